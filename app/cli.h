@@ -1,0 +1,37 @@
+/* Shared helpers for the `skinsim` subcommands: number parsing that names the
+ * option on error, error printing with the right exit code, common options. */
+#ifndef SKINSIM_CLI_H
+#define SKINSIM_CLI_H
+
+#include "skinsim/core.h"
+
+/* One subcommand: name, one-line summary, entry point returning the exit code. */
+typedef struct cli_command {
+    const char *name;
+    const char *summary;
+    int (*run)(int argc, char **argv);
+} cli_command;
+
+/* Subcommand entry points (one file each: app/cmd_<name>.c). */
+int cmd_abrasion(int argc, char **argv);
+
+/* Prints "skinsim <cmd>: <msg>" on stderr and returns the exit code for err. */
+int cli_fail(const char *cmd, const ss_error *err);
+/* Prints a usage error (exit code 2) with a hint to --help. */
+int cli_usage_error(const char *cmd, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+/* Strict number parsing: the whole string must be a finite number within
+ * [lo, hi]; on failure err names the option and the value. */
+ss_status cli_parse_double(const char *opt, const char *s, double lo, double hi, double *out,
+                           ss_error *err);
+ss_status cli_parse_int(const char *opt, const char *s, long lo, long hi, long *out, ss_error *err);
+ss_status cli_parse_u64(const char *opt, const char *s, uint64_t *out, ss_error *err);
+/* Comma-separated list of doubles within [lo, hi]; *out is malloc'd. */
+ss_status cli_parse_double_list(const char *opt, const char *s, double lo, double hi, double **out,
+                                int *count, ss_error *err);
+
+#endif

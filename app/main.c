@@ -1,0 +1,46 @@
+/* The `skinsim` command: dispatches to one subcommand per file (cmd_*.c). */
+#include <stdio.h>
+#include <string.h>
+
+#include "cli.h"
+
+static const cli_command commands[] = {
+    {"abrasion", "abrasion-healing texture timeline (seed 000)", cmd_abrasion},
+};
+static const int ncommands = (int)(sizeof commands / sizeof commands[0]);
+
+static void usage(FILE *f) {
+    fprintf(f,
+            "skinsim %s - simulate skin and wound healing, and turn it into textures\n\n"
+            "usage: skinsim <command> [options]     skinsim <command> --help\n\n"
+            "commands:\n",
+            SKINSIM_VERSION);
+    for (int i = 0; i < ncommands; i++)
+        fprintf(f, "  %-10s %s\n", commands[i].name, commands[i].summary);
+    fprintf(f, "\noptions:\n"
+               "  --help       this text\n"
+               "  --version    print the version\n\n"
+               "Exit codes: 0 success, 1 runtime failure, 2 bad usage or bad input.\n"
+               "Environment: SKINSIM_THREADS (default thread count), SKINSIM_DATA (data dir).\n");
+}
+
+int main(int argc, char **argv) {
+    if (argc < 2) {
+        usage(stderr);
+        return 2;
+    }
+    const char *cmd = argv[1];
+    if (!strcmp(cmd, "--help") || !strcmp(cmd, "-h") || !strcmp(cmd, "help")) {
+        usage(stdout);
+        return 0;
+    }
+    if (!strcmp(cmd, "--version") || !strcmp(cmd, "-V")) {
+        printf("skinsim %s\n", SKINSIM_VERSION);
+        return 0;
+    }
+    for (int i = 0; i < ncommands; i++)
+        if (!strcmp(cmd, commands[i].name)) return commands[i].run(argc - 1, argv + 1);
+    fprintf(stderr, "skinsim: unknown command '%s'\n\n", cmd);
+    usage(stderr);
+    return 2;
+}

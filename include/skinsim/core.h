@@ -1,0 +1,161 @@
+/* skinsim core: errors, float images, PNG/EXR I/O, counter-based RNG, threads,
+ * progress and atomic file writes. Every other module builds on these; none of
+ * it exits or aborts: failures come back as an ss_status with a message that
+ * names the input and what was wrong. */
+#ifndef SKINSIM_CORE_H
+#define SKINSIM_CORE_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- errors ------------------------------------------------------------ */
+
+/* Status codes. The CLI maps SS_ERR_INPUT to exit code 2 (usage and input
+ * errors, including unwritable outputs) and anything else non-zero to 1. */
+typedef enum ss_status {
+    SS_OK = 0,
+    SS_ERR_INPUT = 2,   /* bad argument, malformed or missing file, bad value */
+    SS_ERR_RUNTIME = 1, /* failure while working (I/O error mid-run, ...) */
+    SS_ERR_NOMEM = 3    /* allocation failed */
+} ss_status;
+
+typedef struct ss_error {
+    ss_status code;
+    char msg[1024];
+} ss_error;
+
+/* Records code and a printf-style message in err (which may be NULL) and
+ * returns code, so callers can write `return ss_error_set(err, ...)`. */
+ss_status ss_error_set(ss_error *err, ss_status code, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+void ss_error_clear(ss_error *err);
+/* Exit code the CLI uses for a status: 0, 1 or 2. */
+int ss_status_exit_code(ss_status code);
+
+/* ---- images -------------------------------------------------------------- */
+
+/* float32, linear light, interleaved, row-major, origin top-left. */
+typedef struct ss_image {
+    int width, height, channels;
+    float *data; /* width*height*channels floats */
+} ss_image;
+
+/* Returns NULL (and sets err) on a bad size or when memory runs out. Pixels are
+ * zeroed. Sizes above SS_IMAGE_MAX_SIDE per side are refused. */
+#define SS_IMAGE_MAX_SIDE 65536
+ss_image *ss_image_create(int width, int height, int channels, ss_error *err);
+ss_image *ss_image_clone(const ss_image *img, ss_error *err);
+void ss_image_free(ss_image *img);
+static inline float *ss_image_px(const ss_image *img, int x, int y) {
+    return img->data + ((size_t)y * (size_t)img->width + (size_t)x) * (size_t)img->channels;
+}
+void ss_image_fill(ss_image *img, const float *value);
+/* Bilinear sample with wrap-around at (u,v) in 0..1; writes img->channels floats. */
+void ss_image_sample_wrap(const ss_image *img, float u, float v, float *out);
+/* Resample to a new size (bilinear, wrap-around); used for input textures of
+ * another size than the output. */
+ss_image *ss_image_resize(const ss_image *img, int width, int height, ss_error *err);
+
+/* ---- colour encoding ----------------------------------------------------- */
+float ss_srgb_encode(float linear); /* linear 0..1 -> sRGB 0..1 */
+float ss_srgb_decode(float encoded);
+
+/* ---- file I/O ------------------------------------------------------------ */
+
+typedef enum ss_encoding {
+    SS_ENC_LINEAR = 0, /* data maps (height, roughness, masks, normals) */
+    SS_ENC_SRGB = 1    /* colour: RGB channels sRGB-encoded, alpha linear */
+} ss_encoding;
+
+/* Writes 1-4 channel images as grey, grey+alpha, RGB or RGBA PNG with 8 or 16
+ * bits per channel. Values are clamped to 0..1. Atomic: written to a
+ * temporary name and renamed. */
+ss_status ss_png_write(const char *path, const ss_image *img, int bits, ss_encoding enc,
+                       ss_error *err);
+/* Reads any PNG (palette, grey, 16 bit expanded); channels as stored after
+ * expansion (1-4). SS_ENC_SRGB decodes colour channels to linear. */
+ss_image *ss_png_read(const char *path, ss_encoding enc, ss_error *err);
+/* Writes an OpenEXR scanline file (ZIP compressed) with half or float pixels;
+ * channels named Y / YA / RGB / RGBA. Atomic. */
+ss_status ss_exr_write(const char *path, const ss_image *img, int use_half, ss_error *err);
+ss_image *ss_exr_read(const char *path, ss_error *err);
+/* Picks PNG or EXR from the extension (.png, .exr). For PNG, enc applies. */
+ss_image *ss_image_read(const char *path, ss_encoding enc, ss_error *err);
+
+/* Atomic output file: write to path.tmp.XXXXXX, then rename on commit. */
+typedef struct ss_atomic_file {
+    FILE *fp;
+    char path[4096];
+    char tmp[4200];
+} ss_atomic_file;
+ss_status ss_atomic_open(ss_atomic_file *af, const char *path, ss_error *err);
+ss_status ss_atomic_commit(ss_atomic_file *af, ss_error *err); /* fflush+fsync+rename */
+void ss_atomic_abort(ss_atomic_file *af);                      /* close and unlink */
+/* Writes a whole buffer atomically. */
+ss_status ss_write_file_atomic(const char *path, const void *data, size_t len, ss_error *err);
+/* Reads a whole file (NUL-terminated for convenience); caller frees. */
+char *ss_read_file(const char *path, size_t *len, ss_error *err);
+/* mkdir -p; an existing directory is fine, a file in the way is an input error. */
+ss_status ss_mkdir_p(const char *path, ss_error *err);
+/* Checks that dir exists (or can be created) and a file can be created in it. */
+ss_status ss_check_writable_dir(const char *dir, ss_error *err);
+/* Directory with the shipped data files: $SKINSIM_DATA, else the build-time
+ * source data directory. */
+const char *ss_data_dir(void);
+
+/* ---- random numbers ------------------------------------------------------ */
+
+/* Counter-based generator (Philox4x32-10): every draw is a pure function of
+ * (seed, stream, index), so results do not depend on thread count or order. */
+void ss_rng4(uint64_t seed, uint64_t stream, uint64_t index, uint32_t out[4]);
+uint32_t ss_rng_u32(uint64_t seed, uint64_t stream, uint64_t index);
+/* Uniform in [0,1) with 53 random bits. */
+double ss_rng_uniform(uint64_t seed, uint64_t stream, uint64_t index);
+
+/* A sequential view of one (seed, stream): for loops that need many draws,
+ * such as one photon's walk. Draw k of the stream is a function of k only. */
+typedef struct ss_rng_seq {
+    uint64_t seed, stream, counter;
+    uint32_t buf[4];
+    int left;
+} ss_rng_seq;
+void ss_rng_seq_init(ss_rng_seq *r, uint64_t seed, uint64_t stream);
+uint32_t ss_rng_seq_u32(ss_rng_seq *r);
+double ss_rng_seq_uniform(ss_rng_seq *r);      /* [0,1) */
+double ss_rng_seq_uniform_open(ss_rng_seq *r); /* (0,1), safe for log() */
+
+/* ---- threads ------------------------------------------------------------- */
+
+/* Thread count: n > 0 uses n; n == 0 uses $SKINSIM_THREADS, else all cores.
+ * Returns the count in force. */
+int ss_threads_set(int n);
+int ss_threads_get(void);
+
+/* ---- progress ------------------------------------------------------------ */
+
+/* A progress bar on stderr, drawn only when stderr is a terminal and not quiet. */
+typedef struct ss_progress {
+    const char *label;
+    double total, done;
+    int enabled;
+    double last_draw, start;
+} ss_progress;
+void ss_progress_begin(ss_progress *p, const char *label, double total, int quiet);
+void ss_progress_update(ss_progress *p, double done);
+void ss_progress_end(ss_progress *p);
+
+/* Wall clock in seconds (monotonic). */
+double ss_now(void);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

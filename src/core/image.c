@@ -1,0 +1,101 @@
+/* Float images: plain structs with create/free, wrap-around sampling, resize,
+ * and the sRGB transfer functions used at 8/16-bit file boundaries. */
+#include "skinsim/core.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+ss_image *ss_image_create(int width, int height, int channels, ss_error *err) {
+    if (width <= 0 || height <= 0 || width > SS_IMAGE_MAX_SIDE || height > SS_IMAGE_MAX_SIDE) {
+        ss_error_set(err, SS_ERR_INPUT, "image size %dx%d is out of range 1..%d", width, height,
+                     SS_IMAGE_MAX_SIDE);
+        return NULL;
+    }
+    if (channels < 1 || channels > 4) {
+        ss_error_set(err, SS_ERR_INPUT, "image channel count %d is out of range 1..4", channels);
+        return NULL;
+    }
+    ss_image *img = malloc(sizeof *img);
+    size_t n = (size_t)width * (size_t)height * (size_t)channels;
+    float *data = img ? calloc(n, sizeof(float)) : NULL;
+    if (!data) {
+        free(img);
+        ss_error_set(err, SS_ERR_NOMEM, "out of memory for a %dx%dx%d image", width, height,
+                     channels);
+        return NULL;
+    }
+    img->width = width;
+    img->height = height;
+    img->channels = channels;
+    img->data = data;
+    return img;
+}
+
+ss_image *ss_image_clone(const ss_image *img, ss_error *err) {
+    ss_image *c = ss_image_create(img->width, img->height, img->channels, err);
+    if (c)
+        memcpy(c->data, img->data,
+               (size_t)img->width * (size_t)img->height * (size_t)img->channels * sizeof(float));
+    return c;
+}
+
+void ss_image_free(ss_image *img) {
+    if (!img) return;
+    free(img->data);
+    free(img);
+}
+
+void ss_image_fill(ss_image *img, const float *value) {
+    size_t n = (size_t)img->width * (size_t)img->height;
+    for (size_t i = 0; i < n; i++)
+        for (int c = 0; c < img->channels; c++)
+            img->data[i * (size_t)img->channels + (size_t)c] = value[c];
+}
+
+static int wrap(int i, int n) {
+    i %= n;
+    return i < 0 ? i + n : i;
+}
+
+void ss_image_sample_wrap(const ss_image *img, float u, float v, float *out) {
+    float fx = u * (float)img->width - 0.5f, fy = v * (float)img->height - 0.5f;
+    float x0f = floorf(fx), y0f = floorf(fy);
+    float tx = fx - x0f, ty = fy - y0f;
+    int x0 = wrap((int)x0f, img->width), y0 = wrap((int)y0f, img->height);
+    int x1 = wrap(x0 + 1, img->width), y1 = wrap(y0 + 1, img->height);
+    const float *a = ss_image_px(img, x0, y0), *b = ss_image_px(img, x1, y0);
+    const float *c = ss_image_px(img, x0, y1), *d = ss_image_px(img, x1, y1);
+    for (int k = 0; k < img->channels; k++) {
+        float top = a[k] + (b[k] - a[k]) * tx, bot = c[k] + (d[k] - c[k]) * tx;
+        out[k] = top + (bot - top) * ty;
+    }
+}
+
+ss_image *ss_image_resize(const ss_image *img, int width, int height, ss_error *err) {
+    ss_image *r = ss_image_create(width, height, img->channels, err);
+    if (!r) return NULL;
+    if (width == img->width && height == img->height) {
+        memcpy(r->data, img->data,
+               (size_t)width * (size_t)height * (size_t)img->channels * sizeof(float));
+        return r;
+    }
+#pragma omp parallel for schedule(static)
+    for (int y = 0; y < height; y++)
+        for (int x = 0; x < width; x++)
+            ss_image_sample_wrap(img, ((float)x + 0.5f) / (float)width,
+                                 ((float)y + 0.5f) / (float)height, ss_image_px(r, x, y));
+    return r;
+}
+
+float ss_srgb_encode(float l) {
+    if (!(l > 0.0f)) return 0.0f;
+    if (l >= 1.0f) return 1.0f;
+    return l <= 0.0031308f ? 12.92f * l : 1.055f * powf(l, 1.0f / 2.4f) - 0.055f;
+}
+
+float ss_srgb_decode(float e) {
+    if (!(e > 0.0f)) return 0.0f;
+    if (e >= 1.0f) return 1.0f;
+    return e <= 0.04045f ? e / 12.92f : powf((e + 0.055f) / 1.055f, 2.4f);
+}

@@ -1,0 +1,148 @@
+/* PNG read/write with libpng: 8 or 16 bits, 1-4 channels; sRGB encoding of
+ * colour channels only at this boundary (images in memory are linear). */
+#include "skinsim/core.h"
+
+#include <png.h>
+#include <setjmp.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* libpng's default handler prints to stderr; errors reach the caller as an
+ * ss_error instead, so only longjmp here. */
+static void png_error_quiet(png_structp png, png_const_charp msg) {
+    (void)msg;
+    png_longjmp(png, 1);
+}
+static void png_warning_quiet(png_structp png, png_const_charp msg) {
+    (void)png;
+    (void)msg;
+}
+
+static float encode(float v, int c, int channels, ss_encoding enc) {
+    int is_alpha = (channels == 2 && c == 1) || (channels == 4 && c == 3);
+    if (!(v > 0.0f)) v = 0.0f; /* also maps NaN to 0 */
+    if (v > 1.0f) v = 1.0f;
+    return (enc == SS_ENC_SRGB && !is_alpha) ? ss_srgb_encode(v) : v;
+}
+
+ss_status ss_png_write(const char *path, const ss_image *img, int bits, ss_encoding enc,
+                       ss_error *err) {
+    if (bits != 8 && bits != 16)
+        return ss_error_set(err, SS_ERR_INPUT, "%s: PNG bit depth must be 8 or 16, not %d", path,
+                            bits);
+    static const int types[5] = {0, PNG_COLOR_TYPE_GRAY, PNG_COLOR_TYPE_GRAY_ALPHA,
+                                 PNG_COLOR_TYPE_RGB, PNG_COLOR_TYPE_RGBA};
+    int ch = img->channels;
+    size_t rowbytes = (size_t)img->width * (size_t)ch * (size_t)(bits / 8);
+    unsigned char *row = malloc(rowbytes);
+    if (!row) return ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", path);
+    ss_atomic_file af;
+    ss_status st = ss_atomic_open(&af, path, err);
+    if (st) {
+        free(row);
+        return st;
+    }
+    png_structp png =
+        png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, png_error_quiet, png_warning_quiet);
+    png_infop info = png ? png_create_info_struct(png) : NULL;
+    if (!info || setjmp(png_jmpbuf(png))) {
+        png_destroy_write_struct(&png, &info);
+        ss_atomic_abort(&af);
+        free(row);
+        return ss_error_set(err, SS_ERR_RUNTIME, "%s: PNG encoding failed", path);
+    }
+    png_init_io(png, af.fp);
+    png_set_compression_level(png, 3); /* speed over a few % of size */
+    png_set_IHDR(png, info, (png_uint_32)img->width, (png_uint_32)img->height, bits, types[ch],
+                 PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+    if (enc == SS_ENC_SRGB)
+        png_set_sRGB_gAMA_and_cHRM(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
+    else
+        png_set_gAMA(png, info, 1.0);
+    png_write_info(png, info);
+    for (int y = 0; y < img->height; y++) {
+        const float *src = ss_image_px(img, 0, y);
+        for (int i = 0; i < img->width * ch; i++) {
+            float v = encode(src[i], i % ch, ch, enc);
+            if (bits == 8) {
+                row[i] = (unsigned char)(v * 255.0f + 0.5f);
+            } else {
+                unsigned q = (unsigned)(v * 65535.0f + 0.5f);
+                row[2 * i] = (unsigned char)(q >> 8);
+                row[2 * i + 1] = (unsigned char)(q & 0xff);
+            }
+        }
+        png_write_row(png, row);
+    }
+    png_write_end(png, NULL);
+    png_destroy_write_struct(&png, &info);
+    free(row);
+    return ss_atomic_commit(&af, err);
+}
+
+ss_image *ss_png_read(const char *path, ss_encoding enc, ss_error *err) {
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        ss_error_set(err, SS_ERR_INPUT, "%s: cannot open PNG file", path);
+        return NULL;
+    }
+    unsigned char sig[8];
+    if (fread(sig, 1, 8, f) != 8 || png_sig_cmp(sig, 0, 8) != 0) {
+        fclose(f);
+        ss_error_set(err, SS_ERR_INPUT, "%s: not a PNG file", path);
+        return NULL;
+    }
+    png_structp png =
+        png_create_read_struct(PNG_LIBPNG_VER_STRING, NULL, png_error_quiet, png_warning_quiet);
+    png_infop info = png ? png_create_info_struct(png) : NULL;
+    ss_image *volatile img = NULL;
+    unsigned char *volatile row = NULL;
+    if (!info || setjmp(png_jmpbuf(png))) {
+        png_destroy_read_struct(&png, &info, NULL);
+        fclose(f);
+        ss_image_free(img);
+        free(row);
+        ss_error_set(err, SS_ERR_INPUT, "%s: corrupt or truncated PNG", path);
+        return NULL;
+    }
+    png_init_io(png, f);
+    png_set_sig_bytes(png, 8);
+    png_set_user_limits(png, SS_IMAGE_MAX_SIDE, SS_IMAGE_MAX_SIDE);
+    png_read_info(png, info);
+    png_set_expand(png);
+    png_set_packing(png);
+    png_read_update_info(png, info);
+    int w = (int)png_get_image_width(png, info), h = (int)png_get_image_height(png, info);
+    int ch = png_get_channels(png, info), bits = png_get_bit_depth(png, info);
+    ss_error e2;
+    img = ss_image_create(w, h, ch, &e2);
+    if (!img) {
+        png_destroy_read_struct(&png, &info, NULL);
+        fclose(f);
+        ss_error_set(err, e2.code, "%s: %s", path, e2.msg);
+        return NULL;
+    }
+    row = malloc(png_get_rowbytes(png, info));
+    if (!row) png_error(png, "out of memory");
+    for (int y = 0; y < h; y++) {
+        png_read_row(png, row, NULL);
+        float *dst = ss_image_px(img, 0, y);
+        for (int i = 0; i < w * ch; i++) {
+            float v = bits == 16 ? (float)((row[2 * i] << 8) | row[2 * i + 1]) / 65535.0f
+                                 : (float)row[i] / 255.0f;
+            int is_alpha = (ch == 2 && i % ch == 1) || (ch == 4 && i % ch == 3);
+            dst[i] = (enc == SS_ENC_SRGB && !is_alpha) ? ss_srgb_decode(v) : v;
+        }
+    }
+    png_destroy_read_struct(&png, &info, NULL);
+    fclose(f);
+    free(row);
+    return img;
+}
+
+ss_image *ss_image_read(const char *path, ss_encoding enc, ss_error *err) {
+    const char *dot = strrchr(path, '.');
+    if (dot && (strcmp(dot, ".exr") == 0 || strcmp(dot, ".EXR") == 0))
+        return ss_exr_read(path, err);
+    return ss_png_read(path, enc, err);
+}
