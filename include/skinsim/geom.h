@@ -1,0 +1,64 @@
+/* skinsim geom: wound shapes in texture space. Convex hull by Andrew's monotone
+ * chain (seed 000 Alg. 4.1, Eq. 4.4), concave hull by k-nearest neighbours
+ * (Moreira & Santos 2007, named in seed 000 §5.1), polygon fill by scanlines
+ * (seed 000 §5.1 Fig. 5.1; brute force Alg. 4.2 kept for tests), closing
+ * distance (Alg. 4.3), distance from pixels to a polygon outline (Alg. 3.3),
+ * exact Euclidean distance transform. Coordinates are pixels unless stated. */
+#ifndef SKINSIM_GEOM_H
+#define SKINSIM_GEOM_H
+
+#include "skinsim/core.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct ss_vec2 {
+    double x, y;
+} ss_vec2;
+
+/* A closed polygon (last vertex connects to the first). */
+typedef struct ss_polygon {
+    int count;
+    ss_vec2 *pts;
+} ss_polygon;
+
+void ss_polygon_free(ss_polygon *poly); /* frees pts, zeroes the struct */
+
+/* Convex hull of n points, clockwise in a y-down image frame as the seed's
+ * Alg. 4.1 returns it. Duplicates and collinear points are dropped. Fewer than
+ * 3 distinct non-collinear points is an input error. */
+ss_status ss_convex_hull(const ss_vec2 *pts, int n, ss_polygon *out, ss_error *err);
+/* Concave hull with k nearest neighbours (k >= 3; k is raised automatically
+ * until every point is inside, falling back to the convex hull). */
+ss_status ss_concave_hull(const ss_vec2 *pts, int n, int k, ss_polygon *out, ss_error *err);
+
+/* Fill: sets mask pixels whose centre (x+0.5, y+0.5) is inside the polygon to
+ * 1 (others untouched). Works for any simple polygon (even-odd rule). */
+void ss_polygon_fill(const ss_polygon *poly, ss_image *mask);
+/* The seed's Alg. 4.2 (bounding box + right-side test per edge), for convex
+ * hulls only; used by tests as the brute-force reference. */
+void ss_polygon_fill_bruteforce(const ss_polygon *poly, ss_image *mask);
+
+/* Alg. 4.3: the largest distance between two hull vertices. */
+double ss_closing_distance(const ss_polygon *poly);
+
+/* Alg. 3.3: distance from p to segment a-b. */
+double ss_segment_distance(ss_vec2 a, ss_vec2 b, ss_vec2 p);
+/* Distance from every pixel centre to the nearest outline edge of the
+ * polygons (brute force over all edges, as seed Alg. 3.4 does). 1 channel. */
+void ss_outline_distance_bruteforce(const ss_polygon *polys, int npolys, ss_image *dist);
+/* Same result, cost independent of edge count: exact for pixel centres
+ * within max_dist of the outline (beyond it the value is only guaranteed
+ * to be > max_dist). Uses a distance transform to find candidate edges. */
+ss_status ss_outline_distance(const ss_polygon *polys, int npolys, double max_dist,
+                              ss_image *dist, ss_error *err);
+
+/* Exact Euclidean distance transform (Felzenszwalb & Huttenlocher): for each
+ * pixel, distance to the nearest pixel whose src value is > 0.5. */
+ss_status ss_distance_transform(const ss_image *src, ss_image *dist, ss_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
