@@ -68,7 +68,8 @@ void ss_wound_shape_free(ss_wound_shape *w);
  * linear RGB, size x size. Inputs may be given (any size, resampled); the
  * rest are generated procedurally from seed (see docs/abrasion.md). */
 typedef struct ss_base_skin {
-    ss_image *upper, *lower;
+    ss_image *upper, *lower;           /* linear RGB */
+    ss_image *upper_srgb, *lower_srgb; /* the same, sRGB-encoded: the seed blends in display space */
 } ss_base_skin;
 ss_status ss_base_skin_create(const ss_image *upper_in, const ss_image *lower_in, int size,
                               uint64_t seed, ss_base_skin *out, ss_error *err);
@@ -114,6 +115,13 @@ void ss_abrasion_settings_default(ss_abrasion_settings *s);
 ss_status ss_abrasion_render_phase(ss_phase phase, double position, const ss_wound_shape *w,
                                    const ss_base_skin *skin, const ss_abrasion_settings *s,
                                    ss_texture_set *out, ss_error *err);
+
+/* Only the colour of maturation at a position (reflection, height and normal
+ * of maturation do not change with position): what a timeline frame in the
+ * maturation phase re-renders. */
+ss_status ss_abrasion_maturation_color(const ss_wound_shape *w, const ss_base_skin *skin,
+                                       const ss_abrasion_settings *s, double position,
+                                       ss_image *color, ss_error *err);
 
 /* ---- timeline ----------------------------------------------------------- */
 
