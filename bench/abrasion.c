@@ -119,6 +119,14 @@ int main(int argc, char **argv) {
         printf("  frame (blend of 2 keys)  %8.1f ms   target <= 15 ms\n", 1e3 * best_of(5, run_frame, &j));
         j.day = 20.0;
         printf("  frame (maturation)       %8.1f ms   target <= 15 ms\n", 1e3 * best_of(5, run_frame, &j));
+        /* What a time slider needs: the colour map only. */
+        ss_texture_set color_only = {out.color, NULL, NULL, NULL};
+        j.out = &color_only;
+        j.day = 0.5 * (tl.key[3].day + tl.key[4].day);
+        printf("  colour frame (blend)     %8.1f ms\n", 1e3 * best_of(5, run_frame, &j));
+        j.day = 20.0;
+        printf("  colour frame (maturation)%8.1f ms\n", 1e3 * best_of(5, run_frame, &j));
+        j.out = &out;
         ss_abrasion_free(j.ab);
         double tn = best_of(3, run_noise, &j);
         printf("  value noise, 6 octaves   %8.2f ns/sample (%.1f ms per %dx%d texture)\n",

@@ -332,6 +332,15 @@ static void test_frames_blend(void **state) {
     assert_int_equal(ss_texture_set_create(n, &ref, &err), SS_OK);
     assert_int_equal(ss_abrasion_render_phase(SS_PHASE_MATURATION, pos, sc.w, &sc.skin, &sc.s, &ref, &err), SS_OK);
     for (int i = 0; i < n * n * 3; i++) assert_float_equal(f.color->data[i], ref.color->data[i], 1e-6);
+    /* A colour-only frame (the slider's) equals the colour of the full one. */
+    ss_image *col = ss_image_create(n, n, 3, &err);
+    ss_texture_set only = {col, NULL, NULL, NULL};
+    for (double day = 0.001; day < 40; day *= 3.7) {
+        assert_int_equal(ss_abrasion_frame(a, day, &f, &err), SS_OK);
+        assert_int_equal(ss_abrasion_frame(a, day, &only, &err), SS_OK);
+        assert_memory_equal(col->data, f.color->data, sizeof(float) * (size_t)(n * n * 3));
+    }
+    ss_image_free(col);
     assert_int_equal(ss_abrasion_frame(a, NAN, &f, &err), SS_ERR_INPUT);
     assert_int_equal(ss_abrasion_frame(a, -1, &f, &err), SS_ERR_INPUT);
     ss_texture_set_free(&ref);

@@ -168,7 +168,8 @@ ss_status ss_abrasion_create(const ss_abrasion_settings *s, const ss_timeline *t
                              ss_abrasion **out, ss_error *err);
 void ss_abrasion_free(ss_abrasion *a);
 /* The texture set at time day (days since injury), into out (created by the
- * caller with ss_texture_set_create at settings.size). */
+ * caller with ss_texture_set_create at settings.size). Maps the caller set to
+ * NULL (all but color) are skipped: a time slider needs only the colour. */
 ss_status ss_abrasion_frame(const ss_abrasion *a, double day, ss_texture_set *out, ss_error *err);
 
 #ifdef __cplusplus

@@ -46,7 +46,7 @@ void ss_abrasion_settings_default(ss_abrasion_settings *s) {
     s->size = 2048;
     s->world_size_cm = 10.0;
     s->reference_px = 2048.0;
-    s->scab_height_mm = 1.0;
+    s->scab_height_mm = 0.5;
     s->seed = 1;
 }
 
@@ -302,7 +302,8 @@ static ss_status render_scab(const ctx *c, ss_texture_set *out, ss_error *err) {
             if (c->w->mask->data[i] > 0.5f) {
                 float h = mask_n->data[i] * mid->data[i];
                 float in_col[3], grad[3] = {0, 0, 0};
-                lerp3(SCAB_LIGHT, SCAB_DARK, h, in_col);
+                /* Higher crust is the lighter, yellowish colour (docs/abrasion.md). */
+                lerp3(SCAB_DARK, SCAB_LIGHT, h, in_col);
                 if (inner->data[i] >= 0.0f) {
                     static const float black[3] = {0, 0, 0};
                     lerp3(SCAB_RED, black, inner->data[i], grad);

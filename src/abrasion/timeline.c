@@ -175,36 +175,41 @@ static void blend(const float *a, const float *b, float t, float *out, size_t n)
     for (size_t i = 0; i < n; i++) out[i] = a[i] + (b[i] - a[i]) * t;
 }
 
-static void copy_set(const ss_texture_set *src, ss_texture_set *dst, size_t npx) {
-    memcpy(dst->color->data, src->color->data, npx * 3 * sizeof(float));
-    memcpy(dst->reflection->data, src->reflection->data, npx * sizeof(float));
-    memcpy(dst->height->data, src->height->data, npx * sizeof(float));
-    memcpy(dst->normal->data, src->normal->data, npx * 3 * sizeof(float));
+/* Maps left NULL in dst are skipped. */
+static void copy_set(const ss_texture_set *src, ss_texture_set *dst, size_t npx, int color) {
+    if (color) memcpy(dst->color->data, src->color->data, npx * 3 * sizeof(float));
+    if (dst->reflection) memcpy(dst->reflection->data, src->reflection->data, npx * sizeof(float));
+    if (dst->height) memcpy(dst->height->data, src->height->data, npx * sizeof(float));
+    if (dst->normal) memcpy(dst->normal->data, src->normal->data, npx * 3 * sizeof(float));
 }
 
 ss_status ss_abrasion_frame(const ss_abrasion *a, double day, ss_texture_set *out, ss_error *err) {
     if (!isfinite(day) || day < 0)
         return ss_error_set(err, SS_ERR_INPUT, "time %g days must be finite and >= 0", day);
     int n = a->settings.size;
-    if (out->color->width != n)
-        return ss_error_set(err, SS_ERR_INPUT, "frame output size differs from %d", n);
+    const ss_image *maps[4] = {out->color, out->reflection, out->height, out->normal};
+    if (!out->color) return ss_error_set(err, SS_ERR_INPUT, "frame output has no colour image");
+    for (int k = 0; k < 4; k++)
+        if (maps[k] && (maps[k]->width != n || maps[k]->height != n))
+            return ss_error_set(err, SS_ERR_INPUT, "frame output size differs from %d", n);
     size_t npx = (size_t)n * (size_t)n;
     ss_timeline_pos p = ss_timeline_locate(&a->timeline, day);
     const ss_texture_set *ka = &a->phase[a->timeline.key[p.key_a].phase];
     const ss_texture_set *kb = &a->phase[a->timeline.key[p.key_b].phase];
     if (p.in_maturation) {
-        copy_set(ka, out, npx);
+        copy_set(ka, out, npx, 0);
         return ss_abrasion_maturation_color(a->shape, a->skin, &a->settings, p.maturation_pos,
                                             out->color, err);
     }
     if (ka == kb || p.weight <= 0.0) {
-        copy_set(ka, out, npx);
+        copy_set(ka, out, npx, 1);
         return SS_OK;
     }
     float w = (float)p.weight;
     blend(ka->color->data, kb->color->data, w, out->color->data, npx * 3);
-    blend(ka->reflection->data, kb->reflection->data, w, out->reflection->data, npx);
-    blend(ka->height->data, kb->height->data, w, out->height->data, npx);
+    if (out->reflection) blend(ka->reflection->data, kb->reflection->data, w, out->reflection->data, npx);
+    if (out->height) blend(ka->height->data, kb->height->data, w, out->height->data, npx);
+    if (!out->normal) return SS_OK;
     /* Normals: blend, then renormalise so the map stays unit length. */
     float *nm = out->normal->data;
     const float *na = ka->normal->data, *nb = kb->normal->data;
