@@ -64,16 +64,23 @@ typedef struct opts {
 } opts;
 
 static int parse(int argc, char **argv, opts *o, ss_error *err) {
-    static const struct option longopts[] = {
-        {"stroke", required_argument, 0, 's'},   {"mask", required_argument, 0, 'm'},
-        {"hull", required_argument, 0, 'H'},     {"concave-k", required_argument, 0, 'k'},
-        {"upper", required_argument, 0, 'u'},    {"lower", required_argument, 0, 'l'},
-        {"size", required_argument, 0, 'n'},     {"world-size-cm", required_argument, 0, 'w'},
-        {"times", required_argument, 0, 't'},    {"timeline", required_argument, 0, 'T'},
-        {"seed", required_argument, 0, 'S'},     {"out", required_argument, 0, 'o'},
-        {"threads", required_argument, 0, 'j'},  {"quiet", no_argument, 0, 'q'},
-        {"json", no_argument, 0, 'J'},           {"help", no_argument, 0, 'h'},
-        {0, 0, 0, 0}};
+    static const struct option longopts[] = {{"stroke", required_argument, 0, 's'},
+                                             {"mask", required_argument, 0, 'm'},
+                                             {"hull", required_argument, 0, 'H'},
+                                             {"concave-k", required_argument, 0, 'k'},
+                                             {"upper", required_argument, 0, 'u'},
+                                             {"lower", required_argument, 0, 'l'},
+                                             {"size", required_argument, 0, 'n'},
+                                             {"world-size-cm", required_argument, 0, 'w'},
+                                             {"times", required_argument, 0, 't'},
+                                             {"timeline", required_argument, 0, 'T'},
+                                             {"seed", required_argument, 0, 'S'},
+                                             {"out", required_argument, 0, 'o'},
+                                             {"threads", required_argument, 0, 'j'},
+                                             {"quiet", no_argument, 0, 'q'},
+                                             {"json", no_argument, 0, 'J'},
+                                             {"help", no_argument, 0, 'h'},
+                                             {0, 0, 0, 0}};
     memset(o, 0, sizeof *o);
     o->size = 2048;
     o->concave_k = 5;
@@ -89,20 +96,44 @@ static int parse(int argc, char **argv, opts *o, ss_error *err) {
     ss_status st = SS_OK;
     while (!st && (c = getopt_long(argc, argv, "", longopts, NULL)) != -1) {
         switch (c) {
-        case 's': o->stroke = optarg; break;
-        case 'm': o->mask = optarg; break;
-        case 'u': o->upper = optarg; break;
-        case 'l': o->lower = optarg; break;
-        case 'T': o->timeline = optarg; break;
-        case 'o': o->out = optarg; break;
-        case 't': times = optarg; break;
-        case 'q': o->quiet = 1; break;
-        case 'J': o->json = 1; break;
-        case 'h': help(); return -1;
+        case 's':
+            o->stroke = optarg;
+            break;
+        case 'm':
+            o->mask = optarg;
+            break;
+        case 'u':
+            o->upper = optarg;
+            break;
+        case 'l':
+            o->lower = optarg;
+            break;
+        case 'T':
+            o->timeline = optarg;
+            break;
+        case 'o':
+            o->out = optarg;
+            break;
+        case 't':
+            times = optarg;
+            break;
+        case 'q':
+            o->quiet = 1;
+            break;
+        case 'J':
+            o->json = 1;
+            break;
+        case 'h':
+            help();
+            return -1;
         case 'H':
-            if (!strcmp(optarg, "convex")) o->hull = SS_HULL_CONVEX;
-            else if (!strcmp(optarg, "concave")) o->hull = SS_HULL_CONCAVE;
-            else st = ss_error_set(err, SS_ERR_INPUT, "--hull: '%s' is not convex or concave", optarg);
+            if (!strcmp(optarg, "convex"))
+                o->hull = SS_HULL_CONVEX;
+            else if (!strcmp(optarg, "concave"))
+                o->hull = SS_HULL_CONCAVE;
+            else
+                st = ss_error_set(err, SS_ERR_INPUT, "--hull: '%s' is not convex or concave",
+                                  optarg);
             break;
         case 'k':
             st = cli_parse_int("--concave-k", optarg, 3, 1000, &v, err);
@@ -116,14 +147,21 @@ static int parse(int argc, char **argv, opts *o, ss_error *err) {
             st = cli_parse_int("--threads", optarg, 1, 4096, &v, err);
             o->threads = (int)v;
             break;
-        case 'w': st = cli_parse_double("--world-size-cm", optarg, 1e-3, 1e4, &o->world_cm, err); break;
-        case 'S': st = cli_parse_u64("--seed", optarg, &o->seed, err); break;
+        case 'w':
+            st = cli_parse_double("--world-size-cm", optarg, 1e-3, 1e4, &o->world_cm, err);
+            break;
+        case 'S':
+            st = cli_parse_u64("--seed", optarg, &o->seed, err);
+            break;
         default:
-            st = ss_error_set(err, SS_ERR_INPUT, "unknown or incomplete option '%s'", argv[optind - 1]);
+            st = ss_error_set(err, SS_ERR_INPUT, "unknown or incomplete option '%s'",
+                              argv[optind - 1]);
         }
     }
-    if (!st && optind < argc) st = ss_error_set(err, SS_ERR_INPUT, "unexpected argument '%s'", argv[optind]);
-    if (!st && o->stroke && o->mask) st = ss_error_set(err, SS_ERR_INPUT, "give --stroke or --mask, not both");
+    if (!st && optind < argc)
+        st = ss_error_set(err, SS_ERR_INPUT, "unexpected argument '%s'", argv[optind]);
+    if (!st && o->stroke && o->mask)
+        st = ss_error_set(err, SS_ERR_INPUT, "give --stroke or --mask, not both");
     if (!st) st = cli_parse_double_list("--times", times, 0.0, 1e5, &o->times, &o->ntimes, err);
     return st ? (int)st : 0;
 }
@@ -131,13 +169,16 @@ static int parse(int argc, char **argv, opts *o, ss_error *err) {
 /* A time as people say it: minutes under an hour, hours under two days. */
 static void human_time(double day, char *buf, size_t n) {
     double min = day * 1440.0;
-    if (min < 59.5) snprintf(buf, n, "%.0f min", min);
-    else if (day < 2.0) snprintf(buf, n, "%.1f h", day * 24.0);
-    else snprintf(buf, n, "day %.4g", day);
+    if (min < 59.5)
+        snprintf(buf, n, "%.0f min", min);
+    else if (day < 2.0)
+        snprintf(buf, n, "%.1f h", day * 24.0);
+    else
+        snprintf(buf, n, "day %.4g", day);
 }
 
-static ss_status write_set(const char *dir, const char *stem, const ss_texture_set *t,
-                           cJSON *files, ss_error *err) {
+static ss_status write_set(const char *dir, const char *stem, const ss_texture_set *t, cJSON *files,
+                           ss_error *err) {
     static const char *names[4] = {"color", "reflection", "height", "normal"};
     const ss_image *imgs[4] = {t->color, t->reflection, t->height, t->normal};
     for (int k = 0; k < 4; k++) {
@@ -200,9 +241,11 @@ static ss_status run(const opts *o, const char *dir, cJSON *summary, ss_error *e
     ss_progress prog;
     double t0 = ss_now();
     if (!st) {
-        if (in.mask) st = ss_wound_shape_from_mask(in.mask, o->size, o->seed, &shape, err);
-        else st = ss_wound_shape_from_strokes(&in.strokes, o->hull, o->concave_k, o->size, o->seed,
-                                              &shape, err);
+        if (in.mask)
+            st = ss_wound_shape_from_mask(in.mask, o->size, o->seed, &shape, err);
+        else
+            st = ss_wound_shape_from_strokes(&in.strokes, o->hull, o->concave_k, o->size, o->seed,
+                                             &shape, err);
         if (st && o->stroke) {
             ss_error e2 = *err;
             ss_error_set(err, st, "%s: %s", o->stroke, e2.msg);
@@ -277,8 +320,9 @@ static ss_status run(const opts *o, const char *dir, cJSON *summary, ss_error *e
             cJSON_AddNumberToObject(f, "weight", p.weight);
         }
         st = write_set(dir, stem, &frame, cJSON_AddObjectToObject(f, "files"), err);
-        if (!st) thumbs[i] = ss_image_resize(frame.color, 512 < o->size ? 512 : o->size,
-                                             512 < o->size ? 512 : o->size, err);
+        if (!st)
+            thumbs[i] = ss_image_resize(frame.color, 512 < o->size ? 512 : o->size,
+                                        512 < o->size ? 512 : o->size, err);
         if (!st && !thumbs[i]) st = err->code;
         if (!st) {
             char buf[64];
@@ -289,10 +333,11 @@ static ss_status run(const opts *o, const char *dir, cJSON *summary, ss_error *e
     }
     if (!st) ss_progress_end(&prog);
     if (!st) {
-        ss_image *sheet = ss_contact_sheet((const ss_image *const *)thumbs,
-                                           (const char *const *)labels, o->ntimes, 256,
-                                           o->ntimes <= 8 ? o->ntimes : 8, err);
-        if (!sheet) st = err->code;
+        ss_image *sheet =
+            ss_contact_sheet((const ss_image *const *)thumbs, (const char *const *)labels,
+                             o->ntimes, 256, o->ntimes <= 8 ? o->ntimes : 8, err);
+        if (!sheet)
+            st = err->code;
         else {
             snprintf(sub, sizeof sub, "%s/contact_sheet.png", dir);
             st = ss_png_write(sub, sheet, 8, SS_ENC_SRGB, err);

@@ -15,19 +15,19 @@
 #include <string.h>
 
 /* Seed colours (display values). */
-static const float GLOW_RED[3] = {0.79f, 0.0f, 0.0f};       /* §4.3.2 */
-static const float EDGE_GREY = 0.95f;                        /* §4.3.2 */
-static const float SPECKLE_RED[3] = {0.88f, 0.20f, 0.22f};   /* §4.3.3 */
-static const float SCAB_RED[3] = {0.5f, 0.04f, 0.03f};       /* §4.3.4 */
-static const float SCAB_LIGHT[3] = {0.78f, 0.48f, 0.27f};    /* §4.3.4 */
-static const float SCAB_DARK[3] = {0.39f, 0.12f, 0.11f};     /* §4.3.4 */
-static const float WOUND_WHITE[3] = {0.79f, 0.41f, 0.41f};   /* §4.3.5 */
+static const float GLOW_RED[3] = {0.79f, 0.0f, 0.0f};      /* §4.3.2 */
+static const float EDGE_GREY = 0.95f;                      /* §4.3.2 */
+static const float SPECKLE_RED[3] = {0.88f, 0.20f, 0.22f}; /* §4.3.3 */
+static const float SCAB_RED[3] = {0.5f, 0.04f, 0.03f};     /* §4.3.4 */
+static const float SCAB_LIGHT[3] = {0.78f, 0.48f, 0.27f};  /* §4.3.4 */
+static const float SCAB_DARK[3] = {0.39f, 0.12f, 0.11f};   /* §4.3.4 */
+static const float WOUND_WHITE[3] = {0.79f, 0.41f, 0.41f}; /* §4.3.5 */
 
 /* Reflection and height where the seed gives none (docs/abrasion.md). */
-static const float SKIN_REFLECTION = 0.25f;   /* healthy skin specular strength */
+static const float SKIN_REFLECTION = 0.25f;     /* healthy skin specular strength */
 static const float RAW_WOUND_REFLECTION = 0.5f; /* fresh, wet wound bed */
-static const float WOUND_DEPTH = 0.05f;       /* epidermis removed: 0.05 of the height range */
-static const float SCRAPE_RELIEF = 0.02f;     /* depth of the scrape lines */
+static const float WOUND_DEPTH = 0.05f;         /* epidermis removed: 0.05 of the height range */
+static const float SCRAPE_RELIEF = 0.02f;       /* depth of the scrape lines */
 
 /* Noise streams: one per noise texture, so each phase is reproducible alone. */
 enum {
@@ -113,9 +113,38 @@ typedef struct ctx {
     const ss_abrasion_settings *s;
     int n;
     size_t npx;
-    float k; /* output pixels per reference pixel */
+    float k;            /* output pixels per reference pixel */
+    int bx, by, bw, bh; /* bounding box of the wound mask (bw = 0: none) */
     decode_lut lut;
 } ctx;
+
+/* The wound's bounding box: noise, erosion and normals are only needed
+ * there (outside, every phase is plain skin), which makes the cost grow with
+ * the wound, not the texture. */
+static void mask_bbox(ctx *c) {
+    int x0 = c->n, y0 = c->n, x1 = -1, y1 = -1;
+    for (int y = 0; y < c->n; y++) {
+        const float *row = c->w->mask->data + (size_t)y * (size_t)c->n;
+        for (int x = 0; x < c->n; x++)
+            if (row[x] > 0.5f) {
+                if (x < x0) x0 = x;
+                if (x > x1) x1 = x;
+                if (y < y0) y0 = y;
+                y1 = y;
+            }
+    }
+    c->bx = x1 >= 0 ? x0 : 0;
+    c->by = y1 >= 0 ? y0 : 0;
+    c->bw = x1 >= 0 ? x1 - x0 + 1 : 0;
+    c->bh = y1 >= 0 ? y1 - y0 + 1 : 0;
+}
+
+/* Copies sub (w x h) into img at (x0, y0). */
+static void paste(ss_image *img, const ss_image *sub, int x0, int y0) {
+    size_t row = (size_t)sub->width * (size_t)img->channels * sizeof(float);
+    for (int y = 0; y < sub->height; y++)
+        memcpy(ss_image_px(img, x0, y0 + y), ss_image_px(sub, 0, y), row);
+}
 
 static void ctx_init(ctx *c, const ss_wound_shape *w, const ss_base_skin *skin,
                      const ss_abrasion_settings *s) {
@@ -126,6 +155,7 @@ static void ctx_init(ctx *c, const ss_wound_shape *w, const ss_base_skin *skin,
     c->npx = (size_t)s->size * (size_t)s->size;
     c->k = (float)(s->size / s->reference_px);
     lut_init(&c->lut);
+    mask_bbox(c);
 }
 
 static inline void put_color(const ctx *c, float *dst, const float rgb[3]) {
@@ -144,7 +174,13 @@ static ss_status noise(const ctx *c, int octaves, float persistence, float bias,
     p.cell_px = c->k;
     *out = ss_image_create(c->n, c->n, 1, err);
     if (!*out) return err->code;
-    ss_status st = ss_value_noise(&p, c->s->seed, stream, *out, err);
+    if (c->bw == 0) return SS_OK;
+    ss_image *sub = ss_image_create(c->bw, c->bh, 1, err);
+    ss_status st =
+        sub ? ss_value_noise_rect(&p, c->s->seed, stream, c->n, c->n, c->bx, c->by, sub, err)
+            : err->code;
+    if (!st) paste(*out, sub, c->bx, c->by);
+    ss_image_free(sub);
     if (st) {
         ss_image_free(*out);
         *out = NULL;
@@ -164,15 +200,42 @@ static ss_status glow(const ctx *c, ss_image **out, ss_error *err) {
  * upper skin where the gradient is not drawn. */
 static inline void outside_color(const ctx *c, size_t i, const ss_image *glw, float *rgb) {
     const float *up = c->skin->upper_srgb->data + i * 3;
-    if (glw && glw->data[i] >= 0.0f) lerp3(GLOW_RED, up, glw->data[i], rgb);
-    else memcpy(rgb, up, 3 * sizeof(float));
+    if (glw && glw->data[i] >= 0.0f)
+        lerp3(GLOW_RED, up, glw->data[i], rgb);
+    else
+        memcpy(rgb, up, 3 * sizeof(float));
 }
 
 static void normals(const ctx *c, ss_texture_set *out) {
     double pixel_mm = c->s->world_size_cm * 10.0 / c->n;
     /* height 0..1 spans 2 * scab_height_mm (0.5 is the skin surface) */
     float strength = (float)(2.0 * c->s->scab_height_mm / pixel_mm);
-    ss_height_to_normal(out->height, strength, out->normal);
+    /* Outside the wound the height is flat (0.5), so the normal is (0,0,1);
+     * only the box around the wound needs the differences. */
+    int x0 = c->bx - 2, y0 = c->by - 2, w = c->bw + 4, h = c->bh + 4;
+    if (c->bw == 0 || x0 < 0 || y0 < 0 || x0 + w > c->n || y0 + h > c->n) {
+        ss_height_to_normal(out->height, strength, out->normal);
+        return;
+    }
+    const float flat[3] = {0.5f, 0.5f, 1.0f};
+    ss_image_fill(out->normal, flat);
+    ss_error err;
+    ss_image *hs = ss_image_create(w, h, 1, &err), *ns = hs ? ss_image_create(w, h, 3, &err) : NULL;
+    if (!ns) { /* no memory for the box: do the whole texture */
+        ss_image_free(hs);
+        ss_height_to_normal(out->height, strength, out->normal);
+        return;
+    }
+    for (int y = 0; y < h; y++)
+        memcpy(ss_image_px(hs, 0, y), ss_image_px(out->height, x0, y0 + y),
+               (size_t)w * sizeof(float));
+    ss_height_to_normal(hs, strength, ns);
+    /* The box's outer ring saw wrapped neighbours; it is flat anyway. */
+    for (int y = 1; y < h - 1; y++)
+        memcpy(ss_image_px(out->normal, x0 + 1, y0 + y), ss_image_px(ns, 1, y),
+               (size_t)(w - 2) * 3 * sizeof(float));
+    ss_image_free(hs);
+    ss_image_free(ns);
 }
 
 static ss_status render_vasoconstriction(const ctx *c, ss_texture_set *out, ss_error *err) {
@@ -196,18 +259,36 @@ static ss_status render_vasodilation(const ctx *c, ss_texture_set *out, ss_error
     ss_status st = glow(c, &glw, err);
     /* Scrape lines: 5 octaves, persistence 0.09, bias 0.5, gain 0.43, y x64. */
     if (!st) st = noise(c, 5, 0.09f, 0.5f, 0.43f, 64.0f, ST_SCRAPE, &scrape, err);
-    /* The half-scraped edge: erode twice (widths 3-5, then 3-10). */
-    if (!st) e1 = ss_image_create(c->n, c->n, 1, err);
-    if (e1) e2 = ss_image_create(c->n, c->n, 1, err);
+    /* The half-scraped edge: erode twice (widths 3-5, then 3-10), in a box
+     * around the wound padded wider than the kernels so the result equals
+     * eroding the whole texture. */
+    if (!st) e2 = ss_image_create(c->n, c->n, 1, err);
     if (!e2) st = err->code;
+    int lo = (int)fmaxf(1.0f, roundf(3 * c->k)), hi1 = (int)fmaxf((float)lo, roundf(5 * c->k)),
+        hi2 = (int)fmaxf((float)lo, roundf(10 * c->k)), pad = hi2 / 2 + 3;
+    int ex0 = c->bx - pad < 0 ? 0 : c->bx - pad;
+    int ex1 = c->bx + c->bw + pad > c->n ? c->n : c->bx + c->bw + pad;
+    if (!st && c->bw > 0) {
+        ss_image *m = ss_image_create(ex1 - ex0, c->bh, 1, err);
+        e1 = m ? ss_image_create(ex1 - ex0, c->bh, 1, err) : NULL;
+        if (!e1) {
+            ss_image_free(m);
+            st = err->code;
+        } else {
+            for (int y = 0; y < c->bh; y++)
+                memcpy(ss_image_px(m, 0, y), ss_image_px(c->w->mask, ex0, c->by + y),
+                       (size_t)(ex1 - ex0) * sizeof(float));
+            ss_erosion_widths_rect(c->n, c->n, ex0, c->by, ex1 - ex0, c->bh, lo, hi1, c->s->seed,
+                                   ST_ERODE1, widths);
+            ss_erode(m, widths, e1);
+            ss_erosion_widths_rect(c->n, c->n, ex0, c->by, ex1 - ex0, c->bh, lo, hi2, c->s->seed,
+                                   ST_ERODE2, widths);
+            ss_erode(e1, widths, m);
+            paste(e2, m, ex0, c->by);
+            ss_image_free(m);
+        }
+    }
     if (!st) {
-        int lo = (int)fmaxf(1.0f, roundf(3 * c->k));
-        ss_erosion_widths(c->n, c->n, lo, (int)fmaxf((float)lo, roundf(5 * c->k)), c->s->seed,
-                          ST_ERODE1, widths);
-        ss_erode(c->w->mask, widths, e1);
-        ss_erosion_widths(c->n, c->n, lo, (int)fmaxf((float)lo, roundf(10 * c->k)), c->s->seed,
-                          ST_ERODE2, widths);
-        ss_erode(e1, widths, e2);
 #pragma omp parallel for schedule(static)
         for (size_t i = 0; i < c->npx; i++) {
             float rgb[3];
@@ -222,9 +303,10 @@ static ss_status render_vasodilation(const ctx *c, ss_texture_set *out, ss_error
                     for (int k = 0; k < 3; k++) rgb[k] = up[k] * EDGE_GREY;
                 }
                 out->reflection->data[i] = scrape->data[i];
-                out->height->data[i] = e2->data[i] > 0.5f
-                                           ? 0.5f - WOUND_DEPTH + SCRAPE_RELIEF * (scrape->data[i] - 0.5f)
-                                           : 0.5f - 0.5f * WOUND_DEPTH;
+                out->height->data[i] =
+                    e2->data[i] > 0.5f
+                        ? 0.5f - WOUND_DEPTH + SCRAPE_RELIEF * (scrape->data[i] - 0.5f)
+                        : 0.5f - 0.5f * WOUND_DEPTH;
             } else {
                 outside_color(c, i, glw, rgb);
                 out->reflection->data[i] = SKIN_REFLECTION;
@@ -262,7 +344,8 @@ static ss_status render_scab_forming(const ctx *c, ss_texture_set *out, ss_error
                 for (int k = 0; k < 3; k++) lower_wound[k] = lo_s[k] * ln + up[k] * (1.0f - ln);
                 /* Eq. 4.6: speckle colour = noise x (0.88, 0.20, 0.22), weighted by its red. */
                 for (int k = 0; k < 3; k++) sp[k] = speck->data[i] * SPECKLE_RED[k];
-                for (int k = 0; k < 3; k++) rgb[k] = sp[k] * sp[0] + lower_wound[k] * (1.0f - sp[0]);
+                for (int k = 0; k < 3; k++)
+                    rgb[k] = sp[k] * sp[0] + lower_wound[k] * (1.0f - sp[0]);
                 out->reflection->data[i] = 0.7f * scrape->data[i];
                 /* The redder parts are carved deeper (§4.3.3). */
                 out->height->data[i] = 0.5f - WOUND_DEPTH * (0.5f + ln) - WOUND_DEPTH * sp[0];
@@ -339,7 +422,7 @@ static inline void maturation_color(const ctx *c, size_t i, double position, flo
         return;
     }
     double closing = c->w->closing_px[l];
-    double max_outer = closing * 0.5;                             /* Eq. 4.8 */
+    double max_outer = closing * 0.5; /* Eq. 4.8 */
     double outer = max_outer * position;
     double inner = outer + max_outer * c->w->inner_ratio[l];
     double d = c->w->dist->data[i];
@@ -378,8 +461,9 @@ static ss_status check_inputs(const ss_wound_shape *w, const ss_base_skin *skin,
         return ss_error_set(err, SS_ERR_INPUT,
                             "abrasion render: shape, skin and output sizes differ from %d", n);
     if (!(s->world_size_cm > 0) || !(s->reference_px > 0) || !(s->scab_height_mm > 0))
-        return ss_error_set(err, SS_ERR_INPUT,
-                            "abrasion settings: world size, reference size and scab height must be > 0");
+        return ss_error_set(
+            err, SS_ERR_INPUT,
+            "abrasion settings: world size, reference size and scab height must be > 0");
     return SS_OK;
 }
 
@@ -391,17 +475,26 @@ ss_status ss_abrasion_render_phase(ss_phase phase, double position, const ss_wou
     ctx c;
     ctx_init(&c, w, skin, s);
     switch (phase) {
-    case SS_PHASE_VASOCONSTRICTION: st = render_vasoconstriction(&c, out, err); break;
-    case SS_PHASE_VASODILATION: st = render_vasodilation(&c, out, err); break;
-    case SS_PHASE_SCAB_FORMING: st = render_scab_forming(&c, out, err); break;
-    case SS_PHASE_SCAB: st = render_scab(&c, out, err); break;
+    case SS_PHASE_VASOCONSTRICTION:
+        st = render_vasoconstriction(&c, out, err);
+        break;
+    case SS_PHASE_VASODILATION:
+        st = render_vasodilation(&c, out, err);
+        break;
+    case SS_PHASE_SCAB_FORMING:
+        st = render_scab_forming(&c, out, err);
+        break;
+    case SS_PHASE_SCAB:
+        st = render_scab(&c, out, err);
+        break;
     case SS_PHASE_MATURATION:
         if (!(position >= 0.0 && position <= 1.0))
             return ss_error_set(err, SS_ERR_INPUT, "maturation position %g is outside 0..1",
                                 position);
         st = render_maturation(&c, position, out, err);
         break;
-    default: return ss_error_set(err, SS_ERR_INPUT, "unknown phase %d", (int)phase);
+    default:
+        return ss_error_set(err, SS_ERR_INPUT, "unknown phase %d", (int)phase);
     }
     if (!st) normals(&c, out);
     return st;

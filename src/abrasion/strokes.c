@@ -71,8 +71,10 @@ ss_status ss_strokes_read_csv(const char *path, ss_strokes *out, ss_error *err) 
             q = field(q, &v[k]);
             if (!q) break;
             k++;
-            if (*q == ',') q++;
-            else break;
+            if (*q == ',')
+                q++;
+            else
+                break;
         }
         if (!q || (k < 2) || *q != '\0') {
             if (first_data && !isdigit((unsigned char)*p) && *p != '-' && *p != '.' && *p != '+') {

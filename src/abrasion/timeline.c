@@ -20,8 +20,8 @@ void ss_timeline_default(ss_timeline *t) {
         {SS_PHASE_VASODILATION, 30 * MINUTE},    /* ... for about 20 minutes */
         {SS_PHASE_SCAB_FORMING, 0.5},            /* the bed dries over hours */
         {SS_PHASE_SCAB_FORMING, 1.0},
-        {SS_PHASE_SCAB, 3.0},                    /* a scab within days */
-        {SS_PHASE_SCAB, 10.0},                   /* holds while the wound contracts */
+        {SS_PHASE_SCAB, 3.0},                      /* a scab within days */
+        {SS_PHASE_SCAB, 10.0},                     /* holds while the wound contracts */
         {SS_PHASE_MATURATION, 10.0 + 10 * MINUTE}, /* scab falls off: the jump */
     };
     t->nkeys = (int)(sizeof keys / sizeof keys[0]);
@@ -37,7 +37,8 @@ ss_status ss_timeline_validate(const ss_timeline *t, ss_error *err) {
         if ((unsigned)t->key[i].phase >= SS_PHASE_COUNT)
             return ss_error_set(err, SS_ERR_INPUT, "timeline: key %d has an unknown phase", i);
         if (!isfinite(t->key[i].day) || t->key[i].day < 0)
-            return ss_error_set(err, SS_ERR_INPUT, "timeline: key %d day must be finite and >= 0", i);
+            return ss_error_set(err, SS_ERR_INPUT, "timeline: key %d day must be finite and >= 0",
+                                i);
         if (i && !(t->key[i].day > t->key[i - 1].day))
             return ss_error_set(err, SS_ERR_INPUT,
                                 "timeline: key %d (day %g) is not after key %d (day %g)", i,
@@ -47,8 +48,9 @@ ss_status ss_timeline_validate(const ss_timeline *t, ss_error *err) {
                                 "timeline: maturation must be the last key (it runs to end_day)");
     }
     if (!isfinite(t->end_day) || t->end_day <= t->key[t->nkeys - 1].day)
-        return ss_error_set(err, SS_ERR_INPUT, "timeline: end_day %g must be after the last key (day %g)",
-                            t->end_day, t->key[t->nkeys - 1].day);
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "timeline: end_day %g must be after the last key (day %g)", t->end_day,
+                            t->key[t->nkeys - 1].day);
     return SS_OK;
 }
 
@@ -100,13 +102,16 @@ ss_status ss_timeline_load_json(const char *path, ss_timeline *t, ss_error *err)
     }
     const cJSON *end = cJSON_GetObjectItemCaseSensitive(root, "end_day");
     if (!st && end) {
-        if (!cJSON_IsNumber(end)) st = ss_error_set(err, SS_ERR_INPUT, "%s: \"end_day\" must be a number", path);
-        else nt.end_day = end->valuedouble;
+        if (!cJSON_IsNumber(end))
+            st = ss_error_set(err, SS_ERR_INPUT, "%s: \"end_day\" must be a number", path);
+        else
+            nt.end_day = end->valuedouble;
     }
     cJSON_Delete(root);
     if (!st) {
         ss_error e2;
-        if (ss_timeline_validate(&nt, &e2)) st = ss_error_set(err, SS_ERR_INPUT, "%s: %s", path, e2.msg);
+        if (ss_timeline_validate(&nt, &e2))
+            st = ss_error_set(err, SS_ERR_INPUT, "%s: %s", path, e2.msg);
     }
     if (!st) *t = nt;
     return st;
@@ -143,8 +148,8 @@ void ss_abrasion_free(ss_abrasion *a) {
 }
 
 ss_status ss_abrasion_create(const ss_abrasion_settings *s, const ss_timeline *t,
-                             const ss_wound_shape *w, const ss_base_skin *skin,
-                             ss_abrasion **out, ss_error *err) {
+                             const ss_wound_shape *w, const ss_base_skin *skin, ss_abrasion **out,
+                             ss_error *err) {
     *out = NULL;
     ss_status st = ss_timeline_validate(t, err);
     if (st) return st;
@@ -207,7 +212,8 @@ ss_status ss_abrasion_frame(const ss_abrasion *a, double day, ss_texture_set *ou
     }
     float w = (float)p.weight;
     blend(ka->color->data, kb->color->data, w, out->color->data, npx * 3);
-    if (out->reflection) blend(ka->reflection->data, kb->reflection->data, w, out->reflection->data, npx);
+    if (out->reflection)
+        blend(ka->reflection->data, kb->reflection->data, w, out->reflection->data, npx);
     if (out->height) blend(ka->height->data, kb->height->data, w, out->height->data, npx);
     if (!out->normal) return SS_OK;
     /* Normals: blend, then renormalise so the map stays unit length. */
