@@ -242,6 +242,19 @@ static void test_noise_rect_equals_crop(void **state) {
     ss_image_free(full);
 }
 
+/* Widths of a rectangle are the same numbers as the whole texture's there. */
+static void test_erosion_widths_rect(void **state) {
+    (void)state;
+    const int W = 70, H = 40, x0 = 13, y0 = 7, w = 30, h = 21;
+    int *full = malloc(sizeof(int) * W * H), *sub = malloc(sizeof(int) * w * h);
+    ss_erosion_widths(W, H, 3, 10, 4, 8, full);
+    ss_erosion_widths_rect(W, H, x0, y0, w, h, 3, 10, 4, 8, sub);
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) assert_int_equal(sub[y * w + x], full[(y0 + y) * W + x0 + x]);
+    free(full);
+    free(sub);
+}
+
 static void test_erosion(void **state) {
     (void)state;
     ss_error err;
@@ -367,7 +380,7 @@ int main(void) {
         cmocka_unit_test(test_bias_gain),        cmocka_unit_test(test_noise_matches_reference),
         cmocka_unit_test(test_noise_properties), cmocka_unit_test(test_noise_tiling),
         cmocka_unit_test(test_erosion),          cmocka_unit_test(test_gradient_edge),
-        cmocka_unit_test(test_height_to_normal), cmocka_unit_test(test_noise_rect_equals_crop),
+        cmocka_unit_test(test_height_to_normal), cmocka_unit_test(test_noise_rect_equals_crop), cmocka_unit_test(test_erosion_widths_rect),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
