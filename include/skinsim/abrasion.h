@@ -50,9 +50,10 @@ typedef struct ss_wound_shape {
                        exact up to the widest gradient, larger beyond */
     int *label;     /* size*size: index of the nearest wound */
     int nwounds;
-    double *closing_px;  /* per wound: closing distance in pixels */
-    double *inner_ratio; /* per wound: rand(0.4, 0.8) of Eq. 4.8 */
-    int npolys;          /* hulls (0 for mask input) */
+    double *closing_px;             /* per wound: closing distance in pixels */
+    double *inner_ratio;            /* per wound: rand(0.4, 0.8) of Eq. 4.8 */
+    int box_x, box_y, box_w, box_h; /* bounding box of the mask (box_w = 0: empty) */
+    int npolys;                     /* hulls (0 for mask input) */
     ss_polygon *polys;
 } ss_wound_shape;
 
@@ -123,7 +124,9 @@ ss_status ss_abrasion_render_phase(ss_phase phase, double position, const ss_wou
 
 /* Only the colour of maturation at a position (reflection, height and normal
  * of maturation do not change with position): what a timeline frame in the
- * maturation phase re-renders. */
+ * maturation phase re-renders. Writes the pixels of the wound's bounding box
+ * only: outside it maturation is plain skin at every position, so color must
+ * already hold a maturation colour (e.g. the key's) there. */
 ss_status ss_abrasion_maturation_color(const ss_wound_shape *w, const ss_base_skin *skin,
                                        const ss_abrasion_settings *s, double position,
                                        ss_image *color, ss_error *err);

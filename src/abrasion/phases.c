@@ -114,30 +114,11 @@ typedef struct ctx {
     int n;
     size_t npx;
     float k;            /* output pixels per reference pixel */
-    int bx, by, bw, bh; /* bounding box of the wound mask (bw = 0: none) */
+    int bx, by, bw, bh; /* the wound's box: noise, erosion and normals are only
+                           needed there (outside, every phase is plain skin), so
+                           the cost grows with the wound, not the texture */
     decode_lut lut;
 } ctx;
-
-/* The wound's bounding box: noise, erosion and normals are only needed
- * there (outside, every phase is plain skin), which makes the cost grow with
- * the wound, not the texture. */
-static void mask_bbox(ctx *c) {
-    int x0 = c->n, y0 = c->n, x1 = -1, y1 = -1;
-    for (int y = 0; y < c->n; y++) {
-        const float *row = c->w->mask->data + (size_t)y * (size_t)c->n;
-        for (int x = 0; x < c->n; x++)
-            if (row[x] > 0.5f) {
-                if (x < x0) x0 = x;
-                if (x > x1) x1 = x;
-                if (y < y0) y0 = y;
-                y1 = y;
-            }
-    }
-    c->bx = x1 >= 0 ? x0 : 0;
-    c->by = y1 >= 0 ? y0 : 0;
-    c->bw = x1 >= 0 ? x1 - x0 + 1 : 0;
-    c->bh = y1 >= 0 ? y1 - y0 + 1 : 0;
-}
 
 /* Copies sub (w x h) into img at (x0, y0). */
 static void paste(ss_image *img, const ss_image *sub, int x0, int y0) {
@@ -155,7 +136,10 @@ static void ctx_init(ctx *c, const ss_wound_shape *w, const ss_base_skin *skin,
     c->npx = (size_t)s->size * (size_t)s->size;
     c->k = (float)(s->size / s->reference_px);
     lut_init(&c->lut);
-    mask_bbox(c);
+    c->bx = w->box_x;
+    c->by = w->box_y;
+    c->bw = w->box_w;
+    c->bh = w->box_h;
 }
 
 static inline void put_color(const ctx *c, float *dst, const float rgb[3]) {
@@ -508,10 +492,12 @@ ss_status ss_abrasion_maturation_color(const ss_wound_shape *w, const ss_base_sk
     ctx c;
     ctx_init(&c, w, skin, s);
 #pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < c.npx; i++) {
-        float rgb[3];
-        maturation_color(&c, i, position, rgb);
-        put_color(&c, color->data + i * 3, rgb);
-    }
+    for (int y = c.by; y < c.by + c.bh; y++)
+        for (int x = c.bx; x < c.bx + c.bw; x++) {
+            size_t i = (size_t)y * (size_t)c.n + (size_t)x;
+            float rgb[3];
+            maturation_color(&c, i, position, rgb);
+            put_color(&c, color->data + i * 3, rgb);
+        }
     return SS_OK;
 }

@@ -41,6 +41,24 @@ static ss_wound_shape *shape_alloc(int size, int nwounds, ss_error *err) {
     return w;
 }
 
+static void find_box(ss_wound_shape *w) {
+    int n = w->size, x0 = n, y0 = n, x1 = -1, y1 = -1;
+    for (int y = 0; y < n; y++) {
+        const float *row = w->mask->data + (size_t)y * (size_t)n;
+        for (int x = 0; x < n; x++)
+            if (row[x] > 0.5f) {
+                if (x < x0) x0 = x;
+                if (x > x1) x1 = x;
+                if (y < y0) y0 = y;
+                y1 = y;
+            }
+    }
+    w->box_x = x1 >= 0 ? x0 : 0;
+    w->box_y = y1 >= 0 ? y0 : 0;
+    w->box_w = x1 >= 0 ? x1 - x0 + 1 : 0;
+    w->box_h = y1 >= 0 ? y1 - y0 + 1 : 0;
+}
+
 /* Eq. 4.8's rand(0.4, 0.8), one draw per wound from the run's seed. */
 static void draw_inner_ratios(ss_wound_shape *w, uint64_t seed) {
     for (int i = 0; i < w->nwounds; i++)
@@ -136,6 +154,7 @@ ss_status ss_wound_shape_from_strokes(const ss_strokes *s, ss_hull_kind kind, in
                             size);
     }
     draw_inner_ratios(w, seed);
+    find_box(w);
     *out = w;
     return SS_OK;
 }
@@ -286,6 +305,7 @@ ss_status ss_wound_shape_from_mask(const ss_image *mask_in, int size, uint64_t s
         return st;
     }
     draw_inner_ratios(w, seed);
+    find_box(w);
     *out = w;
     return SS_OK;
 }

@@ -202,7 +202,7 @@ ss_status ss_abrasion_frame(const ss_abrasion *a, double day, ss_texture_set *ou
     const ss_texture_set *ka = &a->phase[a->timeline.key[p.key_a].phase];
     const ss_texture_set *kb = &a->phase[a->timeline.key[p.key_b].phase];
     if (p.in_maturation) {
-        copy_set(ka, out, npx, 0);
+        copy_set(ka, out, npx, 1);
         return ss_abrasion_maturation_color(a->shape, a->skin, &a->settings, p.maturation_pos,
                                             out->color, err);
     }
