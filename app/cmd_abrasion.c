@@ -47,8 +47,9 @@ static void help(void) {
         "  --json                print a summary as JSON on stdout\n\n"
         "Writes DIR/keys/<phase>_{color,reflection,height,normal}.png,\n"
         "DIR/frames/t<days>_{color,reflection,height,normal}.png, DIR/timeline.json and\n"
-        "DIR/contact_sheet.png. Colour is sRGB 8-bit; reflection, height (0.5 = skin\n"
-        "surface) and normal (tangent space, OpenGL +Y up) are linear 16-bit.\n\n"
+        "DIR/contact_sheet.png. Colour is sRGB 8-bit; reflection (specular strength)\n"
+        "8-bit; height 16-bit (0.5 = skin surface, 0..1 spans -0.5..+0.5 mm); normal\n"
+        "8-bit, tangent space, OpenGL convention (+Y up).\n\n"
         "Example:\n"
         "  skinsim abrasion --stroke knee.csv --size 1024 --times 0,1,5,30 --out knee\n");
 }
@@ -177,17 +178,29 @@ static void human_time(double day, char *buf, size_t n) {
         snprintf(buf, n, "day %.4g", day);
 }
 
-static ss_status write_set(const char *dir, const char *stem, const ss_texture_set *t, cJSON *files,
-                           ss_error *err) {
+/* The four maps of a set, written in parallel (PNG encoding is serial per
+ * file). Colour is sRGB 8-bit; height 16-bit (displacement needs the steps);
+ * reflection and normal 8-bit linear, as engines expect them. */
+static ss_status write_set(const char *dir, const char *stem, const ss_texture_set *t,
+                           cJSON *files, ss_error *err) {
     static const char *names[4] = {"color", "reflection", "height", "normal"};
+    static const int bits[4] = {8, 8, 16, 8};
     const ss_image *imgs[4] = {t->color, t->reflection, t->height, t->normal};
+    ss_error errs[4];
+    ss_status sts[4];
+#pragma omp parallel for schedule(dynamic, 1)
     for (int k = 0; k < 4; k++) {
-        char path[4096], rel[512];
+        char path[4096];
+        snprintf(path, sizeof path, "%s/%s_%s.png", dir, stem, names[k]);
+        sts[k] = ss_png_write(path, imgs[k], bits[k], k == 0 ? SS_ENC_SRGB : SS_ENC_LINEAR, &errs[k]);
+    }
+    for (int k = 0; k < 4; k++) {
+        if (sts[k]) {
+            *err = errs[k];
+            return sts[k];
+        }
+        char rel[512];
         snprintf(rel, sizeof rel, "%s_%s.png", stem, names[k]);
-        snprintf(path, sizeof path, "%s/%s", dir, rel);
-        ss_status st = k == 0 ? ss_png_write(path, imgs[k], 8, SS_ENC_SRGB, err)
-                              : ss_png_write(path, imgs[k], 16, SS_ENC_LINEAR, err);
-        if (st) return st;
         if (files) cJSON_AddStringToObject(files, names[k], rel);
     }
     return SS_OK;
