@@ -13,6 +13,9 @@
  * * solid angle of the bin * cos(theta_r at the bin centre)) (seed §3.1.6,
  * §4.5.2); the solid angle of a bin is (cos th0 - cos th1) * dphi_width * 2
  * (both mirror halves phi and -phi fold into one dphi bin).
+ * Directions: omega_i (towards the light) and omega_r (towards the viewer) both
+ * point away from the surface; the incident packet travels in the x-z plane,
+ * so the mirror direction has dphi = pi and retro-reflection dphi = 0.
  * The specular surface reflection IS included in brdf_exit / f_rgb (it is part
  * of the BRDF). Colour albedos and reflectance spectra EXCLUDE it; it is
  * reported separately as `specular`. */
@@ -77,6 +80,12 @@ typedef struct ss_mc_result {
     double *brdf_exit; /* [theta_r][dphi] f_r in 1/sr (solid-angle + cos normalised), or NULL */
     double *radial;    /* Rd(r) per cm^2 per bin, or NULL */
     double *absorbed_per_layer; /* nlayers */
+    /* Russian roulette changes weight only in expectation: net weight it added
+     * (survivor boosts minus killed packets), as a fraction of incident, so that
+     * specular + diffuse + transmit + absorbed - roulette_net == 1 to rounding. */
+    double roulette_net;
+    int nlayers, brdf_n_theta, brdf_n_phi, radial_bins; /* sizes of the arrays above */
+    double radial_dr_cm;
 } ss_mc_result;
 ss_status ss_mc_run(const ss_optics_slab *slab, const ss_mc_options *opt, ss_mc_result *res,
                     ss_error *err);
@@ -94,6 +103,32 @@ ss_status ss_mc_trace_paths(const ss_optics_slab *geometry, const ss_mc_options 
 ss_status ss_mc_paths_apply(const ss_mc_paths *p, const double *mua_per_cm, ss_mc_result *res,
                             ss_error *err);
 void ss_mc_paths_free(ss_mc_paths *p);
+
+/* ---- MCML input files (.mci) and output (.mco) ------------------------------------ */
+/* One run of an MCML input file (Wang, Jacques & Zheng 1995, MCML 1.2 format):
+ * output file name and type (A = ASCII), photon count, grid (dz, dr in cm,
+ * number of z, r and angle bins) and the layers (slab->bottom_albedo = -1). */
+typedef struct ss_mci_run {
+    char out_name[1024];
+    char out_type;
+    uint64_t photons;
+    double dz_cm, dr_cm;
+    int nz, nr, na;
+    ss_optics_slab slab;
+} ss_mci_run;
+typedef struct ss_mci_file {
+    int nruns;
+    ss_mci_run *runs;
+} ss_mci_file;
+/* Parses the text of a .mci file; `name` is used in error messages. '#' starts
+ * a comment; blank lines are skipped. Every value is range-checked. */
+ss_status ss_mci_parse(const char *text, const char *name, ss_mci_file *out, ss_error *err);
+void ss_mci_file_free(ss_mci_file *f);
+/* Runs one MCML run and returns the MCML-style output text (malloc'd): InParm,
+ * RAT (specular, diffuse, absorbed, transmittance), A_l, A_z, Rd_r, Rd_a, Tt_r,
+ * Tt_a with MCML's units and normalisations (overflow collected in the last bin
+ * as MCML does). */
+ss_status ss_mci_simulate(const ss_mci_run *run, uint64_t seed, char **mco_text, ss_error *err);
 
 /* ---- spectra and colour ---------------------------------------------------------- */
 typedef struct ss_spectrum_options {
@@ -121,6 +156,13 @@ ss_status ss_optics_brdf_sample(const ss_bio_params *bio, const ss_spectrum_opti
                                 int n_theta_i, int n_theta_r, int n_phi, ss_brdf_sampled *out,
                                 ss_error *err);
 void ss_brdf_sampled_free(ss_brdf_sampled *b);
+/* Radial diffuse reflectance profile Rd(r) per linear-sRGB channel (seed
+ * §4.7.1): the spectral Rd(r, lambda) of each radial bin is converted with the
+ * CIE observer and D65 like an albedo. Bins of width max_cm/bins from r = 0;
+ * rgb[bin*3 + c] in 1/cm^2 (integrates over the plane to the channel albedo
+ * minus what falls beyond max_cm). o->mc.radial_* are ignored. */
+ss_status ss_optics_radial_profile_rgb(const ss_bio_params *bio, const ss_spectrum_options *o,
+                                       int bins, double max_cm, double *rgb, ss_error *err);
 
 #ifdef __cplusplus
 }
