@@ -436,7 +436,7 @@ static void swatch_help(FILE *f) {
             "  --cell PX                cell size in pixels (96)\n"
             "  --json                   print the colours as JSON\n"
             "  (--melanin and --blood are replaced by the lists; defaults here:\n"
-            "   --photons 20000 --wl-step 20)\n\n%s",
+            "   --photons 10000 --wl-step 20)\n\n%s",
             COMMON_HELP);
 }
 
@@ -449,6 +449,7 @@ static int optics_swatch(int argc, char **argv) {
     common_opts c;
     common_init(&c);
     c.spec.wl_step_nm = 20;
+    c.spec.mc.photons = 10000;
     int rc = 0;
     double mel_def[] = {0.01, 0.03, 0.06, 0.12, 0.2, 0.3, 0.43};
     double bl_def[] = {0.002, 0.005, 0.01, 0.02, 0.04};

@@ -105,8 +105,12 @@ void ss_mc_result_free(ss_mc_result *res);
 typedef struct ss_mc_paths ss_mc_paths; /* opaque */
 ss_status ss_mc_trace_paths(const ss_optics_slab *geometry, const ss_mc_options *opt,
                             ss_mc_paths **out, ss_error *err);
-/* mua_per_cm: one per layer; fills diffuse (and brdf_exit if it was recorded, and
- * radial if recorded) */
+/* mua_per_cm: one per layer; fills specular, diffuse, diffuse_se (and brdf_exit
+ * if it was recorded, and radial if recorded), transmit (packets leaving through
+ * the bottom boundary only). absorbed and absorbed_per_layer are NaN: the path
+ * method does not compute them. Memory: one 76-byte record per traced photon at
+ * most; traces of more than 4,000,000 photons are refused. Fat bounces are
+ * recorded, so bottom_albedo < 1 is applied exactly as albedo^bounces. */
 ss_status ss_mc_paths_apply(const ss_mc_paths *p, const double *mua_per_cm, ss_mc_result *res,
                             ss_error *err);
 void ss_mc_paths_free(ss_mc_paths *p);
