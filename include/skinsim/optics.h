@@ -174,7 +174,8 @@ void ss_brdf_sampled_free(ss_brdf_sampled *b);
  * §4.7.1): the spectral Rd(r, lambda) of each radial bin is converted with the
  * CIE observer and D65 like an albedo. Bins of width max_cm/bins from r = 0;
  * rgb[bin*3 + c] in 1/cm^2 (integrates over the plane to the channel albedo
- * minus what falls beyond max_cm). o->mc.radial_* are ignored. */
+ * minus what falls beyond max_cm); far-out bins can be slightly negative, as a
+ * colour-matrix row can be. o->mc.radial_* are ignored. */
 ss_status ss_optics_radial_profile_rgb(const ss_bio_params *bio, const ss_spectrum_options *o,
                                        int bins, double max_cm, double *rgb, ss_error *err);
 
