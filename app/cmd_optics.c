@@ -146,6 +146,10 @@ static int parse_common(const char *cmd, int argc, char **argv, int *i, common_o
     return 0;
 }
 
+static void progress_cb(void *user, double fraction) {
+    ss_progress_update((ss_progress *)user, fraction);
+}
+
 static void common_init(common_opts *c) {
     memset(c, 0, sizeof *c);
     ss_bio_params_default(&c->bio);
@@ -258,7 +262,13 @@ static int optics_spectrum(int argc, char **argv) {
         if (st) return cli_fail(cmd, &e);
     }
     ss_reflectance_spectrum s;
-    if (ss_optics_reflectance_spectrum(&c.bio, &c.spec, &s, &e)) return cli_fail(cmd, &e);
+    ss_progress pr;
+    ss_progress_begin(&pr, "spectrum", 1.0, c.quiet || c.json);
+    c.spec.progress = progress_cb;
+    c.spec.progress_user = &pr;
+    ss_status sst = ss_optics_reflectance_spectrum(&c.bio, &c.spec, &s, &e);
+    ss_progress_end(&pr);
+    if (sst) return cli_fail(cmd, &e);
     double rgb[3];
     if (ss_spectrum_to_srgb_linear(s.wavelength_nm, s.reflectance, s.n, rgb, &e)) {
         ss_reflectance_spectrum_free(&s);
@@ -353,8 +363,13 @@ static int optics_brdf(int argc, char **argv) {
     if ((rc = common_finish(cmd, &c))) return rc;
     if ((rc = check_out(cmd, c.out))) return rc;
     ss_brdf_sampled b;
-    if (ss_optics_brdf_sample(&c.bio, &c.spec, (int)nti, (int)ntr, (int)nph, &b, &e))
-        return cli_fail(cmd, &e);
+    ss_progress pr;
+    ss_progress_begin(&pr, "brdf", 1.0, c.quiet || c.json);
+    c.spec.progress = progress_cb;
+    c.spec.progress_user = &pr;
+    ss_status bst = ss_optics_brdf_sample(&c.bio, &c.spec, (int)nti, (int)ntr, (int)nph, &b, &e);
+    ss_progress_end(&pr);
+    if (bst) return cli_fail(cmd, &e);
     size_t nrow = (size_t)nti * ntr * nph, cap = 64 + nrow * 96, len = 0;
     char *buf = malloc(cap);
     if (!buf) {

@@ -145,6 +145,10 @@ ss_status ss_mci_simulate(const ss_mci_run *run, uint64_t seed, char **mco_text,
 typedef struct ss_spectrum_options {
     double wl_min_nm, wl_max_nm, wl_step_nm;
     ss_mc_options mc;
+    /* optional: called after each Monte Carlo run with the fraction done (0..1]
+     * from the calling thread; NULL (the default) for none */
+    void (*progress)(void *user, double fraction_done);
+    void *progress_user;
 } ss_spectrum_options;
 void ss_spectrum_options_default(ss_spectrum_options *o); /* 380..780 step 10 */
 typedef struct ss_reflectance_spectrum {
