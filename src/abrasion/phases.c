@@ -117,6 +117,8 @@ typedef struct ctx {
     int bx, by, bw, bh; /* the wound's box: noise, erosion and normals are only
                            needed there (outside, every phase is plain skin), so
                            the cost grows with the wound, not the texture */
+    int rx, ry, rw, rh; /* the box grown by the glow: where any colour differs
+                           from healthy skin */
     decode_lut lut;
 } ctx;
 
@@ -140,6 +142,12 @@ static void ctx_init(ctx *c, const ss_wound_shape *w, const ss_base_skin *skin,
     c->by = w->box_y;
     c->bw = w->box_w;
     c->bh = w->box_h;
+    int g = (int)ceilf(SS_ABRASION_MAX_GRADIENT_REF_PX * c->k) + 2;
+    c->rx = c->bx - g < 0 ? 0 : c->bx - g;
+    c->ry = c->by - g < 0 ? 0 : c->by - g;
+    c->rw = (c->bx + c->bw + g > c->n ? c->n : c->bx + c->bw + g) - c->rx;
+    c->rh = (c->by + c->bh + g > c->n ? c->n : c->by + c->bh + g) - c->ry;
+    if (c->bw == 0) c->rw = c->rh = 0;
 }
 
 static inline void put_color(const ctx *c, float *dst, const float rgb[3]) {
@@ -180,14 +188,23 @@ static ss_status glow(const ctx *c, ss_image **out, ss_error *err) {
     return SS_OK;
 }
 
-/* Outside the wound: the glow fades from red to the upper skin, or plain
- * upper skin where the gradient is not drawn. */
-static inline void outside_color(const ctx *c, size_t i, const ss_image *glw, float *rgb) {
-    const float *up = c->skin->upper_srgb->data + i * 3;
-    if (glw && glw->data[i] >= 0.0f)
-        lerp3(GLOW_RED, up, glw->data[i], rgb);
-    else
-        memcpy(rgb, up, 3 * sizeof(float));
+/* Outside the wound the glow fades from red to the upper skin (Alg. 3.4);
+ * where it is not drawn the pixel keeps the healthy skin fill_healthy wrote. */
+static inline void outside_glow(const ctx *c, size_t i, const ss_image *glw, ss_texture_set *out) {
+    if (glw->data[i] < 0.0f) return;
+    float rgb[3];
+    lerp3(GLOW_RED, c->skin->upper_srgb->data + i * 3, glw->data[i], rgb);
+    put_color(c, out->color->data + i * 3, rgb);
+}
+
+/* Every phase starts from healthy skin: the upper colour, its reflection,
+ * flat height and normal; the phases then draw only around the wound. */
+static void fill_healthy(const ctx *c, ss_texture_set *out) {
+    memcpy(out->color->data, c->skin->upper->data, c->npx * 3 * sizeof(float));
+    const float refl = SKIN_REFLECTION, h = 0.5f, flat[3] = {0.5f, 0.5f, 1.0f};
+    ss_image_fill(out->reflection, &refl);
+    ss_image_fill(out->height, &h);
+    ss_image_fill(out->normal, flat);
 }
 
 static void normals(const ctx *c, ss_texture_set *out) {
@@ -201,9 +218,7 @@ static void normals(const ctx *c, ss_texture_set *out) {
         ss_height_to_normal(out->height, strength, out->normal);
         return;
     }
-    const float flat[3] = {0.5f, 0.5f, 1.0f};
-    ss_image_fill(out->normal, flat);
-    ss_error err;
+    ss_error err; /* the flat normal outside is already there (fill_healthy) */
     ss_image *hs = ss_image_create(w, h, 1, &err), *ns = hs ? ss_image_create(w, h, 3, &err) : NULL;
     if (!ns) { /* no memory for the box: do the whole texture */
         ss_image_free(hs);
@@ -226,13 +241,14 @@ static ss_status render_vasoconstriction(const ctx *c, ss_texture_set *out, ss_e
     (void)err;
     /* §4.3.1: lower skin inside the shape, upper skin outside. */
 #pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < c->npx; i++) {
-        int in = c->w->mask->data[i] > 0.5f;
-        const float *src = (in ? c->skin->lower_srgb : c->skin->upper_srgb)->data + i * 3;
-        put_color(c, out->color->data + i * 3, src);
-        out->reflection->data[i] = in ? RAW_WOUND_REFLECTION : SKIN_REFLECTION;
-        out->height->data[i] = in ? 0.5f - WOUND_DEPTH : 0.5f;
-    }
+    for (int y = c->ry; y < c->ry + c->rh; y++)
+        for (size_t i = (size_t)y * (size_t)c->n + (size_t)c->rx, e = i + (size_t)c->rw; i < e;
+             i++) {
+            if (c->w->mask->data[i] <= 0.5f) continue;
+            put_color(c, out->color->data + i * 3, c->skin->lower_srgb->data + i * 3);
+            out->reflection->data[i] = RAW_WOUND_REFLECTION;
+            out->height->data[i] = 0.5f - WOUND_DEPTH;
+        }
     return SS_OK;
 }
 
@@ -274,30 +290,31 @@ static ss_status render_vasodilation(const ctx *c, ss_texture_set *out, ss_error
     }
     if (!st) {
 #pragma omp parallel for schedule(static)
-        for (size_t i = 0; i < c->npx; i++) {
-            float rgb[3];
-            if (c->w->mask->data[i] > 0.5f) {
-                const float *lo_s = c->skin->lower_srgb->data + i * 3;
-                if (e2->data[i] > 0.5f) {
-                    /* Inside: lower skin multiplied by the red (§4.3.2). */
-                    for (int k = 0; k < 3; k++) rgb[k] = lo_s[k] * GLOW_RED[k];
+        for (int y = c->ry; y < c->ry + c->rh; y++)
+            for (size_t i = (size_t)y * (size_t)c->n + (size_t)c->rx, e = i + (size_t)c->rw; i < e;
+                 i++) {
+                float rgb[3];
+                if (c->w->mask->data[i] > 0.5f) {
+                    const float *lo_s = c->skin->lower_srgb->data + i * 3;
+                    if (e2->data[i] > 0.5f) {
+                        /* Inside: lower skin multiplied by the red (§4.3.2). */
+                        for (int k = 0; k < 3; k++) rgb[k] = lo_s[k] * GLOW_RED[k];
+                    } else {
+                        /* The edge of half scraped-off skin. */
+                        const float *up = c->skin->upper_srgb->data + i * 3;
+                        for (int k = 0; k < 3; k++) rgb[k] = up[k] * EDGE_GREY;
+                    }
+                    out->reflection->data[i] = scrape->data[i];
+                    out->height->data[i] =
+                        e2->data[i] > 0.5f
+                            ? 0.5f - WOUND_DEPTH + SCRAPE_RELIEF * (scrape->data[i] - 0.5f)
+                            : 0.5f - 0.5f * WOUND_DEPTH;
                 } else {
-                    /* The edge of half scraped-off skin. */
-                    const float *up = c->skin->upper_srgb->data + i * 3;
-                    for (int k = 0; k < 3; k++) rgb[k] = up[k] * EDGE_GREY;
+                    outside_glow(c, i, glw, out);
+                    continue;
                 }
-                out->reflection->data[i] = scrape->data[i];
-                out->height->data[i] =
-                    e2->data[i] > 0.5f
-                        ? 0.5f - WOUND_DEPTH + SCRAPE_RELIEF * (scrape->data[i] - 0.5f)
-                        : 0.5f - 0.5f * WOUND_DEPTH;
-            } else {
-                outside_color(c, i, glw, rgb);
-                out->reflection->data[i] = SKIN_REFLECTION;
-                out->height->data[i] = 0.5f;
+                put_color(c, out->color->data + i * 3, rgb);
             }
-            put_color(c, out->color->data + i * 3, rgb);
-        }
     }
     ss_image_free(glw);
     ss_image_free(scrape);
@@ -318,28 +335,29 @@ static ss_status render_scab_forming(const ctx *c, ss_texture_set *out, ss_error
     if (!st) st = noise(c, 5, 0.09f, 0.5f, 0.43f, 64.0f, ST_SCRAPE, &scrape, err);
     if (!st) {
 #pragma omp parallel for schedule(static)
-        for (size_t i = 0; i < c->npx; i++) {
-            float rgb[3];
-            if (c->w->mask->data[i] > 0.5f) {
-                const float *lo_s = c->skin->lower_srgb->data + i * 3;
-                const float *up = c->skin->upper_srgb->data + i * 3;
-                float ln = low->data[i], lower_wound[3], sp[3];
-                /* Eq. 4.5 */
-                for (int k = 0; k < 3; k++) lower_wound[k] = lo_s[k] * ln + up[k] * (1.0f - ln);
-                /* Eq. 4.6: speckle colour = noise x (0.88, 0.20, 0.22), weighted by its red. */
-                for (int k = 0; k < 3; k++) sp[k] = speck->data[i] * SPECKLE_RED[k];
-                for (int k = 0; k < 3; k++)
-                    rgb[k] = sp[k] * sp[0] + lower_wound[k] * (1.0f - sp[0]);
-                out->reflection->data[i] = 0.7f * scrape->data[i];
-                /* The redder parts are carved deeper (§4.3.3). */
-                out->height->data[i] = 0.5f - WOUND_DEPTH * (0.5f + ln) - WOUND_DEPTH * sp[0];
-            } else {
-                outside_color(c, i, glw, rgb);
-                out->reflection->data[i] = SKIN_REFLECTION;
-                out->height->data[i] = 0.5f;
+        for (int y = c->ry; y < c->ry + c->rh; y++)
+            for (size_t i = (size_t)y * (size_t)c->n + (size_t)c->rx, e = i + (size_t)c->rw; i < e;
+                 i++) {
+                float rgb[3];
+                if (c->w->mask->data[i] > 0.5f) {
+                    const float *lo_s = c->skin->lower_srgb->data + i * 3;
+                    const float *up = c->skin->upper_srgb->data + i * 3;
+                    float ln = low->data[i], lower_wound[3], sp[3];
+                    /* Eq. 4.5 */
+                    for (int k = 0; k < 3; k++) lower_wound[k] = lo_s[k] * ln + up[k] * (1.0f - ln);
+                    /* Eq. 4.6: speckle colour = noise x (0.88, 0.20, 0.22), weighted by its red. */
+                    for (int k = 0; k < 3; k++) sp[k] = speck->data[i] * SPECKLE_RED[k];
+                    for (int k = 0; k < 3; k++)
+                        rgb[k] = sp[k] * sp[0] + lower_wound[k] * (1.0f - sp[0]);
+                    out->reflection->data[i] = 0.7f * scrape->data[i];
+                    /* The redder parts are carved deeper (§4.3.3). */
+                    out->height->data[i] = 0.5f - WOUND_DEPTH * (0.5f + ln) - WOUND_DEPTH * sp[0];
+                } else {
+                    outside_glow(c, i, glw, out);
+                    continue;
+                }
+                put_color(c, out->color->data + i * 3, rgb);
             }
-            put_color(c, out->color->data + i * 3, rgb);
-        }
     }
     ss_image_free(glw);
     ss_image_free(low);
@@ -364,29 +382,30 @@ static ss_status render_scab(const ctx *c, ss_texture_set *out, ss_error *err) {
     if (!st) {
         ss_gradient_edge(c->w->mask, c->w->dist, 100.0f * c->k, 1, inner);
 #pragma omp parallel for schedule(static)
-        for (size_t i = 0; i < c->npx; i++) {
-            float rgb[3];
-            if (c->w->mask->data[i] > 0.5f) {
-                float h = mask_n->data[i] * mid->data[i];
-                float in_col[3], grad[3] = {0, 0, 0};
-                /* Higher crust is the lighter, yellowish colour (docs/abrasion.md). */
-                lerp3(SCAB_DARK, SCAB_LIGHT, h, in_col);
-                if (inner->data[i] >= 0.0f) {
-                    static const float black[3] = {0, 0, 0};
-                    lerp3(SCAB_RED, black, inner->data[i], grad);
-                    for (int k = 0; k < 3; k++) grad[k] *= redn->data[i];
+        for (int y = c->ry; y < c->ry + c->rh; y++)
+            for (size_t i = (size_t)y * (size_t)c->n + (size_t)c->rx, e = i + (size_t)c->rw; i < e;
+                 i++) {
+                float rgb[3];
+                if (c->w->mask->data[i] > 0.5f) {
+                    float h = mask_n->data[i] * mid->data[i];
+                    float in_col[3], grad[3] = {0, 0, 0};
+                    /* Higher crust is the lighter, yellowish colour (docs/abrasion.md). */
+                    lerp3(SCAB_DARK, SCAB_LIGHT, h, in_col);
+                    if (inner->data[i] >= 0.0f) {
+                        static const float black[3] = {0, 0, 0};
+                        lerp3(SCAB_RED, black, inner->data[i], grad);
+                        for (int k = 0; k < 3; k++) grad[k] *= redn->data[i];
+                    }
+                    /* Eq. 4.7 */
+                    for (int k = 0; k < 3; k++) rgb[k] = in_col[k] + grad[k] * (1.0f - in_col[k]);
+                    out->reflection->data[i] = refl->data[i];
+                    out->height->data[i] = 0.5f + 0.5f * h;
+                } else {
+                    outside_glow(c, i, glw, out);
+                    continue;
                 }
-                /* Eq. 4.7 */
-                for (int k = 0; k < 3; k++) rgb[k] = in_col[k] + grad[k] * (1.0f - in_col[k]);
-                out->reflection->data[i] = refl->data[i];
-                out->height->data[i] = 0.5f + 0.5f * h;
-            } else {
-                outside_color(c, i, glw, rgb);
-                out->reflection->data[i] = SKIN_REFLECTION;
-                out->height->data[i] = 0.5f;
+                put_color(c, out->color->data + i * 3, rgb);
             }
-            put_color(c, out->color->data + i * 3, rgb);
-        }
     }
     ss_image_free(glw);
     ss_image_free(mask_n);
@@ -397,14 +416,12 @@ static ss_status render_scab(const ctx *c, ss_texture_set *out, ss_error *err) {
     return st;
 }
 
-/* Alg. 4.4 for one pixel (display-space colour). */
-static inline void maturation_color(const ctx *c, size_t i, double position, float *rgb) {
+/* Alg. 4.4 for one pixel (display-space colour); returns 0 for pixels
+ * outside the wound, which stay healthy skin. */
+static inline int maturation_color(const ctx *c, size_t i, double position, float *rgb) {
     const float *skin = c->skin->upper_srgb->data + i * 3;
     int l = c->w->label[i];
-    if (c->w->mask->data[i] <= 0.5f || l < 0) {
-        memcpy(rgb, skin, 3 * sizeof(float));
-        return;
-    }
+    if (c->w->mask->data[i] <= 0.5f || l < 0) return 0;
     double closing = c->w->closing_px[l];
     double max_outer = closing * 0.5; /* Eq. 4.8 */
     double outer = max_outer * position;
@@ -420,19 +437,20 @@ static inline void maturation_color(const ctx *c, size_t i, double position, flo
         float t = span > 0 ? (float)((d - inner) / span) : 1.0f;
         lerp3(GLOW_RED, WOUND_WHITE, t < 0 ? 0 : t > 1 ? 1 : t, rgb);
     }
+    return 1;
 }
 
 static ss_status render_maturation(const ctx *c, double position, ss_texture_set *out,
                                    ss_error *err) {
     (void)err;
+    /* Reflection, height and normal stay those of healthy skin. */
 #pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < c->npx; i++) {
-        float rgb[3];
-        maturation_color(c, i, position, rgb);
-        put_color(c, out->color->data + i * 3, rgb);
-        out->reflection->data[i] = SKIN_REFLECTION;
-        out->height->data[i] = 0.5f;
-    }
+    for (int y = c->by; y < c->by + c->bh; y++)
+        for (size_t i = (size_t)y * (size_t)c->n + (size_t)c->bx, e = i + (size_t)c->bw; i < e;
+             i++) {
+            float rgb[3];
+            if (maturation_color(c, i, position, rgb)) put_color(c, out->color->data + i * 3, rgb);
+        }
     return SS_OK;
 }
 
@@ -458,6 +476,7 @@ ss_status ss_abrasion_render_phase(ss_phase phase, double position, const ss_wou
     if (st) return st;
     ctx c;
     ctx_init(&c, w, skin, s);
+    fill_healthy(&c, out);
     switch (phase) {
     case SS_PHASE_VASOCONSTRICTION:
         st = render_vasoconstriction(&c, out, err);
@@ -496,8 +515,7 @@ ss_status ss_abrasion_maturation_color(const ss_wound_shape *w, const ss_base_sk
         for (int x = c.bx; x < c.bx + c.bw; x++) {
             size_t i = (size_t)y * (size_t)c.n + (size_t)x;
             float rgb[3];
-            maturation_color(&c, i, position, rgb);
-            put_color(&c, color->data + i * 3, rgb);
+            if (maturation_color(&c, i, position, rgb)) put_color(&c, color->data + i * 3, rgb);
         }
     return SS_OK;
 }
