@@ -122,6 +122,11 @@ ss_status ss_abrasion_render_phase(ss_phase phase, double position, const ss_wou
                                    const ss_base_skin *skin, const ss_abrasion_settings *s,
                                    ss_texture_set *out, ss_error *err);
 
+/* The rectangle outside which every phase is plain healthy skin: the wound's
+ * box grown by the widest gradient. Frames blend only inside it. */
+void ss_abrasion_changed_region(const ss_wound_shape *w, const ss_abrasion_settings *s, int *x,
+                                int *y, int *width, int *height);
+
 /* Only the colour of maturation at a position (reflection, height and normal
  * of maturation do not change with position): what a timeline frame in the
  * maturation phase re-renders. Writes the pixels of the wound's bounding box

@@ -122,6 +122,17 @@ typedef struct ctx {
     decode_lut lut;
 } ctx;
 
+void ss_abrasion_changed_region(const ss_wound_shape *w, const ss_abrasion_settings *s, int *x,
+                                int *y, int *width, int *height) {
+    int n = s->size;
+    int g = (int)ceilf((float)(SS_ABRASION_MAX_GRADIENT_REF_PX * s->size / s->reference_px)) + 2;
+    *x = w->box_x - g < 0 ? 0 : w->box_x - g;
+    *y = w->box_y - g < 0 ? 0 : w->box_y - g;
+    *width = (w->box_x + w->box_w + g > n ? n : w->box_x + w->box_w + g) - *x;
+    *height = (w->box_y + w->box_h + g > n ? n : w->box_y + w->box_h + g) - *y;
+    if (w->box_w == 0) *width = *height = 0;
+}
+
 /* Copies sub (w x h) into img at (x0, y0). */
 static void paste(ss_image *img, const ss_image *sub, int x0, int y0) {
     size_t row = (size_t)sub->width * (size_t)img->channels * sizeof(float);
@@ -142,12 +153,7 @@ static void ctx_init(ctx *c, const ss_wound_shape *w, const ss_base_skin *skin,
     c->by = w->box_y;
     c->bw = w->box_w;
     c->bh = w->box_h;
-    int g = (int)ceilf(SS_ABRASION_MAX_GRADIENT_REF_PX * c->k) + 2;
-    c->rx = c->bx - g < 0 ? 0 : c->bx - g;
-    c->ry = c->by - g < 0 ? 0 : c->by - g;
-    c->rw = (c->bx + c->bw + g > c->n ? c->n : c->bx + c->bw + g) - c->rx;
-    c->rh = (c->by + c->bh + g > c->n ? c->n : c->by + c->bh + g) - c->ry;
-    if (c->bw == 0) c->rw = c->rh = 0;
+    ss_abrasion_changed_region(w, s, &c->rx, &c->ry, &c->rw, &c->rh);
 }
 
 static inline void put_color(const ctx *c, float *dst, const float rgb[3]) {
