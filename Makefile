@@ -7,7 +7,7 @@ DEPS      = build-essential cmake pkg-config libpng-dev libopenexr-dev zlib1g-de
             libcjson-dev libcmocka-dev libcairo2-dev fonts-dejavu-core
 DEMO_OUT ?= demo-out
 
-.PHONY: all deps build demo test test-asan bench clean
+.PHONY: all deps build demo test test-asan bench fuzz clean
 
 all: build
 
@@ -40,6 +40,15 @@ test-asan: deps
 
 bench: build
 	@for b in $(BUILD)/bench_*; do echo "== $$b"; $$b; done
+
+# Fuzz the input readers for FUZZ_SECONDS (clang's libFuzzer).
+FUZZ_SECONDS ?= 60
+fuzz: deps
+	clang -O1 -g -fsanitize=fuzzer,address,undefined -Iinclude $$(pkg-config --cflags libpng libcjson cairo) \
+	  tests/fuzz/fuzz_inputs.c src/*/*.c -o build-fuzz/fuzz_inputs -fopenmp \
+	  $$(pkg-config --libs libpng libcjson cairo) -lOpenEXRCore-3_1 -lz -lm
+	@mkdir -p build-fuzz/corpus
+	build-fuzz/fuzz_inputs -max_total_time=$(FUZZ_SECONDS) -max_len=4096 build-fuzz/corpus
 
 clean:
 	rm -rf $(BUILD) $(ASAN)

@@ -1,0 +1,56 @@
+/* libFuzzer target for the abrasion inputs a user hands over: stroke CSV,
+ * timeline JSON and PNG masks. Each input goes through the same readers the
+ * CLI uses (via a temporary file); any crash or sanitizer report is a bug.
+ * Build: make fuzz (clang -fsanitize=fuzzer,address,undefined). */
+#define _POSIX_C_SOURCE 200809L
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <unistd.h>
+
+#include "skinsim/abrasion.h"
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
+    if (size < 1) return 0;
+    char path[] = "/tmp/skinsim-fuzz-XXXXXX";
+    int fd = mkstemp(path);
+    if (fd < 0) return 0;
+    /* The first byte picks the reader, the rest is the file. */
+    if (write(fd, data + 1, size - 1) < 0) {
+        close(fd);
+        unlink(path);
+        return 0;
+    }
+    close(fd);
+    ss_error err;
+    switch (data[0] % 3) {
+    case 0: {
+        ss_strokes s;
+        if (ss_strokes_read_csv(path, &s, &err) == SS_OK) {
+            ss_wound_shape *w = NULL;
+            if (ss_wound_shape_from_strokes(&s, (data[0] / 3) % 2 ? SS_HULL_CONCAVE : SS_HULL_CONVEX,
+                                            5, 32, 1, &w, &err) == SS_OK)
+                ss_wound_shape_free(w);
+            ss_strokes_free(&s);
+        }
+        break;
+    }
+    case 1: {
+        ss_timeline t;
+        ss_timeline_load_json(path, &t, &err);
+        break;
+    }
+    default: {
+        ss_image *img = ss_png_read(path, SS_ENC_LINEAR, &err);
+        if (img && img->width <= 512 && img->height <= 512) {
+            ss_wound_shape *w = NULL;
+            if (ss_wound_shape_from_mask(img, 32, 1, &w, &err) == SS_OK) ss_wound_shape_free(w);
+        }
+        ss_image_free(img);
+    }
+    }
+    unlink(path);
+    return 0;
+}
