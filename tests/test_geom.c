@@ -376,8 +376,25 @@ static void test_outline_distance(void **state) {
     ss_image_free(d);
 }
 
+/* Three points that are collinear up to rounding: the turn tests disagree
+ * between the two chains; must be an input error, not a buffer overrun. */
+static void test_hull_nearly_collinear(void **state) {
+    (void)state;
+    const ss_vec2 pts[3] = {{3.2, 6.4}, {9.6, 12.8}, {0, 3.2}};
+    ss_polygon h;
+    ss_error err;
+    ss_status st = ss_convex_hull(pts, 3, &h, &err);
+    if (st == SS_OK) {
+        assert_true(h.count >= 3);
+        ss_polygon_free(&h);
+    } else {
+        assert_int_equal(st, SS_ERR_INPUT);
+    }
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_hull_nearly_collinear),
         cmocka_unit_test(test_convex_hull), cmocka_unit_test(test_concave_hull),
         cmocka_unit_test(test_fill),        cmocka_unit_test(test_closing_and_segment),
         cmocka_unit_test(test_edt),         cmocka_unit_test(test_outline_distance),

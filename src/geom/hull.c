@@ -82,7 +82,8 @@ static void reverse(ss_vec2 *p, int n) {
 }
 
 /* Monotone chain on sorted unique points p[0..m). Writes the hull to h (room
- * for m+1) and returns its vertex count. Keeps only det > 0 turns (the mirror
+ * for 2m: with nearly collinear points, inexact turn tests can keep a point in
+ * both chains) and returns its vertex count. Keeps only det > 0 turns (the mirror
  * of Alg. 4.1's det < 0, see the file comment). */
 static int chain(const ss_vec2 *p, int m, ss_vec2 *h) {
     int k = 0;
@@ -110,7 +111,7 @@ ss_status ss_convex_hull(const ss_vec2 *pts, int n, ss_polygon *out, ss_error *e
         return ss_error_set(err, SS_ERR_INPUT,
                             "convex hull: need at least 3 distinct points, got %d (of %d)", m, n);
     }
-    ss_vec2 *h = malloc(sizeof *h * (size_t)(m + 1));
+    ss_vec2 *h = malloc(sizeof *h * (size_t)(2 * m + 1));
     if (!h) {
         free(p);
         return ss_error_set(err, SS_ERR_NOMEM, "convex hull: out of memory");
