@@ -1,0 +1,36 @@
+/* Top-view maps of the healing grid: per (x, y) column, the value of a field in
+ * the topmost non-air cell (what one sees at the skin surface) or its maximum
+ * over the column. These are the 2D views the seed maps onto the undeformed
+ * mesh for shading (seed 001 §5.4); rendered to PNG by plot.c. */
+#include "skinsim/heal_io.h"
+
+ss_image *ss_heal_surface_map(const ss_heal_grid *g, int field, ss_heal_surface_mode mode,
+                              ss_error *err) {
+    if (!g || field < 0 || field >= SS_HEAL_NFIELDS || !g->field[field]) {
+        ss_error_set(err, SS_ERR_INPUT, "surface map: invalid field %d", field);
+        return NULL;
+    }
+    ss_image *img = ss_image_create(g->nx, g->ny, 1, err);
+    if (!img) return NULL;
+    const int nx = g->nx, ny = g->ny, nz = g->nz;
+    const float *a = g->field[field];
+#pragma omp parallel for schedule(static)
+    for (int y = 0; y < ny; y++) {
+        for (int x = 0; x < nx; x++) {
+            float v = 0;
+            int found = 0;
+            for (int z = nz - 1; z >= 0; z--) {
+                size_t i = ((size_t)z * (size_t)ny + (size_t)y) * (size_t)nx + (size_t)x;
+                if (g->cell[i] == SS_CELL_AIR) continue;
+                if (mode == SS_SURFACE_TOP) {
+                    v = a[i];
+                    break;
+                }
+                if (!found || a[i] > v) v = a[i];
+                found = 1;
+            }
+            img->data[(size_t)(ny - 1 - y) * (size_t)nx + (size_t)x] = v;
+        }
+    }
+    return img;
+}
