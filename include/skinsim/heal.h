@@ -36,7 +36,7 @@ enum {
     SS_HEAL_ESCHAR,     /* s */
     SS_HEAL_EPITHELIUM, /* e */
     SS_HEAL_SCAR,       /* rho */
-    SS_HEAL_PLASMA,     /* p, omega = [p > p_min] */
+    SS_HEAL_PLASMA,     /* p, omega = [p > SS_HEAL_P_MIN] */
     SS_HEAL_NFIELDS
 };
 
@@ -83,14 +83,18 @@ typedef struct ss_heal_params {
     double lamnrho; /* 1/day per unit n, collagen deposition by fibroblasts */
     double lamrhop; /* 1/day, scar remodelling (fading) */
     /* plasma p / wound region */
-    double Dp;      /* mm^2/day */
-    double lampp;   /* 1/day, signed: negative = plasma resorption */
-    double rho_max; /* 1, collagen level above which C(rho) pushes the region */
-    double p_min;   /* 1, omega = [p > p_min] */
-    /* healthy far-field / initial values (dimensionless) */
-    double u1_healthy, u3_healthy, n_healthy;
-    double u1_wound; /* initial oxygen in the wound (clot) */
+    double Dp;       /* mm^2/day */
+    double lampp;    /* 1/day, signed: negative = plasma resorption */
+    double rho_max;  /* 1, collagen level above which C(rho) pushes the region */
+    double u1_wound; /* 1, initial oxygen in the wound (clot) */
 } ss_heal_params;
+
+/* omega = [p > SS_HEAL_P_MIN] (plasma is normalised to 1 in the fresh clot). */
+#define SS_HEAL_P_MIN 0.5
+/* Healthy far-field values implied by the parameters (steady state of §4.1
+ * in intact tissue): u3 = u3_eq, u1 = lam31 u3_eq / lam11, u2 = 0,
+ * n = K (1 - lamnn / (rn u1)) (0 if negative), s = rho = p = 0. */
+void ss_heal_params_healthy(const ss_heal_params *p, float healthy[SS_HEAL_NFIELDS]);
 
 /* Built-in preset; unknown scenario -> SS_ERR_INPUT listing "clean", "scab",
  * "keloid". The presets are compiled in and equal data/heal/<scenario>.json. */
@@ -213,14 +217,18 @@ int ss_heal_in_region(const ss_heal_grid *g, const ss_heal_params *p, size_t idx
 #define SS_HEAL_RD_MAXCLASS 8
 #define SS_HEAL_RD_MAXSLOT 4
 
-/* One x-run of cells handed to the reaction function: it must write, for
- * i < n, r[f][i] = R_f (per day) for every field and m[k][i] (>= 0) for every
- * diffusion-multiplier slot k. u[f][i] are the current values. */
+/* One x-run of cells handed to the reaction function. The reaction of field
+ * f is written in production/loss form R_f = prod_f - loss_f * u_f with
+ * prod_f >= 0, loss_f >= 0 (this keeps both schemes non-negative). For i < n
+ * it must write prod[f][i], loss[f][i] (per day) for every field and m[k][i]
+ * (>= 0, the diffusion multiplier) for every slot k < nslots. u[f][i] are the
+ * current values; cls[i] the classes. */
 typedef struct ss_heal_rd_row {
     int n, x0, y, z;
     const uint8_t *cls;
     const float *u[SS_HEAL_RD_MAXF];
-    float *r[SS_HEAL_RD_MAXF];
+    float *prod[SS_HEAL_RD_MAXF];
+    float *loss[SS_HEAL_RD_MAXF];
     float *m[SS_HEAL_RD_MAXSLOT];
 } ss_heal_rd_row;
 typedef void (*ss_heal_reaction_fn)(void *ctx, const ss_heal_rd_row *row);
@@ -241,7 +249,7 @@ typedef struct ss_heal_rd_system {
     ss_heal_reaction_fn react;                      /* NULL = no reaction */
     void *ctx;
     double mmax;     /* bound on every multiplier m (for the stability limit) */
-    double rate_max; /* bound on |dR_f/du_f| (1/day), for the explicit limit */
+    double rate_max; /* bound on every loss_f (1/day), explicit positivity limit */
 } ss_heal_rd_system;
 
 typedef struct ss_heal_rd_work ss_heal_rd_work;
@@ -252,13 +260,16 @@ double ss_heal_rd_explicit_dt(const ss_heal_rd_system *sys);
 /* Largest |vx|+|vy|+|vz| over the grid (0 without velocity), mm/day. */
 double ss_heal_rd_max_speed(const ss_heal_rd_system *sys);
 /* One forward-Euler step: central-difference diffusion, donor-cell convection
- * (conservative), reaction; clamp to [lo, hi]. */
-void ss_heal_rd_step_explicit(const ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt);
-/* One split step: reaction (nsub forward-Euler substeps per cell, clamped),
+ * (conservative), reaction; clamp to [lo, hi]. The new values are written to
+ * the work buffers, which are then exchanged with sys->u (both malloc'd by
+ * their creators; after the step sys->u[f] points at the new values). */
+void ss_heal_rd_step_explicit(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt);
+/* One split step, in place: reaction (nsub substeps per cell of the
+ * positivity-preserving u <- (u + h prod) / (1 + h loss), clamped),
  * convection (CFL-subcycled donor cell), then implicit-Euler LOD diffusion
  * along x, y, z by Thomas line solves with multipliers frozen after the
  * reaction. Unconditionally stable and positivity preserving in diffusion. */
-void ss_heal_rd_step_split(const ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt, int nsub);
+void ss_heal_rd_step_split(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt, int nsub);
 
 #ifdef __cplusplus
 }
