@@ -101,10 +101,12 @@ ss_status ss_heal_pvd_write(const char *path, int n, const double *t_days, const
 
 /* ---- surface maps -------------------------------------------------------- */
 typedef enum ss_heal_surface_mode {
-    SS_SURFACE_TOP = 0, /* value in the topmost non-air cell of each column */
-    SS_SURFACE_MAX = 1  /* maximum over the non-air cells of each column */
+    SS_SURFACE_TOP = 0, /* value in the topmost tissue cell of each column */
+    SS_SURFACE_MAX = 1  /* maximum over the tissue cells of each column */
 } ss_heal_surface_mode;
-/* nx x ny 1-channel image oriented like a footprint image: image row 0 is
+/* Tissue cells: all but AIR, the BOUND layers z = 0 and z = nz-1, and BOUND
+ * cells whose centre is above g->skin_top_mm.
+ * nx x ny 1-channel image oriented like a footprint image: image row 0 is
  * grid y = ny-1 (image row r = grid y ny-1-r), column x = grid x. Columns of
  * air only are 0. */
 ss_image *ss_heal_surface_map(const ss_heal_grid *g, int field, ss_heal_surface_mode mode,
