@@ -133,7 +133,7 @@ ss_status ss_heal_pvd_write(const char *path, int n, const double *t_days, const
                "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
                "  <Collection>\n");
     for (int i = 0; i < n; i++) {
-        fprintf(f, "    <DataSet timestep=\"%.17g\" group=\"\" part=\"0\" file=\"", t_days[i]);
+        fprintf(f, "    <DataSet timestep=\"%.12g\" group=\"\" part=\"0\" file=\"", t_days[i]);
         xml_attr(f, files[i]);
         fprintf(f, "\"/>\n");
     }
