@@ -22,7 +22,7 @@ for w in "mm" "days" "area.csv" "fields.pvd" "summary.json" "--checkpoint-every"
 done
 
 # --- full run: every output exists and is consistent
-"$CLI" heal $SMALL --days 2 --out "$T/a" --json >"$T/a.json" || fail "small run failed"
+"$CLI" heal $SMALL --days 2 --threads 2 --out "$T/a" --json >"$T/a.json" || fail "small run failed"
 grep -q '"scenario":[[:space:]]*"scab"' "$T/a.json" || fail "--json summary lacks the scenario"
 for f in area.csv area.png summary.json fields/fields.pvd; do
     [ -s "$T/a/$f" ] || fail "missing $f"
@@ -46,6 +46,9 @@ for k in '"dt_days"' '"scheme"' '"time_to_50pct_closure_days"' '"time_to_95pct_c
     '"wall_time_s"' '"params"' '"nx":[[:space:]]*24'; do
     grep -q "$k" "$T/a/summary.json" || fail "summary.json lacks $k"
 done
+# one thread gives the same bytes as two
+"$CLI" heal $SMALL --days 2 --threads 1 --out "$T/a1" || fail "1-thread run failed"
+cmp -s "$T/a/fields/fields_0002.vti" "$T/a1/fields/fields_0002.vti" || fail "1 vs 2 threads differ"
 # the same DIR again is refused (a previous run), --force overwrites
 "$CLI" heal $SMALL --days 2 --out "$T/a" 2>/dev/null
 [ $? -eq 2 ] || fail "re-running into a previous run's DIR should exit 2"

@@ -12,6 +12,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "skinsim/heal.h"
 #include "skinsim/heal_io.h"
@@ -753,6 +754,68 @@ static void test_surface_and_area(void **state) {
     ss_heal_grid_free(g);
 }
 
+/* ---- CLI: mask + depth image ------------------------------------------------------- */
+
+static void test_cli_mask_and_depth_image(void **state) {
+    (void)state;
+    char *dir = tu_tmpdir("cli");
+    char *mask = join(dir, "mask.png"), *depth = join(dir, "depth.png"), *out = join(dir, "out");
+    ss_error err;
+    ss_image *m = ss_image_create(40, 32, 1, &err), *d = ss_image_create(40, 32, 1, &err);
+    for (int y = 0; y < 32; y++)
+        for (int x = 0; x < 40; x++) {
+            ss_image_px(m, x, y)[0] = (x >= 10 && x < 30 && y >= 8 && y < 24) ? 1.0f : 0.0f;
+            ss_image_px(d, x, y)[0] = x < 20 ? 0.25f : 1.0f; /* x 2 mm: 0.5 mm | 2 mm deep */
+        }
+    assert_int_equal(ss_png_write(mask, m, 8, SS_ENC_LINEAR, &err), SS_OK);
+    assert_int_equal(ss_png_write(depth, d, 16, SS_ENC_LINEAR, &err), SS_OK);
+    ss_image_free(m);
+    ss_image_free(d);
+    char args[4096], *sum = join(dir, "stdout.json");
+    snprintf(args, sizeof args,
+             "heal --grid 20x16x8 --days 0.1 --wound-mask '%s' --wound-depth-image '%s' "
+             "--wound-depth-mm 2 --out '%s' --json",
+             mask, depth, out);
+    assert_int_equal(tu_run_cli(args, sum, NULL), 0);
+    char *text = ss_read_file(sum, NULL, &err);
+    assert_non_null(text);
+    /* 10 x 8 wound columns of 0.25 mm^2 */
+    assert_non_null(strstr(text, "\"initial_area_mm2\":\t20,"));
+    free(text);
+    /* wound voxels: 40 columns 1 layer deep (0.5 mm) + 40 columns 4 layers (2 mm) */
+    char *vti = join(out, "fields/fields_0000.vti");
+    size_t len;
+    char *data = ss_read_file(vti, &len, &err);
+    assert_non_null(data);
+    unsigned long long off;
+    char *da = strstr(data, "Name=\"cell_state\"");
+    assert_non_null(da);
+    assert_int_equal(sscanf(strstr(da, "offset=\"") + 8, "%llu", &off), 1);
+    const unsigned char *base =
+        (const unsigned char *)strchr(strstr(data, "<AppendedData"), '_') + 1 + off;
+    size_t n = get_u64le(base), wound = 0;
+    assert_int_equal(n, 20 * 16 * 8);
+    for (size_t i = 0; i < n; i++) wound += base[8 + i] == SS_CELL_WOUND;
+    assert_int_equal(wound, 200);
+    free(data);
+    /* the same mask with a depth reaching the bottom is refused, nothing written */
+    char *out2 = join(dir, "out2");
+    snprintf(args, sizeof args,
+             "heal --grid 20x16x8 --days 0.1 --wound-mask '%s' --wound-depth-image '%s' "
+             "--wound-depth-mm 3.5 --out '%s'",
+             mask, depth, out2);
+    assert_int_equal(tu_run_cli(args, NULL, NULL), 2);
+    assert_int_not_equal(access(out2, F_OK), 0); /* no directory created */
+    free(out2);
+    free(vti);
+    free(sum);
+    free(mask);
+    free(depth);
+    free(out);
+    tu_rmtree(dir);
+    free(dir);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_vti_roundtrip),
@@ -763,6 +826,7 @@ int main(void) {
         cmocka_unit_test(test_footprint_mask),
         cmocka_unit_test(test_stroke_csv),
         cmocka_unit_test(test_surface_and_area),
+        cmocka_unit_test(test_cli_mask_and_depth_image),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
