@@ -813,7 +813,11 @@ int cmd_heal(int argc, char **argv) {
         else if (r.nsteps > 2000000000LL)
             st = ss_error_set(&err, SS_ERR_INPUT, "--days %g needs %lld steps of %g days", o->days,
                               r.nsteps, r.dt);
-        else if ((long long)r.g->step > r.nsteps)
+        else if (fabs((double)r.nsteps * r.dt - o->days) > 1e-9 * (o->days > 1 ? o->days : 1) &&
+                 !o->quiet && !o->json)
+            fprintf(stderr, "skinsim heal: note: --days %g rounded to %lld steps of %g days\n",
+                    o->days, r.nsteps, r.dt);
+        if (!st && (long long)r.g->step > r.nsteps)
             st = ss_error_set(&err, SS_ERR_INPUT,
                               "--days %g is before the checkpoint's time %g days", o->days,
                               r.g->t_days);
