@@ -38,7 +38,8 @@ static void help(void) {
            "Units: lengths in mm, times in days. x, y run along the skin, z up.\n"
            "\n"
            "Scenario and model\n"
-           "  --scenario NAME        clean | scab | keloid (default clean)\n"
+           "  --scenario NAME        clean | scab | keloid (default clean, or the\n"
+           "                         \"scenario\" key of --params)\n"
            "  --params FILE.json     parameter overrides (every value with its unit, see\n"
            "                         data/heal/params.json); applied on top of the scenario\n"
            "  --no-scab              switch off eschar (scab) formation\n"
@@ -117,7 +118,7 @@ typedef struct opts {
     double size[3];
     int have_size;
     double skin_top, epidermis, depth;
-    int have_skin_top, have_depth;
+    int have_skin_top, have_depth, have_scenario;
     double days, dt, snap_every, area_every, ckpt_every;
     int have_days, have_ckpt;
     int scheme, concave_k, threads, no_scab, static_region, quiet, json, force;
@@ -335,6 +336,7 @@ static int parse_args(int argc, char **argv, opts *o, ss_error *err) {
         int resume_ok = 0;
         if (!strcmp(a, "--scenario")) {
             o->scenario = v;
+            o->have_scenario = 1;
         } else if (!strcmp(a, "--params")) {
             o->params = v;
         } else if (!strcmp(a, "--grid")) {
@@ -444,7 +446,8 @@ static ss_status setup_fresh(run *r, ss_error *err) {
     opts *o = &r->o;
     ss_status st;
     /* scenario + parameters */
-    r->p = o->params ? ss_heal_params_load(o->params, o->scenario, err)
+    /* with --params and no --scenario, the file's "scenario" key decides */
+    r->p = o->params ? ss_heal_params_load(o->params, o->have_scenario ? o->scenario : NULL, err)
                      : ss_heal_params_preset(o->scenario, err);
     if (!r->p) return err->code ? err->code : SS_ERR_INPUT;
     if ((st = ss_heal_params_set_switches(r->p, o->no_scab ? 0 : -1, o->static_region ? 1 : -1)))
@@ -581,6 +584,17 @@ static ss_status setup_fresh(run *r, ss_error *err) {
                              "%s: no voxel centre of the %gx%gx%g mm block lies inside the mesh "
                              "(coordinates are mm from the block corner, z up)",
                              o->mesh, X, Y, Z);
+                free(w3);
+                w3 = NULL;
+            }
+            size_t below = 0; /* voxels under the skin surface: the solver's wound */
+            for (size_t i = 0; w3 && i < (size_t)n[0] * n[1] * n[2]; i++)
+                below += w3[i] && ((double)(i / ((size_t)n[0] * n[1])) + 0.5) * dx < top;
+            if (w3 && cnt && !below) {
+                ss_error_set(err, SS_ERR_INPUT,
+                             "%s: the mesh lies entirely above the skin surface (%g mm); "
+                             "coordinates are mm from the block corner, z up",
+                             o->mesh, top);
                 free(w3);
                 w3 = NULL;
             }
