@@ -35,7 +35,7 @@ test: build
 test-asan: deps
 	cmake -S . -B $(ASAN) -DCMAKE_BUILD_TYPE=Debug -DSKINSIM_SANITIZE=ON $(CMAKE_ARGS)
 	cmake --build $(ASAN) -j $(JOBS)
-	cd $(ASAN) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 SKINSIM_TEST_QUICK=1 \
+	cd $(ASAN) && ASAN_OPTIONS=detect_leaks=1 LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp UBSAN_OPTIONS=print_stacktrace=1 SKINSIM_TEST_QUICK=1 \
 	  ctest --output-on-failure -j $(JOBS)
 
 bench: build

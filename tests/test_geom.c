@@ -217,6 +217,19 @@ static void test_fill(void **state) {
         ss_polygon_free(&h);
         free(p);
     }
+    /* Far away, huge or NaN polygons fill nothing (and do not crash). */
+    {
+        ss_vec2 far[] = {{1e300, 1e300}, {2e300, 1e300}, {1e300, 3e300}};
+        ss_vec2 bad[] = {{1, 1}, {NAN, 5}, {9, 9}};
+        ss_polygon fp = {3, far}, bp = {3, bad};
+        ss_image *z = ss_image_create(17, 13, 1, &err);
+        ss_polygon_fill(&fp, z);
+        ss_polygon_fill_bruteforce(&fp, z);
+        ss_polygon_fill(&bp, z);
+        ss_polygon_fill_bruteforce(&bp, z);
+        for (int i = 0; i < 17 * 13; i++) assert_true(z->data[i] == 0.0f);
+        ss_image_free(z);
+    }
     /* Concave: scanline == per-pixel even-odd point-in-polygon. */
     for (uint64_t seed = 1; seed <= 4; seed++) {
         int W = 61, H = 59, n = 60;
@@ -349,6 +362,10 @@ static void test_outline_distance(void **state) {
         free(p2);
         free(L);
     }
+    /* A huge triangle whose edges cross the image: exact within max_dist. */
+    ss_vec2 big[] = {{-1e9, 20.3}, {1e9, 30.7}, {40.2, 1e9}};
+    ss_polygon bigp = {3, big};
+    compare_outline(&bigp, 1, 61, 47, 12.0);
     /* An outline entirely far outside: still exact with max_dist = inf. */
     ss_vec2 far[] = {{-500, -500}, {-400, -500}, {-450, -420}};
     ss_polygon fp = {3, far};

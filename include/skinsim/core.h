@@ -64,6 +64,12 @@ void ss_image_sample_wrap(const ss_image *img, float u, float v, float *out);
  * another size than the output. */
 ss_image *ss_image_resize(const ss_image *img, int width, int height, ss_error *err);
 
+/* A contact sheet: tiles (any size, RGB or grey, linear) scaled into
+ * tile_px squares on a dark canvas, `columns` per row, each labelled below
+ * (labels may be NULL). Returns a linear RGB image. */
+ss_image *ss_contact_sheet(const ss_image *const *tiles, const char *const *labels, int n,
+                           int tile_px, int columns, ss_error *err);
+
 /* ---- colour encoding ----------------------------------------------------- */
 float ss_srgb_encode(float linear); /* linear 0..1 -> sRGB 0..1 */
 float ss_srgb_decode(float encoded);
@@ -107,6 +113,16 @@ char *ss_read_file(const char *path, size_t *len, ss_error *err);
 ss_status ss_mkdir_p(const char *path, ss_error *err);
 /* Checks that dir exists (or can be created) and a file can be created in it. */
 ss_status ss_check_writable_dir(const char *dir, ss_error *err);
+/* Output directories that appear whole or not at all. begin: when dir does
+ * not exist yet, *work is a fresh sibling "dir.partial-XXXXXX" to write into;
+ * when it exists, *work is dir itself (each file is still written
+ * atomically). end: on status SS_OK renames the staging directory into place;
+ * otherwise removes it. Returns the final status. *work is malloc'd. */
+ss_status ss_output_dir_begin(const char *dir, char **work, ss_error *err);
+ss_status ss_output_dir_end(const char *dir, const char *work, ss_status status, ss_error *err);
+/* rm -rf of a directory tree (used to clean up a failed staging directory). */
+void ss_remove_tree(const char *path);
+
 /* Directory with the shipped data files: $SKINSIM_DATA, else the build-time
  * source data directory. */
 const char *ss_data_dir(void);

@@ -27,17 +27,26 @@ void ss_polygon_free(ss_polygon *poly); /* frees pts, zeroes the struct */
 
 /* Convex hull of n points, clockwise in a y-down image frame as the seed's
  * Alg. 4.1 returns it. Duplicates and collinear points are dropped. Fewer than
- * 3 distinct non-collinear points is an input error. */
+ * 3 distinct non-collinear points is an input error. Precisely: the shoelace
+ * area in raw pixel coordinates (x right, y down) is positive (clockwise as
+ * seen on the image), every vertex turns with Eq. 4.4 det > 0, and a point
+ * is inside when it is on no edge's Eq. 4.4 "right side" (det < 0), the test
+ * of Alg. 4.2. The caller frees out with ss_polygon_free. */
 ss_status ss_convex_hull(const ss_vec2 *pts, int n, ss_polygon *out, ss_error *err);
 /* Concave hull with k nearest neighbours (k >= 3; k is raised automatically
- * until every point is inside, falling back to the convex hull). */
+ * until every point is inside, falling back to the convex hull). Starts at
+ * the lowest-y point; k below 3 is taken as 3. Same orientation as
+ * ss_convex_hull; the result is a simple polygon through input points with
+ * every input point inside or on it. O(n^2) per attempt. */
 ss_status ss_concave_hull(const ss_vec2 *pts, int n, int k, ss_polygon *out, ss_error *err);
 
 /* Fill: sets mask pixels whose centre (x+0.5, y+0.5) is inside the polygon to
- * 1 (others untouched). Works for any simple polygon (even-odd rule). */
+ * 1 (others untouched). Works for any simple polygon (even-odd rule). All
+ * channels of a pixel are set. Parallel over rows. */
 void ss_polygon_fill(const ss_polygon *poly, ss_image *mask);
 /* The seed's Alg. 4.2 (bounding box + right-side test per edge), for convex
- * hulls only; used by tests as the brute-force reference. */
+ * hulls only; used by tests as the brute-force reference. Like the seed it
+ * writes 0 to the bounding-box pixels that are outside; either winding. */
 void ss_polygon_fill_bruteforce(const ss_polygon *poly, ss_image *mask);
 
 /* Alg. 4.3: the largest distance between two hull vertices. */
@@ -46,16 +55,24 @@ double ss_closing_distance(const ss_polygon *poly);
 /* Alg. 3.3: distance from p to segment a-b. */
 double ss_segment_distance(ss_vec2 a, ss_vec2 b, ss_vec2 p);
 /* Distance from every pixel centre to the nearest outline edge of the
- * polygons (brute force over all edges, as seed Alg. 3.4 does). 1 channel. */
+ * polygons (brute force over all edges, as seed Alg. 3.4 does). 1 channel
+ * (channel 0 is written). +INFINITY where there is no edge at all. */
 void ss_outline_distance_bruteforce(const ss_polygon *polys, int npolys, ss_image *dist);
 /* Same result, cost independent of edge count: exact for pixel centres
  * within max_dist of the outline (beyond it the value is only guaranteed
- * to be > max_dist). Uses a distance transform to find candidate edges. */
-ss_status ss_outline_distance(const ss_polygon *polys, int npolys, double max_dist,
-                              ss_image *dist, ss_error *err);
+ * to be > max_dist). Uses a distance transform to find candidate edges.
+ * "Exact" means bit-identical to ss_outline_distance_bruteforce. Beyond
+ * max_dist the value is a lower bound of the true distance that is still
+ * > max_dist. max_dist = INFINITY asks for exact values everywhere. dist
+ * must be 1 channel; max_dist < 0 or NaN and malformed polygons are input
+ * errors. Memory: about (W + 2 max_dist)(H + 2 max_dist) * 9 bytes. */
+ss_status ss_outline_distance(const ss_polygon *polys, int npolys, double max_dist, ss_image *dist,
+                              ss_error *err);
 
 /* Exact Euclidean distance transform (Felzenszwalb & Huttenlocher): for each
- * pixel, distance to the nearest pixel whose src value is > 0.5. */
+ * pixel, distance to the nearest pixel whose src value is > 0.5. Reads
+ * channel 0 of src; dist must be 1 channel of the same size. +INFINITY when
+ * no pixel is set. Bit-identical for any thread count. */
 ss_status ss_distance_transform(const ss_image *src, ss_image *dist, ss_error *err);
 
 #ifdef __cplusplus

@@ -1,9 +1,10 @@
 /* Files: atomic writes (temporary name + fsync + rename, so a failed or killed
  * run never leaves a half-written output), whole-file reads, mkdir -p. */
-#define _POSIX_C_SOURCE 200809L
+#define _XOPEN_SOURCE 700
 #include "skinsim/core.h"
 
 #include <errno.h>
+#include <ftw.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -163,4 +164,69 @@ const char *ss_data_dir(void) {
 #else
     return "data";
 #endif
+}
+
+static int unlink_cb(const char *path, const struct stat *sb, int flag, struct FTW *ftw) {
+    (void)sb;
+    (void)flag;
+    (void)ftw;
+    return remove(path);
+}
+
+void ss_remove_tree(const char *path) {
+    if (path && *path) nftw(path, unlink_cb, 16, FTW_DEPTH | FTW_PHYS);
+}
+
+ss_status ss_output_dir_begin(const char *dir, char **work, ss_error *err) {
+    *work = NULL;
+    struct stat st;
+    if (stat(dir, &st) == 0) {
+        if (!S_ISDIR(st.st_mode))
+            return ss_error_set(err, SS_ERR_INPUT, "%s: exists and is not a directory", dir);
+        if (access(dir, W_OK | X_OK) != 0)
+            return ss_error_set(err, SS_ERR_INPUT, "%s: directory is not writable", dir);
+        *work = strdup(dir);
+        return *work ? SS_OK : ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    }
+    ss_status s = ss_check_writable_dir(dir, err);
+    if (s) return s;
+    /* Create the parents, then a staging sibling next to dir. */
+    char parent[4096];
+    snprintf(parent, sizeof parent, "%s", dir);
+    size_t n = strlen(parent);
+    while (n > 1 && parent[n - 1] == '/') parent[--n] = '\0';
+    char *slash = strrchr(parent, '/');
+    if (slash && slash != parent) {
+        *slash = '\0';
+        if ((s = ss_mkdir_p(parent, err))) return s;
+    }
+    size_t len = strlen(dir) + 32;
+    char *tmpl = malloc(len);
+    if (!tmpl) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    snprintf(tmpl, len, "%.*s.partial-XXXXXX", (int)n, dir);
+    if (!mkdtemp(tmpl)) {
+        int e = errno;
+        free(tmpl);
+        return ss_error_set(err, SS_ERR_INPUT, "%s: cannot create output directory: %s", dir,
+                            strerror(e));
+    }
+    chmod(tmpl, 0755);
+    *work = tmpl;
+    return SS_OK;
+}
+
+ss_status ss_output_dir_end(const char *dir, const char *work, ss_status status, ss_error *err) {
+    if (!work) return status;
+    if (strcmp(dir, work) == 0) return status;
+    if (status) {
+        ss_remove_tree(work);
+        return status;
+    }
+    if (rename(work, dir) != 0) {
+        int e = errno;
+        ss_remove_tree(work);
+        return ss_error_set(err, SS_ERR_RUNTIME, "%s: cannot move output into place: %s", dir,
+                            strerror(e));
+    }
+    return SS_OK;
 }

@@ -26,23 +26,30 @@ static void set_px(ss_image *m, int x, int y, float v) {
     for (int c = 0; c < m->channels; c++) p[c] = v;
 }
 
+/* Polygons with NaN/inf vertices are not filled (nothing sensible to do). */
+static int finite_poly(const ss_polygon *poly) {
+    for (int i = 0; i < poly->count; i++)
+        if (!isfinite(poly->pts[i].x) || !isfinite(poly->pts[i].y)) return 0;
+    return 1;
+}
+
 static int cmp_double(const void *a, const void *b) {
     double x = *(const double *)a, y = *(const double *)b;
     return (x > y) - (x < y);
 }
 
 void ss_polygon_fill(const ss_polygon *poly, ss_image *mask) {
-    if (!poly || !mask || poly->count < 3 || !poly->pts) return;
+    if (!poly || !mask || poly->count < 3 || !poly->pts || !finite_poly(poly)) return;
     const int n = poly->count, W = mask->width, H = mask->height;
     double ymin = poly->pts[0].y, ymax = ymin;
     for (int i = 1; i < n; i++) {
         ymin = fmin(ymin, poly->pts[i].y);
         ymax = fmax(ymax, poly->pts[i].y);
     }
-    if (!(ymin == ymin) || !(ymax == ymax)) return; /* NaN vertices: nothing to fill */
     /* Rows whose centre y+0.5 can lie inside [ymin, ymax]. */
-    int y0 = (int)fmax(0.0, floor(ymin - 0.5)), y1 = (int)fmin((double)H - 1, ceil(ymax));
-    if (y0 > y1) return;
+    const double y0d = fmax(0.0, floor(ymin - 0.5)), y1d = fmin((double)H - 1, ceil(ymax));
+    if (y0d > y1d) return;
+    const int y0 = (int)y0d, y1 = (int)y1d;
 #pragma omp parallel
     {
         double *xs = malloc(sizeof *xs * (size_t)n);
@@ -70,7 +77,7 @@ void ss_polygon_fill(const ss_polygon *poly, ss_image *mask) {
 }
 
 void ss_polygon_fill_bruteforce(const ss_polygon *poly, ss_image *mask) {
-    if (!poly || !mask || poly->count < 3 || !poly->pts) return;
+    if (!poly || !mask || poly->count < 3 || !poly->pts || !finite_poly(poly)) return;
     const int n = poly->count, W = mask->width, H = mask->height;
     double minx = poly->pts[0].x, maxx = minx, miny = poly->pts[0].y, maxy = miny, area2 = 0;
     for (int i = 0; i < n; i++) {
@@ -81,11 +88,12 @@ void ss_polygon_fill_bruteforce(const ss_polygon *poly, ss_image *mask) {
         maxy = fmax(maxy, a.y);
         area2 += a.x * b.y - b.x * a.y;
     }
-    if (!(area2 == area2)) return;
     const double s = area2 >= 0 ? 1.0 : -1.0;
     /* GetHullBoundingBox: pixels that can have their centre in the box. */
-    int x0 = (int)fmax(0.0, floor(minx)), x1 = (int)fmin((double)W - 1, ceil(maxx));
-    int y0 = (int)fmax(0.0, floor(miny)), y1 = (int)fmin((double)H - 1, ceil(maxy));
+    const double x0d = fmax(0.0, floor(minx)), x1d = fmin((double)W - 1, ceil(maxx));
+    const double y0d = fmax(0.0, floor(miny)), y1d = fmin((double)H - 1, ceil(maxy));
+    if (x0d > x1d || y0d > y1d) return;
+    const int x0 = (int)x0d, x1 = (int)x1d, y0 = (int)y0d, y1 = (int)y1d;
 #pragma omp parallel for schedule(static)
     for (int y = y0; y <= y1; y++)
         for (int x = x0; x <= x1; x++) {

@@ -185,19 +185,23 @@ static int concave_attempt(const ss_vec2 *p, int m, int first, int k, double tol
     for (;;) {
         const int cur = hull[len - 1];
         const ss_vec2 c = p[cur];
-        /* k nearest among unused points, plus the start once the hull can close. */
+        /* k nearest among unused points, plus the start once the hull can close
+         * (kept sorted by (distance, index) with insertion: O(n k)). */
         int nc = 0;
         for (int i = 0; i < m; i++) {
             if (used[i] && !(i == first && len >= 3)) continue;
             if (i == cur) continue;
             double dx = p[i].x - c.x, dy = p[i].y - c.y;
-            cs[nc].idx = i;
-            cs[nc].key = dx * dx + dy * dy;
-            nc++;
+            const cand ci = {i, dx * dx + dy * dy};
+            if (nc == k && cmp_cand_asc(&ci, &cs[k - 1]) >= 0) continue;
+            int j = nc < k ? nc++ : k - 1;
+            while (j > 0 && cmp_cand_asc(&ci, &cs[j - 1]) < 0) {
+                cs[j] = cs[j - 1];
+                j--;
+            }
+            cs[j] = ci;
         }
         if (nc == 0) return 0;
-        qsort(cs, (size_t)nc, sizeof *cs, cmp_cand_asc);
-        if (nc > k) nc = k;
         /* Sort by right-hand (clockwise) turn from the back direction, largest first. */
         for (int i = 0; i < nc; i++) {
             double dx = p[cs[i].idx].x - c.x, dy = p[cs[i].idx].y - c.y;

@@ -1,0 +1,178 @@
+/* skinsim abrasion: the abrasion-healing texture timeline of seed 000 (§3.2,
+ * §4.2-4.3). A wound shape (hulls of painted UV strokes, or a mask) drives five
+ * key positions (vasoconstriction, vasodilation, scab-forming, scab,
+ * maturation) that each render a texture set; any time t on the timeline is the
+ * linear blend of the two keys around it, except maturation, which is
+ * re-rendered at its position (§4.3.5). */
+#ifndef SKINSIM_ABRASION_H
+#define SKINSIM_ABRASION_H
+
+#include "skinsim/core.h"
+#include "skinsim/geom.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- strokes ------------------------------------------------------------ */
+
+/* Painted strokes in texture space: points (u,v) in 0..1, v = 0 at the top
+ * row of the image (glTF convention), grouped by stroke id. */
+typedef struct ss_strokes {
+    int count;       /* points */
+    ss_vec2 *uv;     /* count points */
+    int *stroke_id;  /* count ids (0 when the file has no id column) */
+} ss_strokes;
+
+/* CSV: one point per line "u,v" or "u,v,stroke_id"; blank lines, lines
+ * starting with '#', and a first line without numbers (a header) are skipped.
+ * Errors name the file and line: non-numbers, NaN, u or v outside 0..1. */
+ss_status ss_strokes_read_csv(const char *path, ss_strokes *out, ss_error *err);
+void ss_strokes_free(ss_strokes *s);
+/* The built-in example: one scrape-shaped stroke in the middle of the texture. */
+ss_status ss_strokes_example(ss_strokes *out, ss_error *err);
+
+/* ---- wound shape -------------------------------------------------------- */
+
+typedef enum ss_hull_kind { SS_HULL_CONVEX = 0, SS_HULL_CONCAVE = 1 } ss_hull_kind;
+
+/* Everything the key positions need to know about the wound(s) at one texture
+ * size: the binary shape, the distance of each pixel to the wound outline, and
+ * per wound its closing distance (Alg. 4.3) and maturation border ratio. */
+typedef struct ss_wound_shape {
+    int size;             /* square texture side in pixels */
+    ss_image *mask;       /* 1 inside a wound, 0 outside */
+    ss_image *dist;       /* pixels from the pixel centre to the nearest outline */
+    int *label;           /* size*size: index of the nearest wound */
+    int nwounds;
+    double *closing_px;   /* per wound: closing distance in pixels */
+    double *inner_ratio;  /* per wound: rand(0.4, 0.8) of Eq. 4.8 */
+    int npolys;           /* hulls (0 for mask input) */
+    ss_polygon *polys;
+} ss_wound_shape;
+
+/* One hull per stroke id (each needs >= 3 distinct, non-collinear points),
+ * filled and measured at the given size. */
+ss_status ss_wound_shape_from_strokes(const ss_strokes *s, ss_hull_kind kind, int concave_k,
+                                      int size, uint64_t seed, ss_wound_shape **out,
+                                      ss_error *err);
+/* A mask image (any size, > 0.5 = wound; resampled to size). Each connected
+ * component is a wound; an empty mask is an input error. */
+ss_status ss_wound_shape_from_mask(const ss_image *mask, int size, uint64_t seed,
+                                   ss_wound_shape **out, ss_error *err);
+void ss_wound_shape_free(ss_wound_shape *w);
+
+/* ---- base skin ---------------------------------------------------------- */
+
+/* The seed's "upper" (healthy) and "lower" (dermis) skin colour textures,
+ * linear RGB, size x size. Inputs may be given (any size, resampled); the
+ * rest are generated procedurally from seed (see docs/abrasion.md). */
+typedef struct ss_base_skin {
+    ss_image *upper, *lower;           /* linear RGB */
+    ss_image *upper_srgb, *lower_srgb; /* the same, sRGB-encoded: the seed blends in display space */
+} ss_base_skin;
+ss_status ss_base_skin_create(const ss_image *upper_in, const ss_image *lower_in, int size,
+                              uint64_t seed, ss_base_skin *out, ss_error *err);
+void ss_base_skin_free(ss_base_skin *b);
+
+/* ---- key positions ------------------------------------------------------ */
+
+typedef enum ss_phase {
+    SS_PHASE_VASOCONSTRICTION = 0,
+    SS_PHASE_VASODILATION,
+    SS_PHASE_SCAB_FORMING,
+    SS_PHASE_SCAB,
+    SS_PHASE_MATURATION,
+    SS_PHASE_COUNT
+} ss_phase;
+const char *ss_phase_name(ss_phase p); /* "vasoconstriction", ... "maturation" */
+int ss_phase_from_name(const char *name); /* -1 if unknown */
+
+/* A key position's texture set. color: linear RGB; reflection: 1 channel
+ * specular strength 0..1; height: 1 channel, 0.5 = skin surface, 1 = the
+ * thickest scab (world units in ss_abrasion_settings); normal: RGB tangent
+ * space, OpenGL (+Y up), derived from height. */
+typedef struct ss_texture_set {
+    ss_image *color, *reflection, *height, *normal;
+} ss_texture_set;
+ss_status ss_texture_set_create(int size, ss_texture_set *t, ss_error *err);
+void ss_texture_set_free(ss_texture_set *t);
+
+/* Scale of the textures in the world: the seed's thicknesses and noise
+ * periods are pixels of a reference_px texture; other sizes are scaled so
+ * the output looks the same at 512 and at 4096 pixels. */
+typedef struct ss_abrasion_settings {
+    int size;               /* output side in pixels */
+    double world_size_cm;   /* side of the texture in the world */
+    double reference_px;    /* texture size the seed's pixel values refer to (2048) */
+    double scab_height_mm;  /* height = 1 in the height map */
+    uint64_t seed;
+} ss_abrasion_settings;
+void ss_abrasion_settings_default(ss_abrasion_settings *s);
+
+/* Renders one key position. For maturation, position in 0..1 is the
+ * maturation interpolation value of §4.3.5 (ignored by other phases). */
+ss_status ss_abrasion_render_phase(ss_phase phase, double position, const ss_wound_shape *w,
+                                   const ss_base_skin *skin, const ss_abrasion_settings *s,
+                                   ss_texture_set *out, ss_error *err);
+
+/* Only the colour of maturation at a position (reflection, height and normal
+ * of maturation do not change with position): what a timeline frame in the
+ * maturation phase re-renders. */
+ss_status ss_abrasion_maturation_color(const ss_wound_shape *w, const ss_base_skin *skin,
+                                       const ss_abrasion_settings *s, double position,
+                                       ss_image *color, ss_error *err);
+
+/* ---- timeline ----------------------------------------------------------- */
+
+#define SS_TIMELINE_MAX_KEYS 32
+typedef struct ss_timeline_key {
+    ss_phase phase;
+    double day;
+} ss_timeline_key;
+/* Keys in increasing day order; maturation runs from its key to end_day. */
+typedef struct ss_timeline {
+    int nkeys;
+    ss_timeline_key key[SS_TIMELINE_MAX_KEYS];
+    double end_day;
+} ss_timeline;
+/* The default mapping of phases to days (seed §2.1; docs/abrasion.md). */
+void ss_timeline_default(ss_timeline *t);
+/* Overrides from JSON: {"keys":[{"phase":"scab","day":3},...],"end_day":30}.
+ * Checks phases are known, days finite, increasing, maturation last. */
+ss_status ss_timeline_load_json(const char *path, ss_timeline *t, ss_error *err);
+ss_status ss_timeline_validate(const ss_timeline *t, ss_error *err);
+
+/* Where time t falls: the two keys to blend and the weight of the second,
+ * or, in maturation, the maturation position. */
+typedef struct ss_timeline_pos {
+    int key_a, key_b;     /* indices into t->key */
+    double weight;        /* 0 = key_a, 1 = key_b */
+    int in_maturation;    /* 1: re-render maturation at maturation_pos */
+    double maturation_pos;
+} ss_timeline_pos;
+ss_timeline_pos ss_timeline_locate(const ss_timeline *t, double day);
+
+/* The key textures: one set per phase present (rendered once; maturation at
+ * position 0). */
+typedef struct ss_abrasion {
+    ss_abrasion_settings settings;
+    ss_timeline timeline;
+    const ss_wound_shape *shape;
+    const ss_base_skin *skin;
+    ss_texture_set phase[SS_PHASE_COUNT];
+    int rendered[SS_PHASE_COUNT];
+} ss_abrasion;
+ss_status ss_abrasion_create(const ss_abrasion_settings *s, const ss_timeline *t,
+                             const ss_wound_shape *w, const ss_base_skin *skin,
+                             ss_abrasion **out, ss_error *err);
+void ss_abrasion_free(ss_abrasion *a);
+/* The texture set at time day (days since injury), into out (created by the
+ * caller with ss_texture_set_create at settings.size). Maps the caller set to
+ * NULL (all but color) are skipped: a time slider needs only the colour. */
+ss_status ss_abrasion_frame(const ss_abrasion *a, double day, ss_texture_set *out, ss_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
