@@ -21,14 +21,6 @@
 
 #define CMD "heal"
 
-/* Sanitizer builds: fontconfig (used by cairo's text) keeps process-lifetime
- * caches that LeakSanitizer reports at exit; they are not ours. This hook is
- * read only by LSan; weak so that other files may define the same. */
-__attribute__((weak)) const char *__lsan_default_suppressions(void);
-__attribute__((weak)) const char *__lsan_default_suppressions(void) {
-    return "leak:libfontconfig.so\n";
-}
-
 static void help(void) {
     printf("usage: skinsim heal [options]\n"
            "\n"

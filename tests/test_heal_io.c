@@ -21,14 +21,6 @@
 #define M_PI 3.14159265358979323846
 #endif
 
-/* Sanitizer builds: fontconfig (used by cairo's text) keeps process-lifetime
- * caches that LeakSanitizer reports at exit; they are not ours. This hook is
- * read only by LSan; weak so that other files may define the same. */
-__attribute__((weak)) const char *__lsan_default_suppressions(void);
-__attribute__((weak)) const char *__lsan_default_suppressions(void) {
-    return "leak:libfontconfig.so\n";
-}
-
 static char *join(const char *dir, const char *name) {
     size_t n = strlen(dir) + strlen(name) + 2;
     char *p = malloc(n);
