@@ -590,6 +590,20 @@ static void test_footprint_mask(void **state) {
     assert_float_equal(ss_image_px(d, 39, 5)[0], 2.0, 1e-4);
     assert_float_equal(ss_image_px(d, 13, 5)[0], 2.0 * 13 / 39.0, 1e-4);
     ss_image_free(d);
+    /* depth image: EXR values are mm, unscaled; a negative depth is refused */
+    char *exr = join(dir, "depth.exr");
+    for (int i = 0; i < 40 * 30; i++) img->data[i] = 0.1f * (float)(i % 40);
+    assert_int_equal(ss_exr_write(exr, img, 0, &err), SS_OK);
+    d = ss_heal_depth_image_read(exr, 2.0, &err);
+    assert_non_null(d);
+    assert_float_equal(ss_image_px(d, 39, 7)[0], 3.9, 1e-5);
+    ss_image_free(d);
+    img->data[77] = -0.5f;
+    assert_int_equal(ss_exr_write(exr, img, 0, &err), SS_OK);
+    assert_null(ss_heal_depth_image_read(exr, 2.0, &err));
+    assert_int_equal(err.code, SS_ERR_INPUT);
+    assert_non_null(strstr(err.msg, "depth.exr"));
+    free(exr);
     ss_image_free(img);
     free(path);
     tu_rmtree(dir);
