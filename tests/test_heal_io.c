@@ -45,8 +45,8 @@ static ss_heal_grid *random_grid(int nx, int ny, int nz, uint64_t seed) {
     for (int f = 0; f < SS_HEAL_NFIELDS; f++)
         for (size_t i = 0; i < n; i++)
             g->field[f][i] = (float)ss_rng_uniform(seed, (uint64_t)f, i) * 2.0f - 0.5f;
-    for (int c = 0; c < 3; c++)
-        if (g->velocity[c])
+    for (int c = 0; c < 3; c++) /* velocities (mm/day) as the mechanics will set them */
+        if ((g->velocity[c] = malloc(n * sizeof(float))))
             for (size_t i = 0; i < n; i++)
                 g->velocity[c][i] = (float)ss_rng_uniform(seed, 10 + (uint64_t)c, i);
     g->skin_top_mm = 1.75;
@@ -68,9 +68,8 @@ static void assert_grids_equal(const ss_heal_grid *a, const ss_heal_grid *b) {
     for (int f = 0; f < SS_HEAL_NFIELDS; f++)
         assert_memory_equal(a->field[f], b->field[f], n * sizeof(float));
     for (int c = 0; c < 3; c++) {
-        assert_true(!a->velocity[c] == !b->velocity[c] || !a->velocity[c]);
-        if (a->velocity[c] && b->velocity[c])
-            assert_memory_equal(a->velocity[c], b->velocity[c], n * sizeof(float));
+        assert_true(!a->velocity[c] == !b->velocity[c]);
+        if (a->velocity[c]) assert_memory_equal(a->velocity[c], b->velocity[c], n * sizeof(float));
     }
 }
 
@@ -158,6 +157,17 @@ static void test_vti_roundtrip(void **state) {
         assert_memory_equal(back, g->field[f], 4 * n);
         free(back);
     }
+    /* velocity: 3 interleaved components per cell */
+    char *dv = strstr(data, "Name=\"velocity\" NumberOfComponents=\"3\"");
+    assert_non_null(dv);
+    assert_int_equal(sscanf(strstr(dv, "offset=\"") + 8, "%llu", &off), 1);
+    assert_int_equal(get_u64le(base + off), 12 * n);
+    for (size_t i = 0; i < n; i += 17)
+        for (int c = 0; c < 3; c++) {
+            float v;
+            memcpy(&v, base + off + 8 + 12 * i + 4 * (size_t)c, 4);
+            assert_true(v == g->velocity[c][i]);
+        }
     /* total appended size: every block accounted for, then the closing tags */
     size_t blocks = 8 + n + SS_HEAL_NFIELDS * (8 + 4 * n);
     int vel = g->velocity[0] != NULL;

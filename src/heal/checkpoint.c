@@ -226,8 +226,11 @@ ss_status ss_heal_checkpoint_read(const char *path, ss_heal_checkpoint *out, ss_
         goto done;
     }
     out->grid = g;
-    if (vel && !(g->velocity[0] && g->velocity[1] && g->velocity[2]))
-        BAD("%s: checkpoint has velocities but the grid has none", path);
+    for (int c = 0; vel && c < 3; c++) /* the grid owns (and frees) its velocity arrays */
+        if (!g->velocity[c] && !(g->velocity[c] = malloc(n * sizeof(float)))) {
+            st = ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory for velocities", path);
+            goto done;
+        }
     g->skin_top_mm = top;
     g->t_days = t;
     g->step = step;
