@@ -267,7 +267,8 @@ ss_status ss_heal_surface_png(const char *path, const ss_image *map, double vmin
     if (scale < 1) scale = 1;
     int mw = map->width * scale, mh = map->height * scale;
     const int L = 70, T = 58, B = 60, CB = 120;
-    int W = L + mw + CB, H = T + mh + B;
+    int bh = mh < 240 ? 240 : mh; /* colour bar height: readable for flat maps too */
+    int W = L + mw + CB, H = T + (bh > mh ? bh : mh) + B;
     cairo_surface_t *img = cairo_image_surface_create(CAIRO_FORMAT_RGB24, map->width, map->height);
     unsigned char *px = cairo_image_surface_get_data(img);
     int stride = cairo_image_surface_get_stride(img);
@@ -305,7 +306,8 @@ ss_status ss_heal_surface_png(const char *path, const ss_image *map, double vmin
     cairo_set_font_size(cr, 12);
     if (dx_mm > 0) {
         double wmm = map->width * dx_mm, hmm = map->height * dx_mm;
-        double st = nice_step(wmm > hmm ? wmm : hmm, 5);
+        double st = nice_step(wmm > hmm ? wmm : hmm, 5), sty = st;
+        if (hmm < 0.4 * wmm) sty = nice_step(hmm, 3); /* flat maps: finer y ticks */
         for (double v = 0; v <= wmm + 1e-9; v += st) {
             double x = L + v / dx_mm * scale;
             cairo_move_to(cr, x, T + mh);
@@ -314,12 +316,12 @@ ss_status ss_heal_surface_png(const char *path, const ss_image *map, double vmin
             fmt_tick(buf, sizeof buf, v, st);
             text_at(cr, x, T + mh + 8, buf, 0.5, 0);
         }
-        for (double v = 0; v <= hmm + 1e-9; v += st) {
+        for (double v = 0; v <= hmm + 1e-9; v += sty) {
             double y = T + (hmm - v) / dx_mm * scale; /* image row 0 = far y edge */
             cairo_move_to(cr, L - 5, y);
             cairo_line_to(cr, L, y);
             cairo_stroke(cr);
-            fmt_tick(buf, sizeof buf, v, st);
+            fmt_tick(buf, sizeof buf, v, sty);
             text_at(cr, L - 8, y, buf, 1, 0.5);
         }
         cairo_set_font_size(cr, 13);
@@ -332,20 +334,20 @@ ss_status ss_heal_surface_png(const char *path, const ss_image *map, double vmin
     }
     /* colour bar */
     int bx = L + mw + 25, bw = 22;
-    for (int y = 0; y < mh; y++) {
+    for (int y = 0; y < bh; y++) {
         double rgb[3];
-        viridis(1.0 - (y + 0.5) / mh, rgb);
+        viridis(1.0 - (y + 0.5) / bh, rgb);
         cairo_set_source_rgb(cr, rgb[0], rgb[1], rgb[2]);
         cairo_rectangle(cr, bx, T + y, bw, 1);
         cairo_fill(cr);
     }
     cairo_set_source_rgb(cr, 0, 0, 0);
-    cairo_rectangle(cr, bx - 0.5, T - 0.5, bw + 1, mh + 1);
+    cairo_rectangle(cr, bx - 0.5, T - 0.5, bw + 1, bh + 1);
     cairo_stroke(cr);
     cairo_set_font_size(cr, 12);
     double cst = nice_step(vmax - vmin, 4);
     for (double v = ceil(vmin / cst - 1e-9) * cst; v <= vmax + 1e-9 * cst; v += cst) {
-        double y = T + mh - (v - vmin) / (vmax - vmin) * mh;
+        double y = T + bh - (v - vmin) / (vmax - vmin) * bh;
         cairo_move_to(cr, bx + bw, y);
         cairo_line_to(cr, bx + bw + 5, y);
         cairo_stroke(cr);
