@@ -217,7 +217,7 @@ ss_status ss_heal_checkpoint_read(const char *path, ss_heal_checkpoint *out, ss_
     if (!out->aux) BAD("%s: truncated checkpoint (strings)", path);
     size_t n = (size_t)nx * (size_t)ny * (size_t)nz;
     size_t need = n * (1 + 4 * (size_t)(SS_HEAL_NFIELDS + (vel ? 3 : 0)));
-    if (n / (size_t)nx / (size_t)ny != (size_t)nz || r.len - r.pos != need)
+    if (n / (size_t)nx / (size_t)ny != (size_t)nz || n > SIZE_MAX / 64 || r.len - r.pos != need)
         BAD("%s: checkpoint data size %zu does not match a %dx%dx%d grid (%zu bytes)", path,
             r.len - r.pos, nx, ny, nz, need);
     ss_heal_grid *g = ss_heal_grid_create(nx, ny, nz, dx, err);

@@ -230,6 +230,31 @@ ss_image *ss_stroke_footprint(const ss_stroke_set *s, int width, int height, int
         for (int i = 0; i < s->npoints; i++)
             if (s->stroke[i] == s->stroke_ids[k])
                 pts[n++] = (ss_vec2){s->u[i] * width, s->v[i] * height};
+        /* All points on one line: refused here (ss_convex_hull's inexact turn
+         * tests can misbehave on exactly collinear input). */
+        int i0 = 0, i1 = 0;
+        for (int i = 1; i < n; i++)
+            if (pts[i].x < pts[i0].x || (pts[i].x == pts[i0].x && pts[i].y < pts[i0].y)) i0 = i;
+        double far = 0, dev = 0;
+        for (int i = 0; i < n; i++) {
+            double d = hypot(pts[i].x - pts[i0].x, pts[i].y - pts[i0].y);
+            if (d > far) far = d, i1 = i;
+        }
+        for (int i = 0; far > 0 && i < n; i++) {
+            double c = fabs((pts[i1].x - pts[i0].x) * (pts[i].y - pts[i0].y) -
+                            (pts[i1].y - pts[i0].y) * (pts[i].x - pts[i0].x)) /
+                       far;
+            if (c > dev) dev = c;
+        }
+        if (!(dev > 1e-9 * far)) {
+            ss_error_set(err, SS_ERR_INPUT,
+                         "%s: stroke %d: its %d points lie on one line; a wound outline needs "
+                         "an area",
+                         name, s->stroke_ids[k], n);
+            free(pts);
+            ss_image_free(img);
+            return NULL;
+        }
         ss_polygon poly = {0};
         ss_error e;
         ss_error_clear(&e);
