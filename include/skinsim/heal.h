@@ -267,8 +267,8 @@ void ss_heal_rd_step_explicit(ss_heal_rd_system *sys, ss_heal_rd_work *w, double
 /* One split step, in place: reaction (nsub substeps per cell of the
  * positivity-preserving u <- (u + h prod) / (1 + h loss), clamped),
  * convection (CFL-subcycled donor cell), then implicit-Euler LOD diffusion
- * along x, y, z by Thomas line solves with multipliers frozen after the
- * reaction. Unconditionally stable and positivity preserving in diffusion. */
+ * along x, y, z by Thomas line solves with multipliers frozen at the
+ * last reaction substep. Unconditionally stable and positivity preserving in diffusion. */
 void ss_heal_rd_step_split(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt, int nsub);
 
 #ifdef __cplusplus

@@ -15,6 +15,12 @@
 
 #include "heal_internal.h"
 
+/* clamp without the libm call fminf/fmaxf need without -ffast-math */
+static inline float clampf(float v, float lo, float hi) {
+    v = v > lo ? v : lo;
+    return v < hi ? v : hi;
+}
+
 static uint8_t cls_of(const ss_heal_rd_system *sys, size_t c) { return sys->cls ? sys->cls[c] : 0; }
 
 void ss_heal_rd__build_masks(const ss_heal_rd_system *sys, ss_heal_rd_work *w) {
@@ -197,7 +203,7 @@ void ss_heal_rd__convect(const ss_heal_rd_system *sys, const ss_heal_rd_work *w,
                 float v = src[c];
                 if (upd[c]) {
                     v = (float)((double)src[c] - dt * donor_div(sys, src, c, w->nb[c], sy, sz));
-                    v = fminf(fmaxf(v, sys->lo[f]), sys->hi[f]);
+                    v = clampf(v, sys->lo[f], sys->hi[f]);
                 }
                 dst[c] = v;
             }
@@ -263,6 +269,7 @@ void ss_heal_rd_step_explicit(ss_heal_rd_system *sys, ss_heal_rd_work *w, double
                     const float lo = sys->lo[f], hi = sys->hi[f];
                     un[0] = u[0];
                     un[nx - 1] = u[nx - 1];
+#pragma omp simd
                     for (int x = 1; x <= n; x++) {
                         const uint8_t b = nbr[x];
                         const float uc = u[x];
@@ -274,7 +281,7 @@ void ss_heal_rd_step_explicit(ss_heal_rd_system *sys, ss_heal_rd_work *w, double
                                           (float)((b >> 5) & 1) * (u[x + sz] - uc);
                         const float m = mk ? mk[x - 1] : 1.0f;
                         float v = uc + dtf * (m * Dh * lap + pr[x - 1] - ls[x - 1] * uc);
-                        v = fminf(fmaxf(v, lo), hi);
+                        v = clampf(v, lo, hi);
                         un[x] = upd[x] ? v : uc;
                     }
                     if (has_vel) {
@@ -283,7 +290,7 @@ void ss_heal_rd_step_explicit(ss_heal_rd_system *sys, ss_heal_rd_work *w, double
                             size_t c = base + (size_t)x;
                             float v =
                                 un[x] - (float)(dt * donor_div(sys, sys->u[f], c, nbr[x], sy, sz));
-                            un[x] = fminf(fmaxf(v, lo), hi);
+                            un[x] = clampf(v, lo, hi);
                         }
                     }
                 }

@@ -51,11 +51,19 @@ static void heal_react(void *vctx, const ss_heal_rd_row *row) {
                   *restrict E = row->u[SS_HEAL_EPITHELIUM], *restrict RHO = row->u[SS_HEAL_SCAR],
                   *restrict P = row->u[SS_HEAL_PLASMA];
     float *const *pr = row->prod, *const *ls = row->loss;
+    _Static_assert(SS_HEAL_OXYGEN == 0 && SS_HEAL_PLASMA == 7, "field order");
     const float Rs = m->scab ? m->Rs : 0.0f;
     const float pmin = (float)SS_HEAL_P_MIN;
     const float g1 = m->gamma1, ig1 = 1.0f / m->gamma1, ig2 = 1.0f / (1.0f - m->gamma1);
     const float ppos = pos(m->lampp), pneg = pos(-m->lampp);
     const float dyn = m->static_region ? 0.0f : 1.0f;
+    const float ibeta = 1.0f / m->beta2;
+    float *restrict m0 = row->m[0], *restrict m1 = row->m[1];
+    float *restrict p1 = pr[0], *restrict p2 = pr[1], *restrict p3 = pr[2], *restrict p4 = pr[3];
+    float *restrict p5 = pr[4], *restrict p6 = pr[5], *restrict p7 = pr[6], *restrict p8 = pr[7];
+    float *restrict l1 = ls[0], *restrict l2 = ls[1], *restrict l3 = ls[2], *restrict l4 = ls[3];
+    float *restrict l5 = ls[4], *restrict l6 = ls[5], *restrict l7 = ls[6], *restrict l8 = ls[7];
+#pragma omp simd
     for (int i = 0; i < n; i++) {
         const float u1 = U1[i], u2 = U2[i], u3 = U3[i], nn = N[i], s = S[i], e = E[i];
         const float rho = RHO[i], p = P[i];
@@ -63,38 +71,38 @@ static void heal_react(void *vctx, const ss_heal_rd_row *row) {
         const float ns = pos(1.0f - s);
         const float open3 = pos(1.0f - u3);
         /* 4.1.1 oxygen: (1-s)(D1 lap u1 + lam31 u3) - lam11 u1 */
-        pr[SS_HEAL_OXYGEN][i] = ns * m->lam31 * u3;
-        ls[SS_HEAL_OXYGEN][i] = m->lam11;
+        p1[i] = ns * m->lam31 * u3;
+        l1[i] = m->lam11;
         /* 4.1.2 MDGF: (1-s)(D2 lap u2 + lam12 P(u1)) - lam22 u2 */
-        const float Pu1 = u1 < m->beta2 ? 1.0f - u1 / m->beta2 : 0.0f;
-        pr[SS_HEAL_MDGF][i] = ns * m->lam12 * Pu1;
-        ls[SS_HEAL_MDGF][i] = m->lam22;
+        const float Pu1 = pos(1.0f - u1 * ibeta);
+        p2[i] = ns * m->lam12 * Pu1;
+        l2[i] = m->lam22;
         /* 4.1.3 capillaries: (1-s)(D3 lap u3 + (lam33 + lam32 u2) u3 (1 - u3/u3eq)) */
         const float g3 = ns * (m->lam33 + m->lam32 * u2) * u3;
-        pr[SS_HEAL_CAPILLARY][i] = g3;
-        ls[SS_HEAL_CAPILLARY][i] = g3 * m->inv_u3eq;
+        p3[i] = g3;
+        l3[i] = g3 * m->inv_u3eq;
         /* 4.1.4 fibroblasts: (1-s)(Dn lap n + rn u1 n (1 - n/K)) - lamnn n */
         const float gn = ns * m->rn * u1 * nn;
-        pr[SS_HEAL_FIBROBLAST][i] = gn;
-        ls[SS_HEAL_FIBROBLAST][i] = gn * m->inv_K + m->lamnn;
+        p4[i] = gn;
+        l4[i] = gn * m->inv_K + m->lamnn;
         /* 4.1.5 eschar: Ds lap s + (1-s)(1-u3) R(omega) - lames e s */
         const float R = (above[i] == SS_CELL_AIR ? Rs : 0.0f) * om;
         const float X = open3 * R;
-        pr[SS_HEAL_ESCHAR][i] = X;
-        ls[SS_HEAL_ESCHAR][i] = X + m->lames * e;
+        p5[i] = X;
+        l5[i] = X + m->lames * e;
         /* 4.1.6 epithelium: Q(u3)(De lap e + lamge e) - lamee e */
         const float Q = pos(u3 < g1 ? u3 * ig1 : (1.0f - u3) * ig2);
-        pr[SS_HEAL_EPITHELIUM][i] = Q * m->lamge * e;
-        ls[SS_HEAL_EPITHELIUM][i] = m->lamee;
+        p6[i] = Q * m->lamge * e;
+        l6[i] = m->lamee;
         /* 4.1.7 scar: (1-s)(1-u3)(1-e) lamnrho n - lamrhop rho, restricted to omega */
-        pr[SS_HEAL_SCAR][i] = om * ns * open3 * pos(1.0f - e) * m->lamnrho * nn;
-        ls[SS_HEAL_SCAR][i] = m->lamrhop;
+        p7[i] = om * ns * open3 * pos(1.0f - e) * m->lamnrho * nn;
+        l7[i] = m->lamrhop;
         /* 4.1.8 plasma: Dp lap p + lampp p + C(rho)(1-p) */
         const float C = pos(rho - m->rhomax) * m->inv_rhomax;
-        pr[SS_HEAL_PLASMA][i] = dyn * (C + ppos * p);
-        ls[SS_HEAL_PLASMA][i] = dyn * (C + pneg);
-        row->m[0][i] = ns;
-        row->m[1][i] = Q;
+        p8[i] = dyn * (C + ppos * p);
+        l8[i] = dyn * (C + pneg);
+        m0[i] = ns;
+        m1[i] = Q;
     }
 }
 
@@ -250,7 +258,8 @@ ss_heal_solver *ss_heal_solver_create(const ss_heal_grid *g, const ss_heal_param
     ctx_init(&s->ctx, &s->p, g);
     sys_init(&s->sys, &s->ctx, g, &s->p);
     double r = s->sys.rate_max;
-    s->nsub = (int)ceil(dt * r / 0.5);
+    /* reaction substeps of at most 0.1 / rate_max (both halves together) */
+    s->nsub = (int)ceil(dt * r / 0.1);
     if (s->nsub < 1) s->nsub = 1;
     int has_vel = g->velocity[0] || g->velocity[1] || g->velocity[2];
     s->w = ss_heal_rd__work_create_ex(&s->sys, scheme == SS_HEAL_EXPLICIT || has_vel,
