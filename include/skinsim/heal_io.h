@@ -168,7 +168,8 @@ void ss_heal_checkpoint_free(ss_heal_checkpoint *c);
 ss_status ss_heal_checkpoint_load_latest(const char *run_dir, ss_heal_checkpoint *out, char *note,
                                          size_t note_len, ss_error *err);
 /* Writes DIR/checkpoints/ckpt_<step>.sshc and then removes all but the
- * newest `keep` (>= 2) checkpoints of that directory. */
+ * newest `keep` (>= 2) checkpoints of that directory and any temporary file
+ * an earlier, killed write left there. */
 ss_status ss_heal_checkpoint_save(const char *run_dir, const ss_heal_grid *g, const char *scenario,
                                   const char *params_json, int scheme, double dt_days,
                                   const char *aux, int keep, ss_error *err);

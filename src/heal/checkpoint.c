@@ -345,5 +345,14 @@ ss_status ss_heal_checkpoint_save(const char *run_dir, const ss_heal_grid *g, co
         unlink(path);
     }
     free(steps);
+    /* temporary files left by writes that were killed (ours just committed) */
+    DIR *d = opendir(dir);
+    struct dirent *e;
+    while (d && (e = readdir(d))) {
+        if (strncmp(e->d_name, "ckpt_", 5) || !strstr(e->d_name, CK_EXT ".tmp.")) continue;
+        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+        unlink(path);
+    }
+    if (d) closedir(d);
     return SS_OK;
 }
