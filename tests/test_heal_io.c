@@ -651,6 +651,11 @@ static void test_stroke_csv(void **state) {
     assert_true(fabs(tri - 50.0) <= 12); /* triangle area 10 x 10 / 2 pixels */
     ss_image_free(fp);
     ss_stroke_set_free(&s);
+    /* a UTF-8 byte order mark (spreadsheet export) does not hide the first point */
+    assert_int_equal(ss_stroke_csv_parse("\xEF\xBB\xBF0.5,0.5\n1,0\n0,1\n", "b.csv", &s, &err),
+                     SS_OK);
+    assert_int_equal(s.npoints, 3);
+    ss_stroke_set_free(&s);
     /* no header, no ids: one stroke */
     assert_int_equal(ss_stroke_csv_parse("0,0\n1,0\n0,1\n", "t.csv", &s, &err), SS_OK);
     assert_int_equal(s.nstrokes, 1);

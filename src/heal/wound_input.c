@@ -89,6 +89,7 @@ ss_status ss_stroke_csv_parse(const char *text, const char *name, ss_stroke_set 
         st = ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", name);
         goto fail;
     }
+    if (!strncmp(text, "\xEF\xBB\xBF", 3)) text += 3; /* UTF-8 byte order mark */
     for (const char *p = text; (p = next_line(p, line, sizeof line, &too_long));) {
         lineno++;
         if (too_long) {
@@ -360,6 +361,7 @@ ss_status ss_obj_parse(const char *text, const char *name, ss_tri_mesh *out, ss_
         goto fail;                                                                                 \
     } while (0)
     if (!V || !T || !TL || !face) FAIL(SS_ERR_NOMEM, "%s: out of memory", name);
+    if (!strncmp(text, "\xEF\xBB\xBF", 3)) text += 3; /* UTF-8 byte order mark */
     for (const char *p = text; (p = next_line(p, line, sizeof line, &too_long));) {
         lineno++;
         if (too_long) FAIL(SS_ERR_INPUT, "%s:%d: line too long", name, lineno);
