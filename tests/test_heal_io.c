@@ -652,7 +652,9 @@ static void test_stroke_csv(void **state) {
     ss_image_free(fp);
     ss_stroke_set_free(&s);
     /* a UTF-8 byte order mark (spreadsheet export) does not hide the first point */
-    assert_int_equal(ss_stroke_csv_parse("\xEF\xBB\xBF0.5,0.5\n1,0\n0,1\n", "b.csv", &s, &err),
+    assert_int_equal(ss_stroke_csv_parse("\xEF\xBB\xBF"
+                                         "0.5,0.5\n1,0\n0,1\n",
+                                         "b.csv", &s, &err),
                      SS_OK);
     assert_int_equal(s.npoints, 3);
     ss_stroke_set_free(&s);
