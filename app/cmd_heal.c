@@ -579,17 +579,6 @@ static ss_status setup_fresh(run *r, ss_error *err) {
                 free(w3);
                 w3 = NULL;
             }
-            size_t below = 0; /* voxels under the skin surface: the solver's wound */
-            for (size_t i = 0; w3 && i < (size_t)n[0] * n[1] * n[2]; i++)
-                below += w3[i] && ((double)(i / ((size_t)n[0] * n[1])) + 0.5) * dx < top;
-            if (w3 && cnt && !below) {
-                ss_error_set(err, SS_ERR_INPUT,
-                             "%s: the mesh lies entirely above the skin surface (%g mm); "
-                             "coordinates are mm from the block corner, z up",
-                             o->mesh, top);
-                free(w3);
-                w3 = NULL;
-            }
             if (w3) cJSON_AddNumberToObject(r->wound, "voxels", (double)cnt);
         } else if (fp) {
             w3 = ss_heal_wound_from_footprint(r->g, top, fp, o->depth, dimg, err);
@@ -600,6 +589,24 @@ static ss_status setup_fresh(run *r, ss_error *err) {
             cJSON_AddStringToObject(r->wound, "builtin", "centred square");
             cJSON_AddNumberToObject(r->wound, "side_mm", side);
         }
+    }
+    /* the wound must reach at least one voxel under the skin surface */
+    size_t below = 0, plane = (size_t)n[0] * (size_t)n[1];
+    for (size_t i = 0; w3 && i < plane * (size_t)n[2]; i++)
+        below += w3[i] && ((double)(i / plane) + 0.5) * dx < top;
+    if (w3 && !below) {
+        ss_error_set(err, SS_ERR_INPUT,
+                     "%s: the wound covers no voxel under the skin surface (%g mm) of the "
+                     "%gx%gx%g mm block with %g mm voxels%s",
+                     o->mesh     ? o->mesh
+                     : o->mask   ? o->mask
+                     : o->stroke ? o->stroke
+                                 : "--wound-depth-mm",
+                     top, X, Y, Z, dx,
+                     o->mesh ? "; mesh coordinates are mm from the block corner, z up"
+                             : "; make it larger or deeper");
+        free(w3);
+        w3 = NULL;
     }
     ss_tri_mesh_free(&mesh);
     ss_image_free(fp);

@@ -114,6 +114,8 @@ echo '{"params": ' >"$T/bad.json"
 printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 2 3 4\n' >"$T/open.obj"
 printf '0.1,0.1\n0.2,nan\n0.3,0.3\n' >"$T/nan.csv"
 printf '0.1,0.1\n0.2,0.2\n' >"$T/two.csv"
+# a closed tetrahedron in the air above the skin surface (3 mm)
+printf 'v 1 1 3.5\nv 5 1 3.5\nv 1 5 3.5\nv 1 1 3.9\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n' >"$T/above.obj"
 bad_cases=(
     "--scenario bogus"
     "--params $T/bad.json"
@@ -131,6 +133,8 @@ bad_cases=(
     "--stroke $T/nan.csv"
     "--stroke $T/two.csv"
     "--wound-depth-mm 9"
+    "--wound-depth-mm 0.1"
+    "--wound-mesh $T/above.obj"
     "--stroke $T/s.csv --wound-mesh $T/cube.obj"
     "--threads -3"
     "--no-such-option"
