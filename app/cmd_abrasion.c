@@ -47,8 +47,9 @@ static void help(void) {
         "  --json                print a summary as JSON on stdout\n\n"
         "Writes DIR/keys/<phase>_{color,reflection,height,normal}.png,\n"
         "DIR/frames/t<days>_{color,reflection,height,normal}.png, DIR/timeline.json and\n"
-        "DIR/contact_sheet.png. Colour is sRGB 8-bit; reflection, height (0.5 = skin\n"
-        "surface) and normal (tangent space, OpenGL +Y up) are linear 16-bit.\n\n"
+        "DIR/contact_sheet.png. Colour is sRGB 8-bit; reflection (specular strength)\n"
+        "8-bit; height 16-bit (0.5 = skin surface, 0..1 spans -0.5..+0.5 mm); normal\n"
+        "8-bit, tangent space, OpenGL convention (+Y up).\n\n"
         "Example:\n"
         "  skinsim abrasion --stroke knee.csv --size 1024 --times 0,1,5,30 --out knee\n");
 }
@@ -64,16 +65,23 @@ typedef struct opts {
 } opts;
 
 static int parse(int argc, char **argv, opts *o, ss_error *err) {
-    static const struct option longopts[] = {
-        {"stroke", required_argument, 0, 's'},   {"mask", required_argument, 0, 'm'},
-        {"hull", required_argument, 0, 'H'},     {"concave-k", required_argument, 0, 'k'},
-        {"upper", required_argument, 0, 'u'},    {"lower", required_argument, 0, 'l'},
-        {"size", required_argument, 0, 'n'},     {"world-size-cm", required_argument, 0, 'w'},
-        {"times", required_argument, 0, 't'},    {"timeline", required_argument, 0, 'T'},
-        {"seed", required_argument, 0, 'S'},     {"out", required_argument, 0, 'o'},
-        {"threads", required_argument, 0, 'j'},  {"quiet", no_argument, 0, 'q'},
-        {"json", no_argument, 0, 'J'},           {"help", no_argument, 0, 'h'},
-        {0, 0, 0, 0}};
+    static const struct option longopts[] = {{"stroke", required_argument, 0, 's'},
+                                             {"mask", required_argument, 0, 'm'},
+                                             {"hull", required_argument, 0, 'H'},
+                                             {"concave-k", required_argument, 0, 'k'},
+                                             {"upper", required_argument, 0, 'u'},
+                                             {"lower", required_argument, 0, 'l'},
+                                             {"size", required_argument, 0, 'n'},
+                                             {"world-size-cm", required_argument, 0, 'w'},
+                                             {"times", required_argument, 0, 't'},
+                                             {"timeline", required_argument, 0, 'T'},
+                                             {"seed", required_argument, 0, 'S'},
+                                             {"out", required_argument, 0, 'o'},
+                                             {"threads", required_argument, 0, 'j'},
+                                             {"quiet", no_argument, 0, 'q'},
+                                             {"json", no_argument, 0, 'J'},
+                                             {"help", no_argument, 0, 'h'},
+                                             {0, 0, 0, 0}};
     memset(o, 0, sizeof *o);
     o->size = 2048;
     o->concave_k = 5;
@@ -89,20 +97,44 @@ static int parse(int argc, char **argv, opts *o, ss_error *err) {
     ss_status st = SS_OK;
     while (!st && (c = getopt_long(argc, argv, "", longopts, NULL)) != -1) {
         switch (c) {
-        case 's': o->stroke = optarg; break;
-        case 'm': o->mask = optarg; break;
-        case 'u': o->upper = optarg; break;
-        case 'l': o->lower = optarg; break;
-        case 'T': o->timeline = optarg; break;
-        case 'o': o->out = optarg; break;
-        case 't': times = optarg; break;
-        case 'q': o->quiet = 1; break;
-        case 'J': o->json = 1; break;
-        case 'h': help(); return -1;
+        case 's':
+            o->stroke = optarg;
+            break;
+        case 'm':
+            o->mask = optarg;
+            break;
+        case 'u':
+            o->upper = optarg;
+            break;
+        case 'l':
+            o->lower = optarg;
+            break;
+        case 'T':
+            o->timeline = optarg;
+            break;
+        case 'o':
+            o->out = optarg;
+            break;
+        case 't':
+            times = optarg;
+            break;
+        case 'q':
+            o->quiet = 1;
+            break;
+        case 'J':
+            o->json = 1;
+            break;
+        case 'h':
+            help();
+            return -1;
         case 'H':
-            if (!strcmp(optarg, "convex")) o->hull = SS_HULL_CONVEX;
-            else if (!strcmp(optarg, "concave")) o->hull = SS_HULL_CONCAVE;
-            else st = ss_error_set(err, SS_ERR_INPUT, "--hull: '%s' is not convex or concave", optarg);
+            if (!strcmp(optarg, "convex"))
+                o->hull = SS_HULL_CONVEX;
+            else if (!strcmp(optarg, "concave"))
+                o->hull = SS_HULL_CONCAVE;
+            else
+                st = ss_error_set(err, SS_ERR_INPUT, "--hull: '%s' is not convex or concave",
+                                  optarg);
             break;
         case 'k':
             st = cli_parse_int("--concave-k", optarg, 3, 1000, &v, err);
@@ -116,14 +148,21 @@ static int parse(int argc, char **argv, opts *o, ss_error *err) {
             st = cli_parse_int("--threads", optarg, 1, 4096, &v, err);
             o->threads = (int)v;
             break;
-        case 'w': st = cli_parse_double("--world-size-cm", optarg, 1e-3, 1e4, &o->world_cm, err); break;
-        case 'S': st = cli_parse_u64("--seed", optarg, &o->seed, err); break;
+        case 'w':
+            st = cli_parse_double("--world-size-cm", optarg, 1e-3, 1e4, &o->world_cm, err);
+            break;
+        case 'S':
+            st = cli_parse_u64("--seed", optarg, &o->seed, err);
+            break;
         default:
-            st = ss_error_set(err, SS_ERR_INPUT, "unknown or incomplete option '%s'", argv[optind - 1]);
+            st = ss_error_set(err, SS_ERR_INPUT, "unknown or incomplete option '%s'",
+                              argv[optind - 1]);
         }
     }
-    if (!st && optind < argc) st = ss_error_set(err, SS_ERR_INPUT, "unexpected argument '%s'", argv[optind]);
-    if (!st && o->stroke && o->mask) st = ss_error_set(err, SS_ERR_INPUT, "give --stroke or --mask, not both");
+    if (!st && optind < argc)
+        st = ss_error_set(err, SS_ERR_INPUT, "unexpected argument '%s'", argv[optind]);
+    if (!st && o->stroke && o->mask)
+        st = ss_error_set(err, SS_ERR_INPUT, "give --stroke or --mask, not both");
     if (!st) st = cli_parse_double_list("--times", times, 0.0, 1e5, &o->times, &o->ntimes, err);
     return st ? (int)st : 0;
 }
@@ -131,22 +170,37 @@ static int parse(int argc, char **argv, opts *o, ss_error *err) {
 /* A time as people say it: minutes under an hour, hours under two days. */
 static void human_time(double day, char *buf, size_t n) {
     double min = day * 1440.0;
-    if (min < 59.5) snprintf(buf, n, "%.0f min", min);
-    else if (day < 2.0) snprintf(buf, n, "%.1f h", day * 24.0);
-    else snprintf(buf, n, "day %.4g", day);
+    if (min < 59.5)
+        snprintf(buf, n, "%.0f min", min);
+    else if (day < 2.0)
+        snprintf(buf, n, "%.1f h", day * 24.0);
+    else
+        snprintf(buf, n, "day %.4g", day);
 }
 
+/* The four maps of a set, written in parallel (PNG encoding is serial per
+ * file). Colour is sRGB 8-bit; height 16-bit (displacement needs the steps);
+ * reflection and normal 8-bit linear, as engines expect them. */
 static ss_status write_set(const char *dir, const char *stem, const ss_texture_set *t,
                            cJSON *files, ss_error *err) {
     static const char *names[4] = {"color", "reflection", "height", "normal"};
+    static const int bits[4] = {8, 8, 16, 8};
     const ss_image *imgs[4] = {t->color, t->reflection, t->height, t->normal};
+    ss_error errs[4];
+    ss_status sts[4];
+#pragma omp parallel for schedule(dynamic, 1)
     for (int k = 0; k < 4; k++) {
-        char path[4096], rel[512];
+        char path[4096];
+        snprintf(path, sizeof path, "%s/%s_%s.png", dir, stem, names[k]);
+        sts[k] = ss_png_write(path, imgs[k], bits[k], k == 0 ? SS_ENC_SRGB : SS_ENC_LINEAR, &errs[k]);
+    }
+    for (int k = 0; k < 4; k++) {
+        if (sts[k]) {
+            *err = errs[k];
+            return sts[k];
+        }
+        char rel[512];
         snprintf(rel, sizeof rel, "%s_%s.png", stem, names[k]);
-        snprintf(path, sizeof path, "%s/%s", dir, rel);
-        ss_status st = k == 0 ? ss_png_write(path, imgs[k], 8, SS_ENC_SRGB, err)
-                              : ss_png_write(path, imgs[k], 16, SS_ENC_LINEAR, err);
-        if (st) return st;
         if (files) cJSON_AddStringToObject(files, names[k], rel);
     }
     return SS_OK;
@@ -200,9 +254,11 @@ static ss_status run(const opts *o, const char *dir, cJSON *summary, ss_error *e
     ss_progress prog;
     double t0 = ss_now();
     if (!st) {
-        if (in.mask) st = ss_wound_shape_from_mask(in.mask, o->size, o->seed, &shape, err);
-        else st = ss_wound_shape_from_strokes(&in.strokes, o->hull, o->concave_k, o->size, o->seed,
-                                              &shape, err);
+        if (in.mask)
+            st = ss_wound_shape_from_mask(in.mask, o->size, o->seed, &shape, err);
+        else
+            st = ss_wound_shape_from_strokes(&in.strokes, o->hull, o->concave_k, o->size, o->seed,
+                                             &shape, err);
         if (st && o->stroke) {
             ss_error e2 = *err;
             ss_error_set(err, st, "%s: %s", o->stroke, e2.msg);
@@ -277,8 +333,9 @@ static ss_status run(const opts *o, const char *dir, cJSON *summary, ss_error *e
             cJSON_AddNumberToObject(f, "weight", p.weight);
         }
         st = write_set(dir, stem, &frame, cJSON_AddObjectToObject(f, "files"), err);
-        if (!st) thumbs[i] = ss_image_resize(frame.color, 512 < o->size ? 512 : o->size,
-                                             512 < o->size ? 512 : o->size, err);
+        if (!st)
+            thumbs[i] = ss_image_resize(frame.color, 512 < o->size ? 512 : o->size,
+                                        512 < o->size ? 512 : o->size, err);
         if (!st && !thumbs[i]) st = err->code;
         if (!st) {
             char buf[64];
@@ -289,10 +346,11 @@ static ss_status run(const opts *o, const char *dir, cJSON *summary, ss_error *e
     }
     if (!st) ss_progress_end(&prog);
     if (!st) {
-        ss_image *sheet = ss_contact_sheet((const ss_image *const *)thumbs,
-                                           (const char *const *)labels, o->ntimes, 256,
-                                           o->ntimes <= 8 ? o->ntimes : 8, err);
-        if (!sheet) st = err->code;
+        ss_image *sheet =
+            ss_contact_sheet((const ss_image *const *)thumbs, (const char *const *)labels,
+                             o->ntimes, 256, o->ntimes <= 8 ? o->ntimes : 8, err);
+        if (!sheet)
+            st = err->code;
         else {
             snprintf(sub, sizeof sub, "%s/contact_sheet.png", dir);
             st = ss_png_write(sub, sheet, 8, SS_ENC_SRGB, err);

@@ -110,15 +110,19 @@ int main(int argc, char **argv) {
         job j = {w, &skin, &s, &out, 0, NULL, 0, noise_img};
         for (int ph = 0; ph < SS_PHASE_COUNT; ph++) {
             j.phase = (ss_phase)ph;
-            printf("  key %-17s %8.1f ms\n", ss_phase_name((ss_phase)ph), 1e3 * best_of(3, run_phase, &j));
+            printf("  key %-17s %8.1f ms\n", ss_phase_name((ss_phase)ph),
+                   1e3 * best_of(3, run_phase, &j));
         }
-        printf("  whole timeline (5 keys)  %8.1f ms   target <= 300 ms on 2 cores; seed 943 ms on a GTX 780\n",
+        printf("  whole timeline (5 keys)  %8.1f ms   target <= 300 ms on 2 cores; seed 943 ms on "
+               "a GTX 780\n",
                1e3 * best_of(3, run_timeline, &j));
         ss_abrasion_create(&s, &tl, w, &skin, &j.ab, &err);
         j.day = 0.5 * (tl.key[3].day + tl.key[4].day);
-        printf("  frame (blend of 2 keys)  %8.1f ms   target <= 15 ms\n", 1e3 * best_of(5, run_frame, &j));
+        printf("  frame (blend of 2 keys)  %8.1f ms   target <= 15 ms\n",
+               1e3 * best_of(5, run_frame, &j));
         j.day = 20.0;
-        printf("  frame (maturation)       %8.1f ms   target <= 15 ms\n", 1e3 * best_of(5, run_frame, &j));
+        printf("  frame (maturation)       %8.1f ms   target <= 15 ms\n",
+               1e3 * best_of(5, run_frame, &j));
         /* What a time slider needs: the colour map only. */
         ss_texture_set color_only = {out.color, NULL, NULL, NULL};
         j.out = &color_only;

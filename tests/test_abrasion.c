@@ -59,10 +59,11 @@ static void test_timeline_json(void **state) {
     char *dir = tu_tmpdir("tl");
     ss_error err;
     ss_timeline t;
-    const char *good = write_tmp(dir, "good.json",
-                                 "{\"keys\":[{\"phase\":\"vasoconstriction\",\"day\":0},"
-                                 "{\"phase\":\"scab\",\"day\":2},{\"phase\":\"maturation\",\"day\":4}],"
-                                 "\"end_day\":9}");
+    const char *good =
+        write_tmp(dir, "good.json",
+                  "{\"keys\":[{\"phase\":\"vasoconstriction\",\"day\":0},"
+                  "{\"phase\":\"scab\",\"day\":2},{\"phase\":\"maturation\",\"day\":4}],"
+                  "\"end_day\":9}");
     assert_int_equal(ss_timeline_load_json(good, &t, &err), SS_OK);
     assert_int_equal(t.nkeys, 3);
     assert_int_equal(t.key[1].phase, SS_PHASE_SCAB);
@@ -89,14 +90,16 @@ static void test_strokes_csv(void **state) {
     char *dir = tu_tmpdir("csv");
     ss_error err;
     ss_strokes s;
-    const char *ok = write_tmp(dir, "ok.csv", "u,v,stroke\n# comment\n0.1,0.2,0\n0.3, 0.4 ,1\r\n\n0.5,0.6\n");
+    const char *ok =
+        write_tmp(dir, "ok.csv", "u,v,stroke\n# comment\n0.1,0.2,0\n0.3, 0.4 ,1\r\n\n0.5,0.6\n");
     assert_int_equal(ss_strokes_read_csv(ok, &s, &err), SS_OK);
     assert_int_equal(s.count, 3);
     assert_int_equal(s.stroke_id[1], 1);
     assert_float_equal(s.uv[2].y, 0.6, 1e-12);
     ss_strokes_free(&s);
     const char *bads[] = {"0.1,0.2\n0.3,nan\n", "0.1,0.2\n1.5,0.2\n", "0.1,0.2\n-0.1,0.2\n",
-                          "0.1,0.2\nfoo\n", "0.1,0.2,1.5\n", "", "# only comments\n"};
+                          "0.1,0.2\nfoo\n",     "0.1,0.2,1.5\n",      "",
+                          "# only comments\n"};
     for (size_t i = 0; i < sizeof bads / sizeof bads[0]; i++) {
         const char *bad = write_tmp(dir, "bad.csv", bads[i]);
         assert_int_equal(ss_strokes_read_csv(bad, &s, &err), SS_ERR_INPUT);
@@ -141,7 +144,8 @@ static void test_shape_from_strokes(void **state) {
     ss_wound_shape_free(w);
     /* Two collinear points only: a clear input error. */
     s.count = 2;
-    assert_int_equal(ss_wound_shape_from_strokes(&s, SS_HULL_CONVEX, 5, n, 1, &w, &err), SS_ERR_INPUT);
+    assert_int_equal(ss_wound_shape_from_strokes(&s, SS_HULL_CONVEX, 5, n, 1, &w, &err),
+                     SS_ERR_INPUT);
     ss_strokes_free(&s);
 }
 
@@ -182,7 +186,8 @@ static void scene_make(scene *sc, int n) {
     ss_error err;
     ss_strokes st;
     assert_int_equal(ss_strokes_example(&st, &err), SS_OK);
-    assert_int_equal(ss_wound_shape_from_strokes(&st, SS_HULL_CONVEX, 5, n, 7, &sc->w, &err), SS_OK);
+    assert_int_equal(ss_wound_shape_from_strokes(&st, SS_HULL_CONVEX, 5, n, 7, &sc->w, &err),
+                     SS_OK);
     ss_strokes_free(&st);
     assert_int_equal(ss_base_skin_create(NULL, NULL, n, 7, &sc->skin, &err), SS_OK);
     ss_abrasion_settings_default(&sc->s);
@@ -203,10 +208,13 @@ static void test_vasoconstriction_colours(void **state) {
     ss_texture_set t;
     ss_error err;
     assert_int_equal(ss_texture_set_create(n, &t, &err), SS_OK);
-    assert_int_equal(ss_abrasion_render_phase(SS_PHASE_VASOCONSTRICTION, 0, sc.w, &sc.skin, &sc.s, &t, &err), SS_OK);
+    assert_int_equal(
+        ss_abrasion_render_phase(SS_PHASE_VASOCONSTRICTION, 0, sc.w, &sc.skin, &sc.s, &t, &err),
+        SS_OK);
     for (int i = 0; i < n * n; i++) {
         const ss_image *src = sc.w->mask->data[i] > 0.5f ? sc.skin.lower : sc.skin.upper;
-        for (int c = 0; c < 3; c++) assert_float_equal(t.color->data[i * 3 + c], src->data[i * 3 + c], 2e-4);
+        for (int c = 0; c < 3; c++)
+            assert_float_equal(t.color->data[i * 3 + c], src->data[i * 3 + c], 2e-4);
     }
     ss_texture_set_free(&t);
     scene_free(&sc);
@@ -220,7 +228,8 @@ static void test_vasodilation_glow(void **state) {
     ss_texture_set t;
     ss_error err;
     assert_int_equal(ss_texture_set_create(n, &t, &err), SS_OK);
-    assert_int_equal(ss_abrasion_render_phase(SS_PHASE_VASODILATION, 0, sc.w, &sc.skin, &sc.s, &t, &err), SS_OK);
+    assert_int_equal(
+        ss_abrasion_render_phase(SS_PHASE_VASODILATION, 0, sc.w, &sc.skin, &sc.s, &t, &err), SS_OK);
     float thick = 100.0f * n / 2048.0f;
     float red = ss_srgb_decode(0.79f);
     for (int i = 0; i < n * n; i++) {
@@ -245,7 +254,9 @@ static void test_vasodilation_glow(void **state) {
     for (int y = 1; y < n; y++)
         for (int x = 1; x < n; x++) {
             int i = y * n + x;
-            if (sc.w->mask->data[i] < 0.5f || sc.w->mask->data[i - 1] < 0.5f || sc.w->mask->data[i - n] < 0.5f) continue;
+            if (sc.w->mask->data[i] < 0.5f || sc.w->mask->data[i - 1] < 0.5f ||
+                sc.w->mask->data[i - n] < 0.5f)
+                continue;
             dh += fabs(t.reflection->data[i] - t.reflection->data[i - 1]);
             dv += fabs(t.reflection->data[i] - t.reflection->data[i - n]);
         }
@@ -268,7 +279,9 @@ static void test_maturation_matches_alg44(void **state) {
     const double positions[] = {0.0, 0.3, 0.7, 1.0};
     for (int k = 0; k < 4; k++) {
         double pos = positions[k];
-        assert_int_equal(ss_abrasion_render_phase(SS_PHASE_MATURATION, pos, sc.w, &sc.skin, &sc.s, &t, &err), SS_OK);
+        assert_int_equal(
+            ss_abrasion_render_phase(SS_PHASE_MATURATION, pos, sc.w, &sc.skin, &sc.s, &t, &err),
+            SS_OK);
         double closing = sc.w->closing_px[0], max_outer = closing * 0.5;
         double outer = max_outer * pos, inner = outer + max_outer * sc.w->inner_ratio[0];
         const float red[3] = {0.79f, 0, 0}, white[3] = {0.79f, 0.41f, 0.41f};
@@ -277,8 +290,10 @@ static void test_maturation_matches_alg44(void **state) {
             const float *skin = sc.skin.upper_srgb->data + i * 3;
             double d = bf->data[i];
             for (int c = 0; c < 3; c++) {
-                if (sc.w->mask->data[i] < 0.5f || d <= outer) want[c] = skin[c];
-                else if (d <= inner) want[c] = (float)(skin[c] + (red[c] - skin[c]) * (d - outer) / (inner - outer));
+                if (sc.w->mask->data[i] < 0.5f || d <= outer)
+                    want[c] = skin[c];
+                else if (d <= inner)
+                    want[c] = (float)(skin[c] + (red[c] - skin[c]) * (d - outer) / (inner - outer));
                 else {
                     double v = (d - inner) / (closing * 0.5 - inner);
                     v = v < 0 ? 0 : v > 1 ? 1 : v;
@@ -289,7 +304,8 @@ static void test_maturation_matches_alg44(void **state) {
         }
     }
     /* At the end of maturation the wound has closed: skin everywhere. */
-    for (int i = 0; i < n * n * 3; i++) assert_float_equal(t.color->data[i], sc.skin.upper->data[i], 2e-4);
+    for (int i = 0; i < n * n * 3; i++)
+        assert_float_equal(t.color->data[i], sc.skin.upper->data[i], 2e-4);
     ss_texture_set_free(&t);
     ss_image_free(bf);
     scene_free(&sc);
@@ -310,14 +326,17 @@ static void test_frames_blend(void **state) {
     /* Halfway between vasodilation (key 3) and scab-forming (key 4). */
     double mid = 0.5 * (tl.key[3].day + tl.key[4].day);
     assert_int_equal(ss_abrasion_frame(a, mid, &f, &err), SS_OK);
-    const ss_texture_set *A = &a->phase[SS_PHASE_VASODILATION], *B = &a->phase[SS_PHASE_SCAB_FORMING];
+    const ss_texture_set *A = &a->phase[SS_PHASE_VASODILATION],
+                         *B = &a->phase[SS_PHASE_SCAB_FORMING];
     for (int i = 0; i < n * n * 3; i++)
         assert_float_equal(f.color->data[i], 0.5f * (A->color->data[i] + B->color->data[i]), 1e-6);
     for (int i = 0; i < n * n; i++)
-        assert_float_equal(f.height->data[i], 0.5f * (A->height->data[i] + B->height->data[i]), 1e-6);
+        assert_float_equal(f.height->data[i], 0.5f * (A->height->data[i] + B->height->data[i]),
+                           1e-6);
     /* Inside a double key the phase holds. */
     assert_int_equal(ss_abrasion_frame(a, 0.5 * (tl.key[6].day + tl.key[7].day), &f, &err), SS_OK);
-    assert_memory_equal(f.color->data, a->phase[SS_PHASE_SCAB].color->data, sizeof(float) * (size_t)(n * n * 3));
+    assert_memory_equal(f.color->data, a->phase[SS_PHASE_SCAB].color->data,
+                        sizeof(float) * (size_t)(n * n * 3));
     /* Normals stay unit length after blending. */
     assert_int_equal(ss_abrasion_frame(a, 0.5 * (tl.key[5].day + tl.key[6].day), &f, &err), SS_OK);
     for (int i = 0; i < n * n; i++) {
@@ -330,8 +349,11 @@ static void test_frames_blend(void **state) {
     assert_int_equal(ss_abrasion_frame(a, m0 + pos * (tl.end_day - m0), &f, &err), SS_OK);
     ss_texture_set ref;
     assert_int_equal(ss_texture_set_create(n, &ref, &err), SS_OK);
-    assert_int_equal(ss_abrasion_render_phase(SS_PHASE_MATURATION, pos, sc.w, &sc.skin, &sc.s, &ref, &err), SS_OK);
-    for (int i = 0; i < n * n * 3; i++) assert_float_equal(f.color->data[i], ref.color->data[i], 1e-6);
+    assert_int_equal(
+        ss_abrasion_render_phase(SS_PHASE_MATURATION, pos, sc.w, &sc.skin, &sc.s, &ref, &err),
+        SS_OK);
+    for (int i = 0; i < n * n * 3; i++)
+        assert_float_equal(f.color->data[i], ref.color->data[i], 1e-6);
     /* A colour-only frame (the slider's) equals the colour of the full one. */
     ss_image *col = ss_image_create(n, n, 3, &err);
     ss_texture_set only = {col, NULL, NULL, NULL};
@@ -370,7 +392,8 @@ static double red_fraction(int n, ss_phase ph) {
 
 static void test_scale_invariance(void **state) {
     (void)state;
-    double a = red_fraction(128, SS_PHASE_VASODILATION), b = red_fraction(256, SS_PHASE_VASODILATION);
+    double a = red_fraction(128, SS_PHASE_VASODILATION),
+           b = red_fraction(256, SS_PHASE_VASODILATION);
     assert_true(a > 0.02);
     assert_float_equal(a, b, 0.1 * b);
 }
@@ -386,12 +409,15 @@ static void test_thread_determinism(void **state) {
         assert_int_equal(ss_texture_set_create(n, &t1, &err), SS_OK);
         assert_int_equal(ss_texture_set_create(n, &t2, &err), SS_OK);
         ss_threads_set(1);
-        assert_int_equal(ss_abrasion_render_phase((ss_phase)ph, 0.3, sc.w, &sc.skin, &sc.s, &t1, &err), SS_OK);
+        assert_int_equal(
+            ss_abrasion_render_phase((ss_phase)ph, 0.3, sc.w, &sc.skin, &sc.s, &t1, &err), SS_OK);
         ss_threads_set(2);
-        assert_int_equal(ss_abrasion_render_phase((ss_phase)ph, 0.3, sc.w, &sc.skin, &sc.s, &t2, &err), SS_OK);
+        assert_int_equal(
+            ss_abrasion_render_phase((ss_phase)ph, 0.3, sc.w, &sc.skin, &sc.s, &t2, &err), SS_OK);
         assert_memory_equal(t1.color->data, t2.color->data, sizeof(float) * (size_t)(n * n * 3));
         assert_memory_equal(t1.height->data, t2.height->data, sizeof(float) * (size_t)(n * n));
-        assert_memory_equal(t1.reflection->data, t2.reflection->data, sizeof(float) * (size_t)(n * n));
+        assert_memory_equal(t1.reflection->data, t2.reflection->data,
+                            sizeof(float) * (size_t)(n * n));
         ss_texture_set_free(&t1);
         ss_texture_set_free(&t2);
     }
@@ -400,16 +426,11 @@ static void test_thread_determinism(void **state) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_timeline_locate),
-        cmocka_unit_test(test_timeline_json),
-        cmocka_unit_test(test_strokes_csv),
-        cmocka_unit_test(test_shape_from_strokes),
-        cmocka_unit_test(test_shape_from_mask),
-        cmocka_unit_test(test_vasoconstriction_colours),
-        cmocka_unit_test(test_vasodilation_glow),
-        cmocka_unit_test(test_maturation_matches_alg44),
-        cmocka_unit_test(test_frames_blend),
-        cmocka_unit_test(test_scale_invariance),
+        cmocka_unit_test(test_timeline_locate),    cmocka_unit_test(test_timeline_json),
+        cmocka_unit_test(test_strokes_csv),        cmocka_unit_test(test_shape_from_strokes),
+        cmocka_unit_test(test_shape_from_mask),    cmocka_unit_test(test_vasoconstriction_colours),
+        cmocka_unit_test(test_vasodilation_glow),  cmocka_unit_test(test_maturation_matches_alg44),
+        cmocka_unit_test(test_frames_blend),       cmocka_unit_test(test_scale_invariance),
         cmocka_unit_test(test_thread_determinism),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

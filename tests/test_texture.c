@@ -206,6 +206,55 @@ static void test_noise_tiling(void **state) {
     ss_image_free(st);
 }
 
+/* A rectangle of the noise equals the same pixels of the whole texture, for
+ * stretched and scaled lattices and rectangles touching the borders. */
+static void test_noise_rect_equals_crop(void **state) {
+    (void)state;
+    ss_error err;
+    const int W = 150, H = 97;
+    ss_image *full = ss_image_create(W, H, 1, &err);
+    const int rects[][4] = {{0, 0, W, H}, {10, 20, 33, 41}, {117, 60, 33, 37}, {0, 96, 1, 1}};
+    for (int pset = 0; pset < 3; pset++) {
+        ss_noise_params p;
+        ss_noise_params_default(&p);
+        p.octaves = 4 + pset;
+        p.bias = 0.3f;
+        p.gain = 0.6f;
+        if (pset == 1) p.stretch_y = 64.0f;
+        if (pset == 2) p.cell_px = 0.7f;
+        assert_int_equal(ss_value_noise(&p, 5, 9, full, &err), SS_OK);
+        for (int r = 0; r < 4; r++) {
+            ss_image *sub = ss_image_create(rects[r][2], rects[r][3], 1, &err);
+            assert_int_equal(
+                ss_value_noise_rect(&p, 5, 9, W, H, rects[r][0], rects[r][1], sub, &err), SS_OK);
+            for (int y = 0; y < sub->height; y++)
+                for (int x = 0; x < sub->width; x++)
+                    assert_true(ss_image_px(sub, x, y)[0] ==
+                                ss_image_px(full, rects[r][0] + x, rects[r][1] + y)[0]);
+            ss_image_free(sub);
+        }
+    }
+    ss_image *sub = ss_image_create(10, 10, 1, &err);
+    ss_noise_params p;
+    ss_noise_params_default(&p);
+    assert_int_equal(ss_value_noise_rect(&p, 5, 9, W, H, 145, 0, sub, &err), SS_ERR_INPUT);
+    ss_image_free(sub);
+    ss_image_free(full);
+}
+
+/* Widths of a rectangle are the same numbers as the whole texture's there. */
+static void test_erosion_widths_rect(void **state) {
+    (void)state;
+    const int W = 70, H = 40, x0 = 13, y0 = 7, w = 30, h = 21;
+    int *full = malloc(sizeof(int) * W * H), *sub = malloc(sizeof(int) * w * h);
+    ss_erosion_widths(W, H, 3, 10, 4, 8, full);
+    ss_erosion_widths_rect(W, H, x0, y0, w, h, 3, 10, 4, 8, sub);
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) assert_int_equal(sub[y * w + x], full[(y0 + y) * W + x0 + x]);
+    free(full);
+    free(sub);
+}
+
 static void test_erosion(void **state) {
     (void)state;
     ss_error err;
@@ -331,7 +380,7 @@ int main(void) {
         cmocka_unit_test(test_bias_gain),        cmocka_unit_test(test_noise_matches_reference),
         cmocka_unit_test(test_noise_properties), cmocka_unit_test(test_noise_tiling),
         cmocka_unit_test(test_erosion),          cmocka_unit_test(test_gradient_edge),
-        cmocka_unit_test(test_height_to_normal),
+        cmocka_unit_test(test_height_to_normal), cmocka_unit_test(test_noise_rect_equals_crop), cmocka_unit_test(test_erosion_widths_rect),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

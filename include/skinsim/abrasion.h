@@ -19,9 +19,9 @@ extern "C" {
 /* Painted strokes in texture space: points (u,v) in 0..1, v = 0 at the top
  * row of the image (glTF convention), grouped by stroke id. */
 typedef struct ss_strokes {
-    int count;       /* points */
-    ss_vec2 *uv;     /* count points */
-    int *stroke_id;  /* count ids (0 when the file has no id column) */
+    int count;      /* points */
+    ss_vec2 *uv;    /* count points */
+    int *stroke_id; /* count ids (0 when the file has no id column) */
 } ss_strokes;
 
 /* CSV: one point per line "u,v" or "u,v,stroke_id"; blank lines, lines
@@ -34,28 +34,33 @@ ss_status ss_strokes_example(ss_strokes *out, ss_error *err);
 
 /* ---- wound shape -------------------------------------------------------- */
 
+/* The widest gradient of the phases (seed §4.3: thickness 100) in pixels of
+ * the reference texture; distances beyond it only need to be "far". */
+#define SS_ABRASION_MAX_GRADIENT_REF_PX 100.0
+
 typedef enum ss_hull_kind { SS_HULL_CONVEX = 0, SS_HULL_CONCAVE = 1 } ss_hull_kind;
 
 /* Everything the key positions need to know about the wound(s) at one texture
  * size: the binary shape, the distance of each pixel to the wound outline, and
  * per wound its closing distance (Alg. 4.3) and maturation border ratio. */
 typedef struct ss_wound_shape {
-    int size;             /* square texture side in pixels */
-    ss_image *mask;       /* 1 inside a wound, 0 outside */
-    ss_image *dist;       /* pixels from the pixel centre to the nearest outline */
-    int *label;           /* size*size: index of the nearest wound */
+    int size;       /* square texture side in pixels */
+    ss_image *mask; /* 1 inside a wound, 0 outside */
+    ss_image *dist; /* pixels from the pixel centre to the nearest outline;
+                       exact up to the widest gradient, larger beyond */
+    int *label;     /* size*size: index of the nearest wound */
     int nwounds;
-    double *closing_px;   /* per wound: closing distance in pixels */
-    double *inner_ratio;  /* per wound: rand(0.4, 0.8) of Eq. 4.8 */
-    int npolys;           /* hulls (0 for mask input) */
+    double *closing_px;             /* per wound: closing distance in pixels */
+    double *inner_ratio;            /* per wound: rand(0.4, 0.8) of Eq. 4.8 */
+    int box_x, box_y, box_w, box_h; /* bounding box of the mask (box_w = 0: empty) */
+    int npolys;                     /* hulls (0 for mask input) */
     ss_polygon *polys;
 } ss_wound_shape;
 
 /* One hull per stroke id (each needs >= 3 distinct, non-collinear points),
  * filled and measured at the given size. */
 ss_status ss_wound_shape_from_strokes(const ss_strokes *s, ss_hull_kind kind, int concave_k,
-                                      int size, uint64_t seed, ss_wound_shape **out,
-                                      ss_error *err);
+                                      int size, uint64_t seed, ss_wound_shape **out, ss_error *err);
 /* A mask image (any size, > 0.5 = wound; resampled to size). Each connected
  * component is a wound; an empty mask is an input error. */
 ss_status ss_wound_shape_from_mask(const ss_image *mask, int size, uint64_t seed,
@@ -68,8 +73,9 @@ void ss_wound_shape_free(ss_wound_shape *w);
  * linear RGB, size x size. Inputs may be given (any size, resampled); the
  * rest are generated procedurally from seed (see docs/abrasion.md). */
 typedef struct ss_base_skin {
-    ss_image *upper, *lower;           /* linear RGB */
-    ss_image *upper_srgb, *lower_srgb; /* the same, sRGB-encoded: the seed blends in display space */
+    ss_image *upper, *lower; /* linear RGB */
+    ss_image *upper_srgb,
+        *lower_srgb; /* the same, sRGB-encoded: the seed blends in display space */
 } ss_base_skin;
 ss_status ss_base_skin_create(const ss_image *upper_in, const ss_image *lower_in, int size,
                               uint64_t seed, ss_base_skin *out, ss_error *err);
@@ -85,7 +91,7 @@ typedef enum ss_phase {
     SS_PHASE_MATURATION,
     SS_PHASE_COUNT
 } ss_phase;
-const char *ss_phase_name(ss_phase p); /* "vasoconstriction", ... "maturation" */
+const char *ss_phase_name(ss_phase p);    /* "vasoconstriction", ... "maturation" */
 int ss_phase_from_name(const char *name); /* -1 if unknown */
 
 /* A key position's texture set. color: linear RGB; reflection: 1 channel
@@ -102,10 +108,10 @@ void ss_texture_set_free(ss_texture_set *t);
  * periods are pixels of a reference_px texture; other sizes are scaled so
  * the output looks the same at 512 and at 4096 pixels. */
 typedef struct ss_abrasion_settings {
-    int size;               /* output side in pixels */
-    double world_size_cm;   /* side of the texture in the world */
-    double reference_px;    /* texture size the seed's pixel values refer to (2048) */
-    double scab_height_mm;  /* height = 1 in the height map */
+    int size;              /* output side in pixels */
+    double world_size_cm;  /* side of the texture in the world */
+    double reference_px;   /* texture size the seed's pixel values refer to (2048) */
+    double scab_height_mm; /* height = 1 in the height map */
     uint64_t seed;
 } ss_abrasion_settings;
 void ss_abrasion_settings_default(ss_abrasion_settings *s);
@@ -116,9 +122,16 @@ ss_status ss_abrasion_render_phase(ss_phase phase, double position, const ss_wou
                                    const ss_base_skin *skin, const ss_abrasion_settings *s,
                                    ss_texture_set *out, ss_error *err);
 
+/* The rectangle outside which every phase is plain healthy skin: the wound's
+ * box grown by the widest gradient. Frames blend only inside it. */
+void ss_abrasion_changed_region(const ss_wound_shape *w, const ss_abrasion_settings *s, int *x,
+                                int *y, int *width, int *height);
+
 /* Only the colour of maturation at a position (reflection, height and normal
  * of maturation do not change with position): what a timeline frame in the
- * maturation phase re-renders. */
+ * maturation phase re-renders. Writes the pixels of the wound's bounding box
+ * only: outside it maturation is plain skin at every position, so color must
+ * already hold a maturation colour (e.g. the key's) there. */
 ss_status ss_abrasion_maturation_color(const ss_wound_shape *w, const ss_base_skin *skin,
                                        const ss_abrasion_settings *s, double position,
                                        ss_image *color, ss_error *err);
@@ -146,9 +159,9 @@ ss_status ss_timeline_validate(const ss_timeline *t, ss_error *err);
 /* Where time t falls: the two keys to blend and the weight of the second,
  * or, in maturation, the maturation position. */
 typedef struct ss_timeline_pos {
-    int key_a, key_b;     /* indices into t->key */
-    double weight;        /* 0 = key_a, 1 = key_b */
-    int in_maturation;    /* 1: re-render maturation at maturation_pos */
+    int key_a, key_b;  /* indices into t->key */
+    double weight;     /* 0 = key_a, 1 = key_b */
+    int in_maturation; /* 1: re-render maturation at maturation_pos */
     double maturation_pos;
 } ss_timeline_pos;
 ss_timeline_pos ss_timeline_locate(const ss_timeline *t, double day);
@@ -164,8 +177,8 @@ typedef struct ss_abrasion {
     int rendered[SS_PHASE_COUNT];
 } ss_abrasion;
 ss_status ss_abrasion_create(const ss_abrasion_settings *s, const ss_timeline *t,
-                             const ss_wound_shape *w, const ss_base_skin *skin,
-                             ss_abrasion **out, ss_error *err);
+                             const ss_wound_shape *w, const ss_base_skin *skin, ss_abrasion **out,
+                             ss_error *err);
 void ss_abrasion_free(ss_abrasion *a);
 /* The texture set at time day (days since injury), into out (created by the
  * caller with ss_texture_set_create at settings.size). Maps the caller set to

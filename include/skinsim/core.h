@@ -73,6 +73,9 @@ ss_image *ss_contact_sheet(const ss_image *const *tiles, const char *const *labe
 /* ---- colour encoding ----------------------------------------------------- */
 float ss_srgb_encode(float linear); /* linear 0..1 -> sRGB 0..1 */
 float ss_srgb_decode(float encoded);
+/* The same over arrays through a table with linear interpolation (error
+ * below 2e-6), for whole images where powf per value would dominate. */
+void ss_srgb_encode_array(const float *in, float *out, size_t n);
 
 /* ---- file I/O ------------------------------------------------------------ */
 
@@ -135,6 +138,13 @@ void ss_rng4(uint64_t seed, uint64_t stream, uint64_t index, uint32_t out[4]);
 uint32_t ss_rng_u32(uint64_t seed, uint64_t stream, uint64_t index);
 /* Uniform in [0,1) with 53 random bits. */
 double ss_rng_uniform(uint64_t seed, uint64_t stream, uint64_t index);
+
+/* Bulk fills for textures: out[i] is the draw at index first + i, where
+ * index k is lane k % 4 of Philox block k / 4, so a fill is 4x cheaper than
+ * per-value calls and any sub-range gives the same values. f32 values are
+ * uniform in [0,1) with 24 random bits. Parallel (OpenMP), deterministic. */
+void ss_rng_fill_u32(uint64_t seed, uint64_t stream, uint64_t first, uint32_t *out, size_t n);
+void ss_rng_fill_f32(uint64_t seed, uint64_t stream, uint64_t first, float *out, size_t n);
 
 /* A sequential view of one (seed, stream): for loops that need many draws,
  * such as one photon's walk. Draw k of the stream is a function of k only. */

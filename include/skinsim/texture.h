@@ -49,6 +49,12 @@ void ss_noise_params_default(ss_noise_params *p); /* 5, 0.5, 0.5, 0.5, 1, 1, 1 *
  * equals ss_value_noise_reference bit for bit. */
 ss_status ss_value_noise(const ss_noise_params *p, uint64_t seed, uint64_t stream, ss_image *out,
                          ss_error *err);
+/* The rectangle of a width x height noise texture whose top-left pixel is
+ * (x0, y0) and whose size is out's: exactly the values ss_value_noise gives
+ * there, at a cost proportional to the rectangle (a wound needs noise only
+ * where it is). */
+ss_status ss_value_noise_rect(const ss_noise_params *p, uint64_t seed, uint64_t stream, int width,
+                              int height, int x0, int y0, ss_image *out, ss_error *err);
 /* Direct transcription of Alg. 3.2 (no stretch, cell_px 1), for tests.
  * p->stretch_* and p->cell_px are ignored. O(octaves * 32) per pixel. */
 ss_status ss_value_noise_reference(const ss_noise_params *p, uint64_t seed, uint64_t stream,
@@ -60,6 +66,10 @@ ss_status ss_value_noise_reference(const ss_noise_params *p, uint64_t seed, uint
  * min_w as min_w. */
 void ss_erosion_widths(int width, int height, int min_w, int max_w, uint64_t seed, uint64_t stream,
                        int *widths);
+/* The widths of the w x h rectangle at (x0, y0) of a width x height
+ * texture: the same values ss_erosion_widths gives there (widths holds w*h). */
+void ss_erosion_widths_rect(int width, int height, int x0, int y0, int w, int h, int min_w,
+                            int max_w, uint64_t seed, uint64_t stream, int *widths);
 /* Alg. 3.1: horizontal N x 1 min filter with per-pixel widths; outside the
  * texture counts as the highest value (ignored). src and dst 1 channel.
  * (More channels are eroded independently; src and dst must have the same

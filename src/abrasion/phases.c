@@ -15,19 +15,19 @@
 #include <string.h>
 
 /* Seed colours (display values). */
-static const float GLOW_RED[3] = {0.79f, 0.0f, 0.0f};       /* §4.3.2 */
-static const float EDGE_GREY = 0.95f;                        /* §4.3.2 */
-static const float SPECKLE_RED[3] = {0.88f, 0.20f, 0.22f};   /* §4.3.3 */
-static const float SCAB_RED[3] = {0.5f, 0.04f, 0.03f};       /* §4.3.4 */
-static const float SCAB_LIGHT[3] = {0.78f, 0.48f, 0.27f};    /* §4.3.4 */
-static const float SCAB_DARK[3] = {0.39f, 0.12f, 0.11f};     /* §4.3.4 */
-static const float WOUND_WHITE[3] = {0.79f, 0.41f, 0.41f};   /* §4.3.5 */
+static const float GLOW_RED[3] = {0.79f, 0.0f, 0.0f};      /* §4.3.2 */
+static const float EDGE_GREY = 0.95f;                      /* §4.3.2 */
+static const float SPECKLE_RED[3] = {0.88f, 0.20f, 0.22f}; /* §4.3.3 */
+static const float SCAB_RED[3] = {0.5f, 0.04f, 0.03f};     /* §4.3.4 */
+static const float SCAB_LIGHT[3] = {0.78f, 0.48f, 0.27f};  /* §4.3.4 */
+static const float SCAB_DARK[3] = {0.39f, 0.12f, 0.11f};   /* §4.3.4 */
+static const float WOUND_WHITE[3] = {0.79f, 0.41f, 0.41f}; /* §4.3.5 */
 
 /* Reflection and height where the seed gives none (docs/abrasion.md). */
-static const float SKIN_REFLECTION = 0.25f;   /* healthy skin specular strength */
+static const float SKIN_REFLECTION = 0.25f;     /* healthy skin specular strength */
 static const float RAW_WOUND_REFLECTION = 0.5f; /* fresh, wet wound bed */
-static const float WOUND_DEPTH = 0.05f;       /* epidermis removed: 0.05 of the height range */
-static const float SCRAPE_RELIEF = 0.02f;     /* depth of the scrape lines */
+static const float WOUND_DEPTH = 0.05f;         /* epidermis removed: 0.05 of the height range */
+static const float SCRAPE_RELIEF = 0.02f;       /* depth of the scrape lines */
 
 /* Noise streams: one per noise texture, so each phase is reproducible alone. */
 enum {
@@ -113,9 +113,32 @@ typedef struct ctx {
     const ss_abrasion_settings *s;
     int n;
     size_t npx;
-    float k; /* output pixels per reference pixel */
+    float k;            /* output pixels per reference pixel */
+    int bx, by, bw, bh; /* the wound's box: noise, erosion and normals are only
+                           needed there (outside, every phase is plain skin), so
+                           the cost grows with the wound, not the texture */
+    int rx, ry, rw, rh; /* the box grown by the glow: where any colour differs
+                           from healthy skin */
     decode_lut lut;
 } ctx;
+
+void ss_abrasion_changed_region(const ss_wound_shape *w, const ss_abrasion_settings *s, int *x,
+                                int *y, int *width, int *height) {
+    int n = s->size;
+    int g = (int)ceilf((float)(SS_ABRASION_MAX_GRADIENT_REF_PX * s->size / s->reference_px)) + 2;
+    *x = w->box_x - g < 0 ? 0 : w->box_x - g;
+    *y = w->box_y - g < 0 ? 0 : w->box_y - g;
+    *width = (w->box_x + w->box_w + g > n ? n : w->box_x + w->box_w + g) - *x;
+    *height = (w->box_y + w->box_h + g > n ? n : w->box_y + w->box_h + g) - *y;
+    if (w->box_w == 0) *width = *height = 0;
+}
+
+/* Copies sub (w x h) into img at (x0, y0). */
+static void paste(ss_image *img, const ss_image *sub, int x0, int y0) {
+    size_t row = (size_t)sub->width * (size_t)img->channels * sizeof(float);
+    for (int y = 0; y < sub->height; y++)
+        memcpy(ss_image_px(img, x0, y0 + y), ss_image_px(sub, 0, y), row);
+}
 
 static void ctx_init(ctx *c, const ss_wound_shape *w, const ss_base_skin *skin,
                      const ss_abrasion_settings *s) {
@@ -126,6 +149,11 @@ static void ctx_init(ctx *c, const ss_wound_shape *w, const ss_base_skin *skin,
     c->npx = (size_t)s->size * (size_t)s->size;
     c->k = (float)(s->size / s->reference_px);
     lut_init(&c->lut);
+    c->bx = w->box_x;
+    c->by = w->box_y;
+    c->bw = w->box_w;
+    c->bh = w->box_h;
+    ss_abrasion_changed_region(w, s, &c->rx, &c->ry, &c->rw, &c->rh);
 }
 
 static inline void put_color(const ctx *c, float *dst, const float rgb[3]) {
@@ -144,7 +172,13 @@ static ss_status noise(const ctx *c, int octaves, float persistence, float bias,
     p.cell_px = c->k;
     *out = ss_image_create(c->n, c->n, 1, err);
     if (!*out) return err->code;
-    ss_status st = ss_value_noise(&p, c->s->seed, stream, *out, err);
+    if (c->bw == 0) return SS_OK;
+    ss_image *sub = ss_image_create(c->bw, c->bh, 1, err);
+    ss_status st =
+        sub ? ss_value_noise_rect(&p, c->s->seed, stream, c->n, c->n, c->bx, c->by, sub, err)
+            : err->code;
+    if (!st) paste(*out, sub, c->bx, c->by);
+    ss_image_free(sub);
     if (st) {
         ss_image_free(*out);
         *out = NULL;
@@ -160,32 +194,67 @@ static ss_status glow(const ctx *c, ss_image **out, ss_error *err) {
     return SS_OK;
 }
 
-/* Outside the wound: the glow fades from red to the upper skin, or plain
- * upper skin where the gradient is not drawn. */
-static inline void outside_color(const ctx *c, size_t i, const ss_image *glw, float *rgb) {
-    const float *up = c->skin->upper_srgb->data + i * 3;
-    if (glw && glw->data[i] >= 0.0f) lerp3(GLOW_RED, up, glw->data[i], rgb);
-    else memcpy(rgb, up, 3 * sizeof(float));
+/* Outside the wound the glow fades from red to the upper skin (Alg. 3.4);
+ * where it is not drawn the pixel keeps the healthy skin fill_healthy wrote. */
+static inline void outside_glow(const ctx *c, size_t i, const ss_image *glw, ss_texture_set *out) {
+    if (glw->data[i] < 0.0f) return;
+    float rgb[3];
+    lerp3(GLOW_RED, c->skin->upper_srgb->data + i * 3, glw->data[i], rgb);
+    put_color(c, out->color->data + i * 3, rgb);
+}
+
+/* Every phase starts from healthy skin: the upper colour, its reflection,
+ * flat height and normal; the phases then draw only around the wound. */
+static void fill_healthy(const ctx *c, ss_texture_set *out) {
+    memcpy(out->color->data, c->skin->upper->data, c->npx * 3 * sizeof(float));
+    const float refl = SKIN_REFLECTION, h = 0.5f, flat[3] = {0.5f, 0.5f, 1.0f};
+    ss_image_fill(out->reflection, &refl);
+    ss_image_fill(out->height, &h);
+    ss_image_fill(out->normal, flat);
 }
 
 static void normals(const ctx *c, ss_texture_set *out) {
     double pixel_mm = c->s->world_size_cm * 10.0 / c->n;
     /* height 0..1 spans 2 * scab_height_mm (0.5 is the skin surface) */
     float strength = (float)(2.0 * c->s->scab_height_mm / pixel_mm);
-    ss_height_to_normal(out->height, strength, out->normal);
+    /* Outside the wound the height is flat (0.5), so the normal is (0,0,1);
+     * only the box around the wound needs the differences. */
+    int x0 = c->bx - 2, y0 = c->by - 2, w = c->bw + 4, h = c->bh + 4;
+    if (c->bw == 0 || x0 < 0 || y0 < 0 || x0 + w > c->n || y0 + h > c->n) {
+        ss_height_to_normal(out->height, strength, out->normal);
+        return;
+    }
+    ss_error err; /* the flat normal outside is already there (fill_healthy) */
+    ss_image *hs = ss_image_create(w, h, 1, &err), *ns = hs ? ss_image_create(w, h, 3, &err) : NULL;
+    if (!ns) { /* no memory for the box: do the whole texture */
+        ss_image_free(hs);
+        ss_height_to_normal(out->height, strength, out->normal);
+        return;
+    }
+    for (int y = 0; y < h; y++)
+        memcpy(ss_image_px(hs, 0, y), ss_image_px(out->height, x0, y0 + y),
+               (size_t)w * sizeof(float));
+    ss_height_to_normal(hs, strength, ns);
+    /* The box's outer ring saw wrapped neighbours; it is flat anyway. */
+    for (int y = 1; y < h - 1; y++)
+        memcpy(ss_image_px(out->normal, x0 + 1, y0 + y), ss_image_px(ns, 1, y),
+               (size_t)(w - 2) * 3 * sizeof(float));
+    ss_image_free(hs);
+    ss_image_free(ns);
 }
 
 static ss_status render_vasoconstriction(const ctx *c, ss_texture_set *out, ss_error *err) {
     (void)err;
     /* §4.3.1: lower skin inside the shape, upper skin outside. */
 #pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < c->npx; i++) {
-        int in = c->w->mask->data[i] > 0.5f;
-        const float *src = (in ? c->skin->lower_srgb : c->skin->upper_srgb)->data + i * 3;
-        put_color(c, out->color->data + i * 3, src);
-        out->reflection->data[i] = in ? RAW_WOUND_REFLECTION : SKIN_REFLECTION;
-        out->height->data[i] = in ? 0.5f - WOUND_DEPTH : 0.5f;
-    }
+    for (int y = c->ry; y < c->ry + c->rh; y++)
+        for (size_t i = (size_t)y * (size_t)c->n + (size_t)c->rx, e = i + (size_t)c->rw; i < e;
+             i++) {
+            if (c->w->mask->data[i] <= 0.5f) continue;
+            put_color(c, out->color->data + i * 3, c->skin->lower_srgb->data + i * 3);
+            out->reflection->data[i] = RAW_WOUND_REFLECTION;
+            out->height->data[i] = 0.5f - WOUND_DEPTH;
+        }
     return SS_OK;
 }
 
@@ -196,42 +265,62 @@ static ss_status render_vasodilation(const ctx *c, ss_texture_set *out, ss_error
     ss_status st = glow(c, &glw, err);
     /* Scrape lines: 5 octaves, persistence 0.09, bias 0.5, gain 0.43, y x64. */
     if (!st) st = noise(c, 5, 0.09f, 0.5f, 0.43f, 64.0f, ST_SCRAPE, &scrape, err);
-    /* The half-scraped edge: erode twice (widths 3-5, then 3-10). */
-    if (!st) e1 = ss_image_create(c->n, c->n, 1, err);
-    if (e1) e2 = ss_image_create(c->n, c->n, 1, err);
+    /* The half-scraped edge: erode twice (widths 3-5, then 3-10), in a box
+     * around the wound padded wider than the kernels so the result equals
+     * eroding the whole texture. */
+    if (!st) e2 = ss_image_create(c->n, c->n, 1, err);
     if (!e2) st = err->code;
-    if (!st) {
-        int lo = (int)fmaxf(1.0f, roundf(3 * c->k));
-        ss_erosion_widths(c->n, c->n, lo, (int)fmaxf((float)lo, roundf(5 * c->k)), c->s->seed,
-                          ST_ERODE1, widths);
-        ss_erode(c->w->mask, widths, e1);
-        ss_erosion_widths(c->n, c->n, lo, (int)fmaxf((float)lo, roundf(10 * c->k)), c->s->seed,
-                          ST_ERODE2, widths);
-        ss_erode(e1, widths, e2);
-#pragma omp parallel for schedule(static)
-        for (size_t i = 0; i < c->npx; i++) {
-            float rgb[3];
-            if (c->w->mask->data[i] > 0.5f) {
-                const float *lo_s = c->skin->lower_srgb->data + i * 3;
-                if (e2->data[i] > 0.5f) {
-                    /* Inside: lower skin multiplied by the red (§4.3.2). */
-                    for (int k = 0; k < 3; k++) rgb[k] = lo_s[k] * GLOW_RED[k];
-                } else {
-                    /* The edge of half scraped-off skin. */
-                    const float *up = c->skin->upper_srgb->data + i * 3;
-                    for (int k = 0; k < 3; k++) rgb[k] = up[k] * EDGE_GREY;
-                }
-                out->reflection->data[i] = scrape->data[i];
-                out->height->data[i] = e2->data[i] > 0.5f
-                                           ? 0.5f - WOUND_DEPTH + SCRAPE_RELIEF * (scrape->data[i] - 0.5f)
-                                           : 0.5f - 0.5f * WOUND_DEPTH;
-            } else {
-                outside_color(c, i, glw, rgb);
-                out->reflection->data[i] = SKIN_REFLECTION;
-                out->height->data[i] = 0.5f;
-            }
-            put_color(c, out->color->data + i * 3, rgb);
+    int lo = (int)fmaxf(1.0f, roundf(3 * c->k)), hi1 = (int)fmaxf((float)lo, roundf(5 * c->k)),
+        hi2 = (int)fmaxf((float)lo, roundf(10 * c->k)), pad = hi2 / 2 + 3;
+    int ex0 = c->bx - pad < 0 ? 0 : c->bx - pad;
+    int ex1 = c->bx + c->bw + pad > c->n ? c->n : c->bx + c->bw + pad;
+    if (!st && c->bw > 0) {
+        ss_image *m = ss_image_create(ex1 - ex0, c->bh, 1, err);
+        e1 = m ? ss_image_create(ex1 - ex0, c->bh, 1, err) : NULL;
+        if (!e1) {
+            ss_image_free(m);
+            st = err->code;
+        } else {
+            for (int y = 0; y < c->bh; y++)
+                memcpy(ss_image_px(m, 0, y), ss_image_px(c->w->mask, ex0, c->by + y),
+                       (size_t)(ex1 - ex0) * sizeof(float));
+            ss_erosion_widths_rect(c->n, c->n, ex0, c->by, ex1 - ex0, c->bh, lo, hi1, c->s->seed,
+                                   ST_ERODE1, widths);
+            ss_erode(m, widths, e1);
+            ss_erosion_widths_rect(c->n, c->n, ex0, c->by, ex1 - ex0, c->bh, lo, hi2, c->s->seed,
+                                   ST_ERODE2, widths);
+            ss_erode(e1, widths, m);
+            paste(e2, m, ex0, c->by);
+            ss_image_free(m);
         }
+    }
+    if (!st) {
+#pragma omp parallel for schedule(static)
+        for (int y = c->ry; y < c->ry + c->rh; y++)
+            for (size_t i = (size_t)y * (size_t)c->n + (size_t)c->rx, e = i + (size_t)c->rw; i < e;
+                 i++) {
+                float rgb[3];
+                if (c->w->mask->data[i] > 0.5f) {
+                    const float *lo_s = c->skin->lower_srgb->data + i * 3;
+                    if (e2->data[i] > 0.5f) {
+                        /* Inside: lower skin multiplied by the red (§4.3.2). */
+                        for (int k = 0; k < 3; k++) rgb[k] = lo_s[k] * GLOW_RED[k];
+                    } else {
+                        /* The edge of half scraped-off skin. */
+                        const float *up = c->skin->upper_srgb->data + i * 3;
+                        for (int k = 0; k < 3; k++) rgb[k] = up[k] * EDGE_GREY;
+                    }
+                    out->reflection->data[i] = scrape->data[i];
+                    out->height->data[i] =
+                        e2->data[i] > 0.5f
+                            ? 0.5f - WOUND_DEPTH + SCRAPE_RELIEF * (scrape->data[i] - 0.5f)
+                            : 0.5f - 0.5f * WOUND_DEPTH;
+                } else {
+                    outside_glow(c, i, glw, out);
+                    continue;
+                }
+                put_color(c, out->color->data + i * 3, rgb);
+            }
     }
     ss_image_free(glw);
     ss_image_free(scrape);
@@ -252,27 +341,29 @@ static ss_status render_scab_forming(const ctx *c, ss_texture_set *out, ss_error
     if (!st) st = noise(c, 5, 0.09f, 0.5f, 0.43f, 64.0f, ST_SCRAPE, &scrape, err);
     if (!st) {
 #pragma omp parallel for schedule(static)
-        for (size_t i = 0; i < c->npx; i++) {
-            float rgb[3];
-            if (c->w->mask->data[i] > 0.5f) {
-                const float *lo_s = c->skin->lower_srgb->data + i * 3;
-                const float *up = c->skin->upper_srgb->data + i * 3;
-                float ln = low->data[i], lower_wound[3], sp[3];
-                /* Eq. 4.5 */
-                for (int k = 0; k < 3; k++) lower_wound[k] = lo_s[k] * ln + up[k] * (1.0f - ln);
-                /* Eq. 4.6: speckle colour = noise x (0.88, 0.20, 0.22), weighted by its red. */
-                for (int k = 0; k < 3; k++) sp[k] = speck->data[i] * SPECKLE_RED[k];
-                for (int k = 0; k < 3; k++) rgb[k] = sp[k] * sp[0] + lower_wound[k] * (1.0f - sp[0]);
-                out->reflection->data[i] = 0.7f * scrape->data[i];
-                /* The redder parts are carved deeper (§4.3.3). */
-                out->height->data[i] = 0.5f - WOUND_DEPTH * (0.5f + ln) - WOUND_DEPTH * sp[0];
-            } else {
-                outside_color(c, i, glw, rgb);
-                out->reflection->data[i] = SKIN_REFLECTION;
-                out->height->data[i] = 0.5f;
+        for (int y = c->ry; y < c->ry + c->rh; y++)
+            for (size_t i = (size_t)y * (size_t)c->n + (size_t)c->rx, e = i + (size_t)c->rw; i < e;
+                 i++) {
+                float rgb[3];
+                if (c->w->mask->data[i] > 0.5f) {
+                    const float *lo_s = c->skin->lower_srgb->data + i * 3;
+                    const float *up = c->skin->upper_srgb->data + i * 3;
+                    float ln = low->data[i], lower_wound[3], sp[3];
+                    /* Eq. 4.5 */
+                    for (int k = 0; k < 3; k++) lower_wound[k] = lo_s[k] * ln + up[k] * (1.0f - ln);
+                    /* Eq. 4.6: speckle colour = noise x (0.88, 0.20, 0.22), weighted by its red. */
+                    for (int k = 0; k < 3; k++) sp[k] = speck->data[i] * SPECKLE_RED[k];
+                    for (int k = 0; k < 3; k++)
+                        rgb[k] = sp[k] * sp[0] + lower_wound[k] * (1.0f - sp[0]);
+                    out->reflection->data[i] = 0.7f * scrape->data[i];
+                    /* The redder parts are carved deeper (§4.3.3). */
+                    out->height->data[i] = 0.5f - WOUND_DEPTH * (0.5f + ln) - WOUND_DEPTH * sp[0];
+                } else {
+                    outside_glow(c, i, glw, out);
+                    continue;
+                }
+                put_color(c, out->color->data + i * 3, rgb);
             }
-            put_color(c, out->color->data + i * 3, rgb);
-        }
     }
     ss_image_free(glw);
     ss_image_free(low);
@@ -297,29 +388,30 @@ static ss_status render_scab(const ctx *c, ss_texture_set *out, ss_error *err) {
     if (!st) {
         ss_gradient_edge(c->w->mask, c->w->dist, 100.0f * c->k, 1, inner);
 #pragma omp parallel for schedule(static)
-        for (size_t i = 0; i < c->npx; i++) {
-            float rgb[3];
-            if (c->w->mask->data[i] > 0.5f) {
-                float h = mask_n->data[i] * mid->data[i];
-                float in_col[3], grad[3] = {0, 0, 0};
-                /* Higher crust is the lighter, yellowish colour (docs/abrasion.md). */
-                lerp3(SCAB_DARK, SCAB_LIGHT, h, in_col);
-                if (inner->data[i] >= 0.0f) {
-                    static const float black[3] = {0, 0, 0};
-                    lerp3(SCAB_RED, black, inner->data[i], grad);
-                    for (int k = 0; k < 3; k++) grad[k] *= redn->data[i];
+        for (int y = c->ry; y < c->ry + c->rh; y++)
+            for (size_t i = (size_t)y * (size_t)c->n + (size_t)c->rx, e = i + (size_t)c->rw; i < e;
+                 i++) {
+                float rgb[3];
+                if (c->w->mask->data[i] > 0.5f) {
+                    float h = mask_n->data[i] * mid->data[i];
+                    float in_col[3], grad[3] = {0, 0, 0};
+                    /* Higher crust is the lighter, yellowish colour (docs/abrasion.md). */
+                    lerp3(SCAB_DARK, SCAB_LIGHT, h, in_col);
+                    if (inner->data[i] >= 0.0f) {
+                        static const float black[3] = {0, 0, 0};
+                        lerp3(SCAB_RED, black, inner->data[i], grad);
+                        for (int k = 0; k < 3; k++) grad[k] *= redn->data[i];
+                    }
+                    /* Eq. 4.7 */
+                    for (int k = 0; k < 3; k++) rgb[k] = in_col[k] + grad[k] * (1.0f - in_col[k]);
+                    out->reflection->data[i] = refl->data[i];
+                    out->height->data[i] = 0.5f + 0.5f * h;
+                } else {
+                    outside_glow(c, i, glw, out);
+                    continue;
                 }
-                /* Eq. 4.7 */
-                for (int k = 0; k < 3; k++) rgb[k] = in_col[k] + grad[k] * (1.0f - in_col[k]);
-                out->reflection->data[i] = refl->data[i];
-                out->height->data[i] = 0.5f + 0.5f * h;
-            } else {
-                outside_color(c, i, glw, rgb);
-                out->reflection->data[i] = SKIN_REFLECTION;
-                out->height->data[i] = 0.5f;
+                put_color(c, out->color->data + i * 3, rgb);
             }
-            put_color(c, out->color->data + i * 3, rgb);
-        }
     }
     ss_image_free(glw);
     ss_image_free(mask_n);
@@ -330,16 +422,14 @@ static ss_status render_scab(const ctx *c, ss_texture_set *out, ss_error *err) {
     return st;
 }
 
-/* Alg. 4.4 for one pixel (display-space colour). */
-static inline void maturation_color(const ctx *c, size_t i, double position, float *rgb) {
+/* Alg. 4.4 for one pixel (display-space colour); returns 0 for pixels
+ * outside the wound, which stay healthy skin. */
+static inline int maturation_color(const ctx *c, size_t i, double position, float *rgb) {
     const float *skin = c->skin->upper_srgb->data + i * 3;
     int l = c->w->label[i];
-    if (c->w->mask->data[i] <= 0.5f || l < 0) {
-        memcpy(rgb, skin, 3 * sizeof(float));
-        return;
-    }
+    if (c->w->mask->data[i] <= 0.5f || l < 0) return 0;
     double closing = c->w->closing_px[l];
-    double max_outer = closing * 0.5;                             /* Eq. 4.8 */
+    double max_outer = closing * 0.5; /* Eq. 4.8 */
     double outer = max_outer * position;
     double inner = outer + max_outer * c->w->inner_ratio[l];
     double d = c->w->dist->data[i];
@@ -353,19 +443,20 @@ static inline void maturation_color(const ctx *c, size_t i, double position, flo
         float t = span > 0 ? (float)((d - inner) / span) : 1.0f;
         lerp3(GLOW_RED, WOUND_WHITE, t < 0 ? 0 : t > 1 ? 1 : t, rgb);
     }
+    return 1;
 }
 
 static ss_status render_maturation(const ctx *c, double position, ss_texture_set *out,
                                    ss_error *err) {
     (void)err;
+    /* Reflection, height and normal stay those of healthy skin. */
 #pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < c->npx; i++) {
-        float rgb[3];
-        maturation_color(c, i, position, rgb);
-        put_color(c, out->color->data + i * 3, rgb);
-        out->reflection->data[i] = SKIN_REFLECTION;
-        out->height->data[i] = 0.5f;
-    }
+    for (int y = c->by; y < c->by + c->bh; y++)
+        for (size_t i = (size_t)y * (size_t)c->n + (size_t)c->bx, e = i + (size_t)c->bw; i < e;
+             i++) {
+            float rgb[3];
+            if (maturation_color(c, i, position, rgb)) put_color(c, out->color->data + i * 3, rgb);
+        }
     return SS_OK;
 }
 
@@ -378,8 +469,9 @@ static ss_status check_inputs(const ss_wound_shape *w, const ss_base_skin *skin,
         return ss_error_set(err, SS_ERR_INPUT,
                             "abrasion render: shape, skin and output sizes differ from %d", n);
     if (!(s->world_size_cm > 0) || !(s->reference_px > 0) || !(s->scab_height_mm > 0))
-        return ss_error_set(err, SS_ERR_INPUT,
-                            "abrasion settings: world size, reference size and scab height must be > 0");
+        return ss_error_set(
+            err, SS_ERR_INPUT,
+            "abrasion settings: world size, reference size and scab height must be > 0");
     return SS_OK;
 }
 
@@ -390,18 +482,28 @@ ss_status ss_abrasion_render_phase(ss_phase phase, double position, const ss_wou
     if (st) return st;
     ctx c;
     ctx_init(&c, w, skin, s);
+    fill_healthy(&c, out);
     switch (phase) {
-    case SS_PHASE_VASOCONSTRICTION: st = render_vasoconstriction(&c, out, err); break;
-    case SS_PHASE_VASODILATION: st = render_vasodilation(&c, out, err); break;
-    case SS_PHASE_SCAB_FORMING: st = render_scab_forming(&c, out, err); break;
-    case SS_PHASE_SCAB: st = render_scab(&c, out, err); break;
+    case SS_PHASE_VASOCONSTRICTION:
+        st = render_vasoconstriction(&c, out, err);
+        break;
+    case SS_PHASE_VASODILATION:
+        st = render_vasodilation(&c, out, err);
+        break;
+    case SS_PHASE_SCAB_FORMING:
+        st = render_scab_forming(&c, out, err);
+        break;
+    case SS_PHASE_SCAB:
+        st = render_scab(&c, out, err);
+        break;
     case SS_PHASE_MATURATION:
         if (!(position >= 0.0 && position <= 1.0))
             return ss_error_set(err, SS_ERR_INPUT, "maturation position %g is outside 0..1",
                                 position);
         st = render_maturation(&c, position, out, err);
         break;
-    default: return ss_error_set(err, SS_ERR_INPUT, "unknown phase %d", (int)phase);
+    default:
+        return ss_error_set(err, SS_ERR_INPUT, "unknown phase %d", (int)phase);
     }
     if (!st) normals(&c, out);
     return st;
@@ -415,10 +517,11 @@ ss_status ss_abrasion_maturation_color(const ss_wound_shape *w, const ss_base_sk
     ctx c;
     ctx_init(&c, w, skin, s);
 #pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < c.npx; i++) {
-        float rgb[3];
-        maturation_color(&c, i, position, rgb);
-        put_color(&c, color->data + i * 3, rgb);
-    }
+    for (int y = c.by; y < c.by + c.bh; y++)
+        for (int x = c.bx; x < c.bx + c.bw; x++) {
+            size_t i = (size_t)y * (size_t)c.n + (size_t)x;
+            float rgb[3];
+            if (maturation_color(&c, i, position, rgb)) put_color(&c, color->data + i * 3, rgb);
+        }
     return SS_OK;
 }

@@ -33,11 +33,30 @@ static ss_wound_shape *shape_alloc(int size, int nwounds, ss_error *err) {
     w->closing_px = calloc((size_t)(nwounds > 0 ? nwounds : 1), sizeof(double));
     w->inner_ratio = calloc((size_t)(nwounds > 0 ? nwounds : 1), sizeof(double));
     if (!w->dist || !w->label || !w->closing_px || !w->inner_ratio) {
-        if (w->dist) ss_error_set(err, SS_ERR_NOMEM, "out of memory for a %dx%d wound shape", size, size);
+        if (w->dist)
+            ss_error_set(err, SS_ERR_NOMEM, "out of memory for a %dx%d wound shape", size, size);
         ss_wound_shape_free(w);
         return NULL;
     }
     return w;
+}
+
+static void find_box(ss_wound_shape *w) {
+    int n = w->size, x0 = n, y0 = n, x1 = -1, y1 = -1;
+    for (int y = 0; y < n; y++) {
+        const float *row = w->mask->data + (size_t)y * (size_t)n;
+        for (int x = 0; x < n; x++)
+            if (row[x] > 0.5f) {
+                if (x < x0) x0 = x;
+                if (x > x1) x1 = x;
+                if (y < y0) y0 = y;
+                y1 = y;
+            }
+    }
+    w->box_x = x1 >= 0 ? x0 : 0;
+    w->box_y = y1 >= 0 ? y0 : 0;
+    w->box_w = x1 >= 0 ? x1 - x0 + 1 : 0;
+    w->box_h = y1 >= 0 ? y1 - y0 + 1 : 0;
 }
 
 /* Eq. 4.8's rand(0.4, 0.8), one draw per wound from the run's seed. */
@@ -117,8 +136,10 @@ ss_status ss_wound_shape_from_strokes(const ss_strokes *s, ss_hull_kind kind, in
             }
     }
     ss_image_free(tmp);
-    double maxd = 0;
-    for (int k = 0; k < nids; k++) maxd = fmax(maxd, w->closing_px[k]);
+    /* Exact distances are needed up to the widest gradient: the glow (100
+     * reference px, see phases.c) outside, half the closing distance inside. */
+    double maxd = SS_ABRASION_MAX_GRADIENT_REF_PX * size / 2048.0;
+    for (int k = 0; k < nids; k++) maxd = fmax(maxd, 0.5 * w->closing_px[k]);
     st = ss_outline_distance(w->polys, w->npolys, maxd + 2.0, w->dist, err);
     if (st) {
         ss_wound_shape_free(w);
@@ -129,9 +150,11 @@ ss_status ss_wound_shape_from_strokes(const ss_strokes *s, ss_hull_kind kind, in
     if (!any) {
         ss_wound_shape_free(w);
         return ss_error_set(err, SS_ERR_INPUT,
-                            "the strokes cover no pixel at %dx%d: paint a larger shape", size, size);
+                            "the strokes cover no pixel at %dx%d: paint a larger shape", size,
+                            size);
     }
     draw_inner_ratios(w, seed);
+    find_box(w);
     *out = w;
     return SS_OK;
 }
@@ -199,7 +222,8 @@ ss_status ss_wound_shape_from_mask(const ss_image *mask_in, int size, uint64_t s
     }
     if (ncomp == 0) {
         ss_wound_shape_free(w);
-        return ss_error_set(err, SS_ERR_INPUT, "the wound mask is empty (no pixel above 50%% grey)");
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "the wound mask is empty (no pixel above 50%% grey)");
     }
     free(w->closing_px);
     free(w->inner_ratio);
@@ -210,8 +234,9 @@ ss_status ss_wound_shape_from_mask(const ss_image *mask_in, int size, uint64_t s
      * boundary pixel corners (the farthest pair lies on the hull). */
     int *cnt = calloc((size_t)ncomp, sizeof(int));
     ss_vec2 **pts = calloc((size_t)ncomp, sizeof(ss_vec2 *));
-    ss_status st = (w->closing_px && w->inner_ratio && cnt && pts) ? SS_OK
-                   : ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    ss_status st = (w->closing_px && w->inner_ratio && cnt && pts)
+                       ? SS_OK
+                       : ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     for (int pass = 0; pass < 2 && !st; pass++) {
         if (pass == 1)
             for (int c = 0; c < ncomp && !st; c++) {
@@ -280,6 +305,7 @@ ss_status ss_wound_shape_from_mask(const ss_image *mask_in, int size, uint64_t s
         return st;
     }
     draw_inner_ratios(w, seed);
+    find_box(w);
     *out = w;
     return SS_OK;
 }

@@ -21,8 +21,8 @@ void ss_base_skin_free(ss_base_skin *b) {
 enum { STREAM_SKIN_BLOTCH = 0x51, STREAM_SKIN_GRAIN, STREAM_DERMIS_BLOTCH, STREAM_DERMIS_GRAIN };
 
 static ss_status make_skin(int size, uint64_t seed, const float srgb[3], float blotch_amp,
-                           float grain_amp, const float tint[3], uint64_t stream,
-                           ss_image **out, ss_error *err) {
+                           float grain_amp, const float tint[3], uint64_t stream, ss_image **out,
+                           ss_error *err) {
     ss_image *img = ss_image_create(size, size, 3, err);
     ss_image *blotch = img ? ss_image_create(size, size, 1, err) : NULL;
     ss_image *grain = blotch ? ss_image_create(size, size, 1, err) : NULL;
@@ -109,7 +109,8 @@ ss_status ss_base_skin_create(const ss_image *upper_in, const ss_image *lower_in
             }
             size_t n = (size_t)size * (size_t)size;
             for (size_t i = 0; i < n; i++)
-                for (int c = 0; c < 3; c++) rgb->data[i * 3 + (size_t)c] = (*img)->data[i * 4 + (size_t)c];
+                for (int c = 0; c < 3; c++)
+                    rgb->data[i * 3 + (size_t)c] = (*img)->data[i * 4 + (size_t)c];
             ss_image_free(*img);
             *img = rgb;
         }
@@ -121,10 +122,7 @@ ss_status ss_base_skin_create(const ss_image *upper_in, const ss_image *lower_in
         return err->code;
     }
     size_t n = (size_t)size * (size_t)size * 3;
-#pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < n; i++) {
-        out->upper_srgb->data[i] = ss_srgb_encode(out->upper->data[i]);
-        out->lower_srgb->data[i] = ss_srgb_encode(out->lower->data[i]);
-    }
+    ss_srgb_encode_array(out->upper->data, out->upper_srgb->data, n);
+    ss_srgb_encode_array(out->lower->data, out->lower_srgb->data, n);
     return SS_OK;
 }

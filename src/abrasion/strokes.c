@@ -2,6 +2,9 @@
  * paints): CSV "u,v[,stroke_id]", parsed strictly so a bad line is reported
  * with its file and line number. */
 #define _POSIX_C_SOURCE 200809L
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
 #include "skinsim/abrasion.h"
 
 #include <ctype.h>
@@ -71,8 +74,10 @@ ss_status ss_strokes_read_csv(const char *path, ss_strokes *out, ss_error *err) 
             q = field(q, &v[k]);
             if (!q) break;
             k++;
-            if (*q == ',') q++;
-            else break;
+            if (*q == ',')
+                q++;
+            else
+                break;
         }
         if (!q || (k < 2) || *q != '\0') {
             if (first_data && !isdigit((unsigned char)*p) && *p != '-' && *p != '.' && *p != '+') {
@@ -116,17 +121,22 @@ ss_status ss_strokes_read_csv(const char *path, ss_strokes *out, ss_error *err) 
 }
 
 ss_status ss_strokes_example(ss_strokes *out, ss_error *err) {
-    /* A scrape painted as a wobbly band, wider at one end, like the seed's
-     * Fig. 4.5 knuckle abrasion; points follow the brush path. */
+    /* A brush path scrubbed back and forth over a roundish patch, like the
+     * knuckle abrasion of the seed's Fig. 4.5 (whose hull is "one big
+     * circle"): a zig-zag inside an ellipse of radii 0.15 x 0.12, tilted. */
     memset(out, 0, sizeof *out);
     int cap = 0;
-    for (int i = 0; i <= 40; i++) {
-        double t = i / 40.0;
-        double cx = 0.30 + 0.40 * t, cy = 0.42 + 0.10 * t + 0.03 * sin(6.0 * t);
-        double half = 0.07 + 0.06 * t;
-        for (int side = -1; side <= 1; side += 2)
-            if (push(out, &cap, cx - 0.02 * side, cy + side * half * (0.8 + 0.2 * cos(9 * t)), 0))
+    const double cx = 0.5, cy = 0.5, rx = 0.15, ry = 0.12, tilt = 0.35;
+    for (int i = 0; i <= 48; i++) {
+        double t = i / 48.0 * 2.0 * M_PI;
+        for (int pass = 0; pass < 2; pass++) {
+            double r = pass ? 0.55 + 0.3 * sin(5 * t) : 1.0 - 0.06 * cos(3 * t);
+            double ex = rx * r * cos(t), ey = ry * r * sin(t);
+            double u = cx + ex * cos(tilt) - ey * sin(tilt),
+                   v = cy + ex * sin(tilt) + ey * cos(tilt);
+            if (push(out, &cap, u, v, 0))
                 return ss_strokes_free(out), ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+        }
     }
     return SS_OK;
 }

@@ -20,8 +20,8 @@ void ss_timeline_default(ss_timeline *t) {
         {SS_PHASE_VASODILATION, 30 * MINUTE},    /* ... for about 20 minutes */
         {SS_PHASE_SCAB_FORMING, 0.5},            /* the bed dries over hours */
         {SS_PHASE_SCAB_FORMING, 1.0},
-        {SS_PHASE_SCAB, 3.0},                    /* a scab within days */
-        {SS_PHASE_SCAB, 10.0},                   /* holds while the wound contracts */
+        {SS_PHASE_SCAB, 3.0},                      /* a scab within days */
+        {SS_PHASE_SCAB, 10.0},                     /* holds while the wound contracts */
         {SS_PHASE_MATURATION, 10.0 + 10 * MINUTE}, /* scab falls off: the jump */
     };
     t->nkeys = (int)(sizeof keys / sizeof keys[0]);
@@ -37,7 +37,8 @@ ss_status ss_timeline_validate(const ss_timeline *t, ss_error *err) {
         if ((unsigned)t->key[i].phase >= SS_PHASE_COUNT)
             return ss_error_set(err, SS_ERR_INPUT, "timeline: key %d has an unknown phase", i);
         if (!isfinite(t->key[i].day) || t->key[i].day < 0)
-            return ss_error_set(err, SS_ERR_INPUT, "timeline: key %d day must be finite and >= 0", i);
+            return ss_error_set(err, SS_ERR_INPUT, "timeline: key %d day must be finite and >= 0",
+                                i);
         if (i && !(t->key[i].day > t->key[i - 1].day))
             return ss_error_set(err, SS_ERR_INPUT,
                                 "timeline: key %d (day %g) is not after key %d (day %g)", i,
@@ -47,8 +48,9 @@ ss_status ss_timeline_validate(const ss_timeline *t, ss_error *err) {
                                 "timeline: maturation must be the last key (it runs to end_day)");
     }
     if (!isfinite(t->end_day) || t->end_day <= t->key[t->nkeys - 1].day)
-        return ss_error_set(err, SS_ERR_INPUT, "timeline: end_day %g must be after the last key (day %g)",
-                            t->end_day, t->key[t->nkeys - 1].day);
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "timeline: end_day %g must be after the last key (day %g)", t->end_day,
+                            t->key[t->nkeys - 1].day);
     return SS_OK;
 }
 
@@ -100,13 +102,16 @@ ss_status ss_timeline_load_json(const char *path, ss_timeline *t, ss_error *err)
     }
     const cJSON *end = cJSON_GetObjectItemCaseSensitive(root, "end_day");
     if (!st && end) {
-        if (!cJSON_IsNumber(end)) st = ss_error_set(err, SS_ERR_INPUT, "%s: \"end_day\" must be a number", path);
-        else nt.end_day = end->valuedouble;
+        if (!cJSON_IsNumber(end))
+            st = ss_error_set(err, SS_ERR_INPUT, "%s: \"end_day\" must be a number", path);
+        else
+            nt.end_day = end->valuedouble;
     }
     cJSON_Delete(root);
     if (!st) {
         ss_error e2;
-        if (ss_timeline_validate(&nt, &e2)) st = ss_error_set(err, SS_ERR_INPUT, "%s: %s", path, e2.msg);
+        if (ss_timeline_validate(&nt, &e2))
+            st = ss_error_set(err, SS_ERR_INPUT, "%s: %s", path, e2.msg);
     }
     if (!st) *t = nt;
     return st;
@@ -143,8 +148,8 @@ void ss_abrasion_free(ss_abrasion *a) {
 }
 
 ss_status ss_abrasion_create(const ss_abrasion_settings *s, const ss_timeline *t,
-                             const ss_wound_shape *w, const ss_base_skin *skin,
-                             ss_abrasion **out, ss_error *err) {
+                             const ss_wound_shape *w, const ss_base_skin *skin, ss_abrasion **out,
+                             ss_error *err) {
     *out = NULL;
     ss_status st = ss_timeline_validate(t, err);
     if (st) return st;
@@ -169,18 +174,57 @@ ss_status ss_abrasion_create(const ss_abrasion_settings *s, const ss_timeline *t
     return SS_OK;
 }
 
-/* out = a + (b - a) * t over n floats. */
-static void blend(const float *a, const float *b, float t, float *out, size_t n) {
+/* Row-parallel copy of whole images (memcpy of one big block is serial). */
+static void copy_image(const ss_image *src, ss_image *dst) {
+    size_t row = (size_t)src->width * (size_t)src->channels;
 #pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < n; i++) out[i] = a[i] + (b[i] - a[i]) * t;
+    for (int y = 0; y < src->height; y++)
+        memcpy(dst->data + (size_t)y * row, src->data + (size_t)y * row, row * sizeof(float));
 }
 
 /* Maps left NULL in dst are skipped. */
-static void copy_set(const ss_texture_set *src, ss_texture_set *dst, size_t npx, int color) {
-    if (color) memcpy(dst->color->data, src->color->data, npx * 3 * sizeof(float));
-    if (dst->reflection) memcpy(dst->reflection->data, src->reflection->data, npx * sizeof(float));
-    if (dst->height) memcpy(dst->height->data, src->height->data, npx * sizeof(float));
-    if (dst->normal) memcpy(dst->normal->data, src->normal->data, npx * 3 * sizeof(float));
+static void copy_set(const ss_texture_set *src, ss_texture_set *dst, int color) {
+    if (color) copy_image(src->color, dst->color);
+    if (dst->reflection) copy_image(src->reflection, dst->reflection);
+    if (dst->height) copy_image(src->height, dst->height);
+    if (dst->normal) copy_image(src->normal, dst->normal);
+}
+
+/* Outside the changed region both keys are the same healthy skin, so that
+ * part is copied and only the region is blended. normal: renormalise the
+ * blend so the map stays unit length. */
+typedef struct region {
+    int x, y, w, h;
+} region;
+
+static void blend_map(const ss_image *a, const ss_image *b, float t, ss_image *out, region r,
+                      int normal) {
+    int n = a->width, ch = a->channels;
+    size_t row = (size_t)n * (size_t)ch;
+#pragma omp parallel for schedule(static)
+    for (int y = 0; y < a->height; y++) {
+        const float *pa = a->data + (size_t)y * row, *pb = b->data + (size_t)y * row;
+        float *po = out->data + (size_t)y * row;
+        if (y < r.y || y >= r.y + r.h || r.w == 0) {
+            memcpy(po, pa, row * sizeof(float));
+            continue;
+        }
+        size_t lo = (size_t)r.x * (size_t)ch, hi = (size_t)(r.x + r.w) * (size_t)ch;
+        memcpy(po, pa, lo * sizeof(float));
+        memcpy(po + hi, pa + hi, (row - hi) * sizeof(float));
+        if (!normal) {
+            for (size_t i = lo; i < hi; i++) po[i] = pa[i] + (pb[i] - pa[i]) * t;
+            continue;
+        }
+        for (size_t i = lo; i < hi; i += 3) {
+            float v[3];
+            for (int k = 0; k < 3; k++)
+                v[k] = 2.0f * (pa[i + k] + (pb[i + k] - pa[i + k]) * t) - 1.0f;
+            float len = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+            float inv = len > 1e-12f ? 1.0f / len : 0.0f;
+            for (int k = 0; k < 3; k++) po[i + k] = 0.5f + 0.5f * v[k] * inv;
+        }
+    }
 }
 
 ss_status ss_abrasion_frame(const ss_abrasion *a, double day, ss_texture_set *out, ss_error *err) {
@@ -192,37 +236,24 @@ ss_status ss_abrasion_frame(const ss_abrasion *a, double day, ss_texture_set *ou
     for (int k = 0; k < 4; k++)
         if (maps[k] && (maps[k]->width != n || maps[k]->height != n))
             return ss_error_set(err, SS_ERR_INPUT, "frame output size differs from %d", n);
-    size_t npx = (size_t)n * (size_t)n;
     ss_timeline_pos p = ss_timeline_locate(&a->timeline, day);
     const ss_texture_set *ka = &a->phase[a->timeline.key[p.key_a].phase];
     const ss_texture_set *kb = &a->phase[a->timeline.key[p.key_b].phase];
     if (p.in_maturation) {
-        copy_set(ka, out, npx, 0);
+        copy_set(ka, out, 1);
         return ss_abrasion_maturation_color(a->shape, a->skin, &a->settings, p.maturation_pos,
                                             out->color, err);
     }
     if (ka == kb || p.weight <= 0.0) {
-        copy_set(ka, out, npx, 1);
+        copy_set(ka, out, 1);
         return SS_OK;
     }
+    region r;
+    ss_abrasion_changed_region(a->shape, &a->settings, &r.x, &r.y, &r.w, &r.h);
     float w = (float)p.weight;
-    blend(ka->color->data, kb->color->data, w, out->color->data, npx * 3);
-    if (out->reflection) blend(ka->reflection->data, kb->reflection->data, w, out->reflection->data, npx);
-    if (out->height) blend(ka->height->data, kb->height->data, w, out->height->data, npx);
-    if (!out->normal) return SS_OK;
-    /* Normals: blend, then renormalise so the map stays unit length. */
-    float *nm = out->normal->data;
-    const float *na = ka->normal->data, *nb = kb->normal->data;
-#pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < npx; i++) {
-        float v[3];
-        for (int k = 0; k < 3; k++) {
-            float x = na[i * 3 + (size_t)k], y = nb[i * 3 + (size_t)k];
-            v[k] = 2.0f * (x + (y - x) * w) - 1.0f;
-        }
-        float len = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-        float inv = len > 1e-12f ? 1.0f / len : 0.0f;
-        for (int k = 0; k < 3; k++) nm[i * 3 + (size_t)k] = 0.5f + 0.5f * v[k] * inv;
-    }
+    blend_map(ka->color, kb->color, w, out->color, r, 0);
+    if (out->reflection) blend_map(ka->reflection, kb->reflection, w, out->reflection, r, 0);
+    if (out->height) blend_map(ka->height, kb->height, w, out->height, r, 0);
+    if (out->normal) blend_map(ka->normal, kb->normal, w, out->normal, r, 1);
     return SS_OK;
 }

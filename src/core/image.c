@@ -99,3 +99,24 @@ float ss_srgb_decode(float e) {
     if (e >= 1.0f) return 1.0f;
     return e <= 0.04045f ? e / 12.92f : powf((e + 0.055f) / 1.055f, 2.4f);
 }
+
+#define ENC_LUT 16384
+void ss_srgb_encode_array(const float *in, float *out, size_t n) {
+    float *lut = malloc((ENC_LUT + 1) * sizeof(float));
+    if (!lut) { /* no memory for the table: exact per value */
+        for (size_t i = 0; i < n; i++) out[i] = ss_srgb_encode(in[i]);
+        return;
+    }
+    for (int i = 0; i <= ENC_LUT; i++) lut[i] = ss_srgb_encode((float)i / ENC_LUT);
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < n; i++) {
+        float v = in[i];
+        if (!(v > 0.0f)) v = 0.0f;
+        if (v > 1.0f) v = 1.0f;
+        float f = v * ENC_LUT;
+        int k = (int)f;
+        if (k >= ENC_LUT) k = ENC_LUT - 1;
+        out[i] = lut[k] + (lut[k + 1] - lut[k]) * (f - (float)k);
+    }
+    free(lut);
+}

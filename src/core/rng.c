@@ -70,3 +70,31 @@ double ss_rng_seq_uniform_open(ss_rng_seq *r) {
     while (u == 0.0);
     return u;
 }
+
+void ss_rng_fill_u32(uint64_t seed, uint64_t stream, uint64_t first, uint32_t *out, size_t n) {
+    if (n == 0) return;
+    const uint64_t b0 = first / 4, b1 = (first + n - 1) / 4;
+#pragma omp parallel for schedule(static)
+    for (uint64_t b = b0; b <= b1; b++) {
+        uint32_t o[4];
+        ss_rng4(seed, stream, b, o);
+        for (int lane = 0; lane < 4; lane++) {
+            uint64_t k = b * 4 + (uint64_t)lane;
+            if (k >= first && k < first + n) out[k - first] = o[lane];
+        }
+    }
+}
+
+void ss_rng_fill_f32(uint64_t seed, uint64_t stream, uint64_t first, float *out, size_t n) {
+    if (n == 0) return;
+    const uint64_t b0 = first / 4, b1 = (first + n - 1) / 4;
+#pragma omp parallel for schedule(static)
+    for (uint64_t b = b0; b <= b1; b++) {
+        uint32_t o[4];
+        ss_rng4(seed, stream, b, o);
+        for (int lane = 0; lane < 4; lane++) {
+            uint64_t k = b * 4 + (uint64_t)lane;
+            if (k >= first && k < first + n) out[k - first] = (float)(o[lane] >> 8) * 0x1p-24f;
+        }
+    }
+}

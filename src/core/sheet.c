@@ -58,10 +58,13 @@ ss_image *ss_contact_sheet(const ss_image *const *tiles, const char *const *labe
     unsigned char *px = cairo_image_surface_get_data(surf);
     int stride = cairo_image_surface_get_stride(surf);
     for (int i = 0; i < n; i++) {
-        int ox = pad + (i % columns) * (tile_px + pad), oy = pad + (i / columns) * (tile_px + label_h + pad);
+        int ox = pad + (i % columns) * (tile_px + pad),
+            oy = pad + (i / columns) * (tile_px + label_h + pad);
         int tw = tile_px, th = tile_px;
-        if (tiles[i]->width >= tiles[i]->height) th = (int)((long)tile_px * tiles[i]->height / tiles[i]->width);
-        else tw = (int)((long)tile_px * tiles[i]->width / tiles[i]->height);
+        if (tiles[i]->width >= tiles[i]->height)
+            th = (int)((long)tile_px * tiles[i]->height / tiles[i]->width);
+        else
+            tw = (int)((long)tile_px * tiles[i]->width / tiles[i]->height);
         blit(px, stride, ox, oy, tw > 0 ? tw : 1, th > 0 ? th : 1, tiles[i]);
     }
     cairo_surface_mark_dirty(surf);
@@ -70,10 +73,12 @@ ss_image *ss_contact_sheet(const ss_image *const *tiles, const char *const *labe
     cairo_set_source_rgb(cr, 0.95, 0.95, 0.95);
     for (int i = 0; i < n; i++) {
         if (!labels || !labels[i]) continue;
-        int ox = pad + (i % columns) * (tile_px + pad), oy = pad + (i / columns) * (tile_px + label_h + pad);
+        int ox = pad + (i % columns) * (tile_px + pad),
+            oy = pad + (i / columns) * (tile_px + label_h + pad);
         cairo_text_extents_t ext;
         cairo_text_extents(cr, labels[i], &ext);
-        cairo_move_to(cr, ox + (tile_px - ext.width) / 2 - ext.x_bearing, oy + tile_px + label_h * 0.72);
+        cairo_move_to(cr, ox + (tile_px - ext.width) / 2 - ext.x_bearing,
+                      oy + tile_px + label_h * 0.72);
         cairo_show_text(cr, labels[i]);
     }
     cairo_surface_flush(surf);

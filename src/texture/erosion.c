@@ -17,18 +17,31 @@
 #include <stdlib.h>
 #include <string.h>
 
-void ss_erosion_widths(int width, int height, int min_w, int max_w, uint64_t seed, uint64_t stream,
-                       int *widths) {
-    if (!widths || width <= 0 || height <= 0) return;
+void ss_erosion_widths_rect(int width, int height, int x0, int y0, int w, int h, int min_w,
+                            int max_w, uint64_t seed, uint64_t stream, int *widths) {
+    if (!widths || width <= 0 || height <= 0 || w <= 0 || h <= 0 || x0 < 0 || y0 < 0 ||
+        x0 + w > width || y0 + h > height)
+        return;
     if (min_w < 0) min_w = 0;
     if (max_w < min_w) max_w = min_w;
     const uint64_t span = (uint64_t)(max_w - min_w) + 1;
-    const size_t n = (size_t)width * height;
+    /* The random numbers go through widths itself (same size as uint32);
+     * pixel (x, y) always draws index y * width + x. */
+    uint32_t *r = (uint32_t *)(void *)widths;
+    for (int y = 0; y < h; y++)
+        ss_rng_fill_u32(seed, stream, (uint64_t)(y0 + y) * (uint64_t)width + (uint64_t)x0,
+                        r + (size_t)y * w, (size_t)w);
+    const size_t n = (size_t)w * h;
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < n; i++) {
-        const int m = min_w + (int)(ss_rng_u32(seed, stream, i) % span);
+        const int m = min_w + (int)(r[i] % span);
         widths[i] = m + (m % 2) + 1; /* Eq. 3.1 */
     }
+}
+
+void ss_erosion_widths(int width, int height, int min_w, int max_w, uint64_t seed, uint64_t stream,
+                       int *widths) {
+    ss_erosion_widths_rect(width, height, 0, 0, width, height, min_w, max_w, seed, stream, widths);
 }
 
 static int same_shape(const ss_image *a, const ss_image *b) {

@@ -10,7 +10,7 @@
  * pushes them apart; gain(v, g) equals Perlin's/Schlick's gain(v, 1 - g).
  *
  * ss_value_noise_reference is Alg. 3.2 line by line: a base array of the
- * output size filled with ss_rng_uniform(seed, stream, y*w + x), octaves from
+ * output size filled with ss_rng_fill_f32(seed, stream, 0, ...) (index y*w + x), octaves from
  * `octaves` down to 0 with period 2^oct, sample rows/columns by Eq. 3.2/3.3
  * (x0 wraps with a true modulo so periods larger than the texture also
  * work; for period <= size it is the seed's formula), blend = (p - x1) *
@@ -130,9 +130,7 @@ ss_status ss_value_noise_reference(const ss_noise_params *p, uint64_t seed, uint
     const int w = out->width, h = out->height;
     float *base = malloc(sizeof *base * (size_t)w * h); /* line 2 */
     if (!base) return ss_error_set(err, SS_ERR_NOMEM, "value noise: out of memory (%dx%d)", w, h);
-    for (int y = 0; y < h; y++) /* line 3 */
-        for (int x = 0; x < w; x++)
-            base[(size_t)y * w + x] = (float)ss_rng_uniform(seed, stream, (uint64_t)y * w + x);
+    ss_rng_fill_f32(seed, stream, 0, base, (size_t)w * h); /* line 3 */
     float *T = out->data;
     memset(T, 0, sizeof *T * (size_t)w * h);
     float amplitude = 1.0f, totalAmplitude = 0.0f; /* lines 4-5 */
@@ -194,10 +192,11 @@ static void horizontal(float *restrict o, const float *restrict L, const int *re
     }
 }
 
-ss_status ss_value_noise(const ss_noise_params *p, uint64_t seed, uint64_t stream, ss_image *out,
-                         ss_error *err) {
-    ss_status st = check_params(p, out, err);
-    if (st) return st;
+/* The fast generator over the rectangle (rx, ry, rw, rh) of a W x H texture:
+ * out (rw x rh, row-major) gets exactly the values the full texture has
+ * there. Only the lattice rows the rectangle samples are drawn. */
+static ss_status noise_rect(const ss_noise_params *p, uint64_t seed, uint64_t stream, int W, int H,
+                            int rx, int ry, int rw, int rh, float *out, ss_error *err) {
     if (!(p->stretch_x > 0.0f) || !isfinite(p->stretch_x) || !(p->stretch_y > 0.0f) ||
         !isfinite(p->stretch_y))
         return ss_error_set(err, SS_ERR_INPUT, "value noise: stretch must be > 0, got %g x %g",
@@ -205,7 +204,9 @@ ss_status ss_value_noise(const ss_noise_params *p, uint64_t seed, uint64_t strea
     if (!(p->cell_px > 0.0f) || !isfinite(p->cell_px))
         return ss_error_set(err, SS_ERR_INPUT, "value noise: cell_px must be > 0, got %g",
                             (double)p->cell_px);
-    const int W = out->width, H = out->height;
+    if (rx < 0 || ry < 0 || rw < 1 || rh < 1 || rx + rw > W || ry + rh > H)
+        return ss_error_set(err, SS_ERR_INPUT, "value noise: rectangle outside the %dx%d texture",
+                            W, H);
     const double lwd = fmax(1.0, round(W / (double)p->cell_px));
     const double lhd = fmax(1.0, round(H / (double)p->cell_px));
     if (lwd * lhd > (double)(1 << 26))
@@ -215,29 +216,33 @@ ss_status ss_value_noise(const ss_noise_params *p, uint64_t seed, uint64_t strea
     const int LW = (int)lwd, LH = (int)lhd, no = p->octaves + 1;
     float amp[MAX_OCTAVES + 1];
     const float total = amplitudes(p, amp);
+    ss_status st = SS_OK;
 
     float *lat = malloc(sizeof *lat * (size_t)LW * LH);
+    unsigned char *needed = calloc((size_t)LH, 1);
     int *cidx = malloc(sizeof *cidx * 4 * (size_t)W * no),
         *ridx = malloc(sizeof *ridx * 4 * (size_t)H * no);
     float *cb = malloc(sizeof *cb * (size_t)W * no), *rb = malloc(sizeof *rb * (size_t)H * no);
-    if (!lat || !cidx || !ridx || !cb || !rb) {
+    if (!lat || !needed || !cidx || !ridx || !cb || !rb) {
         st = ss_error_set(err, SS_ERR_NOMEM, "value noise: out of memory (%dx%d)", W, H);
         goto done;
     }
-#pragma omp parallel for schedule(static)
-    for (int y = 0; y < LH; y++)
-        for (int x = 0; x < LW; x++)
-            lat[(size_t)y * LW + x] = (float)ss_rng_uniform(seed, stream, (uint64_t)y * LW + x);
     for (int j = 0; j < no; j++) {
         const int period = 1 << (p->octaves - j);
         axis_table(W, LW, p->stretch_x, period, cidx + 4 * (size_t)W * j, cb + (size_t)W * j);
         axis_table(H, LH, p->stretch_y, period, ridx + 4 * (size_t)H * j, rb + (size_t)H * j);
+        for (int y = ry; y < ry + rh; y++)
+            for (int k = 0; k < 4; k++) needed[ridx[4 * ((size_t)H * j + y) + k]] = 1;
     }
-    const int nbands = (H + BAND - 1) / BAND;
+    /* Alg. 3.2 line 3, for the lattice rows this rectangle reads. */
+    for (int r = 0; r < LH; r++)
+        if (needed[r])
+            ss_rng_fill_f32(seed, stream, (uint64_t)r * LW, lat + (size_t)r * LW, (size_t)LW);
+    const int nbands = (rh + BAND - 1) / BAND;
     int fail = 0;
 #pragma omp parallel
     {
-        float *buf = malloc(sizeof *buf * (size_t)4 * BAND * W);
+        float *buf = malloc(sizeof *buf * (size_t)4 * BAND * rw);
         int *slot = malloc(sizeof *slot * (size_t)LH);
         int rows[4 * BAND];
         if (!buf || !slot) {
@@ -249,11 +254,12 @@ ss_status ss_value_noise(const ss_noise_params *p, uint64_t seed, uint64_t strea
 #pragma omp for schedule(dynamic, 1)
         for (int band = 0; band < nbands; band++) {
             if (!buf || !slot) continue;
-            const int y0 = band * BAND, y1 = y0 + BAND < H ? y0 + BAND : H;
-            for (int y = y0; y < y1; y++) memset(out->data + (size_t)y * W, 0, sizeof(float) * W);
+            const int y0 = ry + band * BAND, y1 = y0 + BAND < ry + rh ? y0 + BAND : ry + rh;
+            float *ob = out + (size_t)(y0 - ry) * rw;
+            memset(ob, 0, sizeof(float) * (size_t)rw * (size_t)(y1 - y0));
             for (int j = 0; j < no; j++) {
-                const int *ci = cidx + 4 * (size_t)W * j, *ri = ridx + 4 * (size_t)H * j;
-                const float *hb = cb + (size_t)W * j, *vbl = rb + (size_t)H * j;
+                const int *ci = cidx + 4 * ((size_t)W * j + rx), *ri = ridx + 4 * (size_t)H * j;
+                const float *hb = cb + (size_t)W * j + rx, *vbl = rb + (size_t)H * j;
                 int ns = 0;
                 /* Horizontal cubics of the lattice rows this band needs. */
                 for (int y = y0; y < y1; y++)
@@ -262,22 +268,21 @@ ss_status ss_value_noise(const ss_noise_params *p, uint64_t seed, uint64_t strea
                         if (slot[r] >= 0) continue;
                         slot[r] = ns;
                         rows[ns] = r;
-                        horizontal(buf + (size_t)ns * W, lat + (size_t)r * LW, ci, hb, W);
+                        horizontal(buf + (size_t)ns * rw, lat + (size_t)r * LW, ci, hb, rw);
                         ns++;
                     }
                 /* Vertical cubic, times the amplitude, summed. */
                 const float a = amp[j];
                 for (int y = y0; y < y1; y++) {
-                    const float *h0 = buf + (size_t)slot[ri[4 * y]] * W;
-                    const float *h1 = buf + (size_t)slot[ri[4 * y + 1]] * W;
-                    const float *h2 = buf + (size_t)slot[ri[4 * y + 2]] * W;
-                    const float *h3 = buf + (size_t)slot[ri[4 * y + 3]] * W;
-                    const float vb = vbl[y];
-                    vertical(out->data + (size_t)y * W, h0, h1, h2, h3, vb, a, W);
+                    const float *h0 = buf + (size_t)slot[ri[4 * y]] * rw;
+                    const float *h1 = buf + (size_t)slot[ri[4 * y + 1]] * rw;
+                    const float *h2 = buf + (size_t)slot[ri[4 * y + 2]] * rw;
+                    const float *h3 = buf + (size_t)slot[ri[4 * y + 3]] * rw;
+                    vertical(ob + (size_t)(y - y0) * rw, h0, h1, h2, h3, vbl[y], a, rw);
                 }
                 for (int s = 0; s < ns; s++) slot[rows[s]] = -1;
             }
-            finish(out->data + (size_t)y0 * W, (size_t)(y1 - y0) * W, total, p->bias, p->gain);
+            finish(ob, (size_t)(y1 - y0) * rw, total, p->bias, p->gain);
         }
         free(buf);
         free(slot);
@@ -285,9 +290,26 @@ ss_status ss_value_noise(const ss_noise_params *p, uint64_t seed, uint64_t strea
     if (fail) st = ss_error_set(err, SS_ERR_NOMEM, "value noise: out of memory");
 done:
     free(lat);
+    free(needed);
     free(cidx);
     free(ridx);
     free(cb);
     free(rb);
     return st;
+}
+
+ss_status ss_value_noise(const ss_noise_params *p, uint64_t seed, uint64_t stream, ss_image *out,
+                         ss_error *err) {
+    ss_status st = check_params(p, out, err);
+    if (st) return st;
+    return noise_rect(p, seed, stream, out->width, out->height, 0, 0, out->width, out->height,
+                      out->data, err);
+}
+
+ss_status ss_value_noise_rect(const ss_noise_params *p, uint64_t seed, uint64_t stream, int width,
+                              int height, int x0, int y0, ss_image *out, ss_error *err) {
+    ss_status st = check_params(p, out, err);
+    if (st) return st;
+    return noise_rect(p, seed, stream, width, height, x0, y0, out->width, out->height, out->data,
+                      err);
 }

@@ -1,0 +1,1002 @@
+/* Photon-packet Monte Carlo transport through a layered slab (seed 003 §4.4,
+ * §4.5, §4.5.2, §4.7.1; the packet scheme of MCML, Wang, Jacques & Zheng 1995).
+ *
+ * Design:
+ * - z points down into the tissue; layer l spans [z0_l, z1_l]. Step lengths are
+ *   drawn as optical depths -ln(xi) and spent across layer boundaries (MCML).
+ * - Weighted mode: at each interaction the packet deposits w*mua/mut and
+ *   scatters (Henyey-Greenstein); Russian roulette below w = 1e-4 with survival
+ *   chance 0.1 (MCML). Stochastic mode (seed §4.4 pseudo-code): the packet is
+ *   absorbed whole with probability mua/mut, else scattered without loss.
+ * - Every change of refractive index applies the full unpolarised Fresnel
+ *   formulae; reflect-or-refract is chosen at random (MCML default). Matched
+ *   boundaries take a fast path.
+ * - Air/skin surface (seed §4.5.1 modification): a Trowbridge-Reitz micro-normal
+ *   is drawn first and used for Fresnel and for the reflected/refracted
+ *   direction, on entry and on exit. A direction that ends on the wrong side of
+ *   the macro surface after a micro-facet event is mirrored in z (the seed
+ *   ignores these rare grazing cases; mirroring keeps energy). At entry the
+ *   Fresnel split is deterministic (specular weight R, packet enters with 1-R)
+ *   in weighted mode and random in stochastic mode.
+ * - Below the last layer either a Fresnel boundary into n_below (MCML) or a
+ *   Lambertian reflector of albedo bottom_albedo (the subcutaneous fat of §2.1);
+ *   weight the fat does not return counts as `transmit`.
+ * - Reproducibility: photon i draws from the Philox stream (seed, i); photons
+ *   are grouped in fixed blocks (depending only on the photon count) whose
+ *   partial tallies are summed in block order, so results are bit-identical
+ *   for any thread count. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "optics_internal.h"
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
+/* ---- per-photon random stream ------------------------------------------ *
+ * Photon i's stream is xoshiro256** (Blackman & Vigna 2018) whose 256-bit state
+ * is drawn from the counter-based Philox generator at (seed, stream = i,
+ * indices 0 and 1) via ss_rng4. Every photon's draws are therefore a pure
+ * function of (seed, i), independent of threads and order, while each step
+ * costs a few integer operations instead of a Philox block. */
+typedef struct prng {
+    uint64_t s[4];
+} prng;
+
+static inline void prng_init(prng *r, uint64_t seed, uint64_t stream) {
+    uint32_t a[4], b[4];
+    ss_rng4(seed, stream, 0, a);
+    ss_rng4(seed, stream, 1, b);
+    r->s[0] = (uint64_t)a[0] << 32 | a[1];
+    r->s[1] = (uint64_t)a[2] << 32 | a[3];
+    r->s[2] = (uint64_t)b[0] << 32 | b[1];
+    r->s[3] = (uint64_t)b[2] << 32 | b[3];
+    if (!(r->s[0] | r->s[1] | r->s[2] | r->s[3])) r->s[0] = 1; /* never all zero */
+}
+
+static inline uint64_t rotl64(uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
+
+static inline uint64_t prng_next(prng *r) {
+    uint64_t *s = r->s;
+    const uint64_t out = rotl64(s[1] * 5, 7) * 9;
+    const uint64_t t = s[1] << 17;
+    s[2] ^= s[0];
+    s[3] ^= s[1];
+    s[1] ^= s[2];
+    s[0] ^= s[3];
+    s[2] ^= t;
+    s[3] = rotl64(s[3], 45);
+    return out;
+}
+
+/* Uniform in the open interval (0,1) with 53 random bits. */
+static inline double prng_u(prng *r) {
+    return ((double)(prng_next(r) >> 11) + 0.5) * (1.0 / 9007199254740992.0);
+}
+
+/* ---- precomputed layer data ---------------------------------------------- */
+typedef struct mc_layer {
+    double z0, z1, mut, inv_mut, absfrac, n, g;
+    double hg_a, hg_b, hg_c; /* HG sampling constants */
+    int isotropic;
+} mc_layer;
+
+typedef struct mc_ctx {
+    int nl;
+    mc_layer L[SS_OPTICS_MAX_LAYERS];
+    double n_above, n_below, albedo;
+    uint64_t seed;
+    double sin_ti, cos_ti;
+    double sigma2; /* Trowbridge-Reitz sigma^2; 0 = smooth */
+    int rough, stochastic, paths;
+    ss_mc_tally_spec spec;
+} mc_ctx;
+
+/* Unpolarised Fresnel reflectance from n1 into n2 at incidence cosine ci (>0);
+ * returns R and the transmitted cosine in *ct (R = 1 under total internal
+ * reflection). */
+static inline double fresnel(double n1, double n2, double ci, double *ct) {
+    if (n1 == n2) {
+        *ct = ci;
+        return 0.0;
+    }
+    if (ci > 1.0 - 1e-12) {
+        *ct = 1.0;
+        double r = (n1 - n2) / (n1 + n2);
+        return r * r;
+    }
+    double si = sqrt(1.0 - ci * ci);
+    double st = n1 / n2 * si;
+    if (st >= 1.0) {
+        *ct = 0.0;
+        return 1.0;
+    }
+    double c = sqrt(1.0 - st * st);
+    *ct = c;
+    double rs = (n1 * ci - n2 * c) / (n1 * ci + n2 * c);
+    double rp = (n1 * c - n2 * ci) / (n1 * c + n2 * ci);
+    return 0.5 * (rs * rs + rp * rp);
+}
+
+/* Trowbridge-Reitz micro-normal zenith cosine from the seed's §4.5.1 formula:
+ * cos^2(alpha) = (sigma^2 / sqrt(sigma^4 - sigma^4 rho + rho) - 1) / (sigma^2 - 1). */
+static inline double tr_cos(double s2, double rho) {
+    double c2;
+    if (fabs(s2 - 1.0) < 1e-9)
+        c2 = rho; /* the limit sigma -> 1 */
+    else
+        c2 = (s2 / sqrt(s2 * s2 * (1.0 - rho) + rho) - 1.0) / (s2 - 1.0);
+    if (c2 < 0.0) c2 = 0.0;
+    if (c2 > 1.0) c2 = 1.0;
+    return sqrt(c2);
+}
+
+/* Uniform azimuth as (cos, sin) by rejection from the unit disk (angle doubling). */
+static inline void rand_azimuth(prng *r, double *cp, double *sp) {
+    for (;;) {
+        double x = 2.0 * prng_u(r) - 1.0, y = 2.0 * prng_u(r) - 1.0;
+        double s = x * x + y * y;
+        if (s <= 1.0 && s > 1e-12) {
+            double inv = 1.0 / s;
+            *cp = (x * x - y * y) * inv;
+            *sp = 2.0 * x * y * inv;
+            return;
+        }
+    }
+}
+
+/* Draws a micro-normal facing the incoming direction d (unit); m points to the
+ * side d comes from (dot(d, m) < 0). side = -1: the air side (m.z < 0), +1: the
+ * tissue side. Returns cos_i = -dot(d, m) > 0. Back-facing draws are redrawn; after
+ * 32 tries the macro normal is used. */
+static inline double micro_normal(const mc_ctx *c, prng *r, const double d[3], double side,
+                                  double m[3]) {
+    for (int t = 0; t < 32; t++) {
+        double ca = tr_cos(c->sigma2, prng_u(r));
+        double sa = sqrt(fmax(0.0, 1.0 - ca * ca));
+        double cp, sp;
+        rand_azimuth(r, &cp, &sp);
+        m[0] = sa * cp;
+        m[1] = sa * sp;
+        m[2] = side * ca;
+        double ci = -(d[0] * m[0] + d[1] * m[1] + d[2] * m[2]);
+        if (ci > 1e-9) return ci;
+    }
+    m[0] = m[1] = 0.0;
+    m[2] = side;
+    return -d[2] * side;
+}
+
+/* Reflect and refract d about m (m on the incident side, cos_i = -d.m). */
+static inline void reflect_dir(const double d[3], const double m[3], double ci, double o[3]) {
+    for (int k = 0; k < 3; k++) o[k] = d[k] + 2.0 * ci * m[k];
+}
+static inline void refract_dir(const double d[3], const double m[3], double ci, double ct,
+                               double eta, double o[3]) {
+    double f = eta * ci - ct;
+    double s = 0;
+    for (int k = 0; k < 3; k++) {
+        o[k] = eta * d[k] + f * m[k];
+        s += o[k] * o[k];
+    }
+    s = 1.0 / sqrt(s);
+    for (int k = 0; k < 3; k++) o[k] *= s;
+}
+
+/* ---- per-block accumulators ------------------------------------------------ */
+typedef struct mc_acc {
+    double specular, diffuse, diffuse2, transmit, transmit2, absorbed, roulette;
+    double abs_layer[SS_OPTICS_MAX_LAYERS];
+    double *brdf, *rd_r, *a_z, *rd_a, *tt_r, *tt_a;
+} mc_acc;
+
+/* One path record of the absorption-free tracer. */
+typedef struct path_rec {
+    float len[SS_OPTICS_MAX_LAYERS]; /* cm in each layer */
+    float w0;                        /* weight that entered (1 - specular share) */
+    int16_t brdf_bin;                /* -1 if not recorded */
+    int16_t rad_bin;                 /* -1 if outside */
+    uint16_t bounces;                /* fat-layer bounces */
+    uint8_t up;                      /* 1 escaped at the top, 0 left at the bottom */
+    uint8_t pad;
+} path_rec;
+
+typedef struct path_buf {
+    path_rec *r;
+    size_t n, cap;
+    int failed;
+} path_buf;
+
+static void path_push(path_buf *b, const path_rec *r) {
+    if (b->failed) return;
+    if (b->n == b->cap) {
+        size_t nc = b->cap ? b->cap * 2 : 1024;
+        path_rec *nr = realloc(b->r, nc * sizeof *nr);
+        if (!nr) {
+            b->failed = 1;
+            return;
+        }
+        b->r = nr;
+        b->cap = nc;
+    }
+    b->r[b->n++] = *r;
+}
+
+static inline int brdf_bin(const mc_ctx *c, double ux, double uy, double cos_out) {
+    int nt = c->spec.brdf_nt, np = c->spec.brdf_np;
+    if (nt <= 0) return -1;
+    double th = acos(fmin(1.0, fmax(0.0, cos_out)));
+    int it = (int)(th * (2.0 * nt / M_PI));
+    if (it >= nt) it = nt - 1;
+    double dphi = M_PI - fabs(atan2(uy, ux)); /* light comes from azimuth pi */
+    int ip = (int)(dphi * (np / M_PI));
+    if (ip >= np) ip = np - 1;
+    if (ip < 0) ip = 0;
+    return it * np + ip;
+}
+
+static inline int radial_bin(const mc_ctx *c, double x, double y, int n, int overflow_last) {
+    if (n <= 0) return -1;
+    int ir = (int)(sqrt(x * x + y * y) / c->spec.rad_dr);
+    if (ir >= n) return overflow_last ? n - 1 : -1;
+    return ir;
+}
+
+static inline int angle_bin(int na, double cos_out) {
+    double th = acos(fmin(1.0, fmax(0.0, cos_out)));
+    int ia = (int)(th * (2.0 * na / M_PI));
+    return ia >= na ? na - 1 : ia;
+}
+
+/* Traces one photon. */
+static void run_photon(const mc_ctx *c, uint64_t idx, mc_acc *a, path_buf *pb) {
+    prng r;
+    prng_init(&r, c->seed, idx);
+    double w = 1.0;
+    double x = 0, y = 0, z = 0;
+    double d[3] = {c->sin_ti, 0.0, c->cos_ti};
+    double plen[SS_OPTICS_MAX_LAYERS];
+    int bounces = 0;
+    if (c->paths)
+        for (int l = 0; l < c->nl; l++) plen[l] = 0.0;
+    const int mcml = c->spec.mcml;
+
+    /* ---- entry through the air/skin surface ---- */
+    {
+        double m[3], ci, ct, o[3];
+        if (c->rough)
+            ci = micro_normal(c, &r, d, -1.0, m);
+        else {
+            m[0] = m[1] = 0.0;
+            m[2] = -1.0;
+            ci = c->cos_ti;
+        }
+        double n1 = c->L[0].n;
+        double R = fresnel(c->n_above, n1, ci, &ct);
+        int reflect_all = 0;
+        if (c->stochastic) {
+            if (prng_u(&r) <= R) reflect_all = 1;
+            R = reflect_all ? 1.0 : 0.0;
+        }
+        if (R > 0.0) {
+            reflect_dir(d, m, ci, o);
+            if (o[2] > 0.0) o[2] = -o[2];
+            a->specular += R;
+            if (a->brdf) {
+                int b = brdf_bin(c, o[0], o[1], -o[2]);
+                a->brdf[b] += R;
+            }
+        }
+        if (reflect_all || R >= 1.0) return;
+        w = 1.0 - R;
+        refract_dir(d, m, ci, ct, c->n_above / n1, o);
+        if (o[2] <= 0.0) o[2] = o[2] < 0.0 ? -o[2] : 1e-12;
+        d[0] = o[0];
+        d[1] = o[1];
+        d[2] = o[2];
+    }
+    int layer = 0;
+    double dsum = 0.0; /* this photon's diffuse reflectance */
+    double tsum = 0.0;
+
+    for (;;) {
+        /* ---- hop: spend an optical depth tau, crossing boundaries ---- */
+        double tau = -log(prng_u(&r));
+        for (;;) {
+            const mc_layer *L = &c->L[layer];
+            double uz = d[2];
+            double db;
+            if (uz > 0.0)
+                db = (L->z1 - z) / uz;
+            else if (uz < 0.0)
+                db = (L->z0 - z) / uz;
+            else
+                db = HUGE_VAL;
+            if (tau < db * L->mut) {
+                double s = tau * L->inv_mut;
+                x += s * d[0];
+                y += s * d[1];
+                z += s * d[2];
+                if (c->paths) plen[layer] += s;
+                break;
+            }
+            if (db == HUGE_VAL) { /* clear layer, horizontal: cannot move */
+                a->abs_layer[layer] += w;
+                a->absorbed += w;
+                return;
+            }
+            /* move to the boundary */
+            x += db * d[0];
+            y += db * d[1];
+            if (c->paths) plen[layer] += db;
+            tau -= db * L->mut;
+            if (tau < 0.0) tau = 0.0;
+            if (uz > 0.0) {
+                z = L->z1;
+                if (layer < c->nl - 1) {
+                    double n1 = L->n, n2 = c->L[layer + 1].n;
+                    if (n1 == n2) {
+                        layer++;
+                        continue;
+                    }
+                    double ct, R = fresnel(n1, n2, uz, &ct);
+                    if (prng_u(&r) <= R)
+                        d[2] = -uz;
+                    else {
+                        double eta = n1 / n2;
+                        d[0] *= eta;
+                        d[1] *= eta;
+                        d[2] = ct;
+                        layer++;
+                    }
+                    continue;
+                }
+                /* bottom of the slab */
+                if (c->albedo >= 0.0) {
+                    /* Lambertian fat reflector */
+                    if (c->stochastic) {
+                        if (prng_u(&r) > c->albedo) {
+                            a->transmit += w;
+                            tsum += w;
+                            goto done;
+                        }
+                    } else if (!c->paths) {
+                        double lost = w * (1.0 - c->albedo);
+                        a->transmit += lost;
+                        tsum += lost;
+                        w -= lost;
+                    }
+                    bounces++;
+                    double cz = sqrt(prng_u(&r));
+                    double sz = sqrt(1.0 - cz * cz), cp, sp;
+                    rand_azimuth(&r, &cp, &sp);
+                    d[0] = sz * cp;
+                    d[1] = sz * sp;
+                    d[2] = -cz;
+                    continue;
+                }
+                double ct, R = fresnel(L->n, c->n_below, uz, &ct);
+                if (prng_u(&r) <= R) {
+                    d[2] = -uz;
+                    continue;
+                }
+                /* transmitted */
+                double eta = L->n / c->n_below;
+                double tx = d[0] * eta, ty = d[1] * eta;
+                a->transmit += w;
+                tsum += w;
+                if (c->paths) {
+                    path_rec pr;
+                    memset(&pr, 0, sizeof pr);
+                    for (int l = 0; l < c->nl; l++) pr.len[l] = (float)plen[l];
+                    pr.brdf_bin = -1;
+                    pr.rad_bin = -1;
+                    pr.bounces = (uint16_t)(bounces > 65535 ? 65535 : bounces);
+                    pr.up = 0;
+                    pr.w0 = (float)w;
+                    path_push(pb, &pr);
+                }
+                if (mcml) {
+                    int ir = radial_bin(c, x, y, c->spec.rad_n, 1);
+                    if (ir >= 0) a->tt_r[ir] += w;
+                    if (c->spec.na > 0) a->tt_a[angle_bin(c->spec.na, ct)] += w;
+                }
+                (void)tx;
+                (void)ty;
+                goto done;
+            } else {
+                z = L->z0;
+                if (layer > 0) {
+                    double n1 = L->n, n2 = c->L[layer - 1].n;
+                    if (n1 == n2) {
+                        layer--;
+                        continue;
+                    }
+                    double ct, R = fresnel(n1, n2, -uz, &ct);
+                    if (prng_u(&r) <= R)
+                        d[2] = -uz;
+                    else {
+                        double eta = n1 / n2;
+                        d[0] *= eta;
+                        d[1] *= eta;
+                        d[2] = -ct;
+                        layer--;
+                    }
+                    continue;
+                }
+                /* the air surface from inside */
+                double m[3], ci, ct, o[3];
+                if (c->rough)
+                    ci = micro_normal(c, &r, d, 1.0, m);
+                else {
+                    m[0] = m[1] = 0.0;
+                    m[2] = 1.0;
+                    ci = -uz;
+                }
+                double R = fresnel(L->n, c->n_above, ci, &ct);
+                if (R > 0.0 && prng_u(&r) <= R) {
+                    reflect_dir(d, m, ci, o);
+                    if (o[2] < 0.0) o[2] = -o[2];
+                    if (o[2] == 0.0) o[2] = 1e-12;
+                    d[0] = o[0];
+                    d[1] = o[1];
+                    d[2] = o[2];
+                    continue;
+                }
+                /* escapes into the air */
+                if (c->rough) {
+                    refract_dir(d, m, ci, ct, L->n / c->n_above, o);
+                    if (o[2] > 0.0) o[2] = -o[2];
+                } else {
+                    double eta = L->n / c->n_above;
+                    o[0] = d[0] * eta;
+                    o[1] = d[1] * eta;
+                    o[2] = -ct;
+                }
+                a->diffuse += w;
+                dsum += w;
+                if (c->paths) {
+                    path_rec pr;
+                    memset(&pr, 0, sizeof pr);
+                    for (int l = 0; l < c->nl; l++) pr.len[l] = (float)plen[l];
+                    pr.brdf_bin = (int16_t)brdf_bin(c, o[0], o[1], -o[2]);
+                    pr.rad_bin = (int16_t)radial_bin(c, x, y, c->spec.rad_n, 0);
+                    pr.bounces = (uint16_t)(bounces > 65535 ? 65535 : bounces);
+                    pr.up = 1;
+                    pr.w0 = (float)w;
+                    path_push(pb, &pr);
+                } else {
+                    if (a->brdf) a->brdf[brdf_bin(c, o[0], o[1], -o[2])] += w;
+                    if (a->rd_r) {
+                        int ir = radial_bin(c, x, y, c->spec.rad_n, mcml);
+                        if (ir >= 0) a->rd_r[ir] += w;
+                    }
+                    if (mcml && c->spec.na > 0) a->rd_a[angle_bin(c->spec.na, -o[2])] += w;
+                }
+                goto done;
+            }
+        }
+
+        /* ---- drop: absorption at the interaction point ---- */
+        const mc_layer *L = &c->L[layer];
+        if (L->absfrac > 0.0) {
+            if (c->stochastic) {
+                if (prng_u(&r) < L->absfrac) {
+                    a->abs_layer[layer] += w;
+                    a->absorbed += w;
+                    if (mcml && c->spec.nz > 0) {
+                        int iz = (int)(z / c->spec.dz);
+                        a->a_z[iz >= c->spec.nz ? c->spec.nz - 1 : iz] += w;
+                    }
+                    goto done;
+                }
+            } else {
+                double dw = w * L->absfrac;
+                w -= dw;
+                a->abs_layer[layer] += dw;
+                a->absorbed += dw;
+                if (mcml && c->spec.nz > 0) {
+                    int iz = (int)(z / c->spec.dz);
+                    a->a_z[iz >= c->spec.nz ? c->spec.nz - 1 : iz] += dw;
+                }
+            }
+        }
+
+        /* ---- spin: Henyey-Greenstein ---- */
+        double cost;
+        {
+            double u = prng_u(&r);
+            if (L->isotropic)
+                cost = 2.0 * u - 1.0;
+            else {
+                double t = L->hg_b / (1.0 - L->g + 2.0 * L->g * u);
+                cost = L->hg_c * (L->hg_a - t * t);
+                if (cost < -1.0) cost = -1.0;
+                if (cost > 1.0) cost = 1.0;
+            }
+        }
+        double sint = sqrt(1.0 - cost * cost), cp, sp;
+        rand_azimuth(&r, &cp, &sp);
+        double uz = d[2];
+        if (fabs(uz) > 1.0 - 1e-12) {
+            d[0] = sint * cp;
+            d[1] = sint * sp;
+            d[2] = uz > 0 ? cost : -cost;
+        } else {
+            double tmp = sqrt(1.0 - uz * uz), inv = 1.0 / tmp;
+            double ux = d[0], uy = d[1];
+            d[0] = sint * (ux * uz * cp - uy * sp) * inv + ux * cost;
+            d[1] = sint * (uy * uz * cp + ux * sp) * inv + uy * cost;
+            d[2] = -sint * cp * tmp + uz * cost;
+        }
+
+        /* ---- roulette ---- */
+        if (!c->stochastic && w < 1e-4) {
+            if (w == 0.0) goto done;
+            if (prng_u(&r) < 0.1) {
+                a->roulette += 9.0 * w;
+                w *= 10.0;
+            } else {
+                a->roulette -= w;
+                goto done;
+            }
+        }
+    }
+done:
+    a->diffuse2 += dsum * dsum;
+    a->transmit2 += tsum * tsum;
+}
+
+/* ---- setup and the block-parallel driver ----------------------------------- */
+static ss_status ctx_init(mc_ctx *c, const ss_optics_slab *s, const ss_mc_options *o,
+                          const ss_mc_tally_spec *spec, int paths, ss_error *err) {
+    ss_status st = ss_optics_slab_validate(s, err);
+    if (st) return st;
+    if (!o) return ss_error_set(err, SS_ERR_INPUT, "Monte Carlo options are missing");
+    if (o->photons == 0)
+        return ss_error_set(err, SS_ERR_INPUT, "photons: must be at least 1 (got 0)");
+    if (!(o->theta_i_rad >= 0.0 && o->theta_i_rad < M_PI / 2))
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "theta_i_rad: incidence angle %g rad is outside [0, pi/2)",
+                            o->theta_i_rad);
+    if (!(o->roughness_sigma >= 0.0 && o->roughness_sigma <= 10.0))
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "roughness_sigma: %g is outside [0, 10] (0 = smooth)",
+                            o->roughness_sigma);
+    if (spec->brdf_nt < 0 || spec->brdf_np < 0 || spec->brdf_nt > 1024 || spec->brdf_np > 1024 ||
+        (spec->brdf_nt > 0) != (spec->brdf_np > 0))
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "BRDF bins: theta %d x phi %d (both 1..1024 or both 0)", spec->brdf_nt,
+                            spec->brdf_np);
+    if (spec->rad_n < 0 || spec->rad_n > 100000 ||
+        (spec->rad_n > 0 && !(spec->rad_dr > 0.0 && isfinite(spec->rad_dr))))
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "radial bins: %d bins of %g cm (need 1..100000 bins, width > 0)",
+                            spec->rad_n, spec->rad_dr);
+    memset(c, 0, sizeof *c);
+    c->nl = s->nlayers;
+    double z = 0.0;
+    for (int l = 0; l < s->nlayers; l++) {
+        const ss_optics_layer *sl = &s->layer[l];
+        mc_layer *L = &c->L[l];
+        double mua = paths ? 0.0 : sl->mua_per_cm;
+        L->z0 = z;
+        z += sl->d_cm;
+        L->z1 = z;
+        L->mut = mua + sl->mus_per_cm;
+        L->inv_mut = L->mut > 0.0 ? 1.0 / L->mut : 0.0;
+        L->absfrac = L->mut > 0.0 ? mua / L->mut : 0.0;
+        L->n = sl->n;
+        L->g = sl->g;
+        L->isotropic = fabs(sl->g) < 1e-9;
+        if (!L->isotropic) {
+            L->hg_a = 1.0 + sl->g * sl->g;
+            L->hg_b = 1.0 - sl->g * sl->g;
+            L->hg_c = 1.0 / (2.0 * sl->g);
+        }
+    }
+    c->n_above = s->n_above;
+    c->n_below = s->n_below;
+    c->albedo = s->bottom_albedo;
+    c->seed = o->seed;
+    c->sin_ti = sin(o->theta_i_rad);
+    c->cos_ti = cos(o->theta_i_rad);
+    c->rough = o->roughness_sigma > 0.0;
+    c->sigma2 = o->roughness_sigma * o->roughness_sigma;
+    c->stochastic = o->stochastic_absorb != 0;
+    c->paths = paths;
+    c->spec = *spec;
+    if (paths) c->stochastic = 0;
+    return SS_OK;
+}
+
+static size_t acc_arrays_size(const ss_mc_tally_spec *sp) {
+    size_t n = (size_t)sp->brdf_nt * (size_t)sp->brdf_np + (size_t)sp->rad_n;
+    if (sp->mcml) n += (size_t)sp->nz + 2u * (size_t)sp->na + (size_t)sp->rad_n;
+    return n;
+}
+
+static void acc_bind(mc_acc *a, const ss_mc_tally_spec *sp, double *mem) {
+    memset(a, 0, sizeof *a);
+    double *p = mem;
+    if (sp->brdf_nt > 0) {
+        a->brdf = p;
+        p += (size_t)sp->brdf_nt * (size_t)sp->brdf_np;
+    }
+    if (sp->rad_n > 0) {
+        a->rd_r = p;
+        p += sp->rad_n;
+    }
+    if (sp->mcml) {
+        a->a_z = p;
+        p += sp->nz;
+        a->rd_a = p;
+        p += sp->na;
+        a->tt_a = p;
+        p += sp->na;
+        a->tt_r = p;
+        p += sp->rad_n;
+    }
+}
+
+static uint64_t nblocks_for(uint64_t photons) {
+    uint64_t nb = photons / 2048;
+    if (nb < 1) nb = 1;
+    if (nb > 256) nb = 256;
+    return nb;
+}
+
+typedef struct run_out {
+    mc_acc total;
+    double *mem;
+    path_buf paths; /* concatenated in block order */
+} run_out;
+
+static ss_status run_blocks(const mc_ctx *c, uint64_t photons, run_out *out, ss_error *err) {
+    const ss_mc_tally_spec *sp = &c->spec;
+    size_t asz = acc_arrays_size(sp);
+    uint64_t nb = nblocks_for(photons);
+    mc_acc *acc = calloc(nb, sizeof *acc);
+    double *mem = asz ? calloc(nb * asz, sizeof *mem) : NULL;
+    path_buf *pbs = c->paths ? calloc(nb, sizeof *pbs) : NULL;
+    if (!acc || (asz && !mem) || (c->paths && !pbs)) {
+        free(acc);
+        free(mem);
+        free(pbs);
+        return ss_error_set(err, SS_ERR_NOMEM, "out of memory for Monte Carlo tallies");
+    }
+    for (uint64_t b = 0; b < nb; b++) acc_bind(&acc[b], sp, mem ? mem + b * asz : NULL);
+    long long nbl = (long long)nb;
+#pragma omp parallel for schedule(dynamic, 1)
+    for (long long b = 0; b < nbl; b++) {
+        uint64_t lo = photons * (uint64_t)b / nb, hi = photons * (uint64_t)(b + 1) / nb;
+        for (uint64_t i = lo; i < hi; i++) run_photon(c, i, &acc[b], pbs ? &pbs[b] : NULL);
+    }
+    /* reduce in block order */
+    memset(out, 0, sizeof *out);
+    out->mem = asz ? calloc(asz, sizeof(double)) : NULL;
+    int fail = asz && !out->mem;
+    if (!fail) acc_bind(&out->total, sp, out->mem);
+    for (uint64_t b = 0; b < nb && !fail; b++) {
+        mc_acc *a = &acc[b], *t = &out->total;
+        t->specular += a->specular;
+        t->diffuse += a->diffuse;
+        t->diffuse2 += a->diffuse2;
+        t->transmit += a->transmit;
+        t->transmit2 += a->transmit2;
+        t->absorbed += a->absorbed;
+        t->roulette += a->roulette;
+        for (int l = 0; l < c->nl; l++) t->abs_layer[l] += a->abs_layer[l];
+        for (size_t k = 0; k < asz; k++) out->mem[k] += mem[b * asz + k];
+    }
+    if (c->paths && !fail) {
+        size_t total = 0;
+        for (uint64_t b = 0; b < nb; b++) {
+            if (pbs[b].failed) fail = 1;
+            total += pbs[b].n;
+        }
+        if (!fail) {
+            out->paths.r = malloc((total ? total : 1) * sizeof(path_rec));
+            if (!out->paths.r)
+                fail = 1;
+            else {
+                for (uint64_t b = 0; b < nb; b++) {
+                    if (pbs[b].n)
+                        memcpy(out->paths.r + out->paths.n, pbs[b].r, pbs[b].n * sizeof(path_rec));
+                    out->paths.n += pbs[b].n;
+                }
+            }
+        }
+    }
+    if (pbs)
+        for (uint64_t b = 0; b < nb; b++) free(pbs[b].r);
+    free(pbs);
+    free(acc);
+    free(mem);
+    if (fail) {
+        free(out->mem);
+        free(out->paths.r);
+        memset(out, 0, sizeof *out);
+        return ss_error_set(err, SS_ERR_NOMEM, "out of memory for Monte Carlo tallies");
+    }
+    return SS_OK;
+}
+
+ss_status ss_mc_run_tallies(const ss_optics_slab *slab, const ss_mc_options *opt,
+                            const ss_mc_tally_spec *spec, ss_mc_tallies *t, ss_error *err) {
+    mc_ctx c;
+    memset(t, 0, sizeof *t);
+    ss_status st = ctx_init(&c, slab, opt, spec, 0, err);
+    if (st) return st;
+    if (spec->mcml && (spec->nz < 1 || spec->na < 1 || spec->rad_n < 1 || !(spec->dz > 0.0)))
+        return ss_error_set(err, SS_ERR_INPUT, "MCML grid: nz, nr, na must be >= 1, dz > 0");
+    run_out o;
+    st = run_blocks(&c, opt->photons, &o, err);
+    if (st) return st;
+    t->photons = opt->photons;
+    t->specular = o.total.specular;
+    t->diffuse = o.total.diffuse;
+    t->diffuse2 = o.total.diffuse2;
+    t->transmit = o.total.transmit;
+    t->transmit2 = o.total.transmit2;
+    t->absorbed = o.total.absorbed;
+    t->roulette = o.total.roulette;
+    memcpy(t->abs_layer, o.total.abs_layer, sizeof t->abs_layer);
+    t->mem = o.mem;
+    t->brdf = o.total.brdf;
+    t->rd_r = o.total.rd_r;
+    t->a_z = o.total.a_z;
+    t->rd_a = o.total.rd_a;
+    t->tt_r = o.total.tt_r;
+    t->tt_a = o.total.tt_a;
+    return SS_OK;
+}
+
+void ss_mc_tallies_free(ss_mc_tallies *t) {
+    if (!t) return;
+    free(t->mem);
+    memset(t, 0, sizeof *t);
+}
+
+/* ---- public API ------------------------------------------------------------ */
+void ss_mc_options_default(ss_mc_options *o) {
+    memset(o, 0, sizeof *o);
+    o->photons = 100000;
+    o->seed = 1;
+    o->theta_i_rad = 0.0;
+    o->roughness_sigma = 0.0;
+    o->stochastic_absorb = 0;
+}
+
+static double se_of(double sum, double sum2, double n) {
+    double m = sum / n;
+    double v = sum2 / n - m * m;
+    return v > 0.0 ? sqrt(v / n) : 0.0;
+}
+
+/* Solid angle of theta bin it (of nt over [0, pi/2)) times one dphi bin (of np
+ * over [0, pi], both mirror halves) and cos(theta centre): the f_r divisor. */
+static double brdf_norm(int it, int nt, int np) {
+    double dt = M_PI / 2 / nt;
+    double t0 = it * dt, t1 = t0 + dt, tc = t0 + 0.5 * dt;
+    double omega = (cos(t0) - cos(t1)) * (M_PI / np) * 2.0;
+    return omega * cos(tc);
+}
+
+static ss_status fill_arrays(ss_mc_result *res, int nl, int nt, int np, int nr, double dr,
+                             ss_error *err) {
+    res->absorbed_per_layer = calloc((size_t)nl, sizeof(double));
+    if (nt > 0) res->brdf_exit = calloc((size_t)nt * (size_t)np, sizeof(double));
+    if (nr > 0) res->radial = calloc((size_t)nr, sizeof(double));
+    if (!res->absorbed_per_layer || (nt > 0 && !res->brdf_exit) || (nr > 0 && !res->radial)) {
+        ss_mc_result_free(res);
+        return ss_error_set(err, SS_ERR_NOMEM, "out of memory for Monte Carlo results");
+    }
+    res->nlayers = nl;
+    res->brdf_n_theta = nt;
+    res->brdf_n_phi = np;
+    res->radial_bins = nr;
+    res->radial_dr_cm = dr;
+    return SS_OK;
+}
+
+static void spec_from_opts(const ss_mc_options *o, ss_mc_tally_spec *sp) {
+    memset(sp, 0, sizeof *sp);
+    if (o->brdf_n_theta > 0 || o->brdf_n_phi > 0) {
+        sp->brdf_nt = o->brdf_n_theta;
+        sp->brdf_np = o->brdf_n_phi;
+    }
+    if (o->radial_bins > 0 || o->radial_max_cm > 0) {
+        sp->rad_n = o->radial_bins;
+        sp->rad_dr = o->radial_bins > 0 ? o->radial_max_cm / o->radial_bins : 0.0;
+    }
+}
+
+ss_status ss_mc_run(const ss_optics_slab *slab, const ss_mc_options *opt, ss_mc_result *res,
+                    ss_error *err) {
+    if (!res) return ss_error_set(err, SS_ERR_INPUT, "result pointer is NULL");
+    memset(res, 0, sizeof *res);
+    if (!opt) return ss_error_set(err, SS_ERR_INPUT, "Monte Carlo options are missing");
+    ss_mc_tally_spec sp;
+    spec_from_opts(opt, &sp);
+    ss_mc_tallies t;
+    ss_status st = ss_mc_run_tallies(slab, opt, &sp, &t, err);
+    if (st) return st;
+    st = fill_arrays(res, slab->nlayers, sp.brdf_nt, sp.brdf_np, sp.rad_n, sp.rad_dr, err);
+    if (st) {
+        ss_mc_tallies_free(&t);
+        return st;
+    }
+    double n = (double)t.photons;
+    res->specular = t.specular / n;
+    res->diffuse = t.diffuse / n;
+    res->transmit = t.transmit / n;
+    res->absorbed = t.absorbed / n;
+    res->roulette_net = t.roulette / n;
+    res->diffuse_se = se_of(t.diffuse, t.diffuse2, n);
+    res->transmit_se = se_of(t.transmit, t.transmit2, n);
+    for (int l = 0; l < slab->nlayers; l++) res->absorbed_per_layer[l] = t.abs_layer[l] / n;
+    for (int it = 0; it < sp.brdf_nt; it++) {
+        double norm = brdf_norm(it, sp.brdf_nt, sp.brdf_np) * n;
+        for (int ip = 0; ip < sp.brdf_np; ip++)
+            res->brdf_exit[it * sp.brdf_np + ip] = t.brdf[it * sp.brdf_np + ip] / norm;
+    }
+    for (int ir = 0; ir < sp.rad_n; ir++) {
+        double r0 = ir * sp.rad_dr, r1 = r0 + sp.rad_dr;
+        res->radial[ir] = t.rd_r[ir] / (M_PI * (r1 * r1 - r0 * r0) * n);
+    }
+    ss_mc_tallies_free(&t);
+    return SS_OK;
+}
+
+void ss_mc_result_free(ss_mc_result *res) {
+    if (!res) return;
+    free(res->brdf_exit);
+    free(res->radial);
+    free(res->absorbed_per_layer);
+    res->brdf_exit = res->radial = res->absorbed_per_layer = NULL;
+}
+
+/* ---- absorption-free path tracing (table fast path) ------------------------- *
+ * One record per packet that leaves the slab (top or bottom): float path length
+ * per layer (cm), exit BRDF and radial bins, number of fat-layer bounces. With
+ * mua = 0 every packet keeps weight 1 until it leaves, so applying absorption
+ * later is exact: w = exp(-sum_l mua_l L_l) * albedo^bounces. Memory is one
+ * record (76 bytes) per traced photon at most; runs are capped at
+ * SS_MC_PATHS_MAX_PHOTONS photons, which bounds the store to about 300 MB. */
+#define SS_MC_PATHS_MAX_PHOTONS 4000000ull
+
+struct ss_mc_paths {
+    int nl;
+    uint64_t photons;
+    double specular, bottom_albedo;
+    int brdf_nt, brdf_np, rad_n;
+    double rad_dr;
+    double *spec_brdf; /* specular part of the BRDF tally (raw weights) */
+    path_rec *rec;
+    size_t nrec;
+};
+
+ss_status ss_mc_trace_paths(const ss_optics_slab *geometry, const ss_mc_options *opt,
+                            ss_mc_paths **out, ss_error *err) {
+    if (!out) return ss_error_set(err, SS_ERR_INPUT, "paths output pointer is NULL");
+    *out = NULL;
+    if (!opt) return ss_error_set(err, SS_ERR_INPUT, "Monte Carlo options are missing");
+    if (opt->photons > SS_MC_PATHS_MAX_PHOTONS)
+        return ss_error_set(
+            err, SS_ERR_INPUT, "photons: %llu exceeds the path-tracing cap of %llu (memory bound)",
+            (unsigned long long)opt->photons, (unsigned long long)SS_MC_PATHS_MAX_PHOTONS);
+    if (opt->stochastic_absorb)
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "stochastic_absorb: path tracing needs the weighted mode");
+    if (geometry && geometry->bottom_albedo > 1.0)
+        return ss_error_set(err, SS_ERR_INPUT, "bottom_albedo %g > 1", geometry->bottom_albedo);
+    ss_mc_tally_spec sp;
+    spec_from_opts(opt, &sp);
+    if (sp.brdf_nt > 32767 || sp.rad_n > 32767)
+        return ss_error_set(err, SS_ERR_INPUT, "path tracing: at most 32767 bins per tally");
+    if ((size_t)sp.brdf_nt * (size_t)sp.brdf_np > 32767)
+        return ss_error_set(err, SS_ERR_INPUT, "path tracing: at most 32767 BRDF bins");
+    mc_ctx c;
+    ss_status st = ctx_init(&c, geometry, opt, &sp, 1, err);
+    if (st) return st;
+    ss_mc_paths *p = calloc(1, sizeof *p);
+    if (!p) return ss_error_set(err, SS_ERR_NOMEM, "out of memory for paths");
+    run_out o;
+    st = run_blocks(&c, opt->photons, &o, err);
+    if (st) {
+        free(p);
+        return st;
+    }
+    p->nl = geometry->nlayers;
+    p->photons = opt->photons;
+    p->specular = o.total.specular;
+    p->bottom_albedo = geometry->bottom_albedo;
+    p->brdf_nt = sp.brdf_nt;
+    p->brdf_np = sp.brdf_np;
+    p->rad_n = sp.rad_n;
+    p->rad_dr = sp.rad_dr;
+    p->rec = o.paths.r;
+    p->nrec = o.paths.n;
+    if (sp.brdf_nt > 0) {
+        /* In path mode only the specular part goes into the BRDF array directly. */
+        size_t nb = (size_t)sp.brdf_nt * (size_t)sp.brdf_np;
+        p->spec_brdf = malloc(nb * sizeof(double));
+        if (!p->spec_brdf) {
+            free(o.mem);
+            ss_mc_paths_free(p);
+            return ss_error_set(err, SS_ERR_NOMEM, "out of memory for paths");
+        }
+        memcpy(p->spec_brdf, o.total.brdf, nb * sizeof(double));
+    }
+    free(o.mem);
+    *out = p;
+    return SS_OK;
+}
+
+ss_status ss_mc_paths_apply(const ss_mc_paths *p, const double *mua_per_cm, ss_mc_result *res,
+                            ss_error *err) {
+    if (!res) return ss_error_set(err, SS_ERR_INPUT, "result pointer is NULL");
+    memset(res, 0, sizeof *res);
+    if (!p || !mua_per_cm) return ss_error_set(err, SS_ERR_INPUT, "paths or mua missing");
+    for (int l = 0; l < p->nl; l++)
+        if (!(mua_per_cm[l] >= 0.0 && isfinite(mua_per_cm[l])))
+            return ss_error_set(err, SS_ERR_INPUT, "mua of layer %d: %g is not a finite value >= 0",
+                                l + 1, mua_per_cm[l]);
+    ss_status st = fill_arrays(res, p->nl, p->brdf_nt, p->brdf_np, p->rad_n, p->rad_dr, err);
+    if (st) return st;
+    double n = (double)p->photons;
+    double alb = p->bottom_albedo >= 0.0 ? p->bottom_albedo : 1.0;
+    double ds = 0, ds2 = 0, ts = 0, ts2 = 0;
+    for (size_t i = 0; i < p->nrec; i++) {
+        const path_rec *r = &p->rec[i];
+        double e = 0.0;
+        for (int l = 0; l < p->nl; l++) e += mua_per_cm[l] * (double)r->len[l];
+        double w = (double)r->w0 * exp(-e);
+        if (r->bounces) w *= pow(alb, (double)r->bounces);
+        if (r->up) {
+            ds += w;
+            ds2 += w * w;
+            if (res->brdf_exit && r->brdf_bin >= 0) res->brdf_exit[r->brdf_bin] += w;
+            if (res->radial && r->rad_bin >= 0) res->radial[r->rad_bin] += w;
+        } else {
+            ts += w;
+            ts2 += w * w;
+        }
+    }
+    res->specular = p->specular / n;
+    res->diffuse = ds / n;
+    res->diffuse_se = se_of(ds, ds2, n);
+    /* transmit here counts only packets leaving through the bottom boundary
+     * (n_below); weight lost in an imperfect fat reflector is 1 - R - T - A and
+     * is not itemised. absorbed is not computed by the path method. */
+    res->transmit = ts / n;
+    res->transmit_se = se_of(ts, ts2, n);
+    res->absorbed = NAN;
+    for (int l = 0; l < p->nl; l++) res->absorbed_per_layer[l] = NAN;
+    if (res->brdf_exit) {
+        for (int it = 0; it < p->brdf_nt; it++) {
+            double norm = brdf_norm(it, p->brdf_nt, p->brdf_np) * n;
+            for (int ip = 0; ip < p->brdf_np; ip++) {
+                int k = it * p->brdf_np + ip;
+                res->brdf_exit[k] = (res->brdf_exit[k] + p->spec_brdf[k]) / norm;
+            }
+        }
+    }
+    if (res->radial) {
+        for (int ir = 0; ir < p->rad_n; ir++) {
+            double r0 = ir * p->rad_dr, r1 = r0 + p->rad_dr;
+            res->radial[ir] /= M_PI * (r1 * r1 - r0 * r0) * n;
+        }
+    }
+    return SS_OK;
+}
+
+void ss_mc_paths_free(ss_mc_paths *p) {
+    if (!p) return;
+    free(p->rec);
+    free(p->spec_brdf);
+    free(p);
+}
