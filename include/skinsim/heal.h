@@ -1,0 +1,277 @@
+/* skinsim heal: the biochemical wound-healing model of seed 001 (Feess et al.)
+ * §4.1 (eight reaction-diffusion-convection species) on the regular 3D grid of
+ * §5.1, with an explicit central-difference scheme and an operator-split scheme
+ * (implicit LOD diffusion by Thomas line solves + reaction substeps). Both run
+ * through one generic reaction-diffusion core (ss_heal_rd_*) with a pluggable
+ * reaction function; the Fisher-KPP validation uses the same core.
+ * Units: lengths in mm, time in days, species normalised (healthy = 1 where it
+ * exists). See docs/heal-model.md. */
+#ifndef SKINSIM_HEAL_H
+#define SKINSIM_HEAL_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "skinsim/core.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- cell states and fields ---------------------------------------------- */
+
+typedef enum ss_heal_cell {
+    SS_CELL_AIR = 0,
+    SS_CELL_EPIDERMIS = 1,
+    SS_CELL_DERMIS = 2,
+    SS_CELL_WOUND = 3,
+    SS_CELL_BOUND = 4
+} ss_heal_cell;
+
+enum {
+    SS_HEAL_OXYGEN,     /* u1 */
+    SS_HEAL_MDGF,       /* u2 */
+    SS_HEAL_CAPILLARY,  /* u3 */
+    SS_HEAL_FIBROBLAST, /* n */
+    SS_HEAL_ESCHAR,     /* s */
+    SS_HEAL_EPITHELIUM, /* e */
+    SS_HEAL_SCAR,       /* rho */
+    SS_HEAL_PLASMA,     /* p, omega = [p > SS_HEAL_P_MIN] */
+    SS_HEAL_NFIELDS
+};
+
+/* "oxygen", "mdgf", "capillary", "fibroblast", "eschar", "epithelium", "scar",
+ * "plasma"; NULL for an out-of-range index. */
+const char *ss_heal_field_name(int field);
+
+/* ---- parameters (§4.1; values, units and sources in data/heal/params.json) -- */
+
+typedef struct ss_heal_params {
+    char scenario[32]; /* "clean" | "scab" | "keloid" */
+    /* scenario switches */
+    int scab;          /* 1: eschar source R(omega) on the exposed wound surface */
+    int static_region; /* 1: omega = initial wound (plasma not evolved) */
+    /* oxygen u1 */
+    double D1;    /* mm^2/day */
+    double lam11; /* 1/day, oxygen consumption */
+    double lam31; /* 1/day, oxygen supply by capillaries (per unit u3) */
+    /* MDGF u2 */
+    double D2;       /* mm^2/day */
+    double lam12;    /* 1/day, MDGF production by hypoxia, times P(u1) */
+    double lam22;    /* 1/day, MDGF decay */
+    double u1_beta2; /* 1, oxygen level below which MDGF is produced */
+    /* capillaries u3 */
+    double D3;    /* mm^2/day */
+    double lam33; /* 1/day, intrinsic capillary growth */
+    double lam32; /* 1/day per unit u2, MDGF-driven angiogenesis */
+    double u3_eq; /* 1, maximal capillary density */
+    /* fibroblasts n */
+    double Dn;    /* mm^2/day */
+    double rn;    /* 1/day per unit u1, maximal proliferation rate */
+    double K;     /* 1, carrying capacity */
+    double lamnn; /* 1/day, fibroblast death/differentiation */
+    /* eschar s */
+    double Ds;    /* mm^2/day */
+    double Rs;    /* 1/day, magnitude of the interface source R(omega) */
+    double lames; /* 1/day per unit e, keratinocyte dissolution of the eschar */
+    /* epithelium e */
+    double De;     /* mm^2/day */
+    double lamge;  /* 1/day, epithelial growth on granulation tissue */
+    double lamee;  /* 1/day, epithelial loss */
+    double gamma1; /* 1, capillary density of maximal Q(u3) */
+    /* scar rho */
+    double lamnrho; /* 1/day per unit n, collagen deposition by fibroblasts */
+    double lamrhop; /* 1/day, scar remodelling (fading) */
+    /* plasma p / wound region */
+    double Dp;       /* mm^2/day */
+    double lampp;    /* 1/day, signed: negative = plasma resorption */
+    double rho_max;  /* 1, collagen level above which C(rho) pushes the region */
+    double u1_wound; /* 1, initial oxygen in the wound (clot) */
+} ss_heal_params;
+
+/* omega = [p > SS_HEAL_P_MIN] (plasma is normalised to 1 in the fresh clot). */
+#define SS_HEAL_P_MIN 0.5
+/* Healthy far-field values implied by the parameters (steady state of §4.1
+ * in intact tissue): u3 = u3_eq, u1 = lam31 u3_eq / lam11, u2 = 0,
+ * n = K (1 - lamnn / (rn u1)) (0 if negative), s = rho = p = 0. */
+void ss_heal_params_healthy(const ss_heal_params *p, float healthy[SS_HEAL_NFIELDS]);
+
+/* Built-in preset; unknown scenario -> SS_ERR_INPUT listing "clean", "scab",
+ * "keloid". The presets are compiled in and equal data/heal/<scenario>.json. */
+ss_heal_params *ss_heal_params_preset(const char *scenario, ss_error *err);
+/* Preset for `scenario` (NULL = the file's "scenario" key, else "clean"), then
+ * overrides from a JSON file of the form {"scenario": "...", "params": {"D1":
+ * {"value": 1.0, "unit": "mm^2/day", "source": "..."}, ...}, "switches":
+ * {"scab": 0, "static_region": 1}}. Malformed JSON, an unknown key, a missing or
+ * wrong unit, or a negative/non-finite value -> SS_ERR_INPUT naming the key. */
+ss_heal_params *ss_heal_params_load(const char *json_path, const char *scenario, ss_error *err);
+/* Same, from a JSON text (what_name names the source in messages). */
+ss_heal_params *ss_heal_params_parse(const char *json_text, const char *what_name,
+                                     const char *scenario, ss_error *err);
+ss_status ss_heal_params_set_switches(ss_heal_params *p, int scab /* -1 keep */,
+                                      int static_region /* -1 keep */);
+void ss_heal_params_free(ss_heal_params *p);
+ss_heal_params *ss_heal_params_clone(const ss_heal_params *p, ss_error *err);
+/* malloc'd JSON text in the load format (value + unit for every parameter). */
+char *ss_heal_params_to_json(const ss_heal_params *p);
+/* Unit string of a parameter key ("D1" -> "mm^2/day"); NULL if unknown. */
+const char *ss_heal_param_unit(const char *key);
+
+/* ---- grid (§5.1) ------------------------------------------------------------ */
+
+typedef struct ss_heal_grid {
+    int nx, ny, nz;     /* x,y along the skin surface, z up (z = nz-1 is the top) */
+    double dx_mm;       /* cubic voxels, edge in mm */
+    double skin_top_mm; /* height of the skin surface above z=0 */
+    uint8_t *cell;      /* nx*ny*nz, index (z*ny + y)*nx + x */
+    float *field[SS_HEAL_NFIELDS];
+    float *velocity[3]; /* NULL = zero (mm/day); the mechanics fills these later */
+    double t_days;
+    uint64_t step;
+} ss_heal_grid;
+
+/* Largest grid accepted (cells); larger -> SS_ERR_INPUT. */
+#define SS_HEAL_MAX_CELLS ((size_t)1 << 31)
+ss_heal_grid *ss_heal_grid_create(int nx, int ny, int nz, double dx_mm, ss_error *err);
+void ss_heal_grid_free(ss_heal_grid *g);
+size_t ss_heal_grid_bytes(int nx, int ny, int nz);
+static inline size_t ss_heal_idx(const ss_heal_grid *g, int x, int y, int z) {
+    return ((size_t)z * (size_t)g->ny + (size_t)y) * (size_t)g->nx + (size_t)x;
+}
+/* wound3d: nx*ny*nz bytes, 1 = wound voxel (tissue removed, filled by clot).
+ * Sets cell states (BOUND on the outermost voxel shell, AIR above skin_top_mm,
+ * EPIDERMIS in the top epidermis_mm of the skin (at least two voxels), DERMIS
+ * below, WOUND where wound3d says) and initial fields: healthy values in
+ * intact tissue, wound values in the wound (u1 = u1_wound, u2 = u3 = n = 0,
+ * plasma 1), the epithelium = 1 in the two-voxel layer on top of the skin
+ * outside the wound (§5.1). wound3d NULL = no wound. */
+ss_status ss_heal_grid_init(ss_heal_grid *g, double skin_top_mm, double epidermis_mm,
+                            const uint8_t *wound3d, const ss_heal_params *p, ss_error *err);
+/* A footprint (1-channel image, value > 0.5 = wound, mapped onto x,y over the
+ * whole grid, image row 0 at y = ny-1) cut to depth_mm (or the per-pixel depth
+ * of depth_mm_img, 1 channel in mm, if non-NULL) below the surface; returns the
+ * malloc'd wound3d mask. */
+uint8_t *ss_heal_wound_from_footprint(const ss_heal_grid *g, double skin_top_mm,
+                                      const ss_image *footprint, double depth_mm,
+                                      const ss_image *depth_mm_img, ss_error *err);
+/* The built-in default wound: a centred square of side_mm, depth_mm deep. */
+uint8_t *ss_heal_wound_box(const ss_heal_grid *g, double skin_top_mm, double side_x_mm,
+                           double side_y_mm, double depth_mm, ss_error *err);
+
+/* Default problem (docs/heal-model.md): a 30 x 30 x 4 mm block, skin surface at
+ * 3.5 mm, 0.1 mm epidermis, a 20 x 20 mm wound 1 mm deep. */
+#define SS_HEAL_DEFAULT_BLOCK_X_MM 30.0
+#define SS_HEAL_DEFAULT_BLOCK_Y_MM 30.0
+#define SS_HEAL_DEFAULT_BLOCK_Z_MM 4.0
+#define SS_HEAL_DEFAULT_SKIN_TOP_MM 3.5
+#define SS_HEAL_DEFAULT_EPIDERMIS_MM 0.1
+#define SS_HEAL_DEFAULT_WOUND_MM 20.0
+#define SS_HEAL_DEFAULT_DEPTH_MM 1.0
+#define SS_HEAL_DEFAULT_DX_MM 0.5
+
+/* ---- time integration -------------------------------------------------------- */
+
+typedef enum ss_heal_scheme { SS_HEAL_EXPLICIT, SS_HEAL_SPLIT } ss_heal_scheme;
+
+/* Largest admissible step in days. EXPLICIT: the diffusion (h^2 / (6 D_max)),
+ * reaction-positivity and convection (CFL) limits; SPLIT: the convection CFL
+ * limit and the accuracy cap SS_HEAL_SPLIT_MAX_DT_DAYS. */
+#define SS_HEAL_SPLIT_MAX_DT_DAYS 0.1
+double ss_heal_stable_dt(const ss_heal_grid *g, const ss_heal_params *p, ss_heal_scheme s);
+
+typedef struct ss_heal_solver ss_heal_solver;
+/* dt_days 0 = automatic (EXPLICIT: 0.9 x limit; SPLIT: SS_HEAL_SPLIT_DEFAULT_DT_DAYS);
+ * too large -> SS_ERR_INPUT naming the limit. */
+#define SS_HEAL_SPLIT_DEFAULT_DT_DAYS 0.05
+ss_heal_solver *ss_heal_solver_create(const ss_heal_grid *g, const ss_heal_params *p,
+                                      ss_heal_scheme s, double dt_days, ss_error *err);
+double ss_heal_solver_dt(const ss_heal_solver *s);
+/* Advances g->t_days by dt, g->step++. All state lives in g (fields, cell,
+ * t_days, step); the solver holds only params, dt and scratch memory. */
+ss_status ss_heal_step(ss_heal_solver *s, ss_heal_grid *g, ss_error *err);
+void ss_heal_solver_free(ss_heal_solver *s);
+
+/* ---- diagnostics ---------------------------------------------------------------- */
+
+typedef struct ss_heal_stats {
+    double open_area_mm2;               /* columns whose surface epithelium < threshold */
+    double wound_region_area_mm2;       /* columns whose surface cell is in omega */
+    double initial_area_mm2;            /* columns that had a WOUND cell at the surface */
+    double field_mean[SS_HEAL_NFIELDS]; /* over tissue cells (not AIR/BOUND) */
+} ss_heal_stats;
+/* Epithelium level below which the surface counts as open: 0.5. */
+double ss_heal_open_threshold(void);
+void ss_heal_stats_compute(const ss_heal_grid *g, ss_heal_stats *st);
+/* omega for one cell (1 = wound region) under params p. */
+int ss_heal_in_region(const ss_heal_grid *g, const ss_heal_params *p, size_t idx);
+
+/* ---- generic reaction-diffusion-convection core ---------------------------------
+ * u_f,t + div(u_f v) = m_f(u) D_f lap u_f + R_f(u) on a regular grid of cubic
+ * cells of edge h. Every cell has a class (< SS_HEAL_RD_MAXCLASS); a class is a
+ * wall (no flux, never updated, shared by all fields) or active; per field an
+ * active class may be fixed (Dirichlet: value kept, still a neighbour). The
+ * outermost voxel shell must be walls. The healing model is one user of it
+ * (classes = ss_heal_cell), the Fisher-KPP tests another. */
+
+#define SS_HEAL_RD_MAXF 8
+#define SS_HEAL_RD_MAXCLASS 8
+#define SS_HEAL_RD_MAXSLOT 4
+
+/* One x-run of cells handed to the reaction function. The reaction of field
+ * f is written in production/loss form R_f = prod_f - loss_f * u_f with
+ * prod_f >= 0, loss_f >= 0 (this keeps both schemes non-negative). For i < n
+ * it must write prod[f][i], loss[f][i] (per day) for every field and m[k][i]
+ * (>= 0, the diffusion multiplier) for every slot k < nslots. u[f][i] are the
+ * current values; cls[i] the classes. */
+typedef struct ss_heal_rd_row {
+    int n, x0, y, z;
+    const uint8_t *cls;
+    const float *u[SS_HEAL_RD_MAXF];
+    float *prod[SS_HEAL_RD_MAXF];
+    float *loss[SS_HEAL_RD_MAXF];
+    float *m[SS_HEAL_RD_MAXSLOT];
+} ss_heal_rd_row;
+typedef void (*ss_heal_reaction_fn)(void *ctx, const ss_heal_rd_row *row);
+
+typedef struct ss_heal_rd_system {
+    int nx, ny, nz;
+    double h_mm;
+    int nfields;
+    float *u[SS_HEAL_RD_MAXF];                           /* nx*ny*nz each */
+    const uint8_t *cls;                                  /* class per cell; NULL = all class 0 */
+    uint8_t wall[SS_HEAL_RD_MAXCLASS];                   /* 1 = wall */
+    uint8_t fixed[SS_HEAL_RD_MAXF][SS_HEAL_RD_MAXCLASS]; /* 1 = Dirichlet */
+    double D[SS_HEAL_RD_MAXF];                           /* mm^2/day; 0 = no diffusion */
+    int mslot[SS_HEAL_RD_MAXF];                          /* multiplier slot, -1 = 1 */
+    int nslots;
+    float lo[SS_HEAL_RD_MAXF], hi[SS_HEAL_RD_MAXF]; /* admissible range (clamp) */
+    const float *velocity[3];                       /* NULL = zero; mm/day */
+    ss_heal_reaction_fn react;                      /* NULL = no reaction */
+    void *ctx;
+    double mmax;     /* bound on every multiplier m (for the stability limit) */
+    double rate_max; /* bound on every loss_f (1/day), explicit positivity limit */
+} ss_heal_rd_system;
+
+typedef struct ss_heal_rd_work ss_heal_rd_work;
+ss_heal_rd_work *ss_heal_rd_work_create(const ss_heal_rd_system *sys, ss_error *err);
+void ss_heal_rd_work_free(ss_heal_rd_work *w);
+/* Explicit limit in days: min(h^2/(6 D_max mmax), 1/rate_max, CFL). */
+double ss_heal_rd_explicit_dt(const ss_heal_rd_system *sys);
+/* Largest |vx|+|vy|+|vz| over the grid (0 without velocity), mm/day. */
+double ss_heal_rd_max_speed(const ss_heal_rd_system *sys);
+/* One forward-Euler step: central-difference diffusion, donor-cell convection
+ * (conservative), reaction; clamp to [lo, hi]. The new values are written to
+ * the work buffers, which are then exchanged with sys->u (both malloc'd by
+ * their creators; after the step sys->u[f] points at the new values). */
+void ss_heal_rd_step_explicit(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt);
+/* One split step, in place: reaction (nsub substeps per cell of the
+ * positivity-preserving u <- (u + h prod) / (1 + h loss), clamped),
+ * convection (CFL-subcycled donor cell), then implicit-Euler LOD diffusion
+ * along x, y, z by Thomas line solves with multipliers frozen at the
+ * last reaction substep. Unconditionally stable and positivity preserving in diffusion. */
+void ss_heal_rd_step_split(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt, int nsub);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,180 @@
+/* skinsim heal_io: getting wounds into the healing grid and results out of it.
+ * Inputs: footprint masks (PNG/EXR), painted stroke CSV files, closed OBJ meshes
+ * voxelised by ray parity as in seed 001 §5.1. Outputs: VTK XML ImageData (.vti)
+ * snapshots with a ParaView .pvd time collection, top-view surface maps, the
+ * normalised wound-area curve of seed 001 Fig. 4 (CSV + cairo plot), and
+ * versioned, CRC-checked, atomically written checkpoints for exact resume.
+ * All lengths are mm, all times days. See docs/heal-outputs.md. */
+#ifndef SKINSIM_HEAL_IO_H
+#define SKINSIM_HEAL_IO_H
+
+#include "skinsim/core.h"
+#include "skinsim/heal.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- painted strokes (CSV) ------------------------------------------------
+ * Format shared with `skinsim abrasion`: one point per line, `u,v` or
+ * `u,v,stroke_id`; u, v are texture coordinates in [0,1] (u to the right, v
+ * down, as image rows); stroke_id is a non-negative integer (default 0). An
+ * optional first line that is not numeric is a header; blank lines and lines
+ * starting with '#' are ignored; fields may be surrounded by spaces. Errors
+ * (SS_ERR_INPUT, message names file and line): NaN/inf or non-numbers, u or v
+ * outside [0,1], a negative or non-integer id, a wrong field count, no points,
+ * any stroke with fewer than 3 points. Points keep file order. */
+typedef struct ss_stroke_set {
+    int npoints;
+    double *u, *v;   /* npoints each */
+    int *stroke;     /* npoints stroke ids */
+    int nstrokes;    /* distinct ids */
+    int *stroke_ids; /* the distinct ids, ascending */
+} ss_stroke_set;
+ss_status ss_stroke_csv_read(const char *path, ss_stroke_set *out, ss_error *err);
+/* Same, from a NUL-terminated buffer; `name` is used in messages. */
+ss_status ss_stroke_csv_parse(const char *text, const char *name, ss_stroke_set *out,
+                              ss_error *err);
+void ss_stroke_set_free(ss_stroke_set *s); /* frees arrays and zeroes the struct */
+/* Footprint of a stroke set: each stroke's points (u*width, v*height pixels)
+ * get a hull (concave_k == 0: convex hull, ss_convex_hull; >= 3: k-nearest
+ * concave hull, ss_concave_hull) filled with ss_polygon_fill into a
+ * width x height 1-channel 0/1 image. Hull errors (e.g. all points collinear)
+ * are SS_ERR_INPUT naming the stroke. */
+ss_image *ss_stroke_footprint(const ss_stroke_set *s, int width, int height, int concave_k,
+                              const char *name, ss_error *err);
+
+/* ---- footprints -------------------------------------------------------------
+ * A footprint is a 1-channel image, 1 = wound, 0 = intact, covering the grid's
+ * x-y extent (image column -> x, image row -> y). */
+
+/* Reads a greyscale/RGB(A) PNG or EXR mask: the first channel (luminance of
+ * RGB) is thresholded at 0.5 (linear). An all-zero mask is an input error. */
+ss_image *ss_heal_footprint_read(const char *path, ss_error *err);
+/* Reads a depth image (PNG: 0..1 scaled by max_depth_mm; EXR: values in mm)
+ * into a 1-channel image of depths in mm. Negative or non-finite depths are
+ * an input error. */
+ss_image *ss_heal_depth_image_read(const char *path, double max_depth_mm, ss_error *err);
+
+/* ---- meshes (OBJ) -----------------------------------------------------------
+ * A small OBJ reader: `v x y z [w]`, `f` with `i`, `i/t`, `i//n`, `i/t/n` forms,
+ * negative (relative) indices, polygons triangulated as fans; other statements
+ * (vt, vn, o, g, s, usemtl, mtllib, l) are ignored. Errors name file and line. */
+typedef struct ss_tri_mesh {
+    int nverts, ntris;
+    double *v; /* 3*nverts, x y z */
+    int *tri;  /* 3*ntris vertex indices (0-based) */
+    int *line; /* ntris: OBJ line of the face each triangle came from */
+} ss_tri_mesh;
+ss_status ss_obj_read(const char *path, ss_tri_mesh *out, ss_error *err);
+ss_status ss_obj_parse(const char *text, const char *name, ss_tri_mesh *out, ss_error *err);
+void ss_tri_mesh_free(ss_tri_mesh *m);
+/* Closed = every undirected edge is used by an even, non-zero number of
+ * triangles and no triangle is degenerate (repeated vertex). Otherwise
+ * SS_ERR_INPUT naming `name` and the OBJ line of an offending face. */
+ss_status ss_tri_mesh_check_closed(const ss_tri_mesh *m, const char *name, ss_error *err);
+
+/* Voxelises a closed mesh (coordinates in mm in the grid frame: x, y along the
+ * grid, z up, origin at the grid corner) into an nx*ny*nz 0/1 array indexed
+ * (z*ny + y)*nx + x: for each column (x, y) a ray along +z through the voxel
+ * centre collects crossings with the triangles; a voxel centre is inside when
+ * an odd number of crossings lies below it (seed 001 §5.1 ray test). Rays are
+ * nudged by a fixed tiny offset to avoid passing exactly through edges.
+ * *count receives the number of inside voxels (may be NULL). Returns malloc'd
+ * array or NULL with err set. Runs in parallel over columns; deterministic. */
+uint8_t *ss_heal_voxelise_mesh(const ss_tri_mesh *m, int nx, int ny, int nz, double dx_mm,
+                               size_t *count, ss_error *err);
+
+/* ---- VTK output -------------------------------------------------------------
+ * VTK XML ImageData, one piece, cell data (one value per voxel), appended raw
+ * binary with UInt64 headers, little endian. Arrays: `cell_state` UInt8 (the
+ * ss_heal_cell codes), one Float32 array per field named by
+ * ss_heal_field_name(), `velocity` Float32 x3 when the grid has velocities.
+ * WholeExtent 0 nx 0 ny 0 nz, Origin 0 0 0, Spacing dx dx dx (mm). FieldData
+ * TimeValue holds t in days. Written atomically. */
+ss_status ss_heal_vti_write(const char *path, const ss_heal_grid *g, ss_error *err);
+
+/* ParaView collection: `n` datasets with their times (days) and file names
+ * relative to the .pvd. Written atomically. */
+ss_status ss_heal_pvd_write(const char *path, int n, const double *t_days, const char *const *files,
+                            ss_error *err);
+
+/* ---- surface maps -------------------------------------------------------- */
+typedef enum ss_heal_surface_mode {
+    SS_SURFACE_TOP = 0, /* value in the topmost tissue cell of each column */
+    SS_SURFACE_MAX = 1  /* maximum over the tissue cells of each column */
+} ss_heal_surface_mode;
+/* Tissue cells: all but AIR, the BOUND layers z = 0 and z = nz-1, and BOUND
+ * cells whose centre is above g->skin_top_mm.
+ * nx x ny 1-channel image oriented like a footprint image: image row 0 is
+ * grid y = ny-1 (image row r = grid y ny-1-r), column x = grid x. Columns of
+ * air only are 0. */
+ss_image *ss_heal_surface_map(const ss_heal_grid *g, int field, ss_heal_surface_mode mode,
+                              ss_error *err);
+/* Colour-mapped picture of a map (viridis, vmin..vmax; nearest-neighbour
+ * upscaled so the map is at least ~360 px wide) with a title and a labelled
+ * colour bar, written as an 8-bit RGB PNG, atomically. */
+ss_status ss_heal_surface_png(const char *path, const ss_image *map, double vmin, double vmax,
+                              const char *title, const char *unit, double dx_mm, ss_error *err);
+
+/* ---- wound-area curve (seed 001 Fig. 4) ------------------------------------ */
+typedef struct ss_heal_area_row {
+    double t_days;
+    ss_heal_stats st;
+} ss_heal_area_row;
+/* Normalised open area: open / initial (0 when the initial area is 0). */
+double ss_heal_area_normalised(const ss_heal_stats *st);
+/* CSV: header `t_days,open_area_mm2,normalised_area,wound_region_area_mm2,
+ * mean_<field>...`, one row per entry. Atomic. */
+ss_status ss_heal_area_csv_write(const char *path, const ss_heal_area_row *rows, int n,
+                                 ss_error *err);
+/* First time (days, linear interpolation between rows) at which the
+ * normalised area drops to <= level; negative when never reached. */
+double ss_heal_time_to_closure(const ss_heal_area_row *rows, int n, double level);
+/* Cairo line plot of the normalised area vs time (days), labelled axes with
+ * ticks, the title, dashed 50% and 95%-closure guides. 8-bit PNG, atomic. */
+ss_status ss_heal_area_plot(const char *path, const ss_heal_area_row *rows, int n,
+                            const char *title, ss_error *err);
+
+/* ---- checkpoints ------------------------------------------------------------
+ * Binary, little endian, version 1:
+ *   "SSHEALCK" u32 version u32 header_bytes, then
+ *   i32 nx ny nz nfields, f64 dx_mm skin_top_mm t_days, u64 step, i32 scheme,
+ *   f64 dt_days, u32 velocity_present, then u32-length-prefixed strings:
+ *   scenario, params JSON, aux (caller's run metadata, may be empty), then the
+ *   cell array (nx*ny*nz bytes), nfields Float32 arrays, 3 velocity arrays if
+ *   present, and a trailing u32 CRC-32 (zlib) over everything before it.
+ * Written to a temporary name, fsync'ed and renamed, so a write that is killed
+ * leaves the previous checkpoint intact. */
+typedef struct ss_heal_checkpoint {
+    ss_heal_grid *grid; /* owned */
+    char *scenario;     /* owned */
+    char *params_json;  /* owned */
+    char *aux;          /* owned, "" when none */
+    int scheme;
+    double dt_days;
+} ss_heal_checkpoint;
+ss_status ss_heal_checkpoint_write(const char *path, const ss_heal_grid *g, const char *scenario,
+                                   const char *params_json, int scheme, double dt_days,
+                                   const char *aux, ss_error *err);
+/* Verifies magic, version, sizes and CRC before building the grid. A short,
+ * corrupt or foreign file is SS_ERR_INPUT naming the path. */
+ss_status ss_heal_checkpoint_read(const char *path, ss_heal_checkpoint *out, ss_error *err);
+void ss_heal_checkpoint_free(ss_heal_checkpoint *c);
+/* Checkpoints of a run directory live in DIR/checkpoints/ as
+ * ckpt_<step, 12 digits>.sshc. Loads the newest one that verifies (temporary
+ * files from interrupted writes are ignored, corrupt ones skipped; the
+ * skipped names go into `note` if not NULL). SS_ERR_INPUT if none loads. */
+ss_status ss_heal_checkpoint_load_latest(const char *run_dir, ss_heal_checkpoint *out, char *note,
+                                         size_t note_len, ss_error *err);
+/* Writes DIR/checkpoints/ckpt_<step>.sshc and then removes all but the
+ * newest `keep` (>= 2) checkpoints of that directory and any temporary file
+ * an earlier, killed write left there. */
+ss_status ss_heal_checkpoint_save(const char *run_dir, const ss_heal_grid *g, const char *scenario,
+                                  const char *params_json, int scheme, double dt_days,
+                                  const char *aux, int keep, ss_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

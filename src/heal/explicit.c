@@ -1,0 +1,305 @@
+/* Generic reaction-diffusion-convection core, explicit part (seed 001 §5.1:
+ * "central differences" on the regular grid). Work memory and masks, the
+ * stability limit, donor-cell convection, and the forward-Euler step: per
+ * x-row the pluggable reaction function fills production/loss/multiplier rows
+ * in thread-local scratch, then one fused pass per field applies the 7-point
+ * Laplacian (no-flux faces masked by precomputed neighbour bits), reaction and
+ * convection, clamps to the admissible range and writes the next buffer.
+ * OpenMP over (z, y) rows; every cell is computed independently, so results
+ * are bit-identical for any thread count. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <omp.h>
+
+#include "heal_internal.h"
+
+/* clamp without the libm call fminf/fmaxf need without -ffast-math */
+static inline float clampf(float v, float lo, float hi) {
+    v = v > lo ? v : lo;
+    return v < hi ? v : hi;
+}
+
+static uint8_t cls_of(const ss_heal_rd_system *sys, size_t c) { return sys->cls ? sys->cls[c] : 0; }
+
+void ss_heal_rd__build_masks(const ss_heal_rd_system *sys, ss_heal_rd_work *w) {
+    const int nx = sys->nx, ny = sys->ny, nz = sys->nz;
+    const size_t sy = (size_t)nx, sz = (size_t)nx * (size_t)ny;
+#pragma omp parallel for schedule(static)
+    for (int z = 0; z < nz; z++) {
+        for (int y = 0; y < ny; y++) {
+            for (int x = 0; x < nx; x++) {
+                size_t c = (size_t)z * sz + (size_t)y * sy + (size_t)x;
+                uint8_t k = cls_of(sys, c) & (SS_HEAL_RD_MAXCLASS - 1);
+                int wall = sys->wall[k] || x == 0 || y == 0 || z == 0 || x == nx - 1 ||
+                           y == ny - 1 || z == nz - 1;
+                uint8_t b = 0;
+                if (!wall) {
+#define NBW(off) (sys->wall[cls_of(sys, (off)) & (SS_HEAL_RD_MAXCLASS - 1)])
+                    if (x > 1 && !NBW(c - 1)) b |= NB_XM;
+                    if (x < nx - 2 && !NBW(c + 1)) b |= NB_XP;
+                    if (y > 1 && !NBW(c - sy)) b |= NB_YM;
+                    if (y < ny - 2 && !NBW(c + sy)) b |= NB_YP;
+                    if (z > 1 && !NBW(c - sz)) b |= NB_ZM;
+                    if (z < nz - 2 && !NBW(c + sz)) b |= NB_ZP;
+#undef NBW
+                }
+                w->nb[c] = b;
+                for (int f = 0; f < sys->nfields; f++)
+                    w->upd[f][c] = (uint8_t)(!wall && !sys->fixed[f][k]);
+            }
+        }
+    }
+}
+
+static ss_heal_rd_work *work_create(const ss_heal_rd_system *sys, int need_buf, int need_mslot,
+                                    ss_error *err) {
+    if (!sys || sys->nx < 3 || sys->ny < 3 || sys->nz < 3 || sys->nfields < 1 ||
+        sys->nfields > SS_HEAL_RD_MAXF || sys->nslots < 0 || sys->nslots > SS_HEAL_RD_MAXSLOT ||
+        !(sys->h_mm > 0)) {
+        ss_error_set(err, SS_ERR_INPUT,
+                     "heal solver: bad system (grid needs >= 3 cells per axis, 1..%d fields, "
+                     "0..%d multiplier slots, h > 0)",
+                     SS_HEAL_RD_MAXF, SS_HEAL_RD_MAXSLOT);
+        return NULL;
+    }
+    for (int f = 0; f < sys->nfields; f++) {
+        if (!sys->u[f] || !(sys->D[f] >= 0) || sys->mslot[f] >= sys->nslots) {
+            ss_error_set(err, SS_ERR_INPUT,
+                         "heal solver: field %d has no data, D < 0 or a bad "
+                         "multiplier slot",
+                         f);
+            return NULL;
+        }
+    }
+    ss_heal_rd_work *w = calloc(1, sizeof *w);
+    if (!w) goto nomem;
+    w->nx = sys->nx;
+    w->ny = sys->ny;
+    w->nz = sys->nz;
+    w->nfields = sys->nfields;
+    w->nslots = sys->nslots;
+    w->ncell = (size_t)sys->nx * (size_t)sys->ny * (size_t)sys->nz;
+    w->nb = malloc(w->ncell);
+    if (!w->nb) goto nomem;
+    for (int f = 0; f < sys->nfields; f++) {
+        w->upd[f] = malloc(w->ncell);
+        if (!w->upd[f]) goto nomem;
+        if (need_buf) {
+            w->buf[f] = malloc(w->ncell * sizeof(float));
+            if (!w->buf[f]) goto nomem;
+            memcpy(w->buf[f], sys->u[f], w->ncell * sizeof(float));
+        }
+    }
+    w->have_buf = need_buf;
+    if (need_mslot) {
+        for (int k = 0; k < sys->nslots; k++) {
+            w->mslot[k] = malloc(w->ncell * sizeof(float));
+            if (!w->mslot[k]) goto nomem;
+            for (size_t c = 0; c < w->ncell; c++) w->mslot[k][c] = 1.0f;
+        }
+        w->have_mslot = 1;
+    }
+    w->nthreads = omp_get_max_threads();
+    if (w->nthreads < 1) w->nthreads = 1;
+    size_t nx = (size_t)sys->nx, big = (size_t)(sys->ny > sys->nz ? sys->ny : sys->nz);
+    size_t a = (size_t)(4 * sys->nfields + sys->nslots) * nx;
+    size_t b = 2 * big * nx + 4 * nx;
+    w->tscratch_len = (a > b ? a : b) + 64;
+    w->tscratch = calloc((size_t)w->nthreads, sizeof(float *));
+    if (!w->tscratch) goto nomem;
+    for (int t = 0; t < w->nthreads; t++) {
+        w->tscratch[t] = malloc(w->tscratch_len * sizeof(float));
+        if (!w->tscratch[t]) goto nomem;
+    }
+    ss_heal_rd__build_masks(sys, w);
+    return w;
+nomem:
+    ss_heal_rd_work_free(w);
+    ss_error_set(err, SS_ERR_NOMEM, "heal solver: out of memory for a %dx%dx%d grid work area",
+                 sys->nx, sys->ny, sys->nz);
+    return NULL;
+}
+
+ss_heal_rd_work *ss_heal_rd__work_create_ex(const ss_heal_rd_system *sys, int need_buf,
+                                            int need_mslot, ss_error *err) {
+    return work_create(sys, need_buf, need_mslot, err);
+}
+
+ss_heal_rd_work *ss_heal_rd_work_create(const ss_heal_rd_system *sys, ss_error *err) {
+    return work_create(sys, 1, 1, err);
+}
+
+void ss_heal_rd_work_free(ss_heal_rd_work *w) {
+    if (!w) return;
+    free(w->nb);
+    for (int f = 0; f < SS_HEAL_RD_MAXF; f++) {
+        free(w->upd[f]);
+        free(w->buf[f]);
+    }
+    for (int k = 0; k < SS_HEAL_RD_MAXSLOT; k++) free(w->mslot[k]);
+    if (w->tscratch)
+        for (int t = 0; t < w->nthreads; t++) free(w->tscratch[t]);
+    free(w->tscratch);
+    free(w);
+}
+
+double ss_heal_rd_max_speed(const ss_heal_rd_system *sys) {
+    if (!sys->velocity[0] && !sys->velocity[1] && !sys->velocity[2]) return 0.0;
+    size_t n = (size_t)sys->nx * (size_t)sys->ny * (size_t)sys->nz;
+    double vmax = 0.0;
+    for (size_t c = 0; c < n; c++) {
+        double s = 0.0;
+        for (int d = 0; d < 3; d++)
+            if (sys->velocity[d]) s += fabs((double)sys->velocity[d][c]);
+        if (s > vmax) vmax = s;
+    }
+    return vmax;
+}
+
+double ss_heal_rd_explicit_dt(const ss_heal_rd_system *sys) {
+    double h2 = sys->h_mm * sys->h_mm, dmax = 0.0;
+    for (int f = 0; f < sys->nfields; f++)
+        if (sys->D[f] > dmax) dmax = sys->D[f];
+    double mmax = sys->mmax > 0 ? sys->mmax : 1.0;
+    /* forward Euler keeps u >= 0 when dt (6 D m / h^2 + loss + |v|/h) <= 1 */
+    double rate = 6.0 * dmax * mmax / h2 + (sys->rate_max > 0 ? sys->rate_max : 0.0) +
+                  ss_heal_rd_max_speed(sys) / sys->h_mm;
+    return rate > 0 ? 1.0 / rate : INFINITY;
+}
+
+/* Donor-cell divergence of the flux u v at cell c (faces masked by nb). */
+static inline double donor_div(const ss_heal_rd_system *sys, const float *u, size_t c, uint8_t nbm,
+                               size_t sy, size_t sz) {
+    const size_t off[3] = {1, sy, sz};
+    double div = 0.0;
+    for (int d = 0; d < 3; d++) {
+        const float *v = sys->velocity[d];
+        if (!v) continue;
+        if (nbm & (NB_XP << (2 * d))) {
+            double vf = 0.5 * ((double)v[c] + (double)v[c + off[d]]);
+            div += vf > 0 ? vf * u[c] : vf * u[c + off[d]];
+        }
+        if (nbm & (NB_XM << (2 * d))) {
+            double vf = 0.5 * ((double)v[c] + (double)v[c - off[d]]);
+            div -= vf > 0 ? vf * u[c - off[d]] : vf * u[c];
+        }
+    }
+    return div / sys->h_mm;
+}
+
+void ss_heal_rd__convect(const ss_heal_rd_system *sys, const ss_heal_rd_work *w, int f,
+                         const float *src, float *dst, double dt) {
+    const int nx = sys->nx, ny = sys->ny, nz = sys->nz;
+    const size_t sy = (size_t)nx, sz = (size_t)nx * (size_t)ny;
+    const uint8_t *upd = w->upd[f];
+#pragma omp parallel for collapse(2) schedule(static)
+    for (int z = 0; z < nz; z++)
+        for (int y = 0; y < ny; y++) {
+            size_t base = (size_t)z * sz + (size_t)y * sy;
+            for (int x = 0; x < nx; x++) {
+                size_t c = base + (size_t)x;
+                float v = src[c];
+                if (upd[c]) {
+                    v = (float)((double)src[c] - dt * donor_div(sys, src, c, w->nb[c], sy, sz));
+                    v = clampf(v, sys->lo[f], sys->hi[f]);
+                }
+                dst[c] = v;
+            }
+        }
+}
+
+static int thread_count(const ss_heal_rd_work *w) {
+    int nt = omp_get_max_threads();
+    return nt < w->nthreads ? nt : w->nthreads;
+}
+
+void ss_heal_rd_step_explicit(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt) {
+    const int nx = sys->nx, ny = sys->ny, nz = sys->nz, nf = sys->nfields;
+    const size_t sy = (size_t)nx, sz = (size_t)nx * (size_t)ny;
+    const int n = nx - 2;
+    const float dtf = (float)dt;
+    const double ih2 = 1.0 / (sys->h_mm * sys->h_mm);
+    const int has_vel = sys->velocity[0] || sys->velocity[1] || sys->velocity[2];
+#pragma omp parallel num_threads(thread_count(w))
+    {
+        float *scr = w->tscratch[omp_get_thread_num()];
+        ss_heal_rd_row row;
+        memset(&row, 0, sizeof row);
+        for (int f = 0; f < nf; f++) {
+            row.prod[f] = scr + (size_t)f * (size_t)nx;
+            row.loss[f] = scr + (size_t)(nf + f) * (size_t)nx;
+        }
+        for (int k = 0; k < sys->nslots; k++) row.m[k] = scr + (size_t)(2 * nf + k) * (size_t)nx;
+#pragma omp for collapse(2) schedule(static)
+        for (int z = 0; z < nz; z++) {
+            for (int y = 0; y < ny; y++) {
+                const size_t base = (size_t)z * sz + (size_t)y * sy;
+                if (z == 0 || y == 0 || z == nz - 1 || y == ny - 1) {
+                    for (int f = 0; f < nf; f++)
+                        memcpy(w->buf[f] + base, sys->u[f] + base, (size_t)nx * sizeof(float));
+                    continue;
+                }
+                row.n = n;
+                row.x0 = 1;
+                row.y = y;
+                row.z = z;
+                row.cls = sys->cls ? sys->cls + base + 1 : NULL;
+                for (int f = 0; f < nf; f++) row.u[f] = sys->u[f] + base + 1;
+                if (sys->react) {
+                    sys->react(sys->ctx, &row);
+                } else {
+                    for (int f = 0; f < nf; f++) {
+                        memset(row.prod[f], 0, (size_t)n * sizeof(float));
+                        memset(row.loss[f], 0, (size_t)n * sizeof(float));
+                    }
+                    for (int k = 0; k < sys->nslots; k++)
+                        for (int i = 0; i < n; i++) row.m[k][i] = 1.0f;
+                }
+                const uint8_t *restrict nbr = w->nb + base;
+                for (int f = 0; f < nf; f++) {
+                    const float *restrict u = sys->u[f] + base;
+                    float *restrict un = w->buf[f] + base;
+                    const uint8_t *restrict upd = w->upd[f] + base;
+                    const float *restrict pr = row.prod[f];
+                    const float *restrict ls = row.loss[f];
+                    const float *restrict mk = sys->mslot[f] >= 0 ? row.m[sys->mslot[f]] : NULL;
+                    const float Dh = (float)(sys->D[f] * ih2);
+                    const float lo = sys->lo[f], hi = sys->hi[f];
+                    un[0] = u[0];
+                    un[nx - 1] = u[nx - 1];
+#pragma omp simd
+                    for (int x = 1; x <= n; x++) {
+                        const uint8_t b = nbr[x];
+                        const float uc = u[x];
+                        const float lap = (float)(b & 1) * (u[x - 1] - uc) +
+                                          (float)((b >> 1) & 1) * (u[x + 1] - uc) +
+                                          (float)((b >> 2) & 1) * (u[x - (long)sy] - uc) +
+                                          (float)((b >> 3) & 1) * (u[x + sy] - uc) +
+                                          (float)((b >> 4) & 1) * (u[x - (long)sz] - uc) +
+                                          (float)((b >> 5) & 1) * (u[x + sz] - uc);
+                        const float m = mk ? mk[x - 1] : 1.0f;
+                        float v = uc + dtf * (m * Dh * lap + pr[x - 1] - ls[x - 1] * uc);
+                        v = clampf(v, lo, hi);
+                        un[x] = upd[x] ? v : uc;
+                    }
+                    if (has_vel) {
+                        for (int x = 1; x <= n; x++) {
+                            if (!upd[x]) continue;
+                            size_t c = base + (size_t)x;
+                            float v =
+                                un[x] - (float)(dt * donor_div(sys, sys->u[f], c, nbr[x], sy, sz));
+                            un[x] = clampf(v, lo, hi);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    for (int f = 0; f < nf; f++) {
+        float *t = sys->u[f];
+        sys->u[f] = w->buf[f];
+        w->buf[f] = t;
+    }
+}

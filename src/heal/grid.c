@@ -1,0 +1,273 @@
+/* Healing grid (seed 001 §5.1): a regular 3D grid of cubic voxels over a block
+ * of skin with a cell state per voxel (air, epidermis, dermis, wound, outer
+ * bound shell) and the eight species fields of §4.1 as float32 arrays. Builds
+ * the wound mask from a footprint + depth (or a box), initialises states and
+ * fields (healthy values, wound values, the two-voxel epithelial layer on top
+ * of the skin), and computes the diagnostics behind area.csv. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "skinsim/heal.h"
+
+static const char *const field_names[SS_HEAL_NFIELDS] = {
+    "oxygen", "mdgf", "capillary", "fibroblast", "eschar", "epithelium", "scar", "plasma"};
+
+const char *ss_heal_field_name(int field) {
+    return field >= 0 && field < SS_HEAL_NFIELDS ? field_names[field] : NULL;
+}
+
+double ss_heal_open_threshold(void) { return 0.5; }
+
+size_t ss_heal_grid_bytes(int nx, int ny, int nz) {
+    if (nx <= 0 || ny <= 0 || nz <= 0) return 0;
+    size_t n = (size_t)nx * (size_t)ny * (size_t)nz;
+    return sizeof(ss_heal_grid) + n * (1 + SS_HEAL_NFIELDS * sizeof(float));
+}
+
+ss_heal_grid *ss_heal_grid_create(int nx, int ny, int nz, double dx_mm, ss_error *err) {
+    if (nx < 3 || ny < 3 || nz < 3) {
+        ss_error_set(err, SS_ERR_INPUT, "heal grid: size %dx%dx%d too small (need >= 3 per axis)",
+                     nx, ny, nz);
+        return NULL;
+    }
+    if (!(dx_mm > 0) || !isfinite(dx_mm)) {
+        ss_error_set(err, SS_ERR_INPUT, "heal grid: voxel size %g mm must be > 0", dx_mm);
+        return NULL;
+    }
+    double cells = (double)nx * (double)ny * (double)nz;
+    if (cells > (double)SS_HEAL_MAX_CELLS) {
+        ss_error_set(err, SS_ERR_INPUT,
+                     "heal grid: %dx%dx%d = %.3g cells is more than the %zu allowed (about %.1f "
+                     "GB with the solver's work memory)",
+                     nx, ny, nz, cells, (size_t)SS_HEAL_MAX_CELLS,
+                     (double)SS_HEAL_MAX_CELLS * 70.0 / 1e9);
+        return NULL;
+    }
+    ss_heal_grid *g = calloc(1, sizeof *g);
+    if (!g) goto nomem;
+    g->nx = nx;
+    g->ny = ny;
+    g->nz = nz;
+    g->dx_mm = dx_mm;
+    size_t n = (size_t)nx * (size_t)ny * (size_t)nz;
+    g->cell = calloc(n, 1);
+    if (!g->cell) goto nomem;
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++) {
+        g->field[f] = calloc(n, sizeof(float));
+        if (!g->field[f]) goto nomem;
+    }
+    return g;
+nomem:
+    ss_heal_grid_free(g);
+    ss_error_set(err, SS_ERR_NOMEM, "heal grid: out of memory for %dx%dx%d (%.1f MB)", nx, ny, nz,
+                 (double)ss_heal_grid_bytes(nx, ny, nz) / 1e6);
+    return NULL;
+}
+
+void ss_heal_grid_free(ss_heal_grid *g) {
+    if (!g) return;
+    free(g->cell);
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++) free(g->field[f]);
+    for (int d = 0; d < 3; d++) free(g->velocity[d]);
+    free(g);
+}
+
+/* Number of voxel layers whose centre lies below height_mm. */
+static int layers_below(const ss_heal_grid *g, double height_mm) {
+    int k = (int)floor(height_mm / g->dx_mm + 0.5);
+    return k < 0 ? 0 : (k > g->nz ? g->nz : k);
+}
+
+ss_status ss_heal_grid_init(ss_heal_grid *g, double skin_top_mm, double epidermis_mm,
+                            const uint8_t *wound3d, const ss_heal_params *p, ss_error *err) {
+    if (!g || !p) return ss_error_set(err, SS_ERR_INPUT, "heal grid init: no grid or params");
+    const int nx = g->nx, ny = g->ny, nz = g->nz;
+    /* top = number of skin layers (z < top are skin) */
+    int top = layers_below(g, skin_top_mm);
+    if (!(skin_top_mm > 0) || top < 4 || top > nz - 2)
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "heal grid init: skin top %g mm must leave >= 3 tissue voxels above "
+                            "the bottom bound and >= 1 air voxel below the top bound (grid "
+                            "height %g mm, voxel %g mm)",
+                            skin_top_mm, nz * g->dx_mm, g->dx_mm);
+    if (!(epidermis_mm >= 0) || epidermis_mm > skin_top_mm)
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "heal grid init: epidermis thickness %g mm must be in 0..%g mm",
+                            epidermis_mm, skin_top_mm);
+    int nepi = (int)ceil(epidermis_mm / g->dx_mm - 1e-9);
+    if (nepi < 2) nepi = 2; /* §5.1: a two-cell epithelial layer */
+    if (nepi > top - 2) nepi = top - 2;
+    g->skin_top_mm = skin_top_mm;
+    g->t_days = 0.0;
+    g->step = 0;
+    float hv[SS_HEAL_NFIELDS];
+    ss_heal_params_healthy(p, hv);
+    for (int z = 0; z < nz; z++) {
+        for (int y = 0; y < ny; y++) {
+            for (int x = 0; x < nx; x++) {
+                size_t c = ss_heal_idx(g, x, y, z);
+                uint8_t s;
+                if (x == 0 || y == 0 || z == 0 || x == nx - 1 || y == ny - 1 || z == nz - 1)
+                    s = SS_CELL_BOUND;
+                else if (z >= top)
+                    s = SS_CELL_AIR;
+                else if (wound3d && wound3d[c])
+                    s = SS_CELL_WOUND;
+                else if (z >= top - nepi)
+                    s = SS_CELL_EPIDERMIS;
+                else
+                    s = SS_CELL_DERMIS;
+                g->cell[c] = s;
+                float v[SS_HEAL_NFIELDS] = {0};
+                if (s == SS_CELL_EPIDERMIS || s == SS_CELL_DERMIS ||
+                    (s == SS_CELL_BOUND && z > 0 && z < top)) {
+                    for (int f = 0; f < SS_HEAL_NFIELDS; f++) v[f] = hv[f];
+                    /* §5.1: the epithelial field starts as the two cells on top of the skin */
+                    if (z >= top - 2) v[SS_HEAL_EPITHELIUM] = 1.0f;
+                } else if (s == SS_CELL_WOUND) {
+                    v[SS_HEAL_OXYGEN] = (float)p->u1_wound;
+                    v[SS_HEAL_PLASMA] = 1.0f;
+                }
+                for (int f = 0; f < SS_HEAL_NFIELDS; f++) g->field[f][c] = v[f];
+            }
+        }
+    }
+    return SS_OK;
+}
+
+uint8_t *ss_heal_wound_from_footprint(const ss_heal_grid *g, double skin_top_mm,
+                                      const ss_image *footprint, double depth_mm,
+                                      const ss_image *depth_mm_img, ss_error *err) {
+    if (!g || !footprint || !footprint->data || footprint->width < 1 || footprint->height < 1) {
+        ss_error_set(err, SS_ERR_INPUT, "wound footprint: no image");
+        return NULL;
+    }
+    if (!depth_mm_img && (!(depth_mm > 0) || !isfinite(depth_mm))) {
+        ss_error_set(err, SS_ERR_INPUT, "wound depth %g mm must be > 0", depth_mm);
+        return NULL;
+    }
+    if (depth_mm_img && (!depth_mm_img->data || depth_mm_img->width < 1)) {
+        ss_error_set(err, SS_ERR_INPUT, "wound depth image: empty");
+        return NULL;
+    }
+    if (!(skin_top_mm > 0) || skin_top_mm > g->nz * g->dx_mm) {
+        ss_error_set(err, SS_ERR_INPUT, "wound footprint: skin top %g mm outside the grid (0..%g)",
+                     skin_top_mm, g->nz * g->dx_mm);
+        return NULL;
+    }
+    size_t n = (size_t)g->nx * (size_t)g->ny * (size_t)g->nz;
+    uint8_t *m = calloc(n, 1);
+    if (!m) {
+        ss_error_set(err, SS_ERR_NOMEM, "wound footprint: out of memory");
+        return NULL;
+    }
+    for (int y = 0; y < g->ny; y++) {
+        for (int x = 0; x < g->nx; x++) {
+            /* voxel centre -> image pixel (row 0 at the far +y edge) */
+            double u = (x + 0.5) / g->nx, v = 1.0 - (y + 0.5) / g->ny;
+            int px = (int)(u * footprint->width), py = (int)(v * footprint->height);
+            if (px >= footprint->width) px = footprint->width - 1;
+            if (py >= footprint->height) py = footprint->height - 1;
+            if (ss_image_px(footprint, px, py)[0] <= 0.5f) continue;
+            double d = depth_mm;
+            if (depth_mm_img) {
+                int qx = (int)(u * depth_mm_img->width), qy = (int)(v * depth_mm_img->height);
+                if (qx >= depth_mm_img->width) qx = depth_mm_img->width - 1;
+                if (qy >= depth_mm_img->height) qy = depth_mm_img->height - 1;
+                d = ss_image_px(depth_mm_img, qx, qy)[0];
+                if (!(d >= 0) || !isfinite(d)) {
+                    free(m);
+                    ss_error_set(err, SS_ERR_INPUT,
+                                 "wound depth image: pixel (%d,%d) = %g mm is not a depth >= 0", qx,
+                                 qy, d);
+                    return NULL;
+                }
+            }
+            double bottom = skin_top_mm - d;
+            for (int z = 0; z < g->nz; z++) {
+                double zc = (z + 0.5) * g->dx_mm;
+                if (zc < skin_top_mm && zc >= bottom) m[ss_heal_idx(g, x, y, z)] = 1;
+            }
+        }
+    }
+    return m;
+}
+
+uint8_t *ss_heal_wound_box(const ss_heal_grid *g, double skin_top_mm, double side_x_mm,
+                           double side_y_mm, double depth_mm, ss_error *err) {
+    if (!g || !(side_x_mm > 0) || !(side_y_mm > 0) || !(depth_mm > 0)) {
+        ss_error_set(err, SS_ERR_INPUT, "wound box: sides %g x %g mm and depth %g mm must be > 0",
+                     side_x_mm, side_y_mm, depth_mm);
+        return NULL;
+    }
+    size_t n = (size_t)g->nx * (size_t)g->ny * (size_t)g->nz;
+    uint8_t *m = calloc(n, 1);
+    if (!m) {
+        ss_error_set(err, SS_ERR_NOMEM, "wound box: out of memory");
+        return NULL;
+    }
+    double cx = 0.5 * g->nx * g->dx_mm, cy = 0.5 * g->ny * g->dx_mm;
+    for (int z = 0; z < g->nz; z++) {
+        double zc = (z + 0.5) * g->dx_mm;
+        if (!(zc < skin_top_mm && zc >= skin_top_mm - depth_mm)) continue;
+        for (int y = 0; y < g->ny; y++) {
+            double yc = (y + 0.5) * g->dx_mm;
+            if (fabs(yc - cy) >= 0.5 * side_y_mm) continue;
+            for (int x = 0; x < g->nx; x++) {
+                double xc = (x + 0.5) * g->dx_mm;
+                if (fabs(xc - cx) < 0.5 * side_x_mm) m[ss_heal_idx(g, x, y, z)] = 1;
+            }
+        }
+    }
+    return m;
+}
+
+int ss_heal_in_region(const ss_heal_grid *g, const ss_heal_params *p, size_t idx) {
+    uint8_t s = g->cell[idx];
+    if (s == SS_CELL_AIR || s == SS_CELL_BOUND) return 0;
+    (void)p;
+    return g->field[SS_HEAL_PLASMA][idx] > (float)SS_HEAL_P_MIN;
+}
+
+void ss_heal_stats_compute(const ss_heal_grid *g, ss_heal_stats *st) {
+    memset(st, 0, sizeof *st);
+    const double a = g->dx_mm * g->dx_mm, thr = ss_heal_open_threshold();
+    const float *e = g->field[SS_HEAL_EPITHELIUM], *p = g->field[SS_HEAL_PLASMA];
+    double sum[SS_HEAL_NFIELDS] = {0};
+    size_t ntissue = 0;
+    /* columns: the surface layer is the top two tissue voxels (the §5.1 epithelial
+     * layer); a column is open when the epithelium there stays below thr and
+     * it belongs to the wound (had a wound voxel or lies in the wound region). */
+    for (int y = 1; y < g->ny - 1; y++) {
+        for (int x = 1; x < g->nx - 1; x++) {
+            int ztop = -1, wounded = 0;
+            for (int z = g->nz - 2; z >= 1; z--) {
+                uint8_t s = g->cell[ss_heal_idx(g, x, y, z)];
+                if (s != SS_CELL_AIR && s != SS_CELL_BOUND) {
+                    ztop = z;
+                    break;
+                }
+            }
+            if (ztop < 0) continue;
+            size_t c0 = ss_heal_idx(g, x, y, ztop), c1 = ss_heal_idx(g, x, y, ztop - 1);
+            double emax = e[c0];
+            uint8_t s1 = g->cell[c1];
+            if (s1 != SS_CELL_AIR && s1 != SS_CELL_BOUND && e[c1] > emax) emax = e[c1];
+            int initial = g->cell[c0] == SS_CELL_WOUND;
+            int region = p[c0] > (float)SS_HEAL_P_MIN;
+            wounded = initial || region;
+            if (initial) st->initial_area_mm2 += a;
+            if (region) st->wound_region_area_mm2 += a;
+            if (wounded && emax < thr) st->open_area_mm2 += a;
+        }
+    }
+    size_t n = (size_t)g->nx * (size_t)g->ny * (size_t)g->nz;
+    for (size_t c = 0; c < n; c++) {
+        uint8_t s = g->cell[c];
+        if (s == SS_CELL_AIR || s == SS_CELL_BOUND) continue;
+        ntissue++;
+        for (int f = 0; f < SS_HEAL_NFIELDS; f++) sum[f] += g->field[f][c];
+    }
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++) st->field_mean[f] = ntissue ? sum[f] / ntissue : 0;
+}

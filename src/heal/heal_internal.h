@@ -1,0 +1,33 @@
+/* Internal to src/heal (solver side): the work memory of the generic
+ * reaction-diffusion core shared by explicit.c and split.c, and the model
+ * hooks model.c gives the solver. Not installed; other modules use heal.h. */
+#ifndef SKINSIM_HEAL_INTERNAL_H
+#define SKINSIM_HEAL_INTERNAL_H
+
+#include "skinsim/heal.h"
+
+/* Neighbour bits of nb[]: bit k set when the face towards neighbour k
+ * conducts (both cells are not walls). Order -x, +x, -y, +y, -z, +z. */
+enum { NB_XM = 1, NB_XP = 2, NB_YM = 4, NB_YP = 8, NB_ZM = 16, NB_ZP = 32 };
+
+struct ss_heal_rd_work {
+    int nx, ny, nz, nfields, nslots;
+    size_t ncell;
+    uint8_t *nb;                      /* per cell neighbour bits */
+    uint8_t *upd[SS_HEAL_RD_MAXF];    /* per field: 1 = cell is updated (not wall/fixed) */
+    float *buf[SS_HEAL_RD_MAXF];      /* explicit: next values; split: convection scratch */
+    float *mslot[SS_HEAL_RD_MAXSLOT]; /* split: frozen diffusion multipliers */
+    int nthreads;                     /* per-thread scratch count */
+    float **tscratch;                 /* per thread row/line scratch */
+    size_t tscratch_len;              /* floats per thread */
+    int have_buf, have_mslot;
+};
+
+/* Shared helpers (explicit.c) */
+void ss_heal_rd__build_masks(const ss_heal_rd_system *sys, ss_heal_rd_work *w);
+/* Donor-cell convection of field f from src into dst over dt (dst may not
+ * alias src). */
+void ss_heal_rd__convect(const ss_heal_rd_system *sys, const ss_heal_rd_work *w, int f,
+                         const float *src, float *dst, double dt);
+
+#endif

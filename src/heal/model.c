@@ -1,0 +1,319 @@
+/* The §4.1 healing model of seed 001 as a reaction function for the generic
+ * reaction-diffusion core, and the solver that steps an ss_heal_grid with the
+ * explicit or the split scheme. Each equation is written in the core's
+ * production/loss form R = prod - loss * u (same terms as §4.1, only sorted by
+ * sign), with diffusion multipliers (1 - s) for u1, u2, u3, n (slot 0) and
+ * Q(u3) for e (slot 1). Cell classes: AIR and BOUND are walls (no flux), the
+ * intact EPIDERMIS holds e at its healthy value 1 (Dirichlet), DERMIS and
+ * WOUND evolve. omega = [p > SS_HEAL_P_MIN]; R(omega) = Rs on wound-region
+ * cells whose upper neighbour is air (the exposed wound surface). */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "heal_internal.h"
+
+ss_heal_rd_work *ss_heal_rd__work_create_ex(const ss_heal_rd_system *sys, int need_buf,
+                                            int need_mslot, ss_error *err);
+
+typedef struct model_ctx {
+    float lam11, lam31, lam12, lam22, beta2, lam33, lam32, inv_u3eq, rn, inv_K, lamnn;
+    float Rs, lames, lamge, lamee, gamma1, lamnrho, lamrhop, lampp, inv_rhomax, rhomax;
+    int scab, static_region;
+    const uint8_t *cell;
+    int nx, ny, nz;
+} model_ctx;
+
+struct ss_heal_solver {
+    ss_heal_params p;
+    ss_heal_scheme scheme;
+    double dt;
+    int nsub;
+    int nx, ny, nz;
+    model_ctx ctx;
+    ss_heal_rd_system sys;
+    ss_heal_rd_work *w;
+};
+
+static inline float pos(float v) { return v > 0.0f ? v : 0.0f; }
+
+static void heal_react(void *vctx, const ss_heal_rd_row *row) {
+    const model_ctx *m = vctx;
+    const int n = row->n;
+    const size_t sz = (size_t)m->nx * (size_t)m->ny;
+    const size_t base =
+        ((size_t)row->z * (size_t)m->ny + (size_t)row->y) * (size_t)m->nx + (size_t)row->x0;
+    const uint8_t *above = m->cell + base + sz; /* z + 1 <= nz - 1 always */
+    const float
+        *restrict U1 = row->u[SS_HEAL_OXYGEN],
+                  *restrict U2 = row->u[SS_HEAL_MDGF], *restrict U3 = row->u[SS_HEAL_CAPILLARY],
+                  *restrict N = row->u[SS_HEAL_FIBROBLAST], *restrict S = row->u[SS_HEAL_ESCHAR],
+                  *restrict E = row->u[SS_HEAL_EPITHELIUM], *restrict RHO = row->u[SS_HEAL_SCAR],
+                  *restrict P = row->u[SS_HEAL_PLASMA];
+    float *const *pr = row->prod, *const *ls = row->loss;
+    _Static_assert(SS_HEAL_OXYGEN == 0 && SS_HEAL_PLASMA == 7, "field order");
+    const float Rs = m->scab ? m->Rs : 0.0f;
+    const float pmin = (float)SS_HEAL_P_MIN;
+    const float g1 = m->gamma1, ig1 = 1.0f / m->gamma1, ig2 = 1.0f / (1.0f - m->gamma1);
+    const float ppos = pos(m->lampp), pneg = pos(-m->lampp);
+    const float dyn = m->static_region ? 0.0f : 1.0f;
+    const float ibeta = 1.0f / m->beta2;
+    float *restrict m0 = row->m[0], *restrict m1 = row->m[1];
+    float *restrict p1 = pr[0], *restrict p2 = pr[1], *restrict p3 = pr[2], *restrict p4 = pr[3];
+    float *restrict p5 = pr[4], *restrict p6 = pr[5], *restrict p7 = pr[6], *restrict p8 = pr[7];
+    float *restrict l1 = ls[0], *restrict l2 = ls[1], *restrict l3 = ls[2], *restrict l4 = ls[3];
+    float *restrict l5 = ls[4], *restrict l6 = ls[5], *restrict l7 = ls[6], *restrict l8 = ls[7];
+#pragma omp simd
+    for (int i = 0; i < n; i++) {
+        const float u1 = U1[i], u2 = U2[i], u3 = U3[i], nn = N[i], s = S[i], e = E[i];
+        const float rho = RHO[i], p = P[i];
+        const float om = p > pmin ? 1.0f : 0.0f;
+        const float ns = pos(1.0f - s);
+        const float open3 = pos(1.0f - u3);
+        /* 4.1.1 oxygen: (1-s)(D1 lap u1 + lam31 u3) - lam11 u1 */
+        p1[i] = ns * m->lam31 * u3;
+        l1[i] = m->lam11;
+        /* 4.1.2 MDGF: (1-s)(D2 lap u2 + lam12 P(u1)) - lam22 u2 */
+        const float Pu1 = pos(1.0f - u1 * ibeta);
+        p2[i] = ns * m->lam12 * Pu1;
+        l2[i] = m->lam22;
+        /* 4.1.3 capillaries: (1-s)(D3 lap u3 + (lam33 + lam32 u2) u3 (1 - u3/u3eq)) */
+        const float g3 = ns * (m->lam33 + m->lam32 * u2) * u3;
+        p3[i] = g3;
+        l3[i] = g3 * m->inv_u3eq;
+        /* 4.1.4 fibroblasts: (1-s)(Dn lap n + rn u1 n (1 - n/K)) - lamnn n */
+        const float gn = ns * m->rn * u1 * nn;
+        p4[i] = gn;
+        l4[i] = gn * m->inv_K + m->lamnn;
+        /* 4.1.5 eschar: Ds lap s + (1-s)(1-u3) R(omega) - lames e s */
+        const float R = (above[i] == SS_CELL_AIR ? Rs : 0.0f) * om;
+        const float X = open3 * R;
+        p5[i] = X;
+        l5[i] = X + m->lames * e;
+        /* 4.1.6 epithelium: Q(u3)(De lap e + lamge e) - lamee e */
+        const float Q = pos(u3 < g1 ? u3 * ig1 : (1.0f - u3) * ig2);
+        p6[i] = Q * m->lamge * e;
+        l6[i] = m->lamee;
+        /* 4.1.7 scar: (1-s)(1-u3)(1-e) lamnrho n - lamrhop rho, restricted to omega */
+        p7[i] = om * ns * open3 * pos(1.0f - e) * m->lamnrho * nn;
+        l7[i] = m->lamrhop;
+        /* 4.1.8 plasma: Dp lap p + lampp p + C(rho)(1-p) */
+        const float C = pos(rho - m->rhomax) * m->inv_rhomax;
+        p8[i] = dyn * (C + ppos * p);
+        l8[i] = dyn * (C + pneg);
+        m0[i] = ns;
+        m1[i] = Q;
+    }
+}
+
+static void ctx_init(model_ctx *c, const ss_heal_params *p, const ss_heal_grid *g) {
+    c->lam11 = (float)p->lam11;
+    c->lam31 = (float)p->lam31;
+    c->lam12 = (float)p->lam12;
+    c->lam22 = (float)p->lam22;
+    c->beta2 = (float)p->u1_beta2;
+    c->lam33 = (float)p->lam33;
+    c->lam32 = (float)p->lam32;
+    c->inv_u3eq = (float)(1.0 / p->u3_eq);
+    c->rn = (float)p->rn;
+    c->inv_K = (float)(1.0 / p->K);
+    c->lamnn = (float)p->lamnn;
+    c->Rs = (float)p->Rs;
+    c->lames = (float)p->lames;
+    c->lamge = (float)p->lamge;
+    c->lamee = (float)p->lamee;
+    c->gamma1 = (float)p->gamma1;
+    c->lamnrho = (float)p->lamnrho;
+    c->lamrhop = (float)p->lamrhop;
+    c->lampp = (float)p->lampp;
+    c->rhomax = (float)p->rho_max;
+    c->inv_rhomax = (float)(1.0 / p->rho_max);
+    c->scab = p->scab;
+    c->static_region = p->static_region;
+    c->cell = g->cell;
+    c->nx = g->nx;
+    c->ny = g->ny;
+    c->nz = g->nz;
+}
+
+/* Bound on the reaction rates (growth + loss, 1/day) for the explicit limit. */
+static double rate_bound(const ss_heal_params *p) {
+    double u2max = p->lam22 > 0 ? p->lam12 / p->lam22 : p->lam12;
+    double u1max = p->lam31 * p->u3_eq / p->lam11;
+    if (u1max < 1.0) u1max = 1.0;
+    double r[8] = {p->lam11,
+                   p->lam22,
+                   2.0 * (p->lam33 + p->lam32 * u2max),
+                   2.0 * p->rn * u1max + p->lamnn,
+                   p->scab ? p->Rs + p->lames : p->lames,
+                   p->lamge + p->lamee,
+                   p->lamrhop,
+                   p->static_region ? 0.0 : fabs(p->lampp)};
+    double m = 0.0;
+    for (int i = 0; i < 8; i++)
+        if (r[i] > m) m = r[i];
+    return m;
+}
+
+static void sys_init(ss_heal_rd_system *s, model_ctx *c, const ss_heal_grid *g,
+                     const ss_heal_params *p) {
+    memset(s, 0, sizeof *s);
+    s->nx = g->nx;
+    s->ny = g->ny;
+    s->nz = g->nz;
+    s->h_mm = g->dx_mm;
+    s->nfields = SS_HEAL_NFIELDS;
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++) {
+        s->u[f] = g->field[f];
+        s->lo[f] = 0.0f;
+        s->hi[f] = INFINITY;
+        s->mslot[f] = -1;
+    }
+    s->cls = g->cell;
+    s->wall[SS_CELL_AIR] = 1;
+    s->wall[SS_CELL_BOUND] = 1;
+    for (int k = SS_CELL_BOUND + 1; k < SS_HEAL_RD_MAXCLASS; k++) s->wall[k] = 1;
+    s->fixed[SS_HEAL_EPITHELIUM][SS_CELL_EPIDERMIS] = 1;
+    s->D[SS_HEAL_OXYGEN] = p->D1;
+    s->D[SS_HEAL_MDGF] = p->D2;
+    s->D[SS_HEAL_CAPILLARY] = p->D3;
+    s->D[SS_HEAL_FIBROBLAST] = p->Dn;
+    s->D[SS_HEAL_ESCHAR] = p->Ds;
+    s->D[SS_HEAL_EPITHELIUM] = p->De;
+    s->D[SS_HEAL_SCAR] = 0.0;
+    s->D[SS_HEAL_PLASMA] = p->static_region ? 0.0 : p->Dp;
+    s->mslot[SS_HEAL_OXYGEN] = s->mslot[SS_HEAL_MDGF] = 0;
+    s->mslot[SS_HEAL_CAPILLARY] = s->mslot[SS_HEAL_FIBROBLAST] = 0;
+    s->mslot[SS_HEAL_EPITHELIUM] = 1;
+    s->nslots = 2;
+    s->hi[SS_HEAL_ESCHAR] = s->hi[SS_HEAL_EPITHELIUM] = s->hi[SS_HEAL_PLASMA] = 1.0f;
+    for (int d = 0; d < 3; d++) s->velocity[d] = g->velocity[d];
+    s->react = heal_react;
+    s->ctx = c;
+    s->mmax = 1.0;
+    s->rate_max = rate_bound(p);
+}
+
+static ss_status check_params(const ss_heal_params *p, ss_error *err) {
+    if (!(p->lam11 > 0) || !(p->u3_eq > 0) || !(p->K > 0) || !(p->rho_max > 0) ||
+        !(p->u1_beta2 > 0) || !(p->gamma1 > 0 && p->gamma1 < 1))
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "heal params: lam11, u3_eq, K, rho_max, u1_beta2 must be > 0 and "
+                            "gamma1 in (0, 1)");
+    return SS_OK;
+}
+
+double ss_heal_stable_dt(const ss_heal_grid *g, const ss_heal_params *p, ss_heal_scheme s) {
+    if (!g || !p) return 0.0;
+    if (s == SS_HEAL_SPLIT) return SS_HEAL_SPLIT_MAX_DT_DAYS;
+    model_ctx c;
+    ss_heal_rd_system sys;
+    ctx_init(&c, p, g);
+    sys_init(&sys, &c, g, p);
+    return ss_heal_rd_explicit_dt(&sys);
+}
+
+ss_heal_solver *ss_heal_solver_create(const ss_heal_grid *g, const ss_heal_params *p,
+                                      ss_heal_scheme scheme, double dt, ss_error *err) {
+    if (!g || !p) {
+        ss_error_set(err, SS_ERR_INPUT, "heal solver: no grid or parameters");
+        return NULL;
+    }
+    if (scheme != SS_HEAL_EXPLICIT && scheme != SS_HEAL_SPLIT) {
+        ss_error_set(err, SS_ERR_INPUT, "heal solver: unknown scheme %d", (int)scheme);
+        return NULL;
+    }
+    if (check_params(p, err) != SS_OK) return NULL;
+    if (!(dt >= 0) || !isfinite(dt)) {
+        ss_error_set(err, SS_ERR_INPUT, "heal solver: time step %g days must be >= 0", dt);
+        return NULL;
+    }
+    double limit = ss_heal_stable_dt(g, p, scheme);
+    if (dt == 0) dt = scheme == SS_HEAL_EXPLICIT ? 0.9 * limit : SS_HEAL_SPLIT_DEFAULT_DT_DAYS;
+    if (dt > limit * (1.0 + 1e-12)) {
+        if (scheme == SS_HEAL_EXPLICIT)
+            ss_error_set(err, SS_ERR_INPUT,
+                         "heal solver: time step %g days exceeds the explicit stability limit "
+                         "%g days (voxel %g mm; limit = 1 / (6 D_max / h^2 + max reaction rate "
+                         "+ |v|/h)); use --dt <= %g or the split scheme",
+                         dt, limit, g->dx_mm, limit);
+        else
+            ss_error_set(err, SS_ERR_INPUT,
+                         "heal solver: time step %g days exceeds the split scheme's accuracy "
+                         "limit %g days",
+                         dt, limit);
+        return NULL;
+    }
+    ss_heal_solver *s = calloc(1, sizeof *s);
+    if (!s) {
+        ss_error_set(err, SS_ERR_NOMEM, "heal solver: out of memory");
+        return NULL;
+    }
+    s->p = *p;
+    s->scheme = scheme;
+    s->dt = dt;
+    s->nx = g->nx;
+    s->ny = g->ny;
+    s->nz = g->nz;
+    ctx_init(&s->ctx, &s->p, g);
+    sys_init(&s->sys, &s->ctx, g, &s->p);
+    double r = s->sys.rate_max;
+    /* reaction substeps of at most 0.1 / rate_max (both halves together) */
+    s->nsub = (int)ceil(dt * r / 0.1);
+    if (s->nsub < 1) s->nsub = 1;
+    int has_vel = g->velocity[0] || g->velocity[1] || g->velocity[2];
+    s->w = ss_heal_rd__work_create_ex(&s->sys, scheme == SS_HEAL_EXPLICIT || has_vel,
+                                      scheme == SS_HEAL_SPLIT, err);
+    if (!s->w) {
+        free(s);
+        return NULL;
+    }
+    return s;
+}
+
+double ss_heal_solver_dt(const ss_heal_solver *s) { return s ? s->dt : 0.0; }
+
+void ss_heal_solver_free(ss_heal_solver *s) {
+    if (!s) return;
+    ss_heal_rd_work_free(s->w);
+    free(s);
+}
+
+ss_status ss_heal_step(ss_heal_solver *s, ss_heal_grid *g, ss_error *err) {
+    if (!s || !g) return ss_error_set(err, SS_ERR_INPUT, "heal step: no solver or grid");
+    if (g->nx != s->nx || g->ny != s->ny || g->nz != s->nz)
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "heal step: grid %dx%dx%d does not match the solver's %dx%dx%d", g->nx,
+                            g->ny, g->nz, s->nx, s->ny, s->nz);
+    s->ctx.cell = g->cell;
+    s->sys.cls = g->cell;
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++) s->sys.u[f] = g->field[f];
+    int has_vel = 0;
+    for (int d = 0; d < 3; d++) {
+        s->sys.velocity[d] = g->velocity[d];
+        has_vel |= g->velocity[d] != NULL;
+    }
+    if (has_vel) {
+        double speed = ss_heal_rd_max_speed(&s->sys);
+        if (s->scheme == SS_HEAL_EXPLICIT) {
+            double lim = ss_heal_rd_explicit_dt(&s->sys);
+            if (s->dt > lim * (1.0 + 1e-12))
+                return ss_error_set(err, SS_ERR_INPUT,
+                                    "heal step: velocity up to %g mm/day lowers the explicit "
+                                    "limit to %g days < dt %g days",
+                                    speed, lim, s->dt);
+        } else if (!s->w->have_buf && speed > 0) {
+            return ss_error_set(err, SS_ERR_INPUT,
+                                "heal step: a velocity field was attached after the split "
+                                "solver was created; create the solver with the velocity set");
+        }
+    }
+    if (s->scheme == SS_HEAL_EXPLICIT)
+        ss_heal_rd_step_explicit(&s->sys, s->w, s->dt);
+    else
+        ss_heal_rd_step_split(&s->sys, s->w, s->dt, s->nsub);
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++) g->field[f] = s->sys.u[f];
+    g->t_days += s->dt;
+    g->step++;
+    return SS_OK;
+}

@@ -1,0 +1,301 @@
+/* Parameters of the §4.1 healing model (seed 001) and the scenario presets of
+ * §6 / Fig. 2: clean regeneration, scab formation, keloid overgrowth. Every
+ * parameter has a unit and a source (table below); JSON files give
+ * {"value", "unit", "source"} per key and are checked key by key (unknown key,
+ * missing or wrong unit, bad value -> SS_ERR_INPUT naming the key). The
+ * shipped data/heal/<scenario>.json files equal these built-in presets. */
+#include <math.h>
+#include <stddef.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cjson/cJSON.h>
+
+#include "skinsim/heal.h"
+
+typedef struct pdef {
+    const char *key;
+    size_t off;
+    const char *unit;
+    const char *source;
+    double clean, scab, keloid; /* preset values */
+} pdef;
+
+#define OFF(m) offsetof(ss_heal_params, m)
+#define CAL "calibrated: clean 2x2 cm shallow wound to the clinical course (docs/heal-model.md)"
+#define DIM "dimensional reasoning (docs/heal-model.md)"
+static const pdef PDEFS[] = {
+    {"D1", OFF(D1), "mm^2/day",
+     "effective, " DIM ": oxygen penetration sqrt(D1/lam11) = 0.45 mm, the scale of a shallow "
+     "wound; molecular O2 diffusivity (2e-5 cm^2/s = 173 mm^2/day) would make u1 quasi-static",
+     2.0, 2.0, 2.0},
+    {"lam11", OFF(lam11), "1/day", DIM ": oxygen relaxes within hours (1/lam11 = 2.4 h)", 10.0,
+     10.0, 10.0},
+    {"lam31", OFF(lam31), "1/day",
+     "set equal to lam11 so healthy tissue (u3 = 1) has u1 = 1 (normalisation, seed §4.1.1)", 10.0,
+     10.0, 10.0},
+    {"D2", OFF(D2), "mm^2/day", DIM ": growth-factor spread of ~1 mm in a day", 0.5, 0.5, 0.5},
+    {"lam12", OFF(lam12), "1/day", CAL, 5.0, 5.0, 5.0},
+    {"lam22", OFF(lam22), "1/day", DIM ": MDGF half-life ~8 h", 2.0, 2.0, 2.0},
+    {"u1_beta2", OFF(u1_beta2), "1",
+     "seed §4.1.2 threshold u1^beta2; below healthy u1 = 1 so intact tissue makes no MDGF", 0.8,
+     0.8, 0.8},
+    {"D3", OFF(D3), "mm^2/day", CAL ": capillary front 0.3-0.8 mm/day", 0.05, 0.05, 0.05},
+    {"lam33", OFF(lam33), "1/day", CAL, 0.15, 0.15, 0.15},
+    {"lam32", OFF(lam32), "1/day", CAL, 0.5, 0.5, 0.5},
+    {"u3_eq", OFF(u3_eq), "1", "normalisation: healthy capillary density = 1", 1.0, 1.0, 1.0},
+    {"Dn", OFF(Dn), "mm^2/day", DIM ": fibroblast random motility ~0.01-0.1 mm^2/day", 0.05, 0.05,
+     0.05},
+    {"rn", OFF(rn), "1/day", DIM ": fibroblast doubling ~1 day when oxygenated", 0.8, 0.8, 0.8},
+    {"K", OFF(K), "1", "normalisation: fibroblast capacity = 1", 1.0, 1.0, 1.0},
+    {"lamnn", OFF(lamnn), "1/day", DIM ": fibroblast lifetime ~1 week", 0.15, 0.15, 0.15},
+    {"Ds", OFF(Ds), "mm^2/day", CAL ": eschar reaches ~0.5 mm into the wound", 0.05, 0.05, 0.05},
+    {"Rs", OFF(Rs), "1/day",
+     CAL ": scab within the first day on a dry wound (seed §3); only used with scab = 1", 4.0, 4.0,
+     4.0},
+    {"lames", OFF(lames), "1/day", CAL ": keratinocytes dissolve the eschar in ~days", 1.0, 1.0,
+     1.0},
+    {"De", OFF(De), "mm^2/day", CAL ": epithelial front ~0.5-1 mm/day", 0.15, 0.15, 0.15},
+    {"lamge", OFF(lamge), "1/day", CAL, 3.0, 3.0, 3.0},
+    {"lamee", OFF(lamee), "1/day", CAL ": slow epithelial loss", 0.01, 0.01, 0.01},
+    {"gamma1", OFF(gamma1), "1",
+     CAL ": capillary density of maximal Q (seed §4.1.6); high so the epithelial window stays open "
+         "while granulation matures",
+     0.8, 0.8, 0.8},
+    {"lamnrho", OFF(lamnrho), "1/day", CAL ": scar forms during the first 1-2 weeks", 0.6, 0.6,
+     3.0},
+    {"lamrhop", OFF(lamrhop), "1/day",
+     CAL ": scar fades over weeks (clean); weak remodelling for keloid (seed §3)", 0.1, 0.1, 0.01},
+    {"Dp", OFF(Dp), "mm^2/day", DIM ": clot plasma spreads ~mm in days", 0.05, 0.05, 0.3},
+    {"lampp", OFF(lampp), "1/day",
+     "signed; negative = plasma resorption; keloid 0 (clot kept); only used with "
+     "static_region = 0",
+     -0.02, -0.02, 0.0},
+    {"rho_max", OFF(rho_max), "1",
+     "seed §4.1.8 collagen threshold of C(rho); keloid: low threshold so overgrowth occurs", 1.0,
+     1.0, 0.1},
+    {"u1_wound", OFF(u1_wound), "1", "hypoxic clot: no oxygen at t = 0 (seed §3)", 0.0, 0.0, 0.0},
+};
+#define NPDEFS ((int)(sizeof PDEFS / sizeof PDEFS[0]))
+/* keys whose value may be negative */
+static int may_be_negative(const char *key) { return !strcmp(key, "lampp"); }
+
+static double *pval(ss_heal_params *p, const pdef *d) { return (double *)((char *)p + d->off); }
+
+static const char *const SCEN[3] = {"clean", "scab", "keloid"};
+
+const char *ss_heal_param_unit(const char *key) {
+    if (!key) return NULL;
+    for (int i = 0; i < NPDEFS; i++)
+        if (!strcmp(PDEFS[i].key, key)) return PDEFS[i].unit;
+    return NULL;
+}
+
+ss_heal_params *ss_heal_params_preset(const char *scenario, ss_error *err) {
+    int k = -1;
+    for (int i = 0; i < 3; i++)
+        if (scenario && !strcmp(scenario, SCEN[i])) k = i;
+    if (k < 0) {
+        ss_error_set(err, SS_ERR_INPUT,
+                     "heal scenario '%s' unknown; valid names: clean, scab, keloid",
+                     scenario ? scenario : "(null)");
+        return NULL;
+    }
+    ss_heal_params *p = calloc(1, sizeof *p);
+    if (!p) {
+        ss_error_set(err, SS_ERR_NOMEM, "heal params: out of memory");
+        return NULL;
+    }
+    snprintf(p->scenario, sizeof p->scenario, "%s", SCEN[k]);
+    for (int i = 0; i < NPDEFS; i++)
+        *pval(p, &PDEFS[i]) = k == 0 ? PDEFS[i].clean : k == 1 ? PDEFS[i].scab : PDEFS[i].keloid;
+    p->scab = k == 1;
+    p->static_region = k != 2;
+    return p;
+}
+
+ss_heal_params *ss_heal_params_clone(const ss_heal_params *p, ss_error *err) {
+    ss_heal_params *q = malloc(sizeof *q);
+    if (!q) {
+        ss_error_set(err, SS_ERR_NOMEM, "heal params: out of memory");
+        return NULL;
+    }
+    *q = *p;
+    return q;
+}
+
+void ss_heal_params_free(ss_heal_params *p) { free(p); }
+
+ss_status ss_heal_params_set_switches(ss_heal_params *p, int scab, int static_region) {
+    if (!p || scab < -1 || scab > 1 || static_region < -1 || static_region > 1) return SS_ERR_INPUT;
+    if (scab >= 0) p->scab = scab;
+    if (static_region >= 0) p->static_region = static_region;
+    return SS_OK;
+}
+
+void ss_heal_params_healthy(const ss_heal_params *p, float h[SS_HEAL_NFIELDS]) {
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++) h[f] = 0.0f;
+    double u3 = p->u3_eq;
+    double u1 = p->lam11 > 0 ? p->lam31 * u3 / p->lam11 : 1.0;
+    double n = (p->rn > 0 && u1 > 0) ? p->K * (1.0 - p->lamnn / (p->rn * u1)) : 0.0;
+    h[SS_HEAL_OXYGEN] = (float)u1;
+    h[SS_HEAL_CAPILLARY] = (float)u3;
+    h[SS_HEAL_FIBROBLAST] = (float)(n > 0 ? n : 0.0);
+}
+
+static ss_status check_value(const char *what, const pdef *d, double v, ss_error *err) {
+    if (!isfinite(v) || (v < 0 && !may_be_negative(d->key)))
+        return ss_error_set(err, SS_ERR_INPUT, "%s: parameter '%s' = %g must be a finite %s", what,
+                            d->key, v, may_be_negative(d->key) ? "number" : "value >= 0");
+    if ((!strcmp(d->key, "u3_eq") || !strcmp(d->key, "K") || !strcmp(d->key, "lam11") ||
+         !strcmp(d->key, "rho_max") || !strcmp(d->key, "u1_beta2")) &&
+        !(v > 0))
+        return ss_error_set(err, SS_ERR_INPUT, "%s: parameter '%s' = %g must be > 0", what, d->key,
+                            v);
+    if (!strcmp(d->key, "gamma1") && !(v > 0 && v < 1))
+        return ss_error_set(err, SS_ERR_INPUT, "%s: parameter 'gamma1' = %g must be in (0, 1)",
+                            what, v);
+    return SS_OK;
+}
+
+ss_heal_params *ss_heal_params_parse(const char *text, const char *what, const char *scenario,
+                                     ss_error *err) {
+    if (!what) what = "heal parameters";
+    cJSON *root = text ? cJSON_Parse(text) : NULL;
+    if (!root || !cJSON_IsObject(root)) {
+        const char *ep = cJSON_GetErrorPtr();
+        char near[40] = "";
+        if (ep) snprintf(near, sizeof near, "%.30s", ep);
+        ss_error_set(err, SS_ERR_INPUT, "%s: malformed JSON%s%s%s", what, ep ? " near '" : "", near,
+                     ep ? "'" : "");
+        cJSON_Delete(root);
+        return NULL;
+    }
+    ss_heal_params *p = NULL;
+    const cJSON *sc = cJSON_GetObjectItemCaseSensitive(root, "scenario");
+    if (sc && !cJSON_IsString(sc)) {
+        ss_error_set(err, SS_ERR_INPUT, "%s: key 'scenario' must be a string", what);
+        goto fail;
+    }
+    if (!scenario) scenario = sc ? sc->valuestring : "clean";
+    p = ss_heal_params_preset(scenario, err);
+    if (!p) goto fail;
+    for (const cJSON *it = root->child; it; it = it->next) {
+        if (strcmp(it->string, "scenario") && strcmp(it->string, "params") &&
+            strcmp(it->string, "switches") && strcmp(it->string, "comment")) {
+            ss_error_set(err, SS_ERR_INPUT,
+                         "%s: unknown top-level key '%s' (expected scenario, params, switches, "
+                         "comment)",
+                         what, it->string);
+            goto fail;
+        }
+    }
+    const cJSON *sw = cJSON_GetObjectItemCaseSensitive(root, "switches");
+    if (sw) {
+        if (!cJSON_IsObject(sw)) {
+            ss_error_set(err, SS_ERR_INPUT, "%s: 'switches' must be an object", what);
+            goto fail;
+        }
+        for (const cJSON *it = sw->child; it; it = it->next) {
+            int *dst = !strcmp(it->string, "scab")            ? &p->scab
+                       : !strcmp(it->string, "static_region") ? &p->static_region
+                                                              : NULL;
+            if (!dst) {
+                ss_error_set(err, SS_ERR_INPUT,
+                             "%s: unknown switch '%s' (expected scab, static_region)", what,
+                             it->string);
+                goto fail;
+            }
+            if (cJSON_IsBool(it))
+                *dst = cJSON_IsTrue(it);
+            else if (cJSON_IsNumber(it) && (it->valuedouble == 0 || it->valuedouble == 1))
+                *dst = (int)it->valuedouble;
+            else {
+                ss_error_set(err, SS_ERR_INPUT, "%s: switch '%s' must be 0/1 or true/false", what,
+                             it->string);
+                goto fail;
+            }
+        }
+    }
+    const cJSON *pa = cJSON_GetObjectItemCaseSensitive(root, "params");
+    if (pa && !cJSON_IsObject(pa)) {
+        ss_error_set(err, SS_ERR_INPUT, "%s: 'params' must be an object", what);
+        goto fail;
+    }
+    for (const cJSON *it = pa ? pa->child : NULL; it; it = it->next) {
+        const pdef *d = NULL;
+        for (int i = 0; i < NPDEFS; i++)
+            if (!strcmp(PDEFS[i].key, it->string)) d = &PDEFS[i];
+        if (!d) {
+            ss_error_set(err, SS_ERR_INPUT, "%s: unknown parameter '%s'", what, it->string);
+            goto fail;
+        }
+        if (!cJSON_IsObject(it)) {
+            ss_error_set(err, SS_ERR_INPUT,
+                         "%s: parameter '%s' must be an object {\"value\": ..., \"unit\": \"%s\"}",
+                         what, d->key, d->unit);
+            goto fail;
+        }
+        const cJSON *v = cJSON_GetObjectItemCaseSensitive(it, "value");
+        const cJSON *u = cJSON_GetObjectItemCaseSensitive(it, "unit");
+        if (!v || !cJSON_IsNumber(v)) {
+            ss_error_set(err, SS_ERR_INPUT, "%s: parameter '%s' has no numeric \"value\"", what,
+                         d->key);
+            goto fail;
+        }
+        if (!u || !cJSON_IsString(u)) {
+            ss_error_set(err, SS_ERR_INPUT, "%s: parameter '%s' has no \"unit\" (expected \"%s\")",
+                         what, d->key, d->unit);
+            goto fail;
+        }
+        if (strcmp(u->valuestring, d->unit)) {
+            ss_error_set(err, SS_ERR_INPUT, "%s: parameter '%s' has unit \"%s\", expected \"%s\"",
+                         what, d->key, u->valuestring, d->unit);
+            goto fail;
+        }
+        if (check_value(what, d, v->valuedouble, err) != SS_OK) goto fail;
+        *pval(p, d) = v->valuedouble;
+    }
+    cJSON_Delete(root);
+    return p;
+fail:
+    cJSON_Delete(root);
+    ss_heal_params_free(p);
+    return NULL;
+}
+
+ss_heal_params *ss_heal_params_load(const char *json_path, const char *scenario, ss_error *err) {
+    if (!json_path) {
+        ss_error_set(err, SS_ERR_INPUT, "heal parameters: no file given");
+        return NULL;
+    }
+    size_t len = 0;
+    char *text = ss_read_file(json_path, &len, err);
+    if (!text) {
+        if (err) err->code = SS_ERR_INPUT;
+        return NULL;
+    }
+    ss_heal_params *p = ss_heal_params_parse(text, json_path, scenario, err);
+    free(text);
+    return p;
+}
+
+char *ss_heal_params_to_json(const ss_heal_params *p) {
+    if (!p) return NULL;
+    cJSON *root = cJSON_CreateObject();
+    if (!root) return NULL;
+    cJSON_AddStringToObject(root, "scenario", p->scenario);
+    cJSON *sw = cJSON_AddObjectToObject(root, "switches");
+    cJSON_AddNumberToObject(sw, "scab", p->scab);
+    cJSON_AddNumberToObject(sw, "static_region", p->static_region);
+    cJSON *pa = cJSON_AddObjectToObject(root, "params");
+    for (int i = 0; i < NPDEFS; i++) {
+        cJSON *o = cJSON_AddObjectToObject(pa, PDEFS[i].key);
+        cJSON_AddNumberToObject(o, "value", *(const double *)((const char *)p + PDEFS[i].off));
+        cJSON_AddStringToObject(o, "unit", PDEFS[i].unit);
+        cJSON_AddStringToObject(o, "source", PDEFS[i].source);
+    }
+    char *s = cJSON_Print(root);
+    cJSON_Delete(root);
+    return s;
+}

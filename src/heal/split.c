@@ -1,0 +1,245 @@
+/* Generic reaction-diffusion-convection core, operator-split part (the faster
+ * scheme next to the seed's explicit central differences of §5.1). One step:
+ * Strang splitting R(dt/2) T(dt) R(dt/2):
+ *  R: reaction, per cell, substeps of u <- (u + h prod) / (1 + h loss)
+ *     (production explicit, loss implicit: unconditionally non-negative); the
+ *     diffusion multipliers m_k are frozen from the state of the last substep
+ *     of the first half;
+ *  T: convection (donor-cell, subcycled to the CFL limit; only with a
+ *     velocity), then diffusion: implicit Euler, locally one-dimensional
+ *     (LOD): for each field
+ *     solve (I - dt m D d_xx) then d_yy then d_zz by the Thomas algorithm.
+ *     Every line matrix is an M-matrix with unit column sums where m = 1, so
+ *     the step is unconditionally stable, keeps u >= 0 and conserves mass of
+ *     pure diffusion with no-flux faces. x lines are solved one by one, y and
+ *     z lines are swept in bundles along x so memory access stays contiguous.
+ * OpenMP over rows/slabs; no reductions, so bit-identical for any thread count. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <omp.h>
+
+#include "heal_internal.h"
+
+/* clamp without the libm call fminf/fmaxf need without -ffast-math */
+static inline float clampf(float v, float lo, float hi) {
+    v = v > lo ? v : lo;
+    return v < hi ? v : hi;
+}
+
+static int thread_count(const ss_heal_rd_work *w) {
+    int nt = omp_get_max_threads();
+    return nt < w->nthreads ? nt : w->nthreads;
+}
+
+static void reaction_pass(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt, int nsub) {
+    const int nx = sys->nx, ny = sys->ny, nz = sys->nz, nf = sys->nfields;
+    const size_t sy = (size_t)nx, sz = (size_t)nx * (size_t)ny;
+    const int n = nx - 2;
+    if (nsub < 1) nsub = 1;
+    const float h = (float)(dt / nsub);
+#pragma omp parallel num_threads(thread_count(w))
+    {
+        float *scr = w->tscratch[omp_get_thread_num()];
+        ss_heal_rd_row row;
+        memset(&row, 0, sizeof row);
+        float *loc[SS_HEAL_RD_MAXF];
+        for (int f = 0; f < nf; f++) {
+            row.prod[f] = scr + (size_t)f * (size_t)nx;
+            row.loss[f] = scr + (size_t)(nf + f) * (size_t)nx;
+            loc[f] = scr + (size_t)(2 * nf + f) * (size_t)nx;
+            row.u[f] = loc[f];
+        }
+        for (int k = 0; k < sys->nslots; k++) row.m[k] = scr + (size_t)(3 * nf + k) * (size_t)nx;
+#pragma omp for collapse(2) schedule(static)
+        for (int z = 1; z < nz - 1; z++) {
+            for (int y = 1; y < ny - 1; y++) {
+                const size_t base = (size_t)z * sz + (size_t)y * sy + 1;
+                row.n = n;
+                row.x0 = 1;
+                row.y = y;
+                row.z = z;
+                row.cls = sys->cls ? sys->cls + base : NULL;
+                for (int f = 0; f < nf; f++) memcpy(loc[f], sys->u[f] + base, (size_t)n * 4);
+                if (sys->react) {
+                    for (int s = 0; s < nsub; s++) {
+                        sys->react(sys->ctx, &row);
+                        /* multipliers frozen from the state at the last substep */
+                        if (s == nsub - 1)
+                            for (int k = 0; k < sys->nslots; k++)
+                                memcpy(w->mslot[k] + base, row.m[k], (size_t)n * 4);
+                        for (int f = 0; f < nf; f++) {
+                            float *restrict u = loc[f];
+                            const float *restrict pr = row.prod[f];
+                            const float *restrict ls = row.loss[f];
+                            const uint8_t *restrict upd = w->upd[f] + base;
+                            const float lo = sys->lo[f], hi = sys->hi[f];
+#pragma omp simd
+                            for (int i = 0; i < n; i++) {
+                                float v = (u[i] + h * pr[i]) / (1.0f + h * ls[i]);
+                                v = clampf(v, lo, hi);
+                                u[i] = upd[i] ? v : u[i];
+                            }
+                        }
+                    }
+                    for (int f = 0; f < nf; f++) memcpy(sys->u[f] + base, loc[f], (size_t)n * 4);
+                } else {
+                    for (int k = 0; k < sys->nslots; k++)
+                        for (int i = 0; i < n; i++) w->mslot[k][base + (size_t)i] = 1.0f;
+                }
+            }
+        }
+    }
+}
+
+/* Thomas solve of one x line (cells 1..nx-2 of the row at base). */
+static inline void line_x(float *restrict u, const uint8_t *restrict nb,
+                          const uint8_t *restrict upd, const float *restrict mrow, float kD, int nx,
+                          float *restrict cp, float *restrict dp) {
+    float cprev = 0.0f, dprev = 0.0f;
+    for (int x = 1; x < nx - 1; x++) {
+        const float k = upd[x] ? kD * (mrow ? mrow[x] : 1.0f) : 0.0f;
+        const float wl = (float)(nb[x] & NB_XM ? 1 : 0);
+        const float wr = (float)(nb[x] & NB_XP ? 1 : 0);
+        const float a = -k * wl, c = -k * wr, b = 1.0f + k * (wl + wr);
+        const float r = 1.0f / (b - a * cprev);
+        cprev = c * r;
+        dprev = (u[x] - a * dprev) * r;
+        cp[x] = cprev;
+        dp[x] = dprev;
+    }
+    float nxt = dp[nx - 2];
+    u[nx - 2] = nxt;
+    for (int x = nx - 3; x >= 1; x--) {
+        nxt = dp[x] - cp[x] * nxt;
+        u[x] = nxt;
+    }
+}
+
+/* Bundle of lines along direction d (1 = y, 2 = z) at outer index o, swept
+ * together along x; clamps to [lo, hi] on the way back when clampit. */
+static inline void bundle_yz(const ss_heal_rd_system *sys, const ss_heal_rd_work *w, int f,
+                             float kD, const float *mk, int d, int o, float *scr, int clampit) {
+    const int nx = sys->nx;
+    const size_t sy = (size_t)nx, sz = (size_t)nx * (size_t)sys->ny;
+    const int nline = d == 1 ? sys->ny : sys->nz;
+    const size_t step = d == 1 ? sy : sz, ostep = d == 1 ? sz : sy;
+    const uint8_t bm = d == 1 ? NB_YM : NB_ZM, bp = d == 1 ? NB_YP : NB_ZP;
+    const int n = nx - 2;
+    float *restrict cpall = scr;
+    float *restrict dpall = scr + (size_t)nline * (size_t)nx;
+    float *restrict u0 = sys->u[f] + (size_t)o * ostep;
+    for (int j = 1; j < nline - 1; j++) {
+        const size_t lb = (size_t)j * step;
+        float *restrict u = u0 + lb;
+        const uint8_t *restrict nb = w->nb + (size_t)o * ostep + lb;
+        const uint8_t *restrict upd = w->upd[f] + (size_t)o * ostep + lb;
+        const float *restrict mrow = mk ? mk + (size_t)o * ostep + lb : NULL;
+        float *restrict cp = cpall + (size_t)j * (size_t)nx;
+        float *restrict dp = dpall + (size_t)j * (size_t)nx;
+        const float *restrict cpp = cpall + (size_t)(j - 1) * (size_t)nx;
+        const float *restrict dpp = dpall + (size_t)(j - 1) * (size_t)nx;
+        const int first = j == 1;
+#pragma omp simd
+        for (int x = 1; x <= n; x++) {
+            const float k = upd[x] ? kD * (mrow ? mrow[x] : 1.0f) : 0.0f;
+            const float wl = (float)(nb[x] & bm ? 1 : 0);
+            const float wr = (float)(nb[x] & bp ? 1 : 0);
+            const float a = -k * wl, c = -k * wr, b = 1.0f + k * (wl + wr);
+            const float cprev = first ? 0.0f : cpp[x];
+            const float dprev = first ? 0.0f : dpp[x];
+            const float r = 1.0f / (b - a * cprev);
+            cp[x] = c * r;
+            dp[x] = (u[x] - a * dprev) * r;
+        }
+    }
+    const float lo = sys->lo[f], hi = sys->hi[f];
+    {
+        const int j = nline - 2;
+        float *restrict u = u0 + (size_t)j * step;
+        const float *restrict dp = dpall + (size_t)j * (size_t)nx;
+        for (int x = 1; x <= n; x++) u[x] = clampit ? clampf(dp[x], lo, hi) : dp[x];
+    }
+    for (int j = nline - 3; j >= 1; j--) {
+        float *restrict u = u0 + (size_t)j * step;
+        const float *restrict un = u0 + (size_t)(j + 1) * step;
+        const float *restrict cp = cpall + (size_t)j * (size_t)nx;
+        float *restrict dp = dpall + (size_t)j * (size_t)nx;
+        const float *restrict dn = dpall + (size_t)(j + 1) * (size_t)nx;
+        if (clampit) {
+            /* recurrence on the unclamped values (kept in dp), clamped output */
+            for (int x = 1; x <= n; x++) {
+                const float v = dp[x] - cp[x] * dn[x];
+                dp[x] = v;
+                u[x] = clampf(v, lo, hi);
+            }
+        } else {
+            for (int x = 1; x <= n; x++) u[x] = dp[x] - cp[x] * un[x];
+        }
+    }
+}
+
+/* Implicit-Euler LOD diffusion of every field with D > 0: one parallel
+ * region, three work-shared sweeps (x lines, y bundles per z, z bundles per
+ * y), fields looped inside, the admissible-range clamp fused into the last. */
+static void diffuse_all(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt) {
+    const int nx = sys->nx, ny = sys->ny, nz = sys->nz, nf = sys->nfields;
+    const size_t sy = (size_t)nx, sz = (size_t)nx * (size_t)ny;
+    const double ih2 = 1.0 / (sys->h_mm * sys->h_mm);
+    float kD[SS_HEAL_RD_MAXF];
+    const float *mk[SS_HEAL_RD_MAXF];
+    int act[SS_HEAL_RD_MAXF], na = 0;
+    for (int f = 0; f < nf; f++) {
+        if (!(sys->D[f] > 0)) continue;
+        act[na++] = f;
+        kD[f] = (float)(dt * sys->D[f] * ih2);
+        mk[f] = sys->mslot[f] >= 0 && w->have_mslot ? w->mslot[sys->mslot[f]] : NULL;
+    }
+    if (!na) return;
+#pragma omp parallel num_threads(thread_count(w))
+    {
+        float *scr = w->tscratch[omp_get_thread_num()];
+#pragma omp for collapse(2) schedule(static)
+        for (int z = 1; z < nz - 1; z++)
+            for (int y = 1; y < ny - 1; y++) {
+                const size_t base = (size_t)z * sz + (size_t)y * sy;
+                for (int a = 0; a < na; a++) {
+                    const int f = act[a];
+                    line_x(sys->u[f] + base, w->nb + base, w->upd[f] + base,
+                           mk[f] ? mk[f] + base : NULL, kD[f], nx, scr, scr + nx);
+                }
+            }
+#pragma omp for schedule(static)
+        for (int z = 1; z < nz - 1; z++)
+            for (int a = 0; a < na; a++)
+                bundle_yz(sys, w, act[a], kD[act[a]], mk[act[a]], 1, z, scr, 0);
+#pragma omp for schedule(static)
+        for (int y = 1; y < ny - 1; y++)
+            for (int a = 0; a < na; a++)
+                bundle_yz(sys, w, act[a], kD[act[a]], mk[act[a]], 2, y, scr, 1);
+    }
+}
+
+void ss_heal_rd_step_split(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt, int nsub) {
+    /* Strang: half reaction, transport, half reaction */
+    const int nhalf = (nsub + 1) / 2;
+    reaction_pass(sys, w, 0.5 * dt, nhalf);
+    const int has_vel = sys->velocity[0] || sys->velocity[1] || sys->velocity[2];
+    if (has_vel && w->have_buf) {
+        double speed = ss_heal_rd_max_speed(sys);
+        int nc = (int)ceil(dt * speed / sys->h_mm / 0.9);
+        if (nc < 1) nc = 1;
+        double h = dt / nc;
+        for (int f = 0; f < sys->nfields; f++) {
+            for (int s = 0; s < nc; s++) {
+                ss_heal_rd__convect(sys, w, f, sys->u[f], w->buf[f], h);
+                float *t = sys->u[f];
+                sys->u[f] = w->buf[f];
+                w->buf[f] = t;
+            }
+        }
+    }
+    diffuse_all(sys, w, dt);
+    reaction_pass(sys, w, 0.5 * dt, nhalf);
+}

@@ -1,0 +1,146 @@
+/* VTK XML ImageData export of the healing grid (seed 001 §5.4: the simulated
+ * fields, here handed to ParaView instead of a shader): one .vti per snapshot
+ * with the cell state (UInt8) and every species field (Float32) as cell data,
+ * appended raw binary with UInt64 block headers, and a .pvd collection that
+ * gives ParaView a time slider in days. Written atomically. */
+#define _POSIX_C_SOURCE 200809L
+#include "skinsim/heal_io.h"
+
+#include <errno.h>
+#include <string.h>
+
+static int little_endian(void) {
+    static const uint32_t one = 1;
+    return *(const unsigned char *)&one == 1;
+}
+
+static void put_u64le(FILE *f, uint64_t v) {
+    unsigned char b[8];
+    for (int i = 0; i < 8; i++) b[i] = (unsigned char)(v >> (8 * i));
+    fwrite(b, 1, 8, f);
+}
+
+static void put_f32le(FILE *f, const float *a, size_t n) {
+    if (little_endian()) {
+        fwrite(a, sizeof(float), n, f);
+        return;
+    }
+    for (size_t i = 0; i < n; i++) {
+        uint32_t v;
+        unsigned char b[4];
+        memcpy(&v, &a[i], 4);
+        for (int k = 0; k < 4; k++) b[k] = (unsigned char)(v >> (8 * k));
+        fwrite(b, 1, 4, f);
+    }
+}
+
+ss_status ss_heal_vti_write(const char *path, const ss_heal_grid *g, ss_error *err) {
+    if (!g || !g->cell) return ss_error_set(err, SS_ERR_INPUT, "%s: no grid", path);
+    int vel = g->velocity[0] && g->velocity[1] && g->velocity[2];
+    size_t n = (size_t)g->nx * (size_t)g->ny * (size_t)g->nz;
+    ss_atomic_file af;
+    ss_status st = ss_atomic_open(&af, path, err);
+    if (st) return st;
+    FILE *f = af.fp;
+    fprintf(f, "<?xml version=\"1.0\"?>\n"
+               "<VTKFile type=\"ImageData\" version=\"1.0\" byte_order=\"LittleEndian\" "
+               "header_type=\"UInt64\">\n");
+    fprintf(f,
+            "  <ImageData WholeExtent=\"0 %d 0 %d 0 %d\" Origin=\"0 0 0\" "
+            "Spacing=\"%.17g %.17g %.17g\">\n",
+            g->nx, g->ny, g->nz, g->dx_mm, g->dx_mm, g->dx_mm);
+    fprintf(f,
+            "    <FieldData>\n"
+            "      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" "
+            "format=\"ascii\">%.17g</DataArray>\n"
+            "    </FieldData>\n",
+            g->t_days);
+    fprintf(f, "    <Piece Extent=\"0 %d 0 %d 0 %d\">\n", g->nx, g->ny, g->nz);
+    fprintf(f, "      <CellData Scalars=\"cell_state\">\n");
+    uint64_t off = 0;
+    fprintf(f,
+            "        <DataArray type=\"UInt8\" Name=\"cell_state\" format=\"appended\" "
+            "offset=\"%llu\"/>\n",
+            (unsigned long long)off);
+    off += 8 + n;
+    for (int k = 0; k < SS_HEAL_NFIELDS; k++) {
+        const char *name = ss_heal_field_name(k);
+        fprintf(f,
+                "        <DataArray type=\"Float32\" Name=\"%s\" format=\"appended\" "
+                "offset=\"%llu\"/>\n",
+                name ? name : "field", (unsigned long long)off);
+        off += 8 + 4 * n;
+    }
+    if (vel)
+        fprintf(f,
+                "        <DataArray type=\"Float32\" Name=\"velocity\" NumberOfComponents=\"3\" "
+                "format=\"appended\" offset=\"%llu\"/>\n",
+                (unsigned long long)off);
+    fprintf(f, "      </CellData>\n    </Piece>\n  </ImageData>\n"
+               "  <AppendedData encoding=\"raw\">\n   _");
+    put_u64le(f, (uint64_t)n);
+    fwrite(g->cell, 1, n, f);
+    for (int k = 0; k < SS_HEAL_NFIELDS; k++) {
+        put_u64le(f, (uint64_t)(4 * n));
+        put_f32le(f, g->field[k], n);
+    }
+    if (vel) {
+        put_u64le(f, (uint64_t)(12 * n));
+        float buf[3 * 256];
+        for (size_t i = 0; i < n; i += 256) {
+            size_t m = n - i < 256 ? n - i : 256;
+            for (size_t j = 0; j < m; j++)
+                for (int c = 0; c < 3; c++) buf[3 * j + (size_t)c] = g->velocity[c][i + j];
+            put_f32le(f, buf, 3 * m);
+        }
+    }
+    fprintf(f, "\n  </AppendedData>\n</VTKFile>\n");
+    if (ferror(f)) {
+        ss_atomic_abort(&af);
+        return ss_error_set(err, SS_ERR_RUNTIME, "%s: write failed: %s", path, strerror(errno));
+    }
+    return ss_atomic_commit(&af, err);
+}
+
+static void xml_attr(FILE *f, const char *s) {
+    for (; *s; s++) {
+        switch (*s) {
+        case '&':
+            fputs("&amp;", f);
+            break;
+        case '<':
+            fputs("&lt;", f);
+            break;
+        case '>':
+            fputs("&gt;", f);
+            break;
+        case '"':
+            fputs("&quot;", f);
+            break;
+        default:
+            fputc(*s, f);
+        }
+    }
+}
+
+ss_status ss_heal_pvd_write(const char *path, int n, const double *t_days, const char *const *files,
+                            ss_error *err) {
+    ss_atomic_file af;
+    ss_status st = ss_atomic_open(&af, path, err);
+    if (st) return st;
+    FILE *f = af.fp;
+    fprintf(f, "<?xml version=\"1.0\"?>\n"
+               "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+               "  <Collection>\n");
+    for (int i = 0; i < n; i++) {
+        fprintf(f, "    <DataSet timestep=\"%.12g\" group=\"\" part=\"0\" file=\"", t_days[i]);
+        xml_attr(f, files[i]);
+        fprintf(f, "\"/>\n");
+    }
+    fprintf(f, "  </Collection>\n</VTKFile>\n");
+    if (ferror(f)) {
+        ss_atomic_abort(&af);
+        return ss_error_set(err, SS_ERR_RUNTIME, "%s: write failed", path);
+    }
+    return ss_atomic_commit(&af, err);
+}
