@@ -181,8 +181,8 @@ static void human_time(double day, char *buf, size_t n) {
 /* The four maps of a set, written in parallel (PNG encoding is serial per
  * file). Colour is sRGB 8-bit; height 16-bit (displacement needs the steps);
  * reflection and normal 8-bit linear, as engines expect them. */
-static ss_status write_set(const char *dir, const char *stem, const ss_texture_set *t,
-                           cJSON *files, ss_error *err) {
+static ss_status write_set(const char *dir, const char *stem, const ss_texture_set *t, cJSON *files,
+                           ss_error *err) {
     static const char *names[4] = {"color", "reflection", "height", "normal"};
     static const int bits[4] = {8, 8, 16, 8};
     const ss_image *imgs[4] = {t->color, t->reflection, t->height, t->normal};
@@ -192,7 +192,8 @@ static ss_status write_set(const char *dir, const char *stem, const ss_texture_s
     for (int k = 0; k < 4; k++) {
         char path[4096];
         snprintf(path, sizeof path, "%s/%s_%s.png", dir, stem, names[k]);
-        sts[k] = ss_png_write(path, imgs[k], bits[k], k == 0 ? SS_ENC_SRGB : SS_ENC_LINEAR, &errs[k]);
+        sts[k] =
+            ss_png_write(path, imgs[k], bits[k], k == 0 ? SS_ENC_SRGB : SS_ENC_LINEAR, &errs[k]);
     }
     for (int k = 0; k < 4; k++) {
         if (sts[k]) {
@@ -207,13 +208,13 @@ static ss_status write_set(const char *dir, const char *stem, const ss_texture_s
 }
 
 typedef struct inputs {
-    ss_strokes strokes;
+    ss_stroke_set strokes;
     ss_image *mask, *upper, *lower;
     ss_timeline timeline;
 } inputs;
 
 static void inputs_free(inputs *in) {
-    ss_strokes_free(&in->strokes);
+    ss_stroke_set_free(&in->strokes);
     ss_image_free(in->mask);
     ss_image_free(in->upper);
     ss_image_free(in->lower);
@@ -226,9 +227,9 @@ static ss_status read_inputs(const opts *o, inputs *in, ss_error *err) {
         in->mask = ss_image_read(o->mask, SS_ENC_LINEAR, err);
         if (!in->mask) return err->code;
     } else if (o->stroke) {
-        st = ss_strokes_read_csv(o->stroke, &in->strokes, err);
+        st = ss_stroke_csv_read(o->stroke, &in->strokes, err);
     } else {
-        st = ss_strokes_example(&in->strokes, err);
+        st = ss_abrasion_example_strokes(&in->strokes, err);
     }
     if (!st && o->upper && !(in->upper = ss_image_read(o->upper, SS_ENC_SRGB, err))) st = err->code;
     if (!st && o->lower && !(in->lower = ss_image_read(o->lower, SS_ENC_SRGB, err))) st = err->code;

@@ -84,8 +84,8 @@ int main(int argc, char **argv) {
         return 2;
     }
     ss_error err;
-    ss_strokes st;
-    ss_strokes_example(&st, &err);
+    ss_stroke_set st;
+    ss_abrasion_example_strokes(&st, &err);
     ss_wound_shape *w;
     ss_base_skin skin;
     ss_abrasion_settings s;
@@ -140,6 +140,6 @@ int main(int argc, char **argv) {
     ss_texture_set_free(&out);
     ss_base_skin_free(&skin);
     ss_wound_shape_free(w);
-    ss_strokes_free(&st);
+    ss_stroke_set_free(&st);
     return 0;
 }

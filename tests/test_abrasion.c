@@ -89,43 +89,47 @@ static void test_strokes_csv(void **state) {
     (void)state;
     char *dir = tu_tmpdir("csv");
     ss_error err;
-    ss_strokes s;
-    const char *ok =
-        write_tmp(dir, "ok.csv", "u,v,stroke\n# comment\n0.1,0.2,0\n0.3, 0.4 ,1\r\n\n0.5,0.6\n");
-    assert_int_equal(ss_strokes_read_csv(ok, &s, &err), SS_OK);
-    assert_int_equal(s.count, 3);
-    assert_int_equal(s.stroke_id[1], 1);
-    assert_float_equal(s.uv[2].y, 0.6, 1e-12);
-    ss_strokes_free(&s);
+    ss_stroke_set s;
+    const char *ok = write_tmp(dir, "ok.csv",
+                               "u,v,stroke\n# comment\n0.1,0.2,0\n0.2,0.2,0\n0.2,0.3,0\n0.3, 0.4 "
+                               ",1\r\n0.4,0.4,1\n0.4,0.5,1\n\n0.5,0.6\n0.6,0.6\n0.5,0.6\n");
+    assert_int_equal(ss_stroke_csv_read(ok, &s, &err), SS_OK);
+    assert_int_equal(s.npoints, 9);
+    assert_int_equal(s.nstrokes, 2);
+    assert_int_equal(s.stroke[3], 1);
+    assert_float_equal(s.v[8], 0.6, 1e-12);
+    ss_stroke_set_free(&s);
     const char *bads[] = {"0.1,0.2\n0.3,nan\n", "0.1,0.2\n1.5,0.2\n", "0.1,0.2\n-0.1,0.2\n",
                           "0.1,0.2\nfoo\n",     "0.1,0.2,1.5\n",      "",
                           "# only comments\n"};
     for (size_t i = 0; i < sizeof bads / sizeof bads[0]; i++) {
         const char *bad = write_tmp(dir, "bad.csv", bads[i]);
-        assert_int_equal(ss_strokes_read_csv(bad, &s, &err), SS_ERR_INPUT);
+        assert_int_equal(ss_stroke_csv_read(bad, &s, &err), SS_ERR_INPUT);
         assert_non_null(strstr(err.msg, "bad.csv"));
     }
-    assert_int_equal(ss_strokes_read_csv("/nonexistent.csv", &s, &err), SS_ERR_INPUT);
+    assert_int_equal(ss_stroke_csv_read("/nonexistent.csv", &s, &err), SS_ERR_INPUT);
     tu_rmtree(dir);
     free(dir);
 }
 
-static ss_strokes square_strokes(double a, double b) {
-    ss_strokes s = {0};
-    s.count = 4;
-    s.uv = malloc(4 * sizeof(ss_vec2));
-    s.stroke_id = calloc(4, sizeof(int));
-    s.uv[0] = (ss_vec2){a, a};
-    s.uv[1] = (ss_vec2){b, a};
-    s.uv[2] = (ss_vec2){b, b};
-    s.uv[3] = (ss_vec2){a, b};
+static ss_stroke_set square_strokes(double a, double b) {
+    ss_stroke_set s = {0};
+    s.npoints = 4;
+    s.u = malloc(4 * sizeof(double));
+    s.v = malloc(4 * sizeof(double));
+    s.stroke = calloc(4, sizeof(int));
+    s.stroke_ids = calloc(1, sizeof(int));
+    s.nstrokes = 1;
+    const double u[4] = {a, b, b, a}, v[4] = {a, a, b, b};
+    memcpy(s.u, u, sizeof u);
+    memcpy(s.v, v, sizeof v);
     return s;
 }
 
 static void test_shape_from_strokes(void **state) {
     (void)state;
     ss_error err;
-    ss_strokes s = square_strokes(0.25, 0.75);
+    ss_stroke_set s = square_strokes(0.25, 0.75);
     ss_wound_shape *w;
     int n = 64;
     assert_int_equal(ss_wound_shape_from_strokes(&s, SS_HULL_CONVEX, 5, n, 1, &w, &err), SS_OK);
@@ -142,11 +146,11 @@ static void test_shape_from_strokes(void **state) {
     for (int i = 0; i < n * n; i++) assert_float_equal(w->dist->data[i], bf->data[i], 1e-4);
     ss_image_free(bf);
     ss_wound_shape_free(w);
-    /* Two collinear points only: a clear input error. */
-    s.count = 2;
+    /* Two points only: a clear input error. */
+    s.npoints = 2;
     assert_int_equal(ss_wound_shape_from_strokes(&s, SS_HULL_CONVEX, 5, n, 1, &w, &err),
                      SS_ERR_INPUT);
-    ss_strokes_free(&s);
+    ss_stroke_set_free(&s);
 }
 
 static void test_shape_from_mask(void **state) {
@@ -184,11 +188,11 @@ typedef struct scene {
 
 static void scene_make(scene *sc, int n) {
     ss_error err;
-    ss_strokes st;
-    assert_int_equal(ss_strokes_example(&st, &err), SS_OK);
+    ss_stroke_set st;
+    assert_int_equal(ss_abrasion_example_strokes(&st, &err), SS_OK);
     assert_int_equal(ss_wound_shape_from_strokes(&st, SS_HULL_CONVEX, 5, n, 7, &sc->w, &err),
                      SS_OK);
-    ss_strokes_free(&st);
+    ss_stroke_set_free(&st);
     assert_int_equal(ss_base_skin_create(NULL, NULL, n, 7, &sc->skin, &err), SS_OK);
     ss_abrasion_settings_default(&sc->s);
     sc->s.size = n;

@@ -16,21 +16,9 @@ extern "C" {
 
 /* ---- strokes ------------------------------------------------------------ */
 
-/* Painted strokes in texture space: points (u,v) in 0..1, v = 0 at the top
- * row of the image (glTF convention), grouped by stroke id. */
-typedef struct ss_strokes {
-    int count;      /* points */
-    ss_vec2 *uv;    /* count points */
-    int *stroke_id; /* count ids (0 when the file has no id column) */
-} ss_strokes;
-
-/* CSV: one point per line "u,v" or "u,v,stroke_id"; blank lines, lines
- * starting with '#', and a first line without numbers (a header) are skipped.
- * Errors name the file and line: non-numbers, NaN, u or v outside 0..1. */
-ss_status ss_strokes_read_csv(const char *path, ss_strokes *out, ss_error *err);
-void ss_strokes_free(ss_strokes *s);
-/* The built-in example: one scrape-shaped stroke in the middle of the texture. */
-ss_status ss_strokes_example(ss_strokes *out, ss_error *err);
+/* Painted strokes are geom's ss_stroke_set (CSV: ss_stroke_csv_read). The
+ * built-in example: a roundish scrape in the middle of the texture. */
+ss_status ss_abrasion_example_strokes(ss_stroke_set *out, ss_error *err);
 
 /* ---- wound shape -------------------------------------------------------- */
 
@@ -59,7 +47,7 @@ typedef struct ss_wound_shape {
 
 /* One hull per stroke id (each needs >= 3 distinct, non-collinear points),
  * filled and measured at the given size. */
-ss_status ss_wound_shape_from_strokes(const ss_strokes *s, ss_hull_kind kind, int concave_k,
+ss_status ss_wound_shape_from_strokes(const ss_stroke_set *s, ss_hull_kind kind, int concave_k,
                                       int size, uint64_t seed, ss_wound_shape **out, ss_error *err);
 /* A mask image (any size, > 0.5 = wound; resampled to size). Each connected
  * component is a wound; an empty mask is an input error. */

@@ -126,6 +126,15 @@ ss_status ss_output_dir_end(const char *dir, const char *work, ss_status status,
 /* rm -rf of a directory tree (used to clean up a failed staging directory). */
 void ss_remove_tree(const char *path);
 
+/* Text helpers for file readers. next_line: copies the next line of p
+ * (\n, \r\n or \r endings) into buf, truncating and setting *too_long when
+ * it does not fit; returns the rest of the text, NULL at the end. trim: strips
+ * blanks in place. parse_number: the whole token as a finite double; returns
+ * 0, 1 (not a number) or 2 (not finite). */
+const char *ss_text_next_line(const char *p, char *buf, size_t bufsize, int *too_long);
+char *ss_text_trim(char *s);
+int ss_text_parse_number(const char *s, double *out);
+
 /* Directory with the shipped data files: $SKINSIM_DATA, else the build-time
  * source data directory. */
 const char *ss_data_dir(void);

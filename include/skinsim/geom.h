@@ -75,6 +75,40 @@ ss_status ss_outline_distance(const ss_polygon *polys, int npolys, double max_di
  * no pixel is set. Bit-identical for any thread count. */
 ss_status ss_distance_transform(const ss_image *src, ss_image *dist, ss_error *err);
 
+/* ---- painted strokes (CSV) -----------------------------------------------
+ * Format shared with `skinsim abrasion`: one point per line, `u,v` or
+ * `u,v,stroke_id`; u, v are texture coordinates in [0,1] (u to the right, v
+ * down, as image rows); stroke_id is a non-negative integer (default 0). An
+ * optional first line that is not numeric is a header; blank lines and lines
+ * starting with '#' are ignored; fields may be surrounded by spaces. Errors
+ * (SS_ERR_INPUT, message names file and line): NaN/inf or non-numbers, u or v
+ * outside [0,1], a negative or non-integer id, a wrong field count, no points,
+ * any stroke with fewer than 3 points. Points keep file order. */
+typedef struct ss_stroke_set {
+    int npoints;
+    double *u, *v;   /* npoints each */
+    int *stroke;     /* npoints stroke ids */
+    int nstrokes;    /* distinct ids */
+    int *stroke_ids; /* the distinct ids, ascending */
+} ss_stroke_set;
+ss_status ss_stroke_csv_read(const char *path, ss_stroke_set *out, ss_error *err);
+/* Same, from a NUL-terminated buffer; `name` is used in messages. */
+ss_status ss_stroke_csv_parse(const char *text, const char *name, ss_stroke_set *out,
+                              ss_error *err);
+void ss_stroke_set_free(ss_stroke_set *s); /* frees arrays and zeroes the struct */
+/* One hull per stroke (in stroke_ids order), points scaled to width x
+ * height: convex (concave_k == 0) or k-nearest concave (>= 3). *out holds
+ * nstrokes polygons; free each and the array. Errors name the stroke. */
+ss_status ss_stroke_hulls(const ss_stroke_set *s, double width, double height, int concave_k,
+                          const char *name, ss_polygon **out, ss_error *err);
+/* Footprint of a stroke set: each stroke's points (u*width, v*height pixels)
+ * get a hull (concave_k == 0: convex hull, ss_convex_hull; >= 3: k-nearest
+ * concave hull, ss_concave_hull) filled with ss_polygon_fill into a
+ * width x height 1-channel 0/1 image. Hull errors (e.g. all points collinear)
+ * are SS_ERR_INPUT naming the stroke. */
+ss_image *ss_stroke_footprint(const ss_stroke_set *s, int width, int height, int concave_k,
+                              const char *name, ss_error *err);
+
 #ifdef __cplusplus
 }
 #endif

@@ -9,40 +9,15 @@
 #define SKINSIM_HEAL_IO_H
 
 #include "skinsim/core.h"
+#include "skinsim/geom.h"
 #include "skinsim/heal.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-/* ---- painted strokes (CSV) ------------------------------------------------
- * Format shared with `skinsim abrasion`: one point per line, `u,v` or
- * `u,v,stroke_id`; u, v are texture coordinates in [0,1] (u to the right, v
- * down, as image rows); stroke_id is a non-negative integer (default 0). An
- * optional first line that is not numeric is a header; blank lines and lines
- * starting with '#' are ignored; fields may be surrounded by spaces. Errors
- * (SS_ERR_INPUT, message names file and line): NaN/inf or non-numbers, u or v
- * outside [0,1], a negative or non-integer id, a wrong field count, no points,
- * any stroke with fewer than 3 points. Points keep file order. */
-typedef struct ss_stroke_set {
-    int npoints;
-    double *u, *v;   /* npoints each */
-    int *stroke;     /* npoints stroke ids */
-    int nstrokes;    /* distinct ids */
-    int *stroke_ids; /* the distinct ids, ascending */
-} ss_stroke_set;
-ss_status ss_stroke_csv_read(const char *path, ss_stroke_set *out, ss_error *err);
-/* Same, from a NUL-terminated buffer; `name` is used in messages. */
-ss_status ss_stroke_csv_parse(const char *text, const char *name, ss_stroke_set *out,
-                              ss_error *err);
-void ss_stroke_set_free(ss_stroke_set *s); /* frees arrays and zeroes the struct */
-/* Footprint of a stroke set: each stroke's points (u*width, v*height pixels)
- * get a hull (concave_k == 0: convex hull, ss_convex_hull; >= 3: k-nearest
- * concave hull, ss_concave_hull) filled with ss_polygon_fill into a
- * width x height 1-channel 0/1 image. Hull errors (e.g. all points collinear)
- * are SS_ERR_INPUT naming the stroke. */
-ss_image *ss_stroke_footprint(const ss_stroke_set *s, int width, int height, int concave_k,
-                              const char *name, ss_error *err);
+/* Painted strokes: ss_stroke_set, ss_stroke_csv_read, ss_stroke_footprint are
+ * in skinsim/geom.h (shared with `skinsim abrasion`). */
 
 /* ---- footprints -------------------------------------------------------------
  * A footprint is a 1-channel image, 1 = wound, 0 = intact, covering the grid's

@@ -65,59 +65,28 @@ static void draw_inner_ratios(ss_wound_shape *w, uint64_t seed) {
         w->inner_ratio[i] = 0.4 + 0.4 * ss_rng_uniform(seed, 0xA8A5, (uint64_t)i);
 }
 
-static int cmp_int(const void *a, const void *b) {
-    int x = *(const int *)a, y = *(const int *)b;
-    return (x > y) - (x < y);
-}
-
-ss_status ss_wound_shape_from_strokes(const ss_strokes *s, ss_hull_kind kind, int concave_k,
+ss_status ss_wound_shape_from_strokes(const ss_stroke_set *s, ss_hull_kind kind, int concave_k,
                                       int size, uint64_t seed, ss_wound_shape **out,
                                       ss_error *err) {
     *out = NULL;
     if (size < 1 || size > 16384)
         return ss_error_set(err, SS_ERR_INPUT, "texture size %d is out of range 1..16384", size);
-    /* Distinct stroke ids, in increasing order. */
-    int *ids = malloc((size_t)s->count * sizeof(int));
-    if (!ids) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
-    memcpy(ids, s->stroke_id, (size_t)s->count * sizeof(int));
-    qsort(ids, (size_t)s->count, sizeof(int), cmp_int);
-    int nids = 0;
-    for (int i = 0; i < s->count; i++)
-        if (i == 0 || ids[i] != ids[i - 1]) ids[nids++] = ids[i];
+    if (s->nstrokes < 1) return ss_error_set(err, SS_ERR_INPUT, "no strokes");
+    int nids = s->nstrokes;
     ss_wound_shape *w = shape_alloc(size, nids, err);
-    ss_vec2 *pts = malloc((size_t)s->count * sizeof(ss_vec2));
-    if (!w || !pts) {
-        free(ids);
-        free(pts);
-        ss_wound_shape_free(w);
-        return err && err->code ? err->code : ss_error_set(err, SS_ERR_NOMEM, "out of memory");
-    }
-    w->polys = calloc((size_t)nids, sizeof(ss_polygon));
-    ss_status st = w->polys ? SS_OK : ss_error_set(err, SS_ERR_NOMEM, "out of memory");
-    for (int k = 0; k < nids && !st; k++) {
-        int n = 0;
-        for (int i = 0; i < s->count; i++)
-            if (s->stroke_id[i] == ids[k]) {
-                pts[n].x = s->uv[i].x * size;
-                pts[n].y = s->uv[i].y * size;
-                n++;
-            }
-        ss_error e2;
-        st = kind == SS_HULL_CONCAVE ? ss_concave_hull(pts, n, concave_k, &w->polys[k], &e2)
-                                     : ss_convex_hull(pts, n, &w->polys[k], &e2);
-        if (st) {
-            ss_error_set(err, st, "stroke %d: %s", ids[k], e2.msg);
-            break;
-        }
-        w->npolys++;
-        w->closing_px[k] = ss_closing_distance(&w->polys[k]);
-    }
-    free(pts);
-    free(ids);
+    if (!w) return err->code;
+    ss_error e2;
+    ss_status st = ss_stroke_hulls(s, size, size, kind == SS_HULL_CONCAVE ? concave_k : 0,
+                                   "strokes", &w->polys, &e2);
     if (st) {
+        /* name the stroke, not the placeholder; the caller names the file */
+        const char *m = strncmp(e2.msg, "strokes: ", 9) == 0 ? e2.msg + 9 : e2.msg;
+        ss_error_set(err, st, "%s", m);
         ss_wound_shape_free(w);
         return st;
     }
+    w->npolys = nids;
+    for (int k = 0; k < nids; k++) w->closing_px[k] = ss_closing_distance(&w->polys[k]);
     /* Fill each hull; the label of a pixel is the first hull containing it. */
     size_t npx = (size_t)size * (size_t)size;
     for (size_t i = 0; i < npx; i++) w->label[i] = -1;

@@ -1,5 +1,5 @@
-/* Wound inputs for the healing grid: painted stroke CSV files (the format of
- * `skinsim abrasion`, seed 000 §4.1), footprint and depth images, and closed
+/* Wound inputs for the healing grid (stroke CSV files are read by geom):
+ * footprint and depth images, and closed
  * OBJ meshes voxelised by ray parity (seed 001 §5.1: "we check with a ray
  * intersection test which cells are wound, skin, or empty cells"). Rays run
  * along +z through each voxel column; a voxel centre is inside when an odd
@@ -20,259 +20,6 @@
 #ifndef M_SQRT2
 #define M_SQRT2 1.41421356237309504880
 #endif
-
-/* ---- small text helpers ----------------------------------------------------------- */
-
-/* Next line of text (handles \n, \r\n, \r); returns NULL at the end. The line
- * is copied into buf (truncated to bufsize-1; *too_long set when it was). */
-static const char *next_line(const char *p, char *buf, size_t bufsize, int *too_long) {
-    if (!*p) return NULL;
-    size_t n = 0;
-    *too_long = 0;
-    while (*p && *p != '\n' && *p != '\r') {
-        if (n + 1 < bufsize)
-            buf[n++] = *p;
-        else
-            *too_long = 1;
-        p++;
-    }
-    buf[n] = '\0';
-    if (*p == '\r') p++;
-    if (*p == '\n') p++;
-    return p;
-}
-
-static char *trim(char *s) {
-    while (isspace((unsigned char)*s)) s++;
-    size_t n = strlen(s);
-    while (n && isspace((unsigned char)s[n - 1])) s[--n] = '\0';
-    return s;
-}
-
-/* Whole-token finite double. Returns 0 on success, 1 not a number, 2 non-finite. */
-static int parse_num(const char *s, double *out) {
-    char *end;
-    errno = 0;
-    double v = strtod(s, &end);
-    if (end == s || *end != '\0') return 1;
-    if (!isfinite(v) || errno == ERANGE) return 2;
-    *out = v;
-    return 0;
-}
-
-/* ---- stroke CSV ----------------------------------------------------------------- */
-
-void ss_stroke_set_free(ss_stroke_set *s) {
-    if (!s) return;
-    free(s->u);
-    free(s->v);
-    free(s->stroke);
-    free(s->stroke_ids);
-    memset(s, 0, sizeof *s);
-}
-
-static int cmp_int(const void *a, const void *b) {
-    int x = *(const int *)a, y = *(const int *)b;
-    return (x > y) - (x < y);
-}
-
-ss_status ss_stroke_csv_parse(const char *text, const char *name, ss_stroke_set *out,
-                              ss_error *err) {
-    memset(out, 0, sizeof *out);
-    int cap = 256, n = 0, lineno = 0, seen_data = 0;
-    double *u = malloc((size_t)cap * sizeof *u), *v = malloc((size_t)cap * sizeof *v);
-    int *id = malloc((size_t)cap * sizeof *id);
-    char line[1024];
-    int too_long;
-    ss_status st = SS_OK;
-    if (!u || !v || !id) {
-        st = ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", name);
-        goto fail;
-    }
-    if (!strncmp(text, "\xEF\xBB\xBF", 3)) text += 3; /* UTF-8 byte order mark */
-    for (const char *p = text; (p = next_line(p, line, sizeof line, &too_long));) {
-        lineno++;
-        if (too_long) {
-            st = ss_error_set(err, SS_ERR_INPUT, "%s:%d: line too long", name, lineno);
-            goto fail;
-        }
-        char *s = trim(line);
-        if (!*s || *s == '#') continue;
-        char *fld[4];
-        int nf = 0;
-        for (char *q = s;;) {
-            char *c = strchr(q, ',');
-            if (nf < 4) fld[nf] = q;
-            nf++;
-            if (!c) break;
-            *c = '\0';
-            q = c + 1;
-        }
-        for (int k = 0; k < nf && k < 4; k++) fld[k] = trim(fld[k]);
-        double a, b;
-        int ra = nf >= 1 ? parse_num(fld[0], &a) : 1;
-        if (!seen_data && ra == 1) { /* header line */
-            seen_data = 1;
-            continue;
-        }
-        seen_data = 1;
-        if (nf < 2 || nf > 3) {
-            st = ss_error_set(err, SS_ERR_INPUT,
-                              "%s:%d: expected 'u,v' or 'u,v,stroke_id', got %d field%s", name,
-                              lineno, nf, nf == 1 ? "" : "s");
-            goto fail;
-        }
-        int rb = parse_num(fld[1], &b);
-        if (ra || rb) {
-            st = ss_error_set(err, SS_ERR_INPUT, "%s:%d: %s '%s' is %s", name, lineno,
-                              ra ? "u" : "v", ra ? fld[0] : fld[1],
-                              (ra ? ra : rb) == 2 ? "not finite" : "not a number");
-            goto fail;
-        }
-        if (a < 0 || a > 1 || b < 0 || b > 1) {
-            st = ss_error_set(err, SS_ERR_INPUT, "%s:%d: u,v = %g,%g is outside [0,1]", name,
-                              lineno, a, b);
-            goto fail;
-        }
-        long sid = 0;
-        if (nf == 3) {
-            char *end;
-            errno = 0;
-            sid = strtol(fld[2], &end, 10);
-            if (end == fld[2] || *end || errno == ERANGE || sid < 0 || sid > 1000000000L) {
-                st = ss_error_set(err, SS_ERR_INPUT,
-                                  "%s:%d: stroke id '%s' is not a non-negative integer", name,
-                                  lineno, fld[2]);
-                goto fail;
-            }
-        }
-        if (n == cap) {
-            cap *= 2;
-            double *nu = realloc(u, (size_t)cap * sizeof *u);
-            if (nu) u = nu;
-            double *nv = realloc(v, (size_t)cap * sizeof *v);
-            if (nv) v = nv;
-            int *ni = realloc(id, (size_t)cap * sizeof *id);
-            if (ni) id = ni;
-            if (!nu || !nv || !ni) {
-                st = ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", name);
-                goto fail;
-            }
-        }
-        u[n] = a;
-        v[n] = b;
-        id[n] = (int)sid;
-        n++;
-    }
-    if (n == 0) {
-        st = ss_error_set(err, SS_ERR_INPUT, "%s: no stroke points", name);
-        goto fail;
-    }
-    int *ids = malloc((size_t)n * sizeof *ids);
-    if (!ids) {
-        st = ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", name);
-        goto fail;
-    }
-    memcpy(ids, id, (size_t)n * sizeof *ids);
-    qsort(ids, (size_t)n, sizeof *ids, cmp_int);
-    int k = 0;
-    for (int i = 0; i < n;) {
-        int j = i;
-        while (j < n && ids[j] == ids[i]) j++;
-        if (j - i < 3) {
-            st = ss_error_set(err, SS_ERR_INPUT,
-                              "%s: stroke %d has %d point%s; a wound outline needs at least 3",
-                              name, ids[i], j - i, j - i == 1 ? "" : "s");
-            free(ids);
-            goto fail;
-        }
-        ids[k++] = ids[i];
-        i = j;
-    }
-    out->npoints = n;
-    out->u = u;
-    out->v = v;
-    out->stroke = id;
-    out->nstrokes = k;
-    out->stroke_ids = ids;
-    return SS_OK;
-fail:
-    free(u);
-    free(v);
-    free(id);
-    return st;
-}
-
-ss_status ss_stroke_csv_read(const char *path, ss_stroke_set *out, ss_error *err) {
-    memset(out, 0, sizeof *out);
-    char *text = ss_read_file(path, NULL, err);
-    if (!text) return err ? err->code : SS_ERR_INPUT;
-    ss_status st = ss_stroke_csv_parse(text, path, out, err);
-    free(text);
-    return st;
-}
-
-ss_image *ss_stroke_footprint(const ss_stroke_set *s, int width, int height, int concave_k,
-                              const char *name, ss_error *err) {
-    if (concave_k != 0 && concave_k < 3) {
-        ss_error_set(err, SS_ERR_INPUT, "%s: concave hull k must be >= 3 (got %d)", name,
-                     concave_k);
-        return NULL;
-    }
-    ss_image *img = ss_image_create(width, height, 1, err);
-    ss_vec2 *pts = img ? malloc((size_t)(s->npoints > 0 ? s->npoints : 1) * sizeof *pts) : NULL;
-    if (!pts) {
-        if (img) ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", name);
-        ss_image_free(img);
-        return NULL;
-    }
-    for (int k = 0; k < s->nstrokes; k++) {
-        int n = 0;
-        for (int i = 0; i < s->npoints; i++)
-            if (s->stroke[i] == s->stroke_ids[k])
-                pts[n++] = (ss_vec2){s->u[i] * width, s->v[i] * height};
-        /* All points on one line: refused here (ss_convex_hull's inexact turn
-         * tests can misbehave on exactly collinear input). */
-        int i0 = 0, i1 = 0;
-        for (int i = 1; i < n; i++)
-            if (pts[i].x < pts[i0].x || (pts[i].x == pts[i0].x && pts[i].y < pts[i0].y)) i0 = i;
-        double far = 0, dev = 0;
-        for (int i = 0; i < n; i++) {
-            double d = hypot(pts[i].x - pts[i0].x, pts[i].y - pts[i0].y);
-            if (d > far) far = d, i1 = i;
-        }
-        for (int i = 0; far > 0 && i < n; i++) {
-            double c = fabs((pts[i1].x - pts[i0].x) * (pts[i].y - pts[i0].y) -
-                            (pts[i1].y - pts[i0].y) * (pts[i].x - pts[i0].x)) /
-                       far;
-            if (c > dev) dev = c;
-        }
-        if (!(dev > 1e-9 * far)) {
-            ss_error_set(err, SS_ERR_INPUT,
-                         "%s: stroke %d: its %d points lie on one line; a wound outline needs "
-                         "an area",
-                         name, s->stroke_ids[k], n);
-            free(pts);
-            ss_image_free(img);
-            return NULL;
-        }
-        ss_polygon poly = {0};
-        ss_error e;
-        ss_error_clear(&e);
-        ss_status st = concave_k ? ss_concave_hull(pts, n, concave_k, &poly, &e)
-                                 : ss_convex_hull(pts, n, &poly, &e);
-        if (st) {
-            ss_error_set(err, st, "%s: stroke %d: %s", name, s->stroke_ids[k], e.msg);
-            free(pts);
-            ss_image_free(img);
-            return NULL;
-        }
-        ss_polygon_fill(&poly, img);
-        ss_polygon_free(&poly);
-    }
-    free(pts);
-    return img;
-}
 
 /* ---- footprint and depth images ------------------------------------------------- */
 
@@ -362,10 +109,10 @@ ss_status ss_obj_parse(const char *text, const char *name, ss_tri_mesh *out, ss_
     } while (0)
     if (!V || !T || !TL || !face) FAIL(SS_ERR_NOMEM, "%s: out of memory", name);
     if (!strncmp(text, "\xEF\xBB\xBF", 3)) text += 3; /* UTF-8 byte order mark */
-    for (const char *p = text; (p = next_line(p, line, sizeof line, &too_long));) {
+    for (const char *p = text; (p = ss_text_next_line(p, line, sizeof line, &too_long));) {
         lineno++;
         if (too_long) FAIL(SS_ERR_INPUT, "%s:%d: line too long", name, lineno);
-        char *s = trim(line);
+        char *s = ss_text_trim(line);
         char *hash = strchr(s, '#');
         if (hash) *hash = '\0';
         if (!*s) continue;
@@ -375,7 +122,7 @@ ss_status ss_obj_parse(const char *text, const char *name, ss_tri_mesh *out, ss_
             for (int k = 0; k < 3; k++) {
                 char *tok = strtok_r(NULL, " \t", &save);
                 if (!tok) FAIL(SS_ERR_INPUT, "%s:%d: vertex needs 3 coordinates", name, lineno);
-                int r = parse_num(tok, &c[k]);
+                int r = ss_text_parse_number(tok, &c[k]);
                 if (r)
                     FAIL(SS_ERR_INPUT, "%s:%d: vertex coordinate '%s' is %s", name, lineno, tok,
                          r == 2 ? "not finite" : "not a number");
