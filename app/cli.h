@@ -14,6 +14,7 @@ typedef struct cli_command {
 
 /* Subcommand entry points (one file each: app/cmd_<name>.c). */
 int cmd_abrasion(int argc, char **argv);
+int cmd_optics(int argc, char **argv);
 
 /* Prints "skinsim <cmd>: <msg>" on stderr and returns the exit code for err. */
 int cli_fail(const char *cmd, const ss_error *err);

@@ -6,6 +6,7 @@
 
 static const cli_command commands[] = {
     {"abrasion", "abrasion-healing texture timeline (seed 000)", cmd_abrasion},
+    {"optics", "skin light transport: spectra, colour, BRDF, MCML files (seed 003)", cmd_optics},
 };
 static const int ncommands = (int)(sizeof commands / sizeof commands[0]);
 

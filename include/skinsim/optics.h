@@ -62,6 +62,13 @@ ss_status ss_optics_slab_validate(const ss_optics_slab *slab, ss_error *err);
  * dermis; bottom_albedo = fat reflectance. */
 ss_status ss_optics_skin_slab(const ss_bio_params *bio, double wavelength_nm, ss_optics_slab *out,
                               ss_error *err);
+/* The same with the spectra loaded once (ss_optics_skin_slab reads the CSV
+ * files of data/spectra on every call): for loops over many parameter sets. */
+typedef struct ss_optics_data ss_optics_data; /* opaque: tabulated spectra */
+ss_status ss_optics_data_open(ss_optics_data **out, ss_error *err);
+void ss_optics_data_close(ss_optics_data *d);
+ss_status ss_optics_skin_slab_with(const ss_optics_data *d, const ss_bio_params *bio,
+                                   double wavelength_nm, ss_optics_slab *out, ss_error *err);
 
 /* ---- Monte Carlo transport (seed §4.1-4.7) ------------------------------------ */
 typedef struct ss_mc_options {
@@ -147,6 +154,9 @@ void ss_reflectance_spectrum_free(ss_reflectance_spectrum *s);
 /* spectrum -> CIE 1931 XYZ under D65 -> linear sRGB (albedo; white reflector -> (1,1,1)) */
 ss_status ss_spectrum_to_srgb_linear(const double *wl_nm, const double *refl, int n, double rgb[3],
                                      ss_error *err);
+/* The same with preloaded spectra (see ss_optics_data_open). */
+ss_status ss_spectrum_to_srgb_linear_with(const ss_optics_data *d, const double *wl_nm,
+                                          const double *refl, int n, double rgb[3], ss_error *err);
 /* Sampled BRDF of a skin (per linear-sRGB channel): bins theta_i x theta_r x dphi, f_r in 1/sr. */
 typedef struct ss_brdf_sampled {
     int n_theta_i, n_theta_r, n_phi;

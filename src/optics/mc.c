@@ -35,51 +35,45 @@
 #define M_PI 3.14159265358979323846
 #endif
 
-/* ---- inline Philox4x32-10 (same generator and keying as ss_rng4) -------- */
+/* ---- per-photon random stream ------------------------------------------ *
+ * Photon i's stream is xoshiro256** (Blackman & Vigna 2018) whose 256-bit state
+ * is drawn from the counter-based Philox generator at (seed, stream = i,
+ * indices 0 and 1) via ss_rng4. Every photon's draws are therefore a pure
+ * function of (seed, i), independent of threads and order, while each step
+ * costs a few integer operations instead of a Philox block. */
 typedef struct prng {
-    uint32_t key0, key1;
-    uint32_t c0, c1, c2, c3; /* counter: index lo, hi, stream lo, hi */
-    uint32_t buf[4];
-    int left;
+    uint64_t s[4];
 } prng;
 
 static inline void prng_init(prng *r, uint64_t seed, uint64_t stream) {
-    r->key0 = (uint32_t)seed;
-    r->key1 = (uint32_t)(seed >> 32);
-    r->c0 = r->c1 = 0;
-    r->c2 = (uint32_t)stream;
-    r->c3 = (uint32_t)(stream >> 32);
-    r->left = 0;
+    uint32_t a[4], b[4];
+    ss_rng4(seed, stream, 0, a);
+    ss_rng4(seed, stream, 1, b);
+    r->s[0] = (uint64_t)a[0] << 32 | a[1];
+    r->s[1] = (uint64_t)a[2] << 32 | a[3];
+    r->s[2] = (uint64_t)b[0] << 32 | b[1];
+    r->s[3] = (uint64_t)b[2] << 32 | b[3];
+    if (!(r->s[0] | r->s[1] | r->s[2] | r->s[3])) r->s[0] = 1; /* never all zero */
 }
 
-static inline void prng_block(prng *r) {
-    uint32_t x0 = r->c0, x1 = r->c1, x2 = r->c2, x3 = r->c3;
-    uint32_t k0 = r->key0, k1 = r->key1;
-    for (int i = 0; i < 10; i++) {
-        const uint64_t p0 = (uint64_t)0xD2511F53u * x0;
-        const uint64_t p1 = (uint64_t)0xCD9E8D57u * x2;
-        uint32_t n0 = (uint32_t)(p1 >> 32) ^ x1 ^ k0;
-        uint32_t n2 = (uint32_t)(p0 >> 32) ^ x3 ^ k1;
-        x0 = n0;
-        x1 = (uint32_t)p1;
-        x2 = n2;
-        x3 = (uint32_t)p0;
-        k0 += 0x9E3779B9u;
-        k1 += 0xBB67AE85u;
-    }
-    r->buf[0] = x0;
-    r->buf[1] = x1;
-    r->buf[2] = x2;
-    r->buf[3] = x3;
-    if (++r->c0 == 0) r->c1++;
-    r->left = 4;
+static inline uint64_t rotl64(uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
+
+static inline uint64_t prng_next(prng *r) {
+    uint64_t *s = r->s;
+    const uint64_t out = rotl64(s[1] * 5, 7) * 9;
+    const uint64_t t = s[1] << 17;
+    s[2] ^= s[0];
+    s[3] ^= s[1];
+    s[1] ^= s[2];
+    s[0] ^= s[3];
+    s[2] ^= t;
+    s[3] = rotl64(s[3], 45);
+    return out;
 }
 
-/* Uniform in the open interval (0,1) with 32 random bits. */
+/* Uniform in the open interval (0,1) with 53 random bits. */
 static inline double prng_u(prng *r) {
-    if (r->left == 0) prng_block(r);
-    uint32_t v = r->buf[4 - r->left--];
-    return ((double)v + 0.5) * (1.0 / 4294967296.0);
+    return ((double)(prng_next(r) >> 11) + 0.5) * (1.0 / 9007199254740992.0);
 }
 
 /* ---- precomputed layer data ---------------------------------------------- */
@@ -201,6 +195,7 @@ typedef struct mc_acc {
 /* One path record of the absorption-free tracer. */
 typedef struct path_rec {
     float len[SS_OPTICS_MAX_LAYERS]; /* cm in each layer */
+    float w0;                        /* weight that entered (1 - specular share) */
     int16_t brdf_bin;                /* -1 if not recorded */
     int16_t rad_bin;                 /* -1 if outside */
     uint16_t bounces;                /* fat-layer bounces */
@@ -400,6 +395,7 @@ static void run_photon(const mc_ctx *c, uint64_t idx, mc_acc *a, path_buf *pb) {
                     pr.rad_bin = -1;
                     pr.bounces = (uint16_t)(bounces > 65535 ? 65535 : bounces);
                     pr.up = 0;
+                    pr.w0 = (float)w;
                     path_push(pb, &pr);
                 }
                 if (mcml) {
@@ -469,6 +465,7 @@ static void run_photon(const mc_ctx *c, uint64_t idx, mc_acc *a, path_buf *pb) {
                     pr.rad_bin = (int16_t)radial_bin(c, x, y, c->spec.rad_n, 0);
                     pr.bounces = (uint16_t)(bounces > 65535 ? 65535 : bounces);
                     pr.up = 1;
+                    pr.w0 = (float)w;
                     path_push(pb, &pr);
                 } else {
                     if (a->brdf) a->brdf[brdf_bin(c, o[0], o[1], -o[2])] += w;
@@ -867,8 +864,8 @@ void ss_mc_result_free(ss_mc_result *res) {
  * per layer (cm), exit BRDF and radial bins, number of fat-layer bounces. With
  * mua = 0 every packet keeps weight 1 until it leaves, so applying absorption
  * later is exact: w = exp(-sum_l mua_l L_l) * albedo^bounces. Memory is one
- * record (72 bytes) per traced photon at most; runs are capped at
- * SS_MC_PATHS_MAX_PHOTONS photons, which bounds the store to about 290 MB. */
+ * record (76 bytes) per traced photon at most; runs are capped at
+ * SS_MC_PATHS_MAX_PHOTONS photons, which bounds the store to about 300 MB. */
 #define SS_MC_PATHS_MAX_PHOTONS 4000000ull
 
 struct ss_mc_paths {
@@ -957,7 +954,7 @@ ss_status ss_mc_paths_apply(const ss_mc_paths *p, const double *mua_per_cm, ss_m
         const path_rec *r = &p->rec[i];
         double e = 0.0;
         for (int l = 0; l < p->nl; l++) e += mua_per_cm[l] * (double)r->len[l];
-        double w = exp(-e);
+        double w = (double)r->w0 * exp(-e);
         if (r->bounces) w *= pow(alb, (double)r->bounces);
         if (r->up) {
             ds += w;

@@ -38,12 +38,12 @@ typedef struct ss_spectrum_table {
     int n;
     double *nm, *v;
 } ss_spectrum_table;
-typedef struct ss_optics_data {
+struct ss_optics_data {
     ss_spectrum_table eumelanin, pheomelanin;  /* cm^-1 per mg/mL */
     ss_spectrum_table hbo2, hb;                /* molar extinction, cm^-1/M (decadic) */
     ss_spectrum_table bilirubin, betacarotene; /* molar extinction, cm^-1/M (decadic) */
     ss_spectrum_table cie_x, cie_y, cie_z, d65;
-} ss_optics_data;
+};
 ss_status ss_optics_data_load(ss_optics_data *d, ss_error *err);
 void ss_optics_data_free(ss_optics_data *d);
 double ss_spectrum_table_eval(const ss_spectrum_table *t, double nm); /* linear, clamped */

@@ -114,6 +114,12 @@ ss_status ss_spectrum_to_srgb_linear(const double *wl_nm, const double *refl, in
     return st;
 }
 
+ss_status ss_spectrum_to_srgb_linear_with(const ss_optics_data *d, const double *wl_nm,
+                                          const double *refl, int n, double rgb[3], ss_error *err) {
+    if (!d) return ss_error_set(err, SS_ERR_INPUT, "spectra are NULL");
+    return ss_spectrum_to_srgb_data(d, wl_nm, refl, n, rgb, err);
+}
+
 /* Linear-sRGB weight of each sample wavelength: rgb = sum_k W[k] R_k. */
 static ss_status colour_weights(const ss_optics_data *d, const double *wl, int n, double *W,
                                 ss_error *err) {

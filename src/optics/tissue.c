@@ -327,3 +327,27 @@ ss_status ss_optics_skin_slab(const ss_bio_params *bio, double wavelength_nm, ss
     ss_optics_data_free(&d);
     return st;
 }
+
+ss_status ss_optics_data_open(ss_optics_data **out, ss_error *err) {
+    if (!out) return ss_error_set(err, SS_ERR_INPUT, "data output is NULL");
+    *out = calloc(1, sizeof **out);
+    if (!*out) return ss_error_set(err, SS_ERR_NOMEM, "out of memory for spectra");
+    ss_status st = ss_optics_data_load(*out, err);
+    if (st) {
+        free(*out);
+        *out = NULL;
+    }
+    return st;
+}
+
+void ss_optics_data_close(ss_optics_data *d) {
+    if (!d) return;
+    ss_optics_data_free(d);
+    free(d);
+}
+
+ss_status ss_optics_skin_slab_with(const ss_optics_data *d, const ss_bio_params *bio,
+                                   double wavelength_nm, ss_optics_slab *out, ss_error *err) {
+    if (!d || !out) return ss_error_set(err, SS_ERR_INPUT, "spectra or slab output is NULL");
+    return ss_optics_skin_slab_data(d, bio, wavelength_nm, out, err);
+}

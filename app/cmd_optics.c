@@ -1,0 +1,678 @@
+/* skinsim optics: the precalculation phase of seed 003 (§4.1-4.7) from the
+ * command line: reflectance spectra and colour, the sampled BRDF, MCML input
+ * files, and a labelled swatch of skin colours over melanin x blood. The same
+ * biological-parameter options work in every subcommand. `fit` and `table`
+ * are provided by app/cmd_optics_fit.c when it is linked in. */
+#define _POSIX_C_SOURCE 200809L
+#include <cairo.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "cli.h"
+#include "skinsim/optics.h"
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
+/* Provided by the fit/table part when it is linked (weak: absent otherwise). */
+int cmd_optics_fit(int argc, char **argv) __attribute__((weak));
+int cmd_optics_table(int argc, char **argv) __attribute__((weak));
+
+typedef struct common_opts {
+    ss_bio_params bio;
+    ss_spectrum_options spec;
+    int threads, json, quiet;
+    const char *out;
+} common_opts;
+
+static const char *COMMON_HELP =
+    "Biological parameters (seed 003 §5.2; defaults: a light skin):\n"
+    "  --melanin F              epidermal melanosome volume fraction 0..1 (0.015;\n"
+    "                           light skin 0.01-0.06, dark 0.2-0.45)\n"
+    "  --pheomelanin-ratio F    pheomelanin share of melanin 0..1 (0.3)\n"
+    "  --blood F                dermal blood volume fraction 0..1 (0.005)\n"
+    "  --oxygenation F          HbO2 / total haemoglobin 0..1 (0.75)\n"
+    "  --sc-thickness-cm X      stratum corneum thickness, cm (0.001)\n"
+    "  --epidermis-thickness-cm X  epidermis thickness, cm (0.01)\n"
+    "  --bilirubin-g-per-l X    bilirubin in blood, g/L (0.003)\n"
+    "  --betacarotene-g-per-l X beta-carotene in tissue, g/L (0.00021)\n"
+    "Monte Carlo:\n"
+    "  --photons N              photon packets per wavelength (20000)\n"
+    "  --seed S                 random seed; the same seed gives identical output\n"
+    "                           for any thread count (1)\n"
+    "  --threads N              worker threads (default $SKINSIM_THREADS or all cores)\n"
+    "  --roughness S            Trowbridge-Reitz surface roughness sigma, 0 = smooth\n"
+    "                           (0.75, BioSpec)\n"
+    "  --stochastic             absorb-or-scatter packets (seed §4.4) instead of weights\n"
+    "  --wl-min NM --wl-max NM --wl-step NM   wavelengths, nm (380, 780, 10)\n"
+    "  --quiet                  no progress output\n";
+
+/* Returns 1 if argv[*i] was a common option (consumed), 0 if not, -1 on error. */
+static int parse_common(const char *cmd, int argc, char **argv, int *i, common_opts *c, int *rc) {
+    const char *a = argv[*i];
+    ss_error e;
+    ss_error_clear(&e);
+    struct {
+        const char *name;
+        double *dst;
+        double lo, hi;
+    } dbl[] = {
+        {"--melanin", &c->bio.melanin, 0, 1},
+        {"--pheomelanin-ratio", &c->bio.pheomelanin_ratio, 0, 1},
+        {"--blood", &c->bio.blood, 0, 1},
+        {"--oxygenation", &c->bio.oxygenation, 0, 1},
+        {"--sc-thickness-cm", &c->bio.sc_thickness_cm, 1e-6, 1},
+        {"--epidermis-thickness-cm", &c->bio.epidermis_thickness_cm, 1e-6, 1},
+        {"--bilirubin-g-per-l", &c->bio.bilirubin_g_per_l, 0, 100},
+        {"--betacarotene-g-per-l", &c->bio.betacarotene_g_per_l, 0, 100},
+        {"--roughness", &c->spec.mc.roughness_sigma, 0, 10},
+        {"--wl-min", &c->spec.wl_min_nm, 300, 800},
+        {"--wl-max", &c->spec.wl_max_nm, 300, 800},
+        {"--wl-step", &c->spec.wl_step_nm, 0.1, 400},
+    };
+    for (size_t k = 0; k < sizeof dbl / sizeof dbl[0]; k++) {
+        if (strcmp(a, dbl[k].name)) continue;
+        if (*i + 1 >= argc) {
+            *rc = cli_usage_error(cmd, "%s needs a value", a);
+            return -1;
+        }
+        if (cli_parse_double(a, argv[++*i], dbl[k].lo, dbl[k].hi, dbl[k].dst, &e)) {
+            *rc = cli_fail(cmd, &e);
+            return -1;
+        }
+        return 1;
+    }
+    if (!strcmp(a, "--photons") || !strcmp(a, "--seed")) {
+        uint64_t v;
+        if (*i + 1 >= argc) {
+            *rc = cli_usage_error(cmd, "%s needs a value", a);
+            return -1;
+        }
+        if (cli_parse_u64(a, argv[++*i], &v, &e)) {
+            *rc = cli_fail(cmd, &e);
+            return -1;
+        }
+        if (!strcmp(a, "--photons")) {
+            if (v < 1 || v > 1000000000000ull) {
+                *rc = cli_usage_error(cmd, "--photons: %llu is outside 1..1e12",
+                                      (unsigned long long)v);
+                return -1;
+            }
+            c->spec.mc.photons = v;
+        } else
+            c->spec.mc.seed = v;
+        return 1;
+    }
+    if (!strcmp(a, "--threads")) {
+        long v;
+        if (*i + 1 >= argc) {
+            *rc = cli_usage_error(cmd, "%s needs a value", a);
+            return -1;
+        }
+        if (cli_parse_int(a, argv[++*i], 1, 4096, &v, &e)) {
+            *rc = cli_fail(cmd, &e);
+            return -1;
+        }
+        c->threads = (int)v;
+        return 1;
+    }
+    if (!strcmp(a, "--stochastic")) {
+        c->spec.mc.stochastic_absorb = 1;
+        return 1;
+    }
+    if (!strcmp(a, "--json")) {
+        c->json = 1;
+        return 1;
+    }
+    if (!strcmp(a, "--quiet")) {
+        c->quiet = 1;
+        return 1;
+    }
+    if (!strcmp(a, "--out")) {
+        if (*i + 1 >= argc) {
+            *rc = cli_usage_error(cmd, "%s needs a file name", a);
+            return -1;
+        }
+        c->out = argv[++*i];
+        return 1;
+    }
+    return 0;
+}
+
+static void common_init(common_opts *c) {
+    memset(c, 0, sizeof *c);
+    ss_bio_params_default(&c->bio);
+    ss_spectrum_options_default(&c->spec);
+}
+
+static int common_finish(const char *cmd, common_opts *c) {
+    ss_error e;
+    ss_error_clear(&e);
+    if (ss_bio_params_validate(&c->bio, &e)) return cli_fail(cmd, &e);
+    if (c->spec.wl_min_nm > c->spec.wl_max_nm)
+        return cli_usage_error(cmd, "--wl-min %g is above --wl-max %g", c->spec.wl_min_nm,
+                               c->spec.wl_max_nm);
+    ss_threads_set(c->threads);
+    return 0;
+}
+
+/* Checks that the output's directory is writable before any work. */
+static int check_out(const char *cmd, const char *path) {
+    char dir[4096];
+    snprintf(dir, sizeof dir, "%s", path);
+    char *sl = strrchr(dir, '/');
+    if (sl)
+        *sl = 0;
+    else
+        snprintf(dir, sizeof dir, ".");
+    if (!dir[0]) snprintf(dir, sizeof dir, "/");
+    ss_error e;
+    ss_error_clear(&e);
+    if (ss_check_writable_dir(dir, &e)) return cli_fail(cmd, &e);
+    return 0;
+}
+
+/* ---- spectrum ------------------------------------------------------------------ */
+static void spectrum_help(FILE *f) {
+    fprintf(f,
+            "usage: skinsim optics spectrum [options]\n\n"
+            "Monte Carlo diffuse reflectance spectrum of the four-layer skin model (stratum\n"
+            "corneum, epidermis, papillary and reticular dermis over white fat) at normal\n"
+            "incidence, and its colour: CIE 1931 XYZ under D65 -> linear sRGB albedo.\n"
+            "Prints a table (wavelength_nm reflectance std_error), or with --json:\n"
+            "  {\"srgb_linear\": [r,g,b], \"wavelength_nm\": [...], \"reflectance\": [...],\n"
+            "   \"specular\": s, \"std_error\": e}\n"
+            "(std_error: the largest standard error over the wavelengths; reflectance\n"
+            "excludes the specular surface reflection, which is reported separately).\n\n"
+            "  --out FILE.csv           also write wavelength_nm,reflectance,std_error\n"
+            "  --json                   machine-readable summary on stdout\n\n%s",
+            COMMON_HELP);
+}
+
+static int optics_spectrum(int argc, char **argv) {
+    const char *cmd = "optics spectrum";
+    common_opts c;
+    common_init(&c);
+    int rc = 0;
+    for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
+            spectrum_help(stdout);
+            return 0;
+        }
+        int k = parse_common(cmd, argc, argv, &i, &c, &rc);
+        if (k < 0) return rc;
+        if (k == 0) return cli_usage_error(cmd, "unknown option '%s'", argv[i]);
+    }
+    if ((rc = common_finish(cmd, &c))) return rc;
+    if (c.out && (rc = check_out(cmd, c.out))) return rc;
+    ss_reflectance_spectrum s;
+    ss_error e;
+    ss_error_clear(&e);
+    if (ss_optics_reflectance_spectrum(&c.bio, &c.spec, &s, &e)) return cli_fail(cmd, &e);
+    double rgb[3];
+    if (ss_spectrum_to_srgb_linear(s.wavelength_nm, s.reflectance, s.n, rgb, &e)) {
+        ss_reflectance_spectrum_free(&s);
+        return cli_fail(cmd, &e);
+    }
+    double se_max = 0;
+    for (int i = 0; i < s.n; i++) se_max = fmax(se_max, s.std_error[i]);
+    if (c.out) {
+        size_t cap = 64 + (size_t)s.n * 64, len = 0;
+        char *buf = malloc(cap);
+        if (!buf) {
+            ss_reflectance_spectrum_free(&s);
+            ss_error_set(&e, SS_ERR_NOMEM, "out of memory");
+            return cli_fail(cmd, &e);
+        }
+        len += (size_t)snprintf(buf + len, cap - len, "wavelength_nm,reflectance,std_error\n");
+        for (int i = 0; i < s.n; i++)
+            len += (size_t)snprintf(buf + len, cap - len, "%g,%.6f,%.6f\n", s.wavelength_nm[i],
+                                    s.reflectance[i], s.std_error[i]);
+        ss_status st = ss_write_file_atomic(c.out, buf, len, &e);
+        free(buf);
+        if (st) {
+            ss_reflectance_spectrum_free(&s);
+            return cli_fail(cmd, &e);
+        }
+    }
+    if (c.json) {
+        printf("{\"srgb_linear\": [%.6f, %.6f, %.6f], \"wavelength_nm\": [", rgb[0], rgb[1],
+               rgb[2]);
+        for (int i = 0; i < s.n; i++) printf("%s%g", i ? ", " : "", s.wavelength_nm[i]);
+        printf("], \"reflectance\": [");
+        for (int i = 0; i < s.n; i++) printf("%s%.6f", i ? ", " : "", s.reflectance[i]);
+        printf("], \"specular\": %.6f, \"std_error\": %.6f}\n", s.specular, se_max);
+    } else {
+        printf("# wavelength_nm reflectance std_error\n");
+        for (int i = 0; i < s.n; i++)
+            printf("%g %.5f %.5f\n", s.wavelength_nm[i], s.reflectance[i], s.std_error[i]);
+        printf("# specular %.5f\n# linear sRGB albedo %.4f %.4f %.4f (8-bit sRGB %d %d %d)\n",
+               s.specular, rgb[0], rgb[1], rgb[2],
+               (int)lround(255 * ss_srgb_encode((float)fmin(1, fmax(0, rgb[0])))),
+               (int)lround(255 * ss_srgb_encode((float)fmin(1, fmax(0, rgb[1])))),
+               (int)lround(255 * ss_srgb_encode((float)fmin(1, fmax(0, rgb[2])))));
+    }
+    ss_reflectance_spectrum_free(&s);
+    return 0;
+}
+
+/* ---- brdf ------------------------------------------------------------------------- */
+static void brdf_help(FILE *f) {
+    fprintf(f,
+            "usage: skinsim optics brdf --out FILE.csv [options]\n\n"
+            "Sampled BRDF of skin per linear-sRGB channel (seed 003 §4.5.2), one Monte Carlo\n"
+            "run per incidence bin and wavelength. Bins: theta uniform over [0, 90) degrees\n"
+            "(centres (k+0.5)*90/n), dphi = |phi_r - phi_i| folded into [0, 180] degrees with\n"
+            "the mirror direction at 180. f_r = escaping weight / (solid angle * cos theta_r),\n"
+            "in 1/sr; the specular surface reflection is included.\n"
+            "CSV columns: theta_i_deg,theta_r_deg,dphi_deg,f_r,f_g,f_b (bin centres).\n\n"
+            "  --out FILE.csv           output file (required)\n"
+            "  --theta-i N              incidence bins (8)\n"
+            "  --theta-r N              exit zenith bins (16)\n"
+            "  --phi N                  azimuth-difference bins (16)\n"
+            "  (--photons is per incidence bin and wavelength; default here 20000)\n\n%s",
+            COMMON_HELP);
+}
+
+static int optics_brdf(int argc, char **argv) {
+    const char *cmd = "optics brdf";
+    common_opts c;
+    common_init(&c);
+    int rc = 0;
+    long nti = 8, ntr = 16, nph = 16;
+    ss_error e;
+    ss_error_clear(&e);
+    for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
+            brdf_help(stdout);
+            return 0;
+        }
+        int k = parse_common(cmd, argc, argv, &i, &c, &rc);
+        if (k < 0) return rc;
+        if (k == 1) continue;
+        long *dst = !strcmp(argv[i], "--theta-i")   ? &nti
+                    : !strcmp(argv[i], "--theta-r") ? &ntr
+                    : !strcmp(argv[i], "--phi")     ? &nph
+                                                    : NULL;
+        if (!dst) return cli_usage_error(cmd, "unknown option '%s'", argv[i]);
+        if (i + 1 >= argc) return cli_usage_error(cmd, "%s needs a value", argv[i]);
+        if (cli_parse_int(argv[i], argv[i + 1], 1, 256, dst, &e)) return cli_fail(cmd, &e);
+        i++;
+    }
+    if (!c.out) return cli_usage_error(cmd, "--out FILE.csv is required");
+    if ((rc = common_finish(cmd, &c))) return rc;
+    if ((rc = check_out(cmd, c.out))) return rc;
+    ss_brdf_sampled b;
+    if (ss_optics_brdf_sample(&c.bio, &c.spec, (int)nti, (int)ntr, (int)nph, &b, &e))
+        return cli_fail(cmd, &e);
+    size_t nrow = (size_t)nti * ntr * nph, cap = 64 + nrow * 96, len = 0;
+    char *buf = malloc(cap);
+    if (!buf) {
+        ss_brdf_sampled_free(&b);
+        ss_error_set(&e, SS_ERR_NOMEM, "out of memory");
+        return cli_fail(cmd, &e);
+    }
+    len += (size_t)snprintf(buf, cap, "theta_i_deg,theta_r_deg,dphi_deg,f_r,f_g,f_b\n");
+    for (long ti = 0; ti < nti; ti++)
+        for (long tr = 0; tr < ntr; tr++)
+            for (long p = 0; p < nph; p++) {
+                const double *f = &b.f_rgb[((ti * ntr + tr) * nph + p) * 3];
+                len += (size_t)snprintf(buf + len, cap - len, "%.4f,%.4f,%.4f,%.6g,%.6g,%.6g\n",
+                                        (ti + 0.5) * 90.0 / nti, (tr + 0.5) * 90.0 / ntr,
+                                        (p + 0.5) * 180.0 / nph, f[0], f[1], f[2]);
+            }
+    ss_brdf_sampled_free(&b);
+    ss_status st = ss_write_file_atomic(c.out, buf, len, &e);
+    free(buf);
+    if (st) return cli_fail(cmd, &e);
+    if (c.json) printf("{\"out\": \"%s\", \"bins\": [%ld, %ld, %ld]}\n", c.out, nti, ntr, nph);
+    return 0;
+}
+
+/* ---- mci -------------------------------------------------------------------------- */
+static void mci_help(FILE *f) {
+    fprintf(f, "usage: skinsim optics mci FILE.mci [--seed S] [--threads N] [--json]\n\n"
+               "Runs an MCML input file unchanged (MCML 1.2 format: version, number of runs;\n"
+               "per run: output name and type A, photon count, dz dr [cm], nz nr na, number of\n"
+               "layers, n above, one 'n mua mus g d' line per layer [1/cm, cm], n below).\n"
+               "Each run writes the MCML-style output file its input names, relative to the\n"
+               "current directory as MCML does: RAT (specular, diffuse reflectance, absorbed\n"
+               "fraction, transmittance), A_l, A_z, Rd_r, Rd_a, Tt_r, Tt_a. The whole file is\n"
+               "checked (values and output directories) before anything is run or written.\n"
+               "  --seed S      random seed (1)\n  --threads N   worker threads\n"
+               "  --json        print a summary of each run on stdout\n");
+}
+
+static int optics_mci(int argc, char **argv) {
+    const char *cmd = "optics mci";
+    const char *file = NULL;
+    uint64_t seed = 1;
+    long threads = 0;
+    int json = 0;
+    ss_error e;
+    ss_error_clear(&e);
+    for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
+            mci_help(stdout);
+            return 0;
+        } else if (!strcmp(argv[i], "--seed") && i + 1 < argc) {
+            if (cli_parse_u64("--seed", argv[++i], &seed, &e)) return cli_fail(cmd, &e);
+        } else if (!strcmp(argv[i], "--threads") && i + 1 < argc) {
+            if (cli_parse_int("--threads", argv[++i], 1, 4096, &threads, &e))
+                return cli_fail(cmd, &e);
+        } else if (!strcmp(argv[i], "--json"))
+            json = 1;
+        else if (!strcmp(argv[i], "--quiet"))
+            ;
+        else if (argv[i][0] == '-')
+            return cli_usage_error(cmd, "unknown option '%s'", argv[i]);
+        else if (!file)
+            file = argv[i];
+        else
+            return cli_usage_error(cmd, "more than one input file ('%s')", argv[i]);
+    }
+    if (!file) return cli_usage_error(cmd, "an input FILE.mci is required");
+    ss_threads_set((int)threads);
+    size_t len;
+    char *text = ss_read_file(file, &len, &e);
+    if (!text) return cli_fail(cmd, &e);
+    ss_mci_file mf;
+    ss_status st = ss_mci_parse(text, file, &mf, &e);
+    free(text);
+    if (st) return cli_fail(cmd, &e);
+    int rc = 0;
+    for (int r = 0; r < mf.nruns && !rc; r++) rc = check_out(cmd, mf.runs[r].out_name);
+    if (json && !rc) printf("[");
+    for (int r = 0; r < mf.nruns && !rc; r++) {
+        char *mco = NULL;
+        st = ss_mci_simulate(&mf.runs[r], seed, &mco, &e);
+        if (!st) st = ss_write_file_atomic(mf.runs[r].out_name, mco, strlen(mco), &e);
+        if (st) {
+            free(mco);
+            rc = cli_fail(cmd, &e);
+            break;
+        }
+        if (json) {
+            /* RAT lines follow "RAT #" in the text */
+            const char *p = strstr(mco, "RAT #");
+            double v[4] = {0};
+            if (p) {
+                p = strchr(p, '\n');
+                for (int k = 0; k < 4 && p; k++) {
+                    v[k] = strtod(p + 1, NULL);
+                    p = strchr(p + 1, '\n');
+                }
+            }
+            printf("%s{\"out\": \"%s\", \"specular\": %g, \"diffuse\": %g, \"absorbed\": %g, "
+                   "\"transmittance\": %g}",
+                   r ? ", " : "", mf.runs[r].out_name, v[0], v[1], v[2], v[3]);
+        } else
+            fprintf(stderr, "skinsim optics mci: wrote %s\n", mf.runs[r].out_name);
+        free(mco);
+    }
+    if (json && !rc) printf("]\n");
+    ss_mci_file_free(&mf);
+    return rc;
+}
+
+/* ---- swatch -------------------------------------------------------------------------- */
+static void swatch_help(FILE *f) {
+    fprintf(f,
+            "usage: skinsim optics swatch --out FILE.png [options]\n\n"
+            "A labelled grid of skin colours: melanin (columns) x blood (rows), each cell\n"
+            "the linear-sRGB albedo of the Monte Carlo reflectance spectrum (D65, CIE 1931),\n"
+            "written as an 8-bit sRGB PNG. Photon paths are traced once per wavelength without\n"
+            "absorption and reweighted for every cell (exact for fixed layer geometry).\n\n"
+            "  --out FILE.png           output image (required)\n"
+            "  --melanin-list A,B,...   column values (0.01,0.03,0.06,0.12,0.2,0.3,0.43)\n"
+            "  --blood-list A,B,...     row values (0.002,0.005,0.01,0.02,0.04)\n"
+            "  --cell PX                cell size in pixels (96)\n"
+            "  --json                   print the colours as JSON\n"
+            "  (--melanin and --blood are replaced by the lists; defaults here:\n"
+            "   --photons 20000 --wl-step 20)\n\n%s",
+            COMMON_HELP);
+}
+
+static void srgb8(const double lin[3], double out[3]) {
+    for (int k = 0; k < 3; k++) out[k] = ss_srgb_encode((float)fmin(1.0, fmax(0.0, lin[k])));
+}
+
+static int optics_swatch(int argc, char **argv) {
+    const char *cmd = "optics swatch";
+    common_opts c;
+    common_init(&c);
+    c.spec.wl_step_nm = 20;
+    int rc = 0;
+    double mel_def[] = {0.01, 0.03, 0.06, 0.12, 0.2, 0.3, 0.43};
+    double bl_def[] = {0.002, 0.005, 0.01, 0.02, 0.04};
+    double *mel = NULL, *bl = NULL;
+    int nmel = 0, nbl = 0;
+    long cell = 96;
+    ss_error e;
+    ss_error_clear(&e);
+    for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
+            swatch_help(stdout);
+            free(mel);
+            free(bl);
+            return 0;
+        }
+        int k = parse_common(cmd, argc, argv, &i, &c, &rc);
+        if (k < 0) goto out;
+        if (k == 1) continue;
+        if (i + 1 >= argc && (!strcmp(argv[i], "--melanin-list") ||
+                              !strcmp(argv[i], "--blood-list") || !strcmp(argv[i], "--cell"))) {
+            rc = cli_usage_error(cmd, "%s needs a value", argv[i]);
+            goto out;
+        }
+        if (!strcmp(argv[i], "--melanin-list")) {
+            free(mel);
+            mel = NULL;
+            if (cli_parse_double_list("--melanin-list", argv[++i], 0, 1, &mel, &nmel, &e) ||
+                nmel < 1 || nmel > 32) {
+                if (!e.msg[0]) ss_error_set(&e, SS_ERR_INPUT, "--melanin-list: 1..32 values");
+                rc = cli_fail(cmd, &e);
+                goto out;
+            }
+        } else if (!strcmp(argv[i], "--blood-list")) {
+            free(bl);
+            bl = NULL;
+            if (cli_parse_double_list("--blood-list", argv[++i], 0, 1, &bl, &nbl, &e) || nbl < 1 ||
+                nbl > 32) {
+                if (!e.msg[0]) ss_error_set(&e, SS_ERR_INPUT, "--blood-list: 1..32 values");
+                rc = cli_fail(cmd, &e);
+                goto out;
+            }
+        } else if (!strcmp(argv[i], "--cell")) {
+            if (cli_parse_int("--cell", argv[++i], 24, 512, &cell, &e)) {
+                rc = cli_fail(cmd, &e);
+                goto out;
+            }
+        } else {
+            rc = cli_usage_error(cmd, "unknown option '%s'", argv[i]);
+            goto out;
+        }
+    }
+    if (!c.out) {
+        rc = cli_usage_error(cmd, "--out FILE.png is required");
+        goto out;
+    }
+    if ((rc = common_finish(cmd, &c))) goto out;
+    if ((rc = check_out(cmd, c.out))) goto out;
+    const double *M = mel ? mel : mel_def, *B = bl ? bl : bl_def;
+    if (!mel) nmel = (int)(sizeof mel_def / sizeof mel_def[0]);
+    if (!bl) nbl = (int)(sizeof bl_def / sizeof bl_def[0]);
+    /* spectra for every cell via the absorption-free path method */
+    int nwl = (int)floor((c.spec.wl_max_nm - c.spec.wl_min_nm) / c.spec.wl_step_nm + 1e-9) + 1;
+    double *wl = calloc((size_t)nwl, sizeof *wl);
+    double *refl = calloc((size_t)nwl * nmel * nbl, sizeof *refl);
+    double *rgb = calloc((size_t)nmel * nbl * 3, sizeof *rgb);
+    if (!wl || !refl || !rgb) {
+        free(wl);
+        free(refl);
+        free(rgb);
+        ss_error_set(&e, SS_ERR_NOMEM, "out of memory");
+        rc = cli_fail(cmd, &e);
+        goto out;
+    }
+    ss_progress pr;
+    ss_optics_data *data = NULL;
+    ss_status st = ss_optics_data_open(&data, &e);
+    ss_progress_begin(&pr, "swatch", nwl, c.quiet);
+    for (int k = 0; k < nwl && !st; k++) {
+        wl[k] = c.spec.wl_min_nm + k * c.spec.wl_step_nm;
+        ss_optics_slab geom;
+        st = ss_optics_skin_slab_with(data, &c.bio, wl[k], &geom, &e);
+        ss_mc_paths *paths = NULL;
+        if (!st) st = ss_mc_trace_paths(&geom, &c.spec.mc, &paths, &e);
+        for (int bi = 0; bi < nbl && !st; bi++)
+            for (int mi = 0; mi < nmel && !st; mi++) {
+                ss_bio_params b = c.bio;
+                b.melanin = M[mi];
+                b.blood = B[bi];
+                ss_optics_slab s;
+                st = ss_optics_skin_slab_with(data, &b, wl[k], &s, &e);
+                if (st) break;
+                double mua[SS_OPTICS_MAX_LAYERS];
+                for (int l = 0; l < s.nlayers; l++) mua[l] = s.layer[l].mua_per_cm;
+                ss_mc_result r;
+                st = ss_mc_paths_apply(paths, mua, &r, &e);
+                if (st) break;
+                refl[((size_t)bi * nmel + mi) * nwl + k] = r.diffuse;
+                ss_mc_result_free(&r);
+            }
+        ss_mc_paths_free(paths);
+        ss_progress_update(&pr, k + 1);
+    }
+    ss_progress_end(&pr);
+    for (int q = 0; q < nmel * nbl && !st; q++)
+        st =
+            ss_spectrum_to_srgb_linear_with(data, wl, refl + (size_t)q * nwl, nwl, rgb + 3 * q, &e);
+    ss_optics_data_close(data);
+    free(refl);
+    free(wl);
+    if (st) {
+        free(rgb);
+        rc = cli_fail(cmd, &e);
+        goto out;
+    }
+    /* draw: left label column, top label row, title */
+    int lw = 110, th = 64, W = lw + nmel * (int)cell + 10, H = th + nbl * (int)cell + 40;
+    cairo_surface_t *sf = cairo_image_surface_create(CAIRO_FORMAT_RGB24, W, H);
+    cairo_t *cr = cairo_create(sf);
+    cairo_set_source_rgb(cr, 0.15, 0.15, 0.16);
+    cairo_paint(cr);
+    cairo_select_font_face(cr, "DejaVu Sans", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+    cairo_set_source_rgb(cr, 0.92, 0.92, 0.92);
+    cairo_set_font_size(cr, 14);
+    cairo_move_to(cr, 10, 20);
+    cairo_show_text(cr, "skin albedo (Monte Carlo, D65, sRGB): melanosome fraction ->, blood v");
+    cairo_set_font_size(cr, 12);
+    for (int mi = 0; mi < nmel; mi++) {
+        char t[32];
+        snprintf(t, sizeof t, "mel %.1f%%", 100 * M[mi]);
+        cairo_move_to(cr, lw + mi * cell + 6, th - 10);
+        cairo_show_text(cr, t);
+    }
+    for (int bi = 0; bi < nbl; bi++) {
+        char t[32];
+        snprintf(t, sizeof t, "blood %.1f%%", 100 * B[bi]);
+        cairo_move_to(cr, 8, th + bi * cell + cell / 2 + 4);
+        cairo_show_text(cr, t);
+    }
+    for (int bi = 0; bi < nbl; bi++)
+        for (int mi = 0; mi < nmel; mi++) {
+            double s[3];
+            srgb8(&rgb[3 * (bi * nmel + mi)], s);
+            cairo_set_source_rgb(cr, s[0], s[1], s[2]);
+            cairo_rectangle(cr, lw + mi * cell + 2, th + bi * cell + 2, cell - 4, cell - 4);
+            cairo_fill(cr);
+        }
+    char foot[160];
+    snprintf(foot, sizeof foot,
+             "pheomelanin %.2f  oxygenation %.2f  epidermis %.3g cm  %llu photons/wl",
+             c.bio.pheomelanin_ratio, c.bio.oxygenation, c.bio.epidermis_thickness_cm,
+             (unsigned long long)c.spec.mc.photons);
+    cairo_set_source_rgb(cr, 0.8, 0.8, 0.8);
+    cairo_set_font_size(cr, 11);
+    cairo_move_to(cr, 10, H - 14);
+    cairo_show_text(cr, foot);
+    cairo_destroy(cr);
+    cairo_surface_flush(sf);
+    ss_image *img = ss_image_create(W, H, 3, &e);
+    if (img) {
+        const unsigned char *d = cairo_image_surface_get_data(sf);
+        int stride = cairo_image_surface_get_stride(sf);
+        for (int y = 0; y < H; y++)
+            for (int x = 0; x < W; x++) {
+                uint32_t px = *(const uint32_t *)(d + (size_t)y * stride + 4 * (size_t)x);
+                float *o = ss_image_px(img, x, y);
+                o[0] = ss_srgb_decode(((px >> 16) & 255) / 255.0f);
+                o[1] = ss_srgb_decode(((px >> 8) & 255) / 255.0f);
+                o[2] = ss_srgb_decode((px & 255) / 255.0f);
+            }
+    }
+    cairo_surface_destroy(sf);
+    st = img ? ss_png_write(c.out, img, 8, SS_ENC_SRGB, &e) : SS_ERR_NOMEM;
+    ss_image_free(img);
+    if (st) {
+        free(rgb);
+        rc = cli_fail(cmd, &e);
+        goto out;
+    }
+    if (c.json) {
+        printf("{\"out\": \"%s\", \"melanin\": [", c.out);
+        for (int mi = 0; mi < nmel; mi++) printf("%s%g", mi ? ", " : "", M[mi]);
+        printf("], \"blood\": [");
+        for (int bi = 0; bi < nbl; bi++) printf("%s%g", bi ? ", " : "", B[bi]);
+        printf("], \"srgb_linear\": [");
+        for (int q = 0; q < nmel * nbl; q++)
+            printf("%s[%.5f, %.5f, %.5f]", q ? ", " : "", rgb[3 * q], rgb[3 * q + 1],
+                   rgb[3 * q + 2]);
+        printf("]}\n");
+    }
+    free(rgb);
+out:
+    free(mel);
+    free(bl);
+    return rc;
+}
+
+/* ---- dispatcher --------------------------------------------------------------------- */
+static void optics_help(FILE *f) {
+    fprintf(f, "usage: skinsim optics <subcommand> [options]   (each has --help)\n\n"
+               "Light transport in a four-layer skin model (seed 003): biological parameters\n"
+               "-> optical coefficients -> Monte Carlo photon packets -> spectra, BRDF, colour.\n\n"
+               "subcommands:\n"
+               "  spectrum   reflectance spectrum and linear sRGB albedo (--json)\n"
+               "  brdf       sampled BRDF per colour channel to a CSV file\n"
+               "  mci        run an MCML .mci input file, write its .mco outputs\n"
+               "  swatch     PNG grid of skin colours over melanin x blood\n");
+    if (cmd_optics_fit) fprintf(f, "  fit        fit a render BRDF to the sampled skin BRDF\n");
+    if (cmd_optics_table) fprintf(f, "  table      precomputed ModelMatch table\n");
+}
+
+int cmd_optics(int argc, char **argv) {
+    if (argc < 2) {
+        optics_help(stderr);
+        return 2;
+    }
+    const char *sub = argv[1];
+    if (!strcmp(sub, "--help") || !strcmp(sub, "-h") || !strcmp(sub, "help")) {
+        optics_help(stdout);
+        return 0;
+    }
+    if (!strcmp(sub, "spectrum")) return optics_spectrum(argc - 1, argv + 1);
+    if (!strcmp(sub, "brdf")) return optics_brdf(argc - 1, argv + 1);
+    if (!strcmp(sub, "mci")) return optics_mci(argc - 1, argv + 1);
+    if (!strcmp(sub, "swatch")) return optics_swatch(argc - 1, argv + 1);
+    if (!strcmp(sub, "fit") && cmd_optics_fit) return cmd_optics_fit(argc - 1, argv + 1);
+    if (!strcmp(sub, "table") && cmd_optics_table) return cmd_optics_table(argc - 1, argv + 1);
+    fprintf(stderr, "skinsim optics: unknown subcommand '%s'\n\n", sub);
+    optics_help(stderr);
+    return 2;
+}

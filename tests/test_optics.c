@@ -1,0 +1,413 @@
+/* Optics transport: van de Hulst slab, unscattered transmission, energy
+ * conservation, a semi-infinite medium against Chandrasekhar's exact
+ * H-function result, Fresnel against closed forms, clear-slab multiple
+ * reflections, BRDF / radial normalisation, the absorption-free path method
+ * against direct runs, determinism across thread counts, parameter checks. */
+#include "testutil.h"
+
+#include <math.h>
+#include <omp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "skinsim/optics.h"
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
+static uint64_t nph(uint64_t full) { return tu_quick() ? full / 4 : full; }
+
+static ss_optics_slab one_layer(double n, double mua, double mus, double g, double d) {
+    ss_optics_slab s;
+    memset(&s, 0, sizeof s);
+    s.nlayers = 1;
+    s.layer[0] = (ss_optics_layer){n, mua, mus, g, d};
+    s.n_above = s.n_below = 1.0;
+    s.bottom_albedo = -1.0;
+    return s;
+}
+
+static void run_ok(const ss_optics_slab *s, const ss_mc_options *o, ss_mc_result *r) {
+    ss_error e;
+    ss_error_clear(&e);
+    ss_status st = ss_mc_run(s, o, r, &e);
+    if (st) fprintf(stderr, "ss_mc_run: %s\n", e.msg);
+    assert_int_equal(st, SS_OK);
+}
+
+/* van de Hulst (1980) via MCML's validation: n=1, mua=10, mus=90, g=0.75, d=0.02 cm. */
+static void test_van_de_hulst(void **state) {
+    (void)state;
+    ss_optics_slab s = one_layer(1.0, 10, 90, 0.75, 0.02);
+    ss_mc_options o;
+    ss_mc_options_default(&o);
+    o.photons = nph(200000);
+    o.seed = 7;
+    ss_mc_result r;
+    run_ok(&s, &o, &r);
+    printf("van de Hulst: Rd %.5f +- %.5f (ref 0.09739), Tt %.5f +- %.5f (ref 0.66096)\n",
+           r.diffuse, r.diffuse_se, r.transmit, r.transmit_se);
+    assert_true(fabs(r.diffuse - 0.09739) < 3 * r.diffuse_se);
+    assert_true(fabs(r.transmit - 0.66096) < 3 * r.transmit_se);
+    assert_true(r.diffuse_se > 0 && r.diffuse_se < 0.003);
+    assert_true(r.specular == 0.0);
+    /* The seed's absorb-or-scatter mode estimates the same quantities. */
+    o.stochastic_absorb = 1;
+    ss_mc_result q;
+    run_ok(&s, &o, &q);
+    printf("van de Hulst (stochastic absorb): Rd %.5f +- %.5f, Tt %.5f +- %.5f\n", q.diffuse,
+           q.diffuse_se, q.transmit, q.transmit_se);
+    assert_true(fabs(q.diffuse - 0.09739) < 3 * q.diffuse_se);
+    assert_true(fabs(q.transmit - 0.66096) < 3 * q.transmit_se);
+    ss_mc_result_free(&r);
+    ss_mc_result_free(&q);
+}
+
+/* A purely absorbing slab of optical depth 2: every packet that interacts is
+ * absorbed, so T is the unscattered transmission exp(-2). */
+static void test_unscattered(void **state) {
+    (void)state;
+    ss_optics_slab s = one_layer(1.0, 100, 0, 0, 0.02);
+    ss_mc_options o;
+    ss_mc_options_default(&o);
+    o.photons = nph(100000);
+    ss_mc_result r;
+    run_ok(&s, &o, &r);
+    printf("unscattered: T %.5f +- %.5f (exp(-2) = %.5f)\n", r.transmit, r.transmit_se, exp(-2.0));
+    assert_true(fabs(r.transmit - exp(-2.0)) < 3 * r.transmit_se);
+    assert_true(r.diffuse == 0.0);
+    ss_mc_result_free(&r);
+}
+
+static void check_energy(const ss_optics_slab *s, ss_mc_options *o) {
+    ss_mc_result r;
+    run_ok(s, o, &r);
+    double sum = r.specular + r.diffuse + r.transmit + r.absorbed - r.roulette_net;
+    assert_true(fabs(sum - 1.0) < 1e-9);
+    double al = 0;
+    for (int l = 0; l < s->nlayers; l++) al += r.absorbed_per_layer[l];
+    assert_true(fabs(al - r.absorbed) < 1e-9);
+    /* Roulette is unbiased: without the bookkeeping the sum is 1 within noise. */
+    assert_true(fabs(sum + r.roulette_net - 1.0) < 0.02);
+    ss_mc_result_free(&r);
+}
+
+static void test_energy_conservation(void **state) {
+    (void)state;
+    ss_mc_options o;
+    ss_mc_options_default(&o);
+    o.photons = nph(40000);
+    ss_optics_slab s = one_layer(1.0, 10, 90, 0.75, 0.02);
+    check_energy(&s, &o);
+    /* mismatched three-layer slab, rough surface, oblique incidence */
+    ss_optics_slab m;
+    memset(&m, 0, sizeof m);
+    m.nlayers = 3;
+    m.layer[0] = (ss_optics_layer){1.5, 2, 50, 0.8, 0.01};
+    m.layer[1] = (ss_optics_layer){1.33, 0.5, 100, 0.9, 0.05};
+    m.layer[2] = (ss_optics_layer){1.4, 5, 20, 0.0, 0.1};
+    m.n_above = 1.0;
+    m.n_below = 1.2;
+    m.bottom_albedo = -1;
+    o.roughness_sigma = 0.75;
+    o.theta_i_rad = 0.6;
+    check_energy(&m, &o);
+    o.stochastic_absorb = 1;
+    check_energy(&m, &o);
+    /* the skin over its fat reflector */
+    ss_bio_params b;
+    ss_bio_params_default(&b);
+    ss_optics_slab sk;
+    ss_error e;
+    assert_int_equal(ss_optics_skin_slab(&b, 560, &sk, &e), SS_OK);
+    o.stochastic_absorb = 0;
+    o.photons = nph(10000);
+    check_energy(&sk, &o);
+}
+
+/* Chandrasekhar (Radiative Transfer, 1960): for a semi-infinite medium with
+ * isotropic scattering and single-scattering albedo a, the total diffuse
+ * reflectance of a collimated beam at cosine mu0 is 1 - H(mu0) sqrt(1 - a), with
+ * 1/H(mu) = sqrt(1-a) + (a/2) int_0^1 mu' H(mu') / (mu + mu') dmu'. */
+static double chandrasekhar_rd(double a, double mu0) {
+    enum { N = 400 };
+    double mu[N], wq[N], H[N];
+    /* Gauss-Legendre on [0,1] via Newton on P_N */
+    for (int i = 0; i < N; i++) {
+        double x = cos(M_PI * (i + 0.75) / (N + 0.5)), dp = 1;
+        for (int it = 0; it < 100; it++) {
+            double p0 = 1, p1 = x;
+            for (int k = 2; k <= N; k++) {
+                double p2 = ((2 * k - 1) * x * p1 - (k - 1) * p0) / k;
+                p0 = p1;
+                p1 = p2;
+            }
+            dp = N * (x * p1 - p0) / (x * x - 1);
+            double dx = p1 / dp;
+            x -= dx;
+            if (fabs(dx) < 1e-15) break;
+        }
+        mu[i] = 0.5 * (x + 1);
+        wq[i] = 1.0 / ((1 - x * x) * dp * dp); /* = 2/((1-x^2)P'^2) / 2 */
+        H[i] = 1;
+    }
+    double s1a = sqrt(1 - a);
+    for (int it = 0; it < 500; it++)
+        for (int i = 0; i < N; i++) {
+            double sum = 0;
+            for (int j = 0; j < N; j++) sum += wq[j] * mu[j] * H[j] / (mu[i] + mu[j]);
+            H[i] = 1.0 / (s1a + 0.5 * a * sum);
+        }
+    double sum = 0;
+    for (int j = 0; j < N; j++) sum += wq[j] * mu[j] * H[j] / (mu0 + mu[j]);
+    double H0 = 1.0 / (s1a + 0.5 * a * sum);
+    return 1.0 - H0 * s1a;
+}
+
+static void test_semi_infinite_isotropic(void **state) {
+    (void)state;
+    double albedo[] = {0.9, 0.5};
+    for (int k = 0; k < 2; k++) {
+        double a = albedo[k];
+        double ref = chandrasekhar_rd(a, 1.0);
+        /* The reference itself against Hapke's (2002, Icarus 157:523) closed-form
+         * approximation of H, good to about 1 %. */
+        double y = sqrt(1 - a), r0 = (1 - y) / (1 + y);
+        double Hh = 1.0 / (1 - (1 - y) * (r0 + (1 - 0.5 * r0 - r0) * log(2.0)));
+        double refh = 1 - Hh * y;
+        printf("semi-infinite a=%.1f: exact H-function Rd = %.5f (Hapke approx %.5f)\n", a, ref,
+               refh);
+        assert_true(fabs(ref - refh) < 0.01 * ref);
+        /* 1000 transport mean free paths deep: semi-infinite for reflectance */
+        ss_optics_slab s = one_layer(1.0, 100 * (1 - a), 100 * a, 0.0, 10.0);
+        ss_mc_options o;
+        ss_mc_options_default(&o);
+        o.photons = nph(100000);
+        o.seed = 3;
+        ss_mc_result r;
+        run_ok(&s, &o, &r);
+        printf("semi-infinite MC: Rd %.5f +- %.5f\n", r.diffuse, r.diffuse_se);
+        assert_true(fabs(r.diffuse - ref) < 3 * r.diffuse_se);
+        ss_mc_result_free(&r);
+    }
+}
+
+/* Fresnel: weighted-mode specular is the exact unpolarised Fresnel reflectance,
+ * here against the sine/tangent closed forms. */
+static double fresnel_closed(double n1, double n2, double ti) {
+    if (ti == 0) return pow((n1 - n2) / (n1 + n2), 2);
+    double tt = asin(n1 / n2 * sin(ti));
+    double rs = pow(sin(ti - tt) / sin(ti + tt), 2);
+    double rp = pow(tan(ti - tt) / tan(ti + tt), 2);
+    return 0.5 * (rs + rp);
+}
+
+static void test_fresnel(void **state) {
+    (void)state;
+    ss_mc_options o;
+    ss_mc_options_default(&o);
+    o.photons = 1000;
+    double angles[] = {0.0, 0.3, 0.7854, 1.0472, 1.4};
+    double ns[] = {1.33, 1.4, 1.55};
+    for (int a = 0; a < 5; a++)
+        for (int k = 0; k < 3; k++) {
+            ss_optics_slab s = one_layer(ns[k], 1, 10, 0.9, 0.1);
+            o.theta_i_rad = angles[a];
+            ss_mc_result r;
+            run_ok(&s, &o, &r);
+            double ref = fresnel_closed(1.0, ns[k], angles[a]);
+            assert_true(fabs(r.specular - ref) < 1e-12);
+            ss_mc_result_free(&r);
+        }
+    /* 0.04 for n = 1.5 at normal incidence */
+    ss_optics_slab g = one_layer(1.5, 0, 0, 0, 0.1);
+    o.theta_i_rad = 0;
+    o.photons = nph(200000);
+    ss_mc_result r;
+    run_ok(&g, &o, &r);
+    assert_true(fabs(r.specular - 0.04) < 1e-12);
+    /* Clear glass plate: incoherent multiple reflections give total reflection
+     * 2R/(1+R) and transmission (1-R)/(1+R). */
+    double R = 0.04;
+    printf("glass plate: R %.5f (ref %.5f) T %.5f +- %.5f (ref %.5f)\n", r.specular + r.diffuse,
+           2 * R / (1 + R), r.transmit, r.transmit_se, (1 - R) / (1 + R));
+    assert_true(fabs(r.transmit - (1 - R) / (1 + R)) < 3 * r.transmit_se + 1e-12);
+    assert_true(fabs(r.specular + r.diffuse - 2 * R / (1 + R)) < 3 * r.transmit_se + 1e-12);
+    ss_mc_result_free(&r);
+}
+
+static void test_brdf_and_radial_normalisation(void **state) {
+    (void)state;
+    ss_optics_slab s = one_layer(1.4, 1, 100, 0.8, 1.0);
+    ss_mc_options o;
+    ss_mc_options_default(&o);
+    o.photons = nph(40000);
+    o.theta_i_rad = 0.5;
+    o.brdf_n_theta = 9;
+    o.brdf_n_phi = 12;
+    o.radial_bins = 200;
+    o.radial_max_cm = 20.0;
+    ss_mc_result r;
+    run_ok(&s, &o, &r);
+    /* sum f_r cos(theta_c) dOmega over bins = specular + diffuse (to rounding) */
+    double tot = 0;
+    for (int it = 0; it < 9; it++) {
+        double t0 = it * M_PI / 18, t1 = t0 + M_PI / 18;
+        double om = (cos(t0) - cos(t1)) * (M_PI / 12) * 2;
+        for (int ip = 0; ip < 12; ip++) tot += r.brdf_exit[it * 12 + ip] * om * cos(t0 + M_PI / 36);
+    }
+    assert_true(fabs(tot - (r.specular + r.diffuse)) < 1e-9);
+    /* The smooth-surface specular lands in the mirror bin: theta_r = theta_i, dphi = pi. */
+    int it_spec = (int)(0.5 / (M_PI / 18));
+    double t0 = it_spec * M_PI / 18;
+    double om = (cos(t0) - cos(t0 + M_PI / 18)) * (M_PI / 12) * 2 * cos(t0 + M_PI / 36);
+    assert_true(r.brdf_exit[it_spec * 12 + 11] * om >= r.specular);
+    /* radial profile integrates to the diffuse reflectance (all within 20 cm) */
+    double rad = 0;
+    for (int i = 0; i < 200; i++) {
+        double r0 = i * 0.1, r1 = r0 + 0.1;
+        rad += r.radial[i] * M_PI * (r1 * r1 - r0 * r0);
+    }
+    assert_true(fabs(rad - r.diffuse) < 1e-3 * r.diffuse);
+    /* and is monotonically decreasing away from the source on average */
+    assert_true(r.radial[0] > r.radial[5] && r.radial[5] > r.radial[50]);
+    ss_mc_result_free(&r);
+}
+
+static void test_determinism_threads(void **state) {
+    (void)state;
+    ss_bio_params b;
+    ss_bio_params_default(&b);
+    ss_optics_slab s;
+    ss_error e;
+    assert_int_equal(ss_optics_skin_slab(&b, 550, &s, &e), SS_OK);
+    ss_mc_options o;
+    ss_mc_options_default(&o);
+    o.photons = nph(20000);
+    o.roughness_sigma = 0.75;
+    o.brdf_n_theta = 6;
+    o.brdf_n_phi = 6;
+    o.radial_bins = 20;
+    o.radial_max_cm = 0.5;
+    ss_mc_result a, c;
+    omp_set_num_threads(1);
+    run_ok(&s, &o, &a);
+    omp_set_num_threads(2);
+    run_ok(&s, &o, &c);
+    assert_memory_equal(&a.diffuse, &c.diffuse, sizeof(double));
+    assert_memory_equal(&a.transmit, &c.transmit, sizeof(double));
+    assert_memory_equal(&a.absorbed, &c.absorbed, sizeof(double));
+    assert_memory_equal(&a.diffuse_se, &c.diffuse_se, sizeof(double));
+    assert_memory_equal(a.brdf_exit, c.brdf_exit, 36 * sizeof(double));
+    assert_memory_equal(a.radial, c.radial, 20 * sizeof(double));
+    assert_memory_equal(a.absorbed_per_layer, c.absorbed_per_layer, 4 * sizeof(double));
+    /* a different seed gives a different estimate */
+    o.seed = 99;
+    ss_mc_result d;
+    run_ok(&s, &o, &d);
+    assert_true(d.diffuse != a.diffuse);
+    ss_mc_result_free(&a);
+    ss_mc_result_free(&c);
+    ss_mc_result_free(&d);
+}
+
+/* Paths traced once without absorption, reweighted with exp(-sum mua L), agree
+ * with direct runs at several absorption sets. */
+static void test_paths_vs_run(void **state) {
+    (void)state;
+    ss_bio_params b;
+    ss_bio_params_default(&b);
+    ss_optics_slab s;
+    ss_error e;
+    assert_int_equal(ss_optics_skin_slab(&b, 600, &s, &e), SS_OK);
+    ss_mc_options o;
+    ss_mc_options_default(&o);
+    o.photons = nph(20000);
+    o.brdf_n_theta = 4;
+    o.brdf_n_phi = 4;
+    o.radial_bins = 10;
+    o.radial_max_cm = 0.5;
+    ss_mc_paths *p = NULL;
+    assert_int_equal(ss_mc_trace_paths(&s, &o, &p, &e), SS_OK);
+    double scale[] = {1.0, 3.0};
+    for (int k = 0; k < 2; k++) {
+        double mua[4];
+        ss_optics_slab t = s;
+        for (int l = 0; l < 4; l++) {
+            mua[l] = s.layer[l].mua_per_cm * scale[k];
+            t.layer[l].mua_per_cm = mua[l];
+        }
+        ss_mc_result a, r;
+        assert_int_equal(ss_mc_paths_apply(p, mua, &a, &e), SS_OK);
+        o.seed = 1000 + k;
+        run_ok(&t, &o, &r);
+        double se = sqrt(a.diffuse_se * a.diffuse_se + r.diffuse_se * r.diffuse_se);
+        printf("paths vs run (mua x%g): %.5f vs %.5f (+- %.5f)\n", scale[k], a.diffuse, r.diffuse,
+               se);
+        assert_true(fabs(a.diffuse - r.diffuse) < 3.5 * se);
+        assert_true(a.specular == r.specular);
+        double sa = 0;
+        for (int i = 0; i < 16; i++) sa += a.brdf_exit[i];
+        assert_true(sa > 0);
+        ss_mc_result_free(&a);
+        ss_mc_result_free(&r);
+    }
+    double bad[4] = {1, -1, 1, 1};
+    ss_mc_result x;
+    assert_int_equal(ss_mc_paths_apply(p, bad, &x, &e), SS_ERR_INPUT);
+    ss_mc_paths_free(p);
+}
+
+static void test_bad_parameters(void **state) {
+    (void)state;
+    ss_bio_params b;
+    ss_error e;
+    ss_bio_params_default(&b);
+    assert_int_equal(ss_bio_params_validate(&b, &e), SS_OK);
+    b.melanin = -0.1;
+    assert_int_equal(ss_bio_params_validate(&b, &e), SS_ERR_INPUT);
+    assert_non_null(strstr(e.msg, "melanin"));
+    ss_bio_params_default(&b);
+    b.blood = 1.5;
+    assert_int_equal(ss_bio_params_validate(&b, &e), SS_ERR_INPUT);
+    ss_bio_params_default(&b);
+    b.oxygenation = NAN;
+    assert_int_equal(ss_bio_params_validate(&b, &e), SS_ERR_INPUT);
+    ss_bio_params_default(&b);
+    b.epidermis_thickness_cm = 0;
+    assert_int_equal(ss_bio_params_validate(&b, &e), SS_ERR_INPUT);
+    ss_optics_slab s;
+    assert_int_equal(ss_optics_skin_slab(&b, 550, &s, &e), SS_ERR_INPUT);
+    ss_bio_params_default(&b);
+    assert_int_equal(ss_optics_skin_slab(&b, 1200, &s, &e), SS_ERR_INPUT);
+    ss_optics_slab t = one_layer(1.0, 10, 90, 1.0, 0.02);
+    ss_mc_options o;
+    ss_mc_options_default(&o);
+    ss_mc_result r;
+    assert_int_equal(ss_mc_run(&t, &o, &r, &e), SS_ERR_INPUT); /* g = 1 */
+    t = one_layer(1.0, 10, 90, 0.5, -1);
+    assert_int_equal(ss_mc_run(&t, &o, &r, &e), SS_ERR_INPUT);
+    t = one_layer(1.0, 10, 90, 0.5, 0.1);
+    o.photons = 0;
+    assert_int_equal(ss_mc_run(&t, &o, &r, &e), SS_ERR_INPUT);
+    o.photons = 10;
+    o.theta_i_rad = 2.0;
+    assert_int_equal(ss_mc_run(&t, &o, &r, &e), SS_ERR_INPUT);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_van_de_hulst),
+        cmocka_unit_test(test_unscattered),
+        cmocka_unit_test(test_energy_conservation),
+        cmocka_unit_test(test_semi_infinite_isotropic),
+        cmocka_unit_test(test_fresnel),
+        cmocka_unit_test(test_brdf_and_radial_normalisation),
+        cmocka_unit_test(test_determinism_threads),
+        cmocka_unit_test(test_paths_vs_run),
+        cmocka_unit_test(test_bad_parameters),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
