@@ -297,6 +297,178 @@ static void test_table_file(void **state) {
     free(dir);
 }
 
+/* Fast path (trace once without absorption, reweight) against direct
+ * simulation: diffuse reflectance of skin slabs at two parameter sets and two
+ * wavelengths, traced on the geometry of a third set, within 4 combined
+ * standard errors (independent seeds). */
+static void test_fast_path_matches_direct(void **state) {
+    (void)state;
+    ss_error err;
+    uint64_t photons = tu_quick() ? 20000 : 60000;
+    ss_bio_params geo, sets[2];
+    ss_bio_params_default(&geo);
+    sets[0] = geo;
+    sets[0].melanin = 0.2;
+    sets[0].blood = 0.03;
+    sets[0].oxygenation = 0.5;
+    sets[1] = geo;
+    sets[1].melanin = 0.03;
+    sets[1].pheomelanin_ratio = 0.8;
+    sets[1].blood = 0.002;
+    double wls[2] = {450.0, 620.0};
+    for (int w = 0; w < 2; w++) {
+        ss_optics_slab g;
+        assert_int_equal(ss_optics_skin_slab(&geo, wls[w], &g, &err), SS_OK);
+        ss_mc_options o;
+        ss_mc_options_default(&o);
+        o.photons = photons;
+        o.roughness_sigma = 0.75;
+        o.theta_i_rad = 0.4;
+        o.seed = 11;
+        ss_mc_paths *paths;
+        assert_int_equal(ss_mc_trace_paths(&g, &o, &paths, &err), SS_OK);
+        for (int k = 0; k < 2; k++) {
+            ss_optics_slab s;
+            assert_int_equal(ss_optics_skin_slab(&sets[k], wls[w], &s, &err), SS_OK);
+            double mua[SS_OPTICS_MAX_LAYERS];
+            for (int l = 0; l < s.nlayers; l++) {
+                /* only absorption differs between the parameter sets */
+                assert_true(s.layer[l].mus_per_cm == g.layer[l].mus_per_cm);
+                assert_true(s.layer[l].d_cm == g.layer[l].d_cm);
+                mua[l] = s.layer[l].mua_per_cm;
+            }
+            ss_mc_result fast, direct;
+            assert_int_equal(ss_mc_paths_apply(paths, mua, &fast, &err), SS_OK);
+            ss_mc_options od = o;
+            od.seed = 12345;
+            assert_int_equal(ss_mc_run(&s, &od, &direct, &err), SS_OK);
+            double z =
+                (fast.diffuse - direct.diffuse) /
+                sqrt(fast.diffuse_se * fast.diffuse_se + direct.diffuse_se * direct.diffuse_se);
+            print_message("wl %g set %d: fast %.5f +- %.5f, direct %.5f +- %.5f (z %.2f)\n", wls[w],
+                          k, fast.diffuse, fast.diffuse_se, direct.diffuse, direct.diffuse_se, z);
+            assert_true(fabs(z) < 4.0);
+            assert_true(direct.diffuse > 0.01);
+            ss_mc_result_free(&fast);
+            ss_mc_result_free(&direct);
+        }
+        ss_mc_paths_free(paths);
+    }
+}
+
+static void small_build_options(ss_mm_build_options *o) {
+    ss_mm_build_options_default(o);
+    o->spectrum.wl_min_nm = 450;
+    o->spectrum.wl_max_nm = 650;
+    o->spectrum.wl_step_nm = 100;
+    o->spectrum.mc.photons = 600;
+    o->n_theta_i = 2;
+    o->n_theta_r = 3;
+    o->n_phi = 3;
+}
+
+/* The table builder's entries equal a fit of ss_mm_sample_fast at the node,
+ * the fast sampled BRDF is close to the direct one, and the build is
+ * bit-identical with 1 and 2 threads. */
+static void test_table_build(void **state) {
+    (void)state;
+    ss_error err;
+    ss_mm_build_options o;
+    small_build_options(&o);
+    int ns[SS_MM_NAXES] = {2, 1, 2, 1, 1, 2};
+    double lo[SS_MM_NAXES], hi[SS_MM_NAXES];
+    for (int a = 0; a < SS_MM_NAXES; a++) ss_mm_axis_default_range(a, &lo[a], &hi[a]);
+    ss_mm_table *t1 = ss_mm_table_create(ns, lo, hi, &err);
+    ss_mm_table *t2 = ss_mm_table_create(ns, lo, hi, &err);
+    assert_non_null(t1);
+    ss_threads_set(1);
+    assert_int_equal(ss_mm_table_build(t1, &o, &err), SS_OK);
+    ss_threads_set(2);
+    assert_int_equal(ss_mm_table_build(t2, &o, &err), SS_OK);
+    assert_memory_equal(t1->entries, t2->entries, t1->nentries * SS_MM_NFIELDS * sizeof(double));
+    assert_true(t1->photons == 600 && t1->n_theta_r == 3 && t1->wl_step_nm == 100);
+    /* entry (1, 0, 1, 0, 0, 1) against a single fast sample + fit */
+    int idx[SS_MM_NAXES] = {1, 0, 1, 0, 0, 1};
+    ss_bio_params b = o.base;
+    b.melanin = t1->axis[0][1];
+    b.pheomelanin_ratio = t1->axis[1][0];
+    b.blood = t1->axis[2][1];
+    b.oxygenation = t1->axis[3][0];
+    b.sc_thickness_cm = t1->axis[4][0];
+    b.epidermis_thickness_cm = t1->axis[5][1];
+    ss_brdf_sampled s;
+    double sss[3], alb[3];
+    assert_int_equal(ss_mm_sample_fast(&b, &o, &s, sss, alb, &err), SS_OK);
+    ss_mm_entry e;
+    ss_mm_entry_unpack(t1->entries + ss_mm_table_index(t1, idx) * SS_MM_NFIELDS, &e);
+    for (int m = 0; m < SS_RENDER_NMODELS; m++) {
+        ss_fit_result r;
+        assert_int_equal(ss_render_fit((ss_render_model)m, &s, &o.fit, &r, &err), SS_OK);
+        assert_memory_equal(&r.params, &e.fit[m], sizeof r.params);
+    }
+    for (int c = 0; c < 3; c++) {
+        assert_true(sss[c] == e.sss_radius_cm[c]);
+        assert_true(alb[c] == e.albedo_rgb[c]);
+        if (!(alb[c] > 0.0 && alb[c] < 1.0)) print_message("alb %d = %g\n", c, alb[c]);
+        assert_true(alb[c] > 0.0 && alb[c] < 1.0);
+        assert_true(sss[c] > 0.0 && sss[c] < 1.0);
+    }
+    /* red light travels further in skin than blue */
+    assert_true(e.sss_radius_cm[0] > e.sss_radius_cm[2]);
+    /* more melanin, darker blue albedo */
+    ss_mm_entry e0;
+    int idx0[SS_MM_NAXES] = {0, 0, 1, 0, 0, 1};
+    ss_mm_entry_unpack(t1->entries + ss_mm_table_index(t1, idx0) * SS_MM_NFIELDS, &e0);
+    assert_true(e.albedo_rgb[2] < e0.albedo_rgb[2]);
+    /* lookup by biological parameters at the node is the node */
+    ss_mm_entry l;
+    assert_int_equal(ss_mm_table_lookup_bio(t1, &b, &l, &err), SS_OK);
+    assert_memory_equal(&l, &e, sizeof l);
+    b.melanin = -1;
+    assert_int_equal(ss_mm_table_lookup_bio(t1, &b, &l, &err), SS_ERR_INPUT);
+    free(s.f_rgb);
+    ss_mm_table_free(t1);
+    ss_mm_table_free(t2);
+    ss_threads_set(0);
+}
+
+/* The fast sampled BRDF (trace + reweight) against the direct one of
+ * ss_optics_brdf_sample: albedo-sized bins agree to Monte Carlo noise. */
+static void test_fast_brdf_close_to_direct(void **state) {
+    (void)state;
+    ss_error err;
+    ss_mm_build_options o;
+    small_build_options(&o);
+    o.spectrum.mc.photons = tu_quick() ? 4000 : 20000;
+    ss_bio_params b;
+    ss_bio_params_default(&b);
+    b.melanin = 0.1;
+    ss_brdf_sampled fast, direct;
+    assert_int_equal(ss_mm_sample_fast(&b, &o, &fast, NULL, NULL, &err), SS_OK);
+    ss_spectrum_options sp = o.spectrum;
+    sp.mc.seed = 77;
+    assert_int_equal(
+        ss_optics_brdf_sample(&b, &sp, o.n_theta_i, o.n_theta_r, o.n_phi, &direct, &err), SS_OK);
+    /* hemispherical sums per incidence bin and channel (projected solid angle
+     * weights): the directional reflectance, compared to 5 % */
+    for (int ti = 0; ti < o.n_theta_i; ti++)
+        for (int c = 0; c < 3; c++) {
+            double sf = 0, sd = 0;
+            for (int tr = 0; tr < o.n_theta_r; tr++) {
+                double t0 = tr * M_PI / 2 / o.n_theta_r, t1 = (tr + 1) * M_PI / 2 / o.n_theta_r;
+                double w = (cos(t0) - cos(t1)) * cos((tr + 0.5) * M_PI / 2 / o.n_theta_r);
+                for (int p = 0; p < o.n_phi; p++) {
+                    size_t k = (((size_t)ti * o.n_theta_r + tr) * o.n_phi + p) * 3 + c;
+                    sf += w * fast.f_rgb[k];
+                    sd += w * direct.f_rgb[k];
+                }
+            }
+            assert_true(fabs(sf - sd) < 0.05 * sd);
+        }
+    ss_brdf_sampled_free(&fast);
+    ss_brdf_sampled_free(&direct);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_reciprocity),
@@ -305,6 +477,9 @@ int main(void) {
         cmocka_unit_test(test_fit_bad_input),
         cmocka_unit_test(test_table_lookup),
         cmocka_unit_test(test_table_file),
+        cmocka_unit_test(test_fast_path_matches_direct),
+        cmocka_unit_test(test_table_build),
+        cmocka_unit_test(test_fast_brdf_close_to_direct),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -88,10 +88,25 @@ double ss_render_albedo(ss_render_model m, const ss_render_params *p, double the
 
 /* ---- fitting (seed 003 §4.6-4.7) ----------------------------------------- */
 
+/* Weight of each (theta_i, theta_r, dphi) bin in the squared distance.
+ *   SS_FIT_SOLID_ANGLE: dtheta_i x solid angle of the exit bin (§3.1.6)
+ *   SS_FIT_UNIFORM:     dtheta_i dtheta_r dphi, the seed's §4.6 integral read
+ *                       literally (uniform in the angles)
+ *   SS_FIT_PROJECTED:   solid angle x cos(theta_i) cos(theta_r): irradiance
+ *                       times projected solid angle, which de-emphasises the
+ *                       grazing bins (see docs/modelmatch.md) */
+typedef enum ss_fit_weighting {
+    SS_FIT_SOLID_ANGLE = 0,
+    SS_FIT_UNIFORM = 1,
+    SS_FIT_PROJECTED = 2
+} ss_fit_weighting;
+const char *ss_fit_weighting_name(int w); /* "solid-angle", "uniform", "projected" */
+
 typedef struct ss_fit_options {
     int subsamples; /* per exit bin and axis for the model's bin average (default 3) */
     int max_iter;   /* Nelder-Mead iterations (default 300) */
     double tol;     /* relative distance tolerance (default 1e-10) */
+    int weighting;  /* an ss_fit_weighting (default SS_FIT_SOLID_ANGLE) */
 } ss_fit_options;
 void ss_fit_options_default(ss_fit_options *o);
 
@@ -194,6 +209,14 @@ void ss_mm_build_options_default(ss_mm_build_options *o);
 ss_status ss_mm_sample_fast(const ss_bio_params *bio, const ss_mm_build_options *o,
                             ss_brdf_sampled *out, double sss_radius_cm[3], double albedo_rgb[3],
                             ss_error *err);
+
+/* From a radial diffuse reflectance profile per RGB channel (bins of width
+ * max_cm/bins from r = 0, rgb[bin*3+c] per cm^2, as ss_optics_radial_profile_rgb
+ * returns it): the subsurface radius, the reflectance-weighted mean distance
+ * from the point of entry per channel (cm, seed §4.7.1), and the albedo
+ * (integral over the disc of radius max_cm). */
+void ss_mm_sss_radius(const double *radial_rgb, int bins, double max_cm, double out_cm[3]);
+void ss_mm_radial_albedo(const double *radial_rgb, int bins, double max_cm, double out[3]);
 
 /* Fills every entry of t (axes set by ss_mm_table_create). */
 ss_status ss_mm_table_build(ss_mm_table *t, const ss_mm_build_options *o, ss_error *err);

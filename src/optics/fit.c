@@ -22,6 +22,11 @@ void ss_fit_options_default(ss_fit_options *o) {
     o->subsamples = 3;
     o->max_iter = 300;
     o->tol = 1e-10;
+    o->weighting = SS_FIT_SOLID_ANGLE;
+}
+
+const char *ss_fit_weighting_name(int w) {
+    return w == SS_FIT_UNIFORM ? "uniform" : w == SS_FIT_PROJECTED ? "projected" : "solid-angle";
 }
 
 typedef struct fit_ctx {
@@ -164,9 +169,11 @@ ss_status ss_render_fit(ss_render_model m, const ss_brdf_sampled *data, const ss
     if (!data || !data->f_rgb || data->n_theta_i < 1 || data->n_theta_r < 1 || data->n_phi < 1 ||
         data->n_theta_i > 1024 || data->n_theta_r > 1024 || data->n_phi > 1024)
         return ss_error_set(err, SS_ERR_INPUT, "fit: sampled BRDF is empty or has bad bin counts");
-    if (o->subsamples < 1 || o->subsamples > 16 || o->max_iter < 1)
-        return ss_error_set(err, SS_ERR_INPUT, "fit: bad options (subsamples %d, max_iter %d)",
-                            o->subsamples, o->max_iter);
+    if (o->subsamples < 1 || o->subsamples > 16 || o->max_iter < 1 || o->weighting < 0 ||
+        o->weighting > SS_FIT_PROJECTED)
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "fit: bad options (subsamples %d, max_iter %d, weighting %d)",
+                            o->subsamples, o->max_iter, o->weighting);
     int nti = data->n_theta_i, ntr = data->n_theta_r, nph = data->n_phi;
     size_t nbins = (size_t)nti * ntr * nph;
     for (size_t i = 0; i < nbins * 3; i++)
@@ -202,7 +209,12 @@ ss_status ss_render_fit(ss_render_model m, const ss_brdf_sampled *data, const ss
             double omega = (cos(t0) - cos(t1)) * dp; /* exit bin solid angle, sr */
             for (int ph = 0; ph < nph; ph++) {
                 size_t b = ((size_t)ti * ntr + tr) * nph + ph;
-                weight[b] = omega * dti;
+                if (o->weighting == SS_FIT_UNIFORM)
+                    weight[b] = dti * dtr * dp;
+                else if (o->weighting == SS_FIT_PROJECTED)
+                    weight[b] = omega * dti * cos(thi) * cos((tr + 0.5) * dtr);
+                else
+                    weight[b] = omega * dti;
                 wsum += weight[b];
                 for (int ch = 0; ch < 3; ch++)
                     fsum2 += weight[b] * data->f_rgb[b * 3 + ch] * data->f_rgb[b * 3 + ch];
