@@ -432,7 +432,7 @@ int cmd_optics_table(int argc, char **argv) {
         printf("{\"out\": \"%s\", \"samples\": %ld, \"entries\": %zu, \"photons\": %llu, "
                "\"seconds\": %.2f}\n",
                c.out, c.samples, t->nentries, (unsigned long long)t->photons, secs);
-    else
+    else if (!c.quiet)
         fprintf(stderr, "skinsim optics table: wrote %s (%zu entries, %.1f s)\n", c.out,
                 t->nentries, secs);
     ss_mm_table_free(t);
