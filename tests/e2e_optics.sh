@@ -30,6 +30,12 @@ cmp -s "$T/s.json" "$T/s9.json" && fail "a different seed gave identical output"
 [ "$(head -1 "$T/s.csv")" = "wavelength_nm,reflectance,std_error" ] || fail "csv header"
 [ "$(wc -l <"$T/s.csv")" -eq 6 ] || fail "csv rows"
 
+# radial profile per colour channel
+"$CLI" optics spectrum --photons 1000 --wl-step 100 --radial-out "$T/r.csv" --radial-bins 10 \
+  --radial-max-cm 0.2 >/dev/null || fail "radial"
+[ "$(head -1 "$T/r.csv")" = "r_min_cm,r_max_cm,rd_r,rd_g,rd_b" ] || fail "radial header"
+[ "$(wc -l <"$T/r.csv")" -eq 11 ] || fail "radial rows"
+
 # brdf
 "$CLI" optics brdf --out "$T/b.csv" --photons 500 --wl-step 200 --theta-i 2 --theta-r 3 --phi 4 \
   || fail "brdf"

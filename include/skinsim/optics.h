@@ -105,8 +105,12 @@ void ss_mc_result_free(ss_mc_result *res);
 typedef struct ss_mc_paths ss_mc_paths; /* opaque */
 ss_status ss_mc_trace_paths(const ss_optics_slab *geometry, const ss_mc_options *opt,
                             ss_mc_paths **out, ss_error *err);
-/* mua_per_cm: one per layer; fills diffuse (and brdf_exit if it was recorded, and
- * radial if recorded) */
+/* mua_per_cm: one per layer; fills specular, diffuse, diffuse_se (and brdf_exit
+ * if it was recorded, and radial if recorded), transmit (packets leaving through
+ * the bottom boundary only). absorbed and absorbed_per_layer are NaN: the path
+ * method does not compute them. Memory: one 76-byte record per traced photon at
+ * most; traces of more than 4,000,000 photons are refused. Fat bounces are
+ * recorded, so bottom_albedo < 1 is applied exactly as albedo^bounces. */
 ss_status ss_mc_paths_apply(const ss_mc_paths *p, const double *mua_per_cm, ss_mc_result *res,
                             ss_error *err);
 void ss_mc_paths_free(ss_mc_paths *p);
@@ -141,6 +145,10 @@ ss_status ss_mci_simulate(const ss_mci_run *run, uint64_t seed, char **mco_text,
 typedef struct ss_spectrum_options {
     double wl_min_nm, wl_max_nm, wl_step_nm;
     ss_mc_options mc;
+    /* optional: called after each Monte Carlo run with the fraction done (0..1]
+     * from the calling thread; NULL (the default) for none */
+    void (*progress)(void *user, double fraction_done);
+    void *progress_user;
 } ss_spectrum_options;
 void ss_spectrum_options_default(ss_spectrum_options *o); /* 380..780 step 10 */
 typedef struct ss_reflectance_spectrum {
@@ -170,7 +178,8 @@ void ss_brdf_sampled_free(ss_brdf_sampled *b);
  * §4.7.1): the spectral Rd(r, lambda) of each radial bin is converted with the
  * CIE observer and D65 like an albedo. Bins of width max_cm/bins from r = 0;
  * rgb[bin*3 + c] in 1/cm^2 (integrates over the plane to the channel albedo
- * minus what falls beyond max_cm). o->mc.radial_* are ignored. */
+ * minus what falls beyond max_cm); far-out bins can be slightly negative, as a
+ * colour-matrix row can be. o->mc.radial_* are ignored. */
 ss_status ss_optics_radial_profile_rgb(const ss_bio_params *bio, const ss_spectrum_options *o,
                                        int bins, double max_cm, double *rgb, ss_error *err);
 

@@ -200,6 +200,7 @@ ss_status ss_optics_reflectance_spectrum(const ss_bio_params *bio, const ss_spec
         out->std_error[k] = r.diffuse_se;
         spec += r.specular;
         ss_mc_result_free(&r);
+        if (o->progress) o->progress(o->progress_user, (double)(k + 1) / n);
     }
     ss_optics_data_free(&d);
     if (st) {
@@ -264,6 +265,8 @@ ss_status ss_optics_brdf_sample(const ss_bio_params *bio, const ss_spectrum_opti
             for (size_t b = 0; b < nb; b++)
                 for (int c = 0; c < 3; c++) f[b * 3 + c] += W[3 * k + c] * r.brdf_exit[b];
             ss_mc_result_free(&r);
+            if (o->progress)
+                o->progress(o->progress_user, (double)(k * n_theta_i + ti + 1) / (n * n_theta_i));
         }
     }
     free(wl);
@@ -310,6 +313,7 @@ ss_status ss_optics_radial_profile_rgb(const ss_bio_params *bio, const ss_spectr
         for (int b = 0; b < bins; b++)
             for (int c = 0; c < 3; c++) rgb[b * 3 + c] += W[3 * k + c] * r.radial[b];
         ss_mc_result_free(&r);
+        if (o->progress) o->progress(o->progress_user, (double)(k + 1) / n);
     }
     free(wl);
     free(W);
