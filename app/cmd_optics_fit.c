@@ -188,6 +188,24 @@ static int check_out(const char *cmd, const char *path) {
     return 0;
 }
 
+/* A JSON string literal (quotes, backslashes and control characters escaped). */
+static void json_str(const char *s) {
+    putchar('"');
+    for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
+        if (*p == '"' || *p == '\\')
+            printf("\\%c", *p);
+        else if (*p < 0x20)
+            printf("\\u%04x", *p);
+        else
+            putchar(*p);
+    }
+    putchar('"');
+}
+
+static void progress_cb(void *user, double fraction) {
+    ss_progress_update((ss_progress *)user, fraction);
+}
+
 static void print_entry(const ss_mm_entry *en, const double *rms, int json) {
     if (json) {
         printf("\"models\": {");
@@ -275,9 +293,15 @@ int cmd_optics_fit(int argc, char **argv) {
         if (ss_mm_sample_fast(&c.bio, &c.build, &s, en.sss_radius_cm, en.albedo_rgb, &e))
             return cli_fail(cmd, &e);
     } else {
-        if (ss_optics_brdf_sample(&c.bio, &c.build.spectrum, c.build.n_theta_i, c.build.n_theta_r,
-                                  c.build.n_phi, &s, &e))
-            return cli_fail(cmd, &e);
+        ss_progress prog;
+        ss_progress_begin(&prog, "sampled BRDF", 1.0, c.quiet);
+        ss_spectrum_options sp = c.build.spectrum;
+        sp.progress = progress_cb;
+        sp.progress_user = &prog;
+        ss_status bst = ss_optics_brdf_sample(&c.bio, &sp, c.build.n_theta_i, c.build.n_theta_r,
+                                              c.build.n_phi, &s, &e);
+        ss_progress_end(&prog);
+        if (bst) return cli_fail(cmd, &e);
         /* radial profile (normal incidence) for the subsurface radius and albedo */
         int bins = 200;
         double max_cm = 1.0, *rad = calloc((size_t)bins * 3, sizeof(double));
@@ -398,8 +422,10 @@ int cmd_optics_table(int argc, char **argv) {
             return cli_fail(cmd, &e);
         }
         if (c.json) {
-            printf("{\"table\": \"%s\", \"entries\": %zu, \"photons\": %llu, ", c.lookup,
-                   t->nentries, (unsigned long long)t->photons);
+            printf("{\"table\": ");
+            json_str(c.lookup);
+            printf(", \"entries\": %zu, \"photons\": %llu, ", t->nentries,
+                   (unsigned long long)t->photons);
             print_entry(&en, NULL, 1);
             printf("}\n");
         } else {
@@ -428,11 +454,12 @@ int cmd_optics_table(int argc, char **argv) {
         ss_mm_table_free(t);
         return cli_fail(cmd, &e);
     }
-    if (c.json)
-        printf("{\"out\": \"%s\", \"samples\": %ld, \"entries\": %zu, \"photons\": %llu, "
-               "\"seconds\": %.2f}\n",
-               c.out, c.samples, t->nentries, (unsigned long long)t->photons, secs);
-    else if (!c.quiet)
+    if (c.json) {
+        printf("{\"out\": ");
+        json_str(c.out);
+        printf(", \"samples\": %ld, \"entries\": %zu, \"photons\": %llu, \"seconds\": %.2f}\n",
+               c.samples, t->nentries, (unsigned long long)t->photons, secs);
+    } else if (!c.quiet)
         fprintf(stderr, "skinsim optics table: wrote %s (%zu entries, %.1f s)\n", c.out,
                 t->nentries, secs);
     ss_mm_table_free(t);

@@ -458,9 +458,10 @@ typedef struct mm_geo_out {
 } mm_geo_out;
 
 /* bios[0..nsets): parameter sets that share sc and epidermis thickness. */
-static ss_status build_geometry(const ss_bio_params *bios, int nsets, const ss_mm_build_options *o,
-                                int nwl, const double *wl, const double *W, mm_geo_out *out,
-                                ss_progress *prog, double *prog_done, ss_error *err) {
+static ss_status build_geometry(const ss_optics_data *data, const ss_bio_params *bios, int nsets,
+                                const ss_mm_build_options *o, int nwl, const double *wl,
+                                const double *W, mm_geo_out *out, ss_progress *prog,
+                                double *prog_done, ss_error *err) {
     int nti = o->n_theta_i, ntr = o->n_theta_r, nph = o->n_phi;
     size_t nb = (size_t)ntr * nph, per = (size_t)nti * nb * 3;
     double *mua = malloc((size_t)nsets * SS_OPTICS_MAX_LAYERS * sizeof(double));
@@ -468,7 +469,7 @@ static ss_status build_geometry(const ss_bio_params *bios, int nsets, const ss_m
     ss_status st = SS_OK;
     for (int k = 0; k < nwl && !st; k++) {
         ss_optics_slab geo;
-        if ((st = ss_optics_skin_slab(&bios[0], wl[k], &geo, err))) break;
+        if ((st = ss_optics_skin_slab_with(data, &bios[0], wl[k], &geo, err))) break;
         /* absorption of every set; the exactness of reweighting rests on the
          * sets differing only in mua, which is checked here */
         int bad = -1;
@@ -478,7 +479,7 @@ static ss_status build_geometry(const ss_bio_params *bios, int nsets, const ss_m
         for (int a = 0; a < nsets; a++) {
             ss_optics_slab sa;
             ss_error e2;
-            ss_status s2 = ss_optics_skin_slab(&bios[a], wl[k], &sa, &e2);
+            ss_status s2 = ss_optics_skin_slab_with(data, &bios[a], wl[k], &sa, &e2);
             if (s2 || !same_geometry(&sa, &geo)) {
 #pragma omp critical(mm_geo_err)
                 {
@@ -669,7 +670,10 @@ ss_status ss_mm_sample_fast(const ss_bio_params *bio, const ss_mm_build_options 
         return st;
     }
     double done = 0;
-    st = build_geometry(bio, 1, o, nwl, wl, W, &g, NULL, &done, err);
+    ss_optics_data *data = NULL;
+    st = ss_optics_data_open(&data, err);
+    if (!st) st = build_geometry(data, bio, 1, o, nwl, wl, W, &g, NULL, &done, err);
+    ss_optics_data_close(data);
     if (!st) {
         out->n_theta_i = o->n_theta_i;
         out->n_theta_r = o->n_theta_r;
@@ -711,6 +715,14 @@ ss_status ss_mm_table_build(ss_mm_table *t, const ss_mm_build_options *o, ss_err
         free(W);
         return st ? st : ss_error_set(err, SS_ERR_NOMEM, "ModelMatch: out of memory");
     }
+    ss_optics_data *data = NULL;
+    if ((st = ss_optics_data_open(&data, err))) {
+        free_geo_out(&g);
+        free(bios);
+        free(wl);
+        free(W);
+        return st;
+    }
     ss_progress prog;
     ss_progress_begin(&prog, "ModelMatch table", (double)ngeo * nwl * (o->n_theta_i + 1), o->quiet);
     double done = 0;
@@ -736,7 +748,7 @@ ss_status ss_mm_table_build(ss_mm_table *t, const ss_mm_build_options *o, ss_err
         memset(g.f_rgb, 0, (size_t)nabs * per * sizeof(double));
         memset(g.radial, 0, (size_t)nabs * MM_RADIAL_BINS * 3 * sizeof(double));
         memset(g.albedo, 0, (size_t)nabs * 3 * sizeof(double));
-        st = build_geometry(bios, nabs, o, nwl, wl, W, &g, &prog, &done, err);
+        st = build_geometry(data, bios, nabs, o, nwl, wl, W, &g, &prog, &done, err);
         if (st) break;
         /* fit both render models to every absorption set of this geometry */
         ss_status fst = SS_OK;
@@ -780,6 +792,7 @@ ss_status ss_mm_table_build(ss_mm_table *t, const ss_mm_build_options *o, ss_err
         }
     }
     ss_progress_end(&prog);
+    ss_optics_data_close(data);
     if (!st) {
         t->photons = o->spectrum.mc.photons;
         t->seed = o->spectrum.mc.seed;
