@@ -10,6 +10,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <zlib.h>
+
 #include "skinsim/optics_fit.h"
 
 #ifndef M_PI
@@ -280,6 +282,28 @@ static void test_table_file(void **state) {
         assert_null(ss_mm_table_read(bad, &err));
         assert_int_equal(err.code, SS_ERR_INPUT);
         buf[flips[i]] ^= 0x10;
+    }
+    /* valid checksum but an axis claiming more samples than the file holds:
+     * rejected before allocating for them */
+    {
+        unsigned char *cp = malloc(len);
+        assert_non_null(cp);
+        memcpy(cp, buf, len);
+        cp[76] = 64; /* axis 0 sample count (u32 at offset 72 + 4) */
+        uint32_t crc = (uint32_t)crc32(crc32(0L, Z_NULL, 0), cp, (uInt)(len - 4));
+        for (int i = 0; i < 4; i++) cp[len - 4 + (size_t)i] = (unsigned char)(crc >> (8 * i));
+        assert_int_equal(ss_write_file_atomic(bad, cp, len, &err), SS_OK);
+        assert_null(ss_mm_table_read(bad, &err));
+        assert_int_equal(err.code, SS_ERR_INPUT);
+        /* and the same edit with the right count restores a readable file */
+        cp[76] = (unsigned char)t->nsamples[0];
+        crc = (uint32_t)crc32(crc32(0L, Z_NULL, 0), cp, (uInt)(len - 4));
+        for (int i = 0; i < 4; i++) cp[len - 4 + (size_t)i] = (unsigned char)(crc >> (8 * i));
+        assert_int_equal(ss_write_file_atomic(bad, cp, len, &err), SS_OK);
+        ss_mm_table *ok = ss_mm_table_read(bad, &err);
+        assert_non_null(ok);
+        ss_mm_table_free(ok);
+        free(cp);
     }
     /* other version: rejected by version, even with a valid checksum */
     buf[8] = SS_MM_FILE_VERSION + 1;

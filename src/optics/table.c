@@ -340,6 +340,12 @@ ss_mm_table *ss_mm_table_from_memory(const unsigned char *buf, size_t len, const
             }
         }
     }
+    {
+        /* the entry block must be present before anything is allocated for it */
+        size_t need = 1;
+        for (int a = 0; a < SS_MM_NAXES; a++) need *= (size_t)ns[a];
+        if ((r.len - r.pos) / 8 / SS_MM_NFIELDS < need) goto trunc_free;
+    }
     t = table_alloc(ns, err);
     if (!t) goto fail;
     for (int a = 0; a < SS_MM_NAXES; a++)
