@@ -107,6 +107,35 @@ static void test_fit_recovers_parameters(void **state) {
     }
 }
 
+/* Monte Carlo-like noise (5 % relative, Gaussian via Box-Muller on the
+ * counter RNG) on a synthetic BRDF: the fit still lands close to the truth. */
+static void test_fit_with_noise(void **state) {
+    (void)state;
+    ss_error err;
+    ss_render_params truth = {{0.45, 0.3, 0.22}, 0.4, 0.45};
+    for (int m = 0; m < SS_RENDER_NMODELS; m++) {
+        ss_brdf_sampled s;
+        assert_int_equal(ss_render_brdf_sample((ss_render_model)m, &truth, 6, 8, 8, 3, &s, &err),
+                         SS_OK);
+        size_t n = (size_t)6 * 8 * 8 * 3;
+        for (size_t i = 0; i < n; i++) {
+            double u1 = ss_rng_uniform(3, (uint64_t)m, 2 * i) + 1e-300;
+            double u2 = ss_rng_uniform(3, (uint64_t)m, 2 * i + 1);
+            double g = sqrt(-2.0 * log(u1)) * cos(2.0 * M_PI * u2);
+            s.f_rgb[i] *= 1.0 + 0.05 * g;
+        }
+        ss_fit_result r;
+        assert_int_equal(ss_render_fit((ss_render_model)m, &s, NULL, &r, &err), SS_OK);
+        assert_true(fabs(r.params.roughness - truth.roughness) < 0.05 * truth.roughness);
+        assert_true(fabs(r.params.specular - truth.specular) < 0.1 * truth.specular);
+        for (int c = 0; c < 3; c++)
+            assert_true(fabs(r.params.base_rgb[c] - truth.base_rgb[c]) < 0.03 * truth.base_rgb[c]);
+        /* the residual reflects the noise level */
+        assert_true(r.residual_rel > 0.01 && r.residual_rel < 0.1);
+        free(s.f_rgb);
+    }
+}
+
 static void test_fit_bad_input(void **state) {
     (void)state;
     ss_error err;
@@ -498,6 +527,7 @@ int main(void) {
         cmocka_unit_test(test_reciprocity),
         cmocka_unit_test(test_energy_bound),
         cmocka_unit_test(test_fit_recovers_parameters),
+        cmocka_unit_test(test_fit_with_noise),
         cmocka_unit_test(test_fit_bad_input),
         cmocka_unit_test(test_table_lookup),
         cmocka_unit_test(test_table_file),
