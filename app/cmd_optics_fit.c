@@ -374,7 +374,9 @@ static void table_help(FILE *f, const fit_cli *c) {
             "table's range).\n\n"
             "  --out FILE               table to write (atomically)\n"
             "  --samples N              samples per axis, 1..9 (3)\n"
-            "  --lookup FILE            read a table and interpolate instead of building\n\n%s",
+            "  --lookup FILE            read a table and interpolate instead of building\n"
+            "When building, bilirubin and beta-carotene are the fixed non-axis values and\n"
+            "the six axis parameters below are not used; with --lookup they are the point.\n\n%s",
             BIO_HELP);
     fprintf(f, MC_HELP, (unsigned long long)c->build.spectrum.mc.photons,
             c->build.spectrum.wl_min_nm, c->build.spectrum.wl_max_nm, c->build.spectrum.wl_step_nm);
