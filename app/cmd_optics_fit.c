@@ -18,6 +18,7 @@ typedef struct fit_cli {
     ss_bio_params bio;
     ss_mm_build_options build; /* spectrum, bins, fit options */
     int threads, json, quiet, fast;
+    double max_theta_deg;
     long samples;
     const char *out, *lookup;
 } fit_cli;
@@ -44,6 +45,8 @@ static const char *MC_HELP =
     "  --weighting W            distance weights: solid-angle (seed §3.1.6, default),\n"
     "                           uniform (dtheta_i dtheta_r dphi, §4.6 literally) or\n"
     "                           projected (solid angle x cos theta_i cos theta_r)\n"
+    "  --max-theta-deg D        leave out bins whose theta_i or theta_r centre is above\n"
+    "                           D degrees (90: all bins, as the seed)\n"
     "  --threads N              worker threads (default $SKINSIM_THREADS or all cores)\n"
     "  --json                   machine-readable output on stdout\n"
     "  --quiet                  no progress bar\n";
@@ -53,6 +56,7 @@ static void init_cli(fit_cli *c) {
     ss_bio_params_default(&c->bio);
     ss_mm_build_options_default(&c->build);
     c->samples = 3;
+    c->max_theta_deg = 90.0;
 }
 
 static int need(const char *cmd, int argc, int i, const char *opt) {
@@ -83,6 +87,7 @@ static int parse_shared(const char *cmd, int argc, char **argv, int *i, fit_cli 
         {"--wl-min", &sp->wl_min_nm, 300, 800},
         {"--wl-max", &sp->wl_max_nm, 300, 800},
         {"--wl-step", &sp->wl_step_nm, 0.1, 400},
+        {"--max-theta-deg", &c->max_theta_deg, 1, 90},
     };
     for (size_t k = 0; k < sizeof dbl / sizeof dbl[0]; k++) {
         if (strcmp(a, dbl[k].name)) continue;
@@ -168,8 +173,15 @@ static int finish_shared(const char *cmd, fit_cli *c) {
     if ((sp->wl_max_nm - sp->wl_min_nm) / sp->wl_step_nm > 1000)
         return cli_usage_error(cmd, "--wl-step %g gives more than 1001 wavelengths",
                                sp->wl_step_nm);
+    double first =
+        45.0 / (c->build.n_theta_i < c->build.n_theta_r ? c->build.n_theta_i : c->build.n_theta_r);
+    if (c->max_theta_deg < 45.0 / c->build.n_theta_i ||
+        c->max_theta_deg < 45.0 / c->build.n_theta_r)
+        return cli_usage_error(cmd, "--max-theta-deg %g leaves no bin (first bin centre %g deg)",
+                               c->max_theta_deg, first);
     ss_threads_set(c->threads);
     c->build.quiet = c->quiet;
+    c->build.fit.max_theta_rad = c->max_theta_deg * 3.14159265358979323846 / 180.0;
     return 0;
 }
 

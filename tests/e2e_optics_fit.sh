@@ -52,6 +52,8 @@ expect2 "$CLI" optics fit --melanin 2
 expect2 "$CLI" optics fit --photons abc
 expect2 "$CLI" optics fit --weighting foo
 expect2 "$CLI" optics fit --bogus
+expect2 "$CLI" optics fit --max-theta-deg 5
+expect2 "$CLI" optics fit --max-theta-deg 91
 expect2 "$CLI" optics table --samples 0 --out "$T/bad.sstab"
 expect2 "$CLI" optics table --samples 2 --photons 10 --out "$T/bad.sstab"
 expect2 "$CLI" optics table $SMALL --samples 2 --out "$T/nodir/x/bad.sstab" --wl-min 700 \

@@ -136,6 +136,39 @@ static void test_fit_with_noise(void **state) {
     }
 }
 
+/* Bins above max_theta_rad are left out: garbage in the grazing bins does
+ * not disturb the fit once they are excluded, and does when they are not. */
+static void test_fit_max_theta(void **state) {
+    (void)state;
+    ss_error err;
+    ss_render_params truth = {{0.5, 0.35, 0.25}, 0.5, 0.4};
+    ss_brdf_sampled s;
+    assert_int_equal(ss_render_brdf_sample(SS_RENDER_GGX, &truth, 6, 6, 6, 3, &s, &err), SS_OK);
+    for (int ti = 0; ti < 6; ti++)
+        for (int tr = 0; tr < 6; tr++)
+            for (int p = 0; p < 6; p++)
+                if (ti == 5 || tr == 5)
+                    for (int c = 0; c < 3; c++)
+                        s.f_rgb[(((size_t)ti * 6 + tr) * 6 + p) * 3 + c] += 3.0;
+    ss_fit_options o;
+    ss_fit_options_default(&o);
+    ss_fit_result all, cut;
+    assert_int_equal(ss_render_fit(SS_RENDER_GGX, &s, &o, &all, &err), SS_OK);
+    o.max_theta_rad = 75.0 * M_PI / 180.0; /* the last bin centre is 82.5 degrees */
+    assert_int_equal(ss_render_fit(SS_RENDER_GGX, &s, &o, &cut, &err), SS_OK);
+    assert_true(fabs(cut.params.roughness - truth.roughness) < 0.02 * truth.roughness);
+    for (int c = 0; c < 3; c++)
+        assert_true(fabs(cut.params.base_rgb[c] - truth.base_rgb[c]) < 0.01 * truth.base_rgb[c]);
+    assert_true(cut.residual_rel < 1e-3);
+    assert_true(all.residual_rel > 0.1);
+    o.max_theta_rad = 0.0;
+    assert_int_equal(ss_render_fit(SS_RENDER_GGX, &s, &o, &cut, &err), SS_ERR_INPUT);
+    o.max_theta_rad = 5.0 * M_PI / 180.0; /* below the first bin centre, 7.5 degrees */
+    assert_int_equal(ss_render_fit(SS_RENDER_GGX, &s, &o, &cut, &err), SS_ERR_INPUT);
+    assert_non_null(strstr(err.msg, "no bin"));
+    free(s.f_rgb);
+}
+
 static void test_fit_bad_input(void **state) {
     (void)state;
     ss_error err;
@@ -528,6 +561,7 @@ int main(void) {
         cmocka_unit_test(test_energy_bound),
         cmocka_unit_test(test_fit_recovers_parameters),
         cmocka_unit_test(test_fit_with_noise),
+        cmocka_unit_test(test_fit_max_theta),
         cmocka_unit_test(test_fit_bad_input),
         cmocka_unit_test(test_table_lookup),
         cmocka_unit_test(test_table_file),

@@ -103,10 +103,12 @@ typedef enum ss_fit_weighting {
 const char *ss_fit_weighting_name(int w); /* "solid-angle", "uniform", "projected" */
 
 typedef struct ss_fit_options {
-    int subsamples; /* per exit bin and axis for the model's bin average (default 3) */
-    int max_iter;   /* Nelder-Mead iterations (default 300) */
-    double tol;     /* relative distance tolerance (default 1e-10) */
-    int weighting;  /* an ss_fit_weighting (default SS_FIT_SOLID_ANGLE) */
+    int subsamples;       /* per exit bin and axis for the model's bin average (default 3) */
+    int max_iter;         /* Nelder-Mead iterations (default 300) */
+    double tol;           /* relative distance tolerance (default 1e-10) */
+    int weighting;        /* an ss_fit_weighting (default SS_FIT_SOLID_ANGLE) */
+    double max_theta_rad; /* bins whose theta_i or theta_r centre lies above this get
+                             weight 0 (default pi/2: all bins) */
 } ss_fit_options;
 void ss_fit_options_default(ss_fit_options *o);
 

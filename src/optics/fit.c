@@ -23,6 +23,7 @@ void ss_fit_options_default(ss_fit_options *o) {
     o->max_iter = 300;
     o->tol = 1e-10;
     o->weighting = SS_FIT_SOLID_ANGLE;
+    o->max_theta_rad = M_PI / 2;
 }
 
 const char *ss_fit_weighting_name(int w) {
@@ -170,10 +171,12 @@ ss_status ss_render_fit(ss_render_model m, const ss_brdf_sampled *data, const ss
         data->n_theta_i > 1024 || data->n_theta_r > 1024 || data->n_phi > 1024)
         return ss_error_set(err, SS_ERR_INPUT, "fit: sampled BRDF is empty or has bad bin counts");
     if (o->subsamples < 1 || o->subsamples > 16 || o->max_iter < 1 || o->weighting < 0 ||
-        o->weighting > SS_FIT_PROJECTED)
+        o->weighting > SS_FIT_PROJECTED ||
+        !(o->max_theta_rad > 0.0 && o->max_theta_rad <= M_PI / 2))
         return ss_error_set(err, SS_ERR_INPUT,
-                            "fit: bad options (subsamples %d, max_iter %d, weighting %d)",
-                            o->subsamples, o->max_iter, o->weighting);
+                            "fit: bad options (subsamples %d, max_iter %d, weighting %d, "
+                            "max theta %g rad)",
+                            o->subsamples, o->max_iter, o->weighting, o->max_theta_rad);
     int nti = data->n_theta_i, ntr = data->n_theta_r, nph = data->n_phi;
     size_t nbins = (size_t)nti * ntr * nph;
     for (size_t i = 0; i < nbins * 3; i++)
@@ -215,6 +218,7 @@ ss_status ss_render_fit(ss_render_model m, const ss_brdf_sampled *data, const ss
                     weight[b] = omega * dti * cos(thi) * cos((tr + 0.5) * dtr);
                 else
                     weight[b] = omega * dti;
+                if (thi > o->max_theta_rad || (tr + 0.5) * dtr > o->max_theta_rad) weight[b] = 0.0;
                 wsum += weight[b];
                 for (int ch = 0; ch < 3; ch++)
                     fsum2 += weight[b] * data->f_rgb[b * 3 + ch] * data->f_rgb[b * 3 + ch];
@@ -233,6 +237,16 @@ ss_status ss_render_fit(ss_render_model m, const ss_brdf_sampled *data, const ss
                 for (int k = 0; k < c.nsub; k++) c.subw[b * (size_t)c.nsub + k] /= sw;
             }
         }
+    }
+    if (!(wsum > 0.0)) {
+        free(weight);
+        free(c.geom);
+        free(c.subw);
+        free(c.A);
+        free(c.S);
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "fit: no bin lies below the maximum angle %g degrees",
+                            o->max_theta_rad * 180.0 / M_PI);
     }
     /* Coarse grid over (specular, roughness), then Nelder-Mead from the best
      * node, restarted once from its own result. */
