@@ -358,6 +358,22 @@ static void test_paths_vs_run(void **state) {
     ss_mc_result x;
     assert_int_equal(ss_mc_paths_apply(p, bad, &x, &e), SS_ERR_INPUT);
     ss_mc_paths_free(p);
+    /* a grey fat reflector (albedo 0.6) is applied per recorded bounce */
+    s.bottom_albedo = 0.6;
+    o.seed = 5;
+    assert_int_equal(ss_mc_trace_paths(&s, &o, &p, &e), SS_OK);
+    double mua[4];
+    for (int l = 0; l < 4; l++) mua[l] = s.layer[l].mua_per_cm;
+    ss_mc_result a, r;
+    assert_int_equal(ss_mc_paths_apply(p, mua, &a, &e), SS_OK);
+    o.seed = 6;
+    run_ok(&s, &o, &r);
+    double se = sqrt(a.diffuse_se * a.diffuse_se + r.diffuse_se * r.diffuse_se);
+    printf("paths vs run (fat albedo 0.6): %.5f vs %.5f (+- %.5f)\n", a.diffuse, r.diffuse, se);
+    assert_true(fabs(a.diffuse - r.diffuse) < 3.5 * se);
+    ss_mc_result_free(&a);
+    ss_mc_result_free(&r);
+    ss_mc_paths_free(p);
 }
 
 static void test_bad_parameters(void **state) {
