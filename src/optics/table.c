@@ -1,0 +1,817 @@
+/* The ModelMatch table (seed 003 §4.8.6): a hypercube over the six optical
+ * biological parameters of §5.2, each entry the fitted render parameters;
+ * multilinear lookup over the 2^6 surrounding nodes; a versioned
+ * little-endian binary file with a CRC-32 (layout in docs/modelmatch.md).
+ * The build reuses transport across entries: photon paths are traced once per
+ * geometry (stratum corneum x epidermis thickness, wavelength, incidence bin)
+ * with absorption off, and every absorption set (melanin, pheomelanin, blood,
+ * oxygenation change only mu_a) is applied by exact reweighting. */
+#include "skinsim/optics_fit.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <zlib.h>
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
+static const char *axis_names[SS_MM_NAXES] = {"melanin",     "pheomelanin", "blood",
+                                              "oxygenation", "sc",          "epidermis"};
+
+const char *ss_mm_axis_name(int axis) {
+    return axis >= 0 && axis < SS_MM_NAXES ? axis_names[axis] : "?";
+}
+
+void ss_mm_axis_default_range(int axis, double *lo, double *hi) {
+    /* Plausible ranges (BioSpec / Jacques): melanosome fraction 1-43 %, blood
+     * 0.2-5 % of the dermis, SC 10-40 um, epidermis 40-150 um. */
+    static const double r[SS_MM_NAXES][2] = {{0.01, 0.43}, {0.0, 1.0},     {0.002, 0.05},
+                                             {0.5, 1.0},   {0.001, 0.004}, {0.004, 0.015}};
+    *lo = r[axis][0];
+    *hi = r[axis][1];
+}
+
+void ss_mm_entry_pack(const ss_mm_entry *e, double v[SS_MM_NFIELDS]) {
+    for (int m = 0; m < SS_RENDER_NMODELS; m++) {
+        for (int c = 0; c < 3; c++) v[m * 5 + c] = e->fit[m].base_rgb[c];
+        v[m * 5 + 3] = e->fit[m].specular;
+        v[m * 5 + 4] = e->fit[m].roughness;
+        v[10 + m] = e->residual_rel[m];
+    }
+    for (int c = 0; c < 3; c++) {
+        v[12 + c] = e->sss_radius_cm[c];
+        v[15 + c] = e->albedo_rgb[c];
+    }
+}
+
+void ss_mm_entry_unpack(const double v[SS_MM_NFIELDS], ss_mm_entry *e) {
+    for (int m = 0; m < SS_RENDER_NMODELS; m++) {
+        for (int c = 0; c < 3; c++) e->fit[m].base_rgb[c] = v[m * 5 + c];
+        e->fit[m].specular = v[m * 5 + 3];
+        e->fit[m].roughness = v[m * 5 + 4];
+        e->residual_rel[m] = v[10 + m];
+    }
+    for (int c = 0; c < 3; c++) {
+        e->sss_radius_cm[c] = v[12 + c];
+        e->albedo_rgb[c] = v[15 + c];
+    }
+}
+
+/* ---- creation ------------------------------------------------------------ */
+
+#define MM_MAX_SAMPLES 64
+#define MM_MAX_ENTRIES 50000000u
+
+static ss_mm_table *table_alloc(const int nsamples[SS_MM_NAXES], ss_error *err) {
+    size_t n = 1;
+    for (int a = 0; a < SS_MM_NAXES; a++) {
+        if (nsamples[a] < 1 || nsamples[a] > MM_MAX_SAMPLES) {
+            ss_error_set(err, SS_ERR_INPUT, "ModelMatch table: axis %s has %d samples (1..%d)",
+                         axis_names[a], nsamples[a], MM_MAX_SAMPLES);
+            return NULL;
+        }
+        n *= (size_t)nsamples[a];
+        if (n > MM_MAX_ENTRIES) {
+            ss_error_set(err, SS_ERR_INPUT, "ModelMatch table: more than %u entries",
+                         MM_MAX_ENTRIES);
+            return NULL;
+        }
+    }
+    ss_mm_table *t = calloc(1, sizeof *t);
+    if (!t) goto nomem;
+    t->nentries = n;
+    for (int a = 0; a < SS_MM_NAXES; a++) {
+        t->nsamples[a] = nsamples[a];
+        t->axis[a] = calloc((size_t)nsamples[a], sizeof(double));
+        if (!t->axis[a]) goto nomem;
+    }
+    t->entries = calloc(n * SS_MM_NFIELDS, sizeof(double));
+    if (!t->entries) goto nomem;
+    return t;
+nomem:
+    ss_mm_table_free(t);
+    ss_error_set(err, SS_ERR_NOMEM, "ModelMatch table: out of memory");
+    return NULL;
+}
+
+ss_mm_table *ss_mm_table_create(const int nsamples[SS_MM_NAXES], const double lo[SS_MM_NAXES],
+                                const double hi[SS_MM_NAXES], ss_error *err) {
+    for (int a = 0; a < SS_MM_NAXES; a++)
+        if (!isfinite(lo[a]) || !isfinite(hi[a]) || (nsamples[a] > 1 && !(hi[a] > lo[a]))) {
+            ss_error_set(err, SS_ERR_INPUT, "ModelMatch table: axis %s range [%g, %g] is empty",
+                         axis_names[a], lo[a], hi[a]);
+            return NULL;
+        }
+    ss_mm_table *t = table_alloc(nsamples, err);
+    if (!t) return NULL;
+    for (int a = 0; a < SS_MM_NAXES; a++)
+        for (int k = 0; k < nsamples[a]; k++)
+            t->axis[a][k] = nsamples[a] == 1 ? lo[a]
+                            : k == nsamples[a] - 1
+                                ? hi[a]
+                                : lo[a] + (hi[a] - lo[a]) * k / (nsamples[a] - 1);
+    return t;
+}
+
+void ss_mm_table_free(ss_mm_table *t) {
+    if (!t) return;
+    for (int a = 0; a < SS_MM_NAXES; a++) free(t->axis[a]);
+    free(t->entries);
+    free(t);
+}
+
+size_t ss_mm_table_index(const ss_mm_table *t, const int idx[SS_MM_NAXES]) {
+    size_t k = 0;
+    for (int a = 0; a < SS_MM_NAXES; a++) k = k * (size_t)t->nsamples[a] + (size_t)idx[a];
+    return k;
+}
+
+/* ---- lookup -------------------------------------------------------------- */
+
+void ss_mm_table_lookup(const ss_mm_table *t, const double x[SS_MM_NAXES],
+                        double out[SS_MM_NFIELDS]) {
+    int i0[SS_MM_NAXES];
+    double fr[SS_MM_NAXES];
+    for (int a = 0; a < SS_MM_NAXES; a++) {
+        int n = t->nsamples[a];
+        const double *v = t->axis[a];
+        i0[a] = 0;
+        fr[a] = 0.0;
+        if (n == 1) continue;
+        double xa = x[a];
+        if (!(xa > v[0])) xa = v[0]; /* also catches NaN */
+        if (xa > v[n - 1]) xa = v[n - 1];
+        int i = 0;
+        while (i < n - 2 && xa >= v[i + 1]) i++;
+        i0[a] = i;
+        fr[a] = (xa - v[i]) / (v[i + 1] - v[i]);
+    }
+    for (int f = 0; f < SS_MM_NFIELDS; f++) out[f] = 0.0;
+    for (int corner = 0; corner < (1 << SS_MM_NAXES); corner++) {
+        double w = 1.0;
+        int idx[SS_MM_NAXES];
+        for (int a = 0; a < SS_MM_NAXES; a++) {
+            int up = (corner >> a) & 1;
+            if (t->nsamples[a] == 1 && up) {
+                w = 0.0;
+                break;
+            }
+            w *= up ? fr[a] : 1.0 - fr[a];
+            idx[a] = i0[a] + up;
+        }
+        if (w == 0.0) continue;
+        const double *e = t->entries + ss_mm_table_index(t, idx) * SS_MM_NFIELDS;
+        for (int f = 0; f < SS_MM_NFIELDS; f++) out[f] += w * e[f];
+    }
+}
+
+/* ---- file ---------------------------------------------------------------- */
+
+static const unsigned char mm_magic[8] = {'S', 'S', 'M', 'M', 'T', 'A', 'B', '\n'};
+
+typedef struct wbuf {
+    unsigned char *p;
+    size_t len, cap;
+    int fail;
+} wbuf;
+
+static void put_bytes(wbuf *b, const void *src, size_t n) {
+    if (b->fail) return;
+    if (b->len + n > b->cap) {
+        size_t cap = b->cap ? b->cap * 2 : 4096;
+        while (cap < b->len + n) cap *= 2;
+        unsigned char *q = realloc(b->p, cap);
+        if (!q) {
+            b->fail = 1;
+            return;
+        }
+        b->p = q;
+        b->cap = cap;
+    }
+    memcpy(b->p + b->len, src, n);
+    b->len += n;
+}
+static void put_u32(wbuf *b, uint32_t v) {
+    unsigned char c[4];
+    for (int i = 0; i < 4; i++) c[i] = (unsigned char)(v >> (8 * i));
+    put_bytes(b, c, 4);
+}
+static void put_u64(wbuf *b, uint64_t v) {
+    unsigned char c[8];
+    for (int i = 0; i < 8; i++) c[i] = (unsigned char)(v >> (8 * i));
+    put_bytes(b, c, 8);
+}
+static void put_f64(wbuf *b, double d) {
+    uint64_t v;
+    memcpy(&v, &d, 8);
+    put_u64(b, v);
+}
+
+ss_status ss_mm_table_write(const char *path, const ss_mm_table *t, ss_error *err) {
+    wbuf b = {0};
+    put_bytes(&b, mm_magic, 8);
+    put_u32(&b, SS_MM_FILE_VERSION);
+    put_u32(&b, SS_MM_NAXES);
+    put_u32(&b, SS_MM_NFIELDS);
+    put_u32(&b, (uint32_t)t->n_theta_i);
+    put_u32(&b, (uint32_t)t->n_theta_r);
+    put_u32(&b, (uint32_t)t->n_phi);
+    put_u64(&b, t->photons);
+    put_u64(&b, t->seed);
+    put_f64(&b, t->wl_min_nm);
+    put_f64(&b, t->wl_max_nm);
+    put_f64(&b, t->wl_step_nm);
+    for (int a = 0; a < SS_MM_NAXES; a++) {
+        put_u32(&b, (uint32_t)a);
+        put_u32(&b, (uint32_t)t->nsamples[a]);
+        for (int k = 0; k < t->nsamples[a]; k++) put_f64(&b, t->axis[a][k]);
+    }
+    for (size_t i = 0; i < t->nentries * SS_MM_NFIELDS; i++) put_f64(&b, t->entries[i]);
+    uLong crc = crc32(0L, Z_NULL, 0);
+    if (!b.fail) crc = crc32(crc, b.p, (uInt)b.len);
+    put_u32(&b, (uint32_t)crc);
+    if (b.fail) {
+        free(b.p);
+        return ss_error_set(err, SS_ERR_NOMEM, "ModelMatch table: out of memory");
+    }
+    ss_status st = ss_write_file_atomic(path, b.p, b.len, err);
+    free(b.p);
+    return st;
+}
+
+typedef struct rbuf {
+    const unsigned char *p;
+    size_t len, pos;
+} rbuf;
+
+static int get_u32(rbuf *r, uint32_t *v) {
+    if (r->len - r->pos < 4) return 0;
+    *v = 0;
+    for (int i = 0; i < 4; i++) *v |= (uint32_t)r->p[r->pos + i] << (8 * i);
+    r->pos += 4;
+    return 1;
+}
+static int get_u64(rbuf *r, uint64_t *v) {
+    if (r->len - r->pos < 8) return 0;
+    *v = 0;
+    for (int i = 0; i < 8; i++) *v |= (uint64_t)r->p[r->pos + i] << (8 * i);
+    r->pos += 8;
+    return 1;
+}
+static int get_f64(rbuf *r, double *d) {
+    uint64_t v;
+    if (!get_u64(r, &v)) return 0;
+    memcpy(d, &v, 8);
+    return 1;
+}
+
+ss_mm_table *ss_mm_table_from_memory(const unsigned char *buf, size_t len, const char *name,
+                                     ss_error *err) {
+    rbuf r = {buf, len, 0};
+    uint32_t version, naxes, nfields, nti, ntr, nph;
+    if (len < 8 || memcmp(buf, mm_magic, 8) != 0) {
+        ss_error_set(err, SS_ERR_INPUT, "%s: not a skinsim ModelMatch table (bad magic)", name);
+        return NULL;
+    }
+    r.pos = 8;
+    if (!get_u32(&r, &version)) goto truncated;
+    if (version != SS_MM_FILE_VERSION) {
+        ss_error_set(err, SS_ERR_INPUT,
+                     "%s: ModelMatch table version %u is not supported (this build reads "
+                     "version %d)",
+                     name, version, SS_MM_FILE_VERSION);
+        return NULL;
+    }
+    /* The CRC covers everything before the last 4 bytes: check it first so a
+     * corrupt file is reported as such, not as whatever field broke. */
+    if (len < 12 + 4) goto truncated;
+    {
+        rbuf tail = {buf, len, len - 4};
+        uint32_t stored;
+        get_u32(&tail, &stored);
+        uLong crc = crc32(crc32(0L, Z_NULL, 0), buf, (uInt)(len - 4));
+        if ((uint32_t)crc != stored) {
+            ss_error_set(err, SS_ERR_INPUT,
+                         "%s: ModelMatch table checksum mismatch (file truncated or corrupt)",
+                         name);
+            return NULL;
+        }
+    }
+    r.len = len - 4;
+    if (!get_u32(&r, &naxes) || !get_u32(&r, &nfields)) goto truncated;
+    if (naxes != SS_MM_NAXES || nfields != SS_MM_NFIELDS) {
+        ss_error_set(err, SS_ERR_INPUT,
+                     "%s: ModelMatch table has %u axes and %u fields (expected %d and %d)", name,
+                     naxes, nfields, SS_MM_NAXES, SS_MM_NFIELDS);
+        return NULL;
+    }
+    uint64_t photons, seed;
+    double wl[3];
+    if (!get_u32(&r, &nti) || !get_u32(&r, &ntr) || !get_u32(&r, &nph) || !get_u64(&r, &photons) ||
+        !get_u64(&r, &seed) || !get_f64(&r, &wl[0]) || !get_f64(&r, &wl[1]) || !get_f64(&r, &wl[2]))
+        goto truncated;
+    int ns[SS_MM_NAXES];
+    double *vals[SS_MM_NAXES] = {0};
+    ss_mm_table *t = NULL;
+    for (int a = 0; a < SS_MM_NAXES; a++) {
+        uint32_t id, n;
+        if (!get_u32(&r, &id) || !get_u32(&r, &n)) goto trunc_free;
+        if (id != (uint32_t)a || n < 1 || n > MM_MAX_SAMPLES) {
+            ss_error_set(err, SS_ERR_INPUT,
+                         "%s: ModelMatch table axis %d is malformed (id %u, %u samples)", name, a,
+                         id, n);
+            goto fail;
+        }
+        ns[a] = (int)n;
+        vals[a] = malloc(n * sizeof(double));
+        if (!vals[a]) {
+            ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", name);
+            goto fail;
+        }
+        for (uint32_t k = 0; k < n; k++) {
+            if (!get_f64(&r, &vals[a][k])) goto trunc_free;
+            if (!isfinite(vals[a][k]) || (k > 0 && !(vals[a][k] > vals[a][k - 1]))) {
+                ss_error_set(err, SS_ERR_INPUT,
+                             "%s: ModelMatch table axis %s values are not finite and increasing",
+                             name, axis_names[a]);
+                goto fail;
+            }
+        }
+    }
+    {
+        /* the entry block must be present before anything is allocated for it */
+        size_t need = 1;
+        for (int a = 0; a < SS_MM_NAXES; a++) need *= (size_t)ns[a];
+        if ((r.len - r.pos) / 8 / SS_MM_NFIELDS < need) goto trunc_free;
+    }
+    t = table_alloc(ns, err);
+    if (!t) goto fail;
+    for (int a = 0; a < SS_MM_NAXES; a++)
+        memcpy(t->axis[a], vals[a], (size_t)ns[a] * sizeof(double));
+    if ((r.len - r.pos) / 8 < t->nentries * SS_MM_NFIELDS) goto trunc_free;
+    for (size_t i = 0; i < t->nentries * SS_MM_NFIELDS; i++) {
+        get_f64(&r, &t->entries[i]);
+        if (!isfinite(t->entries[i])) {
+            ss_error_set(err, SS_ERR_INPUT, "%s: ModelMatch table entry value %zu is not finite",
+                         name, i);
+            goto fail;
+        }
+    }
+    if (r.pos != r.len) {
+        ss_error_set(err, SS_ERR_INPUT, "%s: ModelMatch table has %zu unexpected trailing bytes",
+                     name, r.len - r.pos);
+        goto fail;
+    }
+    t->n_theta_i = (int)nti;
+    t->n_theta_r = (int)ntr;
+    t->n_phi = (int)nph;
+    t->photons = photons;
+    t->seed = seed;
+    t->wl_min_nm = wl[0];
+    t->wl_max_nm = wl[1];
+    t->wl_step_nm = wl[2];
+    for (int a = 0; a < SS_MM_NAXES; a++) free(vals[a]);
+    return t;
+trunc_free:
+    ss_error_set(err, SS_ERR_INPUT, "%s: ModelMatch table is truncated", name);
+fail:
+    for (int a = 0; a < SS_MM_NAXES; a++) free(vals[a]);
+    ss_mm_table_free(t);
+    return NULL;
+truncated:
+    ss_error_set(err, SS_ERR_INPUT, "%s: ModelMatch table is truncated", name);
+    return NULL;
+}
+
+ss_mm_table *ss_mm_table_read(const char *path, ss_error *err) {
+    size_t len = 0;
+    char *buf = ss_read_file(path, &len, err);
+    if (!buf) return NULL;
+    ss_mm_table *t = ss_mm_table_from_memory((const unsigned char *)buf, len, path, err);
+    free(buf);
+    return t;
+}
+ss_status ss_mm_table_lookup_bio(const ss_mm_table *t, const ss_bio_params *bio, ss_mm_entry *out,
+                                 ss_error *err) {
+    ss_status st = ss_bio_params_validate(bio, err);
+    if (st) return st;
+    double x[SS_MM_NAXES] = {bio->melanin,     bio->pheomelanin_ratio, bio->blood,
+                             bio->oxygenation, bio->sc_thickness_cm,   bio->epidermis_thickness_cm};
+    double v[SS_MM_NFIELDS];
+    ss_mm_table_lookup(t, x, v);
+    ss_mm_entry_unpack(v, out);
+    return SS_OK;
+}
+
+/* ---- building: trace once per geometry, reweight per absorption set ------- */
+
+#define MM_RADIAL_BINS 200
+#define MM_RADIAL_MAX_CM 1.0
+
+void ss_mm_build_options_default(ss_mm_build_options *o) {
+    memset(o, 0, sizeof *o);
+    ss_spectrum_options_default(&o->spectrum);
+    o->spectrum.wl_min_nm = 400.0;
+    o->spectrum.wl_max_nm = 700.0;
+    o->spectrum.wl_step_nm = 20.0;
+    o->spectrum.mc.photons = 10000;
+    o->n_theta_i = 8;
+    o->n_theta_r = 8;
+    o->n_phi = 8;
+    ss_fit_options_default(&o->fit);
+    ss_bio_params_default(&o->base);
+    o->quiet = 1;
+}
+
+static ss_status check_build_options(const ss_mm_build_options *o, int *nwl, ss_error *err) {
+    const ss_spectrum_options *s = &o->spectrum;
+    if (!(s->wl_min_nm >= 300.0 && s->wl_max_nm <= 800.0 && s->wl_min_nm <= s->wl_max_nm &&
+          s->wl_step_nm > 0.0 && (s->wl_max_nm - s->wl_min_nm) / s->wl_step_nm <= 1000.0))
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "ModelMatch: wavelengths %g..%g nm step %g: need 300 <= min <= max <= "
+                            "800 and at most 1001 samples",
+                            s->wl_min_nm, s->wl_max_nm, s->wl_step_nm);
+    if (o->n_theta_i < 1 || o->n_theta_i > 64 || o->n_theta_r < 1 || o->n_theta_r > 64 ||
+        o->n_phi < 1 || o->n_phi > 64)
+        return ss_error_set(err, SS_ERR_INPUT, "ModelMatch: BRDF bins %d x %d x %d (each 1..64)",
+                            o->n_theta_i, o->n_theta_r, o->n_phi);
+    if (s->mc.photons < 100 || s->mc.stochastic_absorb)
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "ModelMatch: photons %llu (need >= 100, weighted transport)",
+                            (unsigned long long)s->mc.photons);
+    *nwl = (int)floor((s->wl_max_nm - s->wl_min_nm) / s->wl_step_nm + 1e-9) + 1;
+    return SS_OK;
+}
+
+static int same_geometry(const ss_optics_slab *a, const ss_optics_slab *b) {
+    if (a->nlayers != b->nlayers || a->n_above != b->n_above || a->n_below != b->n_below ||
+        a->bottom_albedo != b->bottom_albedo)
+        return 0;
+    for (int l = 0; l < a->nlayers; l++)
+        if (a->layer[l].n != b->layer[l].n || a->layer[l].mus_per_cm != b->layer[l].mus_per_cm ||
+            a->layer[l].g != b->layer[l].g || a->layer[l].d_cm != b->layer[l].d_cm)
+            return 0;
+    return 1;
+}
+
+/* Per absorption set results of one geometry. */
+typedef struct mm_geo_out {
+    double *f_rgb;  /* nsets * nti*ntr*nph*3 */
+    double *radial; /* nsets * MM_RADIAL_BINS * 3 */
+    double *albedo; /* nsets * 3 */
+} mm_geo_out;
+
+/* bios[0..nsets): parameter sets that share sc and epidermis thickness. */
+static ss_status build_geometry(const ss_optics_data *data, const ss_bio_params *bios, int nsets,
+                                const ss_mm_build_options *o, int nwl, const double *wl,
+                                const double *W, mm_geo_out *out, ss_progress *prog,
+                                double *prog_done, ss_error *err) {
+    int nti = o->n_theta_i, ntr = o->n_theta_r, nph = o->n_phi;
+    size_t nb = (size_t)ntr * nph, per = (size_t)nti * nb * 3;
+    double *mua = malloc((size_t)nsets * SS_OPTICS_MAX_LAYERS * sizeof(double));
+    if (!mua) return ss_error_set(err, SS_ERR_NOMEM, "ModelMatch: out of memory");
+    ss_status st = SS_OK;
+    for (int k = 0; k < nwl && !st; k++) {
+        ss_optics_slab geo;
+        if ((st = ss_optics_skin_slab_with(data, &bios[0], wl[k], &geo, err))) break;
+        /* absorption of every set; the exactness of reweighting rests on the
+         * sets differing only in mua, which is checked here */
+        int bad = -1;
+        ss_status pst = SS_OK;
+        ss_error perr;
+#pragma omp parallel for schedule(dynamic, 4)
+        for (int a = 0; a < nsets; a++) {
+            ss_optics_slab sa;
+            ss_error e2;
+            ss_status s2 = ss_optics_skin_slab_with(data, &bios[a], wl[k], &sa, &e2);
+            if (s2 || !same_geometry(&sa, &geo)) {
+#pragma omp critical(mm_geo_err)
+                {
+                    if (pst == SS_OK) {
+                        pst = s2 ? s2 : SS_ERR_RUNTIME;
+                        perr = e2;
+                        bad = a;
+                    }
+                }
+                continue;
+            }
+            for (int l = 0; l < geo.nlayers; l++)
+                mua[(size_t)a * SS_OPTICS_MAX_LAYERS + l] = sa.layer[l].mua_per_cm;
+        }
+        if (pst) {
+            if (pst == SS_ERR_RUNTIME)
+                st = ss_error_set(err, SS_ERR_RUNTIME,
+                                  "ModelMatch: parameter set %d changes more than absorption at "
+                                  "%g nm; the reweighting fast path does not apply",
+                                  bad, wl[k]);
+            else {
+                *err = perr;
+                st = pst;
+            }
+            break;
+        }
+        /* nti incidence bins for the BRDF, plus normal incidence for the
+         * albedo and the radial profile */
+        for (int ti = 0; ti <= nti && !st; ti++) {
+            ss_mc_options mc = o->spectrum.mc;
+            mc.radial_bins = 0;
+            mc.radial_max_cm = 0;
+            mc.brdf_n_theta = mc.brdf_n_phi = 0;
+            if (ti < nti) {
+                mc.theta_i_rad = (ti + 0.5) * M_PI / (2.0 * nti);
+                mc.brdf_n_theta = ntr;
+                mc.brdf_n_phi = nph;
+            } else {
+                mc.theta_i_rad = 0.0;
+                mc.radial_bins = MM_RADIAL_BINS;
+                mc.radial_max_cm = MM_RADIAL_MAX_CM;
+            }
+            ss_mc_paths *paths = NULL;
+            if ((st = ss_mc_trace_paths(&geo, &mc, &paths, err))) break;
+            ss_status ast = SS_OK;
+            ss_error aerr;
+#pragma omp parallel for schedule(dynamic, 1)
+            for (int a = 0; a < nsets; a++) {
+                ss_mc_result r;
+                ss_error e2;
+                ss_status s2 =
+                    ss_mc_paths_apply(paths, mua + (size_t)a * SS_OPTICS_MAX_LAYERS, &r, &e2);
+                if (s2) {
+#pragma omp critical(mm_apply_err)
+                    {
+                        if (ast == SS_OK) {
+                            ast = s2;
+                            aerr = e2;
+                        }
+                    }
+                    continue;
+                }
+                const double *w = W + 3 * k;
+                if (ti < nti) {
+                    double *f = out->f_rgb + (size_t)a * per + (size_t)ti * nb * 3;
+                    for (size_t b = 0; b < nb; b++)
+                        for (int c = 0; c < 3; c++) f[b * 3 + c] += w[c] * r.brdf_exit[b];
+                } else {
+                    double *rad = out->radial + (size_t)a * MM_RADIAL_BINS * 3;
+                    for (int b = 0; b < MM_RADIAL_BINS; b++)
+                        for (int c = 0; c < 3; c++) rad[b * 3 + c] += w[c] * r.radial[b];
+                    for (int c = 0; c < 3; c++) out->albedo[(size_t)a * 3 + c] += w[c] * r.diffuse;
+                }
+                ss_mc_result_free(&r);
+            }
+            ss_mc_paths_free(paths);
+            if (ast) {
+                *err = aerr;
+                st = ast;
+            }
+            if (prog) {
+                *prog_done += 1.0;
+                ss_progress_update(prog, *prog_done);
+            }
+        }
+    }
+    free(mua);
+    return st;
+}
+
+void ss_mm_sss_radius(const double *rad, int bins, double max_cm, double out[3]) {
+    double dr = max_cm / bins;
+    for (int c = 0; c < 3; c++) {
+        double num = 0, den = 0;
+        for (int b = 0; b < bins; b++) {
+            double r0 = b * dr, r1 = r0 + dr;
+            double area = M_PI * (r1 * r1 - r0 * r0);
+            double rc = 2.0 / 3.0 * (r1 * r1 * r1 - r0 * r0 * r0) / (r1 * r1 - r0 * r0);
+            num += rad[b * 3 + c] * area * rc;
+            den += rad[b * 3 + c] * area;
+        }
+        out[c] = den > 0 ? num / den : 0.0;
+    }
+}
+
+void ss_mm_radial_albedo(const double *rad, int bins, double max_cm, double out[3]) {
+    double dr = max_cm / bins;
+    for (int c = 0; c < 3; c++) {
+        double s = 0;
+        for (int b = 0; b < bins; b++) {
+            double r0 = b * dr, r1 = r0 + dr;
+            s += rad[b * 3 + c] * M_PI * (r1 * r1 - r0 * r0);
+        }
+        out[c] = s;
+    }
+}
+
+static void sss_radius(const double *rad, double out[3]) {
+    ss_mm_sss_radius(rad, MM_RADIAL_BINS, MM_RADIAL_MAX_CM, out);
+}
+
+static ss_status colour_weights(const double *wl, int nwl, double *W, ss_error *err) {
+    double *imp = calloc((size_t)nwl, sizeof(double));
+    if (!imp) return ss_error_set(err, SS_ERR_NOMEM, "ModelMatch: out of memory");
+    ss_status st = SS_OK;
+    for (int k = 0; k < nwl && !st; k++) {
+        imp[k] = 1.0;
+        st = ss_spectrum_to_srgb_linear(wl, imp, nwl, W + 3 * k, err);
+        imp[k] = 0.0;
+    }
+    free(imp);
+    return st;
+}
+
+static ss_status alloc_geo_out(mm_geo_out *g, int nsets, const ss_mm_build_options *o,
+                               ss_error *err) {
+    size_t per = (size_t)o->n_theta_i * o->n_theta_r * o->n_phi * 3;
+    g->f_rgb = calloc((size_t)nsets * per, sizeof(double));
+    g->radial = calloc((size_t)nsets * MM_RADIAL_BINS * 3, sizeof(double));
+    g->albedo = calloc((size_t)nsets * 3, sizeof(double));
+    if (!g->f_rgb || !g->radial || !g->albedo) {
+        free(g->f_rgb);
+        free(g->radial);
+        free(g->albedo);
+        return ss_error_set(err, SS_ERR_NOMEM, "ModelMatch: out of memory");
+    }
+    return SS_OK;
+}
+
+static void free_geo_out(mm_geo_out *g) {
+    free(g->f_rgb);
+    free(g->radial);
+    free(g->albedo);
+}
+
+static ss_status make_wavelengths(const ss_mm_build_options *o, int nwl, double **wl, double **W,
+                                  ss_error *err) {
+    *wl = malloc((size_t)nwl * sizeof(double));
+    *W = malloc((size_t)nwl * 3 * sizeof(double));
+    if (!*wl || !*W) {
+        free(*wl);
+        free(*W);
+        return ss_error_set(err, SS_ERR_NOMEM, "ModelMatch: out of memory");
+    }
+    for (int k = 0; k < nwl; k++) (*wl)[k] = o->spectrum.wl_min_nm + k * o->spectrum.wl_step_nm;
+    ss_status st = colour_weights(*wl, nwl, *W, err);
+    if (st) {
+        free(*wl);
+        free(*W);
+    }
+    return st;
+}
+
+ss_status ss_mm_sample_fast(const ss_bio_params *bio, const ss_mm_build_options *o,
+                            ss_brdf_sampled *out, double sss_radius_cm[3], double albedo_rgb[3],
+                            ss_error *err) {
+    memset(out, 0, sizeof *out);
+    int nwl;
+    ss_status st = check_build_options(o, &nwl, err);
+    if (st) return st;
+    if ((st = ss_bio_params_validate(bio, err))) return st;
+    double *wl, *W;
+    if ((st = make_wavelengths(o, nwl, &wl, &W, err))) return st;
+    mm_geo_out g;
+    if ((st = alloc_geo_out(&g, 1, o, err))) {
+        free(wl);
+        free(W);
+        return st;
+    }
+    double done = 0;
+    ss_optics_data *data = NULL;
+    st = ss_optics_data_open(&data, err);
+    if (!st) st = build_geometry(data, bio, 1, o, nwl, wl, W, &g, NULL, &done, err);
+    ss_optics_data_close(data);
+    if (!st) {
+        out->n_theta_i = o->n_theta_i;
+        out->n_theta_r = o->n_theta_r;
+        out->n_phi = o->n_phi;
+        out->f_rgb = g.f_rgb;
+        g.f_rgb = NULL;
+        if (sss_radius_cm) sss_radius(g.radial, sss_radius_cm);
+        if (albedo_rgb)
+            for (int c = 0; c < 3; c++) albedo_rgb[c] = g.albedo[c];
+    }
+    free_geo_out(&g);
+    free(wl);
+    free(W);
+    return st;
+}
+
+ss_status ss_mm_table_build(ss_mm_table *t, const ss_mm_build_options *o, ss_error *err) {
+    int nwl;
+    ss_status st = check_build_options(o, &nwl, err);
+    if (st) return st;
+    /* every node must be a valid parameter set */
+    for (int a = 0; a < SS_MM_NAXES; a++)
+        for (int k = 0; k < t->nsamples[a]; k++) {
+            double v = t->axis[a][k];
+            int thick = a >= SS_MM_AXIS_SC;
+            if (!(v >= 0.0 && v <= 1.0) || (thick && !(v > 0.0)))
+                return ss_error_set(err, SS_ERR_INPUT, "ModelMatch: axis %s value %g is outside %s",
+                                    axis_names[a], v, thick ? "(0, 1] cm" : "[0, 1]");
+        }
+    double *wl, *W;
+    if ((st = make_wavelengths(o, nwl, &wl, &W, err))) return st;
+    int nabs = t->nsamples[0] * t->nsamples[1] * t->nsamples[2] * t->nsamples[3];
+    int ngeo = t->nsamples[4] * t->nsamples[5];
+    ss_bio_params *bios = malloc((size_t)nabs * sizeof *bios);
+    mm_geo_out g = {0};
+    if (!bios || (st = alloc_geo_out(&g, nabs, o, err))) {
+        free(bios);
+        free(wl);
+        free(W);
+        return st ? st : ss_error_set(err, SS_ERR_NOMEM, "ModelMatch: out of memory");
+    }
+    ss_optics_data *data = NULL;
+    if ((st = ss_optics_data_open(&data, err))) {
+        free_geo_out(&g);
+        free(bios);
+        free(wl);
+        free(W);
+        return st;
+    }
+    ss_progress prog;
+    ss_progress_begin(&prog, "ModelMatch table", (double)ngeo * nwl * (o->n_theta_i + 1), o->quiet);
+    double done = 0;
+    size_t per = (size_t)o->n_theta_i * o->n_theta_r * o->n_phi * 3;
+    for (int gi = 0; gi < ngeo && !st; gi++) {
+        int isc = gi / t->nsamples[5], iep = gi % t->nsamples[5];
+        for (int a = 0; a < nabs; a++) {
+            int r = a;
+            int idx[4];
+            for (int ax = 3; ax >= 0; ax--) {
+                idx[ax] = r % t->nsamples[ax];
+                r /= t->nsamples[ax];
+            }
+            ss_bio_params b = o->base;
+            b.melanin = t->axis[0][idx[0]];
+            b.pheomelanin_ratio = t->axis[1][idx[1]];
+            b.blood = t->axis[2][idx[2]];
+            b.oxygenation = t->axis[3][idx[3]];
+            b.sc_thickness_cm = t->axis[4][isc];
+            b.epidermis_thickness_cm = t->axis[5][iep];
+            bios[a] = b;
+        }
+        memset(g.f_rgb, 0, (size_t)nabs * per * sizeof(double));
+        memset(g.radial, 0, (size_t)nabs * MM_RADIAL_BINS * 3 * sizeof(double));
+        memset(g.albedo, 0, (size_t)nabs * 3 * sizeof(double));
+        st = build_geometry(data, bios, nabs, o, nwl, wl, W, &g, &prog, &done, err);
+        if (st) break;
+        /* fit both render models to every absorption set of this geometry */
+        ss_status fst = SS_OK;
+        ss_error ferr;
+#pragma omp parallel for schedule(dynamic, 1)
+        for (int a = 0; a < nabs; a++) {
+            ss_brdf_sampled s = {o->n_theta_i, o->n_theta_r, o->n_phi, g.f_rgb + (size_t)a * per};
+            ss_mm_entry e;
+            memset(&e, 0, sizeof e);
+            ss_error e2;
+            for (int m = 0; m < SS_RENDER_NMODELS; m++) {
+                ss_fit_result fr;
+                ss_status s2 = ss_render_fit((ss_render_model)m, &s, &o->fit, &fr, &e2);
+                if (s2) {
+#pragma omp critical(mm_fit_err)
+                    {
+                        if (fst == SS_OK) {
+                            fst = s2;
+                            ferr = e2;
+                        }
+                    }
+                    break;
+                }
+                e.fit[m] = fr.params;
+                e.residual_rel[m] = fr.residual_rel;
+            }
+            sss_radius(g.radial + (size_t)a * MM_RADIAL_BINS * 3, e.sss_radius_cm);
+            for (int c = 0; c < 3; c++) e.albedo_rgb[c] = g.albedo[(size_t)a * 3 + c];
+            int r = a, idx[SS_MM_NAXES];
+            for (int ax = 3; ax >= 0; ax--) {
+                idx[ax] = r % t->nsamples[ax];
+                r /= t->nsamples[ax];
+            }
+            idx[4] = isc;
+            idx[5] = iep;
+            ss_mm_entry_pack(&e, t->entries + ss_mm_table_index(t, idx) * SS_MM_NFIELDS);
+        }
+        if (fst) {
+            *err = ferr;
+            st = fst;
+        }
+    }
+    ss_progress_end(&prog);
+    ss_optics_data_close(data);
+    if (!st) {
+        t->photons = o->spectrum.mc.photons;
+        t->seed = o->spectrum.mc.seed;
+        t->n_theta_i = o->n_theta_i;
+        t->n_theta_r = o->n_theta_r;
+        t->n_phi = o->n_phi;
+        t->wl_min_nm = o->spectrum.wl_min_nm;
+        t->wl_max_nm = o->spectrum.wl_max_nm;
+        t->wl_step_nm = o->spectrum.wl_step_nm;
+    }
+    free_geo_out(&g);
+    free(bios);
+    free(wl);
+    free(W);
+    return st;
+}

@@ -1,0 +1,88 @@
+#!/usr/bin/env bash
+# End-to-end: `skinsim optics fit` and `skinsim optics table` (build, lookup),
+# help texts, JSON shape, thread-count determinism of the table file, bad input
+# (exit 2, nothing written), corrupt / truncated / other-version tables, and
+# the shipped default table.
+set -u
+CLI="$(cd "$(dirname "$1")" && pwd)/$(basename "$1")"
+SRC="$2"
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+fail() { echo "FAIL: $*"; exit 1; }
+expect2() { # expect exit code 2
+  "$@" >"$T/o.txt" 2>"$T/e.txt"
+  rc=$?
+  [ $rc -eq 2 ] || fail "expected exit 2, got $rc: $*"
+  grep -q "error" "$T/e.txt" || fail "no error message: $*"
+}
+
+for s in fit table; do
+  "$CLI" optics $s --help >"$T/h.txt" || fail "$s --help"
+  grep -q "usage: skinsim optics $s" "$T/h.txt" || fail "$s help text"
+  grep -q -- "--photons N" "$T/h.txt" || fail "$s help lists --photons"
+done
+grep -q "epidermis" "$T/h.txt" || fail "table help lists the axes"
+
+SMALL="--photons 400 --wl-min 450 --wl-max 650 --wl-step 100 --theta-i 2 --theta-r 3 --phi 3"
+
+# fit: JSON keys and both models
+"$CLI" optics fit $SMALL --json --threads 2 >"$T/f.json" || fail "fit"
+for k in base_color_linear specular roughness residual_rel subsurface_radius_cm ggx \
+         ashikhmin-shirley albedo_linear; do
+  grep -q "\"$k\"" "$T/f.json" || fail "fit json lacks $k"
+done
+"$CLI" optics fit $SMALL --fast --weighting projected >"$T/f.txt" || fail "fit --fast"
+grep -q "^ggx " "$T/f.txt" || fail "fit text output"
+
+# table build: 1 vs 2 threads give identical files
+"$CLI" optics table --samples 2 $SMALL --out "$T/t1.sstab" --threads 1 --quiet || fail "table t1"
+"$CLI" optics table --samples 2 $SMALL --out "$T/t2.sstab" --threads 2 --quiet --json \
+  >"$T/t.json" || fail "table t2"
+cmp -s "$T/t1.sstab" "$T/t2.sstab" || fail "table differs between 1 and 2 threads"
+grep -q '"entries": 64' "$T/t.json" || fail "table json entries"
+head -c 7 "$T/t1.sstab" | grep -q "SSMMTAB" || fail "table magic"
+
+# lookup
+"$CLI" optics table --lookup "$T/t1.sstab" --melanin 0.2 --blood 0.01 --json >"$T/l.json" \
+  || fail "lookup"
+grep -q '"ggx"' "$T/l.json" || fail "lookup json"
+
+# bad input: exit 2, nothing written
+expect2 "$CLI" optics fit --melanin 2
+expect2 "$CLI" optics fit --photons abc
+expect2 "$CLI" optics fit --weighting foo
+expect2 "$CLI" optics fit --bogus
+expect2 "$CLI" optics fit --max-theta-deg 5
+expect2 "$CLI" optics fit --max-theta-deg 91
+expect2 "$CLI" optics table --samples 0 --out "$T/bad.sstab"
+expect2 "$CLI" optics table --samples 2 --photons 10 --out "$T/bad.sstab"
+expect2 "$CLI" optics table $SMALL --samples 2 --out "$T/nodir/x/bad.sstab" --wl-min 700 \
+  --wl-max 400
+expect2 "$CLI" optics table --samples 2
+expect2 "$CLI" optics table --lookup "$T/t1.sstab" --out "$T/bad.sstab"
+expect2 "$CLI" optics table --samples 1 $SMALL --out /proc/none/bad.sstab
+[ ! -e "$T/bad.sstab" ] || fail "a failed run wrote its output"
+[ -z "$(ls "$T" | grep -v -e '^t1.sstab$' -e '^t2.sstab$' -e '\.json$' -e '\.txt$')" ] \
+  || fail "stray files: $(ls "$T")"
+
+# corrupt, truncated, other-version and missing tables: exit 2
+head -c 100 "$T/t1.sstab" >"$T/trunc.sstab"
+expect2 "$CLI" optics table --lookup "$T/trunc.sstab"
+cp "$T/t1.sstab" "$T/corrupt.sstab"
+printf '\x55' | dd of="$T/corrupt.sstab" bs=1 seek=200 conv=notrunc 2>/dev/null
+expect2 "$CLI" optics table --lookup "$T/corrupt.sstab"
+cp "$T/t1.sstab" "$T/v2.sstab"
+printf '\x02' | dd of="$T/v2.sstab" bs=1 seek=8 conv=notrunc 2>/dev/null
+expect2 "$CLI" optics table --lookup "$T/v2.sstab"
+grep -q "version" "$T/e.txt" || fail "version error names the version"
+expect2 "$CLI" optics table --lookup "$T/missing.sstab"
+
+# the shipped default table reads and interpolates
+if [ -f "$SRC/data/modelmatch_default.sstab" ]; then
+  "$CLI" optics table --lookup "$SRC/data/modelmatch_default.sstab" --melanin 0.1 --json \
+    >"$T/d.json" || fail "default table lookup"
+  grep -q '"entries": 729' "$T/d.json" || fail "default table has 3^6 entries"
+else
+  fail "data/modelmatch_default.sstab is missing"
+fi
+echo "ok"
