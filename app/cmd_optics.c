@@ -2,7 +2,7 @@
  * command line: reflectance spectra and colour, the sampled BRDF, MCML input
  * files, and a labelled swatch of skin colours over melanin x blood. The same
  * biological-parameter options work in every subcommand. `fit` and `table`
- * are provided by app/cmd_optics_fit.c when it is linked in. */
+ * are in app/cmd_optics_fit.c. */
 #define _POSIX_C_SOURCE 200809L
 #include <cairo.h>
 #include <math.h>
@@ -18,9 +18,6 @@
 #define M_PI 3.14159265358979323846
 #endif
 
-/* Provided by the fit/table part when it is linked (weak: absent otherwise). */
-int cmd_optics_fit(int argc, char **argv) __attribute__((weak));
-int cmd_optics_table(int argc, char **argv) __attribute__((weak));
 /* fontconfig (loaded by cairo for text): freed at exit when present so leak
  * checkers stay quiet; weak, so no direct link dependency. */
 void FcFini(void) __attribute__((weak));
@@ -717,8 +714,8 @@ static void optics_help(FILE *f) {
                "  brdf       sampled BRDF per colour channel to a CSV file\n"
                "  mci        run an MCML .mci input file, write its .mco outputs\n"
                "  swatch     PNG grid of skin colours over melanin x blood\n");
-    if (cmd_optics_fit) fprintf(f, "  fit        fit a render BRDF to the sampled skin BRDF\n");
-    if (cmd_optics_table) fprintf(f, "  table      precomputed ModelMatch table\n");
+    fprintf(f, "  fit        fit a render BRDF to the sampled skin BRDF\n");
+    fprintf(f, "  table      precomputed ModelMatch table\n");
 }
 
 int cmd_optics(int argc, char **argv) {
@@ -735,8 +732,8 @@ int cmd_optics(int argc, char **argv) {
     if (!strcmp(sub, "brdf")) return optics_brdf(argc - 1, argv + 1);
     if (!strcmp(sub, "mci")) return optics_mci(argc - 1, argv + 1);
     if (!strcmp(sub, "swatch")) return optics_swatch(argc - 1, argv + 1);
-    if (!strcmp(sub, "fit") && cmd_optics_fit) return cmd_optics_fit(argc - 1, argv + 1);
-    if (!strcmp(sub, "table") && cmd_optics_table) return cmd_optics_table(argc - 1, argv + 1);
+    if (!strcmp(sub, "fit")) return cmd_optics_fit(argc - 1, argv + 1);
+    if (!strcmp(sub, "table")) return cmd_optics_table(argc - 1, argv + 1);
     fprintf(stderr, "skinsim optics: unknown subcommand '%s'\n\n", sub);
     optics_help(stderr);
     return 2;
