@@ -26,8 +26,16 @@ build: deps
 	cmake --build $(BUILD) -j $(JOBS)
 
 demo: build
+	@rm -rf $(DEMO_OUT)
 	$(BUILD)/skinsim abrasion --out $(DEMO_OUT)/abrasion
-	@echo "Open $(DEMO_OUT)/abrasion/contact_sheet.png"
+	$(BUILD)/skinsim optics swatch --out $(DEMO_OUT)/skin_swatch.png
+	$(BUILD)/skinsim heal --days 21 --out $(DEMO_OUT)/heal
+	@echo
+	@echo "Look at:"
+	@echo "  $(DEMO_OUT)/abrasion/contact_sheet.png   abrasion from injury to day 30"
+	@echo "  $(DEMO_OUT)/skin_swatch.png              skin colours over melanin x blood"
+	@echo "  $(DEMO_OUT)/heal/area.png                wound closure over 21 days"
+	@echo "  $(DEMO_OUT)/heal/fields/fields.pvd       open in ParaView"
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
