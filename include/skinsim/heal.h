@@ -167,7 +167,7 @@ uint8_t *ss_heal_wound_box(const ss_heal_grid *g, double skin_top_mm, double sid
 #define SS_HEAL_DEFAULT_EPIDERMIS_MM 0.1
 #define SS_HEAL_DEFAULT_WOUND_MM 20.0
 #define SS_HEAL_DEFAULT_DEPTH_MM 1.0
-#define SS_HEAL_DEFAULT_DX_MM 0.5
+#define SS_HEAL_DEFAULT_DX_MM 0.25
 
 /* ---- time integration -------------------------------------------------------- */
 

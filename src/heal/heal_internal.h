@@ -20,6 +20,7 @@ struct ss_heal_rd_work {
     int nthreads;                     /* per-thread scratch count */
     float **tscratch;                 /* per thread row/line scratch */
     size_t tscratch_len;              /* floats per thread */
+    size_t ones_off;                  /* offset of a row of nx ones in each thread scratch */
     int have_buf, have_mslot;
 };
 
