@@ -130,7 +130,8 @@ typedef struct ss_heal_grid {
     uint64_t step;
 } ss_heal_grid;
 
-/* Largest grid accepted (cells); larger -> SS_ERR_INPUT. */
+/* Largest grid accepted (cells); larger, or more than the machine's physical
+ * memory with the solver's work memory -> SS_ERR_INPUT. */
 #define SS_HEAL_MAX_CELLS ((size_t)1 << 31)
 ss_heal_grid *ss_heal_grid_create(int nx, int ny, int nz, double dx_mm, ss_error *err);
 void ss_heal_grid_free(ss_heal_grid *g);
@@ -174,8 +175,8 @@ uint8_t *ss_heal_wound_box(const ss_heal_grid *g, double skin_top_mm, double sid
 typedef enum ss_heal_scheme { SS_HEAL_EXPLICIT, SS_HEAL_SPLIT } ss_heal_scheme;
 
 /* Largest admissible step in days. EXPLICIT: the diffusion (h^2 / (6 D_max)),
- * reaction-positivity and convection (CFL) limits; SPLIT: the convection CFL
- * limit and the accuracy cap SS_HEAL_SPLIT_MAX_DT_DAYS. */
+ * reaction-positivity and convection (CFL) limits; SPLIT: the accuracy cap
+ * SS_HEAL_SPLIT_MAX_DT_DAYS (stable for any step; convection is sub-cycled). */
 #define SS_HEAL_SPLIT_MAX_DT_DAYS 0.1
 double ss_heal_stable_dt(const ss_heal_grid *g, const ss_heal_params *p, ss_heal_scheme s);
 
@@ -255,7 +256,7 @@ typedef struct ss_heal_rd_system {
 typedef struct ss_heal_rd_work ss_heal_rd_work;
 ss_heal_rd_work *ss_heal_rd_work_create(const ss_heal_rd_system *sys, ss_error *err);
 void ss_heal_rd_work_free(ss_heal_rd_work *w);
-/* Explicit limit in days: min(h^2/(6 D_max mmax), 1/rate_max, CFL). */
+/* Explicit limit in days: 1 / (6 D_max mmax / h^2 + rate_max + max|v| / h). */
 double ss_heal_rd_explicit_dt(const ss_heal_rd_system *sys);
 /* Largest |vx|+|vy|+|vz| over the grid (0 without velocity), mm/day. */
 double ss_heal_rd_max_speed(const ss_heal_rd_system *sys);
