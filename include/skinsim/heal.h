@@ -159,16 +159,18 @@ uint8_t *ss_heal_wound_from_footprint(const ss_heal_grid *g, double skin_top_mm,
 uint8_t *ss_heal_wound_box(const ss_heal_grid *g, double skin_top_mm, double side_x_mm,
                            double side_y_mm, double depth_mm, ss_error *err);
 
-/* Default problem (docs/heal-model.md): a 30 x 30 x 4 mm block, skin surface at
- * 3.5 mm, 0.1 mm epidermis, a 20 x 20 mm wound 1 mm deep. */
+/* Default problem (docs/heal-model.md): a 30 x 30 x 4 mm block of 0.5 mm voxels
+ * (60 x 60 x 8), skin surface at 3 mm (one air layer under the top bound),
+ * 0.1 mm epidermis (held as the two-voxel layer), a 20 x 20 mm wound 1 mm deep.
+ * The calibration holds at 0.25 mm too (docs/heal-model.md). */
 #define SS_HEAL_DEFAULT_BLOCK_X_MM 30.0
 #define SS_HEAL_DEFAULT_BLOCK_Y_MM 30.0
 #define SS_HEAL_DEFAULT_BLOCK_Z_MM 4.0
-#define SS_HEAL_DEFAULT_SKIN_TOP_MM 3.5
+#define SS_HEAL_DEFAULT_SKIN_TOP_MM 3.0
 #define SS_HEAL_DEFAULT_EPIDERMIS_MM 0.1
 #define SS_HEAL_DEFAULT_WOUND_MM 20.0
 #define SS_HEAL_DEFAULT_DEPTH_MM 1.0
-#define SS_HEAL_DEFAULT_DX_MM 0.25
+#define SS_HEAL_DEFAULT_DX_MM 0.5
 
 /* ---- time integration -------------------------------------------------------- */
 

@@ -33,7 +33,8 @@ static uint8_t cls_of(const ss_heal_rd_system *sys, size_t c) { return sys->cls 
 void ss_heal_rd__build_masks(const ss_heal_rd_system *sys, ss_heal_rd_work *w) {
     const int nx = sys->nx, ny = sys->ny, nz = sys->nz;
     const size_t sy = (size_t)nx, sz = (size_t)nx * (size_t)ny;
-#pragma omp parallel for schedule(static)
+    const int par = (size_t)nx * (size_t)ny * (size_t)nz >= RD_PAR_MIN_CELLS;
+#pragma omp parallel for schedule(static) if (par)
     for (int z = 0; z < nz; z++) {
         for (int y = 0; y < ny; y++) {
             for (int x = 0; x < nx; x++) {
@@ -203,7 +204,7 @@ void ss_heal_rd__convect(const ss_heal_rd_system *sys, const ss_heal_rd_work *w,
     const int nx = sys->nx, ny = sys->ny, nz = sys->nz;
     const size_t sy = (size_t)nx, sz = (size_t)nx * (size_t)ny;
     const uint8_t *upd = w->upd[f];
-#pragma omp parallel for collapse(2) schedule(static)
+#pragma omp parallel for collapse(2) schedule(static) if (w->ncell >= RD_PAR_MIN_CELLS)
     for (int z = 0; z < nz; z++)
         for (int y = 0; y < ny; y++) {
             size_t base = (size_t)z * sz + (size_t)y * sy;
@@ -231,7 +232,7 @@ void ss_heal_rd_step_explicit(ss_heal_rd_system *sys, ss_heal_rd_work *w, double
     const float dtf = (float)dt;
     const double ih2 = 1.0 / (sys->h_mm * sys->h_mm);
     const int has_vel = sys->velocity[0] || sys->velocity[1] || sys->velocity[2];
-#pragma omp parallel num_threads(thread_count(w))
+#pragma omp parallel num_threads(thread_count(w)) if (w->ncell >= RD_PAR_MIN_CELLS)
     {
         float *scr = w->tscratch[omp_get_thread_num()];
         ss_heal_rd_row row;

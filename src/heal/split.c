@@ -47,7 +47,7 @@ static void reaction_pass(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt,
     const int n = nx - 2;
     if (nsub < 1) nsub = 1;
     const float h = (float)(dt / nsub);
-#pragma omp parallel num_threads(thread_count(w))
+#pragma omp parallel num_threads(thread_count(w)) if (w->ncell >= RD_PAR_MIN_CELLS)
     {
         float *scr = w->tscratch[omp_get_thread_num()];
         ss_heal_rd_row row;
@@ -237,7 +237,7 @@ static void diffuse_all(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt) {
         mk[f] = sys->mslot[f] >= 0 && w->have_mslot ? w->mslot[sys->mslot[f]] : NULL;
     }
     if (!na) return;
-#pragma omp parallel num_threads(thread_count(w))
+#pragma omp parallel num_threads(thread_count(w)) if (w->ncell >= RD_PAR_MIN_CELLS)
     {
         float *scr = w->tscratch[omp_get_thread_num()];
 #pragma omp for schedule(static)
