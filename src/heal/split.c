@@ -101,90 +101,99 @@ static void reaction_pass(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt,
     }
 }
 
-/* Bundle of lines along direction d (1 = y, 2 = z) at outer index o, swept
- * together along x; clamps to [lo, hi] on the way back when clampit. */
+/* Lines are swept in bundles of at most BUNDLE lines side by side, so the
+ * Thomas coefficients of a bundle (2 x line length x BUNDLE floats) stay in
+ * the L2 cache; the lines are independent, so the chunking does not change
+ * any result. */
+#define BUNDLE 64
+
+/* Bundle of lines along direction d (1 = y, 2 = z) at outer index o, for
+ * x in [x0, x0 + cw): the recurrence runs along the line, x is the SIMD
+ * dimension. Clamps to [lo, hi] on the way back when clampit. */
 static inline void bundle_yz(const ss_heal_rd_system *sys, const ss_heal_rd_work *w, int f,
-                             float kD, const float *mk, int d, int o, float *scr, int clampit) {
-    const int nx = sys->nx;
-    const size_t sy = (size_t)nx, sz = (size_t)nx * (size_t)sys->ny;
+                             float kD, const float *mk, int d, int o, int x0, int cw, float *scr,
+                             int clampit) {
+    const size_t sy = (size_t)sys->nx, sz = (size_t)sys->nx * (size_t)sys->ny;
     const int nline = d == 1 ? sys->ny : sys->nz;
-    const size_t step = d == 1 ? sy : sz, ostep = d == 1 ? sz : sy;
+    const size_t step = d == 1 ? sy : sz;
+    const size_t ob = (size_t)o * (d == 1 ? sz : sy) + (size_t)x0;
     const uint8_t bm = d == 1 ? NB_YM : NB_ZM, bp = d == 1 ? NB_YP : NB_ZP;
-    const int n = nx - 2;
-    /* scratch: cp, dp (nline rows each; row 0 zero), and a fixed row of ones
-     * for fields without multiplier */
+    const size_t ldc = (size_t)cw;
+    /* scratch: cp, dp (nline rows of cw each; row 0 zero), and a fixed row of
+     * ones for fields without multiplier */
     float *restrict cpall = scr;
-    float *restrict dpall = scr + (size_t)nline * (size_t)nx;
-    const float *restrict ones = scr + w->ones_off;
-    float *restrict u0 = sys->u[f] + (size_t)o * ostep;
-    for (int x = 0; x < nx; x++) cpall[x] = dpall[x] = 0.0f; /* "line -1": no coupling */
+    float *restrict dpall = scr + (size_t)nline * ldc;
+    const float *restrict ones = scr + w->ones_off + x0;
+    float *restrict u0 = sys->u[f] + ob;
+    for (int x = 0; x < cw; x++) cpall[x] = dpall[x] = 0.0f; /* "line -1": no coupling */
     for (int j = 1; j < nline - 1; j++) {
         const size_t lb = (size_t)j * step;
         float *restrict u = u0 + lb;
-        const uint8_t *restrict nb = w->nb + (size_t)o * ostep + lb;
-        const uint8_t *restrict upd = w->upd[f] + (size_t)o * ostep + lb;
-        const float *restrict mrow = mk ? mk + (size_t)o * ostep + lb : ones;
-        float *restrict cp = cpall + (size_t)j * (size_t)nx;
-        float *restrict dp = dpall + (size_t)j * (size_t)nx;
-        const float *restrict cpp = cpall + (size_t)(j - 1) * (size_t)nx;
-        const float *restrict dpp = dpall + (size_t)(j - 1) * (size_t)nx;
+        const uint8_t *restrict nb = w->nb + ob + lb;
+        const uint8_t *restrict upd = w->upd[f] + ob + lb;
+        const float *restrict mrow = mk ? mk + ob + lb : ones;
+        float *restrict cp = cpall + (size_t)j * ldc;
+        float *restrict dp = dpall + (size_t)j * ldc;
+        const float *restrict cpp = cp - ldc;
+        const float *restrict dpp = dp - ldc;
 #pragma omp simd
-        for (int x = 1; x <= n; x++) {
+        for (int x = 0; x < cw; x++) {
             const float k = kD * mrow[x] * (float)(upd[x] != 0);
             const float wl = (float)((nb[x] & bm) != 0);
             const float wr = (float)((nb[x] & bp) != 0);
             const float a = -k * wl, c = -k * wr, b = 1.0f + k * (wl + wr);
-            const float cprev = cpp[x], dprev = dpp[x];
-            const float r = 1.0f / (b - a * cprev);
+            const float r = 1.0f / (b - a * cpp[x]);
             cp[x] = c * r;
-            dp[x] = (u[x] - a * dprev) * r;
+            dp[x] = (u[x] - a * dpp[x]) * r;
         }
     }
     const float lo = sys->lo[f], hi = sys->hi[f];
     {
         const int j = nline - 2;
         float *restrict u = u0 + (size_t)j * step;
-        const float *restrict dp = dpall + (size_t)j * (size_t)nx;
-        for (int x = 1; x <= n; x++) u[x] = clampit ? clampf(dp[x], lo, hi) : dp[x];
+        const float *restrict dp = dpall + (size_t)j * ldc;
+        for (int x = 0; x < cw; x++) u[x] = clampit ? clampf(dp[x], lo, hi) : dp[x];
     }
     for (int j = nline - 3; j >= 1; j--) {
         float *restrict u = u0 + (size_t)j * step;
         const float *restrict un = u0 + (size_t)(j + 1) * step;
-        const float *restrict cp = cpall + (size_t)j * (size_t)nx;
-        float *restrict dp = dpall + (size_t)j * (size_t)nx;
-        const float *restrict dn = dpall + (size_t)(j + 1) * (size_t)nx;
+        const float *restrict cp = cpall + (size_t)j * ldc;
+        float *restrict dp = dpall + (size_t)j * ldc;
+        const float *restrict dn = dp + ldc;
         if (clampit) {
             /* recurrence on the unclamped values (kept in dp), clamped output */
-            for (int x = 1; x <= n; x++) {
+            for (int x = 0; x < cw; x++) {
                 const float v = dp[x] - cp[x] * dn[x];
                 dp[x] = v;
                 u[x] = clampf(v, lo, hi);
             }
         } else {
-            for (int x = 1; x <= n; x++) u[x] = dp[x] - cp[x] * un[x];
+            for (int x = 0; x < cw; x++) u[x] = dp[x] - cp[x] * un[x];
         }
     }
 }
 
-/* All x lines of slab z at once: the recurrence runs along x while the
- * independent lines (y) form the SIMD dimension, so the Thomas sweep is not
- * bound by the latency of its division chain. Scratch layout [x][y]. */
-static inline void bundle_x(const ss_heal_rd_system *sys, const ss_heal_rd_work *w, int f, float kD,
-                            const float *mk, int z, float *scr) {
-    const int nx = sys->nx, ny = sys->ny;
-    const size_t sy = (size_t)nx, bz = (size_t)z * (size_t)nx * (size_t)ny;
+/* The x lines y in [y0, y0 + ch) of slab z at once: the recurrence runs along
+ * x while the independent lines form the SIMD dimension, so the Thomas sweep
+ * is not bound by the latency of its division chain. Scratch layout [x][y]. */
+static inline void bundle_x(const ss_heal_rd_system *sys, const ss_heal_rd_work *w, int f,
+                            float kD, const float *mk, int z, int y0, int ch, float *scr) {
+    const int nx = sys->nx;
+    const size_t sy = (size_t)nx;
+    const size_t bz = (size_t)z * (size_t)nx * (size_t)sys->ny + (size_t)y0 * sy;
+    const size_t ldc = (size_t)ch;
     float *restrict cpall = scr;
-    float *restrict dpall = scr + (size_t)nx * (size_t)ny;
+    float *restrict dpall = scr + (size_t)nx * ldc;
     float *restrict u = sys->u[f] + bz;
     const uint8_t *restrict nb = w->nb + bz;
     const uint8_t *restrict upd = w->upd[f] + bz;
     const float *restrict m = mk ? mk + bz : NULL;
-    for (int y = 0; y < ny; y++) cpall[y] = dpall[y] = 0.0f; /* x = 0: no coupling */
+    for (int y = 0; y < ch; y++) cpall[y] = dpall[y] = 0.0f; /* x = 0: no coupling */
     for (int x = 1; x < nx - 1; x++) {
-        float *restrict cp = cpall + (size_t)x * (size_t)ny;
-        float *restrict dp = dpall + (size_t)x * (size_t)ny;
-        const float *restrict cpp = cp - ny;
-        const float *restrict dpp = dp - ny;
+        float *restrict cp = cpall + (size_t)x * ldc;
+        float *restrict dp = dpall + (size_t)x * ldc;
+        const float *restrict cpp = cp - ldc;
+        const float *restrict dpp = dp - ldc;
 #define BX_BODY(MVAL)                                                                              \
     {                                                                                              \
         const size_t c = (size_t)y * sy + (size_t)x;                                               \
@@ -198,23 +207,23 @@ static inline void bundle_x(const ss_heal_rd_system *sys, const ss_heal_rd_work 
     }
         if (m) {
 #pragma omp simd
-            for (int y = 1; y < ny - 1; y++) BX_BODY(m[(size_t)y * sy + (size_t)x])
+            for (int y = 0; y < ch; y++) BX_BODY(m[(size_t)y * sy + (size_t)x])
         } else {
 #pragma omp simd
-            for (int y = 1; y < ny - 1; y++) BX_BODY(1.0f)
+            for (int y = 0; y < ch; y++) BX_BODY(1.0f)
         }
 #undef BX_BODY
     }
     {
         const int x = nx - 2;
-        const float *restrict dp = dpall + (size_t)x * (size_t)ny;
-        for (int y = 1; y < ny - 1; y++) u[(size_t)y * sy + (size_t)x] = dp[y];
+        const float *restrict dp = dpall + (size_t)x * ldc;
+        for (int y = 0; y < ch; y++) u[(size_t)y * sy + (size_t)x] = dp[y];
     }
     for (int x = nx - 3; x >= 1; x--) {
-        const float *restrict cp = cpall + (size_t)x * (size_t)ny;
-        const float *restrict dp = dpall + (size_t)x * (size_t)ny;
+        const float *restrict cp = cpall + (size_t)x * ldc;
+        const float *restrict dp = dpall + (size_t)x * ldc;
 #pragma omp simd
-        for (int y = 1; y < ny - 1; y++) {
+        for (int y = 0; y < ch; y++) {
             const size_t c = (size_t)y * sy + (size_t)x;
             u[c] = dp[y] - cp[y] * u[c + 1];
         }
@@ -225,7 +234,7 @@ static inline void bundle_x(const ss_heal_rd_system *sys, const ss_heal_rd_work 
  * region, three work-shared sweeps (x bundles per z, y bundles per z, z bundles per
  * y), fields looped inside, the admissible-range clamp fused into the last. */
 static void diffuse_all(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt) {
-    const int ny = sys->ny, nz = sys->nz, nf = sys->nfields;
+    const int nx = sys->nx, ny = sys->ny, nz = sys->nz, nf = sys->nfields;
     const double ih2 = 1.0 / (sys->h_mm * sys->h_mm);
     float kD[SS_HEAL_RD_MAXF];
     const float *mk[SS_HEAL_RD_MAXF];
@@ -240,17 +249,27 @@ static void diffuse_all(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt) {
 #pragma omp parallel num_threads(thread_count(w)) if (w->ncell >= RD_PAR_MIN_CELLS)
     {
         float *scr = w->tscratch[omp_get_thread_num()];
-#pragma omp for schedule(static)
+#pragma omp for collapse(2) schedule(static)
         for (int z = 1; z < nz - 1; z++)
-            for (int a = 0; a < na; a++) bundle_x(sys, w, act[a], kD[act[a]], mk[act[a]], z, scr);
-#pragma omp for schedule(static)
+            for (int y0 = 1; y0 < ny - 1; y0 += BUNDLE) {
+                const int ch = ny - 1 - y0 < BUNDLE ? ny - 1 - y0 : BUNDLE;
+                for (int a = 0; a < na; a++)
+                    bundle_x(sys, w, act[a], kD[act[a]], mk[act[a]], z, y0, ch, scr);
+            }
+#pragma omp for collapse(2) schedule(static)
         for (int z = 1; z < nz - 1; z++)
-            for (int a = 0; a < na; a++)
-                bundle_yz(sys, w, act[a], kD[act[a]], mk[act[a]], 1, z, scr, 0);
-#pragma omp for schedule(static)
+            for (int x0 = 1; x0 < nx - 1; x0 += BUNDLE) {
+                const int cw = nx - 1 - x0 < BUNDLE ? nx - 1 - x0 : BUNDLE;
+                for (int a = 0; a < na; a++)
+                    bundle_yz(sys, w, act[a], kD[act[a]], mk[act[a]], 1, z, x0, cw, scr, 0);
+            }
+#pragma omp for collapse(2) schedule(static)
         for (int y = 1; y < ny - 1; y++)
-            for (int a = 0; a < na; a++)
-                bundle_yz(sys, w, act[a], kD[act[a]], mk[act[a]], 2, y, scr, 1);
+            for (int x0 = 1; x0 < nx - 1; x0 += BUNDLE) {
+                const int cw = nx - 1 - x0 < BUNDLE ? nx - 1 - x0 : BUNDLE;
+                for (int a = 0; a < na; a++)
+                    bundle_yz(sys, w, act[a], kD[act[a]], mk[act[a]], 2, y, x0, cw, scr, 1);
+            }
     }
 }
 
