@@ -130,7 +130,8 @@ typedef struct ss_heal_grid {
     uint64_t step;
 } ss_heal_grid;
 
-/* Largest grid accepted (cells); larger -> SS_ERR_INPUT. */
+/* Largest grid accepted (cells); larger, or more than the machine's physical
+ * memory with the solver's work memory -> SS_ERR_INPUT. */
 #define SS_HEAL_MAX_CELLS ((size_t)1 << 31)
 ss_heal_grid *ss_heal_grid_create(int nx, int ny, int nz, double dx_mm, ss_error *err);
 void ss_heal_grid_free(ss_heal_grid *g);
@@ -158,12 +159,14 @@ uint8_t *ss_heal_wound_from_footprint(const ss_heal_grid *g, double skin_top_mm,
 uint8_t *ss_heal_wound_box(const ss_heal_grid *g, double skin_top_mm, double side_x_mm,
                            double side_y_mm, double depth_mm, ss_error *err);
 
-/* Default problem (docs/heal-model.md): a 30 x 30 x 4 mm block, skin surface at
- * 3.5 mm, 0.1 mm epidermis, a 20 x 20 mm wound 1 mm deep. */
+/* Default problem (docs/heal-model.md): a 30 x 30 x 4 mm block of 0.5 mm voxels
+ * (60 x 60 x 8), skin surface at 3 mm (one air layer under the top bound),
+ * 0.1 mm epidermis (held as the two-voxel layer), a 20 x 20 mm wound 1 mm deep.
+ * The calibration holds at 0.25 mm too (docs/heal-model.md). */
 #define SS_HEAL_DEFAULT_BLOCK_X_MM 30.0
 #define SS_HEAL_DEFAULT_BLOCK_Y_MM 30.0
 #define SS_HEAL_DEFAULT_BLOCK_Z_MM 4.0
-#define SS_HEAL_DEFAULT_SKIN_TOP_MM 3.5
+#define SS_HEAL_DEFAULT_SKIN_TOP_MM 3.0
 #define SS_HEAL_DEFAULT_EPIDERMIS_MM 0.1
 #define SS_HEAL_DEFAULT_WOUND_MM 20.0
 #define SS_HEAL_DEFAULT_DEPTH_MM 1.0
@@ -174,8 +177,8 @@ uint8_t *ss_heal_wound_box(const ss_heal_grid *g, double skin_top_mm, double sid
 typedef enum ss_heal_scheme { SS_HEAL_EXPLICIT, SS_HEAL_SPLIT } ss_heal_scheme;
 
 /* Largest admissible step in days. EXPLICIT: the diffusion (h^2 / (6 D_max)),
- * reaction-positivity and convection (CFL) limits; SPLIT: the convection CFL
- * limit and the accuracy cap SS_HEAL_SPLIT_MAX_DT_DAYS. */
+ * reaction-positivity and convection (CFL) limits; SPLIT: the accuracy cap
+ * SS_HEAL_SPLIT_MAX_DT_DAYS (stable for any step; convection is sub-cycled). */
 #define SS_HEAL_SPLIT_MAX_DT_DAYS 0.1
 double ss_heal_stable_dt(const ss_heal_grid *g, const ss_heal_params *p, ss_heal_scheme s);
 
@@ -255,7 +258,7 @@ typedef struct ss_heal_rd_system {
 typedef struct ss_heal_rd_work ss_heal_rd_work;
 ss_heal_rd_work *ss_heal_rd_work_create(const ss_heal_rd_system *sys, ss_error *err);
 void ss_heal_rd_work_free(ss_heal_rd_work *w);
-/* Explicit limit in days: min(h^2/(6 D_max mmax), 1/rate_max, CFL). */
+/* Explicit limit in days: 1 / (6 D_max mmax / h^2 + rate_max + max|v| / h). */
 double ss_heal_rd_explicit_dt(const ss_heal_rd_system *sys);
 /* Largest |vx|+|vy|+|vz| over the grid (0 without velocity), mm/day. */
 double ss_heal_rd_max_speed(const ss_heal_rd_system *sys);

@@ -4,9 +4,11 @@
  * the wound mask from a footprint + depth (or a box), initialises states and
  * fields (healthy values, wound values, the two-voxel epithelial layer on top
  * of the skin), and computes the diagnostics behind area.csv. */
+#define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "skinsim/heal.h"
 
@@ -42,6 +44,17 @@ ss_heal_grid *ss_heal_grid_create(int nx, int ny, int nz, double dx_mm, ss_error
                      "GB with the solver's work memory)",
                      nx, ny, nz, cells, (size_t)SS_HEAL_MAX_CELLS,
                      (double)SS_HEAL_MAX_CELLS * 70.0 / 1e9);
+        return NULL;
+    }
+    /* grid + the explicit solver's second set of fields and masks */
+    double need = (double)ss_heal_grid_bytes(nx, ny, nz) + cells * (SS_HEAL_NFIELDS * 4.0 + 9.0);
+    long pages = sysconf(_SC_PHYS_PAGES), psz = sysconf(_SC_PAGESIZE);
+    double phys = pages > 0 && psz > 0 ? (double)pages * (double)psz : 0.0;
+    if (phys > 0 && need > phys) {
+        ss_error_set(err, SS_ERR_INPUT,
+                     "heal grid: %dx%dx%d needs about %.1f GB with the solver's work memory, "
+                     "more than the %.1f GB of this machine; use a coarser voxel",
+                     nx, ny, nz, need / 1e9, phys / 1e9);
         return NULL;
     }
     ss_heal_grid *g = calloc(1, sizeof *g);

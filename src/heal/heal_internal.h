@@ -6,6 +6,11 @@
 
 #include "skinsim/heal.h"
 
+/* Grids with fewer cells run on one thread: for them the OpenMP barriers cost
+ * more than the work (and much more on an oversubscribed machine). Results do
+ * not depend on it (every cell is computed independently either way). */
+#define RD_PAR_MIN_CELLS ((size_t)32768)
+
 /* Neighbour bits of nb[]: bit k set when the face towards neighbour k
  * conducts (both cells are not walls). Order -x, +x, -y, +y, -z, +z. */
 enum { NB_XM = 1, NB_XP = 2, NB_YM = 4, NB_YP = 8, NB_ZM = 16, NB_ZP = 32 };
@@ -20,6 +25,7 @@ struct ss_heal_rd_work {
     int nthreads;                     /* per-thread scratch count */
     float **tscratch;                 /* per thread row/line scratch */
     size_t tscratch_len;              /* floats per thread */
+    size_t ones_off;                  /* offset of a row of nx ones in each thread scratch */
     int have_buf, have_mslot;
 };
 

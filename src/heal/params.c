@@ -22,7 +22,7 @@ typedef struct pdef {
 } pdef;
 
 #define OFF(m) offsetof(ss_heal_params, m)
-#define CAL "calibrated: clean 2x2 cm shallow wound to the clinical course (docs/heal-model.md)"
+#define CAL "calibrated: 2x2 cm shallow wound against the clinical course (docs/heal-model.md)"
 #define DIM "dimensional reasoning (docs/heal-model.md)"
 static const pdef PDEFS[] = {
     {"D1", OFF(D1), "mm^2/day",
@@ -62,18 +62,24 @@ static const pdef PDEFS[] = {
      CAL ": capillary density of maximal Q (seed §4.1.6); high so the epithelial window stays open "
          "while granulation matures",
      0.8, 0.8, 0.8},
-    {"lamnrho", OFF(lamnrho), "1/day", CAL ": scar forms during the first 1-2 weeks", 0.6, 0.6,
-     3.0},
+    {"lamnrho", OFF(lamnrho), "1/day",
+     CAL ": scar forms during the first 1-2 weeks; keloid value calibrated so rho exceeds rho_max "
+         "and the region grows (docs/heal-model.md)",
+     0.6, 0.6, 3.0},
     {"lamrhop", OFF(lamrhop), "1/day",
      CAL ": scar fades over weeks (clean); weak remodelling for keloid (seed §3)", 0.1, 0.1, 0.01},
-    {"Dp", OFF(Dp), "mm^2/day", DIM ": clot plasma spreads ~mm in days", 0.05, 0.05, 0.3},
+    {"Dp", OFF(Dp), "mm^2/day",
+     DIM ": clot plasma spreads ~mm in days; keloid value calibrated for region growth ~20-40% in "
+         "3 weeks",
+     0.05, 0.05, 0.3},
     {"lampp", OFF(lampp), "1/day",
      "signed; negative = plasma resorption; keloid 0 (clot kept); only used with "
      "static_region = 0",
      -0.02, -0.02, 0.0},
     {"rho_max", OFF(rho_max), "1",
-     "seed §4.1.8 collagen threshold of C(rho); keloid: low threshold so overgrowth occurs", 1.0,
-     1.0, 0.1},
+     "seed §4.1.8 collagen threshold of C(rho); clean/scab: never reached; keloid: calibrated low "
+     "so overgrowth occurs",
+     1.0, 1.0, 0.1},
     {"u1_wound", OFF(u1_wound), "1", "hypoxic clot: no oxygen at t = 0 (seed §3)", 0.0, 0.0, 0.0},
 };
 #define NPDEFS ((int)(sizeof PDEFS / sizeof PDEFS[0]))

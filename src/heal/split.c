@@ -11,9 +11,17 @@
  *     solve (I - dt m D d_xx) then d_yy then d_zz by the Thomas algorithm.
  *     Every line matrix is an M-matrix with unit column sums where m = 1, so
  *     the step is unconditionally stable, keeps u >= 0 and conserves mass of
- *     pure diffusion with no-flux faces. x lines are solved one by one, y and
- *     z lines are swept in bundles along x so memory access stays contiguous.
+ *     pure diffusion with no-flux faces. Lines are solved in bundles (all x
+ *     lines of a z slab, all y lines of a z slab, all z lines of a y slab) so
+ *     independent lines fill the SIMD lanes and memory access stays local.
  * OpenMP over rows/slabs; no reductions, so bit-identical for any thread count. */
+/* The hot loops are written branch-free for SIMD. At -O2 GCC vectorises
+ * their compares/selects only with loop if-conversion and without treating
+ * FP exception flags as observable (-fno-trapping-math: values are unchanged,
+ * unlike -ffast-math there is no reassociation or finite-math assumption). */
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC optimize("tree-loop-if-convert", "tree-loop-vectorize", "no-trapping-math")
+#endif
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -39,7 +47,7 @@ static void reaction_pass(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt,
     const int n = nx - 2;
     if (nsub < 1) nsub = 1;
     const float h = (float)(dt / nsub);
-#pragma omp parallel num_threads(thread_count(w))
+#pragma omp parallel num_threads(thread_count(w)) if (w->ncell >= RD_PAR_MIN_CELLS)
     {
         float *scr = w->tscratch[omp_get_thread_num()];
         ss_heal_rd_row row;
@@ -93,99 +101,140 @@ static void reaction_pass(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt,
     }
 }
 
-/* Thomas solve of one x line (cells 1..nx-2 of the row at base). */
-static inline void line_x(float *restrict u, const uint8_t *restrict nb,
-                          const uint8_t *restrict upd, const float *restrict mrow, float kD, int nx,
-                          float *restrict cp, float *restrict dp) {
-    float cprev = 0.0f, dprev = 0.0f;
-    for (int x = 1; x < nx - 1; x++) {
-        const float k = upd[x] ? kD * (mrow ? mrow[x] : 1.0f) : 0.0f;
-        const float wl = (float)(nb[x] & NB_XM ? 1 : 0);
-        const float wr = (float)(nb[x] & NB_XP ? 1 : 0);
-        const float a = -k * wl, c = -k * wr, b = 1.0f + k * (wl + wr);
-        const float r = 1.0f / (b - a * cprev);
-        cprev = c * r;
-        dprev = (u[x] - a * dprev) * r;
-        cp[x] = cprev;
-        dp[x] = dprev;
-    }
-    float nxt = dp[nx - 2];
-    u[nx - 2] = nxt;
-    for (int x = nx - 3; x >= 1; x--) {
-        nxt = dp[x] - cp[x] * nxt;
-        u[x] = nxt;
-    }
-}
+/* Lines are swept in bundles of at most BUNDLE lines side by side, so the
+ * Thomas coefficients of a bundle (2 x line length x BUNDLE floats) stay in
+ * the L2 cache; the lines are independent, so the chunking does not change
+ * any result. */
+#define BUNDLE 64
 
-/* Bundle of lines along direction d (1 = y, 2 = z) at outer index o, swept
- * together along x; clamps to [lo, hi] on the way back when clampit. */
+/* Bundle of lines along direction d (1 = y, 2 = z) at outer index o, for
+ * x in [x0, x0 + cw): the recurrence runs along the line, x is the SIMD
+ * dimension. Clamps to [lo, hi] on the way back when clampit. */
 static inline void bundle_yz(const ss_heal_rd_system *sys, const ss_heal_rd_work *w, int f,
-                             float kD, const float *mk, int d, int o, float *scr, int clampit) {
-    const int nx = sys->nx;
-    const size_t sy = (size_t)nx, sz = (size_t)nx * (size_t)sys->ny;
+                             float kD, const float *mk, int d, int o, int x0, int cw, float *scr,
+                             int clampit) {
+    const size_t sy = (size_t)sys->nx, sz = (size_t)sys->nx * (size_t)sys->ny;
     const int nline = d == 1 ? sys->ny : sys->nz;
-    const size_t step = d == 1 ? sy : sz, ostep = d == 1 ? sz : sy;
+    const size_t step = d == 1 ? sy : sz;
+    const size_t ob = (size_t)o * (d == 1 ? sz : sy) + (size_t)x0;
     const uint8_t bm = d == 1 ? NB_YM : NB_ZM, bp = d == 1 ? NB_YP : NB_ZP;
-    const int n = nx - 2;
+    const size_t ldc = (size_t)cw;
+    /* scratch: cp, dp (nline rows of cw each; row 0 zero), and a fixed row of
+     * ones for fields without multiplier */
     float *restrict cpall = scr;
-    float *restrict dpall = scr + (size_t)nline * (size_t)nx;
-    float *restrict u0 = sys->u[f] + (size_t)o * ostep;
+    float *restrict dpall = scr + (size_t)nline * ldc;
+    const float *restrict ones = scr + w->ones_off + x0;
+    float *restrict u0 = sys->u[f] + ob;
+    for (int x = 0; x < cw; x++) cpall[x] = dpall[x] = 0.0f; /* "line -1": no coupling */
     for (int j = 1; j < nline - 1; j++) {
         const size_t lb = (size_t)j * step;
         float *restrict u = u0 + lb;
-        const uint8_t *restrict nb = w->nb + (size_t)o * ostep + lb;
-        const uint8_t *restrict upd = w->upd[f] + (size_t)o * ostep + lb;
-        const float *restrict mrow = mk ? mk + (size_t)o * ostep + lb : NULL;
-        float *restrict cp = cpall + (size_t)j * (size_t)nx;
-        float *restrict dp = dpall + (size_t)j * (size_t)nx;
-        const float *restrict cpp = cpall + (size_t)(j - 1) * (size_t)nx;
-        const float *restrict dpp = dpall + (size_t)(j - 1) * (size_t)nx;
-        const int first = j == 1;
+        const uint8_t *restrict nb = w->nb + ob + lb;
+        const uint8_t *restrict upd = w->upd[f] + ob + lb;
+        const float *restrict mrow = mk ? mk + ob + lb : ones;
+        float *restrict cp = cpall + (size_t)j * ldc;
+        float *restrict dp = dpall + (size_t)j * ldc;
+        const float *restrict cpp = cp - ldc;
+        const float *restrict dpp = dp - ldc;
 #pragma omp simd
-        for (int x = 1; x <= n; x++) {
-            const float k = upd[x] ? kD * (mrow ? mrow[x] : 1.0f) : 0.0f;
-            const float wl = (float)(nb[x] & bm ? 1 : 0);
-            const float wr = (float)(nb[x] & bp ? 1 : 0);
+        for (int x = 0; x < cw; x++) {
+            const float k = kD * mrow[x] * (float)(upd[x] != 0);
+            const float wl = (float)((nb[x] & bm) != 0);
+            const float wr = (float)((nb[x] & bp) != 0);
             const float a = -k * wl, c = -k * wr, b = 1.0f + k * (wl + wr);
-            const float cprev = first ? 0.0f : cpp[x];
-            const float dprev = first ? 0.0f : dpp[x];
-            const float r = 1.0f / (b - a * cprev);
+            const float r = 1.0f / (b - a * cpp[x]);
             cp[x] = c * r;
-            dp[x] = (u[x] - a * dprev) * r;
+            dp[x] = (u[x] - a * dpp[x]) * r;
         }
     }
     const float lo = sys->lo[f], hi = sys->hi[f];
     {
         const int j = nline - 2;
         float *restrict u = u0 + (size_t)j * step;
-        const float *restrict dp = dpall + (size_t)j * (size_t)nx;
-        for (int x = 1; x <= n; x++) u[x] = clampit ? clampf(dp[x], lo, hi) : dp[x];
+        const float *restrict dp = dpall + (size_t)j * ldc;
+        for (int x = 0; x < cw; x++) u[x] = clampit ? clampf(dp[x], lo, hi) : dp[x];
     }
     for (int j = nline - 3; j >= 1; j--) {
         float *restrict u = u0 + (size_t)j * step;
         const float *restrict un = u0 + (size_t)(j + 1) * step;
-        const float *restrict cp = cpall + (size_t)j * (size_t)nx;
-        float *restrict dp = dpall + (size_t)j * (size_t)nx;
-        const float *restrict dn = dpall + (size_t)(j + 1) * (size_t)nx;
+        const float *restrict cp = cpall + (size_t)j * ldc;
+        float *restrict dp = dpall + (size_t)j * ldc;
+        const float *restrict dn = dp + ldc;
         if (clampit) {
             /* recurrence on the unclamped values (kept in dp), clamped output */
-            for (int x = 1; x <= n; x++) {
+            for (int x = 0; x < cw; x++) {
                 const float v = dp[x] - cp[x] * dn[x];
                 dp[x] = v;
                 u[x] = clampf(v, lo, hi);
             }
         } else {
-            for (int x = 1; x <= n; x++) u[x] = dp[x] - cp[x] * un[x];
+            for (int x = 0; x < cw; x++) u[x] = dp[x] - cp[x] * un[x];
+        }
+    }
+}
+
+/* The x lines y in [y0, y0 + ch) of slab z at once: the recurrence runs along
+ * x while the independent lines form the SIMD dimension, so the Thomas sweep
+ * is not bound by the latency of its division chain. Scratch layout [x][y]. */
+static inline void bundle_x(const ss_heal_rd_system *sys, const ss_heal_rd_work *w, int f,
+                            float kD, const float *mk, int z, int y0, int ch, float *scr) {
+    const int nx = sys->nx;
+    const size_t sy = (size_t)nx;
+    const size_t bz = (size_t)z * (size_t)nx * (size_t)sys->ny + (size_t)y0 * sy;
+    const size_t ldc = (size_t)ch;
+    float *restrict cpall = scr;
+    float *restrict dpall = scr + (size_t)nx * ldc;
+    float *restrict u = sys->u[f] + bz;
+    const uint8_t *restrict nb = w->nb + bz;
+    const uint8_t *restrict upd = w->upd[f] + bz;
+    const float *restrict m = mk ? mk + bz : NULL;
+    for (int y = 0; y < ch; y++) cpall[y] = dpall[y] = 0.0f; /* x = 0: no coupling */
+    for (int x = 1; x < nx - 1; x++) {
+        float *restrict cp = cpall + (size_t)x * ldc;
+        float *restrict dp = dpall + (size_t)x * ldc;
+        const float *restrict cpp = cp - ldc;
+        const float *restrict dpp = dp - ldc;
+#define BX_BODY(MVAL)                                                                              \
+    {                                                                                              \
+        const size_t c = (size_t)y * sy + (size_t)x;                                               \
+        const float k = kD * (MVAL) * (float)(upd[c] != 0);                                        \
+        const float wl = (float)((nb[c] & NB_XM) != 0);                                            \
+        const float wr = (float)((nb[c] & NB_XP) != 0);                                            \
+        const float a = -k * wl, cc = -k * wr, b = 1.0f + k * (wl + wr);                           \
+        const float r = 1.0f / (b - a * cpp[y]);                                                   \
+        cp[y] = cc * r;                                                                            \
+        dp[y] = (u[c] - a * dpp[y]) * r;                                                           \
+    }
+        if (m) {
+#pragma omp simd
+            for (int y = 0; y < ch; y++) BX_BODY(m[(size_t)y * sy + (size_t)x])
+        } else {
+#pragma omp simd
+            for (int y = 0; y < ch; y++) BX_BODY(1.0f)
+        }
+#undef BX_BODY
+    }
+    {
+        const int x = nx - 2;
+        const float *restrict dp = dpall + (size_t)x * ldc;
+        for (int y = 0; y < ch; y++) u[(size_t)y * sy + (size_t)x] = dp[y];
+    }
+    for (int x = nx - 3; x >= 1; x--) {
+        const float *restrict cp = cpall + (size_t)x * ldc;
+        const float *restrict dp = dpall + (size_t)x * ldc;
+#pragma omp simd
+        for (int y = 0; y < ch; y++) {
+            const size_t c = (size_t)y * sy + (size_t)x;
+            u[c] = dp[y] - cp[y] * u[c + 1];
         }
     }
 }
 
 /* Implicit-Euler LOD diffusion of every field with D > 0: one parallel
- * region, three work-shared sweeps (x lines, y bundles per z, z bundles per
+ * region, three work-shared sweeps (x bundles per z, y bundles per z, z bundles per
  * y), fields looped inside, the admissible-range clamp fused into the last. */
 static void diffuse_all(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt) {
     const int nx = sys->nx, ny = sys->ny, nz = sys->nz, nf = sys->nfields;
-    const size_t sy = (size_t)nx, sz = (size_t)nx * (size_t)ny;
     const double ih2 = 1.0 / (sys->h_mm * sys->h_mm);
     float kD[SS_HEAL_RD_MAXF];
     const float *mk[SS_HEAL_RD_MAXF];
@@ -197,27 +246,30 @@ static void diffuse_all(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt) {
         mk[f] = sys->mslot[f] >= 0 && w->have_mslot ? w->mslot[sys->mslot[f]] : NULL;
     }
     if (!na) return;
-#pragma omp parallel num_threads(thread_count(w))
+#pragma omp parallel num_threads(thread_count(w)) if (w->ncell >= RD_PAR_MIN_CELLS)
     {
         float *scr = w->tscratch[omp_get_thread_num()];
 #pragma omp for collapse(2) schedule(static)
         for (int z = 1; z < nz - 1; z++)
-            for (int y = 1; y < ny - 1; y++) {
-                const size_t base = (size_t)z * sz + (size_t)y * sy;
-                for (int a = 0; a < na; a++) {
-                    const int f = act[a];
-                    line_x(sys->u[f] + base, w->nb + base, w->upd[f] + base,
-                           mk[f] ? mk[f] + base : NULL, kD[f], nx, scr, scr + nx);
-                }
+            for (int y0 = 1; y0 < ny - 1; y0 += BUNDLE) {
+                const int ch = ny - 1 - y0 < BUNDLE ? ny - 1 - y0 : BUNDLE;
+                for (int a = 0; a < na; a++)
+                    bundle_x(sys, w, act[a], kD[act[a]], mk[act[a]], z, y0, ch, scr);
             }
-#pragma omp for schedule(static)
+#pragma omp for collapse(2) schedule(static)
         for (int z = 1; z < nz - 1; z++)
-            for (int a = 0; a < na; a++)
-                bundle_yz(sys, w, act[a], kD[act[a]], mk[act[a]], 1, z, scr, 0);
-#pragma omp for schedule(static)
+            for (int x0 = 1; x0 < nx - 1; x0 += BUNDLE) {
+                const int cw = nx - 1 - x0 < BUNDLE ? nx - 1 - x0 : BUNDLE;
+                for (int a = 0; a < na; a++)
+                    bundle_yz(sys, w, act[a], kD[act[a]], mk[act[a]], 1, z, x0, cw, scr, 0);
+            }
+#pragma omp for collapse(2) schedule(static)
         for (int y = 1; y < ny - 1; y++)
-            for (int a = 0; a < na; a++)
-                bundle_yz(sys, w, act[a], kD[act[a]], mk[act[a]], 2, y, scr, 1);
+            for (int x0 = 1; x0 < nx - 1; x0 += BUNDLE) {
+                const int cw = nx - 1 - x0 < BUNDLE ? nx - 1 - x0 : BUNDLE;
+                for (int a = 0; a < na; a++)
+                    bundle_yz(sys, w, act[a], kD[act[a]], mk[act[a]], 2, y, x0, cw, scr, 1);
+            }
     }
 }
 
