@@ -132,6 +132,27 @@ int main(int argc, char **argv) {
         printf("  colour frame (maturation)%8.1f ms\n", 1e3 * best_of(5, run_frame, &j));
         j.out = &out;
         ss_abrasion_free(j.ab);
+        /* The cost grows with the wound: the same timeline for a wound that
+         * covers most of the texture (a square from 0.05 to 0.95). */
+        {
+            ss_stroke_set big = {0};
+            double u[4] = {0.05, 0.95, 0.95, 0.05}, v[4] = {0.05, 0.05, 0.95, 0.95};
+            int ids[4] = {0, 0, 0, 0}, one[1] = {0};
+            big.npoints = 4;
+            big.u = u;
+            big.v = v;
+            big.stroke = ids;
+            big.nstrokes = 1;
+            big.stroke_ids = one;
+            ss_wound_shape *wb;
+            if (ss_wound_shape_from_strokes(&big, SS_HULL_CONVEX, 5, n, 1, &wb, &err) == SS_OK) {
+                job jb = j;
+                jb.w = wb;
+                printf("  whole timeline, wound covering 81%% of the texture %8.1f ms\n",
+                       1e3 * best_of(2, run_timeline, &jb));
+                ss_wound_shape_free(wb);
+            }
+        }
         double tn = best_of(3, run_noise, &j);
         printf("  value noise, 6 octaves   %8.2f ns/sample (%.1f ms per %dx%d texture)\n",
                tn * 1e9 / ((double)n * n), tn * 1e3, n, n);

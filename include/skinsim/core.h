@@ -52,6 +52,8 @@ typedef struct ss_image {
  * zeroed. Sizes above SS_IMAGE_MAX_SIDE per side are refused. */
 #define SS_IMAGE_MAX_SIDE 65536
 ss_image *ss_image_create(int width, int height, int channels, ss_error *err);
+/* Same, pixels left undefined: for images the caller overwrites entirely. */
+ss_image *ss_image_create_uninit(int width, int height, int channels, ss_error *err);
 ss_image *ss_image_clone(const ss_image *img, ss_error *err);
 void ss_image_free(ss_image *img);
 static inline float *ss_image_px(const ss_image *img, int x, int y) {

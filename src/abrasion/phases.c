@@ -65,10 +65,11 @@ int ss_phase_from_name(const char *name) {
 
 ss_status ss_texture_set_create(int size, ss_texture_set *t, ss_error *err) {
     memset(t, 0, sizeof *t);
-    t->color = ss_image_create(size, size, 3, err);
-    t->reflection = t->color ? ss_image_create(size, size, 1, err) : NULL;
-    t->height = t->reflection ? ss_image_create(size, size, 1, err) : NULL;
-    t->normal = t->height ? ss_image_create(size, size, 3, err) : NULL;
+    /* Renders and frames overwrite every pixel: no need to zero. */
+    t->color = ss_image_create_uninit(size, size, 3, err);
+    t->reflection = t->color ? ss_image_create_uninit(size, size, 1, err) : NULL;
+    t->height = t->reflection ? ss_image_create_uninit(size, size, 1, err) : NULL;
+    t->normal = t->height ? ss_image_create_uninit(size, size, 3, err) : NULL;
     if (!t->normal) {
         ss_texture_set_free(t);
         return err->code;
@@ -206,11 +207,21 @@ static inline void outside_glow(const ctx *c, size_t i, const ss_image *glw, ss_
 /* Every phase starts from healthy skin: the upper colour, its reflection,
  * flat height and normal; the phases then draw only around the wound. */
 static void fill_healthy(const ctx *c, ss_texture_set *out) {
-    memcpy(out->color->data, c->skin->upper->data, c->npx * 3 * sizeof(float));
-    const float refl = SKIN_REFLECTION, h = 0.5f, flat[3] = {0.5f, 0.5f, 1.0f};
-    ss_image_fill(out->reflection, &refl);
-    ss_image_fill(out->height, &h);
-    ss_image_fill(out->normal, flat);
+    const size_t n = (size_t)c->n;
+#pragma omp parallel for schedule(static)
+    for (int y = 0; y < c->n; y++) {
+        size_t o = (size_t)y * n;
+        memcpy(out->color->data + o * 3, c->skin->upper->data + o * 3, n * 3 * sizeof(float));
+        float *r = out->reflection->data + o, *h = out->height->data + o;
+        float *nm = out->normal->data + o * 3;
+        for (size_t x = 0; x < n; x++) {
+            r[x] = SKIN_REFLECTION;
+            h[x] = 0.5f;
+            nm[3 * x] = 0.5f;
+            nm[3 * x + 1] = 0.5f;
+            nm[3 * x + 2] = 1.0f;
+        }
+    }
 }
 
 static void normals(const ctx *c, ss_texture_set *out) {
