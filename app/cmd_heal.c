@@ -684,7 +684,7 @@ static ss_status write_snapshot(run *r, ss_error *err) {
         int field;
         ss_heal_surface_mode mode;
         const char *how, *unit;
-    } maps[4] = {{SS_HEAL_EPITHELIUM, SS_SURFACE_TOP, "surface", "(1 = healthy)"},
+    } maps[4] = {{SS_HEAL_EPITHELIUM, SS_SURFACE_LAYER, "epithelial layer", "(1 = healthy)"},
                  {SS_HEAL_CAPILLARY, SS_SURFACE_TOP, "surface", "(1 = healthy)"},
                  {SS_HEAL_ESCHAR, SS_SURFACE_MAX, "column max", "(density)"},
                  {SS_HEAL_SCAR, SS_SURFACE_MAX, "column max", "(density)"}};
