@@ -99,3 +99,18 @@ ss_status cli_parse_double_list(const char *opt, const char *s, double lo, doubl
     *count = k;
     return SS_OK;
 }
+
+int cli_check_output_file(const char *cmd, const char *path) {
+    char dir[4096];
+    snprintf(dir, sizeof dir, "%s", path);
+    char *sl = strrchr(dir, '/');
+    if (sl)
+        *sl = 0;
+    else
+        snprintf(dir, sizeof dir, ".");
+    if (!dir[0]) snprintf(dir, sizeof dir, "/");
+    ss_error e;
+    ss_error_clear(&e);
+    if (ss_check_writable_dir(dir, &e)) return cli_fail(cmd, &e);
+    return 0;
+}

@@ -164,22 +164,6 @@ static int common_finish(const char *cmd, common_opts *c) {
     return 0;
 }
 
-/* Checks that the output's directory is writable before any work. */
-static int check_out(const char *cmd, const char *path) {
-    char dir[4096];
-    snprintf(dir, sizeof dir, "%s", path);
-    char *sl = strrchr(dir, '/');
-    if (sl)
-        *sl = 0;
-    else
-        snprintf(dir, sizeof dir, ".");
-    if (!dir[0]) snprintf(dir, sizeof dir, "/");
-    ss_error e;
-    ss_error_clear(&e);
-    if (ss_check_writable_dir(dir, &e)) return cli_fail(cmd, &e);
-    return 0;
-}
-
 /* ---- spectrum ------------------------------------------------------------------ */
 static void spectrum_help(FILE *f) {
     fprintf(f,
@@ -237,8 +221,8 @@ static int optics_spectrum(int argc, char **argv) {
         return cli_usage_error(cmd, "unknown option '%s'", argv[i]);
     }
     if ((rc = common_finish(cmd, &c))) return rc;
-    if (c.out && (rc = check_out(cmd, c.out))) return rc;
-    if (radial_out && (rc = check_out(cmd, radial_out))) return rc;
+    if (c.out && (rc = cli_check_output_file(cmd, c.out))) return rc;
+    if (radial_out && (rc = cli_check_output_file(cmd, radial_out))) return rc;
     if (radial_out) {
         double *prof = calloc((size_t)rbins * 3, sizeof *prof);
         size_t cap = 64 + (size_t)rbins * 96, len = 0;
@@ -358,7 +342,7 @@ static int optics_brdf(int argc, char **argv) {
     }
     if (!c.out) return cli_usage_error(cmd, "--out FILE.csv is required");
     if ((rc = common_finish(cmd, &c))) return rc;
-    if ((rc = check_out(cmd, c.out))) return rc;
+    if ((rc = cli_check_output_file(cmd, c.out))) return rc;
     ss_brdf_sampled b;
     ss_progress pr;
     ss_progress_begin(&pr, "brdf", 1.0, c.quiet || c.json);
@@ -443,7 +427,7 @@ static int optics_mci(int argc, char **argv) {
     free(text);
     if (st) return cli_fail(cmd, &e);
     int rc = 0;
-    for (int r = 0; r < mf.nruns && !rc; r++) rc = check_out(cmd, mf.runs[r].out_name);
+    for (int r = 0; r < mf.nruns && !rc; r++) rc = cli_check_output_file(cmd, mf.runs[r].out_name);
     if (json && !rc) printf("[");
     for (int r = 0; r < mf.nruns && !rc; r++) {
         char *mco = NULL;
@@ -561,7 +545,7 @@ static int optics_swatch(int argc, char **argv) {
         goto out;
     }
     if ((rc = common_finish(cmd, &c))) goto out;
-    if ((rc = check_out(cmd, c.out))) goto out;
+    if ((rc = cli_check_output_file(cmd, c.out))) goto out;
     const double *M = mel ? mel : mel_def, *B = bl ? bl : bl_def;
     if (!mel) nmel = (int)(sizeof mel_def / sizeof mel_def[0]);
     if (!bl) nbl = (int)(sizeof bl_def / sizeof bl_def[0]);

@@ -185,21 +185,6 @@ static int finish_shared(const char *cmd, fit_cli *c) {
     return 0;
 }
 
-static int check_out(const char *cmd, const char *path) {
-    char dir[4096];
-    snprintf(dir, sizeof dir, "%s", path);
-    char *sl = strrchr(dir, '/');
-    if (sl)
-        *sl = 0;
-    else
-        snprintf(dir, sizeof dir, ".");
-    if (!dir[0]) snprintf(dir, sizeof dir, "/");
-    ss_error e;
-    ss_error_clear(&e);
-    if (ss_check_writable_dir(dir, &e)) return cli_fail(cmd, &e);
-    return 0;
-}
-
 /* A JSON string literal (quotes, backslashes and control characters escaped). */
 static void json_str(const char *s) {
     putchar('"');
@@ -450,7 +435,7 @@ int cmd_optics_table(int argc, char **argv) {
         ss_mm_table_free(t);
         return 0;
     }
-    if ((rc = check_out(cmd, c.out))) return rc;
+    if ((rc = cli_check_output_file(cmd, c.out))) return rc;
     int ns[SS_MM_NAXES];
     double lo[SS_MM_NAXES], hi[SS_MM_NAXES];
     for (int a = 0; a < SS_MM_NAXES; a++) {

@@ -22,12 +22,6 @@
 
 #include "heal_internal.h"
 
-/* clamp without the libm call fminf/fmaxf need without -ffast-math */
-static inline float clampf(float v, float lo, float hi) {
-    v = v > lo ? v : lo;
-    return v < hi ? v : hi;
-}
-
 static uint8_t cls_of(const ss_heal_rd_system *sys, size_t c) { return sys->cls ? sys->cls[c] : 0; }
 
 void ss_heal_rd__build_masks(const ss_heal_rd_system *sys, ss_heal_rd_work *w) {

@@ -36,4 +36,10 @@ void ss_heal_rd__build_masks(const ss_heal_rd_system *sys, ss_heal_rd_work *w);
 void ss_heal_rd__convect(const ss_heal_rd_system *sys, const ss_heal_rd_work *w, int f,
                          const float *src, float *dst, double dt);
 
+/* clamp without the libm call fminf/fmaxf need without -ffast-math */
+static inline float clampf(float v, float lo, float hi) {
+    v = v > lo ? v : lo;
+    return v < hi ? v : hi;
+}
+
 #endif

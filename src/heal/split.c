@@ -30,12 +30,6 @@
 
 #include "heal_internal.h"
 
-/* clamp without the libm call fminf/fmaxf need without -ffast-math */
-static inline float clampf(float v, float lo, float hi) {
-    v = v > lo ? v : lo;
-    return v < hi ? v : hi;
-}
-
 static int thread_count(const ss_heal_rd_work *w) {
     int nt = omp_get_max_threads();
     return nt < w->nthreads ? nt : w->nthreads;
@@ -176,8 +170,8 @@ static inline void bundle_yz(const ss_heal_rd_system *sys, const ss_heal_rd_work
 /* The x lines y in [y0, y0 + ch) of slab z at once: the recurrence runs along
  * x while the independent lines form the SIMD dimension, so the Thomas sweep
  * is not bound by the latency of its division chain. Scratch layout [x][y]. */
-static inline void bundle_x(const ss_heal_rd_system *sys, const ss_heal_rd_work *w, int f,
-                            float kD, const float *mk, int z, int y0, int ch, float *scr) {
+static inline void bundle_x(const ss_heal_rd_system *sys, const ss_heal_rd_work *w, int f, float kD,
+                            const float *mk, int z, int y0, int ch, float *scr) {
     const int nx = sys->nx;
     const size_t sy = (size_t)nx;
     const size_t bz = (size_t)z * (size_t)nx * (size_t)sys->ny + (size_t)y0 * sy;
