@@ -58,7 +58,8 @@ void ss_wound_shape_free(ss_wound_shape *w);
 /* ---- base skin ---------------------------------------------------------- */
 
 /* The seed's "upper" (healthy) and "lower" (dermis) skin colour textures,
- * linear RGB, size x size. Inputs may be given (any size, resampled); the
+ * linear RGB, size x size. Inputs may be given (any size, resampled; grey is
+ * replicated to RGB, alpha dropped); the
  * rest are generated procedurally from seed (see docs/abrasion.md). */
 typedef struct ss_base_skin {
     ss_image *upper, *lower; /* linear RGB */

@@ -75,8 +75,6 @@ ss_status ss_base_skin_create(const ss_image *upper_in, const ss_image *lower_in
     static const float dermis_tint[3] = {0.5f, 1.0f, 1.0f};
     ss_status st = SS_OK;
     if (upper_in) {
-        if (upper_in->channels < 3)
-            return ss_error_set(err, SS_ERR_INPUT, "upper skin texture must be RGB or RGBA");
         out->upper = ss_image_resize(upper_in, size, size, err);
         if (!out->upper) return err->code;
     } else {
@@ -84,12 +82,8 @@ ss_status ss_base_skin_create(const ss_image *upper_in, const ss_image *lower_in
                        &out->upper, err);
     }
     if (!st && lower_in) {
-        if (lower_in->channels < 3) {
-            st = ss_error_set(err, SS_ERR_INPUT, "lower skin texture must be RGB or RGBA");
-        } else {
-            out->lower = ss_image_resize(lower_in, size, size, err);
-            if (!out->lower) st = err->code;
-        }
+        out->lower = ss_image_resize(lower_in, size, size, err);
+        if (!out->lower) st = err->code;
     } else if (!st) {
         st = make_skin(size, seed, dermis_srgb, 0.18f, 0.08f, dermis_tint, STREAM_DERMIS_BLOTCH,
                        &out->lower, err);
@@ -98,10 +92,12 @@ ss_status ss_base_skin_create(const ss_image *upper_in, const ss_image *lower_in
         ss_base_skin_free(out);
         return st;
     }
-    /* RGBA inputs: keep RGB only (alpha is not a skin property here). */
+    /* Inputs of any channel count become RGB: grey is replicated, alpha
+     * dropped (it is not a skin property here). */
     for (int k = 0; k < 2; k++) {
         ss_image **img = k ? &out->lower : &out->upper;
-        if ((*img)->channels == 4) {
+        int ch = (*img)->channels;
+        if (ch != 3) {
             ss_image *rgb = ss_image_create(size, size, 3, err);
             if (!rgb) {
                 ss_base_skin_free(out);
@@ -110,7 +106,8 @@ ss_status ss_base_skin_create(const ss_image *upper_in, const ss_image *lower_in
             size_t n = (size_t)size * (size_t)size;
             for (size_t i = 0; i < n; i++)
                 for (int c = 0; c < 3; c++)
-                    rgb->data[i * 3 + (size_t)c] = (*img)->data[i * 4 + (size_t)c];
+                    rgb->data[i * 3 + (size_t)c] =
+                        (*img)->data[i * (size_t)ch + (size_t)(ch >= 3 ? c : 0)];
             ss_image_free(*img);
             *img = rgb;
         }
