@@ -44,7 +44,10 @@ static void help(void) {
         "  --out DIR             output directory (default abrasion-out)\n"
         "  --threads N           worker threads (default: SKINSIM_THREADS or all cores)\n"
         "  --quiet               no progress on stderr\n"
-        "  --json                print a summary as JSON on stdout\n\n"
+        "  --json                print a summary as JSON on stdout\n"
+        "  --gltf                also write DIR/frames/t<days>.gltf: the frame on a square\n"
+        "                        of the world size, for any glTF viewer or Blender\n"
+        "                        (roughness = 1 - 0.8 x reflection in t<days>_metal_rough.png)\n\n"
         "Writes DIR/keys/<phase>_{color,reflection,height,normal}.png,\n"
         "DIR/frames/t<days>_{color,reflection,height,normal}.png, DIR/timeline.json and\n"
         "DIR/contact_sheet.png. Colour is sRGB 8-bit; reflection (specular strength)\n"
@@ -56,7 +59,7 @@ static void help(void) {
 
 typedef struct opts {
     const char *stroke, *mask, *upper, *lower, *timeline, *out;
-    int size, concave_k, threads, quiet, json;
+    int size, concave_k, threads, quiet, json, gltf;
     ss_hull_kind hull;
     double world_cm;
     uint64_t seed;
@@ -81,6 +84,7 @@ static int parse(int argc, char **argv, opts *o, ss_error *err) {
                                              {"quiet", no_argument, 0, 'q'},
                                              {"json", no_argument, 0, 'J'},
                                              {"help", no_argument, 0, 'h'},
+                                             {"gltf", no_argument, 0, 'G'},
                                              {0, 0, 0, 0}};
     memset(o, 0, sizeof *o);
     o->size = 2048;
@@ -120,6 +124,9 @@ static int parse(int argc, char **argv, opts *o, ss_error *err) {
             break;
         case 'q':
             o->quiet = 1;
+            break;
+        case 'G':
+            o->gltf = 1;
             break;
         case 'J':
             o->json = 1;
@@ -205,6 +212,33 @@ static ss_status write_set(const char *dir, const char *stem, const ss_texture_s
         if (files) cJSON_AddStringToObject(files, names[k], rel);
     }
     return SS_OK;
+}
+
+/* The frame as a glTF square: a metal-rough texture from the reflection
+ * map, and the .gltf referencing the colour, metal-rough and normal PNGs. */
+static ss_status write_gltf(const char *dir, const char *stem, const ss_texture_set *t,
+                            double world_cm, cJSON *files, ss_error *err) {
+    ss_image *mr = ss_image_create_uninit(t->reflection->width, t->reflection->height, 3, err);
+    if (!mr) return err->code;
+    char path[4096], rel[512], gl[512];
+    ss_status st = ss_reflection_to_metal_rough(t->reflection, mr, err);
+    snprintf(rel, sizeof rel, "%s_metal_rough.png", stem);
+    snprintf(path, sizeof path, "%s/%s", dir, rel);
+    if (!st) st = ss_png_write(path, mr, 8, SS_ENC_LINEAR, err);
+    ss_image_free(mr);
+    if (st) return st;
+    cJSON_AddStringToObject(files, "metal_rough", rel);
+    /* URIs are relative to the .gltf, which sits in the same folder. */
+    const char *base = strrchr(stem, '/') ? strrchr(stem, '/') + 1 : stem;
+    char col[256], mrn[256], nrm[256];
+    snprintf(col, sizeof col, "%s_color.png", base);
+    snprintf(mrn, sizeof mrn, "%s_metal_rough.png", base);
+    snprintf(nrm, sizeof nrm, "%s_normal.png", base);
+    snprintf(gl, sizeof gl, "%s.gltf", stem);
+    snprintf(path, sizeof path, "%s/%s", dir, gl);
+    st = ss_gltf_write_textured_square(path, world_cm / 100.0, base, col, mrn, nrm, err);
+    if (!st) cJSON_AddStringToObject(files, "gltf", gl);
+    return st;
 }
 
 typedef struct inputs {
@@ -333,7 +367,9 @@ static ss_status run(const opts *o, const char *dir, cJSON *summary, ss_error *e
             cJSON_AddStringToObject(f, "to", ss_phase_name(in.timeline.key[p.key_b].phase));
             cJSON_AddNumberToObject(f, "weight", p.weight);
         }
-        st = write_set(dir, stem, &frame, cJSON_AddObjectToObject(f, "files"), err);
+        cJSON *files = cJSON_AddObjectToObject(f, "files");
+        st = write_set(dir, stem, &frame, files, err);
+        if (!st && o->gltf) st = write_gltf(dir, stem, &frame, o->world_cm, files, err);
         if (!st)
             thumbs[i] = ss_image_resize(frame.color, 512 < o->size ? 512 : o->size,
                                         512 < o->size ? 512 : o->size, err);

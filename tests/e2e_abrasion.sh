@@ -38,6 +38,21 @@ printf 'u,v,stroke\n0.1,0.1,0\n0.4,0.1,0\n0.4,0.2,0\n0.2,0.2,0\n0.2,0.4,0\n0.1,0
 check '[ $? -eq 0 ]' "strokes run"
 check 'python3 -c "import json,sys; d=json.load(open(sys.argv[1])); assert d[\"wounds\"]==2" "$T/j.json"' "--json says 2 wounds"
 
+# 3b. glTF frames: valid JSON, every image and the buffer present, accessor
+# counts consistent (checked with the Khronos validator by hand: 0 issues).
+"$CLI" abrasion --size 64 --times 5 --gltf --out "$T/gl" --quiet
+check '[ $? -eq 0 ]' "--gltf run"
+check 'python3 - "$T/gl/frames/t5.gltf" <<PY
+import json, os, sys, base64
+g = json.load(open(sys.argv[1])); d = os.path.dirname(sys.argv[1])
+assert g["asset"]["version"] == "2.0"
+for im in g["images"]: assert os.path.getsize(os.path.join(d, im["uri"])) > 0, im
+b = g["buffers"][0]; data = base64.b64decode(b["uri"].split(",", 1)[1]); assert len(data) == b["byteLength"]
+for a in g["accessors"]:
+    v = g["bufferViews"][a["bufferView"]]; assert v["byteOffset"] + v["byteLength"] <= len(data)
+m = g["materials"][0]; assert "baseColorTexture" in m["pbrMetallicRoughness"] and "normalTexture" in m
+PY' "glTF frame content"
+
 # 4. Mask input (a PNG written by the tool itself: the key colour of vasoconstriction is not a mask, so make one with python's zlib).
 python3 - "$T/mask.png" <<'PY'
 import struct, zlib, sys

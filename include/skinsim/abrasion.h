@@ -125,6 +125,12 @@ ss_status ss_abrasion_maturation_color(const ss_wound_shape *w, const ss_base_sk
                                        const ss_abrasion_settings *s, double position,
                                        ss_image *color, ss_error *err);
 
+/* For renderers without a specular map (glTF's metallic-roughness): an RGB
+ * image with roughness = 1 - 0.8 x reflection in G and metallic 0 in B (R is
+ * unused, 1), so shinier parts of the reflection map are smoother. */
+ss_status ss_reflection_to_metal_rough(const ss_image *reflection, ss_image *metal_rough,
+                                       ss_error *err);
+
 /* ---- timeline ----------------------------------------------------------- */
 
 #define SS_TIMELINE_MAX_KEYS 32

@@ -109,6 +109,17 @@ ss_status ss_stroke_hulls(const ss_stroke_set *s, double width, double height, i
 ss_image *ss_stroke_footprint(const ss_stroke_set *s, int width, int height, int concave_k,
                               const char *name, ss_error *err);
 
+/* ---- glTF -------------------------------------------------------------- */
+
+/* A glTF 2.0 file showing a texture set on a square of side_m metres (XY
+ * plane, facing +Z, UV (0,0) at the top-left): glTF metallic-roughness
+ * material with the given texture URIs (relative to the .gltf; any may be
+ * NULL). Geometry embedded; written atomically. */
+ss_status ss_gltf_write_textured_square(const char *path, double side_m, const char *name,
+                                        const char *base_color_uri,
+                                        const char *metallic_roughness_uri, const char *normal_uri,
+                                        ss_error *err);
+
 #ifdef __cplusplus
 }
 #endif

@@ -76,8 +76,8 @@ ss_status ss_heal_pvd_write(const char *path, int n, const double *t_days, const
 
 /* ---- surface maps -------------------------------------------------------- */
 typedef enum ss_heal_surface_mode {
-    SS_SURFACE_TOP = 0, /* value in the topmost tissue cell of each column */
-    SS_SURFACE_MAX = 1, /* maximum over the tissue cells of each column */
+    SS_SURFACE_TOP = 0,  /* value in the topmost tissue cell of each column */
+    SS_SURFACE_MAX = 1,  /* maximum over the tissue cells of each column */
     SS_SURFACE_LAYER = 2 /* maximum over the two topmost tissue cells: the
                             epithelial layer of §5.1, the value the open-area
                             statistic (ss_heal_stats_compute) thresholds */

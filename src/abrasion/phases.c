@@ -536,3 +536,21 @@ ss_status ss_abrasion_maturation_color(const ss_wound_shape *w, const ss_base_sk
         }
     return SS_OK;
 }
+
+ss_status ss_reflection_to_metal_rough(const ss_image *reflection, ss_image *mr, ss_error *err) {
+    if (reflection->width != mr->width || reflection->height != mr->height ||
+        reflection->channels != 1 || mr->channels != 3)
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "metal-rough: needs a 1-channel reflection and an "
+                            "RGB output of the same size");
+    size_t n = (size_t)mr->width * (size_t)mr->height;
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < n; i++) {
+        float r = reflection->data[i];
+        r = r < 0 ? 0 : r > 1 ? 1 : r;
+        mr->data[i * 3] = 1.0f;
+        mr->data[i * 3 + 1] = 1.0f - 0.8f * r;
+        mr->data[i * 3 + 2] = 0.0f;
+    }
+    return SS_OK;
+}
