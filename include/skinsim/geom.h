@@ -98,7 +98,8 @@ ss_status ss_stroke_csv_parse(const char *text, const char *name, ss_stroke_set 
 void ss_stroke_set_free(ss_stroke_set *s); /* frees arrays and zeroes the struct */
 /* One hull per stroke (in stroke_ids order), points scaled to width x
  * height: convex (concave_k == 0) or k-nearest concave (>= 3). *out holds
- * nstrokes polygons; free each and the array. Errors name the stroke. */
+ * nstrokes polygons; free each and the array. Errors name the stroke,
+ * prefixed by name unless it is NULL. */
 ss_status ss_stroke_hulls(const ss_stroke_set *s, double width, double height, int concave_k,
                           const char *name, ss_polygon **out, ss_error *err);
 /* Footprint of a stroke set: each stroke's points (u*width, v*height pixels)

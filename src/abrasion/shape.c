@@ -75,13 +75,10 @@ ss_status ss_wound_shape_from_strokes(const ss_stroke_set *s, ss_hull_kind kind,
     int nids = s->nstrokes;
     ss_wound_shape *w = shape_alloc(size, nids, err);
     if (!w) return err->code;
-    ss_error e2;
-    ss_status st = ss_stroke_hulls(s, size, size, kind == SS_HULL_CONCAVE ? concave_k : 0,
-                                   "strokes", &w->polys, &e2);
+    /* No name: the caller knows the file and prefixes it. */
+    ss_status st = ss_stroke_hulls(s, size, size, kind == SS_HULL_CONCAVE ? concave_k : 0, NULL,
+                                   &w->polys, err);
     if (st) {
-        /* name the stroke, not the placeholder; the caller names the file */
-        const char *m = strncmp(e2.msg, "strokes: ", 9) == 0 ? e2.msg + 9 : e2.msg;
-        ss_error_set(err, st, "%s", m);
         ss_wound_shape_free(w);
         return st;
     }

@@ -6,6 +6,7 @@
 #include "skinsim/geom.h"
 
 #include <errno.h>
+#include <stdio.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -163,13 +164,15 @@ ss_status ss_stroke_csv_read(const char *path, ss_stroke_set *out, ss_error *err
 ss_status ss_stroke_hulls(const ss_stroke_set *s, double width, double height, int concave_k,
                           const char *name, ss_polygon **out, ss_error *err) {
     *out = NULL;
+    /* name prefixes the messages; NULL leaves it to the caller */
+    char pre[512] = "";
+    if (name) snprintf(pre, sizeof pre, "%s: ", name);
     if (concave_k != 0 && concave_k < 3)
-        return ss_error_set(err, SS_ERR_INPUT, "%s: concave hull k must be >= 3 (got %d)", name,
+        return ss_error_set(err, SS_ERR_INPUT, "%sconcave hull k must be >= 3 (got %d)", pre,
                             concave_k);
     ss_polygon *polys = calloc((size_t)(s->nstrokes > 0 ? s->nstrokes : 1), sizeof *polys);
     ss_vec2 *pts = malloc((size_t)(s->npoints > 0 ? s->npoints : 1) * sizeof *pts);
-    ss_status st =
-        polys && pts ? SS_OK : ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", name);
+    ss_status st = polys && pts ? SS_OK : ss_error_set(err, SS_ERR_NOMEM, "%sout of memory", pre);
     for (int k = 0; k < s->nstrokes && !st; k++) {
         int n = 0;
         for (int i = 0; i < s->npoints; i++)
@@ -179,7 +182,7 @@ ss_status ss_stroke_hulls(const ss_stroke_set *s, double width, double height, i
         ss_error_clear(&e);
         st = concave_k ? ss_concave_hull(pts, n, concave_k, &polys[k], &e)
                        : ss_convex_hull(pts, n, &polys[k], &e);
-        if (st) ss_error_set(err, st, "%s: stroke %d: %s", name, s->stroke_ids[k], e.msg);
+        if (st) ss_error_set(err, st, "%sstroke %d: %s", pre, s->stroke_ids[k], e.msg);
     }
     free(pts);
     if (st) {
