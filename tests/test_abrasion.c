@@ -375,6 +375,36 @@ static void test_frames_blend(void **state) {
     scene_free(&sc);
 }
 
+/* Repainting (new shape into the existing textures) gives the same keys as
+ * a fresh timeline for that shape. */
+static void test_update_equals_create(void **state) {
+    (void)state;
+    int n = 64;
+    scene sc;
+    scene_make(&sc, n);
+    ss_error err;
+    ss_timeline tl;
+    ss_timeline_default(&tl);
+    ss_abrasion *a, *b;
+    assert_int_equal(ss_abrasion_create(&sc.s, &tl, sc.w, &sc.skin, &a, &err), SS_OK);
+    ss_stroke_set sq = square_strokes(0.2, 0.6);
+    ss_wound_shape *w2;
+    assert_int_equal(ss_wound_shape_from_strokes(&sq, SS_HULL_CONVEX, 5, n, 7, &w2, &err), SS_OK);
+    assert_int_equal(ss_abrasion_update(a, w2, &err), SS_OK);
+    assert_int_equal(ss_abrasion_create(&sc.s, &tl, w2, &sc.skin, &b, &err), SS_OK);
+    for (int ph = 0; ph < SS_PHASE_COUNT; ph++) {
+        assert_memory_equal(a->phase[ph].color->data, b->phase[ph].color->data,
+                            sizeof(float) * (size_t)(n * n * 3));
+        assert_memory_equal(a->phase[ph].normal->data, b->phase[ph].normal->data,
+                            sizeof(float) * (size_t)(n * n * 3));
+    }
+    ss_abrasion_free(a);
+    ss_abrasion_free(b);
+    ss_wound_shape_free(w2);
+    ss_stroke_set_free(&sq);
+    scene_free(&sc);
+}
+
 /* The same wound at two resolutions: the glow ring and the scab's red edge
  * cover the same fraction of the texture. */
 static double red_fraction(int n, ss_phase ph) {

@@ -175,6 +175,10 @@ ss_status ss_abrasion_create(const ss_abrasion_settings *s, const ss_timeline *t
                              const ss_wound_shape *w, const ss_base_skin *skin, ss_abrasion **out,
                              ss_error *err);
 void ss_abrasion_free(ss_abrasion *a);
+/* Re-renders every key for a new wound shape (same size) into the existing
+ * textures: what an interactive tool does each time the user repaints, with
+ * no new memory. */
+ss_status ss_abrasion_update(ss_abrasion *a, const ss_wound_shape *w, ss_error *err);
 /* The texture set at time day (days since injury), into out (created by the
  * caller with ss_texture_set_create at settings.size). Maps the caller set to
  * NULL (all but color) are skipped: a time slider needs only the colour. */

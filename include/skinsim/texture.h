@@ -86,6 +86,14 @@ void ss_erode_reference(const ss_image *src, const int *widths, ss_image *dst);
  * the caller composes colours as the seed does. */
 void ss_gradient_edge(const ss_image *shape, const ss_image *dist, float thickness,
                       int render_inside, ss_image *lerp_out);
+/* The same weight for one pixel (in_shape: the shape is white there), for
+ * renderers that draw the gradient while they compose colours. */
+static inline float ss_gradient_weight(int in_shape, float dist, float thickness,
+                                       int render_inside) {
+    if ((render_inside ? !in_shape : in_shape) || !(thickness > 0.0f) || !(dist <= thickness))
+        return -1.0f;
+    return dist / thickness;
+}
 /* (thickness <= 0 draws nothing: all -1. Shape value > 0.5 is white.) */
 
 /* Height (1 channel, in world units per pixel scaled by strength) to a

@@ -134,13 +134,6 @@ void ss_abrasion_changed_region(const ss_wound_shape *w, const ss_abrasion_setti
     if (w->box_w == 0) *width = *height = 0;
 }
 
-/* Copies sub (w x h) into img at (x0, y0). */
-static void paste(ss_image *img, const ss_image *sub, int x0, int y0) {
-    size_t row = (size_t)sub->width * (size_t)img->channels * sizeof(float);
-    for (int y = 0; y < sub->height; y++)
-        memcpy(ss_image_px(img, x0, y0 + y), ss_image_px(sub, 0, y), row);
-}
-
 static void ctx_init(ctx *c, const ss_wound_shape *w, const ss_base_skin *skin,
                      const ss_abrasion_settings *s) {
     c->w = w;
@@ -161,6 +154,8 @@ static inline void put_color(const ctx *c, float *dst, const float rgb[3]) {
     for (int k = 0; k < 3; k++) dst[k] = decode(&c->lut, rgb[k]);
 }
 
+/* A value-noise texture over the wound's box only (noise is only read inside
+ * the wound); index it with box_index. Same values as the whole texture. */
 static ss_status noise(const ctx *c, int octaves, float persistence, float bias, float gain,
                        float stretch_y, uint64_t stream, ss_image **out, ss_error *err) {
     ss_noise_params p;
@@ -171,15 +166,10 @@ static ss_status noise(const ctx *c, int octaves, float persistence, float bias,
     p.gain = gain;
     p.stretch_y = stretch_y;
     p.cell_px = c->k;
-    *out = ss_image_create(c->n, c->n, 1, err);
+    *out = ss_image_create_uninit(c->bw > 0 ? c->bw : 1, c->bh > 0 ? c->bh : 1, 1, err);
     if (!*out) return err->code;
     if (c->bw == 0) return SS_OK;
-    ss_image *sub = ss_image_create(c->bw, c->bh, 1, err);
-    ss_status st =
-        sub ? ss_value_noise_rect(&p, c->s->seed, stream, c->n, c->n, c->bx, c->by, sub, err)
-            : err->code;
-    if (!st) paste(*out, sub, c->bx, c->by);
-    ss_image_free(sub);
+    ss_status st = ss_value_noise_rect(&p, c->s->seed, stream, c->n, c->n, c->bx, c->by, *out, err);
     if (st) {
         ss_image_free(*out);
         *out = NULL;
@@ -187,20 +177,23 @@ static ss_status noise(const ctx *c, int octaves, float persistence, float bias,
     return st;
 }
 
-/* Alg. 3.4 weights of the outward red glow (thickness 100 reference px). */
-static ss_status glow(const ctx *c, ss_image **out, ss_error *err) {
-    *out = ss_image_create(c->n, c->n, 1, err);
-    if (!*out) return err->code;
-    ss_gradient_edge(c->w->mask, c->w->dist, 100.0f * c->k, 0, *out);
-    return SS_OK;
+/* Index into a box-sized image (x0, y0 its corner, w its width) of the
+ * texture pixel i. */
+static inline size_t box_index(const ctx *c, int x0, int y0, int w, size_t i) {
+    size_t y = i / (size_t)c->n, x = i - y * (size_t)c->n;
+    return (y - (size_t)y0) * (size_t)w + (x - (size_t)x0);
 }
+
+/* Thickness of the glow and the scab's inner gradient: 100 reference px. */
+static inline float gradient_px(const ctx *c) { return 100.0f * c->k; }
 
 /* Outside the wound the glow fades from red to the upper skin (Alg. 3.4);
  * where it is not drawn the pixel keeps the healthy skin fill_healthy wrote. */
-static inline void outside_glow(const ctx *c, size_t i, const ss_image *glw, ss_texture_set *out) {
-    if (glw->data[i] < 0.0f) return;
+static inline void outside_glow(const ctx *c, size_t i, ss_texture_set *out) {
+    float t = ss_gradient_weight(0, c->w->dist->data[i], gradient_px(c), 0);
+    if (t < 0.0f) return;
     float rgb[3];
-    lerp3(GLOW_RED, c->skin->upper_srgb->data + i * 3, glw->data[i], rgb);
+    lerp3(GLOW_RED, c->skin->upper_srgb->data + i * 3, t, rgb);
     put_color(c, out->color->data + i * 3, rgb);
 }
 
@@ -270,39 +263,33 @@ static ss_status render_vasoconstriction(const ctx *c, ss_texture_set *out, ss_e
 }
 
 static ss_status render_vasodilation(const ctx *c, ss_texture_set *out, ss_error *err) {
-    ss_image *glw = NULL, *scrape = NULL, *e1 = NULL, *e2 = NULL;
-    int *widths = malloc(c->npx * sizeof(int));
-    if (!widths) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
-    ss_status st = glow(c, &glw, err);
+    ss_image *scrape = NULL, *e1 = NULL, *e2 = NULL;
     /* Scrape lines: 5 octaves, persistence 0.09, bias 0.5, gain 0.43, y x64. */
-    if (!st) st = noise(c, 5, 0.09f, 0.5f, 0.43f, 64.0f, ST_SCRAPE, &scrape, err);
+    ss_status st = noise(c, 5, 0.09f, 0.5f, 0.43f, 64.0f, ST_SCRAPE, &scrape, err);
     /* The half-scraped edge: erode twice (widths 3-5, then 3-10), in a box
      * around the wound padded wider than the kernels so the result equals
      * eroding the whole texture. */
-    if (!st) e2 = ss_image_create(c->n, c->n, 1, err);
-    if (!e2) st = err->code;
     int lo = (int)fmaxf(1.0f, roundf(3 * c->k)), hi1 = (int)fmaxf((float)lo, roundf(5 * c->k)),
         hi2 = (int)fmaxf((float)lo, roundf(10 * c->k)), pad = hi2 / 2 + 3;
     int ex0 = c->bx - pad < 0 ? 0 : c->bx - pad;
-    int ex1 = c->bx + c->bw + pad > c->n ? c->n : c->bx + c->bw + pad;
+    int ex1 = c->bx + c->bw + pad > c->n ? c->n : c->bx + c->bw + pad, ew = ex1 - ex0;
+    int *widths = NULL;
     if (!st && c->bw > 0) {
-        ss_image *m = ss_image_create(ex1 - ex0, c->bh, 1, err);
-        e1 = m ? ss_image_create(ex1 - ex0, c->bh, 1, err) : NULL;
-        if (!e1) {
-            ss_image_free(m);
-            st = err->code;
+        widths = malloc((size_t)ew * (size_t)c->bh * sizeof(int));
+        e1 = ss_image_create_uninit(ew, c->bh, 1, err);
+        e2 = e1 ? ss_image_create_uninit(ew, c->bh, 1, err) : NULL;
+        if (!e2 || !widths) {
+            st = widths ? err->code : ss_error_set(err, SS_ERR_NOMEM, "out of memory");
         } else {
             for (int y = 0; y < c->bh; y++)
-                memcpy(ss_image_px(m, 0, y), ss_image_px(c->w->mask, ex0, c->by + y),
-                       (size_t)(ex1 - ex0) * sizeof(float));
-            ss_erosion_widths_rect(c->n, c->n, ex0, c->by, ex1 - ex0, c->bh, lo, hi1, c->s->seed,
+                memcpy(ss_image_px(e2, 0, y), ss_image_px(c->w->mask, ex0, c->by + y),
+                       (size_t)ew * sizeof(float));
+            ss_erosion_widths_rect(c->n, c->n, ex0, c->by, ew, c->bh, lo, hi1, c->s->seed,
                                    ST_ERODE1, widths);
-            ss_erode(m, widths, e1);
-            ss_erosion_widths_rect(c->n, c->n, ex0, c->by, ex1 - ex0, c->bh, lo, hi2, c->s->seed,
+            ss_erode(e2, widths, e1);
+            ss_erosion_widths_rect(c->n, c->n, ex0, c->by, ew, c->bh, lo, hi2, c->s->seed,
                                    ST_ERODE2, widths);
-            ss_erode(e1, widths, m);
-            paste(e2, m, ex0, c->by);
-            ss_image_free(m);
+            ss_erode(e1, widths, e2);
         }
     }
     if (!st) {
@@ -310,30 +297,28 @@ static ss_status render_vasodilation(const ctx *c, ss_texture_set *out, ss_error
         for (int y = c->ry; y < c->ry + c->rh; y++)
             for (size_t i = (size_t)y * (size_t)c->n + (size_t)c->rx, e = i + (size_t)c->rw; i < e;
                  i++) {
-                float rgb[3];
-                if (c->w->mask->data[i] > 0.5f) {
-                    const float *lo_s = c->skin->lower_srgb->data + i * 3;
-                    if (e2->data[i] > 0.5f) {
-                        /* Inside: lower skin multiplied by the red (§4.3.2). */
-                        for (int k = 0; k < 3; k++) rgb[k] = lo_s[k] * GLOW_RED[k];
-                    } else {
-                        /* The edge of half scraped-off skin. */
-                        const float *up = c->skin->upper_srgb->data + i * 3;
-                        for (int k = 0; k < 3; k++) rgb[k] = up[k] * EDGE_GREY;
-                    }
-                    out->reflection->data[i] = scrape->data[i];
-                    out->height->data[i] =
-                        e2->data[i] > 0.5f
-                            ? 0.5f - WOUND_DEPTH + SCRAPE_RELIEF * (scrape->data[i] - 0.5f)
-                            : 0.5f - 0.5f * WOUND_DEPTH;
-                } else {
-                    outside_glow(c, i, glw, out);
+                if (c->w->mask->data[i] <= 0.5f) {
+                    outside_glow(c, i, out);
                     continue;
                 }
+                float rgb[3];
+                float sc = scrape->data[box_index(c, c->bx, c->by, c->bw, i)];
+                int bed = e2->data[box_index(c, ex0, c->by, ew, i)] > 0.5f;
+                if (bed) {
+                    /* Inside: lower skin multiplied by the red (§4.3.2). */
+                    const float *lo_s = c->skin->lower_srgb->data + i * 3;
+                    for (int k = 0; k < 3; k++) rgb[k] = lo_s[k] * GLOW_RED[k];
+                } else {
+                    /* The edge of half scraped-off skin. */
+                    const float *up = c->skin->upper_srgb->data + i * 3;
+                    for (int k = 0; k < 3; k++) rgb[k] = up[k] * EDGE_GREY;
+                }
+                out->reflection->data[i] = sc;
+                out->height->data[i] = bed ? 0.5f - WOUND_DEPTH + SCRAPE_RELIEF * (sc - 0.5f)
+                                           : 0.5f - 0.5f * WOUND_DEPTH;
                 put_color(c, out->color->data + i * 3, rgb);
             }
     }
-    ss_image_free(glw);
     ss_image_free(scrape);
     ss_image_free(e1);
     ss_image_free(e2);
@@ -342,10 +327,9 @@ static ss_status render_vasodilation(const ctx *c, ss_texture_set *out, ss_error
 }
 
 static ss_status render_scab_forming(const ctx *c, ss_texture_set *out, ss_error *err) {
-    ss_image *glw = NULL, *low = NULL, *speck = NULL, *scrape = NULL;
-    ss_status st = glow(c, &glw, err);
+    ss_image *low = NULL, *speck = NULL, *scrape = NULL;
     /* Bottom layer: 5 octaves, 0.85 persistence, 0.54 bias, 0.21 gain. */
-    if (!st) st = noise(c, 5, 0.85f, 0.54f, 0.21f, 1.0f, ST_SCABFORM_LOW, &low, err);
+    ss_status st = noise(c, 5, 0.85f, 0.54f, 0.21f, 1.0f, ST_SCABFORM_LOW, &low, err);
     /* Speckles: 5 octaves, 0.48 persistence, 0.16 bias, 0.15 gain. */
     if (!st) st = noise(c, 5, 0.48f, 0.16f, 0.15f, 1.0f, ST_SCABFORM_SPECKLE, &speck, err);
     /* The scrape lines stay visible in the reflection while the bed dries. */
@@ -355,28 +339,26 @@ static ss_status render_scab_forming(const ctx *c, ss_texture_set *out, ss_error
         for (int y = c->ry; y < c->ry + c->rh; y++)
             for (size_t i = (size_t)y * (size_t)c->n + (size_t)c->rx, e = i + (size_t)c->rw; i < e;
                  i++) {
-                float rgb[3];
-                if (c->w->mask->data[i] > 0.5f) {
-                    const float *lo_s = c->skin->lower_srgb->data + i * 3;
-                    const float *up = c->skin->upper_srgb->data + i * 3;
-                    float ln = low->data[i], lower_wound[3], sp[3];
-                    /* Eq. 4.5 */
-                    for (int k = 0; k < 3; k++) lower_wound[k] = lo_s[k] * ln + up[k] * (1.0f - ln);
-                    /* Eq. 4.6: speckle colour = noise x (0.88, 0.20, 0.22), weighted by its red. */
-                    for (int k = 0; k < 3; k++) sp[k] = speck->data[i] * SPECKLE_RED[k];
-                    for (int k = 0; k < 3; k++)
-                        rgb[k] = sp[k] * sp[0] + lower_wound[k] * (1.0f - sp[0]);
-                    out->reflection->data[i] = 0.7f * scrape->data[i];
-                    /* The redder parts are carved deeper (§4.3.3). */
-                    out->height->data[i] = 0.5f - WOUND_DEPTH * (0.5f + ln) - WOUND_DEPTH * sp[0];
-                } else {
-                    outside_glow(c, i, glw, out);
+                if (c->w->mask->data[i] <= 0.5f) {
+                    outside_glow(c, i, out);
                     continue;
                 }
+                size_t b = box_index(c, c->bx, c->by, c->bw, i);
+                const float *lo_s = c->skin->lower_srgb->data + i * 3;
+                const float *up = c->skin->upper_srgb->data + i * 3;
+                float ln = low->data[b], lower_wound[3], sp[3], rgb[3];
+                /* Eq. 4.5 */
+                for (int k = 0; k < 3; k++) lower_wound[k] = lo_s[k] * ln + up[k] * (1.0f - ln);
+                /* Eq. 4.6: speckle colour = noise x (0.88, 0.20, 0.22), weighted by its red. */
+                for (int k = 0; k < 3; k++) sp[k] = speck->data[b] * SPECKLE_RED[k];
+                for (int k = 0; k < 3; k++)
+                    rgb[k] = sp[k] * sp[0] + lower_wound[k] * (1.0f - sp[0]);
+                out->reflection->data[i] = 0.7f * scrape->data[b];
+                /* The redder parts are carved deeper (§4.3.3). */
+                out->height->data[i] = 0.5f - WOUND_DEPTH * (0.5f + ln) - WOUND_DEPTH * sp[0];
                 put_color(c, out->color->data + i * 3, rgb);
             }
     }
-    ss_image_free(glw);
     ss_image_free(low);
     ss_image_free(speck);
     ss_image_free(scrape);
@@ -384,52 +366,47 @@ static ss_status render_scab_forming(const ctx *c, ss_texture_set *out, ss_error
 }
 
 static ss_status render_scab(const ctx *c, ss_texture_set *out, ss_error *err) {
-    ss_image *glw = NULL, *mask_n = NULL, *mid = NULL, *redn = NULL, *refl = NULL, *inner = NULL;
-    ss_status st = glow(c, &glw, err);
+    ss_image *mask_n = NULL, *mid = NULL, *redn = NULL, *refl = NULL;
     /* Height = mask noise (7, 1.0, 0.44, 0.02) x middle noise (5, 0.54, 0.3, 0.69). */
-    if (!st) st = noise(c, 7, 1.0f, 0.44f, 0.02f, 1.0f, ST_SCAB_MASK, &mask_n, err);
+    ss_status st = noise(c, 7, 1.0f, 0.44f, 0.02f, 1.0f, ST_SCAB_MASK, &mask_n, err);
     if (!st) st = noise(c, 5, 0.54f, 0.3f, 0.69f, 1.0f, ST_SCAB_MIDDLE, &mid, err);
     /* Red details mask: 5 octaves, 0.33 persistence, 0.60 bias, 0.59 gain. */
     if (!st) st = noise(c, 5, 0.33f, 0.60f, 0.59f, 1.0f, ST_SCAB_RED, &redn, err);
     /* Reflection: 10 octaves, 1.0 persistence, 0.25 bias, 0.95 gain. */
     if (!st) st = noise(c, 10, 1.0f, 0.25f, 0.95f, 1.0f, ST_SCAB_REFLECT, &refl, err);
-    /* Inward gradient, thickness 100, from (0.5, 0.04, 0.03) to black. */
-    if (!st) inner = ss_image_create(c->n, c->n, 1, err);
-    if (!inner && !st) st = err->code;
     if (!st) {
-        ss_gradient_edge(c->w->mask, c->w->dist, 100.0f * c->k, 1, inner);
 #pragma omp parallel for schedule(static)
         for (int y = c->ry; y < c->ry + c->rh; y++)
             for (size_t i = (size_t)y * (size_t)c->n + (size_t)c->rx, e = i + (size_t)c->rw; i < e;
                  i++) {
-                float rgb[3];
-                if (c->w->mask->data[i] > 0.5f) {
-                    float h = mask_n->data[i] * mid->data[i];
-                    float in_col[3], grad[3] = {0, 0, 0};
-                    /* Higher crust is the lighter, yellowish colour (docs/abrasion.md). */
-                    lerp3(SCAB_DARK, SCAB_LIGHT, h, in_col);
-                    if (inner->data[i] >= 0.0f) {
-                        static const float black[3] = {0, 0, 0};
-                        lerp3(SCAB_RED, black, inner->data[i], grad);
-                        for (int k = 0; k < 3; k++) grad[k] *= redn->data[i];
-                    }
-                    /* Eq. 4.7 */
-                    for (int k = 0; k < 3; k++) rgb[k] = in_col[k] + grad[k] * (1.0f - in_col[k]);
-                    out->reflection->data[i] = refl->data[i];
-                    out->height->data[i] = 0.5f + 0.5f * h;
-                } else {
-                    outside_glow(c, i, glw, out);
+                if (c->w->mask->data[i] <= 0.5f) {
+                    outside_glow(c, i, out);
                     continue;
                 }
+                size_t b = box_index(c, c->bx, c->by, c->bw, i);
+                float h = mask_n->data[b] * mid->data[b];
+                float in_col[3], grad[3] = {0, 0, 0}, rgb[3];
+                /* Higher crust is the lighter, yellowish colour (docs/abrasion.md). */
+                lerp3(SCAB_DARK, SCAB_LIGHT, h, in_col);
+                /* Inward gradient, thickness 100, from (0.5, 0.04, 0.03) to
+                 * black, masked by the red-detail noise. */
+                float t = ss_gradient_weight(1, c->w->dist->data[i], gradient_px(c), 1);
+                if (t >= 0.0f) {
+                    static const float black[3] = {0, 0, 0};
+                    lerp3(SCAB_RED, black, t, grad);
+                    for (int k = 0; k < 3; k++) grad[k] *= redn->data[b];
+                }
+                /* Eq. 4.7 */
+                for (int k = 0; k < 3; k++) rgb[k] = in_col[k] + grad[k] * (1.0f - in_col[k]);
+                out->reflection->data[i] = refl->data[b];
+                out->height->data[i] = 0.5f + 0.5f * h;
                 put_color(c, out->color->data + i * 3, rgb);
             }
     }
-    ss_image_free(glw);
     ss_image_free(mask_n);
     ss_image_free(mid);
     ss_image_free(redn);
     ss_image_free(refl);
-    ss_image_free(inner);
     return st;
 }
 

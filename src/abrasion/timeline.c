@@ -163,14 +163,28 @@ ss_status ss_abrasion_create(const ss_abrasion_settings *s, const ss_timeline *t
         ss_phase ph = t->key[i].phase;
         if (a->rendered[ph]) continue;
         st = ss_texture_set_create(s->size, &a->phase[ph], err);
-        if (!st) st = ss_abrasion_render_phase(ph, 0.0, w, skin, s, &a->phase[ph], err);
         a->rendered[ph] = !st;
     }
+    if (!st) st = ss_abrasion_update(a, w, err);
     if (st) {
         ss_abrasion_free(a);
         return st;
     }
     *out = a;
+    return SS_OK;
+}
+
+ss_status ss_abrasion_update(ss_abrasion *a, const ss_wound_shape *w, ss_error *err) {
+    if (w->size != a->settings.size)
+        return ss_error_set(err, SS_ERR_INPUT, "wound shape size %d differs from the timeline's %d",
+                            w->size, a->settings.size);
+    a->shape = w;
+    for (int ph = 0; ph < SS_PHASE_COUNT; ph++) {
+        if (!a->rendered[ph]) continue;
+        ss_status st = ss_abrasion_render_phase((ss_phase)ph, 0.0, w, a->skin, &a->settings,
+                                                &a->phase[ph], err);
+        if (st) return st;
+    }
     return SS_OK;
 }
 

@@ -28,12 +28,8 @@ void ss_gradient_edge(const ss_image *shape, const ss_image *dist, float thickne
     for (int y = 0; y < H; y++)
         for (int x = 0; x < W; x++) {
             const size_t i = (size_t)y * W + x;
-            const int white = shape->data[i * Cs] > 0.5f;
-            float v = -1.0f;
-            if (render_inside ? white : !white) {
-                const float d = dist->data[i * Cd];
-                if (thickness > 0.0f && d <= thickness) v = d / thickness;
-            }
+            const float v = ss_gradient_weight(shape->data[i * Cs] > 0.5f, dist->data[i * Cd],
+                                               thickness, render_inside);
             for (int c = 0; c < Co; c++) lerp_out->data[i * Co + c] = v;
         }
 }
