@@ -125,7 +125,8 @@ int main(int argc, char **argv) {
             printf("  key %-17s %8.1f ms\n", ss_phase_name((ss_phase)ph),
                    1e3 * best_of(3, run_phase, &j));
         }
-        printf("  whole timeline (5 keys, allocating) %8.1f ms   target <= 300 ms on 2 cores; seed 943 ms on "
+        printf("  whole timeline (5 keys, allocating) %8.1f ms   target <= 300 ms on 2 cores; seed "
+               "943 ms on "
                "a GTX 780\n",
                1e3 * best_of(3, run_timeline, &j));
         ss_abrasion_create(&s, &tl, w, &skin, &j.ab, &err);

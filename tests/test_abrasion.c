@@ -465,7 +465,7 @@ int main(void) {
         cmocka_unit_test(test_shape_from_mask),    cmocka_unit_test(test_vasoconstriction_colours),
         cmocka_unit_test(test_vasodilation_glow),  cmocka_unit_test(test_maturation_matches_alg44),
         cmocka_unit_test(test_frames_blend),       cmocka_unit_test(test_scale_invariance),
-        cmocka_unit_test(test_thread_determinism),
+        cmocka_unit_test(test_thread_determinism), cmocka_unit_test(test_update_equals_create),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
