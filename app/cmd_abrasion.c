@@ -68,24 +68,16 @@ typedef struct opts {
 } opts;
 
 static int parse(int argc, char **argv, opts *o, ss_error *err) {
-    static const struct option longopts[] = {{"stroke", required_argument, 0, 's'},
-                                             {"mask", required_argument, 0, 'm'},
-                                             {"hull", required_argument, 0, 'H'},
-                                             {"concave-k", required_argument, 0, 'k'},
-                                             {"upper", required_argument, 0, 'u'},
-                                             {"lower", required_argument, 0, 'l'},
-                                             {"size", required_argument, 0, 'n'},
-                                             {"world-size-cm", required_argument, 0, 'w'},
-                                             {"times", required_argument, 0, 't'},
-                                             {"timeline", required_argument, 0, 'T'},
-                                             {"seed", required_argument, 0, 'S'},
-                                             {"out", required_argument, 0, 'o'},
-                                             {"threads", required_argument, 0, 'j'},
-                                             {"quiet", no_argument, 0, 'q'},
-                                             {"json", no_argument, 0, 'J'},
-                                             {"help", no_argument, 0, 'h'},
-                                             {"gltf", no_argument, 0, 'G'},
-                                             {0, 0, 0, 0}};
+    static const struct option longopts[] = {
+        {"stroke", required_argument, 0, 's'},  {"mask", required_argument, 0, 'm'},
+        {"hull", required_argument, 0, 'H'},    {"concave-k", required_argument, 0, 'k'},
+        {"upper", required_argument, 0, 'u'},   {"lower", required_argument, 0, 'l'},
+        {"size", required_argument, 0, 'n'},    {"world-size-cm", required_argument, 0, 'w'},
+        {"times", required_argument, 0, 't'},   {"timeline", required_argument, 0, 'T'},
+        {"seed", required_argument, 0, 'S'},    {"out", required_argument, 0, 'o'},
+        {"threads", required_argument, 0, 'j'}, {"quiet", no_argument, 0, 'q'},
+        {"json", no_argument, 0, 'J'},          {"help", no_argument, 0, 'h'},
+        {"gltf", no_argument, 0, 'G'},          {0, 0, 0, 0}};
     memset(o, 0, sizeof *o);
     o->size = 2048;
     o->concave_k = 5;

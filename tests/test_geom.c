@@ -394,10 +394,10 @@ static void test_hull_nearly_collinear(void **state) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_hull_nearly_collinear),
-        cmocka_unit_test(test_convex_hull), cmocka_unit_test(test_concave_hull),
-        cmocka_unit_test(test_fill),        cmocka_unit_test(test_closing_and_segment),
-        cmocka_unit_test(test_edt),         cmocka_unit_test(test_outline_distance),
+        cmocka_unit_test(test_hull_nearly_collinear), cmocka_unit_test(test_convex_hull),
+        cmocka_unit_test(test_concave_hull),          cmocka_unit_test(test_fill),
+        cmocka_unit_test(test_closing_and_segment),   cmocka_unit_test(test_edt),
+        cmocka_unit_test(test_outline_distance),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -377,10 +377,15 @@ static void test_height_to_normal(void **state) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_bias_gain),        cmocka_unit_test(test_noise_matches_reference),
-        cmocka_unit_test(test_noise_properties), cmocka_unit_test(test_noise_tiling),
-        cmocka_unit_test(test_erosion),          cmocka_unit_test(test_gradient_edge),
-        cmocka_unit_test(test_height_to_normal), cmocka_unit_test(test_noise_rect_equals_crop), cmocka_unit_test(test_erosion_widths_rect),
+        cmocka_unit_test(test_bias_gain),
+        cmocka_unit_test(test_noise_matches_reference),
+        cmocka_unit_test(test_noise_properties),
+        cmocka_unit_test(test_noise_tiling),
+        cmocka_unit_test(test_erosion),
+        cmocka_unit_test(test_gradient_edge),
+        cmocka_unit_test(test_height_to_normal),
+        cmocka_unit_test(test_noise_rect_equals_crop),
+        cmocka_unit_test(test_erosion_widths_rect),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

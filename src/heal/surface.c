@@ -1,8 +1,9 @@
 /* Top-view maps of the healing grid: per (x, y) column, the value of a field in
  * the topmost tissue cell (what one sees at the skin surface), its maximum
- * over the two topmost (the epithelial layer) or over the column's tissue cells; air, the top/bottom boundary layers and
- * side boundary cells above the skin surface are skipped. These are the 2D views the seed maps onto
- * the undeformed mesh for shading (seed 001 §5.4); rendered to PNG by plot.c. */
+ * over the two topmost (the epithelial layer) or over the column's tissue cells; air, the
+ * top/bottom boundary layers and side boundary cells above the skin surface are skipped. These are
+ * the 2D views the seed maps onto the undeformed mesh for shading (seed 001 §5.4); rendered to PNG
+ * by plot.c. */
 #include "skinsim/heal_io.h"
 
 ss_image *ss_heal_surface_map(const ss_heal_grid *g, int field, ss_heal_surface_mode mode,

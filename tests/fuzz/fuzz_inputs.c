@@ -30,8 +30,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
         ss_stroke_set s;
         if (ss_stroke_csv_read(path, &s, &err) == SS_OK) {
             ss_wound_shape *w = NULL;
-            if (ss_wound_shape_from_strokes(&s, (data[0] / 3) % 2 ? SS_HULL_CONCAVE : SS_HULL_CONVEX,
-                                            5, 32, 1, &w, &err) == SS_OK)
+            if (ss_wound_shape_from_strokes(&s,
+                                            (data[0] / 3) % 2 ? SS_HULL_CONCAVE : SS_HULL_CONVEX, 5,
+                                            32, 1, &w, &err) == SS_OK)
                 ss_wound_shape_free(w);
             ss_stroke_set_free(&s);
         }
