@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "optics_opts.h"
 #include "skinsim/optics.h"
 
 #ifndef M_PI
@@ -53,60 +54,11 @@ static const char *COMMON_HELP =
 
 /* Returns 1 if argv[*i] was a common option (consumed), 0 if not, -1 on error. */
 static int parse_common(const char *cmd, int argc, char **argv, int *i, common_opts *c, int *rc) {
+    int r = optics_parse_shared(cmd, argc, argv, i, &c->bio, &c->spec, 1, 1000000000000ull, rc);
+    if (r) return r;
     const char *a = argv[*i];
     ss_error e;
     ss_error_clear(&e);
-    struct {
-        const char *name;
-        double *dst;
-        double lo, hi;
-    } dbl[] = {
-        {"--melanin", &c->bio.melanin, 0, 1},
-        {"--pheomelanin-ratio", &c->bio.pheomelanin_ratio, 0, 1},
-        {"--blood", &c->bio.blood, 0, 1},
-        {"--oxygenation", &c->bio.oxygenation, 0, 1},
-        {"--sc-thickness-cm", &c->bio.sc_thickness_cm, 1e-6, 1},
-        {"--epidermis-thickness-cm", &c->bio.epidermis_thickness_cm, 1e-6, 1},
-        {"--bilirubin-g-per-l", &c->bio.bilirubin_g_per_l, 0, 100},
-        {"--betacarotene-g-per-l", &c->bio.betacarotene_g_per_l, 0, 100},
-        {"--roughness", &c->spec.mc.roughness_sigma, 0, 10},
-        {"--wl-min", &c->spec.wl_min_nm, 300, 800},
-        {"--wl-max", &c->spec.wl_max_nm, 300, 800},
-        {"--wl-step", &c->spec.wl_step_nm, 0.1, 400},
-    };
-    for (size_t k = 0; k < sizeof dbl / sizeof dbl[0]; k++) {
-        if (strcmp(a, dbl[k].name)) continue;
-        if (*i + 1 >= argc) {
-            *rc = cli_usage_error(cmd, "%s needs a value", a);
-            return -1;
-        }
-        if (cli_parse_double(a, argv[++*i], dbl[k].lo, dbl[k].hi, dbl[k].dst, &e)) {
-            *rc = cli_fail(cmd, &e);
-            return -1;
-        }
-        return 1;
-    }
-    if (!strcmp(a, "--photons") || !strcmp(a, "--seed")) {
-        uint64_t v;
-        if (*i + 1 >= argc) {
-            *rc = cli_usage_error(cmd, "%s needs a value", a);
-            return -1;
-        }
-        if (cli_parse_u64(a, argv[++*i], &v, &e)) {
-            *rc = cli_fail(cmd, &e);
-            return -1;
-        }
-        if (!strcmp(a, "--photons")) {
-            if (v < 1 || v > 1000000000000ull) {
-                *rc = cli_usage_error(cmd, "--photons: %llu is outside 1..1e12",
-                                      (unsigned long long)v);
-                return -1;
-            }
-            c->spec.mc.photons = v;
-        } else
-            c->spec.mc.seed = v;
-        return 1;
-    }
     if (!strcmp(a, "--threads")) {
         long v;
         if (*i + 1 >= argc) {

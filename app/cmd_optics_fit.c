@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "cli.h"
+#include "optics_opts.h"
 #include "skinsim/optics_fit.h"
 
 typedef struct fit_cli {
@@ -66,33 +67,15 @@ static int need(const char *cmd, int argc, int i, const char *opt) {
 
 /* 1 consumed, 0 not ours, -1 error (rc set). */
 static int parse_shared(const char *cmd, int argc, char **argv, int *i, fit_cli *c, int *rc) {
+    ss_spectrum_options *sp = &c->build.spectrum;
+    int r = optics_parse_shared(cmd, argc, argv, i, &c->bio, sp, 100, 4000000, rc);
+    if (r) return r;
     const char *a = argv[*i];
     ss_error e;
     ss_error_clear(&e);
-    ss_spectrum_options *sp = &c->build.spectrum;
-    struct {
-        const char *name;
-        double *dst;
-        double lo, hi;
-    } dbl[] = {
-        {"--melanin", &c->bio.melanin, 0, 1},
-        {"--pheomelanin-ratio", &c->bio.pheomelanin_ratio, 0, 1},
-        {"--blood", &c->bio.blood, 0, 1},
-        {"--oxygenation", &c->bio.oxygenation, 0, 1},
-        {"--sc-thickness-cm", &c->bio.sc_thickness_cm, 1e-6, 1},
-        {"--epidermis-thickness-cm", &c->bio.epidermis_thickness_cm, 1e-6, 1},
-        {"--bilirubin-g-per-l", &c->bio.bilirubin_g_per_l, 0, 100},
-        {"--betacarotene-g-per-l", &c->bio.betacarotene_g_per_l, 0, 100},
-        {"--roughness", &sp->mc.roughness_sigma, 0, 10},
-        {"--wl-min", &sp->wl_min_nm, 300, 800},
-        {"--wl-max", &sp->wl_max_nm, 300, 800},
-        {"--wl-step", &sp->wl_step_nm, 0.1, 400},
-        {"--max-theta-deg", &c->max_theta_deg, 1, 90},
-    };
-    for (size_t k = 0; k < sizeof dbl / sizeof dbl[0]; k++) {
-        if (strcmp(a, dbl[k].name)) continue;
+    if (!strcmp(a, "--max-theta-deg")) {
         if ((*rc = need(cmd, argc, *i, a))) return -1;
-        if (cli_parse_double(a, argv[++*i], dbl[k].lo, dbl[k].hi, dbl[k].dst, &e)) {
+        if (cli_parse_double(a, argv[++*i], 1, 90, &c->max_theta_deg, &e)) {
             *rc = cli_fail(cmd, &e);
             return -1;
         }
@@ -117,24 +100,6 @@ static int parse_shared(const char *cmd, int argc, char **argv, int *i, fit_cli 
             return -1;
         }
         *ints[k].dst = (int)v;
-        return 1;
-    }
-    if (!strcmp(a, "--photons") || !strcmp(a, "--seed")) {
-        uint64_t v;
-        if ((*rc = need(cmd, argc, *i, a))) return -1;
-        if (cli_parse_u64(a, argv[++*i], &v, &e)) {
-            *rc = cli_fail(cmd, &e);
-            return -1;
-        }
-        if (!strcmp(a, "--photons")) {
-            if (v < 100 || v > 4000000) {
-                *rc = cli_usage_error(cmd, "--photons: %llu is outside 100..4000000",
-                                      (unsigned long long)v);
-                return -1;
-            }
-            sp->mc.photons = v;
-        } else
-            sp->mc.seed = v;
         return 1;
     }
     if (!strcmp(a, "--weighting")) {
