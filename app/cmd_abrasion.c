@@ -280,6 +280,15 @@ static ss_status run(const opts *o, const char *dir, cJSON *summary, ss_error *e
     set.seed = o->seed;
     ss_progress prog;
     double t0 = ss_now();
+    /* Memory: five key sets and a frame (32 bytes a pixel each), the base
+     * skin (24), the shape (12) and scratch; refuse what cannot fit. */
+    double need = (double)o->size * (double)o->size * (6 * 32.0 + 24 + 12 + 16);
+    double phys = ss_memory_physical_bytes();
+    if (!st && phys > 0 && need > 0.8 * phys)
+        st = ss_error_set(err, SS_ERR_INPUT,
+                          "--size %d needs about %.1f GB, more than this machine's %.1f GB; "
+                          "use a smaller --size",
+                          o->size, need / 1e9, phys / 1e9);
     if (!st) {
         if (in.mask)
             st = ss_wound_shape_from_mask(in.mask, o->size, o->seed, &shape, err);

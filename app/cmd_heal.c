@@ -421,11 +421,7 @@ static ss_status check_memory(int nx, int ny, int nz, ss_error *err) {
                             nx, ny, nz, cells, (size_t)SS_HEAL_MAX_CELLS);
     /* grid + wound mask + solver scratch (about two more grids for the split scheme) */
     double need = 3.0 * (double)ss_heal_grid_bytes(nx, ny, nz) + (double)cells;
-    double avail = 0;
-#ifdef _SC_PHYS_PAGES
-    long pages = sysconf(_SC_PHYS_PAGES), psz = sysconf(_SC_PAGE_SIZE);
-    if (pages > 0 && psz > 0) avail = (double)pages * (double)psz;
-#endif
+    double avail = ss_memory_physical_bytes();
     if (avail > 0 && need > 0.8 * avail)
         return ss_error_set(err, SS_ERR_INPUT,
                             "--grid %dx%dx%d needs about %.1f GB, more than this machine's "

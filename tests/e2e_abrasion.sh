@@ -100,6 +100,10 @@ expect2 "NaN point" "nan.csv" --stroke "$T/nan.csv"
 expect2 "missing stroke file" "missing.csv" --stroke "$T/missing.csv"
 expect2 "size 0" "--size" --size 0
 expect2 "size too big" "--size" --size 20000
+# 16384 px needs about 65 GB: refused up front on machines with less.
+if [ "$(awk '/MemTotal/ {print $2}' /proc/meminfo)" -lt 60000000 ]; then
+  expect2 "size too big for memory" "GB" --size 16384
+fi
 expect2 "negative time" "--times" --times 1,-2
 expect2 "NaN time" "--times" --times nan
 expect2 "bad hull" "--hull" --hull round

@@ -189,6 +189,11 @@ void ss_progress_begin(ss_progress *p, const char *label, double total, int quie
 void ss_progress_update(ss_progress *p, double done);
 void ss_progress_end(ss_progress *p);
 
+/* Physical memory of this machine in bytes (0 if unknown): what commands
+ * check a job's estimated size against before they start, so a job that
+ * cannot fit is an input error rather than an out-of-memory kill. */
+double ss_memory_physical_bytes(void);
+
 /* Wall clock in seconds (monotonic). */
 double ss_now(void);
 

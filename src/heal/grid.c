@@ -48,8 +48,7 @@ ss_heal_grid *ss_heal_grid_create(int nx, int ny, int nz, double dx_mm, ss_error
     }
     /* grid + the explicit solver's second set of fields and masks */
     double need = (double)ss_heal_grid_bytes(nx, ny, nz) + cells * (SS_HEAL_NFIELDS * 4.0 + 9.0);
-    long pages = sysconf(_SC_PHYS_PAGES), psz = sysconf(_SC_PAGESIZE);
-    double phys = pages > 0 && psz > 0 ? (double)pages * (double)psz : 0.0;
+    double phys = ss_memory_physical_bytes();
     if (phys > 0 && need > phys) {
         ss_error_set(err, SS_ERR_INPUT,
                      "heal grid: %dx%dx%d needs about %.1f GB with the solver's work memory, "
