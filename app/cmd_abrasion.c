@@ -281,8 +281,8 @@ static ss_status run(const opts *o, const char *dir, cJSON *summary, ss_error *e
     ss_progress prog;
     double t0 = ss_now();
     /* Memory: five key sets and a frame (32 bytes a pixel each), the base
-     * skin (24), the shape (12) and scratch; refuse what cannot fit. */
-    double need = (double)o->size * (double)o->size * (6 * 32.0 + 24 + 12 + 16);
+     * skin (48: linear and sRGB copies), the shape (12) and scratch; refuse what cannot fit. */
+    double need = (double)o->size * (double)o->size * (6 * 32.0 + 48 + 12 + 16);
     double phys = ss_memory_physical_bytes();
     if (!st && phys > 0 && need > 0.8 * phys)
         st = ss_error_set(err, SS_ERR_INPUT,
