@@ -687,9 +687,15 @@ static ss_status write_snapshot(run *r, ss_error *err) {
     for (int k = 0; k < 4; k++) {
         ss_image *m = ss_heal_surface_map(r->g, maps[k].field, maps[k].mode, err);
         if (!m) return err->code;
-        float vmax = 1;
+        /* Colour scale: 0 .. the next of 1, 2, 5, 10, 20, ... above the
+         * largest value, so snapshots of a run share a scale unless a field
+         * grows past it (a function of the state only, so resumed runs draw
+         * the same maps). */
+        float mx = 1;
         for (size_t i = 0; i < (size_t)m->width * (size_t)m->height; i++)
-            if (m->data[i] > vmax) vmax = m->data[i];
+            if (m->data[i] > mx) mx = m->data[i];
+        double vmax = 1;
+        for (int step = 0; vmax < mx; step++) vmax *= step % 3 == 1 ? 2.5 : 2;
         const char *name = ss_heal_field_name(maps[k].field);
         char title[256];
         snprintf(title, sizeof title, "%s (%s), day %.2f - %s", name, maps[k].how, r->g->t_days,
