@@ -45,6 +45,7 @@ static void help(void) {
         "  --threads N           worker threads (default: SKINSIM_THREADS or all cores)\n"
         "  --quiet               no progress on stderr\n"
         "  --json                print a summary as JSON on stdout\n"
+        "  --exr                 also write every map as half-float OpenEXR (linear light)\n"
         "  --gltf                also write DIR/frames/t<days>.gltf: the frame on a square\n"
         "                        of the world size, for any glTF viewer or Blender\n"
         "                        (roughness = 1 - 0.8 x reflection in t<days>_metal_rough.png)\n\n"
@@ -59,7 +60,7 @@ static void help(void) {
 
 typedef struct opts {
     const char *stroke, *mask, *upper, *lower, *timeline, *out;
-    int size, concave_k, threads, quiet, json, gltf;
+    int size, concave_k, threads, quiet, json, gltf, exr;
     ss_hull_kind hull;
     double world_cm;
     uint64_t seed;
@@ -68,16 +69,25 @@ typedef struct opts {
 } opts;
 
 static int parse(int argc, char **argv, opts *o, ss_error *err) {
-    static const struct option longopts[] = {
-        {"stroke", required_argument, 0, 's'},  {"mask", required_argument, 0, 'm'},
-        {"hull", required_argument, 0, 'H'},    {"concave-k", required_argument, 0, 'k'},
-        {"upper", required_argument, 0, 'u'},   {"lower", required_argument, 0, 'l'},
-        {"size", required_argument, 0, 'n'},    {"world-size-cm", required_argument, 0, 'w'},
-        {"times", required_argument, 0, 't'},   {"timeline", required_argument, 0, 'T'},
-        {"seed", required_argument, 0, 'S'},    {"out", required_argument, 0, 'o'},
-        {"threads", required_argument, 0, 'j'}, {"quiet", no_argument, 0, 'q'},
-        {"json", no_argument, 0, 'J'},          {"help", no_argument, 0, 'h'},
-        {"gltf", no_argument, 0, 'G'},          {0, 0, 0, 0}};
+    static const struct option longopts[] = {{"stroke", required_argument, 0, 's'},
+                                             {"mask", required_argument, 0, 'm'},
+                                             {"hull", required_argument, 0, 'H'},
+                                             {"concave-k", required_argument, 0, 'k'},
+                                             {"upper", required_argument, 0, 'u'},
+                                             {"lower", required_argument, 0, 'l'},
+                                             {"size", required_argument, 0, 'n'},
+                                             {"world-size-cm", required_argument, 0, 'w'},
+                                             {"times", required_argument, 0, 't'},
+                                             {"timeline", required_argument, 0, 'T'},
+                                             {"seed", required_argument, 0, 'S'},
+                                             {"out", required_argument, 0, 'o'},
+                                             {"threads", required_argument, 0, 'j'},
+                                             {"quiet", no_argument, 0, 'q'},
+                                             {"json", no_argument, 0, 'J'},
+                                             {"help", no_argument, 0, 'h'},
+                                             {"gltf", no_argument, 0, 'G'},
+                                             {"exr", no_argument, 0, 'E'},
+                                             {0, 0, 0, 0}};
     memset(o, 0, sizeof *o);
     o->size = 2048;
     o->concave_k = 5;
@@ -119,6 +129,9 @@ static int parse(int argc, char **argv, opts *o, ss_error *err) {
             break;
         case 'G':
             o->gltf = 1;
+            break;
+        case 'E':
+            o->exr = 1;
             break;
         case 'J':
             o->json = 1;
@@ -180,28 +193,33 @@ static void human_time(double day, char *buf, size_t n) {
 /* The four maps of a set, written in parallel (PNG encoding is serial per
  * file). Colour is sRGB 8-bit; height 16-bit (displacement needs the steps);
  * reflection and normal 8-bit linear, as engines expect them. */
-static ss_status write_set(const char *dir, const char *stem, const ss_texture_set *t, cJSON *files,
-                           ss_error *err) {
+static ss_status write_set(const char *dir, const char *stem, const ss_texture_set *t, int exr,
+                           cJSON *files, ss_error *err) {
     static const char *names[4] = {"color", "reflection", "height", "normal"};
     static const int bits[4] = {8, 8, 16, 8};
     const ss_image *imgs[4] = {t->color, t->reflection, t->height, t->normal};
-    ss_error errs[4];
-    ss_status sts[4];
+    ss_error errs[8];
+    ss_status sts[8] = {0};
+    /* k < 4: the PNGs; k >= 4 with --exr: the same maps as half-float EXR
+     * (linear, colour included), for compositing and displacement. */
 #pragma omp parallel for schedule(dynamic, 1)
-    for (int k = 0; k < 4; k++) {
+    for (int k = 0; k < (exr ? 8 : 4); k++) {
         char path[4096];
-        snprintf(path, sizeof path, "%s/%s_%s.png", dir, stem, names[k]);
-        sts[k] =
-            ss_png_write(path, imgs[k], bits[k], k == 0 ? SS_ENC_SRGB : SS_ENC_LINEAR, &errs[k]);
+        int m = k % 4;
+        snprintf(path, sizeof path, "%s/%s_%s.%s", dir, stem, names[m], k < 4 ? "png" : "exr");
+        sts[k] = k < 4 ? ss_png_write(path, imgs[m], bits[m], m == 0 ? SS_ENC_SRGB : SS_ENC_LINEAR,
+                                      &errs[k])
+                       : ss_exr_write(path, imgs[m], 1, &errs[k]);
     }
-    for (int k = 0; k < 4; k++) {
+    for (int k = 0; k < (exr ? 8 : 4); k++) {
         if (sts[k]) {
             *err = errs[k];
             return sts[k];
         }
-        char rel[512];
-        snprintf(rel, sizeof rel, "%s_%s.png", stem, names[k]);
-        if (files) cJSON_AddStringToObject(files, names[k], rel);
+        char rel[512], key[32];
+        snprintf(rel, sizeof rel, "%s_%s.%s", stem, names[k % 4], k < 4 ? "png" : "exr");
+        snprintf(key, sizeof key, "%s%s", names[k % 4], k < 4 ? "" : "_exr");
+        if (files) cJSON_AddStringToObject(files, key, rel);
     }
     return SS_OK;
 }
@@ -337,7 +355,7 @@ static ss_status run(const opts *o, const char *dir, cJSON *summary, ss_error *e
                 continue;
             }
         }
-        st = write_set(dir, stem, &ab->phase[ph], files, err);
+        st = write_set(dir, stem, &ab->phase[ph], o->exr, files, err);
     }
     cJSON_AddNumberToObject(summary, "end_day", in.timeline.end_day);
     if (!st) {
@@ -369,7 +387,7 @@ static ss_status run(const opts *o, const char *dir, cJSON *summary, ss_error *e
             cJSON_AddNumberToObject(f, "weight", p.weight);
         }
         cJSON *files = cJSON_AddObjectToObject(f, "files");
-        st = write_set(dir, stem, &frame, files, err);
+        st = write_set(dir, stem, &frame, o->exr, files, err);
         if (!st && o->gltf) st = write_gltf(dir, stem, &frame, o->world_cm, files, err);
         if (!st)
             thumbs[i] = ss_image_resize(frame.color, 512 < o->size ? 512 : o->size,

@@ -53,6 +53,10 @@ for a in g["accessors"]:
 m = g["materials"][0]; assert "baseColorTexture" in m["pbrMetallicRoughness"] and "normalTexture" in m
 PY' "glTF frame content"
 
+# 3c. --exr: each map also as OpenEXR (magic 76 2f 31 01).
+"$CLI" abrasion --size 64 --times 1 --exr --out "$T/ex" --quiet
+check '[ $? -eq 0 ] && [ "$(head -c 4 "$T/ex/frames/t1_height.exr" | od -An -tx1 | tr -d " ")" = "762f3101" ]' "--exr output"
+
 # 4. Mask input (a PNG written by the tool itself: the key colour of vasoconstriction is not a mask, so make one with python's zlib).
 python3 - "$T/mask.png" <<'PY'
 import struct, zlib, sys
