@@ -22,6 +22,9 @@ typedef struct fit_cli {
     double max_theta_deg;
     long samples;
     const char *out, *lookup;
+    /* explicit sample values of an axis (--axis NAME=v1,v2,...): NULL = uniform */
+    double *axis_values[SS_MM_NAXES];
+    int axis_count[SS_MM_NAXES];
 } fit_cli;
 
 static const char *BIO_HELP =
@@ -336,12 +339,50 @@ static void table_help(FILE *f, const fit_cli *c) {
             "table's range).\n\n"
             "  --out FILE               table to write (atomically)\n"
             "  --samples N              samples per axis, 1..9 (3)\n"
+            "  --axis NAME=V1,V2,...    explicit, increasing sample values for one axis\n"
+            "                           (melanin, pheomelanin, blood, oxygenation, sc,\n"
+            "                           epidermis; fractions 0..1, thicknesses in cm);\n"
+            "                           repeatable, e.g. a denser melanin axis\n"
             "  --lookup FILE            read a table and interpolate instead of building\n"
             "When building, bilirubin and beta-carotene are the fixed non-axis values and\n"
             "the six axis parameters below are not used; with --lookup they are the point.\n\n%s",
             BIO_HELP);
     fprintf(f, MC_HELP, (unsigned long long)c->build.spectrum.mc.photons,
             c->build.spectrum.wl_min_nm, c->build.spectrum.wl_max_nm, c->build.spectrum.wl_step_nm);
+}
+
+/* --axis NAME=V1,V2,...: explicit sample values for one table axis. */
+static int parse_axis(const char *cmd, const char *arg, fit_cli *c) {
+    const char *eq = strchr(arg, '=');
+    int a = -1;
+    for (int k = 0; eq && k < SS_MM_NAXES; k++)
+        if ((size_t)(eq - arg) == strlen(ss_mm_axis_name(k)) &&
+            !strncmp(arg, ss_mm_axis_name(k), (size_t)(eq - arg)))
+            a = k;
+    if (a < 0)
+        return cli_usage_error(cmd,
+                               "--axis: '%s' is not NAME=V1,V2,... with NAME one of melanin, "
+                               "pheomelanin, blood, oxygenation, sc, epidermis",
+                               arg);
+    ss_error e;
+    double *v;
+    int n;
+    int thickness = a == SS_MM_AXIS_SC || a == SS_MM_AXIS_EPIDERMIS;
+    if (cli_parse_double_list("--axis", eq + 1, thickness ? 1e-6 : 0.0, 1.0, &v, &n, &e))
+        return cli_fail(cmd, &e);
+    for (int k = 1; k < n; k++)
+        if (!(v[k] > v[k - 1])) {
+            free(v);
+            return cli_usage_error(cmd, "--axis %s: values must increase", ss_mm_axis_name(a));
+        }
+    if (n > 16) {
+        free(v);
+        return cli_usage_error(cmd, "--axis %s: at most 16 values", ss_mm_axis_name(a));
+    }
+    free(c->axis_values[a]);
+    c->axis_values[a] = v;
+    c->axis_count[a] = n;
+    return 0;
 }
 
 int cmd_optics_table(int argc, char **argv) {
@@ -366,6 +407,9 @@ int cmd_optics_table(int argc, char **argv) {
             else
                 c.lookup = argv[i + 1];
             i++;
+        } else if (!strcmp(argv[i], "--axis")) {
+            if ((rc = need(cmd, argc, i, argv[i]))) return rc;
+            if ((rc = parse_axis(cmd, argv[++i], &c))) return rc;
         } else if (!strcmp(argv[i], "--samples")) {
             if ((rc = need(cmd, argc, i, argv[i]))) return rc;
             if (cli_parse_int("--samples", argv[++i], 1, 9, &c.samples, &e))
@@ -404,10 +448,14 @@ int cmd_optics_table(int argc, char **argv) {
     int ns[SS_MM_NAXES];
     double lo[SS_MM_NAXES], hi[SS_MM_NAXES];
     for (int a = 0; a < SS_MM_NAXES; a++) {
-        ns[a] = (int)c.samples;
+        ns[a] = c.axis_values[a] ? c.axis_count[a] : (int)c.samples;
         ss_mm_axis_default_range(a, &lo[a], &hi[a]);
     }
     ss_mm_table *t = ss_mm_table_create(ns, lo, hi, &e);
+    for (int a = 0; t && a < SS_MM_NAXES; a++)
+        if (c.axis_values[a])
+            for (int k = 0; k < ns[a]; k++) t->axis[a][k] = c.axis_values[a][k];
+    for (int a = 0; a < SS_MM_NAXES; a++) free(c.axis_values[a]);
     if (!t) return cli_fail(cmd, &e);
     c.build.base = c.bio; /* bilirubin, beta-carotene (the non-axis parameters) */
     double t0 = ss_now();
