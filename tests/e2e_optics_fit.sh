@@ -77,11 +77,20 @@ expect2 "$CLI" optics table --lookup "$T/v2.sstab"
 grep -q "version" "$T/e.txt" || fail "version error names the version"
 expect2 "$CLI" optics table --lookup "$T/missing.sstab"
 
+# explicit axis values: two melanin samples, the rest single
+"$CLI" optics table --axis melanin=0.01,0.2 --samples 1 $SMALL --out "$T/ax.sstab" --quiet \
+  || fail "table --axis"
+"$CLI" optics table --lookup "$T/ax.sstab" --melanin 0.1 --json >"$T/ax.json" || fail "lookup --axis table"
+grep -q '"entries": 2' "$T/ax.json" || fail "--axis table has 2 entries"
+expect2 "$CLI" optics table --axis melanin=0.2,0.1 --out "$T/bad.sstab"
+expect2 "$CLI" optics table --axis skin=0.1 --out "$T/bad.sstab"
+[ ! -e "$T/bad.sstab" ] || fail "bad --axis wrote a table"
+
 # the shipped default table reads and interpolates
 if [ -f "$SRC/data/modelmatch_default.sstab" ]; then
   "$CLI" optics table --lookup "$SRC/data/modelmatch_default.sstab" --melanin 0.1 --json \
     >"$T/d.json" || fail "default table lookup"
-  grep -q '"entries": 729' "$T/d.json" || fail "default table has 3^6 entries"
+  grep -q '"entries": 2268' "$T/d.json" || fail "default table has 7 x 3 x 4 x 3 x 3 x 3 entries"
 else
   fail "data/modelmatch_default.sstab is missing"
 fi
