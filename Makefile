@@ -4,7 +4,7 @@ BUILD    ?= build
 ASAN     ?= build-asan
 JOBS     ?= $(shell nproc)
 DEPS      = build-essential cmake pkg-config libpng-dev libopenexr-dev zlib1g-dev \
-            libcjson-dev libcmocka-dev libcairo2-dev fonts-dejavu-core
+            libcjson-dev libcmocka-dev libcairo2-dev fonts-dejavu-core python3
 DEMO_OUT ?= demo-out
 
 .PHONY: all deps build demo test test-asan bench fuzz clean

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# (needs python3 for the JSON and PNG checks: in the Makefile DEPS)
 # End-to-end: `skinsim abrasion` as a user runs it: default shape, strokes,
 # masks, several wounds, timeline JSON; and every bad input exits 2 with a
 # message naming the input and leaves no output directory behind.
