@@ -71,7 +71,9 @@ double ss_rng_seq_uniform_open(ss_rng_seq *r) {
     return u;
 }
 
-void ss_rng_fill_u32(uint64_t seed, uint64_t stream, uint64_t first, uint32_t *out, size_t n) {
+/* Draws first .. first+n-1 into u (raw) or f (24-bit floats in [0,1)):
+ * Philox block k/4, lane k%4, so any sub-range gives the same values. */
+static void fill(uint64_t seed, uint64_t stream, uint64_t first, size_t n, uint32_t *u, float *f) {
     if (n == 0) return;
     const uint64_t b0 = first / 4, b1 = (first + n - 1) / 4;
 #pragma omp parallel for schedule(static)
@@ -80,21 +82,19 @@ void ss_rng_fill_u32(uint64_t seed, uint64_t stream, uint64_t first, uint32_t *o
         ss_rng4(seed, stream, b, o);
         for (int lane = 0; lane < 4; lane++) {
             uint64_t k = b * 4 + (uint64_t)lane;
-            if (k >= first && k < first + n) out[k - first] = o[lane];
+            if (k < first || k >= first + n) continue;
+            if (u)
+                u[k - first] = o[lane];
+            else
+                f[k - first] = (float)(o[lane] >> 8) * 0x1p-24f;
         }
     }
 }
 
+void ss_rng_fill_u32(uint64_t seed, uint64_t stream, uint64_t first, uint32_t *out, size_t n) {
+    fill(seed, stream, first, n, out, NULL);
+}
+
 void ss_rng_fill_f32(uint64_t seed, uint64_t stream, uint64_t first, float *out, size_t n) {
-    if (n == 0) return;
-    const uint64_t b0 = first / 4, b1 = (first + n - 1) / 4;
-#pragma omp parallel for schedule(static)
-    for (uint64_t b = b0; b <= b1; b++) {
-        uint32_t o[4];
-        ss_rng4(seed, stream, b, o);
-        for (int lane = 0; lane < 4; lane++) {
-            uint64_t k = b * 4 + (uint64_t)lane;
-            if (k >= first && k < first + n) out[k - first] = (float)(o[lane] >> 8) * 0x1p-24f;
-        }
-    }
+    fill(seed, stream, first, n, NULL, out);
 }
