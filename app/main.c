@@ -8,6 +8,7 @@ static const cli_command commands[] = {
     {"abrasion", "abrasion-healing texture timeline (seed 000)", cmd_abrasion},
     {"heal", "3D wound-healing simulation: fields, area curve, VTK (seed 001)", cmd_heal},
     {"optics", "skin light transport: spectra, colour, BRDF, MCML files (seed 003)", cmd_optics},
+    {"view", "paint a wound on a 3D body and scrub its healing (GTK 4 window)", cmd_view},
 };
 static const int ncommands = (int)(sizeof commands / sizeof commands[0]);
 
