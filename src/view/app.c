@@ -74,7 +74,7 @@ static void help(void) {
            "Controls: drag rotates, shift-drag or right/middle drag pans, wheel zooms;\n"
            "P paint mode (drag paints), Z or Ctrl+Z undo, C clear, G generate,\n"
            "Space play/pause, Left/Right previous/next key, S save strokes, H hide/show\n"
-        "strokes, R reset view.\n");
+           "strokes, R reset view.\n");
 }
 
 static int parse_size(const char *s, int *w, int *h, ss_error *err) {
@@ -625,6 +625,8 @@ static void app_key(app *a, const char *k) {
         app_save_strokes(a, a->o.save_strokes ? a->o.save_strokes : "strokes.csv");
     else if (!strcasecmp(k, "r"))
         view_camera_frame(&a->cam, &a->mesh);
+    else if (!strcasecmp(k, "h"))
+        a->hide_strokes = !a->hide_strokes;
     else
         app_message(a, 0, "key '%s' does nothing", k);
     app_redraw(a);
@@ -802,7 +804,8 @@ static int app_batch(app *a) {
         } else {
             double total = (ss_now() - t0) * 1e3;
             clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c1);
-            double cpu = ((double)(c1.tv_sec - c0.tv_sec) * 1e3 + (c1.tv_nsec - c0.tv_nsec) * 1e-6) / n;
+            double cpu =
+                ((double)(c1.tv_sec - c0.tv_sec) * 1e3 + (c1.tv_nsec - c0.tv_nsec) * 1e-6) / n;
             qsort(ms, (size_t)n, sizeof *ms, cmp_double);
             double med = n % 2 ? ms[n / 2] : 0.5 * (ms[n / 2 - 1] + ms[n / 2]);
             int i95 = (int)ceil(0.95 * n) - 1;
@@ -826,9 +829,10 @@ static int app_batch(app *a) {
     }
     if (!rc && a->o.screenshot) {
         unsigned char *rgb = malloc((size_t)a->cam.width * (size_t)a->cam.height * 3);
-        ss_status st = rgb ? view_renderer_offscreen(a->rend, &a->cam, &a->layers, a->day,
-                                                     (float)a->o.displace, !a->hide_strokes, rgb, &err)
-                           : ss_error_set(&err, SS_ERR_NOMEM, "out of memory");
+        ss_status st =
+            rgb ? view_renderer_offscreen(a->rend, &a->cam, &a->layers, a->day,
+                                          (float)a->o.displace, !a->hide_strokes, rgb, &err)
+                : ss_error_set(&err, SS_ERR_NOMEM, "out of memory");
         if (!st) st = write_screenshot(a->o.screenshot, rgb, a->cam.width, a->cam.height, &err);
         free(rgb);
         if (st)
