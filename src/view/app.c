@@ -37,7 +37,7 @@ static const char *CMD = "view";
 /* ---- options ------------------------------------------------------------------ */
 
 typedef struct opts {
-    const char *mesh, *load, *strokes, *screenshot, *script, *save_strokes;
+    const char *mesh, *load, *strokes, *screenshot, *script, *save_strokes, *window_shot;
     int width, height, texture_size, bench_frames, generate, egl, json, quiet;
     double day, brush_mm, displace;
     uint64_t seed;
@@ -69,6 +69,8 @@ static void help(void) {
            "  --bench-frames N     render N frames across the timeline; print ms/frame\n"
            "                       (median, 95th percentile) and the resolution\n"
            "  --egl                headless OpenGL through EGL (no display needed)\n"
+           "  --window-shot FILE.png  open the window, replay --script, save a picture\n"
+           "                       of the whole window (controls included) and close\n"
            "  --json               print a JSON summary on stdout\n"
            "  --quiet              no messages on stderr but errors\n\n"
            "Controls: drag rotates, shift-drag or right/middle drag pans, wheel zooms;\n"
@@ -85,25 +87,16 @@ static int parse_size(const char *s, int *w, int *h, ss_error *err) {
 }
 
 static int parse(int argc, char **argv, opts *o, ss_error *err) {
-    static const struct option lo[] = {{"mesh", 1, 0, 'm'},
-                                       {"load", 1, 0, 'l'},
-                                       {"strokes", 1, 0, 's'},
-                                       {"screenshot", 1, 0, 'o'},
-                                       {"script", 1, 0, 'x'},
-                                       {"save-strokes", 1, 0, 'w'},
-                                       {"size", 1, 0, 'z'},
-                                       {"texture-size", 1, 0, 'n'},
-                                       {"bench-frames", 1, 0, 'b'},
-                                       {"generate", 0, 0, 'g'},
-                                       {"egl", 0, 0, 'e'},
-                                       {"json", 0, 0, 'J'},
-                                       {"quiet", 0, 0, 'q'},
-                                       {"time", 1, 0, 't'},
-                                       {"brush-mm", 1, 0, 'r'},
-                                       {"displace", 1, 0, 'd'},
-                                       {"seed", 1, 0, 'S'},
-                                       {"help", 0, 0, 'h'},
-                                       {0, 0, 0, 0}};
+    static const struct option lo[] = {{"mesh", 1, 0, 'm'},         {"load", 1, 0, 'l'},
+                                       {"strokes", 1, 0, 's'},      {"screenshot", 1, 0, 'o'},
+                                       {"script", 1, 0, 'x'},       {"save-strokes", 1, 0, 'w'},
+                                       {"size", 1, 0, 'z'},         {"texture-size", 1, 0, 'n'},
+                                       {"bench-frames", 1, 0, 'b'}, {"generate", 0, 0, 'g'},
+                                       {"egl", 0, 0, 'e'},          {"json", 0, 0, 'J'},
+                                       {"quiet", 0, 0, 'q'},        {"time", 1, 0, 't'},
+                                       {"brush-mm", 1, 0, 'r'},     {"displace", 1, 0, 'd'},
+                                       {"seed", 1, 0, 'S'},         {"help", 0, 0, 'h'},
+                                       {"window-shot", 1, 0, 'W'},  {0, 0, 0, 0}};
     memset(o, 0, sizeof *o);
     o->width = 1280, o->height = 720, o->texture_size = 2048;
     o->brush_mm = 4, o->displace = 1, o->seed = 1;
@@ -131,6 +124,9 @@ static int parse(int argc, char **argv, opts *o, ss_error *err) {
             break;
         case 'w':
             o->save_strokes = optarg;
+            break;
+        case 'W':
+            o->window_shot = optarg;
             break;
         case 'z':
             st = parse_size(optarg, &o->width, &o->height, err);
@@ -755,9 +751,12 @@ static ss_status write_screenshot(const char *path, const unsigned char *rgb, in
                                   ss_error *err) {
     ss_image *img = ss_image_create_uninit(w, h, 3, err);
     if (!img) return err->code;
-    /* The bytes are already sRGB: store them as they are. */
-    for (size_t i = 0; i < (size_t)w * (size_t)h * 3; i++) img->data[i] = rgb[i] / 255.0f;
-    ss_status st = ss_png_write(path, img, 8, SS_ENC_LINEAR, err);
+    /* The bytes are sRGB: decode to linear so the PNG is written (and tagged)
+     * as sRGB; encode(decode(b)) gives b back. */
+    float lut[256];
+    for (int i = 0; i < 256; i++) lut[i] = ss_srgb_decode(i / 255.0f);
+    for (size_t i = 0; i < (size_t)w * (size_t)h * 3; i++) img->data[i] = lut[rgb[i]];
+    ss_status st = ss_png_write(path, img, 8, SS_ENC_SRGB, err);
     ss_image_free(img);
     return st;
 }
@@ -904,8 +903,30 @@ static int run_egl(app *a) {
 
 typedef struct gtk_run {
     app *a;
-    int batch, rc, done;
+    int batch, rc, done, idle_ticks;
 } gtk_run;
+
+/* --window-shot: the window as drawn (widgets and the GL frame) to a PNG. */
+static void save_window(gtk_run *g) {
+    app *a = g->a;
+    int w = gtk_widget_get_width(a->window), h = gtk_widget_get_height(a->window);
+    GdkPaintable *p = gtk_widget_paintable_new(a->window);
+    GtkSnapshot *s = gtk_snapshot_new();
+    gdk_paintable_snapshot(p, GDK_SNAPSHOT(s), w, h);
+    GskRenderNode *node = gtk_snapshot_free_to_node(s);
+    GskRenderer *r = gtk_native_get_renderer(GTK_NATIVE(a->window));
+    graphene_rect_t rect = GRAPHENE_RECT_INIT(0, 0, (float)w, (float)h);
+    GdkTexture *tex = node && r ? gsk_renderer_render_texture(r, node, &rect) : NULL;
+    if (!tex || !gdk_texture_save_to_png(tex, a->o.window_shot)) {
+        app_message(a, 1, "%s: cannot save the window", a->o.window_shot);
+        g->rc = 1;
+    } else if (!a->o.quiet) {
+        fprintf(stderr, "skinsim view: window saved to %s\n", a->o.window_shot);
+    }
+    if (tex) g_object_unref(tex);
+    if (node) gsk_render_node_unref(node);
+    g_object_unref(p);
+}
 
 static gboolean on_render(GtkGLArea *area, GdkGLContext *ctx, gpointer data) {
     (void)ctx;
@@ -1111,7 +1132,14 @@ static gboolean on_tick(gpointer data) {
         app_set_time(a, t);
     }
     if (a->next_ev < a->nev && a->rend && app_script_step(a, &a->ev[a->next_ev])) a->next_ev++;
-    return g->done ? G_SOURCE_REMOVE : G_SOURCE_CONTINUE;
+    /* --window-shot: once the script and Generate are done and a few frames
+     * have been drawn, save the window and close. */
+    if (a->o.window_shot && a->rend && a->next_ev >= a->nev && !a->generating &&
+        ++g->idle_ticks == 10) {
+        save_window(g);
+        g->done = 1;
+    }
+    return G_SOURCE_CONTINUE; /* removed by run_gtk */
 }
 
 static GtkWidget *button(const char *label, const char *key, const char *tip, gtk_run *g) {
@@ -1132,7 +1160,7 @@ static GtkWidget *file_button(const char *label, const char *what, gtk_run *g) {
 }
 
 static int run_gtk(app *a, int batch) {
-    gtk_run g = {a, batch, 0, 0};
+    gtk_run g = {a, batch, 0, 0, 0};
     GtkWidget *win = gtk_window_new();
     a->window = win;
     gtk_window_set_title(GTK_WINDOW(win), "skinsim view");
