@@ -325,15 +325,20 @@ static ss_status prepare(const opts *o, inputs *in, ss_wound_shape **shape, ss_e
     return st;
 }
 
-/* Disk the outputs take at most: every map as raw pixels (PNG's worst case
- * is a fraction of a percent above that), keys for each distinct phase and
- * every frame, plus the contact sheet and timeline.json. */
+/* Disk the outputs will take, generously: half the raw pixel bytes of every
+ * map (keys for each of the five phases, every frame), of the contact sheet
+ * (256-px tiles, 8 a row, as drawn below) and timeline.json. The procedural
+ * maps compress to about 15% of raw (11 MB for 1024 px and three times),
+ * photographs given as --upper to about 60%; a run that still outgrows the
+ * estimate fails with the old output intact. */
 static double estimate_bytes(const opts *o) {
     double px = (double)o->size * (double)o->size;
-    double set = px * (3 + 1 + 2 + 3) * 1.01 + 4096;
-    if (o->exr) set += px * (6 + 2 + 2 + 6) * 1.01 + 4096;
-    double frame = set + (o->gltf ? px * 3 * 1.01 + 8192 : 0);
-    return 5 * set + o->ntimes * frame + 2e6;
+    double set = px * (3 + 1 + 2 + 3) + 4096;
+    if (o->exr) set += px * (6 + 2 + 2 + 6) + 4096;
+    double frame = set + (o->gltf ? px * 3 + 8192 : 0);
+    int cols = o->ntimes < 8 ? o->ntimes : 8, rows = (o->ntimes + 7) / 8;
+    double sheet = (cols * 276.0 + 20) * (rows * 320.0 + 20) * 3;
+    return 0.5 * (5 * set + o->ntimes * frame + sheet) + 4096.0 * (o->ntimes + 4);
 }
 
 static ss_status render(const opts *o, inputs *in, const ss_wound_shape *shape, const char *dir,

@@ -312,6 +312,23 @@ ss_status ss_outputs_input(ss_outputs *o, const char *path, ss_error *err) {
     return SS_OK;
 }
 
+static void free_entry(out_entry *e) {
+    free(e->label);
+    free(e->user);
+    free(e->real);
+    free(e->parent);
+    free(e->base);
+    free(e->lock_path);
+    free(e->staging);
+    free(e->write);
+    free(e->old);
+    for (int k = 0; k < e->nmade; k++) free(e->made[k]);
+    free(e->made);
+}
+
+/* A refused output leaves the set as it was. */
+static void pop_entry(ss_outputs *o) { free_entry(&o->out[--o->nout]); }
+
 /* The checks of an existing or missing target that need no lock. */
 static ss_status check_target(const ss_outputs *o, out_entry *e, ss_error *err) {
     char sb[200];
@@ -396,11 +413,11 @@ ss_status ss_outputs_add(ss_outputs *o, const char *label, const char *path, ss_
     e->parent = dirname_of(real);
     const char *sl = strrchr(real, '/');
     e->base = strdup(sl ? sl + 1 : real);
+    o->nout++;
     if (!e->user || (label && !e->label) || !e->parent || !e->base) {
-        o->nout++; /* so free() releases the parts */
+        pop_entry(o);
         return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     }
-    o->nout++;
     ss_status s = SS_OK;
     size_t room = kind == SS_OUTPUT_DIR ? DIR_CONTENT_ROOM : 0;
     if (strlen(real) + STAGING_SUFFIX + room >= PATH_MAX)
@@ -423,6 +440,7 @@ ss_status ss_outputs_add(ss_outputs *o, const char *label, const char *path, ss_
     for (int i = 0; i < o->nin && !s; i++)
         if (clash_with_input(o, e, &o->in[i]))
             s = OUTMSG(e, "it would overwrite the input %s", shown(o->in[i].user, sb2));
+    if (s) pop_entry(o);
     return s;
 }
 
@@ -624,8 +642,8 @@ static void rollback(ss_outputs *o) {
         free(e->staging);
         free(e->write);
         e->staging = e->write = NULL;
+        release_lock(e); /* first: the lock file sits in a folder begin may remove */
         remove_made(e);
-        release_lock(e);
     }
 }
 
@@ -767,7 +785,12 @@ ss_status ss_outputs_finish(ss_outputs *o, ss_status status, ss_error *err) {
     for (int i = 0; i < o->nout && !s; i++) {
         out_entry *e = &o->out[i];
         struct stat st;
-        if (e->kind == SS_OUTPUT_FILE && (lstat(e->write, &st) != 0 || !S_ISREG(st.st_mode)))
+        /* what sits at the target now must still be replaceable: something
+         * put there during the run (a folder, a pipe) is never swapped out */
+        if ((s = check_target(o, e, err))) {
+            s = SS_ERR_RUNTIME;
+            if (err) err->code = s;
+        } else if (e->kind == SS_OUTPUT_FILE && (lstat(e->write, &st) != 0 || !S_ISREG(st.st_mode)))
             s = ss_error_set(err, SS_ERR_RUNTIME, "%s: the run did not write it",
                              shown(e->user, sb));
         else if (e->kind == SS_OUTPUT_DIR)
@@ -798,6 +821,7 @@ ss_status ss_outputs_finish(ss_outputs *o, ss_status status, ss_error *err) {
         free(e->staging);
         free(e->write);
         e->staging = e->write = NULL;
+        release_lock(e);
         if (s) {
             remove_made(e);
         } else {
@@ -806,7 +830,6 @@ ss_status ss_outputs_finish(ss_outputs *o, ss_status status, ss_error *err) {
             e->made = NULL;
             e->nmade = 0;
         }
-        release_lock(e);
     }
     return s;
 }
@@ -814,20 +837,7 @@ ss_status ss_outputs_finish(ss_outputs *o, ss_status status, ss_error *err) {
 void ss_outputs_free(ss_outputs *o) {
     if (!o) return;
     if (o->begun && !o->finished) rollback(o);
-    for (int i = 0; i < o->nout; i++) {
-        out_entry *e = &o->out[i];
-        free(e->label);
-        free(e->user);
-        free(e->real);
-        free(e->parent);
-        free(e->base);
-        free(e->lock_path);
-        free(e->staging);
-        free(e->write);
-        free(e->old);
-        for (int k = 0; k < e->nmade; k++) free(e->made[k]);
-        free(e->made);
-    }
+    for (int i = 0; i < o->nout; i++) free_entry(&o->out[i]);
     for (int i = 0; i < o->nin; i++) {
         free(o->in[i].user);
         free(o->in[i].real);
