@@ -33,6 +33,14 @@ ss_status ss_mc_run_tallies(const ss_optics_slab *slab, const ss_mc_options *opt
                             const ss_mc_tally_spec *spec, ss_mc_tallies *t, ss_error *err);
 void ss_mc_tallies_free(ss_mc_tallies *t);
 
+/* One Smith microsurface random walk on the rough air/skin interface (GGX
+ * alpha; see mc.c). Local frame: +z towards the incident side of index n_in,
+ * w (unit, w.z < 0) the travel direction, replaced by the exit direction.
+ * Returns 0 if reflected (w.z > 0), 1 if transmitted into n_out (w.z < 0);
+ * *order = number of facet interactions. Random numbers: stream (seed, stream). */
+int ss_ms_walk(double alpha, double n_in, double n_out, double w[3], uint64_t seed, uint64_t stream,
+               int *order);
+
 /* Tabulated spectra loaded from data/spectra (wavelength nm, value). */
 typedef struct ss_spectrum_table {
     int n;
