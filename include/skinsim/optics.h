@@ -183,6 +183,16 @@ void ss_brdf_sampled_free(ss_brdf_sampled *b);
 ss_status ss_optics_radial_profile_rgb(const ss_bio_params *bio, const ss_spectrum_options *o,
                                        int bins, double max_cm, double *rgb, ss_error *err);
 
+/* ---- CIELAB and CIEDE2000 (src/optics/colour.c) ---------------------------------- */
+/* Linear sRGB (white-normalised albedo, as above) <-> CIELAB, D65 white. */
+void ss_srgb_linear_to_lab(const double rgb[3], double lab[3]);
+void ss_lab_to_srgb_linear(const double lab[3], double rgb[3]);
+/* Chroma C*ab, hue angle h_ab in degrees [0, 360) and individual typology
+ * angle ITA = atan((L* - 50) / b*) in degrees; any output may be NULL. */
+void ss_lab_describe(const double lab[3], double *chroma, double *hue_deg, double *ita_deg);
+/* CIEDE2000 colour difference (kL = kC = kH = 1; Sharma, Wu & Dalal 2005). */
+double ss_ciede2000(const double lab1[3], const double lab2[3]);
+
 #ifdef __cplusplus
 }
 #endif
