@@ -179,7 +179,7 @@ static void test_transport_energy(void **state) {
     ss_optics_slab s;
     memset(&s, 0, sizeof s);
     s.nlayers = 1;
-    s.layer[0] = (ss_optics_layer){1.55, 0.0, 10.0, 0.0, 0.01};
+    s.layer[0] = (ss_optics_layer){1.55, 0.0, 10.0, 0.0, 0.01, 0, {0}};
     s.n_above = 1.0;
     s.n_below = 1.55;
     s.bottom_albedo = -1.0;
@@ -201,7 +201,7 @@ static void test_transport_energy(void **state) {
         ss_mc_result_free(&r);
     }
     /* absorbing substrate: all light that enters is absorbed at once */
-    s.layer[0] = (ss_optics_layer){1.55, 1e6, 0.0, 0.0, 0.01};
+    s.layer[0] = (ss_optics_layer){1.55, 1e6, 0.0, 0.0, 0.01, 0, {0}};
     o.theta_i_rad = 0.0;
     o.brdf_n_theta = 6;
     o.brdf_n_phi = 4;

@@ -45,8 +45,16 @@ ss_status ss_bio_params_validate(const ss_bio_params *p, ss_error *err);
 
 /* ---- layered slab ----------------------------------------------------------- */
 #define SS_OPTICS_MAX_LAYERS 16
+#define SS_OPTICS_PHASE_MAX 65
 typedef struct ss_optics_layer {
     double n, mua_per_cm, mus_per_cm, g, d_cm;
+    /* Optional tabulated phase function (phase_n = 0: Henyey-Greenstein with
+     * g). phase_theta[k] is the polar deflection angle (rad, non-decreasing in
+     * [0, pi]) at cumulative probability k / (phase_n - 1), azimuth uniform;
+     * g should then hold its mean cosine (informational). Used for the stratum
+     * corneum and epidermis (Bruls & van der Leun 1984, docs/optics.md). */
+    int phase_n;
+    double phase_theta[SS_OPTICS_PHASE_MAX];
 } ss_optics_layer;
 typedef struct ss_optics_slab {
     int nlayers;

@@ -81,6 +81,8 @@ typedef struct mc_layer {
     double z0, z1, mut, inv_mut, absfrac, n, g;
     double hg_a, hg_b, hg_c; /* HG sampling constants */
     int isotropic;
+    int phase_n; /* > 0: tabulated deflection angles (cosines below) */
+    double phase_cos[SS_OPTICS_PHASE_MAX];
 } mc_layer;
 
 typedef struct mc_ctx {
@@ -598,7 +600,13 @@ static void run_photon(const mc_ctx *c, uint64_t idx, mc_acc *a, path_buf *pb) {
         double cost;
         {
             double u = prng_u(&r);
-            if (L->isotropic)
+            if (L->phase_n) {
+                double x = u * (L->phase_n - 1);
+                int k = (int)x;
+                if (k >= L->phase_n - 1) k = L->phase_n - 2;
+                double f = x - k;
+                cost = L->phase_cos[k] + f * (L->phase_cos[k + 1] - L->phase_cos[k]);
+            } else if (L->isotropic)
                 cost = 2.0 * u - 1.0;
             else {
                 double t = L->hg_b / (1.0 - L->g + 2.0 * L->g * u);
@@ -681,6 +689,8 @@ static ss_status ctx_init(mc_ctx *c, const ss_optics_slab *s, const ss_mc_option
         L->n = sl->n;
         L->g = sl->g;
         L->isotropic = fabs(sl->g) < 1e-9;
+        L->phase_n = sl->phase_n;
+        for (int k = 0; k < sl->phase_n; k++) L->phase_cos[k] = cos(sl->phase_theta[k]);
         if (!L->isotropic) {
             L->hg_a = 1.0 + sl->g * sl->g;
             L->hg_b = 1.0 - sl->g * sl->g;

@@ -41,6 +41,8 @@ void ss_mc_tallies_free(ss_mc_tallies *t);
 int ss_ms_walk(double alpha, double n_in, double n_out, double w[3], uint64_t seed, uint64_t stream,
                int *order);
 
+#define SS_BRULS_COLUMNS 9
+
 /* Tabulated spectra loaded from data/spectra (wavelength nm, value). */
 typedef struct ss_spectrum_table {
     int n;
@@ -51,6 +53,10 @@ struct ss_optics_data {
     ss_spectrum_table hbo2, hb;                /* molar extinction, cm^-1/M (decadic) */
     ss_spectrum_table bilirubin, betacarotene; /* molar extinction, cm^-1/M (decadic) */
     ss_spectrum_table cie_x, cie_y, cie_z, d65;
+    /* Bruls & van der Leun 1984 cumulative transmitted percentage over the
+     * exitant angle (deg, in the "nm" field): stratum corneum at 254, 302, 365,
+     * 436, 546 nm, then epidermis at 302, 365, 436, 546 nm. */
+    ss_spectrum_table bruls[SS_BRULS_COLUMNS];
 };
 ss_status ss_optics_data_load(ss_optics_data *d, ss_error *err);
 void ss_optics_data_free(ss_optics_data *d);
