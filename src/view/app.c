@@ -670,7 +670,12 @@ static void app_sync_gl(app *a) {
     if (!a->rend) return;
     if (a->layers_dirty) {
         ss_error err = {0};
-        if (view_renderer_set_layers(a->rend, &a->layers, &err)) app_message(a, 1, "%s", err.msg);
+        double t0 = ss_now();
+        if (view_renderer_set_layers(a->rend, &a->layers, &err))
+            app_message(a, 1, "%s", err.msg);
+        else if (!a->o.quiet)
+            fprintf(stderr, "skinsim view: %d layers of %d^2 uploaded in %.0f ms\n",
+                    a->layers.nlayers, a->layers.size, (ss_now() - t0) * 1e3);
         a->layers_dirty = 0;
     }
     if (a->strokes_dirty) {
