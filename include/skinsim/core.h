@@ -51,6 +51,9 @@ typedef struct ss_image {
 /* Returns NULL (and sets err) on a bad size or when memory runs out. Pixels are
  * zeroed. Sizes above SS_IMAGE_MAX_SIDE per side are refused. */
 #define SS_IMAGE_MAX_SIDE 65536
+/* Channels per pixel: 1..SS_IMAGE_MAX_CHANNELS (files hold 1..4; more are for
+ * parameter maps such as the bio-parameter maps of skinsim/wound.h). */
+#define SS_IMAGE_MAX_CHANNELS 16
 ss_image *ss_image_create(int width, int height, int channels, ss_error *err);
 /* Same, pixels left undefined: for images the caller overwrites entirely. */
 ss_image *ss_image_create_uninit(int width, int height, int channels, ss_error *err);
