@@ -285,6 +285,27 @@ static void test_clinical(void **state) {
     if (model_failures) skip();
 }
 
+/* The base skin's textures are the ModelMatch lookup of its bio maps (the
+ * renderer's own five-field lookup agrees with the table's generic one). */
+static void test_base_lookup(void **state) {
+    (void)state;
+    scene s;
+    scene_init(&s);
+    const ss_wound_textures *b = ss_wound_renderer_base(s.r);
+    for (size_t i = 0; i < (size_t)TEX * TEX; i += 97) {
+        const float *bio = s.skin->data + i * SS_BIO_NCHANNELS;
+        double x[SS_MM_NAXES] = {bio[SS_BIO_MELANIN], bio[SS_BIO_PHEOMELANIN],
+                                 bio[SS_BIO_BLOOD],   bio[SS_BIO_OXYGENATION],
+                                 bio[SS_BIO_SC_CM],   bio[SS_BIO_EPIDERMIS_CM]};
+        double e[SS_MM_NFIELDS];
+        ss_mm_table_lookup(s.table, x, e);
+        for (int c = 0; c < 3; c++) assert_true(fabs(b->base_color->data[i * 3 + c] - e[c]) < 1e-6);
+        assert_true(fabs(b->roughness->data[i] - e[4]) < 1e-6);
+        assert_true(b->height->data[i] == bio[SS_BIO_HEIGHT_MM]);
+    }
+    scene_free(&s);
+}
+
 /* The same textures for 1 and 2 threads. */
 static void test_threads(void **state) {
     (void)state;
@@ -329,7 +350,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_delta_e2000), cmocka_unit_test(test_recipe),
         cmocka_unit_test(test_layers),      cmocka_unit_test(test_clinical),
-        cmocka_unit_test(test_threads),
+        cmocka_unit_test(test_threads),     cmocka_unit_test(test_base_lookup),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -122,8 +122,22 @@ static ss_status read_inputs(job *j, ss_error *err) {
                                 "--days: %g is not a whole number of steps of %g days", c->days[i],
                                 ss_heal_run_dt(j->run));
     }
-    if ((st = read_skin(j, err))) return st;
-    return ss_check_writable_dir(c->out_dir, err);
+    return read_skin(j, err);
+}
+
+/* The output folder and the inputs it must not overwrite (src/core/output.c). */
+static ss_status declare_outputs(const ss_wound_make_config *c, ss_outputs *outs, ss_error *err) {
+    const char *ins[] = {
+        c->heal.wound_stroke,      c->heal.wound_mask, c->heal.wound_mesh, c->heal.params_path,
+        c->heal.wound_depth_image, c->skin_path,       c->table_path,      c->recipe_path};
+    ss_status st = SS_OK;
+    for (size_t k = 0; k < sizeof ins / sizeof *ins && !st; k++)
+        if (ins[k]) st = ss_outputs_input(outs, ins[k], err);
+    /* per day: PNGs of about 9 bytes a texel before compression, EXRs 20 */
+    double texels = (double)c->size * (double)c->size;
+    double bytes = c->ndays * texels * (c->exr ? 29.0 : 9.0) + 4e6;
+    if (!st) st = ss_outputs_add(outs, "--out", c->out_dir, SS_OUTPUT_DIR, bytes, err);
+    return st;
 }
 
 /* ---- writing --------------------------------------------------------------------------- */
@@ -391,16 +405,19 @@ ss_status ss_wound_make(const ss_wound_make_config *c, char **summary_json, ss_e
     job j = {0};
     j.c = c;
     double t0 = ss_now();
-    ss_status st = read_inputs(&j, err);
+    ss_outputs *outs = ss_outputs_create("wound", err);
+    ss_status st = outs ? declare_outputs(c, outs, err) : err->code;
+    if (!st) st = read_inputs(&j, err);
+    if (!st) st = ss_outputs_begin(outs, err);
     if (st) {
+        ss_outputs_free(outs);
         job_free(&j);
         return st;
     }
     /* everything is validated: from here on, failures are runtime errors */
     cJSON *sum = summary_base(&j);
-    char *staging = NULL;
-    st = ss_output_dir_begin(c->out_dir, &staging, err);
-    if (!st) st = make(&j, staging, sum, err);
+    const char *staging = ss_outputs_path(outs, 0);
+    st = make(&j, staging, sum, err);
     if (!st) {
         cJSON_AddNumberToObject(sum, "heal_s", j.t_heal);
         cJSON_AddNumberToObject(sum, "texture_s", j.t_render);
@@ -414,10 +431,10 @@ ss_status ss_wound_make(const ss_wound_make_config *c, char **summary_json, ss_e
                   : ss_error_set(err, SS_ERR_NOMEM, "out of memory");
         free(text);
     }
-    if (staging) st = ss_output_dir_end(c->out_dir, staging, st, err);
-    if (!st && summary_json) *summary_json = cJSON_PrintUnformatted(sum);
     if (st && err->code == SS_ERR_INPUT) st = err->code = SS_ERR_RUNTIME;
-    free(staging);
+    st = ss_outputs_finish(outs, st, err);
+    ss_outputs_free(outs);
+    if (!st && summary_json) *summary_json = cJSON_PrintUnformatted(sum);
     cJSON_Delete(sum);
     job_free(&j);
     return st;

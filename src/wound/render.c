@@ -29,7 +29,7 @@
 #include <string.h>
 
 #include "skinsim/texture.h"
-#include "skinsim/wound.h"
+#include "wound_internal.h"
 
 /* Floors of the open bed: no epidermis and no stratum corneum, held at the
  * table's smallest samples (the transport needs layers of non-zero
@@ -43,6 +43,7 @@ struct ss_wound_renderer {
     ss_image *skin; /* size x size x SS_BIO_NCHANNELS */
     float mean[SS_BIO_NCHANNELS];
     ss_layer_table scab, clot;
+    ss_image *crust; /* value noise 0..1 at ~1.5 mm: the crust is uneven */
     ss_wound_textures base;
 };
 
@@ -82,59 +83,52 @@ typedef struct lookup5 {
 } lookup5;
 
 static void mm_lookup5(const ss_mm_table *t, const double x[SS_MM_NAXES], lookup5 *out) {
-    int i0[SS_MM_NAXES];
-    double fr[SS_MM_NAXES];
-    size_t stride[SS_MM_NAXES];
-    size_t s = 1;
+    /* the corners of the cell: weights and entry offsets built axis by axis,
+     * doubling the list only on axes where x lies between two samples */
+    double w[1 << SS_MM_NAXES];
+    size_t off[1 << SS_MM_NAXES];
+    int nc = 1;
+    w[0] = 1.0;
+    off[0] = 0;
+    size_t stride = 1;
     for (int a = SS_MM_NAXES - 1; a >= 0; a--) { /* axis 5 fastest */
-        stride[a] = s;
-        s *= (size_t)t->nsamples[a];
-    }
-    size_t base = 0;
-    for (int a = 0; a < SS_MM_NAXES; a++) {
         int n = t->nsamples[a];
         const double *v = t->axis[a];
-        i0[a] = 0;
-        fr[a] = 0.0;
+        int i = 0;
+        double fr = 0.0;
         if (n > 1) {
             double xa = x[a];
             if (!(xa > v[0])) xa = v[0];
             if (xa > v[n - 1]) xa = v[n - 1];
-            int i = 0;
             while (i < n - 2 && xa >= v[i + 1]) i++;
-            i0[a] = i;
-            fr[a] = (xa - v[i]) / (v[i + 1] - v[i]);
+            fr = (xa - v[i]) / (v[i + 1] - v[i]);
         }
-        base += (size_t)i0[a] * stride[a];
-    }
-    double acc[5] = {0, 0, 0, 0, 0};
-    for (int corner = 0; corner < (1 << SS_MM_NAXES); corner++) {
-        double w = 1.0;
-        size_t off = base;
-        for (int a = 0; a < SS_MM_NAXES; a++) {
-            int up = (corner >> a) & 1;
-            if (up) {
-                if (t->nsamples[a] == 1 || fr[a] == 0.0) {
-                    w = 0.0;
-                    break;
-                }
-                w *= fr[a];
-                off += stride[a];
-            } else {
-                w *= 1.0 - fr[a];
+        size_t o = (size_t)i * stride;
+        if (fr > 0.0) {
+            for (int k = 0; k < nc; k++) {
+                w[nc + k] = w[k] * fr;
+                off[nc + k] = off[k] + o + stride;
+                w[k] *= 1.0 - fr;
+                off[k] += o;
             }
+            nc *= 2;
+        } else {
+            for (int k = 0; k < nc; k++) off[k] += o;
         }
-        if (w == 0.0) continue;
-        const double *e = t->entries + off * SS_MM_NFIELDS; /* GGX: rgb, specular, roughness */
-        acc[0] += w * e[0];
-        acc[1] += w * e[1];
-        acc[2] += w * e[2];
-        acc[4] += w * e[4];
+        stride *= (size_t)n;
     }
-    out->rgb[0] = acc[0];
-    out->rgb[1] = acc[1];
-    out->rgb[2] = acc[2];
-    out->roughness = acc[4];
+    double r = 0, g = 0, b = 0, ro = 0;
+    for (int k = 0; k < nc; k++) { /* GGX: rgb, specular, roughness */
+        const double *e = t->entries + off[k] * SS_MM_NFIELDS;
+        r += w[k] * e[0];
+        g += w[k] * e[1];
+        b += w[k] * e[2];
+        ro += w[k] * e[4];
+    }
+    out->rgb[0] = r;
+    out->rgb[1] = g;
+    out->rgb[2] = b;
+    out->roughness = ro;
 }
 
 /* One texel's bio parameters -> base colour and roughness. */
@@ -198,6 +192,8 @@ ss_status ss_wound_renderer_create(const ss_wound_render_options *o, ss_wound_re
     ss_blood_layer_clot(o->recipe.v[SS_WR_BED_OXYGENATION], &clot);
     if (!st) st = ss_layer_table_build(&scab, o->scab_photons, o->seed, &r->scab, err);
     if (!st) st = ss_layer_table_build(&clot, o->scab_photons, o->seed + 1000, &r->clot, err);
+    if (!st && !(r->crust = ss_image_create(o->size, o->size, 1, err))) st = err->code;
+    if (!st) st = ss_wound__noise(o->size, o->side_mm, 1.5, 2, o->seed, 201, r->crust, err);
     if (!st) st = render_base(r, err);
     if (!st) ss_height_to_normal(r->base.height, (float)(o->size / o->side_mm), r->base.normal);
     if (st) {
@@ -211,6 +207,7 @@ ss_status ss_wound_renderer_create(const ss_wound_render_options *o, ss_wound_re
 void ss_wound_renderer_free(ss_wound_renderer *r) {
     if (!r) return;
     ss_image_free(r->skin);
+    ss_image_free(r->crust);
     ss_wound_textures_free(&r->base);
     free(r);
 }
@@ -269,8 +266,8 @@ typedef struct texel_out {
     double rgb[3], roughness, height_mm;
 } texel_out;
 
-static void render_texel(const ss_wound_renderer *r, const float *skin, const texel_tissue *s,
-                         texel_out *o) {
+static void render_texel(const ss_wound_renderer *r, const float *skin, float crust,
+                         const texel_tissue *s, texel_out *o) {
     const double *v = r->o.recipe.v;
     double cover = ramp(s->e, v[SS_WR_EPITHELIUM_LO], v[SS_WR_EPITHELIUM_HI]), open = 1 - cover;
     double reg = ramp(s->plasma, v[SS_WR_REGION_LO], v[SS_WR_REGION_HI]);
@@ -309,7 +306,8 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const te
     for (int c = 0; c < 3; c++) skin_rgb[c] = clamp01(l.rgb[c] + white * (1 - l.rgb[c]));
     /* the clot filling the open, avascular part of the bed (below the
      * crust), then the scab: blood layers over the skin */
-    double thick = s->scab * v[SS_WR_SCAB_SCALE], R[3], T[3], mid[3];
+    /* a crust is uneven: its thickness varies by +-30 % at ~1.5 mm */
+    double thick = s->scab * v[SS_WR_SCAB_SCALE] * (0.7 + 0.6 * crust), R[3], T[3], mid[3];
     double clot =
         open * reg * (s->depth - s->scab > 0 ? s->depth - s->scab : 0) * v[SS_WR_CLOT_SCALE];
     ss_layer_table_eval(&r->clot, clot, R, T);
@@ -370,7 +368,7 @@ ss_status ss_wound_render(ss_wound_renderer *r, const ss_wound_tissue *t,
             texel_tissue s;
             sample_tissue(t, mx, my, &s);
             texel_out o;
-            render_texel(r, r->skin->data + i * SS_BIO_NCHANNELS, &s, &o);
+            render_texel(r, r->skin->data + i * SS_BIO_NCHANNELS, r->crust->data[i], &s, &o);
             for (int c = 0; c < 3; c++) out->base_color->data[i * 3 + c] = (float)o.rgb[c];
             out->roughness->data[i] = (float)o.roughness;
             out->height->data[i] = (float)(o.height_mm + dz);

@@ -13,10 +13,10 @@
 #include <stdlib.h>
 
 #include "skinsim/texture.h"
-#include "skinsim/wound.h"
+#include "wound_internal.h"
 
-static ss_status noise(int size, double side_mm, double period_mm, int octaves, uint64_t seed,
-                       uint64_t stream, ss_image *out, ss_error *err) {
+ss_status ss_wound__noise(int size, double side_mm, double period_mm, int octaves, uint64_t seed,
+                          uint64_t stream, ss_image *out, ss_error *err) {
     ss_noise_params p;
     ss_noise_params_default(&p);
     p.octaves = octaves;
@@ -37,9 +37,9 @@ ss_image *ss_wound_default_skin(int size, double side_mm, uint64_t seed, ss_erro
     ss_image *n2 = n1 ? ss_image_create(size, size, 1, err) : NULL;
     ss_image *n3 = n2 ? ss_image_create(size, size, 1, err) : NULL;
     ss_status st = n3 ? SS_OK : (err->code ? err->code : SS_ERR_NOMEM);
-    if (!st) st = noise(size, side_mm, 8.0, 3, seed, 101, n1, err);
-    if (!st) st = noise(size, side_mm, 20.0, 2, seed, 102, n2, err);
-    if (!st) st = noise(size, side_mm, 1.2, 2, seed, 103, n3, err);
+    if (!st) st = ss_wound__noise(size, side_mm, 8.0, 3, seed, 101, n1, err);
+    if (!st) st = ss_wound__noise(size, side_mm, 20.0, 2, seed, 102, n2, err);
+    if (!st) st = ss_wound__noise(size, side_mm, 1.2, 2, seed, 103, n3, err);
     if (!st) {
         ss_bio_params d;
         ss_bio_params_default(&d);
