@@ -1,7 +1,14 @@
 /* skinsim core: errors, float images, PNG/EXR I/O, counter-based RNG, threads,
  * progress and atomic file writes. Every other module builds on these; none of
  * it exits or aborts: failures come back as an ss_status with a message that
- * names the input and what was wrong. */
+ * names the input and what was wrong.
+ *
+ * What is stable: every type and function declared in include/skinsim/ is the
+ * library's API (one header per module). The shared library's soname
+ * (libskinsim.so.MAJOR) changes whenever a declared struct layout or function
+ * signature changes incompatibly; while MAJOR is 0, expect that between
+ * minor releases. Names with a double underscore and the src/ headers
+ * (*_internal.h) are not API. */
 #ifndef SKINSIM_CORE_H
 #define SKINSIM_CORE_H
 
@@ -224,9 +231,14 @@ const char *ss_text_next_line(const char *p, char *buf, size_t bufsize, int *too
 char *ss_text_trim(char *s);
 int ss_text_parse_number(const char *s, double *out);
 
-/* Directory with the shipped data files: $SKINSIM_DATA, else the build-time
+/* Directory with the shipped data files: $SKINSIM_DATA, else the
+ * share/skinsim folder of an installed copy (found next to the library or
+ * program file, so an installed tree can be moved), else the build-time
  * source data directory. */
 const char *ss_data_dir(void);
+/* The library's version, "MAJOR.MINOR.PATCH" (the shared library's soname
+ * carries MAJOR). */
+const char *ss_version(void);
 
 /* ---- random numbers ------------------------------------------------------ */
 

@@ -147,16 +147,6 @@ ss_status ss_check_writable_dir(const char *dir, ss_error *err) {
     return SS_OK;
 }
 
-const char *ss_data_dir(void) {
-    const char *env = getenv("SKINSIM_DATA");
-    if (env && *env) return env;
-#ifdef SKINSIM_DATA_DIR
-    return SKINSIM_DATA_DIR;
-#else
-    return "data";
-#endif
-}
-
 static int unlink_cb(const char *path, const struct stat *sb, int flag, struct FTW *ftw) {
     (void)sb;
     (void)flag;
