@@ -16,6 +16,7 @@ typedef struct cli_command {
 int cmd_abrasion(int argc, char **argv);
 int cmd_heal(int argc, char **argv);
 int cmd_optics(int argc, char **argv);
+int cmd_skin(int argc, char **argv);
 /* `skinsim optics fit` and `skinsim optics table` (app/cmd_optics_fit.c). */
 int cmd_optics_fit(int argc, char **argv);
 int cmd_optics_table(int argc, char **argv);

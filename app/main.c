@@ -8,6 +8,7 @@ static const cli_command commands[] = {
     {"abrasion", "abrasion-healing texture timeline (seed 000)", cmd_abrasion},
     {"heal", "3D wound-healing simulation: fields, area curve, VTK (seed 001)", cmd_heal},
     {"optics", "skin light transport: spectra, colour, BRDF, MCML files (seed 003)", cmd_optics},
+    {"skin", "procedural skin textures from biological features (seed 003)", cmd_skin},
 };
 static const int ncommands = (int)(sizeof commands / sizeof commands[0]);
 
