@@ -29,11 +29,14 @@ typedef struct ss_bezier3 {
 } ss_bezier3;
 void ss_bezier3_eval(const ss_bezier3 *b, double t, double *x, double *y);
 /* Distance from (px, py) to the curve by golden-section search over t
- * (§4.8.1): the curve is first sampled at `coarse` + 1 evenly spaced t to
- * bracket the global minimum, then golden section refines t inside the
- * bracket to |dt| < tol. Returns the distance; *t_out the parameter. */
+ * (§4.8.1): the curve is first sampled at `coarse` + 1 evenly spaced t
+ * (2..64); golden section refines t to |dt| < tol around every local
+ * minimum of the samples; the best wins. Returns the distance; *t_out the
+ * parameter. reach: when the samples prove every point of the curve
+ * farther than reach, returns +INFINITY without refining (INFINITY: always
+ * refine). */
 double ss_bezier3_distance(const ss_bezier3 *b, double px, double py, int coarse, double tol,
-                           double *t_out);
+                           double reach, double *t_out);
 /* Reference: the minimum over n + 1 evenly spaced samples (for tests). */
 double ss_bezier3_distance_dense(const ss_bezier3 *b, double px, double py, int n, double *t_out);
 

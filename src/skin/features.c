@@ -149,7 +149,7 @@ double ss_skin_dist_get(const ss_skin_dist *d, const char *name) {
 /* Forearm densities per cm^2: follicles 18 (Otberg et al. 2004, J Invest
  * Dermatol 122:14, forearm), the rest chosen for a plausible patch. */
 void ss_skin_forearm_counts(double world_size_cm, long count[SS_FEAT_NTYPES]) {
-    static const double per_cm2[SS_FEAT_NTYPES] = {6.0, 0.12, 3.0, 160.0, 18.0};
+    static const double per_cm2[SS_FEAT_NTYPES] = {6.0, 0.12, 3.0, 320.0, 18.0};
     double area = world_size_cm * world_size_cm;
     for (int t = 0; t < SS_FEAT_NTYPES; t++) count[t] = lround(per_cm2[t] * area);
 }
@@ -163,7 +163,11 @@ ss_status ss_skin_settings_preset(ss_skin_settings *s, const char *preset, int s
     s->sampler = SS_SAMPLER_ALIAS;
     s->phi = 0.1; /* §5.3.1 */
     ss_skin_dist_default(&s->dist);
+    /* plausible ranges: the table's axes (docs/modelmatch.md), except
+     * oxygenation, 0.75..0.95 for dermal blood (the table's 0.5 is venous) */
     for (int a = 0; a < 6; a++) ss_mm_axis_default_range(a, &s->base_lo[a], &s->base_hi[a]);
+    s->base_lo[SS_BIO_OXYGENATION] = 0.75;
+    s->base_hi[SS_BIO_OXYGENATION] = 0.95;
     if (!strcmp(preset, "seed")) {
         s->world_size_cm = 20.0;
         const long c[SS_FEAT_NTYPES] = {5000, 700, 3000, 1000, 170000};
@@ -181,13 +185,12 @@ ss_status ss_skin_settings_preset(ss_skin_settings *s, const char *preset, int s
         s->dist.cyst_h_max = 0.04;
         s->dist.cyst_r_sigma = 0.25;
         s->dist.freckle_m_max = 0.06;
-        s->dist.wrinkle_max_length = 3.0;
-        s->dist.wrinkle_width = 0.12;
-        s->dist.wrinkle_depth = 0.03;
-        s->dist.wrinkle_cross_deg = 70.0;
+        s->dist.wrinkle_max_length = 1.2;
+        s->dist.wrinkle_width = 0.1;
+        s->dist.wrinkle_depth = 0.025;
+        s->dist.wrinkle_cross_deg = 60.0;
         s->base_lo[SS_BIO_MELANIN] = 0.025;
         s->base_lo[SS_BIO_BLOOD] = 0.006;
-        s->base_lo[SS_BIO_OXYGENATION] = 0.7;
         return SS_OK;
     }
     return ss_error_set(err, SS_ERR_INPUT, "--preset: unknown preset '%s' (forearm or seed)",
@@ -262,6 +265,11 @@ static void field_vector(const ss_image *v, double x, double y, double *vx, doub
     *len = s[2] < 0.0f ? 0.0 : s[2] > 1.0f ? 1.0 : s[2];
 }
 
+/* A direction shorter than this counts as zero: 8-bit PNGs cannot store 0.5
+ * exactly (128/255 gives 0.0039), so "no direction" is anything within about
+ * one 8-bit step of (0.5, 0.5). */
+#define MIN_DIR 0.01
+
 static int has_vector(const ss_image *v) {
     if (!v) return 1;
     size_t n = (size_t)v->width * v->height;
@@ -280,7 +288,7 @@ static int make_wrinkle(const ss_skin_settings *s, const ss_image *vf, size_t k,
     double vx, vy, len;
     field_vector(vf, x0, y0, &vx, &vy, &len);
     double norm = hypot(vx, vy);
-    if (!(norm > 1e-3) || !(len > 1e-3)) return 0;
+    if (!(norm > MIN_DIR) || !(len > 1e-3)) return 0;
     double step = len * s->dist.wrinkle_max_length / 3.0 / mm_per_unit;
     double rot = (k & 1) ? s->dist.wrinkle_cross_deg * M_PI / 180.0 : 0.0;
     double cr = cos(rot), sr = sin(rot);
@@ -296,7 +304,7 @@ static int make_wrinkle(const ss_skin_settings *s, const ss_image *vf, size_t k,
         double ux, uy, ul;
         field_vector(vf, x, y, &ux, &uy, &ul);
         double un = hypot(ux, uy);
-        if (un > 1e-3) {
+        if (un > MIN_DIR) {
             /* keep the sense of travel (a direction field has no sign) */
             if (ux * px + uy * py < 0.0) ux = -ux, uy = -uy;
             px = ux / un, py = uy / un;

@@ -3,10 +3,11 @@
  * and the profiles that turn a distance into a feature's weight.
  *
  * Golden section finds a minimum of a unimodal function; the squared
- * distance from a point to a cubic can have two local minima over [0, 1], so
- * the search first samples the curve at `coarse` + 1 points and brackets the
- * best sample with its neighbours before refining (the seed's search, made
- * safe for curved wrinkles). Tests compare it with dense brute-force
+ * distance from a point to a cubic can have several local minima over
+ * [0, 1], so the search first samples the curve at `coarse` + 1 points and
+ * runs golden section in the bracket around every local minimum of the
+ * samples, keeping the best (the seed's search, made safe for curved
+ * wrinkles). Tests compare it with dense brute-force
  * sampling.
  *
  * Profiles: the printed wrinkle profile and follicle fade are garbled or
@@ -28,6 +29,31 @@ static double dist2_at(const ss_bezier3 *b, double t, double px, double py) {
     return (x - px) * (x - px) + (y - py) * (y - py);
 }
 
+/* The curve in power form, x(t) = ((a t + b) t + c) t + d, relative to the
+ * query point: what the search evaluates (Horner, 6 multiply-adds a point). */
+typedef struct poly3 {
+    double ax, bx, cx, dx, ay, by, cy, dy;
+} poly3;
+
+static poly3 to_poly(const ss_bezier3 *b, double px, double py) {
+    poly3 p;
+    p.ax = -b->x[0] + 3.0 * b->x[1] - 3.0 * b->x[2] + b->x[3];
+    p.bx = 3.0 * b->x[0] - 6.0 * b->x[1] + 3.0 * b->x[2];
+    p.cx = -3.0 * b->x[0] + 3.0 * b->x[1];
+    p.dx = b->x[0] - px;
+    p.ay = -b->y[0] + 3.0 * b->y[1] - 3.0 * b->y[2] + b->y[3];
+    p.by = 3.0 * b->y[0] - 6.0 * b->y[1] + 3.0 * b->y[2];
+    p.cy = -3.0 * b->y[0] + 3.0 * b->y[1];
+    p.dy = b->y[0] - py;
+    return p;
+}
+
+static inline double pdist2(const poly3 *p, double t) {
+    double x = ((p->ax * t + p->bx) * t + p->cx) * t + p->dx;
+    double y = ((p->ay * t + p->by) * t + p->cy) * t + p->dy;
+    return x * x + y * y;
+}
+
 double ss_bezier3_distance_dense(const ss_bezier3 *b, double px, double py, int n, double *t_out) {
     if (n < 1) n = 1;
     double best = INFINITY, bt = 0.0;
@@ -39,37 +65,63 @@ double ss_bezier3_distance_dense(const ss_bezier3 *b, double px, double py, int 
     return sqrt(best);
 }
 
-double ss_bezier3_distance(const ss_bezier3 *b, double px, double py, int coarse, double tol,
-                           double *t_out) {
-    if (coarse < 2) coarse = 2;
-    if (!(tol > 0.0)) tol = 1e-6;
-    int bi = 0;
-    double best = INFINITY;
-    for (int i = 0; i <= coarse; i++) {
-        double d = dist2_at(b, (double)i / coarse, px, py);
-        if (d < best) best = d, bi = i;
-    }
-    double lo = (double)(bi > 0 ? bi - 1 : 0) / coarse;
-    double hi = (double)(bi < coarse ? bi + 1 : coarse) / coarse;
+/* Golden section for the minimum of the squared distance over [lo, hi]. */
+static double golden(const poly3 *p, double lo, double hi, double tol, double *t_out) {
     const double g = 0.6180339887498949; /* (sqrt 5 - 1) / 2 */
     double c = hi - g * (hi - lo), d = lo + g * (hi - lo);
-    double fc = dist2_at(b, c, px, py), fd = dist2_at(b, d, px, py);
+    double fc = pdist2(p, c), fd = pdist2(p, d);
     while (hi - lo > tol) {
         if (fc < fd) {
             hi = d, d = c, fd = fc;
             c = hi - g * (hi - lo);
-            fc = dist2_at(b, c, px, py);
+            fc = pdist2(p, c);
         } else {
             lo = c, c = d, fc = fd;
             d = lo + g * (hi - lo);
-            fd = dist2_at(b, d, px, py);
+            fd = pdist2(p, d);
         }
     }
-    double t = 0.5 * (lo + hi), f = dist2_at(b, t, px, py);
-    /* the bracket ends (curve endpoints) can be the minimum */
-    if (best < f) f = best, t = (double)bi / coarse;
-    if (t_out) *t_out = t;
-    return sqrt(f);
+    *t_out = 0.5 * (lo + hi);
+    return pdist2(p, *t_out);
+}
+
+double ss_bezier3_distance(const ss_bezier3 *b, double px, double py, int coarse, double tol,
+                           double reach, double *t_out) {
+    if (coarse < 2) coarse = 2;
+    if (coarse > 64) coarse = 64;
+    if (!(tol > 0.0)) tol = 1e-6;
+    const poly3 p = to_poly(b, px, py);
+    double f[65], fmin = INFINITY;
+    for (int i = 0; i <= coarse; i++) {
+        f[i] = pdist2(&p, (double)i / coarse);
+        if (f[i] < fmin) fmin = f[i];
+    }
+    if (reach < INFINITY) {
+        /* |B'| <= 3 max |P_k+1 - P_k| (the hodograph's hull), so between two
+         * samples the curve is within 1.5 max |dP| / coarse of one of them */
+        double sp = 0.0;
+        for (int k = 0; k < 3; k++) {
+            double l = hypot(b->x[k + 1] - b->x[k], b->y[k + 1] - b->y[k]);
+            if (l > sp) sp = l;
+        }
+        double lb = sqrt(fmin) - 1.5 * sp / coarse;
+        if (lb > reach) {
+            if (t_out) *t_out = 0.0;
+            return INFINITY;
+        }
+    }
+    /* every local minimum of the samples brackets a minimum of the curve's
+     * distance (a cubic has at most three); refine each, keep the best */
+    double best = INFINITY, bt = 0.0;
+    for (int i = 0; i <= coarse; i++) {
+        if ((i > 0 && f[i - 1] < f[i]) || (i < coarse && f[i + 1] < f[i])) continue;
+        if (f[i] < best) best = f[i], bt = (double)i / coarse; /* endpoints can be the minimum */
+        double t, v = golden(&p, (double)(i > 0 ? i - 1 : 0) / coarse,
+                             (double)(i < coarse ? i + 1 : coarse) / coarse, tol, &t);
+        if (v < best) best = v, bt = t;
+    }
+    if (t_out) *t_out = bt;
+    return sqrt(best);
 }
 
 static double sigmoid(double x) { return 1.0 / (1.0 + exp(-x)); }

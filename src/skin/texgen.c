@@ -236,8 +236,9 @@ static void apply_feature(const ss_skin_settings *s, const ss_skin_feature *f, u
             for (int x = xa; x <= xb; x++) {
                 const double u = (x + 0.5) / size;
                 double t;
-                double dist =
-                    ss_bezier3_distance(&f->curve, u - ox, v - oy, 8, 1e-3, &t) * mm_per_unit;
+                double dist = ss_bezier3_distance(&f->curve, u - ox, v - oy, 8, 2e-3,
+                                                  f->w / mm_per_unit, &t) *
+                              mm_per_unit;
                 double prof = ss_profile_wrinkle(dist, ss_wrinkle_taper(t, f->w));
                 if (prof > 0.0) ss_image_px(bio, x, y)[SS_BIO_HEIGHT_MM] -= (float)(prof * f->h);
             }
