@@ -4,10 +4,11 @@ BUILD    ?= build
 ASAN     ?= build-asan
 JOBS     ?= $(shell nproc)
 DEPS      = build-essential cmake pkg-config libpng-dev libopenexr-dev zlib1g-dev \
-            libcjson-dev libcmocka-dev libcairo2-dev fonts-dejavu-core python3
+            libcjson-dev libcmocka-dev libcairo2-dev fonts-dejavu-core python3 \
+            python3-numpy
 DEMO_OUT ?= demo-out
 
-.PHONY: all deps build demo test test-asan bench fuzz clean
+.PHONY: all deps build demo test test-asan bench fuzz clean install test-blender
 
 all: build
 
@@ -45,6 +46,19 @@ test-asan: deps
 	cmake --build $(ASAN) -j $(JOBS)
 	cd $(ASAN) && ASAN_OPTIONS=detect_leaks=1 LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp UBSAN_OPTIONS=print_stacktrace=1 SKINSIM_TEST_QUICK=1 \
 	  ctest --output-on-failure -j $(JOBS)
+
+# Installs library (shared + static), headers, data, skinsim.pc, the CMake
+# package, the command and the Python package under PREFIX.
+PREFIX   ?= /usr/local
+install: build
+	cmake --install $(BUILD) --prefix $(PREFIX)
+
+# The Blender add-on, headless (installs Debian's blender for this target only).
+test-blender: build
+	@dpkg-query -W -f='$${Status}' blender 2>/dev/null | grep -q "ok installed" || { \
+	  SUDO=""; [ "$$(id -u)" = 0 ] || SUDO=sudo; \
+	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq blender; }
+	cd $(BUILD) && SKINSIM_TEST_BLENDER=1 ctest --output-on-failure -R '^e2e_blender$$'
 
 bench: build
 	@for b in $(BUILD)/bench_*; do echo "== $$b"; $$b; done

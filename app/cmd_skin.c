@@ -12,6 +12,7 @@
 
 #include "cli.h"
 #include "skinsim/geom.h"
+#include "skinsim/mesh.h"
 #include "skinsim/skin.h"
 
 static const char *CMD = "skin";
@@ -65,7 +66,7 @@ static void help(void) {
 
 #define MAX_FIELDS 16
 typedef struct opts {
-    const char *out, *table, *features_in, *preset;
+    const char *out, *table, *features_in, *preset, *mesh;
     const char *field_name[MAX_FIELDS], *field_path[MAX_FIELDS];
     int nfields;
     char *counts[64], *params[64], *bases[16];
@@ -103,6 +104,7 @@ static int parse(int argc, char **argv, opts *o, ss_error *err) {
                                              {"normal-convention", required_argument, 0, 'N'},
                                              {"seed", required_argument, 0, 'S'},
                                              {"gltf", no_argument, 0, 'G'},
+                                             {"mesh", required_argument, 0, 'M'},
                                              {"threads", required_argument, 0, 'j'},
                                              {"quiet", no_argument, 0, 'q'},
                                              {"json", no_argument, 0, 'J'},
@@ -199,6 +201,9 @@ static int parse(int argc, char **argv, opts *o, ss_error *err) {
         case 'G':
             o->gltf = 1;
             break;
+        case 'M':
+            o->mesh = optarg;
+            break;
         case 'j':
             st = cli_parse_int("--threads", optarg, 1, 4096, &v, err);
             o->threads = (int)v;
@@ -222,6 +227,8 @@ static int parse(int argc, char **argv, opts *o, ss_error *err) {
     }
     if (!st && optind < argc)
         st = ss_error_set(err, SS_ERR_INPUT, "unexpected argument '%s'", argv[optind]);
+    if (!st && o->mesh && !o->gltf)
+        st = ss_error_set(err, SS_ERR_INPUT, "--mesh needs --gltf (the mesh is only used there)");
     return st ? (int)st : 0;
 }
 
@@ -295,6 +302,7 @@ typedef struct inputs {
     ss_mm_table *table;
     ss_skin_feature_list features;
     int have_features;
+    ss_mesh mesh;
     char table_path[4096];
 } inputs;
 
@@ -302,6 +310,7 @@ static void inputs_free(inputs *in) {
     for (int i = 0; i < MAX_FIELDS; i++) ss_image_free(in->img[i]);
     ss_mm_table_free(in->table);
     ss_skin_feature_list_free(&in->features);
+    ss_mesh_free(&in->mesh);
 }
 
 /* A probability field: PNG/EXR, colour converted to luminance (said in notes). */
@@ -395,6 +404,14 @@ static ss_status read_inputs(const opts *o, inputs *in, cJSON *notes, ss_error *
         ss_error e2;
         in->table = ss_mm_table_read(in->table_path, &e2);
         if (!in->table) st = ss_error_set(err, SS_ERR_INPUT, "--table: %s", e2.msg);
+    }
+    if (!st && o->mesh) {
+        ss_error e2;
+        st = ss_mesh_load(o->mesh, &in->mesh, &e2);
+        if (st)
+            ss_error_set(err, st, "--mesh: %s", e2.msg);
+        else if (!in->mesh.has_uvs)
+            st = ss_error_set(err, SS_ERR_INPUT, "--mesh: %s has no texture coordinates", o->mesh);
     }
     if (!st && o->features_in) {
         st = ss_skin_features_read_csv(o->features_in, &in->features, err);
@@ -554,8 +571,13 @@ static ss_status run(const opts *o, const ss_skin_settings *s, inputs *in, const
     if (!st) st = write_sheet(dir, &maps, bio, err);
     if (!st && o->gltf) {
         snprintf(path, sizeof path, "%s/skin.gltf", dir);
-        st = ss_gltf_write_textured_square(path, s->world_size_cm / 100.0, "skin", "base_color.png",
-                                           "metal_rough.png", "normal.png", err);
+        if (o->mesh)
+            st = ss_gltf_write_textured_mesh(path, &in->mesh, "skin", "base_color.png",
+                                             "metal_rough.png", "normal.png", err);
+        else
+            st = ss_gltf_write_textured_square(path, s->world_size_cm / 100.0, "skin",
+                                               "base_color.png", "metal_rough.png", "normal.png",
+                                               err);
     }
     double t3 = ss_now();
     if (!st) {
@@ -638,13 +660,22 @@ int cmd_skin(int argc, char **argv) {
     cJSON *summary = cJSON_CreateObject(), *notes = cJSON_CreateArray();
     inputs in;
     memset(&in, 0, sizeof in);
+    /* The output folder: checked now, staged by begin, swapped in whole by
+     * finish (src/core/output.c). Estimate: bio.exr 44 B, maps ~8 B a texel. */
+    ss_outputs *outs = st ? NULL : ss_outputs_create(CMD, &err);
+    if (!st && !outs) st = SS_ERR_NOMEM;
+    for (int i = 0; i < o.nfields && !st; i++) st = ss_outputs_input(outs, o.field_path[i], &err);
+    if (!st) st = ss_outputs_input(outs, o.features_in, &err);
+    if (!st) st = ss_outputs_input(outs, o.table, &err);
+    if (!st) st = ss_outputs_input(outs, o.mesh, &err);
+    if (!st)
+        st = ss_outputs_add(outs, "--out", o.out, SS_OUTPUT_DIR, (double)s.size * s.size * 52.0,
+                            &err);
     if (!st) st = read_inputs(&o, &in, notes, &err);
-    char *staging = NULL;
-    if (!st) {
-        st = ss_output_dir_begin(o.out, &staging, &err);
-        if (!st) st = run(&o, &s, &in, staging, summary, notes, &err);
-        st = ss_output_dir_end(o.out, staging, st, &err);
-    }
+    if (!st) st = ss_outputs_begin(outs, &err);
+    if (!st) st = run(&o, &s, &in, ss_outputs_path(outs, 0), summary, notes, &err);
+    if (outs) st = ss_outputs_finish(outs, st, &err);
+    ss_outputs_free(outs);
     if (!st && !o.quiet) {
         for (int i = 0; i < cJSON_GetArraySize(notes); i++)
             fprintf(stderr, "skinsim skin: note: %s\n", cJSON_GetArrayItem(notes, i)->valuestring);
@@ -661,7 +692,6 @@ int cmd_skin(int argc, char **argv) {
     }
     cJSON_Delete(summary);
     cJSON_Delete(notes);
-    free(staging);
     inputs_free(&in);
     opts_free(&o);
     return st ? cli_fail(CMD, &err) : 0;

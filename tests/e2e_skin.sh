@@ -69,6 +69,20 @@ for im in g["images"]: assert os.path.getsize(os.path.join(d, im["uri"])) > 0, i
 PY' "glTF and its images"
 fi
 
+# 4b. The material on the hand mesh's UVs.
+HAND="$SRC/data/meshes/generic-hand-left.glb"
+if [ -f "$HAND" ]; then
+  "$CLI" skin --size 64 --gltf --mesh "$HAND" --no-wrap --out "$T/hand" --quiet 2>"$T/e"
+  check '[ $? -eq 0 ]' "--mesh run ($(cat "$T/e"))"
+  check 'python3 - "$T/hand/skin.gltf" <<PY
+import json, sys
+g = json.load(open(sys.argv[1]))
+acc = g["accessors"][g["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"]]
+assert acc["count"] > 1000, acc
+assert g["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["index"] == 0
+PY' "glTF on the hand"
+fi
+
 # 5. Fixtures: an all-black field, an RGB field, a zero vector field, a truncated PNG.
 python3 - "$SRC/data/skin_face" "$T" <<PY
 import sys
@@ -119,6 +133,8 @@ expect2 "zero vector field" --field vectors="$T/zero_vectors.png"
 check 'grep -q "zero" "$T/e"' "zero vector field message"
 expect2 "grey vector field" --field vectors="$T/black.png"
 expect2 "NaN world size" --world-size-cm nan
+expect2 "mesh without gltf" --mesh "$T/nope.glb"
+expect2 "missing mesh" --gltf --mesh "$T/nope.glb"
 
 echo "e2e_skin: $pass passed, $fail failed"
 [ $fail -eq 0 ]
