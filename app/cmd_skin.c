@@ -473,51 +473,75 @@ static ss_status write_maps(const char *dir, const ss_skin_maps *m, const ss_ima
     return SS_OK;
 }
 
-/* All maps side by side (colour, roughness, specular, height, normal, melanin, blood). */
+/* A w x w crop of img at its centre (1:1 texels for the contact sheet). */
+static ss_image *crop_centre(const ss_image *img, int w, ss_error *err) {
+    if (w > img->width) w = img->width;
+    if (w > img->height) w = img->height;
+    ss_image *c = ss_image_create_uninit(w, w, img->channels, err);
+    if (!c) return NULL;
+    int x0 = (img->width - w) / 2, y0 = (img->height - w) / 2;
+    for (int y = 0; y < w; y++)
+        memcpy(ss_image_px(c, 0, y), ss_image_px(img, x0, y0 + y),
+               (size_t)w * (size_t)img->channels * sizeof(float));
+    return c;
+}
+
+/* Maps a 1-channel quantity onto 0..1 grey for display, from mean - 4 sd to
+ * mean + 4 sd (clamped to the data's range): a few tall cysts do not turn
+ * everything else into one grey. Decoded, since the sheet encodes sRGB. */
+static ss_image *display_grey(const ss_image *bio, int channel, const ss_image *plain,
+                              ss_error *err) {
+    const ss_image *src = plain ? plain : bio;
+    const int C = plain ? 1 : SS_BIO_NCHANNELS, ch = plain ? 0 : channel;
+    ss_image *g = ss_image_create_uninit(src->width, src->height, 1, err);
+    if (!g) return NULL;
+    size_t n = (size_t)src->width * src->height;
+    double s1 = 0, s2 = 0, mn = INFINITY, mx = -INFINITY;
+    for (size_t i = 0; i < n; i++) {
+        double v = src->data[i * C + ch];
+        s1 += v, s2 += v * v;
+        mn = fmin(mn, v), mx = fmax(mx, v);
+    }
+    double mean = s1 / n, sd = sqrt(fmax(0.0, s2 / n - mean * mean));
+    double lo = fmax(mn, mean - 4 * sd), hi = fmin(mx, mean + 4 * sd);
+    for (size_t i = 0; i < n; i++) {
+        double v = hi > lo ? (src->data[i * C + ch] - lo) / (hi - lo) : 0.5;
+        g->data[i] = ss_srgb_decode((float)(v < 0 ? 0 : v > 1 ? 1 : v));
+    }
+    return g;
+}
+
+/* All maps side by side: base colour (whole and a 1:1 crop), roughness,
+ * specular, height, normal (1:1 crop: at a glance the whole map is flat
+ * blue), melanin, blood. */
 static ss_status write_sheet(const char *dir, const ss_skin_maps *m, const ss_image *bio,
                              ss_error *err) {
-    const int S = m->base_color->width, T = S < 512 ? S : 512;
-    ss_image *tiles[7] = {0};
+    enum { N = 8 };
+    const int S = m->base_color->width, T = S < 512 ? S : 512, CROP = S < 256 ? S : 256;
+    ss_image *tiles[N] = {0}, *work[N] = {0};
+    static const char *labels[N] = {"base colour", "base colour 1:1", "roughness", "specular",
+                                    "height",      "normal 1:1",      "melanin",   "blood"};
     ss_status st = SS_OK;
-    ss_image *h = ss_image_clone(m->height_mm, err);
-    ss_image *mel = ss_image_create_uninit(S, S, 1, err);
-    ss_image *bl = ss_image_create_uninit(S, S, 1, err);
-    if (!h || !mel || !bl) st = err->code;
-    if (!st) {
-        size_t n = (size_t)S * S;
-        double lo = m->height_min_mm, span = m->height_max_mm - m->height_min_mm;
-        float mmax = 1e-6f, bmax = 1e-6f;
-        for (size_t i = 0; i < n; i++) {
-            mmax = fmaxf(mmax, bio->data[i * SS_BIO_NCHANNELS + SS_BIO_MELANIN]);
-            bmax = fmaxf(bmax, bio->data[i * SS_BIO_NCHANNELS + SS_BIO_BLOOD]);
-        }
-        for (size_t i = 0; i < n; i++) {
-            /* data maps shown as their values; the sheet encodes sRGB, so decode first */
-            h->data[i] = ss_srgb_decode(span > 0 ? (float)((h->data[i] - lo) / span) : 0.5f);
-            mel->data[i] = ss_srgb_decode(bio->data[i * SS_BIO_NCHANNELS + SS_BIO_MELANIN] / mmax);
-            bl->data[i] = ss_srgb_decode(bio->data[i * SS_BIO_NCHANNELS + SS_BIO_BLOOD] / bmax);
-        }
+    work[0] = ss_image_clone(m->base_color, err);
+    work[1] = work[0] ? crop_centre(m->base_color, CROP, err) : NULL;
+    work[2] = work[1] ? display_grey(NULL, 0, m->roughness, err) : NULL;
+    work[3] = work[2] ? display_grey(NULL, 0, m->specular, err) : NULL;
+    work[4] = work[3] ? display_grey(NULL, 0, m->height_mm, err) : NULL;
+    work[5] = work[4] ? crop_centre(m->normal, CROP, err) : NULL;
+    work[6] = work[5] ? display_grey(bio, SS_BIO_MELANIN, NULL, err) : NULL;
+    work[7] = work[6] ? display_grey(bio, SS_BIO_BLOOD, NULL, err) : NULL;
+    if (!work[7]) st = err->code;
+    if (!st) { /* the normal map's stored values, shown as they are */
+        size_t nv = (size_t)work[5]->width * work[5]->height * 3;
+        for (size_t i = 0; i < nv; i++) work[5]->data[i] = ss_srgb_decode(work[5]->data[i]);
     }
-    const ss_image *src[7] = {m->base_color, m->roughness, m->specular, h, m->normal, mel, bl};
-    static const char *labels[7] = {"base colour", "roughness", "specular", "height",
-                                    "normal",      "melanin",   "blood"};
-    for (int k = 0; k < 7 && !st; k++) {
-        ss_image *tmp = NULL;
-        if (k == 1 || k == 2 || k == 4) { /* linear data maps: show the stored values */
-            tmp = ss_image_clone(src[k], err);
-            if (!tmp) {
-                st = err->code;
-                break;
-            }
-            size_t nv = (size_t)tmp->width * tmp->height * (size_t)tmp->channels;
-            for (size_t i = 0; i < nv; i++) tmp->data[i] = ss_srgb_decode(tmp->data[i]);
-        }
-        tiles[k] = ss_image_resize(tmp ? tmp : src[k], T, T, err);
-        ss_image_free(tmp);
+    for (int k = 0; k < N && !st; k++) {
+        tiles[k] = work[k]->width > T ? ss_image_resize(work[k], T, T, err) : work[k];
         if (!tiles[k]) st = err->code;
+        if (tiles[k] == work[k]) work[k] = NULL;
     }
     if (!st) {
-        ss_image *sheet = ss_contact_sheet((const ss_image *const *)tiles, labels, 7, 256, 7, err);
+        ss_image *sheet = ss_contact_sheet((const ss_image *const *)tiles, labels, N, 256, N, err);
         if (!sheet)
             st = err->code;
         else {
@@ -527,10 +551,10 @@ static ss_status write_sheet(const char *dir, const ss_skin_maps *m, const ss_im
             ss_image_free(sheet);
         }
     }
-    for (int k = 0; k < 7; k++) ss_image_free(tiles[k]);
-    ss_image_free(h);
-    ss_image_free(mel);
-    ss_image_free(bl);
+    for (int k = 0; k < N; k++) {
+        ss_image_free(tiles[k]);
+        ss_image_free(work[k]);
+    }
     return st;
 }
 
