@@ -249,7 +249,7 @@ static void apply_feature(const ss_skin_settings *s, const ss_skin_feature *f, u
         for (int x = x0; x <= x1; x++) {
             const double u = (x + 0.5) / size, v = (y + 0.5) / size;
             float *p = ss_image_px(bio, x, y);
-            const double dist = hypot(u - cx, v - cy) * mm_per_unit;
+            const double dist = sqrt((u - cx) * (u - cx) + (v - cy) * (v - cy)) * mm_per_unit;
             switch (f->type) {
             case SS_FEAT_CYST:
                 if (dist < 2.0 * f->r)
