@@ -220,8 +220,53 @@ ss_status ss_gltf_write_textured_mesh(const char *path, const struct ss_mesh *m,
                                       ss_error *err) {
     if (!m || !m->has_uvs || !m->uvs || m->nvertices < 3 || m->ntriangles < 1)
         return ss_error_set(err, SS_ERR_INPUT, "%s: the mesh needs triangles with UVs", path);
-    /* no tangents: glTF viewers then derive them (MikkTSpace) from the UVs */
-    return write_textured(path, name, m->positions, m->normals, NULL, m->uvs, m->nvertices,
-                          m->indices, m->ntriangles, base_color_uri, metallic_roughness_uri,
-                          normal_uri, err);
+    /* tangents from the UVs (Lengyel's per-triangle accumulation, then
+     * Gram-Schmidt against the normal; w the handedness): glTF wants them
+     * with a normal map, and v grows downwards in skinsim's and glTF's UVs */
+    const int nv = m->nvertices;
+    float *tan = calloc((size_t)nv * 4, sizeof *tan), *bit = calloc((size_t)nv * 3, sizeof *bit);
+    if (!tan || !bit) {
+        free(tan), free(bit);
+        return ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", path);
+    }
+    for (int t = 0; t < m->ntriangles; t++) {
+        const uint32_t *ix = m->indices + 3 * t;
+        const float *p0 = m->positions + 3 * ix[0], *p1 = m->positions + 3 * ix[1],
+                    *p2 = m->positions + 3 * ix[2];
+        const float *w0 = m->uvs + 2 * ix[0], *w1 = m->uvs + 2 * ix[1], *w2 = m->uvs + 2 * ix[2];
+        float e1[3], e2[3], du1 = w1[0] - w0[0], dv1 = w1[1] - w0[1], du2 = w2[0] - w0[0],
+                            dv2 = w2[1] - w0[1];
+        for (int c = 0; c < 3; c++) e1[c] = p1[c] - p0[c], e2[c] = p2[c] - p0[c];
+        float det = du1 * dv2 - du2 * dv1;
+        if (!(fabsf(det) > 1e-20f)) continue;
+        float r = 1.0f / det;
+        for (int k = 0; k < 3; k++)
+            for (int c = 0; c < 3; c++) {
+                tan[4 * ix[k] + c] += (e1[c] * dv2 - e2[c] * dv1) * r;
+                bit[3 * ix[k] + c] += (e2[c] * du1 - e1[c] * du2) * r;
+            }
+    }
+    for (int i = 0; i < nv; i++) {
+        const float *n = m->normals + 3 * i;
+        float *tv = tan + 4 * i, d = tv[0] * n[0] + tv[1] * n[1] + tv[2] * n[2];
+        for (int c = 0; c < 3; c++) tv[c] -= n[c] * d;
+        float len = sqrtf(tv[0] * tv[0] + tv[1] * tv[1] + tv[2] * tv[2]);
+        if (!(len > 1e-12f)) { /* no UV gradient here: any unit vector normal to n */
+            float a[3] = {fabsf(n[0]) < 0.9f ? 1.0f : 0.0f, fabsf(n[0]) < 0.9f ? 0.0f : 1.0f, 0};
+            d = a[0] * n[0] + a[1] * n[1];
+            for (int c = 0; c < 3; c++) tv[c] = a[c] - n[c] * d;
+            len = sqrtf(tv[0] * tv[0] + tv[1] * tv[1] + tv[2] * tv[2]);
+        }
+        for (int c = 0; c < 3; c++) tv[c] /= len;
+        const float *b = bit + 3 * i;
+        float cx = n[1] * tv[2] - n[2] * tv[1], cy = n[2] * tv[0] - n[0] * tv[2],
+              cz = n[0] * tv[1] - n[1] * tv[0];
+        tv[3] = cx * b[0] + cy * b[1] + cz * b[2] < 0.0f ? -1.0f : 1.0f;
+    }
+    free(bit);
+    ss_status st =
+        write_textured(path, name, m->positions, m->normals, tan, m->uvs, nv, m->indices,
+                       m->ntriangles, base_color_uri, metallic_roughness_uri, normal_uri, err);
+    free(tan);
+    return st;
 }
