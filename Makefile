@@ -31,12 +31,14 @@ demo: build
 	$(BUILD)/skinsim abrasion --out $(DEMO_OUT)/abrasion
 	$(BUILD)/skinsim optics swatch --out $(DEMO_OUT)/skin_swatch.png
 	$(BUILD)/skinsim heal --days 21 --out $(DEMO_OUT)/heal
+	$(BUILD)/skinsim skin --size 1024 --gltf --out $(DEMO_OUT)/skin
 	@echo
 	@echo "Look at:"
 	@echo "  $(DEMO_OUT)/abrasion/contact_sheet.png   abrasion from injury to day 30"
 	@echo "  $(DEMO_OUT)/skin_swatch.png              skin colours over melanin x blood"
 	@echo "  $(DEMO_OUT)/heal/area.png                wound closure over 21 days"
 	@echo "  $(DEMO_OUT)/heal/fields/fields.pvd       open in ParaView"
+	@echo "  $(DEMO_OUT)/skin/contact_sheet.png       a patch of forearm skin: every map side by side"
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
