@@ -452,16 +452,20 @@ static void test_free_block(void **state) {
     ss_heal_grid *g = ss_heal_grid_create(nx, ny, nz, 0.5, &err);
     assert_non_null(g);
     assert_int_equal(ss_heal_grid_init(g, 6.0, 0.1, NULL, hp, &err), SS_OK);
-    float hv[SS_HEAL_NFIELDS];
-    ss_heal_params_healthy(hp, hv);
     size_t n = (size_t)nx * ny * nz;
     const double nmyo = 0.5;
-    for (size_t i = 0; i < n; i++)
-        g->field[SS_HEAL_FIBROBLAST][i] = hv[SS_HEAL_FIBROBLAST] + (float)nmyo;
+    /* an open wound region everywhere: plasma above p_min, no epithelium */
+    for (size_t i = 0; i < n; i++) {
+        g->field[SS_HEAL_FIBROBLAST][i] = (float)nmyo;
+        g->field[SS_HEAL_PLASMA][i] = 1.0f;
+        g->field[SS_HEAL_EPITHELIUM][i] = 0.0f;
+    }
     ss_mech_params p;
     ss_mech_params_default(&p);
     p.anchor = 0;
     p.kappa = 1.0 / 3.0; /* isotropic: the same strain in every direction */
+    p.k1 = 0;            /* ground matrix only: the strain is sigma / (3 K_bulk) */
+    p.K_m = 1;
     p.tol = 1e-9;
     p.max_substeps = 20000;
     p.tet_size_mm = 1.0;
@@ -476,6 +480,7 @@ static void test_free_block(void **state) {
     double e[3] = {1, 0, 0};
     double eps = ss_mech_shortening(&p, ss_mech_spring_energy_density(&p, sig, e));
     assert_true(eps > 0.01);
+    assert_float_equal(eps, sig / (3 * p.K_bulk), 1e-12);
     /* distances are free of the rigid drift a free block may pick up */
     const ss_tetmesh *M = ss_mech_mesh(m);
     const double *x = ss_mech_positions(m);

@@ -2,9 +2,14 @@
  *
  * One frame (ss_mech_step), after the biochemistry has advanced the grid:
  *  1. sample at every spring node, with the B-spline weights, the
- *     myofibroblast density (fibroblasts above their healthy level: the
- *     recruited, contracting cells; intact skin at rest exerts no net
- *     pull), the grid's volumetric strain theta (from the last frame) and
+ *     myofibroblast density: the fibroblasts under an open wound surface
+ *     (a column whose top is in the wound region, initial wound or omega,
+ *     weighted by 1 - epithelium at the top), through the whole thickness
+ *     (the wound bed's activated dermis pulls with it). Fibroblasts in open
+ *     granulation tissue differentiate into myofibroblasts and these go by
+ *     apoptosis once the wound is covered (Desmouliere et al. 1995, Am J
+ *     Pathol 146:56); intact skin exerts no net pull. Then the volumetric
+ *     strain theta (from the last frame) and
  *     rho_ecm / rho_ecm_hat (1 in intact tissue; in the initial wound the
  *     clot's ecm_floor plus the deposited collagen, the scar field rho,
  *     capped at 1);
@@ -19,10 +24,12 @@
  *     the displacement's divergence is theta for the next frame.
  * Boundary: the top surface is free; the bottom and side faces sit on an
  * elastic foundation (anchor, kPa/mm per face area): the subcutis below and
- * the skin beyond the block, which give way but pull back. Rest lengths are
- * set from l0 every frame (not accumulated), so contraction follows the
- * myofibroblasts and relaxes when they die; the grid fields are carried by the
- * convection, which is where the lasting deformation of the wound lives. */
+ * the skin beyond the block, which give way but pull back. Rest lengths
+ * never lengthen: new collagen is laid down in the contracted state and
+ * locks it (the permanent strain of morphoelastic wound models, e.g. Hall
+ * 2008 / Menon et al. 2017), so a scar stays contracted after the
+ * myofibroblasts are gone; theta's feedback through p_cell (zero pressure
+ * at theta1) ends the contraction. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -42,6 +49,7 @@ void ss_mech_free(ss_mech *m) {
     free(m->mask);
     free(m->wound0);
     free(m->ecm);
+    free(m->myo);
     free(m->theta);
     for (int d = 0; d < 3; d++) free(m->u[d]);
     free(m->kbase);
@@ -168,8 +176,9 @@ ss_mech *ss_mech_create(ss_heal_grid *g, const ss_heal_params *heal, const ss_me
     m->mask = malloc(n);
     m->wound0 = malloc(n);
     m->ecm = malloc(n * sizeof(float));
+    m->myo = malloc(n * sizeof(float));
     m->theta = calloc(n, sizeof(float));
-    if (!m->mask || !m->wound0 || !m->ecm || !m->theta) goto nomem;
+    if (!m->mask || !m->wound0 || !m->ecm || !m->myo || !m->theta) goto nomem;
     size_t ncells = 0;
     for (size_t i = 0; i < n; i++) {
         m->mask[i] = tissue(g->cell[i]);
@@ -349,24 +358,42 @@ ss_status ss_mech_step(ss_mech *m, ss_heal_grid *g, double dt_days, ss_error *er
     const ss_mech_params *p = &m->p;
     ss_springs *S = m->S;
     const int nn = m->mesh->nnodes;
-    const size_t n = (size_t)m->nx * m->ny * m->nz;
     /* 1. fields at the nodes */
-    const float *rho = g->field[SS_HEAL_SCAR];
+    const float *rho = g->field[SS_HEAL_SCAR], *fib = g->field[SS_HEAL_FIBROBLAST];
+    const float *epi = g->field[SS_HEAL_EPITHELIUM], *pla = g->field[SS_HEAL_PLASMA];
+    const int nx = m->nx, ny = m->ny, nz = m->nz;
 #pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < n; i++) {
-        float e = 1.0f;
-        if (m->wound0[i]) {
-            e = (float)p->ecm_floor + rho[i];
-            if (e > 1.0f) e = 1.0f;
+    for (int col = 0; col < nx * ny; col++) {
+        /* the column's surface: its top tissue cell; open when in the wound
+         * region (initial wound or omega) and not yet covered by epithelium */
+        int top = -1, region = 0;
+        for (int z = nz - 1; z >= 0; z--) {
+            size_t i = (size_t)z * nx * ny + (size_t)col;
+            if (!m->mask[i]) continue;
+            if (top < 0) top = z;
+            region |= m->wound0[i] || pla[i] > SS_HEAL_P_MIN;
         }
-        m->ecm[i] = e;
+        float open = 0.0f;
+        if (top >= 0 && region) {
+            float cover = epi[(size_t)top * nx * ny + (size_t)col];
+            open = 1.0f - (cover > 1.0f ? 1.0f : cover < 0.0f ? 0.0f : cover);
+        }
+        for (int z = 0; z < nz; z++) {
+            size_t i = (size_t)z * nx * ny + (size_t)col;
+            float e = 1.0f;
+            if (m->wound0[i]) {
+                e = (float)p->ecm_floor + rho[i];
+                if (e > 1.0f) e = 1.0f;
+            }
+            m->ecm[i] = e;
+            m->myo[i] = m->mask[i] ? fib[i] * open : 0.0f;
+        }
     }
-    ss_mech_g2p(m->T, g->field[SS_HEAL_FIBROBLAST], m->mask, S->x, nn, m->nmyo);
+    ss_mech_g2p(m->T, m->myo, m->mask, S->x, nn, m->nmyo);
     ss_mech_g2p(m->T, m->theta, m->mask, S->x, nn, m->nth);
     ss_mech_g2p(m->T, m->ecm, m->mask, S->x, nn, m->necm);
     for (int i = 0; i < nn; i++) {
-        double a = m->nmyo[i] - m->n_healthy;
-        m->nmyo[i] = a > 0 ? a : 0;
+        if (m->nmyo[i] < 0) m->nmyo[i] = 0;
         m->stress[i] = ss_mech_pcell(p, m->nth[i]) * m->nmyo[i] * p->K_m;
     }
     /* 2. rest lengths and stiffness of the tissue springs */
@@ -380,7 +407,8 @@ ss_status ss_mech_step(ss_mech *m, ss_heal_grid *g, double dt_days, ss_error *er
         for (int d = 0; d < 3; d++) e[d] = S->X[3 * b + d] - S->X[3 * a + d];
         double psi = ss_mech_spring_energy_density(p, fabs(sig), e);
         double dl = ss_mech_shortening(p, psi);
-        S->rest[s] = S->l0[s] * (1.0 - (sig >= 0 ? dl : -dl));
+        double r = S->l0[s] * (1.0 - (sig >= 0 ? dl : -dl));
+        if (r < S->rest[s]) S->rest[s] = r; /* the contracted state is kept */
         S->k[s] = m->kbase[s] * (ecm > 0 ? ecm : p->ecm_floor);
     }
     for (int i = 0; i < m->nsutures; i++)
@@ -454,7 +482,8 @@ void ss_mech_stats_compute(const ss_mech *m, ss_mech_stats *st) {
 }
 
 size_t ss_mech_state_size(const ss_mech *m) {
-    return (size_t)m->mesh->nnodes * 7 * sizeof(double) + sizeof(uint64_t);
+    return ((size_t)m->mesh->nnodes * 7 + (size_t)m->S->nsprings) * sizeof(double) +
+           sizeof(uint64_t);
 }
 
 void ss_mech_state_get(const ss_mech *m, void *buf) {
@@ -466,6 +495,7 @@ void ss_mech_state_get(const ss_mech *m, void *buf) {
     memcpy(b, m->S->x, 3 * nn * sizeof(double));
     memcpy(b + 3 * nn * sizeof(double), m->vel, 3 * nn * sizeof(double));
     memcpy(b + 6 * nn * sizeof(double), m->stress, nn * sizeof(double));
+    memcpy(b + 7 * nn * sizeof(double), m->S->rest, (size_t)m->S->nsprings * sizeof(double));
 }
 
 ss_status ss_mech_state_set(ss_mech *m, const void *buf, size_t size, ss_error *err) {
@@ -482,6 +512,7 @@ ss_status ss_mech_state_set(ss_mech *m, const void *buf, size_t size, ss_error *
     memcpy(m->S->x, b, 3 * nn * sizeof(double));
     memcpy(m->vel, b + 3 * nn * sizeof(double), 3 * nn * sizeof(double));
     memcpy(m->stress, b + 6 * nn * sizeof(double), nn * sizeof(double));
+    memcpy(m->S->rest, b + 7 * nn * sizeof(double), (size_t)m->S->nsprings * sizeof(double));
     for (size_t i = 0; i < 3 * nn; i++)
         if (!isfinite(m->S->x[i]) || !isfinite(m->vel[i]))
             return ss_error_set(err, SS_ERR_INPUT, "mechanics state: non-finite value");

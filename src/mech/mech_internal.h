@@ -17,6 +17,7 @@ struct ss_mech {
     uint8_t *mask;                      /* tissue cells */
     uint8_t *wound0;                    /* initial wound cells */
     float *ecm;                         /* rho_ecm / rho_ecm_hat per cell (scratch) */
+    float *myo;    /* myofibroblast density per cell (scratch) */
     float *theta;                       /* grid volumetric strain */
     float *u[3];                        /* grid displacement, mm */
     double *kbase;                      /* undamaged spring stiffness */
