@@ -29,10 +29,6 @@ int cli_usage_error(const char *cmd, const char *fmt, ...)
 #endif
     ;
 
-/* Checks that the directory an output file goes into is writable, before
- * any work; prints the error and returns 2 if not, else 0. */
-int cli_check_output_file(const char *cmd, const char *path);
-
 /* Strict number parsing: the whole string must be a finite number within
  * [lo, hi]; on failure err names the option and the value. */
 ss_status cli_parse_double(const char *opt, const char *s, double lo, double hi, double *out,

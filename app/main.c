@@ -40,6 +40,13 @@ int main(int argc, char **argv) {
         printf("skinsim %s\n", SKINSIM_VERSION);
         return 0;
     }
+    /* SKINSIM_THREADS is checked like --threads, once for every command */
+    ss_error err;
+    ss_error_clear(&err);
+    if (ss_threads_check_env(&err)) {
+        fprintf(stderr, "skinsim: error: %s\n", err.msg);
+        return 2;
+    }
     for (int i = 0; i < ncommands; i++)
         if (!strcmp(cmd, commands[i].name)) return commands[i].run(argc - 1, argv + 1);
     fprintf(stderr, "skinsim: unknown command '%s'\n\n", cmd);

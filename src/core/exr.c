@@ -260,6 +260,7 @@ static ss_image *read_pixels(exr_context_t ctx, const char *path, exr_io *io, ss
                      (long long)w64, (long long)h64);
         return NULL;
     }
+    if (ss_image_check_alloc(path, (long)w64, (long)h64, nch, err)) return NULL;
     ss_image *img = ss_image_create((int)w64, (int)h64, nch, err);
     if (!img) return NULL;
 
@@ -294,16 +295,9 @@ static ss_image *read_pixels(exr_context_t ctx, const char *path, exr_io *io, ss
 }
 
 ss_image *ss_exr_read(const char *path, ss_error *err) {
-    exr_io io = {.fd = open(path, O_RDONLY), .msg = ""};
-    struct stat st;
-    if (io.fd < 0 || fstat(io.fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-        if (io.fd < 0)
-            ss_error_set(err, SS_ERR_INPUT, "%s: cannot open: %s", path, strerror(errno));
-        else
-            ss_error_set(err, SS_ERR_INPUT, "%s: not a regular file", path);
-        if (io.fd >= 0) close(io.fd);
-        return NULL;
-    }
+    /* regular files only, and the open never blocks (named pipes) */
+    exr_io io = {.fd = ss_input_open_fd(path, NULL, err), .msg = ""};
+    if (io.fd < 0) return NULL;
     exr_context_initializer_t init = make_init(&io);
     init.read_fn = io_read;
     init.size_fn = io_size;

@@ -84,11 +84,9 @@ ss_status ss_png_write(const char *path, const ss_image *img, int bits, ss_encod
 }
 
 ss_image *ss_png_read(const char *path, ss_encoding enc, ss_error *err) {
-    FILE *f = fopen(path, "rb");
-    if (!f) {
-        ss_error_set(err, SS_ERR_INPUT, "%s: cannot open PNG file", path);
-        return NULL;
-    }
+    size_t fsize = 0;
+    FILE *f = ss_input_open(path, &fsize, err); /* regular files only, never blocks */
+    if (!f) return NULL;
     unsigned char sig[8];
     if (fread(sig, 1, 8, f) != 8 || png_sig_cmp(sig, 0, 8) != 0) {
         fclose(f);
@@ -117,12 +115,25 @@ ss_image *ss_png_read(const char *path, ss_encoding enc, ss_error *err) {
     png_read_update_info(png, info);
     int w = (int)png_get_image_width(png, info), h = (int)png_get_image_height(png, info);
     int ch = png_get_channels(png, info), bits = png_get_bit_depth(png, info);
+    /* Before allocating what the header claims: the pixels must fit in
+     * memory, and the file must be able to hold them (deflate expands at
+     * most about 1032:1, so a tiny file cannot be a huge image). */
     ss_error e2;
-    img = ss_image_create(w, h, ch, &e2);
+    double raw = (double)h * ((double)png_get_rowbytes(png, info) + 1.0);
+    ss_status cs = ss_image_check_alloc(path, w, h, ch, &e2);
+    if (!cs && raw > 1100.0 * (double)fsize + 65536.0)
+        cs = ss_error_set(&e2, SS_ERR_INPUT,
+                          "%s: header claims %d x %d pixels (%.0f MB), more than a %zu-byte PNG "
+                          "can hold: truncated or forged",
+                          path, w, h, raw / 1e6, fsize);
+    img = cs ? NULL : ss_image_create(w, h, ch, &e2);
     if (!img) {
         png_destroy_read_struct(&png, &info, NULL);
         fclose(f);
-        ss_error_set(err, e2.code, "%s: %s", path, e2.msg);
+        if (cs)
+            *err = e2;
+        else
+            ss_error_set(err, SS_ERR_INPUT, "%s: %s", path, e2.msg);
         return NULL;
     }
     row = malloc(png_get_rowbytes(png, info));
