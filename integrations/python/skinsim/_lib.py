@@ -395,6 +395,11 @@ _fn("ss_render_brdf_eval", None, c_int, POINTER(ss_render_params), c_double, c_d
     POINTER(c_double))
 _fn("ss_render_brdf_sample", c_int, c_int, POINTER(ss_render_params), c_int, c_int, c_int, c_int,
     POINTER(ss_brdf_sampled), P_ERR)
+_fn("ss_srgb_linear_to_lab", None, POINTER(c_double), POINTER(c_double))
+_fn("ss_lab_to_srgb_linear", None, POINTER(c_double), POINTER(c_double))
+_fn("ss_lab_describe", None, POINTER(c_double), POINTER(c_double), POINTER(c_double),
+    POINTER(c_double))
+_fn("ss_ciede2000", c_double, POINTER(c_double), POINTER(c_double))
 _fn("ss_mm_build_options_default", None, POINTER(ss_mm_build_options))
 _fn("ss_mm_sample_fast", c_int, P_BIO, POINTER(ss_mm_build_options), POINTER(ss_brdf_sampled),
     POINTER(c_double), POINTER(c_double), P_ERR)
