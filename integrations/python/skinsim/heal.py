@@ -15,7 +15,7 @@ summary.json on finish).
 
 Fields come as numpy views of the grid (axis order z, y, x; z up, z = nz-1
 the top): no copy, and they show the state of the moment you took them
-until the next step -- the explicit scheme swaps buffers while stepping, so
+until the next step -- the solver may swap buffers while stepping, so
 take a view again (or .copy()) after stepping. Views keep the run's memory
 alive. Units: mm and days.
 """
