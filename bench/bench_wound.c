@@ -50,7 +50,7 @@ int main(int argc, char **argv) {
     }
     const ss_heal_grid *g = ss_heal_run_grid(run);
     double side = g->nx * g->dx_mm, t0 = ss_now(), c0 = cpu();
-    ss_image *skin = ss_wound_default_skin(size, side, 1, &err);
+    ss_image *skin = ss_skin_bio_default(size, side / 10.0, 1, &err); /* forearm skin */
     ss_wound_render_options o;
     ss_wound_render_options_default(&o);
     o.size = size;

@@ -66,29 +66,9 @@ static ss_status check_days(const ss_wound_make_config *c, ss_error *err) {
 
 static ss_status read_skin(job *j, ss_error *err) {
     const ss_wound_make_config *c = j->c;
-    if (!c->skin_path) {
-        j->skin = ss_wound_default_skin(c->size, j->side_mm, c->seed, err);
-        return j->skin ? SS_OK : err->code;
-    }
-    ss_image *in = ss_exr_read(c->skin_path, err);
-    if (!in) return err->code;
-    ss_status st = SS_OK;
-    if (in->channels < SS_BIO_NCHANNELS) {
-        st = ss_error_set(err, SS_ERR_INPUT,
-                          "%s: a base skin needs at least %d channels (melanin, pheomelanin, "
-                          "blood, oxygenation, sc_cm, epidermis_cm, height_mm), it has %d",
-                          c->skin_path, SS_BIO_NCHANNELS, in->channels);
-    } else {
-        j->skin = ss_image_create(in->width, in->height, SS_BIO_NCHANNELS, err);
-        if (!j->skin) st = err->code;
-        size_t n = (size_t)in->width * (size_t)in->height;
-        for (size_t i = 0; !st && i < n; i++)
-            memcpy(j->skin->data + i * SS_BIO_NCHANNELS, in->data + i * (size_t)in->channels,
-                   SS_BIO_NCHANNELS * sizeof(float));
-        if (!st) st = ss_wound_skin_validate(j->skin, c->skin_path, err);
-    }
-    ss_image_free(in);
-    return st;
+    j->skin = c->skin_path ? ss_wound_skin_read(c->skin_path, err)
+                           : ss_skin_bio_default(c->size, j->side_mm / 10.0, c->seed, err);
+    return j->skin ? SS_OK : (err->code ? err->code : SS_ERR_INPUT);
 }
 
 static ss_status read_inputs(job *j, ss_error *err) {
@@ -391,7 +371,7 @@ static cJSON *summary_base(const job *j) {
     cJSON_AddNumberToObject(s, "seed", (double)c->seed);
     cJSON_AddNumberToObject(s, "height_range_mm", j->recipe.v[SS_WR_HEIGHT_RANGE_MM]);
     cJSON_AddStringToObject(s, "height_encoding", "0.5 + 0.5 * height_mm / height_range_mm");
-    cJSON_AddStringToObject(s, "base_skin", c->skin_path ? c->skin_path : "built-in");
+    cJSON_AddStringToObject(s, "base_skin", c->skin_path ? c->skin_path : "forearm (built-in)");
     char *rj = ss_wound_recipe_to_json(&j->recipe);
     cJSON *r = rj ? cJSON_Parse(rj) : NULL;
     free(rj);

@@ -17,12 +17,12 @@
  *
  * Design: the tissue maps are at grid resolution and sampled bilinearly; a
  * texel whose four source columns are all healthy (and undeformed) is copied
- * from the base skin's textures, so the skin away from the wound is the base
- * skin exactly and only the wound's texels cost a table lookup. The lookup
- * reads only the five fields a texture needs (GGX base colour, roughness) of
- * the public table, which is ~4x cheaper than the generic 18-field lookup and
- * agrees with it to rounding (tested). Gave up: sub-texel detail of the fields
- * (the grid is 0.5 mm; bilinear keeps edges soft, as healing edges are). */
+ * from the base skin's textures (`skinsim skin`'s render maps of the bio map),
+ * so the skin away from the wound is the base skin exactly and only the
+ * wound's texels cost a table lookup (skin.h's render lookup of the GGX fit).
+ * The skin's extra colour (hair) is laid over everything, except where the
+ * tissue was destroyed. Gave up: sub-texel detail of the fields (the grid is
+ * 0.5 mm; bilinear keeps edges soft, as healing edges are). */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdlib.h>
@@ -41,6 +41,7 @@
 struct ss_wound_renderer {
     ss_wound_render_options o;
     ss_image *skin; /* size x size x SS_BIO_NCHANNELS */
+    ss_skin_lut *lut;
     float mean[SS_BIO_NCHANNELS];
     ss_layer_table scab, clot;
     ss_image *crust; /* value noise 0..1 at ~1.5 mm: the crust is uneven */
@@ -76,90 +77,34 @@ void ss_wound_textures_free(ss_wound_textures *t) {
     memset(t, 0, sizeof *t);
 }
 
-/* ---- the table lookup of the five texture fields ------------------------------------- */
+/* ---- the table lookup (skinsim/skin.h's render lookup of the GGX fit) ------------- */
 
 typedef struct lookup5 {
     double rgb[3], roughness;
 } lookup5;
 
-static void mm_lookup5(const ss_mm_table *t, const double x[SS_MM_NAXES], lookup5 *out) {
-    /* the corners of the cell: weights and entry offsets built axis by axis,
-     * doubling the list only on axes where x lies between two samples */
-    double w[1 << SS_MM_NAXES];
-    size_t off[1 << SS_MM_NAXES];
-    int nc = 1;
-    w[0] = 1.0;
-    off[0] = 0;
-    size_t stride = 1;
-    for (int a = SS_MM_NAXES - 1; a >= 0; a--) { /* axis 5 fastest */
-        int n = t->nsamples[a];
-        const double *v = t->axis[a];
-        int i = 0;
-        double fr = 0.0;
-        if (n > 1) {
-            double xa = x[a];
-            if (!(xa > v[0])) xa = v[0];
-            if (xa > v[n - 1]) xa = v[n - 1];
-            while (i < n - 2 && xa >= v[i + 1]) i++;
-            fr = (xa - v[i]) / (v[i + 1] - v[i]);
-        }
-        size_t o = (size_t)i * stride;
-        if (fr > 0.0) {
-            for (int k = 0; k < nc; k++) {
-                w[nc + k] = w[k] * fr;
-                off[nc + k] = off[k] + o + stride;
-                w[k] *= 1.0 - fr;
-                off[k] += o;
-            }
-            nc *= 2;
-        } else {
-            for (int k = 0; k < nc; k++) off[k] += o;
-        }
-        stride *= (size_t)n;
-    }
-    double r = 0, g = 0, b = 0, ro = 0;
-    for (int k = 0; k < nc; k++) { /* GGX: rgb, specular, roughness */
-        const double *e = t->entries + off[k] * SS_MM_NFIELDS;
-        r += w[k] * e[0];
-        g += w[k] * e[1];
-        b += w[k] * e[2];
-        ro += w[k] * e[4];
-    }
-    out->rgb[0] = r;
-    out->rgb[1] = g;
-    out->rgb[2] = b;
-    out->roughness = ro;
-}
-
 /* One texel's bio parameters -> base colour and roughness. */
-static void bio_to_render(const ss_mm_table *t, const float *b, lookup5 *out) {
-    double x[SS_MM_NAXES];
-    x[SS_MM_AXIS_MELANIN] = b[SS_BIO_MELANIN];
-    x[SS_MM_AXIS_PHEOMELANIN] = b[SS_BIO_PHEOMELANIN];
-    x[SS_MM_AXIS_BLOOD] = b[SS_BIO_BLOOD];
-    x[SS_MM_AXIS_OXYGENATION] = b[SS_BIO_OXYGENATION];
-    x[SS_MM_AXIS_SC] = b[SS_BIO_SC_CM];
-    x[SS_MM_AXIS_EPIDERMIS] = b[SS_BIO_EPIDERMIS_CM];
-    mm_lookup5(t, x, out);
+static void bio_to_render(const ss_skin_lut *lut, const float *b, lookup5 *out) {
+    float x[6] = {b[SS_BIO_MELANIN],     b[SS_BIO_PHEOMELANIN], b[SS_BIO_BLOOD],
+                  b[SS_BIO_OXYGENATION], b[SS_BIO_SC_CM],       b[SS_BIO_EPIDERMIS_CM]};
+    float r[5];
+    ss_skin_lut_lookup(lut, x, r);
+    for (int c = 0; c < 3; c++) out->rgb[c] = r[c] < 0 ? 0 : r[c] > 1 ? 1 : r[c];
+    out->roughness = r[4] < 0 ? 0 : r[4] > 1 ? 1 : r[4];
 }
 
 /* ---- create ----------------------------------------------------------------------------- */
 
+/* The base skin's textures are `skinsim skin`'s render maps of the bio map. */
 static ss_status render_base(ss_wound_renderer *r, ss_error *err) {
-    ss_status st = ss_wound_textures_create(r->o.size, &r->base, err);
+    ss_skin_maps m;
+    ss_status st = ss_skin_render_maps(r->skin, r->lut, r->o.side_mm / 10.0, 0, &m, err);
     if (st) return st;
-    const int n = r->o.size;
-#pragma omp parallel for schedule(static)
-    for (int y = 0; y < n; y++)
-        for (int x = 0; x < n; x++) {
-            size_t i = (size_t)y * (size_t)n + (size_t)x;
-            const float *b = r->skin->data + i * SS_BIO_NCHANNELS;
-            lookup5 l;
-            bio_to_render(r->o.table, b, &l);
-            for (int c = 0; c < 3; c++) r->base.base_color->data[i * 3 + c] = (float)l.rgb[c];
-            r->base.roughness->data[i] = (float)l.roughness;
-            r->base.height->data[i] = b[SS_BIO_HEIGHT_MM];
-        }
+    r->base.base_color = m.base_color;
+    r->base.roughness = m.roughness;
+    r->base.height = m.height_mm;
+    r->base.normal = m.normal;
+    ss_image_free(m.specular);
     return SS_OK;
 }
 
@@ -192,10 +137,10 @@ ss_status ss_wound_renderer_create(const ss_wound_render_options *o, ss_wound_re
     ss_blood_layer_clot(o->recipe.v[SS_WR_BED_OXYGENATION], &clot);
     if (!st) st = ss_layer_table_build(&scab, o->scab_photons, o->seed, &r->scab, err);
     if (!st) st = ss_layer_table_build(&clot, o->scab_photons, o->seed + 1000, &r->clot, err);
+    if (!st && !(r->lut = ss_skin_lut_create(o->table, err))) st = err->code;
     if (!st && !(r->crust = ss_image_create(o->size, o->size, 1, err))) st = err->code;
     if (!st) st = ss_wound__noise(o->size, o->side_mm, 1.5, 2, o->seed, 201, r->crust, err);
     if (!st) st = render_base(r, err);
-    if (!st) ss_height_to_normal(r->base.height, (float)(o->size / o->side_mm), r->base.normal);
     if (st) {
         ss_wound_renderer_free(r);
         return st;
@@ -208,6 +153,7 @@ void ss_wound_renderer_free(ss_wound_renderer *r) {
     if (!r) return;
     ss_image_free(r->skin);
     ss_image_free(r->crust);
+    ss_skin_lut_free(r->lut);
     ss_wound_textures_free(&r->base);
     free(r);
 }
@@ -299,7 +245,7 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, float cr
     b[SS_BIO_SC_CM] = (float)sc;
     b[SS_BIO_EPIDERMIS_CM] = (float)epi;
     lookup5 l;
-    bio_to_render(r->o.table, b, &l);
+    bio_to_render(r->lut, b, &l);
     /* dense mature collagen scatters more: lift the albedo towards white */
     double white = v[SS_WR_SCAR_WHITENING] * reg * scar * m_scar * cover;
     double skin_rgb[3];
@@ -314,7 +260,10 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, float cr
     ss_layer_over(R, T, skin_rgb, mid);
     ss_layer_table_eval(&r->scab, thick, R, T);
     ss_layer_over(R, T, mid, o->rgb);
-    for (int c = 0; c < 3; c++) o->rgb[c] = clamp01(o->rgb[c]);
+    /* the extra colour (hair) over everything, gone where the tissue was destroyed */
+    double ea = k[SS_BIO_EXTRA_A] * (1 - reg);
+    for (int c = 0; c < 3; c++)
+        o->rgb[c] = clamp01(clamp01(o->rgb[c]) * (1 - ea) + k[SS_BIO_EXTRA_R + c] * ea);
     double scab_cover = 1 - exp(-thick / 0.05); /* a 0.05 mm crust is matte */
     double rough = l.roughness;
     rough = lerp(rough, v[SS_WR_WET_ROUGHNESS], open * reg);

@@ -1,5 +1,5 @@
-/* Internal to src/wound: value noise with its period in mm (skin.c), shared by
- * the built-in base skin and the renderer's crust relief. Not installed. */
+/* Internal to src/wound: value noise with its period in mm (skin.c), for
+ * the renderer's uneven crust. Not installed. */
 #ifndef SKINSIM_WOUND_INTERNAL_H
 #define SKINSIM_WOUND_INTERNAL_H
 
