@@ -101,7 +101,11 @@ ss_status ss_layer_table_build(const ss_blood_layer *l, uint64_t photons, uint64
         int k = 1 + jb / NWL, w = jb % NWL;
         ss_optics_slab slab = {0};
         slab.nlayers = 1;
-        slab.layer[0] = (ss_optics_layer){l->n, mua[w], l->mus_per_cm, l->g, THICK_MM[k] * 0.1};
+        slab.layer[0] = (ss_optics_layer){.n = l->n,
+                                          .mua_per_cm = mua[w],
+                                          .mus_per_cm = l->mus_per_cm,
+                                          .g = l->g,
+                                          .d_cm = THICK_MM[k] * 0.1};
         slab.n_above = 1.0;
         slab.n_below = SKIN_N;
         slab.bottom_albedo = -1;
