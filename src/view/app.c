@@ -1253,6 +1253,17 @@ static int run_gtk(app *a, int batch) {
     return g.rc;
 }
 
+/* Checks an output path before any work (ss_outputs: empty, too long, a
+ * folder, a device or pipe, a broken symlink): exit 2 naming it. */
+static int check_output_file(const char *label, const char *path) {
+    ss_error e = {0};
+    ss_outputs *outs = ss_outputs_create("view", &e);
+    if (!outs) return cli_fail(CMD, &e);
+    ss_status st = ss_outputs_add(outs, label, path, SS_OUTPUT_FILE, 0, &e);
+    ss_outputs_free(outs);
+    return st ? cli_fail(CMD, &e) : 0;
+}
+
 int main(int argc, char **argv) {
     /* Called as "skinsim view ..." through the skinsim command, or directly. */
     if (argc > 1 && !strcmp(argv[1], "view")) argc--, argv++;
@@ -1262,8 +1273,8 @@ int main(int argc, char **argv) {
     if (r < 0) return 0;
     if (r) return cli_fail(CMD, &err);
     int batch = o.screenshot || o.bench_frames > 0 || o.save_strokes;
-    if (o.screenshot && cli_check_output_file(CMD, o.screenshot)) return 2;
-    if (o.save_strokes && cli_check_output_file(CMD, o.save_strokes)) return 2;
+    if (o.screenshot && check_output_file("--screenshot", o.screenshot)) return 2;
+    if (o.save_strokes && check_output_file("--save-strokes", o.save_strokes)) return 2;
     app *a = calloc(1, sizeof *a);
     if (!a) return 1;
     ss_status st = app_init(a, &o, &err);

@@ -103,12 +103,11 @@ ss_status ss_layer_table_build(const ss_blood_layer *l, uint64_t photons, uint64
         int k = 1 + jb / NWL, w = jb % NWL;
         ss_optics_slab slab = {0};
         slab.nlayers = 1;
-        ss_optics_layer *ly = &slab.layer[0]; /* Henyey-Greenstein (phase_n 0) */
-        ly->n = l->n;
-        ly->mua_per_cm = mua[w];
-        ly->mus_per_cm = l->mus_per_cm;
-        ly->g = l->g;
-        ly->d_cm = THICK_MM[k] * 0.1;
+        slab.layer[0] = (ss_optics_layer){.n = l->n,
+                                          .mua_per_cm = mua[w],
+                                          .mus_per_cm = l->mus_per_cm,
+                                          .g = l->g,
+                                          .d_cm = THICK_MM[k] * 0.1};
         slab.n_above = 1.0;
         slab.n_below = SKIN_N;
         slab.bottom_albedo = -1;
