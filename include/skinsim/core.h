@@ -198,6 +198,9 @@ const char *ss_outputs_target(const ss_outputs *o, int i);
 ss_status ss_outputs_finish(ss_outputs *o, ss_status status, ss_error *err);
 /* Rolls back anything begun and not finished, releases locks, frees. */
 void ss_outputs_free(ss_outputs *o);
+/* The process id of the skinsim run writing path now (holding its lock),
+ * -1 when that run's id is unreadable, 0 when no run is writing it. */
+long ss_output_lock_holder(const char *path);
 /* 1 when dir holds a completion marker (of owner, or of any owner when NULL). */
 int ss_output_dir_is_complete(const char *dir, const char *owner);
 /* Writes or removes dir's completion marker (for outputs a command keeps

@@ -453,6 +453,15 @@ ss_status ss_outputs_add(ss_outputs *o, const char *label, const char *path, ss_
     else if (strlen(e->base) + STAGING_SUFFIX > NAME_MAX)
         s = OUTMSG(e, "the name %s is too long (at most %d bytes here)", shown(e->base, sb2),
                    NAME_MAX - STAGING_SUFFIX);
+    long holder = s ? 0 : ss_output_lock_holder(real);
+    if (holder)
+        s = holder > 0 ? OUTMSG(e,
+                                "another skinsim run (process %ld) is writing it; wait for it to "
+                                "finish or choose another output",
+                                holder)
+                       : OUTMSG(e, "%s",
+                                "another skinsim run is writing it; wait for it to finish or "
+                                "choose another output");
     if (!s) s = check_target(o, e, err);
     for (int i = 0; i < o->nout - 1 && !s; i++) {
         out_entry *p = &o->out[i];
@@ -566,6 +575,30 @@ static ss_status take_lock(out_entry *e, ss_error *err) {
     }
     return ss_error_set(err, SS_ERR_INPUT, "%s: its lock file %s keeps changing",
                         shown(e->user, sb), e->lock_path);
+}
+
+long ss_output_lock_holder(const char *path) {
+    const char *why = NULL;
+    char *real = path && *path ? resolve(path, &why) : NULL;
+    if (!real) return 0;
+    size_t n = strlen(real) + 16;
+    char *lp = malloc(n);
+    if (lp) snprintf(lp, n, "%s.skinsim-lock", real);
+    free(real);
+    int fd = lp ? open(lp, O_RDONLY | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK) : -1;
+    free(lp);
+    if (fd < 0) return 0;
+    long pid = 0;
+    if (flock(fd, LOCK_SH | LOCK_NB) == 0) {
+        flock(fd, LOCK_UN);
+    } else {
+        char buf[64] = {0};
+        ssize_t got = pread(fd, buf, sizeof buf - 1, 0);
+        pid = got > 0 ? strtol(buf, NULL, 10) : 0;
+        if (pid <= 0) pid = -1;
+    }
+    close(fd);
+    return pid;
 }
 
 static int has_prefix_tail(const char *name, const char *base, const char *mid, size_t tail) {

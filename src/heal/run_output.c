@@ -147,12 +147,12 @@ static int dir_has_entries(const char *path) {
 static double estimate_bytes(const ss_heal_run *r) {
     double cells = (double)r->g->nx * r->g->ny * r->g->nz;
     double vti = cells * (1 + 4.0 * (SS_HEAL_NFIELDS + 3)) + 8192;
-    double map = 4 * (640.0 * 520.0 * 3 * 0.25); /* colour-mapped PNGs, compressed */
+    double map = 4 * 80e3; /* colour-mapped PNGs: about 12 KB each at 20 x 20 voxels */
     long long left = r->nsteps - (long long)r->g->step;
     double snaps = (r->snap_every ? (double)left / (double)r->snap_every : 0) + 2;
     double ckpt = r->ckpt_every ? 3 * (cells * (1 + 4.0 * (SS_HEAL_NFIELDS + 3)) + 65536) : 0;
     double rows = (double)left / (double)(r->area_every > 0 ? r->area_every : 1) + 2;
-    return snaps * (vti + map) + ckpt + rows * 24.0 * (4 + SS_HEAL_NFIELDS) + 2e6;
+    return snaps * (vti + map) + ckpt + rows * 24.0 * (4 + SS_HEAL_NFIELDS) + 500e3;
 }
 
 ss_status ss_heal_run__outputs_open(ss_heal_run *r, ss_error *err) {
@@ -160,6 +160,12 @@ ss_status ss_heal_run__outputs_open(ss_heal_run *r, ss_error *err) {
     const char *dir = r->out_dir;
     const char *opt = c->resume_dir ? "--resume" : "--out";
     struct stat st;
+    long holder = ss_output_lock_holder(dir);
+    if (holder)
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "%s %s: another skinsim run (process %ld) is writing it; wait for it "
+                            "to finish or choose another folder",
+                            opt, dir, holder);
     int exists = stat(dir, &st) == 0 && S_ISDIR(st.st_mode) && dir_has_entries(dir);
     if (!c->resume_dir && exists && !c->force) {
         char probe[4400];
