@@ -5,7 +5,10 @@ ASAN     ?= build-asan
 JOBS     ?= $(shell nproc)
 DEPS      = build-essential cmake pkg-config libpng-dev libopenexr-dev zlib1g-dev \
             libcjson-dev libcmocka-dev libcairo2-dev fonts-dejavu-core python3 \
-            python3-numpy
+            python3-numpy $(VIEW_DEPS)
+# The viewer (skinsim view): GTK 4, libepoxy, Mesa's software OpenGL/EGL, and
+# Xvfb so its tests have a display on a machine without one.
+VIEW_DEPS = libgtk-4-dev libepoxy-dev libgl1-mesa-dri libegl-mesa0 xvfb
 DEMO_OUT ?= demo-out
 
 .PHONY: all deps build demo test test-asan bench fuzz clean install test-blender
@@ -31,12 +34,14 @@ demo: build
 	$(BUILD)/skinsim abrasion --out $(DEMO_OUT)/abrasion
 	$(BUILD)/skinsim optics swatch --out $(DEMO_OUT)/skin_swatch.png
 	$(BUILD)/skinsim heal --days 21 --out $(DEMO_OUT)/heal
+	$(BUILD)/skinsim skin --size 1024 --gltf --out $(DEMO_OUT)/skin
 	@echo
 	@echo "Look at:"
 	@echo "  $(DEMO_OUT)/abrasion/contact_sheet.png   abrasion from injury to day 30"
 	@echo "  $(DEMO_OUT)/skin_swatch.png              skin colours over melanin x blood"
 	@echo "  $(DEMO_OUT)/heal/area.png                wound closure over 21 days"
 	@echo "  $(DEMO_OUT)/heal/fields/fields.pvd       open in ParaView"
+	@echo "  $(DEMO_OUT)/skin/contact_sheet.png       a patch of forearm skin: every map side by side"
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)

@@ -34,6 +34,8 @@ ss_status ss_png_write(const char *path, const ss_image *img, int bits, ss_encod
     static const int types[5] = {0, PNG_COLOR_TYPE_GRAY, PNG_COLOR_TYPE_GRAY_ALPHA,
                                  PNG_COLOR_TYPE_RGB, PNG_COLOR_TYPE_RGBA};
     int ch = img->channels;
+    if (ch < 1 || ch > 4)
+        return ss_error_set(err, SS_ERR_INPUT, "%s: PNG holds 1..4 channels, not %d", path, ch);
     size_t rowbytes = (size_t)img->width * (size_t)ch * (size_t)(bits / 8);
     unsigned char *row = malloc(rowbytes);
     if (!row) return ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", path);
