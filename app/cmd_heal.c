@@ -240,6 +240,13 @@ int cmd_heal(int argc, char **argv) {
     if (ss_heal_run_create(&o.c, &r, &err)) return cli_fail(CMD, &err);
     print_notes(&o, r);
 
+    /* The output folder: locked, checked against the free space, staged or
+     * marked unfinished; errors here are still about the input (exit 2). */
+    if (ss_heal_run_start(r, &err)) {
+        int rc = cli_fail(CMD, &err);
+        ss_heal_run_free(r);
+        return rc;
+    }
     /* Everything is validated: from here on, files are written. */
     ss_status st = SS_OK;
     ss_progress pr;
