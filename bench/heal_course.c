@@ -5,6 +5,7 @@
  * Usage: bench_heal_course [--scenario S] [--dx MM] [--block MM] [--wound MM]
  *        [--depth MM] [--days D] [--dt D] [--late-dt D] [--deep-day D]
  *        [--keloid-thr R] [--set KEY=VALUE]... [--scale KEY=FACTOR]...
+ *        bench_heal_course [--scenario S] --get KEY   (prints the preset value)
  * Figures only; nothing is asserted. */
 #include <stdio.h>
 #include <stdlib.h>
@@ -62,6 +63,15 @@ int main(int argc, char **argv) {
             o.deep_check_day = atof(v), i++;
         } else if (v && !strcmp(a, "--keloid-thr")) {
             o.keloid_thr = atof(v), i++;
+        } else if (v && !strcmp(a, "--get")) {
+            double val;
+            if (ss_heal_param_get(p, v, &val, &err)) {
+                fprintf(stderr, "%s\n", err.msg);
+                return 2;
+            }
+            printf("%g\n", val);
+            ss_heal_params_free(p);
+            return 0;
         } else if (v && (!strcmp(a, "--set") || !strcmp(a, "--scale"))) {
             if (set_param(p, v, !strcmp(a, "--scale"))) {
                 fprintf(stderr, "bench_heal_course: bad %s %s\n", a, v);

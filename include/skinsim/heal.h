@@ -154,11 +154,12 @@ static inline size_t ss_heal_idx(const ss_heal_grid *g, int x, int y, int z) {
 }
 /* wound3d: nx*ny*nz bytes, 1 = wound voxel (tissue removed, filled by clot).
  * Sets cell states (BOUND on the outermost voxel shell, AIR above skin_top_mm,
- * EPIDERMIS in the top epidermis_mm of the skin (at least two voxels), DERMIS
- * below, WOUND where wound3d says) and initial fields: healthy values in
+ * EPIDERMIS in the voxels reaching into the top epidermis_mm of the skin (at
+ * least the surface voxel, which then holds a thinner epidermis as a sheet),
+ * DERMIS below, WOUND where wound3d says) and initial fields: healthy values in
  * intact tissue, wound values in the wound (u1 = u1_wound, u2 = u3 = n = 0,
- * plasma 1), the epithelium = 1 in the two-voxel layer on top of the skin
- * outside the wound (§5.1). wound3d NULL = no wound. */
+ * plasma 1), the epithelium = 1 in the intact epidermis, 0 elsewhere (§5.1's
+ * layer on top of the skin, in mm). wound3d NULL = no wound. */
 ss_status ss_heal_grid_init(ss_heal_grid *g, double skin_top_mm, double epidermis_mm,
                             const uint8_t *wound3d, const ss_heal_params *p, ss_error *err);
 /* A footprint (1-channel image, value > 0.5 = wound, mapped onto x,y over the
@@ -174,7 +175,7 @@ uint8_t *ss_heal_wound_box(const ss_heal_grid *g, double skin_top_mm, double sid
 
 /* Default problem (docs/heal-model.md): a 30 x 30 x 4 mm block of 0.5 mm voxels
  * (60 x 60 x 8), skin surface at 3 mm (one air layer under the top bound),
- * 0.1 mm epidermis (held as the two-voxel layer), a 20 x 20 mm wound 1 mm deep.
+ * 0.1 mm epidermis (a sheet in the surface voxel), a 20 x 20 mm wound 1 mm deep.
  * The calibration holds at 0.25 mm too (docs/heal-model.md). */
 #define SS_HEAL_DEFAULT_BLOCK_X_MM 30.0
 #define SS_HEAL_DEFAULT_BLOCK_Y_MM 30.0
