@@ -48,7 +48,8 @@ typedef struct ss_heal_run_config {
     int grid[3];         /* voxels; all 0 = from size_mm with 0.5 mm voxels */
     double size_mm[3];   /* block size; all 0 = 30 x 30 x 4 mm (or grid x 0.5 mm) */
     double skin_top_mm;  /* skin surface height; 0 = nz-2 voxels (one air layer) */
-    double epidermis_mm; /* default SS_HEAL_DEFAULT_EPIDERMIS_MM (at least 2 voxels used) */
+    double epidermis_mm; /* default SS_HEAL_DEFAULT_EPIDERMIS_MM (a sub-voxel sheet in the
+                            surface voxel when thinner than a voxel) */
 
     /* ---- wound (fresh runs): at most one of mask, stroke, mesh, footprint;
      * none = a centred square of 20 mm (at most 2/3 of the smaller side) ---- */

@@ -521,6 +521,9 @@ class ss_heal_stats(ctypes.Structure):
         ("wound_region_area_mm2", c_double),
         ("initial_area_mm2", c_double),
         ("field_mean", c_double * SS_HEAL_NFIELDS),
+        ("eschar_wound_mean", c_double),
+        ("scar_volume_mm3", c_double),
+        ("scar_max", c_double),
     ]
 
 
