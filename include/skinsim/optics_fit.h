@@ -64,6 +64,10 @@ typedef struct ss_render_geom {
     int valid;           /* 0 when either direction is at or below the horizon */
 } ss_render_geom;
 void ss_render_geom_init(double theta_i, double theta_r, double dphi, ss_render_geom *g);
+/* Directional albedo E(cos_theta) of the GGX model's specular lobe (Schlick F,
+ * height-correlated Smith), from the table the GGX diffuse coupling uses;
+ * roughness is clamped to [SS_RENDER_ROUGHNESS_MIN, 1]. */
+double ss_render_ggx_spec_albedo(double specular, double roughness, double cos_theta);
 void ss_render_terms_geom(ss_render_model m, double specular, double roughness,
                           const ss_render_geom *g, double *diffuse, double *spec);
 
