@@ -366,6 +366,7 @@ static void test_determinism_and_roundtrip(void **state) {
     assert_non_null(rd);
     assert_memory_equal(rd->data, bio2->data, n * SS_BIO_NCHANNELS * sizeof(float));
     ss_image_free(rd);
+    ss_skin_feature_list_free(&back);
     /* bad rows name the file and line */
     assert_int_equal(ss_skin_features_parse_csv("type,x,y,r,r2,h,m,p,w,x1,y1,x2,y2,x3,y3\n"
                                                 "wart,0.5,0.5,1,0,0,0,0,0,0,0,0,0,0,0\n",
