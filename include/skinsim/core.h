@@ -58,7 +58,7 @@ typedef struct ss_image {
 /* Returns NULL (and sets err) on a bad size or when memory runs out. Pixels are
  * zeroed. Sizes above SS_IMAGE_MAX_SIDE per side are refused. */
 #define SS_IMAGE_MAX_SIDE 65536
-/* Up to 16 channels: RGBA images, and parameter maps such as skin's bio map
+/* Up to 16 channels: RGBA images, and parameter maps (skin and wound bio maps)
  * (file writers other than ss_exr_write_channels take 1-4). */
 #define SS_IMAGE_MAX_CHANNELS 16
 ss_image *ss_image_create(int width, int height, int channels, ss_error *err);

@@ -124,6 +124,25 @@ def check_ptr(fn, *args):
     return p
 
 
+class Handle:
+    """Owns library objects: calls each free function on its pointer when the
+    last reference goes. Python objects hold a Handle and the numpy views of
+    library memory reference it too, so memory is never freed under a view
+    (closing an object only drops its own reference)."""
+
+    def __init__(self):
+        self._frees = []
+
+    def own(self, free_fn, ptr):
+        self._frees.append((free_fn, ptr))
+        return ptr
+
+    def __del__(self):
+        while self._frees and lib:
+            fn, ptr = self._frees.pop()
+            fn(ptr)
+
+
 def _fn(name, restype, *argtypes):
     f = getattr(lib, name)
     f.restype = restype
@@ -376,6 +395,11 @@ _fn("ss_render_brdf_eval", None, c_int, POINTER(ss_render_params), c_double, c_d
     POINTER(c_double))
 _fn("ss_render_brdf_sample", c_int, c_int, POINTER(ss_render_params), c_int, c_int, c_int, c_int,
     POINTER(ss_brdf_sampled), P_ERR)
+_fn("ss_srgb_linear_to_lab", None, POINTER(c_double), POINTER(c_double))
+_fn("ss_lab_to_srgb_linear", None, POINTER(c_double), POINTER(c_double))
+_fn("ss_lab_describe", None, POINTER(c_double), POINTER(c_double), POINTER(c_double),
+    POINTER(c_double))
+_fn("ss_ciede2000", c_double, POINTER(c_double), POINTER(c_double))
 _fn("ss_mm_build_options_default", None, POINTER(ss_mm_build_options))
 _fn("ss_mm_sample_fast", c_int, P_BIO, POINTER(ss_mm_build_options), POINTER(ss_brdf_sampled),
     POINTER(c_double), POINTER(c_double), P_ERR)
@@ -485,3 +509,92 @@ _fn("ss_abrasion_create", c_int, POINTER(ss_abrasion_settings), POINTER(ss_timel
     POINTER(ss_base_skin), POINTER(P_ABR), P_ERR)
 _fn("ss_abrasion_free", None, P_ABR)
 _fn("ss_abrasion_frame", c_int, P_ABR, c_double, POINTER(ss_texture_set), P_ERR)
+
+# ---- heal ------------------------------------------------------------------------
+
+SS_HEAL_NFIELDS = 8
+
+
+class ss_heal_stats(ctypes.Structure):
+    _fields_ = [
+        ("open_area_mm2", c_double),
+        ("wound_region_area_mm2", c_double),
+        ("initial_area_mm2", c_double),
+        ("field_mean", c_double * SS_HEAL_NFIELDS),
+    ]
+
+
+class ss_heal_area_row(ctypes.Structure):
+    _fields_ = [("t_days", c_double), ("st", ss_heal_stats)]
+
+
+class ss_heal_grid(ctypes.Structure):
+    _fields_ = [
+        ("nx", c_int),
+        ("ny", c_int),
+        ("nz", c_int),
+        ("dx_mm", c_double),
+        ("skin_top_mm", c_double),
+        ("cell", POINTER(ctypes.c_uint8)),
+        ("field", POINTER(c_float) * SS_HEAL_NFIELDS),
+        ("velocity", POINTER(c_float) * 3),
+        ("t_days", c_double),
+        ("step", c_uint64),
+    ]
+
+
+class ss_heal_run_config(ctypes.Structure):
+    _fields_ = [
+        ("scenario", c_char_p),
+        ("params_path", c_char_p),
+        ("no_scab", c_int),
+        ("static_region", c_int),
+        ("grid", c_int * 3),
+        ("size_mm", c_double * 3),
+        ("skin_top_mm", c_double),
+        ("epidermis_mm", c_double),
+        ("wound_mask", c_char_p),
+        ("wound_stroke", c_char_p),
+        ("concave_k", c_int),
+        ("wound_mesh", c_char_p),
+        ("wound_footprint", P_IMAGE),
+        ("wound_depth_mm", c_double),
+        ("wound_depth_image", c_char_p),
+        ("days", c_double),
+        ("scheme", c_int),
+        ("dt_days", c_double),
+        ("snapshot_every", c_double),
+        ("area_every", c_double),
+        ("checkpoint_every", c_double),
+        ("out_dir", c_char_p),
+        ("force", c_int),
+        ("resume_dir", c_char_p),
+        ("seed", c_uint64),
+    ]
+
+
+P_RUN = c_void_p  # opaque ss_heal_run *
+P_GRID = POINTER(ss_heal_grid)
+_fn("ss_heal_field_name", c_char_p, c_int)
+_fn("ss_heal_run_config_default", None, POINTER(ss_heal_run_config))
+_fn("ss_heal_run_create", c_int, POINTER(ss_heal_run_config), POINTER(P_RUN), P_ERR)
+_fn("ss_heal_run_free", None, P_RUN)
+_fn("ss_heal_run_step", c_int, P_RUN, P_ERR)
+_fn("ss_heal_run_advance_to", c_int, P_RUN, c_double, P_ERR)
+_fn("ss_heal_run_finish", c_int, P_RUN, POINTER(c_void_p), P_ERR)
+_fn("ss_heal_run_grid", P_GRID, P_RUN)
+_fn("ss_heal_run_scenario", c_char_p, P_RUN)
+_fn("ss_heal_run_day", c_double, P_RUN)
+_fn("ss_heal_run_dt", c_double, P_RUN)
+_fn("ss_heal_run_end_day", c_double, P_RUN)
+_fn("ss_heal_run_step_index", ctypes.c_longlong, P_RUN)
+_fn("ss_heal_run_steps_total", ctypes.c_longlong, P_RUN)
+_fn("ss_heal_run_done", c_int, P_RUN)
+_fn("ss_heal_run_area", POINTER(ss_heal_area_row), P_RUN, POINTER(c_int))
+_fn("ss_heal_area_normalised", c_double, POINTER(ss_heal_stats))
+_fn("ss_heal_open_threshold", c_double)
+_fn("ss_heal_surface_map", P_IMAGE, P_GRID, c_int, c_int, P_ERR)
+_fn("ss_heal_time_to_closure", c_double, POINTER(ss_heal_area_row), c_int, c_double)
+libc_free = ctypes.CDLL(None).free
+libc_free.argtypes = [c_void_p]
+libc_free.restype = None

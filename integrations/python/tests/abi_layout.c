@@ -10,6 +10,9 @@
 #include "skinsim/abrasion.h"
 #include "skinsim/core.h"
 #include "skinsim/geom.h"
+#include "skinsim/heal.h"
+#include "skinsim/heal_io.h"
+#include "skinsim/heal_run.h"
 #include "skinsim/optics.h"
 #include "skinsim/optics_fit.h"
 
@@ -48,11 +51,23 @@ int main(void) {
         F(ss_wound_shape, npolys), F(ss_wound_shape, polys);
     S(ss_base_skin), F(ss_base_skin, lower_srgb);
     S(ss_texture_set), F(ss_texture_set, normal);
-    S(ss_abrasion_settings), F(ss_abrasion_settings, world_size_cm),
-        F(ss_abrasion_settings, seed);
+    S(ss_abrasion_settings), F(ss_abrasion_settings, world_size_cm), F(ss_abrasion_settings, seed);
     S(ss_timeline_key), F(ss_timeline_key, day);
     S(ss_timeline), F(ss_timeline, key), F(ss_timeline, end_day);
     S(ss_abrasion), F(ss_abrasion, timeline), F(ss_abrasion, shape), F(ss_abrasion, skin),
         F(ss_abrasion, phase), F(ss_abrasion, rendered);
+    S(ss_heal_stats), F(ss_heal_stats, initial_area_mm2), F(ss_heal_stats, field_mean);
+    S(ss_heal_area_row), F(ss_heal_area_row, st);
+    S(ss_heal_grid), F(ss_heal_grid, dx_mm), F(ss_heal_grid, cell), F(ss_heal_grid, field),
+        F(ss_heal_grid, velocity), F(ss_heal_grid, t_days), F(ss_heal_grid, step);
+    S(ss_heal_run_config), F(ss_heal_run_config, params_path), F(ss_heal_run_config, no_scab),
+        F(ss_heal_run_config, grid), F(ss_heal_run_config, size_mm),
+        F(ss_heal_run_config, epidermis_mm), F(ss_heal_run_config, wound_mask),
+        F(ss_heal_run_config, concave_k), F(ss_heal_run_config, wound_footprint),
+        F(ss_heal_run_config, wound_depth_image), F(ss_heal_run_config, days),
+        F(ss_heal_run_config, scheme), F(ss_heal_run_config, dt_days),
+        F(ss_heal_run_config, checkpoint_every), F(ss_heal_run_config, out_dir),
+        F(ss_heal_run_config, force), F(ss_heal_run_config, resume_dir),
+        F(ss_heal_run_config, seed);
     return 0;
 }
