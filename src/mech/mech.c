@@ -260,9 +260,19 @@ ss_mech *ss_mech_create(ss_heal_grid *g, const ss_heal_params *heal, const ss_me
     for (size_t i = 0; i < n; i++)
         if (m->wound0[i]) foot[i % ((size_t)g->nx * g->ny)] = 1;
     for (int t = 0; t < m->ntri; t++) {
-        double c[2] = {0, 0};
-        for (int k = 0; k < 3; k++)
-            for (int d = 0; d < 2; d++) c[d] += m->mesh->x[3 * m->tri[3 * t + k] + d] / 3.0;
+        /* the midpoint of the longest edge: on a lattice, the centre of the
+         * square face the triangle halves, so both halves agree */
+        double c[2] = {0, 0}, best = -1;
+        for (int k = 0; k < 3; k++) {
+            const double *a = m->mesh->x + 3 * m->tri[3 * t + k],
+                         *b = m->mesh->x + 3 * m->tri[3 * t + (k + 1) % 3];
+            double l = (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]);
+            if (l > best) {
+                best = l;
+                c[0] = 0.5 * (a[0] + b[0]);
+                c[1] = 0.5 * (a[1] + b[1]);
+            }
+        }
         int ix = (int)floor(c[0] / g->dx_mm), iy = (int)floor(c[1] / g->dx_mm);
         if (ix >= 0 && iy >= 0 && ix < g->nx && iy < g->ny)
             m->tri_wound[t] = foot[(size_t)iy * g->nx + ix];
