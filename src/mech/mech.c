@@ -565,6 +565,7 @@ ss_mech_suture *ss_mech_sutures_read(const char *path, int *count, ss_error *err
     while (p) {
         int too_long = 0;
         p = ss_text_next_line(p, buf, sizeof buf, &too_long);
+        if (!p) break;
         line++;
         char *h = strchr(buf, '#');
         if (h) *h = 0;

@@ -239,6 +239,7 @@ static const char *next_line(lines *L) {
     while (L->p) {
         int too_long = 0;
         L->p = ss_text_next_line(L->p, L->buf, sizeof L->buf, &too_long);
+        if (!L->p) break;
         L->line++;
         char *h = strchr(L->buf, '#');
         if (h) *h = 0;
