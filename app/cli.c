@@ -28,9 +28,14 @@ ss_status cli_parse_double(const char *opt, const char *s, double lo, double hi,
     char *end;
     errno = 0;
     double v = s ? strtod(s, &end) : NAN;
-    if (!s || end == s || *end != '\0' || errno == ERANGE || !isfinite(v))
-        return ss_error_set(err, SS_ERR_INPUT, "%s: '%s' is not a finite number", opt,
+    if (!s || end == s || *end != '\0')
+        return ss_error_set(err, SS_ERR_INPUT, "%s: '%s' is not a number", opt,
                             s ? s : "(missing)");
+    /* ERANGE with a tiny result is underflow: the value is as good as 0 and
+     * the range check below says whether that is allowed */
+    if (!isfinite(v) || (errno == ERANGE && fabs(v) > 1.0))
+        return ss_error_set(err, SS_ERR_INPUT, "%s: '%s' is %s", opt, s,
+                            isnan(v) ? "not a number" : "too large (not finite as a double)");
     if (v < lo || v > hi)
         return ss_error_set(err, SS_ERR_INPUT, "%s: %s is out of range [%g, %g]", opt, s, lo, hi);
     *out = v;
@@ -42,9 +47,11 @@ ss_status cli_parse_int(const char *opt, const char *s, long lo, long hi, long *
     char *end;
     errno = 0;
     long v = s ? strtol(s, &end, 10) : 0;
-    if (!s || end == s || *end != '\0' || errno == ERANGE)
+    if (!s || end == s || *end != '\0')
         return ss_error_set(err, SS_ERR_INPUT, "%s: '%s' is not an integer", opt,
                             s ? s : "(missing)");
+    if (errno == ERANGE)
+        return ss_error_set(err, SS_ERR_INPUT, "%s: %s is out of range [%ld, %ld]", opt, s, lo, hi);
     if (v < lo || v > hi)
         return ss_error_set(err, SS_ERR_INPUT, "%s: %ld is out of range [%ld, %ld]", opt, v, lo,
                             hi);
@@ -59,8 +66,11 @@ ss_status cli_parse_u64(const char *opt, const char *s, uint64_t *out, ss_error 
         return ss_error_set(err, SS_ERR_INPUT, "%s: '%s' is not a non-negative integer", opt,
                             s ? s : "(missing)");
     unsigned long long v = strtoull(s, &end, 10);
-    if (end == s || *end != '\0' || errno == ERANGE)
+    if (end == s || *end != '\0')
         return ss_error_set(err, SS_ERR_INPUT, "%s: '%s' is not a non-negative integer", opt, s);
+    if (errno == ERANGE)
+        return ss_error_set(err, SS_ERR_INPUT, "%s: %s is too large (at most %llu)", opt, s,
+                            (unsigned long long)UINT64_MAX);
     *out = (uint64_t)v;
     return SS_OK;
 }
@@ -98,19 +108,4 @@ ss_status cli_parse_double_list(const char *opt, const char *s, double lo, doubl
     *out = v;
     *count = k;
     return SS_OK;
-}
-
-int cli_check_output_file(const char *cmd, const char *path) {
-    char dir[4096];
-    snprintf(dir, sizeof dir, "%s", path);
-    char *sl = strrchr(dir, '/');
-    if (sl)
-        *sl = 0;
-    else
-        snprintf(dir, sizeof dir, ".");
-    if (!dir[0]) snprintf(dir, sizeof dir, "/");
-    ss_error e;
-    ss_error_clear(&e);
-    if (ss_check_writable_dir(dir, &e)) return cli_fail(cmd, &e);
-    return 0;
 }

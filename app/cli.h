@@ -15,7 +15,10 @@ typedef struct cli_command {
 /* Subcommand entry points (one file each: app/cmd_<name>.c). */
 int cmd_abrasion(int argc, char **argv);
 int cmd_heal(int argc, char **argv);
+int cmd_wound(int argc, char **argv);
 int cmd_optics(int argc, char **argv);
+int cmd_skin(int argc, char **argv);
+int cmd_view(int argc, char **argv); /* execs skinsim-view (app/cmd_view.c) */
 /* `skinsim optics fit` and `skinsim optics table` (app/cmd_optics_fit.c). */
 int cmd_optics_fit(int argc, char **argv);
 int cmd_optics_table(int argc, char **argv);
@@ -28,10 +31,6 @@ int cli_usage_error(const char *cmd, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)))
 #endif
     ;
-
-/* Checks that the directory an output file goes into is writable, before
- * any work; prints the error and returns 2 if not, else 0. */
-int cli_check_output_file(const char *cmd, const char *path);
 
 /* Strict number parsing: the whole string must be a finite number within
  * [lo, hi]; on failure err names the option and the value. */

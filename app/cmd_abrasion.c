@@ -1,8 +1,10 @@
 /* skinsim abrasion: renders the abrasion-healing timeline of seed 000 for a
  * painted shape (strokes or mask) and writes key textures, frames at the
  * requested days, timeline.json and a labelled contact sheet. All inputs are
- * read and checked before anything is written; the output directory is built
- * under a temporary name and renamed into place when it did not exist. */
+ * read and checked before anything is written; the output folder goes
+ * through the core output discipline (checked before work, staged next to
+ * its target, swapped in whole; a previous run's folder is replaced whole or
+ * not at all). */
 #define _POSIX_C_SOURCE 200809L
 #include <cjson/cJSON.h>
 #include <getopt.h>
@@ -157,7 +159,7 @@ static int parse(int argc, char **argv, opts *o, ss_error *err) {
             o->size = (int)v;
             break;
         case 'j':
-            st = cli_parse_int("--threads", optarg, 1, 4096, &v, err);
+            st = cli_parse_int("--threads", optarg, 1, SS_THREADS_MAX, &v, err);
             o->threads = (int)v;
             break;
         case 'w':
@@ -176,6 +178,19 @@ static int parse(int argc, char **argv, opts *o, ss_error *err) {
     if (!st && o->stroke && o->mask)
         st = ss_error_set(err, SS_ERR_INPUT, "give --stroke or --mask, not both");
     if (!st) st = cli_parse_double_list("--times", times, 0.0, 1e5, &o->times, &o->ntimes, err);
+    /* each time names its files t<days>_*: two times with one name would
+     * write the same files twice */
+    for (int i = 0; !st && i < o->ntimes; i++)
+        for (int j = 0; !st && j < i; j++) {
+            char a[32], b[32];
+            snprintf(a, sizeof a, "%g", o->times[i]);
+            snprintf(b, sizeof b, "%g", o->times[j]);
+            if (!strcmp(a, b))
+                st = ss_error_set(err, SS_ERR_INPUT,
+                                  "--times: %.15g and %.15g both name the frame t%s; give times "
+                                  "that differ within 6 significant digits",
+                                  o->times[j], o->times[i], a);
+        }
     return st ? (int)st : 0;
 }
 
@@ -282,10 +297,53 @@ static ss_status read_inputs(const opts *o, inputs *in, ss_error *err) {
     return st;
 }
 
-static ss_status run(const opts *o, const char *dir, cJSON *summary, ss_error *err) {
-    inputs in;
-    ss_status st = read_inputs(o, &in, err);
-    ss_wound_shape *shape = NULL;
+/* Inputs read and checked, the shape built: everything that can be bad
+ * input, before any output is touched. */
+static ss_status prepare(const opts *o, inputs *in, ss_wound_shape **shape, ss_error *err) {
+    ss_status st = read_inputs(o, in, err);
+    *shape = NULL;
+    /* Memory: five key sets and a frame (32 bytes a pixel each), the base
+     * skin (48: linear and sRGB copies), the shape (12) and scratch; refuse what cannot fit. */
+    double need = (double)o->size * (double)o->size * (6 * 32.0 + 48 + 12 + 16);
+    double phys = ss_memory_physical_bytes();
+    if (!st && phys > 0 && need > 0.8 * phys)
+        st = ss_error_set(err, SS_ERR_INPUT,
+                          "--size %d needs about %.1f GB, more than this machine's %.1f GB; "
+                          "use a smaller --size",
+                          o->size, need / 1e9, phys / 1e9);
+    if (!st) {
+        if (in->mask)
+            st = ss_wound_shape_from_mask(in->mask, o->size, o->seed, shape, err);
+        else
+            st = ss_wound_shape_from_strokes(&in->strokes, o->hull, o->concave_k, o->size, o->seed,
+                                             shape, err);
+        if (st && o->stroke) {
+            ss_error e2 = *err;
+            ss_error_set(err, st, "%s: %s", o->stroke, e2.msg);
+        }
+    }
+    return st;
+}
+
+/* Disk the outputs will take, generously: half the raw pixel bytes of every
+ * map (keys for each of the five phases, every frame), of the contact sheet
+ * (256-px tiles, 8 a row, as drawn below) and timeline.json. The procedural
+ * maps compress to about 15% of raw (11 MB for 1024 px and three times),
+ * photographs given as --upper to about 60%; a run that still outgrows the
+ * estimate fails with the old output intact. */
+static double estimate_bytes(const opts *o) {
+    double px = (double)o->size * (double)o->size;
+    double set = px * (3 + 1 + 2 + 3) + 4096;
+    if (o->exr) set += px * (6 + 2 + 2 + 6) + 4096;
+    double frame = set + (o->gltf ? px * 3 + 8192 : 0);
+    int cols = o->ntimes < 8 ? o->ntimes : 8, rows = (o->ntimes + 7) / 8;
+    double sheet = (cols * 276.0 + 20) * (rows * 320.0 + 20) * 3;
+    return 0.5 * (5 * set + o->ntimes * frame + sheet) + 4096.0 * (o->ntimes + 4);
+}
+
+static ss_status render(const opts *o, inputs *in, const ss_wound_shape *shape, const char *dir,
+                        cJSON *summary, ss_error *err) {
+    ss_status st = SS_OK;
     ss_base_skin skin = {0};
     ss_abrasion *ab = NULL;
     ss_texture_set frame = {0};
@@ -298,32 +356,11 @@ static ss_status run(const opts *o, const char *dir, cJSON *summary, ss_error *e
     set.seed = o->seed;
     ss_progress prog;
     double t0 = ss_now();
-    /* Memory: five key sets and a frame (32 bytes a pixel each), the base
-     * skin (48: linear and sRGB copies), the shape (12) and scratch; refuse what cannot fit. */
-    double need = (double)o->size * (double)o->size * (6 * 32.0 + 48 + 12 + 16);
-    double phys = ss_memory_physical_bytes();
-    if (!st && phys > 0 && need > 0.8 * phys)
-        st = ss_error_set(err, SS_ERR_INPUT,
-                          "--size %d needs about %.1f GB, more than this machine's %.1f GB; "
-                          "use a smaller --size",
-                          o->size, need / 1e9, phys / 1e9);
-    if (!st) {
-        if (in.mask)
-            st = ss_wound_shape_from_mask(in.mask, o->size, o->seed, &shape, err);
-        else
-            st = ss_wound_shape_from_strokes(&in.strokes, o->hull, o->concave_k, o->size, o->seed,
-                                             &shape, err);
-        if (st && o->stroke) {
-            ss_error e2 = *err;
-            ss_error_set(err, st, "%s: %s", o->stroke, e2.msg);
-        }
-    }
     /* Inputs are good: from here on, failures are runtime errors. */
-    if (!st) st = ss_check_writable_dir(dir, err);
-    if (!st) st = ss_base_skin_create(in.upper, in.lower, o->size, o->seed, &skin, err);
+    if (!st) st = ss_base_skin_create(in->upper, in->lower, o->size, o->seed, &skin, err);
     if (!st) {
         ss_progress_begin(&prog, "key positions", 1, o->quiet);
-        st = ss_abrasion_create(&set, &in.timeline, shape, &skin, &ab, err);
+        st = ss_abrasion_create(&set, &in->timeline, shape, &skin, &ab, err);
         ss_progress_end(&prog);
     }
     double t_keys = ss_now() - t0;
@@ -333,18 +370,18 @@ static ss_status run(const opts *o, const char *dir, cJSON *summary, ss_error *e
         st = ss_mkdir_p(sub, err);
     }
     cJSON *keys = cJSON_AddArrayToObject(summary, "keys");
-    for (int i = 0; i < in.timeline.nkeys && !st; i++) {
-        ss_phase ph = in.timeline.key[i].phase;
+    for (int i = 0; i < in->timeline.nkeys && !st; i++) {
+        ss_phase ph = in->timeline.key[i].phase;
         cJSON *k = cJSON_CreateObject();
         cJSON_AddItemToArray(keys, k);
         cJSON_AddStringToObject(k, "phase", ss_phase_name(ph));
-        cJSON_AddNumberToObject(k, "day", in.timeline.key[i].day);
+        cJSON_AddNumberToObject(k, "day", in->timeline.key[i].day);
         cJSON *files = cJSON_AddObjectToObject(k, "files");
         char stem[128];
         snprintf(stem, sizeof stem, "keys/%s", ss_phase_name(ph));
         if (i > 0) {
             int seen = 0;
-            for (int j = 0; j < i; j++) seen |= in.timeline.key[j].phase == ph;
+            for (int j = 0; j < i; j++) seen |= in->timeline.key[j].phase == ph;
             if (seen) { /* a double key outputs the same textures */
                 static const char *names[4] = {"color", "reflection", "height", "normal"};
                 for (int c = 0; c < 4; c++) {
@@ -357,7 +394,7 @@ static ss_status run(const opts *o, const char *dir, cJSON *summary, ss_error *e
         }
         st = write_set(dir, stem, &ab->phase[ph], o->exr, files, err);
     }
-    cJSON_AddNumberToObject(summary, "end_day", in.timeline.end_day);
+    cJSON_AddNumberToObject(summary, "end_day", in->timeline.end_day);
     if (!st) {
         snprintf(sub, sizeof sub, "%s/frames", dir);
         st = ss_mkdir_p(sub, err);
@@ -377,13 +414,13 @@ static ss_status run(const opts *o, const char *dir, cJSON *summary, ss_error *e
         cJSON *f = cJSON_CreateObject();
         cJSON_AddItemToArray(frames, f);
         cJSON_AddNumberToObject(f, "day", day);
-        ss_timeline_pos p = ss_timeline_locate(&in.timeline, day);
+        ss_timeline_pos p = ss_timeline_locate(&in->timeline, day);
         if (p.in_maturation) {
             cJSON_AddStringToObject(f, "phase", "maturation");
             cJSON_AddNumberToObject(f, "maturation_position", p.maturation_pos);
         } else {
-            cJSON_AddStringToObject(f, "from", ss_phase_name(in.timeline.key[p.key_a].phase));
-            cJSON_AddStringToObject(f, "to", ss_phase_name(in.timeline.key[p.key_b].phase));
+            cJSON_AddStringToObject(f, "from", ss_phase_name(in->timeline.key[p.key_a].phase));
+            cJSON_AddStringToObject(f, "to", ss_phase_name(in->timeline.key[p.key_b].phase));
             cJSON_AddNumberToObject(f, "weight", p.weight);
         }
         cJSON *files = cJSON_AddObjectToObject(f, "files");
@@ -433,8 +470,6 @@ static ss_status run(const opts *o, const char *dir, cJSON *summary, ss_error *e
     ss_texture_set_free(&frame);
     ss_abrasion_free(ab);
     ss_base_skin_free(&skin);
-    ss_wound_shape_free(shape);
-    inputs_free(&in);
     return st;
 }
 
@@ -450,10 +485,24 @@ int cmd_abrasion(int argc, char **argv) {
     }
     ss_threads_set(o.threads);
     cJSON *summary = cJSON_CreateObject();
-    char *staging = NULL;
-    ss_status st = ss_output_dir_begin(o.out, &staging, &err);
-    if (!st) st = run(&o, staging, summary, &err);
-    st = ss_output_dir_end(o.out, staging, st, &err);
+    /* The output folder: checked now, staged by begin, swapped in whole by
+     * finish (src/core/output.c). */
+    inputs in;
+    memset(&in, 0, sizeof in);
+    ss_wound_shape *shape = NULL;
+    ss_outputs *outs = ss_outputs_create(CMD, &err);
+    ss_status st = outs ? SS_OK : SS_ERR_NOMEM;
+    const char *ins[] = {o.stroke, o.mask, o.upper, o.lower, o.timeline};
+    for (size_t k = 0; k < sizeof ins / sizeof *ins && !st; k++)
+        st = ss_outputs_input(outs, ins[k], &err);
+    if (!st) st = ss_outputs_add(outs, "--out", o.out, SS_OUTPUT_DIR, estimate_bytes(&o), &err);
+    if (!st) st = prepare(&o, &in, &shape, &err);
+    if (!st) st = ss_outputs_begin(outs, &err);
+    if (!st) st = render(&o, &in, shape, ss_outputs_path(outs, 0), summary, &err);
+    st = ss_outputs_finish(outs, st, &err);
+    ss_outputs_free(outs);
+    ss_wound_shape_free(shape);
+    inputs_free(&in);
     if (!st && o.json) {
         cJSON_AddStringToObject(summary, "out", o.out);
         char *text = cJSON_PrintUnformatted(summary);
@@ -463,7 +512,6 @@ int cmd_abrasion(int argc, char **argv) {
         fprintf(stderr, "wrote %s (contact sheet: %s/contact_sheet.png)\n", o.out, o.out);
     }
     cJSON_Delete(summary);
-    free(staging);
     free(o.times);
     return st ? cli_fail(CMD, &err) : 0;
 }

@@ -65,7 +65,7 @@ static int parse_common(const char *cmd, int argc, char **argv, int *i, common_o
             *rc = cli_usage_error(cmd, "%s needs a value", a);
             return -1;
         }
-        if (cli_parse_int(a, argv[++*i], 1, 4096, &v, &e)) {
+        if (cli_parse_int(a, argv[++*i], 1, SS_THREADS_MAX, &v, &e)) {
             *rc = cli_fail(cmd, &e);
             return -1;
         }
@@ -139,6 +139,41 @@ static void spectrum_help(FILE *f) {
             COMMON_HELP);
 }
 
+/* The radial profile Rd(r) per channel as CSV at path. */
+static ss_status write_radial(const common_opts *c, int rbins, double rmax, const char *path,
+                              ss_error *e) {
+    double *prof = calloc((size_t)rbins * 3, sizeof *prof);
+    size_t cap = 64 + (size_t)rbins * 96, len = 0;
+    char *buf = malloc(cap);
+    ss_status st = prof && buf ? SS_OK : ss_error_set(e, SS_ERR_NOMEM, "out of memory");
+    if (!st) st = ss_optics_radial_profile_rgb(&c->bio, &c->spec, rbins, rmax, prof, e);
+    if (!st) {
+        len += (size_t)snprintf(buf, cap, "r_min_cm,r_max_cm,rd_r,rd_g,rd_b\n");
+        double dr = rmax / rbins;
+        for (int b = 0; b < rbins; b++)
+            len += (size_t)snprintf(buf + len, cap - len, "%.6g,%.6g,%.6g,%.6g,%.6g\n", b * dr,
+                                    (b + 1) * dr, prof[3 * b], prof[3 * b + 1], prof[3 * b + 2]);
+        st = ss_write_file_atomic(path, buf, len, e);
+    }
+    free(prof);
+    free(buf);
+    return st;
+}
+
+static ss_status write_spectrum_csv(const ss_reflectance_spectrum *s, const char *path,
+                                    ss_error *e) {
+    size_t cap = 64 + (size_t)s->n * 64, len = 0;
+    char *buf = malloc(cap);
+    if (!buf) return ss_error_set(e, SS_ERR_NOMEM, "out of memory");
+    len += (size_t)snprintf(buf + len, cap - len, "wavelength_nm,reflectance,std_error\n");
+    for (int i = 0; i < s->n; i++)
+        len += (size_t)snprintf(buf + len, cap - len, "%g,%.6f,%.6f\n", s->wavelength_nm[i],
+                                s->reflectance[i], s->std_error[i]);
+    ss_status st = ss_write_file_atomic(path, buf, len, e);
+    free(buf);
+    return st;
+}
+
 static int optics_spectrum(int argc, char **argv) {
     const char *cmd = "optics spectrum";
     common_opts c;
@@ -173,61 +208,43 @@ static int optics_spectrum(int argc, char **argv) {
         return cli_usage_error(cmd, "unknown option '%s'", argv[i]);
     }
     if ((rc = common_finish(cmd, &c))) return rc;
-    if (c.out && (rc = cli_check_output_file(cmd, c.out))) return rc;
-    if (radial_out && (rc = cli_check_output_file(cmd, radial_out))) return rc;
-    if (radial_out) {
-        double *prof = calloc((size_t)rbins * 3, sizeof *prof);
-        size_t cap = 64 + (size_t)rbins * 96, len = 0;
-        char *buf = malloc(cap);
-        ss_status st = prof && buf ? SS_OK : ss_error_set(&e, SS_ERR_NOMEM, "out of memory");
-        if (!st) st = ss_optics_radial_profile_rgb(&c.bio, &c.spec, (int)rbins, rmax, prof, &e);
-        if (!st) {
-            len += (size_t)snprintf(buf, cap, "r_min_cm,r_max_cm,rd_r,rd_g,rd_b\n");
-            double dr = rmax / rbins;
-            for (long b = 0; b < rbins; b++)
-                len +=
-                    (size_t)snprintf(buf + len, cap - len, "%.6g,%.6g,%.6g,%.6g,%.6g\n", b * dr,
-                                     (b + 1) * dr, prof[3 * b], prof[3 * b + 1], prof[3 * b + 2]);
-            st = ss_write_file_atomic(radial_out, buf, len, &e);
-        }
-        free(prof);
-        free(buf);
-        if (st) return cli_fail(cmd, &e);
+    /* Outputs checked before the Monte Carlo runs, written staged, swapped
+     * in together at the end (src/core/output.c). */
+    ss_outputs *outs = ss_outputs_create("optics", &e);
+    int i_out = -1, i_rad = -1;
+    ss_status st = outs ? SS_OK : SS_ERR_NOMEM;
+    if (!st && c.out) {
+        i_out = ss_outputs_count(outs);
+        st = ss_outputs_add(outs, "--out", c.out, SS_OUTPUT_FILE, 64.0 * 1024, &e);
     }
-    ss_reflectance_spectrum s;
-    ss_progress pr;
-    ss_progress_begin(&pr, "spectrum", 1.0, c.quiet || c.json);
-    c.spec.progress = progress_cb;
-    c.spec.progress_user = &pr;
-    ss_status sst = ss_optics_reflectance_spectrum(&c.bio, &c.spec, &s, &e);
-    ss_progress_end(&pr);
-    if (sst) return cli_fail(cmd, &e);
-    double rgb[3];
-    if (ss_spectrum_to_srgb_linear(s.wavelength_nm, s.reflectance, s.n, rgb, &e)) {
+    if (!st && radial_out) {
+        i_rad = ss_outputs_count(outs);
+        st = ss_outputs_add(outs, "--radial-out", radial_out, SS_OUTPUT_FILE, 64.0 * rbins + 4096,
+                            &e);
+    }
+    if (!st) st = ss_outputs_begin(outs, &e);
+    ss_reflectance_spectrum s = {0};
+    double rgb[3] = {0};
+    if (!st && radial_out)
+        st = write_radial(&c, (int)rbins, rmax, ss_outputs_path(outs, i_rad), &e);
+    if (!st) {
+        ss_progress pr;
+        ss_progress_begin(&pr, "spectrum", 1.0, c.quiet || c.json);
+        c.spec.progress = progress_cb;
+        c.spec.progress_user = &pr;
+        st = ss_optics_reflectance_spectrum(&c.bio, &c.spec, &s, &e);
+        ss_progress_end(&pr);
+    }
+    if (!st) st = ss_spectrum_to_srgb_linear(s.wavelength_nm, s.reflectance, s.n, rgb, &e);
+    if (!st && c.out) st = write_spectrum_csv(&s, ss_outputs_path(outs, i_out), &e);
+    st = ss_outputs_finish(outs, st, &e);
+    ss_outputs_free(outs);
+    if (st) {
         ss_reflectance_spectrum_free(&s);
         return cli_fail(cmd, &e);
     }
     double se_max = 0;
     for (int i = 0; i < s.n; i++) se_max = fmax(se_max, s.std_error[i]);
-    if (c.out) {
-        size_t cap = 64 + (size_t)s.n * 64, len = 0;
-        char *buf = malloc(cap);
-        if (!buf) {
-            ss_reflectance_spectrum_free(&s);
-            ss_error_set(&e, SS_ERR_NOMEM, "out of memory");
-            return cli_fail(cmd, &e);
-        }
-        len += (size_t)snprintf(buf + len, cap - len, "wavelength_nm,reflectance,std_error\n");
-        for (int i = 0; i < s.n; i++)
-            len += (size_t)snprintf(buf + len, cap - len, "%g,%.6f,%.6f\n", s.wavelength_nm[i],
-                                    s.reflectance[i], s.std_error[i]);
-        ss_status st = ss_write_file_atomic(c.out, buf, len, &e);
-        free(buf);
-        if (st) {
-            ss_reflectance_spectrum_free(&s);
-            return cli_fail(cmd, &e);
-        }
-    }
     if (c.json) {
         printf("{\"srgb_linear\": [%.6f, %.6f, %.6f], \"wavelength_nm\": [", rgb[0], rgb[1],
                rgb[2]);
@@ -294,34 +311,38 @@ static int optics_brdf(int argc, char **argv) {
     }
     if (!c.out) return cli_usage_error(cmd, "--out FILE.csv is required");
     if ((rc = common_finish(cmd, &c))) return rc;
-    if ((rc = cli_check_output_file(cmd, c.out))) return rc;
-    ss_brdf_sampled b;
-    ss_progress pr;
-    ss_progress_begin(&pr, "brdf", 1.0, c.quiet || c.json);
-    c.spec.progress = progress_cb;
-    c.spec.progress_user = &pr;
-    ss_status bst = ss_optics_brdf_sample(&c.bio, &c.spec, (int)nti, (int)ntr, (int)nph, &b, &e);
-    ss_progress_end(&pr);
-    if (bst) return cli_fail(cmd, &e);
     size_t nrow = (size_t)nti * ntr * nph, cap = 64 + nrow * 96, len = 0;
-    char *buf = malloc(cap);
-    if (!buf) {
-        ss_brdf_sampled_free(&b);
-        ss_error_set(&e, SS_ERR_NOMEM, "out of memory");
-        return cli_fail(cmd, &e);
+    ss_outputs *outs = ss_outputs_create("optics", &e);
+    ss_status st = outs ? SS_OK : SS_ERR_NOMEM;
+    if (!st) st = ss_outputs_add(outs, "--out", c.out, SS_OUTPUT_FILE, (double)cap, &e);
+    if (!st) st = ss_outputs_begin(outs, &e);
+    ss_brdf_sampled b = {0};
+    char *buf = NULL;
+    if (!st) {
+        ss_progress pr;
+        ss_progress_begin(&pr, "brdf", 1.0, c.quiet || c.json);
+        c.spec.progress = progress_cb;
+        c.spec.progress_user = &pr;
+        st = ss_optics_brdf_sample(&c.bio, &c.spec, (int)nti, (int)ntr, (int)nph, &b, &e);
+        ss_progress_end(&pr);
     }
-    len += (size_t)snprintf(buf, cap, "theta_i_deg,theta_r_deg,dphi_deg,f_r,f_g,f_b\n");
-    for (long ti = 0; ti < nti; ti++)
-        for (long tr = 0; tr < ntr; tr++)
-            for (long p = 0; p < nph; p++) {
-                const double *f = &b.f_rgb[((ti * ntr + tr) * nph + p) * 3];
-                len += (size_t)snprintf(buf + len, cap - len, "%.4f,%.4f,%.4f,%.6g,%.6g,%.6g\n",
-                                        (ti + 0.5) * 90.0 / nti, (tr + 0.5) * 90.0 / ntr,
-                                        (p + 0.5) * 180.0 / nph, f[0], f[1], f[2]);
-            }
-    ss_brdf_sampled_free(&b);
-    ss_status st = ss_write_file_atomic(c.out, buf, len, &e);
+    if (!st && !(buf = malloc(cap))) st = ss_error_set(&e, SS_ERR_NOMEM, "out of memory");
+    if (!st) {
+        len += (size_t)snprintf(buf, cap, "theta_i_deg,theta_r_deg,dphi_deg,f_r,f_g,f_b\n");
+        for (long ti = 0; ti < nti; ti++)
+            for (long tr = 0; tr < ntr; tr++)
+                for (long p = 0; p < nph; p++) {
+                    const double *f = &b.f_rgb[((ti * ntr + tr) * nph + p) * 3];
+                    len += (size_t)snprintf(buf + len, cap - len, "%.4f,%.4f,%.4f,%.6g,%.6g,%.6g\n",
+                                            (ti + 0.5) * 90.0 / nti, (tr + 0.5) * 90.0 / ntr,
+                                            (p + 0.5) * 180.0 / nph, f[0], f[1], f[2]);
+                }
+        st = ss_write_file_atomic(ss_outputs_path(outs, 0), buf, len, &e);
+    }
     free(buf);
+    ss_brdf_sampled_free(&b);
+    st = ss_outputs_finish(outs, st, &e);
+    ss_outputs_free(outs);
     if (st) return cli_fail(cmd, &e);
     if (c.json) printf("{\"out\": \"%s\", \"bins\": [%ld, %ld, %ld]}\n", c.out, nti, ntr, nph);
     return 0;
@@ -329,16 +350,21 @@ static int optics_brdf(int argc, char **argv) {
 
 /* ---- mci -------------------------------------------------------------------------- */
 static void mci_help(FILE *f) {
-    fprintf(f, "usage: skinsim optics mci FILE.mci [--seed S] [--threads N] [--json]\n\n"
+    fprintf(f, "usage: skinsim optics mci FILE.mci [--seed S] [--threads N] [--json]\n"
+               "                                  [--allow-outside-paths]\n\n"
                "Runs an MCML input file unchanged (MCML 1.2 format: version, number of runs;\n"
                "per run: output name and type A, photon count, dz dr [cm], nz nr na, number of\n"
                "layers, n above, one 'n mua mus g d' line per layer [1/cm, cm], n below).\n"
-               "Each run writes the MCML-style output file its input names, relative to the\n"
-               "current directory as MCML does: RAT (specular, diffuse reflectance, absorbed\n"
-               "fraction, transmittance), A_l, A_z, Rd_r, Rd_a, Tt_r, Tt_a. The whole file is\n"
-               "checked (values and output directories) before anything is run or written.\n"
+               "Each run writes the MCML-style output file its input names: RAT (specular,\n"
+               "diffuse reflectance, absorbed fraction, transmittance), A_l, A_z, Rd_r, Rd_a,\n"
+               "Tt_r, Tt_a. Output names are taken relative to the folder of FILE.mci (not the\n"
+               "current folder) and may not leave it (absolute names, '..', symlinks out)\n"
+               "unless --allow-outside-paths is given; an output may not be the .mci itself.\n"
+               "The whole file and every output are checked before anything is run; the\n"
+               "outputs appear together at the end, each whole.\n"
                "  --seed S      random seed (1)\n  --threads N   worker threads\n"
-               "  --json        print a summary of each run on stdout\n");
+               "  --json        print a summary of each run on stdout\n"
+               "  --allow-outside-paths   let the .mci name outputs anywhere\n");
 }
 
 static int optics_mci(int argc, char **argv) {
@@ -346,7 +372,7 @@ static int optics_mci(int argc, char **argv) {
     const char *file = NULL;
     uint64_t seed = 1;
     long threads = 0;
-    int json = 0;
+    int json = 0, outside = 0;
     ss_error e;
     ss_error_clear(&e);
     for (int i = 1; i < argc; i++) {
@@ -356,10 +382,12 @@ static int optics_mci(int argc, char **argv) {
         } else if (!strcmp(argv[i], "--seed") && i + 1 < argc) {
             if (cli_parse_u64("--seed", argv[++i], &seed, &e)) return cli_fail(cmd, &e);
         } else if (!strcmp(argv[i], "--threads") && i + 1 < argc) {
-            if (cli_parse_int("--threads", argv[++i], 1, 4096, &threads, &e))
+            if (cli_parse_int("--threads", argv[++i], 1, SS_THREADS_MAX, &threads, &e))
                 return cli_fail(cmd, &e);
         } else if (!strcmp(argv[i], "--json"))
             json = 1;
+        else if (!strcmp(argv[i], "--allow-outside-paths"))
+            outside = 1;
         else if (!strcmp(argv[i], "--quiet"))
             ;
         else if (argv[i][0] == '-')
@@ -378,37 +406,61 @@ static int optics_mci(int argc, char **argv) {
     ss_status st = ss_mci_parse(text, file, &mf, &e);
     free(text);
     if (st) return cli_fail(cmd, &e);
-    int rc = 0;
-    for (int r = 0; r < mf.nruns && !rc; r++) rc = cli_check_output_file(cmd, mf.runs[r].out_name);
-    if (json && !rc) printf("[");
-    for (int r = 0; r < mf.nruns && !rc; r++) {
+    /* Every run's output: inside the .mci's folder, not the .mci itself, not
+     * two runs to one file, not a device; all checked before the first run. */
+    char *folder = strdup(file);
+    char *sl = folder ? strrchr(folder, '/') : NULL;
+    if (sl) sl[sl == folder ? 1 : 0] = '\0';
+    ss_outputs *outs = ss_outputs_create("optics", &e);
+    char **paths = calloc((size_t)mf.nruns, sizeof *paths);
+    double(*rat)[4] = calloc((size_t)mf.nruns, sizeof *rat);
+    st = folder && outs && paths && rat ? SS_OK : ss_error_set(&e, SS_ERR_NOMEM, "out of memory");
+    if (!st) st = ss_outputs_input(outs, file, &e);
+    for (int r = 0; r < mf.nruns && !st; r++) {
+        ss_mci_run *run = &mf.runs[r];
+        char label[64];
+        snprintf(label, sizeof label, "%s run %d:", file, r + 1);
+        st = ss_path_under(sl ? folder : ".", run->out_name, outside, &paths[r], &e);
+        if (st) {
+            ss_error e2 = e;
+            ss_error_set(&e, st, "%s run %d: %s", file, r + 1, e2.msg);
+        }
+        double bytes = 8192.0 + 40.0 * (run->nz + 2.0 * run->nr + 2.0 * run->na + 8);
+        if (!st) st = ss_outputs_add(outs, label, paths[r], SS_OUTPUT_FILE, bytes, &e);
+    }
+    if (!st) st = ss_outputs_begin(outs, &e);
+    for (int r = 0; r < mf.nruns && !st; r++) {
         char *mco = NULL;
         st = ss_mci_simulate(&mf.runs[r], seed, &mco, &e);
-        if (!st) st = ss_write_file_atomic(mf.runs[r].out_name, mco, strlen(mco), &e);
-        if (st) {
-            free(mco);
-            rc = cli_fail(cmd, &e);
-            break;
-        }
-        if (json) {
-            /* RAT lines follow "RAT #" in the text */
-            const char *p = strstr(mco, "RAT #");
-            double v[4] = {0};
-            if (p) {
-                p = strchr(p, '\n');
-                for (int k = 0; k < 4 && p; k++) {
-                    v[k] = strtod(p + 1, NULL);
-                    p = strchr(p + 1, '\n');
-                }
+        if (!st) st = ss_write_file_atomic(ss_outputs_path(outs, r), mco, strlen(mco), &e);
+        /* RAT lines follow "RAT #" in the text */
+        const char *p = mco ? strstr(mco, "RAT #") : NULL;
+        if (p) {
+            p = strchr(p, '\n');
+            for (int k = 0; k < 4 && p; k++) {
+                rat[r][k] = strtod(p + 1, NULL);
+                p = strchr(p + 1, '\n');
             }
-            printf("%s{\"out\": \"%s\", \"specular\": %g, \"diffuse\": %g, \"absorbed\": %g, "
-                   "\"transmittance\": %g}",
-                   r ? ", " : "", mf.runs[r].out_name, v[0], v[1], v[2], v[3]);
-        } else
-            fprintf(stderr, "skinsim optics mci: wrote %s\n", mf.runs[r].out_name);
+        }
         free(mco);
     }
-    if (json && !rc) printf("]\n");
+    st = ss_outputs_finish(outs, st, &e);
+    int rc = st ? cli_fail(cmd, &e) : 0;
+    if (json && !rc) {
+        printf("[");
+        for (int r = 0; r < mf.nruns; r++)
+            printf("%s{\"out\": \"%s\", \"specular\": %g, \"diffuse\": %g, \"absorbed\": "
+                   "%g, \"transmittance\": %g}",
+                   r ? ", " : "", paths[r], rat[r][0], rat[r][1], rat[r][2], rat[r][3]);
+        printf("]\n");
+    } else if (!rc)
+        for (int r = 0; r < mf.nruns; r++)
+            fprintf(stderr, "skinsim optics mci: wrote %s\n", paths[r]);
+    ss_outputs_free(outs);
+    for (int r = 0; paths && r < mf.nruns; r++) free(paths[r]);
+    free(paths);
+    free(rat);
+    free(folder);
     ss_mci_file_free(&mf);
     return rc;
 }
@@ -447,6 +499,7 @@ static int optics_swatch(int argc, char **argv) {
     double *mel = NULL, *bl = NULL;
     int nmel = 0, nbl = 0;
     long cell = 96;
+    ss_outputs *outs = NULL;
     ss_error e;
     ss_error_clear(&e);
     for (int i = 1; i < argc; i++) {
@@ -497,7 +550,12 @@ static int optics_swatch(int argc, char **argv) {
         goto out;
     }
     if ((rc = common_finish(cmd, &c))) goto out;
-    if ((rc = cli_check_output_file(cmd, c.out))) goto out;
+    outs = ss_outputs_create("optics", &e);
+    if (!outs || ss_outputs_add(outs, "--out", c.out, SS_OUTPUT_FILE, 3.0 * 1024 * 1024, &e) ||
+        ss_outputs_begin(outs, &e)) {
+        rc = cli_fail(cmd, &e);
+        goto out;
+    }
     const double *M = mel ? mel : mel_def, *B = bl ? bl : bl_def;
     if (!mel) nmel = (int)(sizeof mel_def / sizeof mel_def[0]);
     if (!bl) nbl = (int)(sizeof bl_def / sizeof bl_def[0]);
@@ -615,8 +673,9 @@ static int optics_swatch(int argc, char **argv) {
             }
     }
     cairo_surface_destroy(sf);
-    st = img ? ss_png_write(c.out, img, 8, SS_ENC_SRGB, &e) : SS_ERR_NOMEM;
+    st = img ? ss_png_write(ss_outputs_path(outs, 0), img, 8, SS_ENC_SRGB, &e) : SS_ERR_NOMEM;
     ss_image_free(img);
+    st = ss_outputs_finish(outs, st, &e);
     if (st) {
         free(rgb);
         rc = cli_fail(cmd, &e);
@@ -635,6 +694,7 @@ static int optics_swatch(int argc, char **argv) {
     }
     free(rgb);
 out:
+    ss_outputs_free(outs); /* rolls back whatever was not finished */
     free(mel);
     free(bl);
     return rc;

@@ -92,7 +92,7 @@ static int parse_shared(const char *cmd, int argc, char **argv, int *i, fit_cli 
         {"--theta-i", &c->build.n_theta_i, 1, 64},
         {"--theta-r", &c->build.n_theta_r, 1, 64},
         {"--phi", &c->build.n_phi, 1, 64},
-        {"--threads", &c->threads, 1, 4096},
+        {"--threads", &c->threads, 1, SS_THREADS_MAX},
     };
     for (size_t k = 0; k < sizeof ints / sizeof ints[0]; k++) {
         if (strcmp(a, ints[k].name)) continue;
@@ -444,7 +444,19 @@ int cmd_optics_table(int argc, char **argv) {
         ss_mm_table_free(t);
         return 0;
     }
-    if ((rc = cli_check_output_file(cmd, c.out))) return rc;
+    /* the table file: checked now, staged, swapped in whole when built */
+    ss_outputs *outs = ss_outputs_create("optics", &e);
+    ss_status st = outs ? SS_OK : SS_ERR_NOMEM;
+    double bytes = 8.0 * SS_MM_NFIELDS;
+    for (int a = 0; a < SS_MM_NAXES; a++)
+        bytes *= c.axis_values[a] ? c.axis_count[a] : (int)c.samples;
+    if (!st) st = ss_outputs_add(outs, "--out", c.out, SS_OUTPUT_FILE, bytes + 4096, &e);
+    if (!st) st = ss_outputs_begin(outs, &e);
+    if (st) {
+        ss_outputs_free(outs);
+        for (int a = 0; a < SS_MM_NAXES; a++) free(c.axis_values[a]);
+        return cli_fail(cmd, &e);
+    }
     int ns[SS_MM_NAXES];
     double lo[SS_MM_NAXES], hi[SS_MM_NAXES];
     for (int a = 0; a < SS_MM_NAXES; a++) {
@@ -456,12 +468,17 @@ int cmd_optics_table(int argc, char **argv) {
         if (c.axis_values[a])
             for (int k = 0; k < ns[a]; k++) t->axis[a][k] = c.axis_values[a][k];
     for (int a = 0; a < SS_MM_NAXES; a++) free(c.axis_values[a]);
-    if (!t) return cli_fail(cmd, &e);
+    if (!t) {
+        ss_outputs_free(outs);
+        return cli_fail(cmd, &e);
+    }
     c.build.base = c.bio; /* bilirubin, beta-carotene (the non-axis parameters) */
     double t0 = ss_now();
-    ss_status st = ss_mm_table_build(t, &c.build, &e);
+    st = ss_mm_table_build(t, &c.build, &e);
     double secs = ss_now() - t0;
-    if (!st) st = ss_mm_table_write(c.out, t, &e);
+    if (!st) st = ss_mm_table_write(ss_outputs_path(outs, 0), t, &e);
+    st = ss_outputs_finish(outs, st, &e);
+    ss_outputs_free(outs);
     if (st) {
         ss_mm_table_free(t);
         return cli_fail(cmd, &e);

@@ -7,7 +7,10 @@
 static const cli_command commands[] = {
     {"abrasion", "abrasion-healing texture timeline (seed 000)", cmd_abrasion},
     {"heal", "3D wound-healing simulation: fields, area curve, VTK (seed 001)", cmd_heal},
+    {"wound", "a healing wound as skin textures day by day (seeds 001 + 003 + 000)", cmd_wound},
     {"optics", "skin light transport: spectra, colour, BRDF, MCML files (seed 003)", cmd_optics},
+    {"skin", "procedural skin textures from biological features (seed 003)", cmd_skin},
+    {"view", "paint a wound on a 3D body and scrub its healing (GTK 4 window)", cmd_view},
 };
 static const int ncommands = (int)(sizeof commands / sizeof commands[0]);
 
@@ -39,6 +42,13 @@ int main(int argc, char **argv) {
     if (!strcmp(cmd, "--version") || !strcmp(cmd, "-V")) {
         printf("skinsim %s\n", SKINSIM_VERSION);
         return 0;
+    }
+    /* SKINSIM_THREADS is checked like --threads, once for every command */
+    ss_error err;
+    ss_error_clear(&err);
+    if (ss_threads_check_env(&err)) {
+        fprintf(stderr, "skinsim: error: %s\n", err.msg);
+        return 2;
     }
     for (int i = 0; i < ncommands; i++)
         if (!strcmp(cmd, commands[i].name)) return commands[i].run(argc - 1, argv + 1);

@@ -46,10 +46,10 @@ int main(int argc, char **argv) {
     ss_optics_slab skin;
     memset(&skin, 0, sizeof skin);
     skin.nlayers = 4;
-    skin.layer[0] = (ss_optics_layer){1.55, 0.4605, 373.6, 0.90, 0.001};
-    skin.layer[1] = (ss_optics_layer){1.40, 5.479, 373.6, 0.90, 0.01};
-    skin.layer[2] = (ss_optics_layer){1.36, 1.643, 169.4, 0.7795, 0.02};
-    skin.layer[3] = (ss_optics_layer){1.38, 1.643, 169.4, 0.7795, 0.18};
+    skin.layer[0] = (ss_optics_layer){1.55, 0.4605, 373.6, 0.90, 0.001, 0, {0}};
+    skin.layer[1] = (ss_optics_layer){1.40, 5.479, 373.6, 0.90, 0.01, 0, {0}};
+    skin.layer[2] = (ss_optics_layer){1.36, 1.643, 169.4, 0.7795, 0.02, 0, {0}};
+    skin.layer[3] = (ss_optics_layer){1.38, 1.643, 169.4, 0.7795, 0.18, 0, {0}};
     skin.n_above = 1.0;
     skin.n_below = 1.44;
     skin.bottom_albedo = -1.0;
@@ -76,7 +76,7 @@ int main(int argc, char **argv) {
     ss_optics_slab v;
     memset(&v, 0, sizeof v);
     v.nlayers = 1;
-    v.layer[0] = (ss_optics_layer){1.0, 10, 90, 0.75, 0.02};
+    v.layer[0] = (ss_optics_layer){1.0, 10, 90, 0.75, 0.02, 0, {0}};
     v.n_above = v.n_below = 1.0;
     v.bottom_albedo = -1;
     ss_mc_options ov = o;

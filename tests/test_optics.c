@@ -23,7 +23,7 @@ static ss_optics_slab one_layer(double n, double mua, double mus, double g, doub
     ss_optics_slab s;
     memset(&s, 0, sizeof s);
     s.nlayers = 1;
-    s.layer[0] = (ss_optics_layer){n, mua, mus, g, d};
+    s.layer[0] = (ss_optics_layer){n, mua, mus, g, d, 0, {0}};
     s.n_above = s.n_below = 1.0;
     s.bottom_albedo = -1.0;
     return s;
@@ -105,9 +105,9 @@ static void test_energy_conservation(void **state) {
     ss_optics_slab m;
     memset(&m, 0, sizeof m);
     m.nlayers = 3;
-    m.layer[0] = (ss_optics_layer){1.5, 2, 50, 0.8, 0.01};
-    m.layer[1] = (ss_optics_layer){1.33, 0.5, 100, 0.9, 0.05};
-    m.layer[2] = (ss_optics_layer){1.4, 5, 20, 0.0, 0.1};
+    m.layer[0] = (ss_optics_layer){1.5, 2, 50, 0.8, 0.01, 0, {0}};
+    m.layer[1] = (ss_optics_layer){1.33, 0.5, 100, 0.9, 0.05, 0, {0}};
+    m.layer[2] = (ss_optics_layer){1.4, 5, 20, 0.0, 0.1, 0, {0}};
     m.n_above = 1.0;
     m.n_below = 1.2;
     m.bottom_albedo = -1;

@@ -549,7 +549,12 @@ static void test_fast_brdf_close_to_direct(void **state) {
                     sd += w * direct.f_rgb[k];
                 }
             }
-            assert_true(fabs(sf - sd) < 0.05 * sd);
+            /* 5 %, or about 4 standard errors of the difference for the dark
+             * blue channel (0.04 at melanin 0.1: per-wavelength SE ~ 0.0005,
+             * the sRGB blue row weights them by up to ~1.5) */
+            if (!(fabs(sf - sd) < 0.05 * sd + 0.004))
+                printf("ti %d c %d: fast %.5f direct %.5f\n", ti, c, sf, sd);
+            assert_true(fabs(sf - sd) < 0.05 * sd + 0.004);
         }
     ss_brdf_sampled_free(&fast);
     ss_brdf_sampled_free(&direct);

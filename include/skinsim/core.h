@@ -1,7 +1,14 @@
 /* skinsim core: errors, float images, PNG/EXR I/O, counter-based RNG, threads,
  * progress and atomic file writes. Every other module builds on these; none of
  * it exits or aborts: failures come back as an ss_status with a message that
- * names the input and what was wrong. */
+ * names the input and what was wrong.
+ *
+ * What is stable: every type and function declared in include/skinsim/ is the
+ * library's API (one header per module). The shared library's soname
+ * (libskinsim.so.MAJOR) changes whenever a declared struct layout or function
+ * signature changes incompatibly; while MAJOR is 0, expect that between
+ * minor releases. Names with a double underscore and the src/ headers
+ * (*_internal.h) are not API. */
 #ifndef SKINSIM_CORE_H
 #define SKINSIM_CORE_H
 
@@ -51,6 +58,9 @@ typedef struct ss_image {
 /* Returns NULL (and sets err) on a bad size or when memory runs out. Pixels are
  * zeroed. Sizes above SS_IMAGE_MAX_SIDE per side are refused. */
 #define SS_IMAGE_MAX_SIDE 65536
+/* Up to 16 channels: RGBA images, and parameter maps (skin and wound bio maps)
+ * (file writers other than ss_exr_write_channels take 1-4). */
+#define SS_IMAGE_MAX_CHANNELS 16
 ss_image *ss_image_create(int width, int height, int channels, ss_error *err);
 /* Same, pixels left undefined: for images the caller overwrites entirely. */
 ss_image *ss_image_create_uninit(int width, int height, int channels, ss_error *err);
@@ -98,6 +108,12 @@ ss_image *ss_png_read(const char *path, ss_encoding enc, ss_error *err);
  * channels named Y / YA / RGB / RGBA. Atomic. */
 ss_status ss_exr_write(const char *path, const ss_image *img, int use_half, ss_error *err);
 ss_image *ss_exr_read(const char *path, ss_error *err);
+/* Any number of channels (1-64) with the given names, in the image's
+ * channel order (a float map of several quantities, e.g. skin's bio.exr).
+ * Reading: each named channel must exist; the image has them in that order. */
+ss_status ss_exr_write_channels(const char *path, const ss_image *img, const char *const *names,
+                                int use_half, ss_error *err);
+ss_image *ss_exr_read_channels(const char *path, const char *const *names, int n, ss_error *err);
 /* Picks PNG or EXR from the extension (.png, .exr). For PNG, enc applies. */
 ss_image *ss_image_read(const char *path, ss_encoding enc, ss_error *err);
 
@@ -118,15 +134,102 @@ char *ss_read_file(const char *path, size_t *len, ss_error *err);
 ss_status ss_mkdir_p(const char *path, ss_error *err);
 /* Checks that dir exists (or can be created) and a file can be created in it. */
 ss_status ss_check_writable_dir(const char *dir, ss_error *err);
-/* Output directories that appear whole or not at all. begin: when dir does
- * not exist yet, *work is a fresh sibling "dir.partial-XXXXXX" to write into;
- * when it exists, *work is dir itself (each file is still written
- * atomically). end: on status SS_OK renames the staging directory into place;
- * otherwise removes it. Returns the final status. *work is malloc'd. */
+/* Older form of the folder discipline, kept for callers not yet on
+ * ss_outputs: begin stages dir (new or existing) as "dir.skinsim-staging.*"
+ * and *work is where to write; end swaps it in whole on SS_OK (with the
+ * completion marker) or removes it. No lock and no checks: use ss_outputs. */
 ss_status ss_output_dir_begin(const char *dir, char **work, ss_error *err);
 ss_status ss_output_dir_end(const char *dir, const char *work, ss_status status, ss_error *err);
 /* rm -rf of a directory tree (used to clean up a failed staging directory). */
 void ss_remove_tree(const char *path);
+
+/* ---- outputs: checked before work, staged, swapped in whole --------------
+ *
+ * Every command writes every output (a single file or a folder) through one
+ * ss_outputs set (src/core/output.c, docs/reliability.md):
+ *
+ *     ss_outputs *outs = ss_outputs_create("abrasion", &err);
+ *     st = ss_outputs_input(outs, stroke_csv, &err);        // may not be overwritten
+ *     st = ss_outputs_add(outs, "--out", dir, SS_OUTPUT_DIR, bytes_estimate, &err);
+ *     ...read and check the inputs...
+ *     st = ss_outputs_begin(outs, &err);                    // lock, clean, disk, stage
+ *     ...write everything under ss_outputs_path(outs, 0)...
+ *     st = ss_outputs_finish(outs, st, &err);               // swap in, or roll back
+ *     ss_outputs_free(outs);
+ *
+ * add checks a path at once, without touching the disk: empty, too long, a
+ * broken symlink, a device, pipe or socket (never replaced), a folder where a
+ * file is wanted, a folder that is not this command's finished output (no
+ * completion marker), two outputs naming the same place, an output that is
+ * or holds an input: each is SS_ERR_INPUT naming the option and the path.
+ * begin creates missing parent folders, takes NAME.skinsim-lock (a second run
+ * into the same output gets SS_ERR_INPUT naming the process that holds it; the
+ * kernel drops the lock when a run dies), removes what killed runs left next
+ * to the target, refuses (SS_ERR_INPUT) when the estimates exceed the free
+ * space, and makes a staging folder NAME.skinsim-staging.PID.XXXXXX next to
+ * each target. finish(SS_OK) marks folders complete (.skinsim-complete) and
+ * swaps each staged output in with one rename (the old one stays until all
+ * are in, and comes back if any swap fails); finish(error) removes the
+ * staging and the folders begin created, leaving every old output as it was,
+ * and rewrites staging paths in err back to the names the user gave. */
+typedef enum ss_output_kind {
+    SS_OUTPUT_FILE = 0, /* one regular file */
+    SS_OUTPUT_DIR = 1   /* a folder the command owns and replaces whole */
+} ss_output_kind;
+typedef struct ss_outputs ss_outputs;
+
+/* owner: the command name written into the completion marker of its
+ * folders ("abrasion"); an existing folder is replaced only when its marker
+ * names the same owner (or it is empty). NULL on out of memory. */
+ss_outputs *ss_outputs_create(const char *owner, ss_error *err);
+/* Registers an input file: no output may be it or contain it. Missing
+ * inputs are ignored here (their reader reports them). */
+ss_status ss_outputs_input(ss_outputs *o, const char *path, ss_error *err);
+/* Adds output number ss_outputs_count() (0, 1, ...). label names it in
+ * messages ("--out"); bytes is the estimated size written (0 = unknown). */
+ss_status ss_outputs_add(ss_outputs *o, const char *label, const char *path, ss_output_kind kind,
+                         double bytes, ss_error *err);
+int ss_outputs_count(const ss_outputs *o);
+ss_status ss_outputs_begin(ss_outputs *o, ss_error *err);
+/* Where output i is written between begin and finish: the staging folder
+ * itself for SS_OUTPUT_DIR, a file of the target's name inside it for
+ * SS_OUTPUT_FILE (so extensions are kept). */
+const char *ss_outputs_path(const ss_outputs *o, int i);
+/* The resolved absolute target of output i (symlinks followed). */
+const char *ss_outputs_target(const ss_outputs *o, int i);
+ss_status ss_outputs_finish(ss_outputs *o, ss_status status, ss_error *err);
+/* Rolls back anything begun and not finished, releases locks, frees. */
+void ss_outputs_free(ss_outputs *o);
+/* 1 when dir holds a completion marker (of owner, or of any owner when NULL). */
+int ss_output_dir_is_complete(const char *dir, const char *owner);
+/* Writes or removes dir's completion marker (for outputs a command keeps
+ * updating in place, such as a resumable run). */
+ss_status ss_output_dir_mark_complete(const char *dir, const char *owner, ss_error *err);
+ss_status ss_output_dir_mark_incomplete(const char *dir, ss_error *err);
+#define SS_OUTPUT_MARKER ".skinsim-complete"
+
+/* An output path named by an input file (an .mci's run outputs): name is
+ * taken relative to base_dir; absolute names and names that leave base_dir
+ * (after "..", symlinks followed) are SS_ERR_INPUT unless allow_outside.
+ * *out is malloc'd. */
+ss_status ss_path_under(const char *base_dir, const char *name, int allow_outside, char **out,
+                        ss_error *err);
+
+/* ---- inputs: never block, never allocate what the machine lacks --------- */
+
+/* Opens an input for reading after checking it is a regular file (a named
+ * pipe without writer, a device, a socket or a folder is SS_ERR_INPUT, and
+ * the open never blocks). *size (may be NULL) gets its size. */
+int ss_input_open_fd(const char *path, size_t *size, ss_error *err);
+FILE *ss_input_open(const char *path, size_t *size, ss_error *err);
+/* Memory this process can still allocate, in bytes: the smallest of the
+ * available memory, its address-space limit and its cgroup's limit. */
+double ss_memory_available_bytes(void);
+/* Checks a width x height x channels float image named by an input header
+ * before it is allocated: sides within SS_IMAGE_MAX_SIDE and the bytes
+ * within the available memory, else SS_ERR_INPUT naming the size. */
+ss_status ss_image_check_alloc(const char *name, long width, long height, int channels,
+                               ss_error *err);
 
 /* Text helpers for file readers. next_line: copies the next line of p
  * (\n, \r\n or \r endings) into buf, truncating and setting *too_long when
@@ -137,9 +240,14 @@ const char *ss_text_next_line(const char *p, char *buf, size_t bufsize, int *too
 char *ss_text_trim(char *s);
 int ss_text_parse_number(const char *s, double *out);
 
-/* Directory with the shipped data files: $SKINSIM_DATA, else the build-time
+/* Directory with the shipped data files: $SKINSIM_DATA, else the
+ * share/skinsim folder of an installed copy (found next to the library or
+ * program file, so an installed tree can be moved), else the build-time
  * source data directory. */
 const char *ss_data_dir(void);
+/* The library's version, "MAJOR.MINOR.PATCH" (the shared library's soname
+ * carries MAJOR). */
+const char *ss_version(void);
 
 /* ---- random numbers ------------------------------------------------------ */
 
@@ -174,6 +282,13 @@ double ss_rng_seq_uniform_open(ss_rng_seq *r); /* (0,1), safe for log() */
 /* Thread count: n > 0 uses n; n == 0 uses $SKINSIM_THREADS, else all cores.
  * Returns the count in force. */
 int ss_threads_set(int n);
+/* Largest thread count accepted (--threads and SKINSIM_THREADS). */
+#define SS_THREADS_MAX 1024
+/* Parses a thread count as --threads and $SKINSIM_THREADS take it: an
+ * integer 1..SS_THREADS_MAX; what names the source in the message. */
+ss_status ss_threads_parse(const char *what, const char *s, int *n, ss_error *err);
+/* Checks $SKINSIM_THREADS (unset or empty is fine): SS_ERR_INPUT otherwise. */
+ss_status ss_threads_check_env(ss_error *err);
 int ss_threads_get(void);
 
 /* ---- progress ------------------------------------------------------------ */

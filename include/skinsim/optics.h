@@ -45,8 +45,16 @@ ss_status ss_bio_params_validate(const ss_bio_params *p, ss_error *err);
 
 /* ---- layered slab ----------------------------------------------------------- */
 #define SS_OPTICS_MAX_LAYERS 16
+#define SS_OPTICS_PHASE_MAX 65
 typedef struct ss_optics_layer {
     double n, mua_per_cm, mus_per_cm, g, d_cm;
+    /* Optional tabulated phase function (phase_n = 0: Henyey-Greenstein with
+     * g). phase_theta[k] is the polar deflection angle (rad, non-decreasing in
+     * [0, pi]) at cumulative probability k / (phase_n - 1), azimuth uniform;
+     * g should then hold its mean cosine (informational). Used for the stratum
+     * corneum and epidermis (Bruls & van der Leun 1984, docs/optics.md). */
+    int phase_n;
+    double phase_theta[SS_OPTICS_PHASE_MAX];
 } ss_optics_layer;
 typedef struct ss_optics_slab {
     int nlayers;
@@ -182,6 +190,16 @@ void ss_brdf_sampled_free(ss_brdf_sampled *b);
  * colour-matrix row can be. o->mc.radial_* are ignored. */
 ss_status ss_optics_radial_profile_rgb(const ss_bio_params *bio, const ss_spectrum_options *o,
                                        int bins, double max_cm, double *rgb, ss_error *err);
+
+/* ---- CIELAB and CIEDE2000 (src/optics/colour.c) ---------------------------------- */
+/* Linear sRGB (white-normalised albedo, as above) <-> CIELAB, D65 white. */
+void ss_srgb_linear_to_lab(const double rgb[3], double lab[3]);
+void ss_lab_to_srgb_linear(const double lab[3], double rgb[3]);
+/* Chroma C*ab, hue angle h_ab in degrees [0, 360) and individual typology
+ * angle ITA = atan((L* - 50) / b*) in degrees; any output may be NULL. */
+void ss_lab_describe(const double lab[3], double *chroma, double *hue_deg, double *ita_deg);
+/* CIEDE2000 colour difference (kL = kC = kH = 1; Sharma, Wu & Dalal 2005). */
+double ss_ciede2000(const double lab1[3], const double lab2[3]);
 
 #ifdef __cplusplus
 }

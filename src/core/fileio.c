@@ -66,22 +66,13 @@ ss_status ss_write_file_atomic(const char *path, const void *data, size_t len, s
 }
 
 char *ss_read_file(const char *path, size_t *len, ss_error *err) {
-    FILE *f = fopen(path, "rb");
-    if (!f) {
-        ss_error_set(err, SS_ERR_INPUT, "%s: cannot open: %s", path, strerror(errno));
-        return NULL;
-    }
-    struct stat st;
-    if (fstat(fileno(f), &st) != 0 || !S_ISREG(st.st_mode)) {
-        fclose(f);
-        ss_error_set(err, SS_ERR_INPUT, "%s: not a regular file", path);
-        return NULL;
-    }
-    size_t n = (size_t)st.st_size;
+    size_t n = 0;
+    FILE *f = ss_input_open(path, &n, err); /* regular files only, never blocks */
+    if (!f) return NULL;
     char *buf = malloc(n + 1);
     if (!buf) {
         fclose(f);
-        ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory reading %zu bytes", path, n);
+        ss_error_set(err, SS_ERR_INPUT, "%s: %zu bytes do not fit in memory", path, n);
         return NULL;
     }
     size_t got = fread(buf, 1, n, f);
@@ -156,16 +147,6 @@ ss_status ss_check_writable_dir(const char *dir, ss_error *err) {
     return SS_OK;
 }
 
-const char *ss_data_dir(void) {
-    const char *env = getenv("SKINSIM_DATA");
-    if (env && *env) return env;
-#ifdef SKINSIM_DATA_DIR
-    return SKINSIM_DATA_DIR;
-#else
-    return "data";
-#endif
-}
-
 static int unlink_cb(const char *path, const struct stat *sb, int flag, struct FTW *ftw) {
     (void)sb;
     (void)flag;
@@ -175,58 +156,4 @@ static int unlink_cb(const char *path, const struct stat *sb, int flag, struct F
 
 void ss_remove_tree(const char *path) {
     if (path && *path) nftw(path, unlink_cb, 16, FTW_DEPTH | FTW_PHYS);
-}
-
-ss_status ss_output_dir_begin(const char *dir, char **work, ss_error *err) {
-    *work = NULL;
-    struct stat st;
-    if (stat(dir, &st) == 0) {
-        if (!S_ISDIR(st.st_mode))
-            return ss_error_set(err, SS_ERR_INPUT, "%s: exists and is not a directory", dir);
-        if (access(dir, W_OK | X_OK) != 0)
-            return ss_error_set(err, SS_ERR_INPUT, "%s: directory is not writable", dir);
-        *work = strdup(dir);
-        return *work ? SS_OK : ss_error_set(err, SS_ERR_NOMEM, "out of memory");
-    }
-    ss_status s = ss_check_writable_dir(dir, err);
-    if (s) return s;
-    /* Create the parents, then a staging sibling next to dir. */
-    char parent[4096];
-    snprintf(parent, sizeof parent, "%s", dir);
-    size_t n = strlen(parent);
-    while (n > 1 && parent[n - 1] == '/') parent[--n] = '\0';
-    char *slash = strrchr(parent, '/');
-    if (slash && slash != parent) {
-        *slash = '\0';
-        if ((s = ss_mkdir_p(parent, err))) return s;
-    }
-    size_t len = strlen(dir) + 32;
-    char *tmpl = malloc(len);
-    if (!tmpl) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
-    snprintf(tmpl, len, "%.*s.partial-XXXXXX", (int)n, dir);
-    if (!mkdtemp(tmpl)) {
-        int e = errno;
-        free(tmpl);
-        return ss_error_set(err, SS_ERR_INPUT, "%s: cannot create output directory: %s", dir,
-                            strerror(e));
-    }
-    chmod(tmpl, 0755);
-    *work = tmpl;
-    return SS_OK;
-}
-
-ss_status ss_output_dir_end(const char *dir, const char *work, ss_status status, ss_error *err) {
-    if (!work) return status;
-    if (strcmp(dir, work) == 0) return status;
-    if (status) {
-        ss_remove_tree(work);
-        return status;
-    }
-    if (rename(work, dir) != 0) {
-        int e = errno;
-        ss_remove_tree(work);
-        return ss_error_set(err, SS_ERR_RUNTIME, "%s: cannot move output into place: %s", dir,
-                            strerror(e));
-    }
-    return SS_OK;
 }

@@ -2,6 +2,7 @@
  * colour channels only at this boundary (images in memory are linear). */
 #include "skinsim/core.h"
 
+#include <errno.h>
 #include <png.h>
 #include <setjmp.h>
 #include <stdlib.h>
@@ -33,6 +34,8 @@ ss_status ss_png_write(const char *path, const ss_image *img, int bits, ss_encod
     static const int types[5] = {0, PNG_COLOR_TYPE_GRAY, PNG_COLOR_TYPE_GRAY_ALPHA,
                                  PNG_COLOR_TYPE_RGB, PNG_COLOR_TYPE_RGBA};
     int ch = img->channels;
+    if (ch < 1 || ch > 4)
+        return ss_error_set(err, SS_ERR_INPUT, "%s: PNG holds 1..4 channels, not %d", path, ch);
     size_t rowbytes = (size_t)img->width * (size_t)ch * (size_t)(bits / 8);
     unsigned char *row = malloc(rowbytes);
     if (!row) return ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", path);
@@ -46,9 +49,13 @@ ss_status ss_png_write(const char *path, const ss_image *img, int bits, ss_encod
         png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, png_error_quiet, png_warning_quiet);
     png_infop info = png ? png_create_info_struct(png) : NULL;
     if (!info || setjmp(png_jmpbuf(png))) {
+        int e = errno, wrote_badly = af.fp && ferror(af.fp);
         png_destroy_write_struct(&png, &info);
         ss_atomic_abort(&af);
         free(row);
+        if (wrote_badly) /* a full disk, a quota, an I/O error */
+            return ss_error_set(err, SS_ERR_RUNTIME, "%s: cannot write: %s", path,
+                                e ? strerror(e) : "write error");
         return ss_error_set(err, SS_ERR_RUNTIME, "%s: PNG encoding failed", path);
     }
     png_init_io(png, af.fp);
@@ -84,11 +91,9 @@ ss_status ss_png_write(const char *path, const ss_image *img, int bits, ss_encod
 }
 
 ss_image *ss_png_read(const char *path, ss_encoding enc, ss_error *err) {
-    FILE *f = fopen(path, "rb");
-    if (!f) {
-        ss_error_set(err, SS_ERR_INPUT, "%s: cannot open PNG file", path);
-        return NULL;
-    }
+    size_t fsize = 0;
+    FILE *f = ss_input_open(path, &fsize, err); /* regular files only, never blocks */
+    if (!f) return NULL;
     unsigned char sig[8];
     if (fread(sig, 1, 8, f) != 8 || png_sig_cmp(sig, 0, 8) != 0) {
         fclose(f);
@@ -117,12 +122,25 @@ ss_image *ss_png_read(const char *path, ss_encoding enc, ss_error *err) {
     png_read_update_info(png, info);
     int w = (int)png_get_image_width(png, info), h = (int)png_get_image_height(png, info);
     int ch = png_get_channels(png, info), bits = png_get_bit_depth(png, info);
+    /* Before allocating what the header claims: the pixels must fit in
+     * memory, and the file must be able to hold them (deflate expands at
+     * most about 1032:1, so a tiny file cannot be a huge image). */
     ss_error e2;
-    img = ss_image_create(w, h, ch, &e2);
+    double raw = (double)h * ((double)png_get_rowbytes(png, info) + 1.0);
+    ss_status cs = ss_image_check_alloc(path, w, h, ch, &e2);
+    if (!cs && raw > 1100.0 * (double)fsize + 65536.0)
+        cs = ss_error_set(&e2, SS_ERR_INPUT,
+                          "%s: header claims %d x %d pixels (%.0f MB), more than a %zu-byte PNG "
+                          "can hold: truncated or forged",
+                          path, w, h, raw / 1e6, fsize);
+    img = cs ? NULL : ss_image_create(w, h, ch, &e2);
     if (!img) {
         png_destroy_read_struct(&png, &info, NULL);
         fclose(f);
-        ss_error_set(err, e2.code, "%s: %s", path, e2.msg);
+        if (cs)
+            *err = e2;
+        else
+            ss_error_set(err, SS_ERR_INPUT, "%s: %s", path, e2.msg);
         return NULL;
     }
     row = malloc(png_get_rowbytes(png, info));

@@ -39,7 +39,8 @@ int ss_text_parse_number(const char *s, double *out) {
     errno = 0;
     double v = strtod(s, &end);
     if (end == s || *end != '\0') return 1;
-    if (!isfinite(v) || errno == ERANGE) return 2;
+    /* underflow (1e-320) is a finite number as good as 0; overflow is not */
+    if (!isfinite(v) || (errno == ERANGE && fabs(v) > 1.0)) return 2;
     *out = v;
     return 0;
 }

@@ -88,9 +88,14 @@ ss_status ss_stroke_csv_parse(const char *text, const char *name, ss_stroke_set 
             char *end;
             errno = 0;
             sid = strtol(fld[2], &end, 10);
-            if (end == fld[2] || *end || errno == ERANGE || sid < 0 || sid > 1000000000L) {
+            if (end == fld[2] || *end) {
+                st = ss_error_set(err, SS_ERR_INPUT, "%s:%d: stroke id '%s' is not a whole number",
+                                  name, lineno, fld[2]);
+                goto fail;
+            }
+            if (errno == ERANGE || sid < 0 || sid > 1000000000L) {
                 st = ss_error_set(err, SS_ERR_INPUT,
-                                  "%s:%d: stroke id '%s' is not a non-negative integer", name,
+                                  "%s:%d: stroke id %s is out of range [0, 1000000000]", name,
                                   lineno, fld[2]);
                 goto fail;
             }

@@ -81,6 +81,8 @@ typedef struct mc_layer {
     double z0, z1, mut, inv_mut, absfrac, n, g;
     double hg_a, hg_b, hg_c; /* HG sampling constants */
     int isotropic;
+    int phase_n; /* > 0: tabulated deflection angles (cosines below) */
+    double phase_cos[SS_OPTICS_PHASE_MAX];
 } mc_layer;
 
 typedef struct mc_ctx {
@@ -89,7 +91,7 @@ typedef struct mc_ctx {
     double n_above, n_below, albedo;
     uint64_t seed;
     double sin_ti, cos_ti;
-    double sigma2; /* Trowbridge-Reitz sigma^2; 0 = smooth */
+    double alpha; /* Trowbridge-Reitz (GGX) roughness sigma; 0 = smooth */
     int rough, stochastic, paths;
     ss_mc_tally_spec spec;
 } mc_ctx;
@@ -120,18 +122,22 @@ static inline double fresnel(double n1, double n2, double ci, double *ct) {
     return 0.5 * (rs * rs + rp * rp);
 }
 
-/* Trowbridge-Reitz micro-normal zenith cosine from the seed's §4.5.1 formula:
- * cos^2(alpha) = (sigma^2 / sqrt(sigma^4 - sigma^4 rho + rho) - 1) / (sigma^2 - 1). */
-static inline double tr_cos(double s2, double rho) {
-    double c2;
-    if (fabs(s2 - 1.0) < 1e-9)
-        c2 = rho; /* the limit sigma -> 1 */
-    else
-        c2 = (s2 / sqrt(s2 * s2 * (1.0 - rho) + rho) - 1.0) / (s2 - 1.0);
-    if (c2 < 0.0) c2 = 0.0;
-    if (c2 > 1.0) c2 = 1.0;
-    return sqrt(c2);
-}
+/* ---- rough air/skin surface: Smith microsurface random walk ---------------- *
+ * The surface is a Trowbridge-Reitz (GGX) microsurface of roughness alpha =
+ * sigma with Smith's uncorrelated heights (uniform height distribution), and
+ * light is traced ON it (Heitz, Hanika, d'Eon & Dachsbacher 2016, "Multiple-
+ * scattering microfacet BSDFs with the Smith model", dielectric walk): the
+ * height of the next intersection is drawn from the Smith masking function,
+ * the facet hit from the distribution of visible normals (Heitz 2018; sampled
+ * with the spherical-cap form of Dupuy & Benyoub 2023, valid for any
+ * direction), then Fresnel reflection or refraction about that facet. The
+ * walk ends when the ray leaves the microsurface upwards or downwards. Its
+ * single-scattering part is exactly the Walter et al. 2007 microfacet BSDF
+ * D F G2 / (4 |cos_i cos_o|) with the height-correlated Smith G2; every
+ * direction ends on the side it escapes to (no mirroring) and energy is
+ * conserved (R + T = 1 for a clear medium). The walk runs in a local frame
+ * whose +z points to the side the ray comes from. */
+#define MS_MAX_EVENTS 256
 
 /* Uniform azimuth as (cos, sin) by rejection from the unit disk (angle doubling). */
 static inline void rand_azimuth(prng *r, double *cp, double *sp) {
@@ -145,28 +151,6 @@ static inline void rand_azimuth(prng *r, double *cp, double *sp) {
             return;
         }
     }
-}
-
-/* Draws a micro-normal facing the incoming direction d (unit); m points to the
- * side d comes from (dot(d, m) < 0). side = -1: the air side (m.z < 0), +1: the
- * tissue side. Returns cos_i = -dot(d, m) > 0. Back-facing draws are redrawn; after
- * 32 tries the macro normal is used. */
-static inline double micro_normal(const mc_ctx *c, prng *r, const double d[3], double side,
-                                  double m[3]) {
-    for (int t = 0; t < 32; t++) {
-        double ca = tr_cos(c->sigma2, prng_u(r));
-        double sa = sqrt(fmax(0.0, 1.0 - ca * ca));
-        double cp, sp;
-        rand_azimuth(r, &cp, &sp);
-        m[0] = sa * cp;
-        m[1] = sa * sp;
-        m[2] = side * ca;
-        double ci = -(d[0] * m[0] + d[1] * m[1] + d[2] * m[2]);
-        if (ci > 1e-9) return ci;
-    }
-    m[0] = m[1] = 0.0;
-    m[2] = side;
-    return -d[2] * side;
 }
 
 /* Reflect and refract d about m (m on the incident side, cos_i = -d.m). */
@@ -183,6 +167,114 @@ static inline void refract_dir(const double d[3], const double m[3], double ci, 
     }
     s = 1.0 / sqrt(s);
     for (int k = 0; k < 3; k++) o[k] *= s;
+}
+
+/* Smith Lambda of GGX for a direction with cosine cz (any sign); Lambda(-w) = -1 - Lambda(w). */
+static inline double ms_lambda(double alpha, double wx, double wy, double wz) {
+    double s2 = wx * wx + wy * wy;
+    if (s2 <= 0.0) return wz > 0.0 ? 0.0 : -1.0;
+    if (wz == 0.0) return HUGE_VAL;
+    double a2t2 = alpha * alpha * s2 / (wz * wz);
+    double l = 0.5 * (-1.0 + sqrt(1.0 + a2t2));
+    return wz > 0.0 ? l : -1.0 - l;
+}
+
+/* Next height on the microsurface (uniform heights in [-1, 1]) along w from
+ * height h; HUGE_VAL when the ray leaves upwards. */
+static inline double ms_height(double alpha, const double w[3], double h, double u) {
+    double c1 = fmin(1.0, fmax(0.0, 0.5 * (h + 1.0)));
+    if (w[2] > 0.9999) return HUGE_VAL;
+    if (w[2] < -0.9999) return 2.0 * (u * c1) - 1.0;
+    if (fabs(w[2]) < 1e-4) return h;
+    double lam = ms_lambda(alpha, w[0], w[1], w[2]);
+    if (w[2] > 0.0) {
+        double g1 = pow(c1, lam); /* probability of leaving without a hit */
+        if (u > 1.0 - g1) return HUGE_VAL;
+    }
+    double c = c1 / pow(1.0 - u, 1.0 / lam);
+    return fmin(1.0, fmax(-1.0, 2.0 * c - 1.0));
+}
+
+/* Visible normal for direction wi (pointing away from the surface it sees,
+ * any sign of wi.z) of GGX alpha: spherical caps (Dupuy & Benyoub 2023),
+ * equal in distribution to Heitz 2018's hemisphere projection. */
+static inline void ms_vndf(double alpha, const double wi[3], double u1, double u2, double m[3]) {
+    double vx = alpha * wi[0], vy = alpha * wi[1], vz = wi[2];
+    double inv = 1.0 / sqrt(vx * vx + vy * vy + vz * vz);
+    vx *= inv;
+    vy *= inv;
+    vz *= inv;
+    double phi = 2.0 * M_PI * u1;
+    double z = (1.0 - u2) * (1.0 + vz) - vz;
+    double st = sqrt(fmax(0.0, 1.0 - z * z));
+    double hx = st * cos(phi) + vx, hy = st * sin(phi) + vy, hz = z + vz;
+    hx *= alpha;
+    hy *= alpha;
+    double n = sqrt(hx * hx + hy * hy + hz * hz);
+    if (!(n > 0.0)) {
+        m[0] = m[1] = 0.0;
+        m[2] = 1.0;
+        return;
+    }
+    m[0] = hx / n;
+    m[1] = hy / n;
+    m[2] = hz / n;
+}
+
+/* One walk on the microsurface. Local frame: +z towards the incident side,
+ * whose index is n_in; w (unit, w.z < 0) is the travel direction. On return w
+ * is the exit direction; returns 0 if the ray left on the incident side
+ * (reflected), 1 if it crossed into n_out; *order = number of facet events. */
+static inline int ms_walk(double alpha, double n_in, double n_out, double w[3], prng *rng,
+                          int *order) {
+    int outside = 1, k = 0;
+    double h = 2.0; /* above the highest facet */
+    for (; k < MS_MAX_EVENTS; k++) {
+        double u = prng_u(rng);
+        if (outside)
+            h = ms_height(alpha, w, h, u);
+        else {
+            double nw[3] = {-w[0], -w[1], -w[2]};
+            h = -ms_height(alpha, nw, -h, u);
+        }
+        if (fabs(h) == HUGE_VAL) break;
+        double m[3], wi[3] = {-w[0], -w[1], -w[2]};
+        double u1 = prng_u(rng), u2 = prng_u(rng);
+        if (outside)
+            ms_vndf(alpha, wi, u1, u2, m);
+        else {
+            ms_vndf(alpha, w, u1, u2, m);
+            m[0] = -m[0];
+            m[1] = -m[1];
+            m[2] = -m[2];
+        }
+        double ci = wi[0] * m[0] + wi[1] * m[1] + wi[2] * m[2];
+        if (ci < 1e-12) ci = 1e-12;
+        double n1 = outside ? n_in : n_out, n2 = outside ? n_out : n_in, ct, o[3];
+        double R = fresnel(n1, n2, ci, &ct);
+        if (prng_u(rng) < R)
+            reflect_dir(w, m, ci, o);
+        else {
+            refract_dir(w, m, ci, ct, n1 / n2, o);
+            outside = !outside;
+        }
+        double inv = 1.0 / sqrt(o[0] * o[0] + o[1] * o[1] + o[2] * o[2]);
+        w[0] = o[0] * inv;
+        w[1] = o[1] * inv;
+        w[2] = o[2] * inv;
+    }
+    if (k == MS_MAX_EVENTS) { /* practically never: leave towards the side the ray heads to */
+        if ((w[2] > 0.0) != (outside != 0)) w[2] = -w[2];
+    }
+    *order = k;
+    return !outside;
+}
+
+int ss_ms_walk(double alpha, double n_in, double n_out, double w[3], uint64_t seed, uint64_t stream,
+               int *order) {
+    prng r;
+    prng_init(&r, seed, stream);
+    return ms_walk(alpha, n_in, n_out, w, &r, order);
 }
 
 /* ---- per-block accumulators ------------------------------------------------ */
@@ -264,15 +356,23 @@ static void run_photon(const mc_ctx *c, uint64_t idx, mc_acc *a, path_buf *pb) {
     const int mcml = c->spec.mcml;
 
     /* ---- entry through the air/skin surface ---- */
-    {
-        double m[3], ci, ct, o[3];
-        if (c->rough)
-            ci = micro_normal(c, &r, d, -1.0, m);
-        else {
-            m[0] = m[1] = 0.0;
-            m[2] = -1.0;
-            ci = c->cos_ti;
+    if (c->rough) {
+        /* microsurface walk in the air-side frame (local z = -z) */
+        double wl[3] = {d[0], d[1], -d[2]};
+        int order;
+        if (!ms_walk(c->alpha, c->n_above, c->L[0].n, wl, &r, &order)) {
+            a->specular += 1.0;
+            if (a->brdf) a->brdf[brdf_bin(c, wl[0], wl[1], wl[2])] += 1.0;
+            return;
         }
+        d[0] = wl[0];
+        d[1] = wl[1];
+        d[2] = -wl[2];
+        if (!(d[2] > 0.0)) d[2] = 1e-12;
+    } else {
+        double ct, o[3];
+        const double m[3] = {0.0, 0.0, -1.0};
+        double ci = c->cos_ti;
         double n1 = c->L[0].n;
         double R = fresnel(c->n_above, n1, ci, &ct);
         int reflect_all = 0;
@@ -282,17 +382,12 @@ static void run_photon(const mc_ctx *c, uint64_t idx, mc_acc *a, path_buf *pb) {
         }
         if (R > 0.0) {
             reflect_dir(d, m, ci, o);
-            if (o[2] > 0.0) o[2] = -o[2];
             a->specular += R;
-            if (a->brdf) {
-                int b = brdf_bin(c, o[0], o[1], -o[2]);
-                a->brdf[b] += R;
-            }
+            if (a->brdf) a->brdf[brdf_bin(c, o[0], o[1], -o[2])] += R;
         }
         if (reflect_all || R >= 1.0) return;
         w = 1.0 - R;
         refract_dir(d, m, ci, ct, c->n_above / n1, o);
-        if (o[2] <= 0.0) o[2] = o[2] < 0.0 ? -o[2] : 1e-12;
         d[0] = o[0];
         d[1] = o[1];
         d[2] = o[2];
@@ -427,34 +522,31 @@ static void run_photon(const mc_ctx *c, uint64_t idx, mc_acc *a, path_buf *pb) {
                     continue;
                 }
                 /* the air surface from inside */
-                double m[3], ci, ct, o[3];
-                if (c->rough)
-                    ci = micro_normal(c, &r, d, 1.0, m);
-                else {
-                    m[0] = m[1] = 0.0;
-                    m[2] = 1.0;
-                    ci = -uz;
-                }
-                double R = fresnel(L->n, c->n_above, ci, &ct);
-                if (R > 0.0 && prng_u(&r) <= R) {
-                    reflect_dir(d, m, ci, o);
-                    if (o[2] < 0.0) o[2] = -o[2];
-                    if (o[2] == 0.0) o[2] = 1e-12;
-                    d[0] = o[0];
-                    d[1] = o[1];
-                    d[2] = o[2];
-                    continue;
-                }
-                /* escapes into the air */
+                double o[3];
                 if (c->rough) {
-                    refract_dir(d, m, ci, ct, L->n / c->n_above, o);
-                    if (o[2] > 0.0) o[2] = -o[2];
+                    /* microsurface walk in the tissue frame (+z towards the tissue) */
+                    int order;
+                    o[0] = d[0];
+                    o[1] = d[1];
+                    o[2] = d[2];
+                    if (!ms_walk(c->alpha, L->n, c->n_above, o, &r, &order)) {
+                        d[0] = o[0];
+                        d[1] = o[1];
+                        d[2] = o[2] > 0.0 ? o[2] : 1e-12;
+                        continue;
+                    }
                 } else {
+                    double ct, R = fresnel(L->n, c->n_above, -uz, &ct);
+                    if (R > 0.0 && prng_u(&r) <= R) {
+                        d[2] = -uz;
+                        continue;
+                    }
                     double eta = L->n / c->n_above;
                     o[0] = d[0] * eta;
                     o[1] = d[1] * eta;
                     o[2] = -ct;
                 }
+                /* escapes into the air */
                 a->diffuse += w;
                 dsum += w;
                 if (c->paths) {
@@ -508,7 +600,13 @@ static void run_photon(const mc_ctx *c, uint64_t idx, mc_acc *a, path_buf *pb) {
         double cost;
         {
             double u = prng_u(&r);
-            if (L->isotropic)
+            if (L->phase_n) {
+                double x = u * (L->phase_n - 1);
+                int k = (int)x;
+                if (k >= L->phase_n - 1) k = L->phase_n - 2;
+                double f = x - k;
+                cost = L->phase_cos[k] + f * (L->phase_cos[k + 1] - L->phase_cos[k]);
+            } else if (L->isotropic)
                 cost = 2.0 * u - 1.0;
             else {
                 double t = L->hg_b / (1.0 - L->g + 2.0 * L->g * u);
@@ -591,6 +689,8 @@ static ss_status ctx_init(mc_ctx *c, const ss_optics_slab *s, const ss_mc_option
         L->n = sl->n;
         L->g = sl->g;
         L->isotropic = fabs(sl->g) < 1e-9;
+        L->phase_n = sl->phase_n;
+        for (int k = 0; k < sl->phase_n; k++) L->phase_cos[k] = cos(sl->phase_theta[k]);
         if (!L->isotropic) {
             L->hg_a = 1.0 + sl->g * sl->g;
             L->hg_b = 1.0 - sl->g * sl->g;
@@ -604,7 +704,7 @@ static ss_status ctx_init(mc_ctx *c, const ss_optics_slab *s, const ss_mc_option
     c->sin_ti = sin(o->theta_i_rad);
     c->cos_ti = cos(o->theta_i_rad);
     c->rough = o->roughness_sigma > 0.0;
-    c->sigma2 = o->roughness_sigma * o->roughness_sigma;
+    c->alpha = o->roughness_sigma;
     c->stochastic = o->stochastic_absorb != 0;
     c->paths = paths;
     c->spec = *spec;

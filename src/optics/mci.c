@@ -160,7 +160,7 @@ ss_status ss_mci_parse(const char *text, const char *name, ss_mci_file *out, ss_
         sl->n_above = v[0];
         for (int l = 0; l < sl->nlayers; l++) {
             READ("a layer: n mua mus g d", 5);
-            sl->layer[l] = (ss_optics_layer){v[0], v[1], v[2], v[3], v[4]};
+            sl->layer[l] = (ss_optics_layer){v[0], v[1], v[2], v[3], v[4], 0, {0}};
         }
         READ("n for the medium below", 1);
         sl->n_below = v[0];

@@ -33,6 +33,16 @@ ss_status ss_mc_run_tallies(const ss_optics_slab *slab, const ss_mc_options *opt
                             const ss_mc_tally_spec *spec, ss_mc_tallies *t, ss_error *err);
 void ss_mc_tallies_free(ss_mc_tallies *t);
 
+/* One Smith microsurface random walk on the rough air/skin interface (GGX
+ * alpha; see mc.c). Local frame: +z towards the incident side of index n_in,
+ * w (unit, w.z < 0) the travel direction, replaced by the exit direction.
+ * Returns 0 if reflected (w.z > 0), 1 if transmitted into n_out (w.z < 0);
+ * *order = number of facet interactions. Random numbers: stream (seed, stream). */
+int ss_ms_walk(double alpha, double n_in, double n_out, double w[3], uint64_t seed, uint64_t stream,
+               int *order);
+
+#define SS_BRULS_COLUMNS 9
+
 /* Tabulated spectra loaded from data/spectra (wavelength nm, value). */
 typedef struct ss_spectrum_table {
     int n;
@@ -43,6 +53,10 @@ struct ss_optics_data {
     ss_spectrum_table hbo2, hb;                /* molar extinction, cm^-1/M (decadic) */
     ss_spectrum_table bilirubin, betacarotene; /* molar extinction, cm^-1/M (decadic) */
     ss_spectrum_table cie_x, cie_y, cie_z, d65;
+    /* Bruls & van der Leun 1984 cumulative transmitted percentage over the
+     * exitant angle (deg, in the "nm" field): stratum corneum at 254, 302, 365,
+     * 436, 546 nm, then epidermis at 302, 365, 436, 546 nm. */
+    ss_spectrum_table bruls[SS_BRULS_COLUMNS];
 };
 ss_status ss_optics_data_load(ss_optics_data *d, ss_error *err);
 void ss_optics_data_free(ss_optics_data *d);

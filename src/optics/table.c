@@ -451,7 +451,10 @@ static int same_geometry(const ss_optics_slab *a, const ss_optics_slab *b) {
         return 0;
     for (int l = 0; l < a->nlayers; l++)
         if (a->layer[l].n != b->layer[l].n || a->layer[l].mus_per_cm != b->layer[l].mus_per_cm ||
-            a->layer[l].g != b->layer[l].g || a->layer[l].d_cm != b->layer[l].d_cm)
+            a->layer[l].g != b->layer[l].g || a->layer[l].d_cm != b->layer[l].d_cm ||
+            a->layer[l].phase_n != b->layer[l].phase_n ||
+            memcmp(a->layer[l].phase_theta, b->layer[l].phase_theta,
+                   sizeof a->layer[l].phase_theta))
             return 0;
     return 1;
 }

@@ -8,25 +8,34 @@
  *   air above 1.0.
  * - Thicknesses: SC and epidermis from the parameters (defaults 0.001 cm and
  *   0.01 cm, BioSpec); papillary dermis 0.02 cm, reticular dermis 0.18 cm (BioSpec).
- * - Baseline skin absorption (Jacques 1998, OMLC "Skin Optics", bloodless rat
- *   skin): mua_base = 0.244 + 85.3 exp(-(lambda - 154)/66.2) [1/cm].
+ * - No unspecific "baseline" absorption: the non-pigment absorbers of skin
+ *   in the visible are the carotene and bilirubin baselines below; water and
+ *   fat absorb < 0.03 /cm below 780 nm (Jacques 2013, Phys. Med. Biol.
+ *   58:R37, which models skin as blood + water + fat + melanin + bilirubin +
+ *   carotene) and are left out. Jacques' 1998 bloodless-rat-skin baseline is
+ *   not used: it made the blood-poor cells too yellow (docs/optics.md).
  * - Melanin (epidermis): mua_eu = eps_eu(lambda) * 80 mg/mL, mua_ph =
- *   eps_ph(lambda) * 12 mg/mL, eps in cm^-1/(mg/mL) (OMLC/Prahl tabulation used
- *   by BioSpec; concentrations in melanosomes from BioSpec). The melanosome
- *   absorption is (1-p) mua_eu + p mua_ph for pheomelanin ratio p; the epidermis
- *   is mua_epi = f_mel mua_melanosome + (1 - f_mel) mua_base (Jacques 1998).
+ *   eps_ph(lambda) * 12 mg/mL, eps in cm^-1/(mg/mL) (OMLC/Prahl tabulation of
+ *   measurements on polymeric eumelanin and pheomelanin, as used by BioSpec;
+ *   concentrations in melanosomes from BioSpec). The melanosome absorption is
+ *   (1-p) mua_eu + p mua_ph for pheomelanin ratio p; the epidermis is
+ *   mua_epi = f_mel mua_melanosome (+ carotene).
  * - Blood (dermis): mua_blood = ln(10) * 150 g/L / 66500 g/mol *
  *   (S eps_HbO2 + (1-S) eps_Hb) + bilirubin (ln 10 * eps_bil * c / 584.66 g/mol),
- *   eps in cm^-1/M decadic (Prahl, OMLC). mua_derm = f_blood mua_blood + (1 -
- *   f_blood) mua_base in both dermal layers (the same blood fraction in both).
+ *   eps in cm^-1/M decadic (Prahl, OMLC). mua_derm = f_blood mua_blood
+ *   (+ carotene) in both dermal layers (the same blood fraction in both).
  * - beta-carotene in every layer at the given concentration: ln 10 * eps * c /
  *   536.87 g/mol added to the layer absorption (Prahl, OMLC).
- * - Scattering of all four layers: the reduced scattering of dermis
- *   (Jacques 1998): mus' = 2e5 lambda^-1.5 (Mie, collagen fibres) + 2e12
- *   lambda^-4 (Rayleigh) [1/cm, lambda in nm]; Henyey-Greenstein phase with
- *   g_dermis = 0.62 + 0.29e-3 lambda (Jacques 1998) in the dermis and a stated
- *   g = 0.90 in the stratum corneum and epidermis (forward-peaked, as the
- *   Bruls & van der Leun 1984 measurements show); mus = mus' / (1 - g).
+ * - Scattering, stratum corneum and epidermis: the angular distributions of
+ *   light transmitted through excised layers measured by Bruls & van der Leun
+ *   1984 (data/spectra/bruls_scattering.csv) as a tabulated phase function
+ *   (deflection angle quantiles, interpolated in wavelength, clamped outside
+ *   254/302-546 nm), with mus = 1 / thickness: on average one deflection per
+ *   normal traversal, the volumetric form of BioSpec's one perturbation per
+ *   traversal. These distributions have no backward part.
+ * - Scattering, dermis (Jacques 1998): mus' = 2e5 lambda^-1.5 (Mie, collagen
+ *   fibres) + 2e12 lambda^-4 (Rayleigh) [1/cm, lambda in nm]; Henyey-
+ *   Greenstein with g_dermis = 0.62 + 0.29e-3 lambda; mus = mus' / (1 - g).
  * - Fat below: Lambertian reflector of albedo SS_FAT_ALBEDO (seed §2.1: "the
  *   fatty tissue simply reflects all light back"). */
 #define _POSIX_C_SOURCE 200809L
@@ -36,6 +45,10 @@
 #include <string.h>
 
 #include "optics_internal.h"
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
 
 #define SS_FAT_ALBEDO 1.0
 #define N_AIR 1.0
@@ -52,7 +65,6 @@
 #define M_HB_G_PER_MOL 66500.0
 #define M_BILIRUBIN_G_PER_MOL 584.66
 #define M_BETACAROTENE_G_PER_MOL 536.87
-#define G_EPIDERMAL 0.90
 #define LN10 2.302585092994046
 
 void ss_bio_params_default(ss_bio_params *p) {
@@ -122,6 +134,17 @@ ss_status ss_optics_slab_validate(const ss_optics_slab *s, ss_error *err) {
         if (!(L->d_cm > 0.0 && L->d_cm < 1e6))
             return ss_error_set(err, SS_ERR_INPUT, "layer %d: thickness %g cm must be > 0", l + 1,
                                 L->d_cm);
+        if (L->phase_n != 0 && (L->phase_n < 2 || L->phase_n > SS_OPTICS_PHASE_MAX))
+            return ss_error_set(err, SS_ERR_INPUT,
+                                "layer %d: tabulated phase function has %d points (0 or 2..%d)",
+                                l + 1, L->phase_n, SS_OPTICS_PHASE_MAX);
+        for (int k = 0; k < L->phase_n; k++)
+            if (!(L->phase_theta[k] >= 0.0 && L->phase_theta[k] <= 3.14159265358979323846 &&
+                  (k == 0 || L->phase_theta[k] >= L->phase_theta[k - 1])))
+                return ss_error_set(err, SS_ERR_INPUT,
+                                    "layer %d: phase angle %d (%g rad) is not a non-decreasing "
+                                    "angle in [0, pi]",
+                                    l + 1, k, L->phase_theta[k]);
     }
     return SS_OK;
 }
@@ -135,7 +158,7 @@ static ss_status load_csv(const char *file, int ncols, ss_spectrum_table *out[],
     if (!text) return err ? err->code : SS_ERR_INPUT;
     int cap = 256, n = 0;
     double *nm = malloc(cap * sizeof *nm);
-    double *v[4] = {0};
+    double *v[16] = {0};
     for (int k = 0; k < ncols; k++) v[k] = malloc(cap * sizeof(double));
     int ok = nm != NULL;
     for (int k = 0; k < ncols; k++) ok = ok && v[k];
@@ -219,6 +242,7 @@ void ss_optics_data_free(ss_optics_data *d) {
                                 &d->bilirubin, &d->betacarotene, &d->cie_x, &d->cie_y,
                                 &d->cie_z,     &d->d65};
     for (size_t i = 0; i < sizeof all / sizeof all[0]; i++) table_free(all[i]);
+    for (int k = 0; k < SS_BRULS_COLUMNS; k++) table_free(&d->bruls[k]);
 }
 
 ss_status ss_optics_data_load(ss_optics_data *d, ss_error *err) {
@@ -228,13 +252,16 @@ ss_status ss_optics_data_load(ss_optics_data *d, ss_error *err) {
                       *hb[] = {&d->hbo2, &d->hb}, *bi[] = {&d->bilirubin},
                       *bc[] = {&d->betacarotene}, *cie[] = {&d->cie_x, &d->cie_y, &d->cie_z},
                       *d65[] = {&d->d65};
+    ss_spectrum_table *br[SS_BRULS_COLUMNS];
+    for (int k = 0; k < SS_BRULS_COLUMNS; k++) br[k] = &d->bruls[k];
     if ((st = load_csv("eumelanin.csv", 1, eu, err)) ||
         (st = load_csv("pheomelanin.csv", 1, ph, err)) ||
         (st = load_csv("hemoglobin.csv", 2, hb, err)) ||
         (st = load_csv("bilirubin.csv", 1, bi, err)) ||
         (st = load_csv("betacarotene.csv", 1, bc, err)) ||
         (st = load_csv("cie1931_2deg.csv", 3, cie, err)) ||
-        (st = load_csv("d65.csv", 1, d65, err))) {
+        (st = load_csv("d65.csv", 1, d65, err)) ||
+        (st = load_csv("bruls_scattering.csv", SS_BRULS_COLUMNS, br, err))) {
         ss_optics_data_free(d);
         return st;
     }
@@ -257,7 +284,56 @@ double ss_spectrum_table_eval(const ss_spectrum_table *t, double nm) {
 }
 
 /* ---- the skin slab ----------------------------------------------------------- */
-static double mua_baseline(double nm) { return 0.244 + 85.3 * exp(-(nm - 154.0) / 66.2); }
+/* Stratum corneum (epi = 0) or epidermis (epi = 1) deflection-angle phase
+ * function from Bruls & van der Leun 1984: the cumulative transmitted share
+ * over the exitant angle at the two nearest measured wavelengths, interpolated
+ * linearly in wavelength (clamped outside the measured 254/302-546 nm),
+ * normalised and inverted at probabilities k / (n - 1); the exitant angle is
+ * used as the deflection angle, as BioSpec does. g gets its mean cosine. */
+static void bruls_phase(const ss_optics_data *d, int epi, double nm, ss_optics_layer *L) {
+    static const double wl_sc[5] = {254, 302, 365, 436, 546}, wl_epi[4] = {302, 365, 436, 546};
+    const double *wl = epi ? wl_epi : wl_sc;
+    int nw = epi ? 4 : 5, c0 = epi ? 5 : 0, a = 0, b = 0;
+    double f = 0.0;
+    if (nm >= wl[nw - 1])
+        a = b = nw - 1;
+    else if (nm > wl[0]) {
+        while (wl[a + 1] < nm) a++;
+        b = a + 1;
+        f = (nm - wl[a]) / (wl[b] - wl[a]);
+    }
+    const ss_spectrum_table *ta = &d->bruls[c0 + a], *tb = &d->bruls[c0 + b];
+    int n = ta->n < 64 ? ta->n : 64;
+    double cdf[64], ang[64];
+    for (int i = 0; i < n; i++) {
+        ang[i] = ta->nm[i] * (M_PI / 180.0); /* used as measured (BioSpec) */
+        cdf[i] = (1.0 - f) * ta->v[i] + f * tb->v[i];
+        if (i > 0 && cdf[i] < cdf[i - 1]) cdf[i] = cdf[i - 1];
+    }
+    double top = cdf[n - 1] > 0.0 ? cdf[n - 1] : 1.0;
+    for (int i = 0; i < n; i++) cdf[i] /= top;
+    const int N = SS_OPTICS_PHASE_MAX;
+    L->phase_n = N;
+    int i = 0;
+    for (int k = 0; k < N; k++) {
+        double p = (double)k / (N - 1);
+        while (i < n - 2 && cdf[i + 1] < p) i++;
+        double span = cdf[i + 1] - cdf[i];
+        double t = span > 0.0 ? (p - cdf[i]) / span : 0.0;
+        L->phase_theta[k] = ang[i] + fmin(1.0, fmax(0.0, t)) * (ang[i + 1] - ang[i]);
+        if (k > 0 && L->phase_theta[k] < L->phase_theta[k - 1])
+            L->phase_theta[k] = L->phase_theta[k - 1];
+    }
+    L->phase_theta[N - 1] = ang[n - 1];
+    /* mean cosine of the piecewise-uniform angle density */
+    double g = 0.0;
+    for (int j = 0; j + 1 < n; j++) {
+        double w = cdf[j + 1] - cdf[j], t0 = ang[j], t1 = ang[j + 1];
+        g += w * (t1 > t0 ? (sin(t1) - sin(t0)) / (t1 - t0) : cos(t0));
+    }
+    L->g = g;
+}
+
 static double musp_jacques(double nm) { return 2e5 * pow(nm, -1.5) + 2e12 * pow(nm, -4.0); }
 
 ss_status ss_optics_skin_slab_data(const ss_optics_data *d, const ss_bio_params *bio, double nm,
@@ -268,7 +344,6 @@ ss_status ss_optics_skin_slab_data(const ss_optics_data *d, const ss_bio_params 
         return ss_error_set(err, SS_ERR_INPUT,
                             "wavelength %g nm is outside 300..800 nm (range of the spectra)", nm);
     memset(out, 0, sizeof *out);
-    double base = mua_baseline(nm);
     double bc = LN10 * ss_spectrum_table_eval(&d->betacarotene, nm) * bio->betacarotene_g_per_l /
                 M_BETACAROTENE_G_PER_MOL;
     double mel = (1.0 - bio->pheomelanin_ratio) * ss_spectrum_table_eval(&d->eumelanin, nm) *
@@ -289,20 +364,20 @@ ss_status ss_optics_skin_slab_data(const ss_optics_data *d, const ss_bio_params 
     out->n_below = N_FAT;
     out->bottom_albedo = SS_FAT_ALBEDO;
     ss_optics_layer *L = out->layer;
-    /* stratum corneum */
+    /* stratum corneum and epidermis: one Bruls & van der Leun deflection per
+     * normal traversal on average (BioSpec perturbs once per traversal) */
     L[0].n = N_SC;
-    L[0].mua_per_cm = base + bc;
-    L[0].g = G_EPIDERMAL;
-    L[0].mus_per_cm = musp / (1.0 - G_EPIDERMAL);
+    L[0].mua_per_cm = bc;
     L[0].d_cm = bio->sc_thickness_cm;
-    /* epidermis */
+    L[0].mus_per_cm = 1.0 / L[0].d_cm;
+    bruls_phase(d, 0, nm, &L[0]);
     L[1].n = N_EPI;
-    L[1].mua_per_cm = bio->melanin * mel + (1.0 - bio->melanin) * base + bc;
-    L[1].g = G_EPIDERMAL;
-    L[1].mus_per_cm = musp / (1.0 - G_EPIDERMAL);
+    L[1].mua_per_cm = bio->melanin * mel + bc;
     L[1].d_cm = bio->epidermis_thickness_cm;
+    L[1].mus_per_cm = 1.0 / L[1].d_cm;
+    bruls_phase(d, 1, nm, &L[1]);
     /* papillary and reticular dermis */
-    double mua_d = bio->blood * blood + (1.0 - bio->blood) * base + bc;
+    double mua_d = bio->blood * blood + bc;
     L[2].n = N_PAP;
     L[3].n = N_RET;
     L[2].d_cm = D_PAP_CM;

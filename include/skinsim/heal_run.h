@@ -1,0 +1,142 @@
+/* skinsim heal_run: one healing simulation as an object (seed 001 §4.1 on the
+ * §5.1 grid): set-up of a fresh run (parameters, grid geometry, wound from a
+ * mask, strokes, depth image or closed mesh) or resume from a checkpoint,
+ * stepping with the bookkeeping a run needs (the area curve of Fig. 4, VTK and
+ * surface-map snapshots, checkpoints), and the closing tables (area.csv,
+ * area.png, summary.json). `skinsim heal`, `skinsim wound`, the viewer and the
+ * MPI driver all run through it; the CLI only parses options and prints.
+ *
+ *   ss_heal_run_config c;
+ *   ss_heal_run_config_default(&c);
+ *   c.scenario = "scab"; c.days = 28; c.out_dir = NULL;  // in memory
+ *   ss_heal_run *r;
+ *   if (ss_heal_run_create(&c, &r, &err)) ...;           // nothing written yet
+ *   ss_heal_run_advance_to(r, 3.0, &err);                 // fields at day 3
+ *   const ss_heal_grid *g = ss_heal_run_grid(r);
+ *   ...
+ *   ss_heal_run_free(r);
+ *
+ * Error messages name the setting by its `skinsim heal` option (a config field
+ * `wound_depth_mm` is `--wound-depth-mm`). Outputs are described in
+ * docs/heal-outputs.md. Units: mm and days. */
+#ifndef SKINSIM_HEAL_RUN_H
+#define SKINSIM_HEAL_RUN_H
+
+#include <stdint.h>
+
+#include "skinsim/core.h"
+#include "skinsim/heal.h"
+#include "skinsim/heal_io.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Simulated time when config.days is 0 on a fresh run. */
+#define SS_HEAL_RUN_DEFAULT_DAYS 10.0
+
+typedef struct ss_heal_run_config {
+    /* ---- model (fresh runs) ---- */
+    const char *scenario; /* "clean" | "scab" | "keloid"; NULL = the params file's
+                             "scenario" key, else "clean" */
+    const char
+        *params_path;  /* JSON parameter overrides (data/heal/params.json form); NULL = none */
+    int no_scab;       /* 1: switch off eschar formation */
+    int static_region; /* 1: keep the wound region fixed (no keloid growth) */
+
+    /* ---- grid (fresh runs) ---- */
+    int grid[3];         /* voxels; all 0 = from size_mm with 0.5 mm voxels */
+    double size_mm[3];   /* block size; all 0 = 30 x 30 x 4 mm (or grid x 0.5 mm) */
+    double skin_top_mm;  /* skin surface height; 0 = nz-2 voxels (one air layer) */
+    double epidermis_mm; /* default SS_HEAL_DEFAULT_EPIDERMIS_MM (at least 2 voxels used) */
+
+    /* ---- wound (fresh runs): at most one of mask, stroke, mesh, footprint;
+     * none = a centred square of 20 mm (at most 2/3 of the smaller side) ---- */
+    const char *wound_mask;          /* PNG/EXR footprint over the block */
+    const char *wound_stroke;        /* painted strokes CSV (u,v[,id]) over the block */
+    int concave_k;                   /* with wound_stroke: k-nearest concave hull, 0 = convex */
+    const char *wound_mesh;          /* closed OBJ in mm in the grid frame */
+    const ss_image *wound_footprint; /* in-memory footprint (1 channel, > 0.5 = wound, row 0 at
+                                       the far y edge); not owned, used during create only */
+    double wound_depth_mm;           /* 0 = SS_HEAL_DEFAULT_DEPTH_MM */
+    const char *wound_depth_image;   /* per-pixel depth (PNG x depth, EXR in mm) */
+
+    /* ---- time ---- */
+    double days;             /* end of the run; 0 = SS_HEAL_RUN_DEFAULT_DAYS, or the
+                                checkpoint's end on resume */
+    ss_heal_scheme scheme;   /* default SS_HEAL_SPLIT */
+    double dt_days;          /* 0 = automatic */
+    double snapshot_every;   /* days between snapshots; 0 = first and last only (default 1) */
+    double area_every;       /* days between area rows (default 0.01, at least one step) */
+    double checkpoint_every; /* days between checkpoints; 0 = none; < 0 = default (none, or
+                                the checkpoint's interval on resume) */
+
+    /* ---- files ---- */
+    const char *out_dir;    /* run directory; NULL = in memory, no file written */
+    int force;              /* 1: replace a previous run's outputs in out_dir */
+    const char *resume_dir; /* continue the run in this directory from its newest valid
+                               checkpoint (bit-identical to an uninterrupted run); the model,
+                               grid, wound and intervals then come from the checkpoint: only
+                               days and checkpoint_every are taken from this config */
+    uint64_t seed;          /* recorded in summary.json (the solver draws no random numbers) */
+} ss_heal_run_config;
+
+/* The defaults listed above (every other field 0 / NULL). */
+void ss_heal_run_config_default(ss_heal_run_config *c);
+
+typedef struct ss_heal_run ss_heal_run;
+
+/* Validates every input (including that out_dir is writable and holds no
+ * previous run unless force), builds the grid and the solver, or loads the
+ * newest valid checkpoint of resume_dir. Writes no file. Bad input ->
+ * SS_ERR_INPUT naming it. A fresh run has its day-0 area row. */
+ss_status ss_heal_run_create(const ss_heal_run_config *c, ss_heal_run **out, ss_error *err);
+void ss_heal_run_free(ss_heal_run *r);
+
+/* One solver step and its bookkeeping: an area row every area_every (and at
+ * the end), with out_dir a snapshot every snapshot_every (and at the end) and a
+ * checkpoint every checkpoint_every (newest two kept). The first call that
+ * writes files first removes a previous run's outputs (force) and writes the
+ * day-0 snapshot of a fresh run. Stepping past the end -> SS_ERR_INPUT. */
+ss_status ss_heal_run_step(ss_heal_run *r, ss_error *err);
+/* Steps until the run reaches `day` (rounded to whole steps), at most to the
+ * end; a day before the current time or after the end -> SS_ERR_INPUT. */
+ss_status ss_heal_run_advance_to(ss_heal_run *r, double day, ss_error *err);
+/* With out_dir: writes the outputs still due (the day-0 snapshot of a run
+ * that never stepped), then area.csv, area.png and summary.json. Returns in
+ * *summary_json (if not NULL) the summary as malloc'd JSON text without the
+ * file's trailing newline. Without out_dir only the summary text is made. */
+ss_status ss_heal_run_finish(ss_heal_run *r, char **summary_json, ss_error *err);
+
+/* Writes a snapshot of the current state now (fields/fields_NNNN.vti, the
+ * updated fields.pvd, surface/<field>_NNNN.png); needs out_dir. */
+ss_status ss_heal_run_write_snapshot(ss_heal_run *r, ss_error *err);
+/* Writes a checkpoint of the current state now (checkpoints/ckpt_<step>.sshc,
+ * newest two kept) from which ss_heal_run_create resumes; needs out_dir. */
+ss_status ss_heal_run_write_checkpoint(ss_heal_run *r, ss_error *err);
+
+/* ---- state ---- */
+/* The grid holds all the state (fields, cells, t_days, step). A caller may
+ * change fields or velocities between steps (the mechanics does). */
+ss_heal_grid *ss_heal_run_grid(ss_heal_run *r);
+const ss_heal_params *ss_heal_run_params(const ss_heal_run *r);
+const char *ss_heal_run_scenario(const ss_heal_run *r);
+ss_heal_scheme ss_heal_run_scheme(const ss_heal_run *r);
+double ss_heal_run_day(const ss_heal_run *r);     /* current time, days */
+double ss_heal_run_dt(const ss_heal_run *r);      /* step, days */
+double ss_heal_run_end_day(const ss_heal_run *r); /* steps_total x dt */
+long long ss_heal_run_step_index(const ss_heal_run *r);
+long long ss_heal_run_steps_total(const ss_heal_run *r);
+int ss_heal_run_done(const ss_heal_run *r); /* 1 when the end is reached */
+/* The area curve so far (one row per area_every, day 0 first). */
+const ss_heal_area_row *ss_heal_run_area(const ss_heal_run *r, int *n);
+int ss_heal_run_snapshot_count(const ss_heal_run *r);
+/* Step the run was resumed from, -1 for a fresh run. */
+long long ss_heal_run_resumed_from(const ss_heal_run *r);
+/* Checkpoints skipped as damaged while resuming ("" if none). */
+const char *ss_heal_run_note(const ss_heal_run *r);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

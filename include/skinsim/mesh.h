@@ -1,0 +1,89 @@
+/* skinsim mesh: triangle meshes read from OBJ and glTF 2.0 (.gltf/.glb), their
+ * UV islands, and a bounding volume hierarchy for ray casting. The painter
+ * (seed 000 §4.2) turns a mouse ray into the hit triangle's barycentric
+ * coordinates and from them a UV, the input of the hull (Alg. 4.1); other
+ * modules use the same reader to put textures and mechanics on real bodies.
+ *
+ * UV convention: u to the right, v down, (0,0) at the top-left of the image,
+ * as glTF and skinsim's images and stroke files have it. OBJ stores v up; the
+ * reader flips it (v = 1 - v_obj) so every mesh speaks the same convention. */
+#ifndef SKINSIM_MESH_H
+#define SKINSIM_MESH_H
+
+#include "skinsim/core.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* An indexed triangle mesh. Vertices are unique (position, normal, UV)
+ * combinations: a UV seam or a hard edge duplicates the position. */
+typedef struct ss_mesh {
+    int nvertices, ntriangles;
+    float *positions;   /* 3 per vertex, in the file's units (glTF: metres) */
+    float *normals;     /* 3 per vertex, unit length; computed when the file has none */
+    float *uvs;         /* 2 per vertex; NULL when has_uvs == 0 */
+    uint32_t *indices;  /* 3 per triangle, counter-clockwise front faces */
+    int has_uvs;        /* every triangle corner had a texture coordinate */
+    int normals_loaded; /* 1: normals from the file; 0: computed (area-weighted) */
+    float bbox_min[3], bbox_max[3];
+} ss_mesh;
+
+/* Loads a mesh, choosing the reader by extension (.obj, .gltf, .glb; case
+ * insensitive). OBJ: v/vt/vn/f (polygons fanned, negative indices, any of
+ * the v, v/t, v//n, v/t/n forms; other statements ignored). glTF 2.0:
+ * triangles, strips and fans, indexed or not; POSITION, NORMAL and
+ * TEXCOORD_0 (float or normalised integers); buffers from the GLB BIN chunk,
+ * base64 data URIs or files next to the .gltf; the default scene's node
+ * transforms applied (a skinned mesh is kept in its bind pose, as the glTF
+ * spec says to ignore the skinned node's own transform). Points and lines
+ * are skipped. A mesh whose triangles lack UVs loads with has_uvs = 0: the
+ * caller decides whether that is an error. Errors are SS_ERR_INPUT naming
+ * the file and what is wrong (missing, truncated, out-of-range index, no
+ * triangles, non-finite value, unsupported feature such as sparse
+ * accessors or Draco compression); *out is then zeroed. */
+ss_status ss_mesh_load(const char *path, ss_mesh *out, ss_error *err);
+/* Builds a mesh from arrays (copied; uvs and normals may be NULL), checking
+ * indices and finiteness; used by the readers and by tests. */
+ss_status ss_mesh_from_arrays(const float *positions, const float *normals, const float *uvs,
+                              int nvertices, const uint32_t *indices, int ntriangles,
+                              const char *name, ss_mesh *out, ss_error *err);
+void ss_mesh_free(ss_mesh *m); /* frees the arrays and zeroes the struct */
+
+/* UV islands: triangles joined through corners with identical UV coordinates
+ * form one island. island[t] (ntriangles entries, caller-allocated) gets
+ * 0..n-1, numbered in order of each island's first triangle. Returns n, or
+ * -1 when the mesh has no UVs or memory runs out. */
+int ss_mesh_uv_islands(const ss_mesh *m, int *island);
+
+/* ---- ray casting ------------------------------------------------------- */
+
+/* A BVH over the mesh's triangles (binned surface-area heuristic, at most 4
+ * triangles per leaf). It keeps a pointer to the mesh, which must outlive it
+ * and not change. */
+typedef struct ss_bvh ss_bvh;
+
+typedef struct ss_ray_hit {
+    int triangle; /* index into m->indices / 3; -1 for no hit */
+    float t;      /* hit point = origin + t * dir */
+    float b1, b2; /* barycentrics of corners 1 and 2 (corner 0: 1 - b1 - b2) */
+    float uv[2];  /* interpolated UV (0 when the mesh has none) */
+} ss_ray_hit;
+
+ss_bvh *ss_bvh_build(const ss_mesh *m, ss_error *err);
+void ss_bvh_free(ss_bvh *b);
+/* Nearest hit with t in (tmin, tmax], both faces. Returns 1 on a hit and
+ * fills *hit, else 0 (hit->triangle = -1). Equal t: the lower triangle index
+ * wins, so the result equals ss_mesh_raycast_bruteforce exactly. */
+int ss_bvh_raycast(const ss_bvh *b, const float origin[3], const float dir[3], float tmin,
+                   float tmax, ss_ray_hit *hit);
+/* The same by testing every triangle: the reference for tests. */
+int ss_mesh_raycast_bruteforce(const ss_mesh *m, const float origin[3], const float dir[3],
+                               float tmin, float tmax, ss_ray_hit *hit);
+/* Depth of the tree and node count, for tests and benchmarks. */
+void ss_bvh_stats(const ss_bvh *b, int *nodes, int *depth);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,379 @@
+"""skinsim for Blender: an abrasion-healing timeline on the selected mesh.
+
+What it does: for the active mesh object, runs the `skinsim abrasion`
+command (seed 000's texture timeline) for a wound painted as a circle (or
+strokes from a CSV file) in the mesh's UV space, at a list of days, and
+builds a Principled BSDF material from the texture sets: base colour (sRGB),
+roughness (1 - 0.8 x reflection, as skinsim's glTF output), specular
+(reflection), normal (a Normal Map node, tangent space, Non-Color images)
+and height (a Displacement node into the material output; Cycles uses it as
+bump by default). Time: the material gets a `skinsim_day` property keyed on
+Blender's timeline (frame = start + day x frames per day), and every map's
+chain of Mix nodes is driven by it, so between two sampled days the maps are
+blended linearly -- the timeline's own blend between key positions (seed
+000 §3.2) when the sampled days include the key days, as the default list
+does. Retiming the healing is editing the `skinsim_day` curve.
+
+Why the command line rather than the Python package: the CLI is the one
+interface every Blender build can use (Blender bundles its own Python, which
+may lack numpy or not match the installed package), it writes the PNGs the
+material needs anyway, and its error messages are the ones users already
+see. A failing run is reported with the command's own message and leaves the
+scene untouched.
+
+Gave up: the maturation phase (after the scab falls off) is re-rendered by
+skinsim at every time; here it is sampled at the listed days and blended
+linearly in between. Healing fields (`skinsim heal`) and skin textures are
+not wired yet: they produce tissue fields, not render textures.
+"""
+
+bl_info = {
+    "name": "skinsim",
+    "author": "skinsim contributors",
+    "version": (0, 1, 0),
+    "blender": (3, 4, 0),
+    "location": "Properties > Material > skinsim",
+    "description": "Abrasion-healing texture timelines from skinsim on the selected mesh",
+    "category": "Material",
+}
+
+import math
+import os
+import shutil
+import subprocess
+import tempfile
+
+import bpy
+
+DEFAULT_DAYS = "0,0.007,0.02,0.5,1,3,10,10.01,15,20,30"
+MAPS = ("color", "reflection", "height", "normal")
+
+
+# ---- settings ------------------------------------------------------------------
+
+
+class SkinsimPreferences(bpy.types.AddonPreferences):
+    bl_idname = __name__
+    cli: bpy.props.StringProperty(
+        name="skinsim command",
+        description="Path of the skinsim program (empty: $SKINSIM_CLI, else skinsim on PATH)",
+        subtype="FILE_PATH",
+        default="",
+    )
+
+    def draw(self, context):
+        self.layout.prop(self, "cli")
+
+
+class SkinsimSettings(bpy.types.PropertyGroup):
+    wound_u: bpy.props.FloatProperty(name="Wound U", min=0.0, max=1.0, default=0.25,
+                                     description="Wound centre, U in the mesh's UV map")
+    wound_v: bpy.props.FloatProperty(name="Wound V", min=0.0, max=1.0, default=0.38,
+                                     description="Wound centre, V in the mesh's UV map (up)")
+    wound_radius: bpy.props.FloatProperty(name="Radius", min=0.0, max=0.5, default=0.05,
+                                          description="Wound radius in UV units")
+    stroke_csv: bpy.props.StringProperty(
+        name="Strokes CSV", subtype="FILE_PATH", default="",
+        description="Painted strokes (skinsim's u,v[,id] CSV, v down) instead of the circle")
+    size: bpy.props.IntProperty(name="Texture size", min=16, max=16384, default=1024)
+    world_size_cm: bpy.props.FloatProperty(
+        name="UV square (cm)", min=0.1, default=23.0,
+        description="Side of the whole UV square on the body, in cm (noise and edge scale)")
+    days: bpy.props.StringProperty(name="Days", default=DEFAULT_DAYS,
+                                   description="Days since injury to sample, comma separated")
+    start_frame: bpy.props.IntProperty(name="Start frame", default=1)
+    frames_per_day: bpy.props.FloatProperty(name="Frames per day", min=0.001, default=4.0)
+    seed: bpy.props.IntProperty(name="Seed", min=0, default=1)
+    out_dir: bpy.props.StringProperty(
+        name="Output folder", subtype="DIR_PATH", default="",
+        description="Where the textures go (empty: //skinsim_<object> next to the .blend, "
+                    "or a temporary folder for an unsaved file)")
+    last_error: bpy.props.StringProperty(name="Last error", default="")
+
+
+def find_cli(context):
+    prefs = context.preferences.addons.get(__name__)
+    path = prefs.preferences.cli if prefs else ""
+    path = bpy.path.abspath(path) if path else os.environ.get("SKINSIM_CLI", "")
+    if path:
+        return path
+    return shutil.which("skinsim") or "skinsim"
+
+
+def parse_days(text):
+    """The day list as increasing floats; ValueError naming the bad entry."""
+    days = []
+    for tok in text.replace(";", ",").split(","):
+        tok = tok.strip()
+        if not tok:
+            continue
+        try:
+            d = float(tok)
+        except ValueError:
+            raise ValueError("Days: %r is not a number" % tok)
+        if not math.isfinite(d) or d < 0:
+            raise ValueError("Days: %r must be a finite number >= 0" % tok)
+        days.append(d)
+    if len(days) < 2:
+        raise ValueError("Days: need at least two days, got %r" % text)
+    if any(b <= a for a, b in zip(days, days[1:])):
+        raise ValueError("Days: must increase, got %r" % text)
+    return days
+
+
+def circle_strokes(u, v_up, r, n=24):
+    """A circle of n points in skinsim's stroke CSV (v down)."""
+    lines = ["u,v"]
+    for i in range(n):
+        a = 2 * math.pi * i / n
+        uu = min(max(u + r * math.cos(a), 0.0), 1.0)
+        vv = min(max(1.0 - (v_up + r * math.sin(a)), 0.0), 1.0)
+        lines.append("%.6f,%.6f" % (uu, vv))
+    return "\n".join(lines) + "\n"
+
+
+def day_label(d):
+    """The file stem the CLI writes for day d (printf %g)."""
+    s = "%g" % d
+    return "t" + s
+
+
+# ---- running skinsim ---------------------------------------------------------------
+
+
+def run_abrasion(cli, settings, days, out_dir):
+    """Runs `skinsim abrasion`; returns the frames folder. Raises
+    RuntimeError with the command's message when it fails."""
+    os.makedirs(os.path.dirname(os.path.abspath(out_dir)) or ".", exist_ok=True)
+    with tempfile.TemporaryDirectory() as tmp:
+        if settings.stroke_csv:
+            stroke = bpy.path.abspath(settings.stroke_csv)
+        else:
+            if settings.wound_radius <= 0:
+                raise RuntimeError("Radius: the wound radius must be > 0")
+            stroke = os.path.join(tmp, "wound.csv")
+            with open(stroke, "w") as f:
+                f.write(circle_strokes(settings.wound_u, settings.wound_v, settings.wound_radius))
+        cmd = [cli, "abrasion", "--stroke", stroke, "--size", str(settings.size),
+               "--world-size-cm", repr(settings.world_size_cm), "--seed", str(settings.seed),
+               "--times", ",".join("%g" % d for d in days), "--out", out_dir, "--quiet"]
+        try:
+            p = subprocess.run(cmd, capture_output=True, text=True)
+        except OSError as e:
+            raise RuntimeError("cannot run skinsim (%s): %s; set its path in the add-on's "
+                               "preferences or $SKINSIM_CLI" % (cli, e.strerror))
+    if p.returncode != 0:
+        msg = (p.stderr or p.stdout).strip().splitlines()
+        raise RuntimeError(msg[-1] if msg else "skinsim exited with code %d" % p.returncode)
+    return os.path.join(out_dir, "frames")
+
+
+# ---- the material --------------------------------------------------------------------
+
+
+def _input(node, *names):
+    """A node input by the first name that exists (names changed across
+    Blender versions, e.g. Principled 'Specular' -> 'Specular IOR Level')."""
+    for n in names:
+        if n in node.inputs:
+            return node.inputs[n]
+    raise KeyError("%s has none of the inputs %s" % (node.bl_idname, names))
+
+
+def _separate(nt):
+    """A node that splits a colour (its first output is the red/grey value)."""
+    kind = "ShaderNodeSeparateColor" if hasattr(bpy.types, "ShaderNodeSeparateColor") else \
+        "ShaderNodeSeparateRGB"
+    return nt.nodes.new(kind)
+
+
+def _load_image(path, non_color):
+    img = bpy.data.images.load(path, check_existing=False)
+    img.colorspace_settings.name = "Non-Color" if non_color else "sRGB"
+    return img
+
+
+def _day_driver(target, data_path, material, expression):
+    fc = target.driver_add(data_path)
+    drv = fc.driver
+    drv.type = "SCRIPTED"
+    var = drv.variables.new()
+    var.name = "day"
+    var.type = "SINGLE_PROP"
+    var.targets[0].id_type = "MATERIAL"
+    var.targets[0].id = material
+    var.targets[0].data_path = '["skinsim_day"]'
+    drv.expression = expression
+    return fc
+
+
+def build_material(obj, frames_dir, days, settings, name=None):
+    """A material on obj showing the texture sets in frames_dir, blended
+    over the timeline. Returns the material."""
+    mat = bpy.data.materials.new(name or "skinsim_" + obj.name)
+    mat.use_nodes = True
+    nt = mat.node_tree
+    nt.nodes.clear()
+    out = nt.nodes.new("ShaderNodeOutputMaterial")
+    out.location = (900, 0)
+    bsdf = nt.nodes.new("ShaderNodeBsdfPrincipled")
+    bsdf.location = (600, 0)
+    nt.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
+
+    # the time property, keyed linearly on the timeline
+    f0 = settings.start_frame + days[0] * settings.frames_per_day
+    f1 = settings.start_frame + days[-1] * settings.frames_per_day
+    mat["skinsim_day"] = float(days[0])
+    mat.keyframe_insert('["skinsim_day"]', frame=f0)
+    mat["skinsim_day"] = float(days[-1])
+    mat.keyframe_insert('["skinsim_day"]', frame=f1)
+    for fc in mat.animation_data.action.fcurves:
+        for kp in fc.keyframe_points:
+            kp.interpolation = "LINEAR"
+
+    chains = {}
+    uv = nt.nodes.new("ShaderNodeTexCoord")
+    uv.location = (-1400, 0)
+    for row, m in enumerate(MAPS):
+        y = 600 - row * 420
+        prev = None
+        for k, d in enumerate(days):
+            path = os.path.join(frames_dir, "%s_%s.png" % (day_label(d), m))
+            if not os.path.isfile(path):
+                raise RuntimeError("%s: missing (skinsim did not write it)" % path)
+            tex = nt.nodes.new("ShaderNodeTexImage")
+            tex.label = "%s day %g" % (m, d)
+            tex.image = _load_image(path, non_color=(m != "color"))
+            tex.interpolation = "Linear"
+            tex.location = (-1200 + 60 * k, y - 30 * k)
+            tex.hide = True
+            nt.links.new(uv.outputs["UV"], tex.inputs["Vector"])
+            if prev is None:
+                prev = tex.outputs["Color"]
+                continue
+            mix = nt.nodes.new("ShaderNodeMixRGB")
+            mix.blend_type = "MIX"
+            mix.label = "%s to day %g" % (m, d)
+            mix.location = (-500 + 40 * k, y - 30 * k)
+            mix.hide = True
+            nt.links.new(prev, mix.inputs["Color1"])
+            nt.links.new(tex.outputs["Color"], mix.inputs["Color2"])
+            a = days[k - 1]
+            _day_driver(mix.inputs["Fac"], "default_value", mat,
+                        "clamp((day - %r) / %r, 0.0, 1.0)" % (a, d - a))
+            prev = mix.outputs["Color"]
+        chains[m] = prev
+
+    nt.links.new(chains["color"], _input(bsdf, "Base Color"))
+    # reflection map -> specular; roughness = 1 - 0.8 x reflection
+    refl = _separate(nt)
+    refl.location = (0, 200)
+    nt.links.new(chains["reflection"], refl.inputs[0])
+    nt.links.new(refl.outputs[0], _input(bsdf, "Specular", "Specular IOR Level"))
+    rough = nt.nodes.new("ShaderNodeMath")
+    rough.operation = "MULTIPLY_ADD"
+    rough.label = "roughness = 1 - 0.8 reflection"
+    rough.inputs[1].default_value = -0.8
+    rough.inputs[2].default_value = 1.0
+    rough.location = (250, 150)
+    nt.links.new(refl.outputs[0], rough.inputs[0])
+    nt.links.new(rough.outputs["Value"], _input(bsdf, "Roughness"))
+    # normal map (tangent space, OpenGL +Y up: Blender's convention)
+    nmap = nt.nodes.new("ShaderNodeNormalMap")
+    nmap.space = "TANGENT"
+    if obj.data.uv_layers.active:
+        nmap.uv_map = obj.data.uv_layers.active.name
+    nmap.location = (250, -300)
+    nt.links.new(chains["normal"], nmap.inputs["Color"])
+    nt.links.new(nmap.outputs["Normal"], _input(bsdf, "Normal"))
+    # height: 0.5 = skin surface, 0..1 spans -0.5..+0.5 mm (skinsim abrasion --help)
+    hsep = _separate(nt)
+    hsep.location = (250, -600)
+    nt.links.new(chains["height"], hsep.inputs[0])
+    disp = nt.nodes.new("ShaderNodeDisplacement")
+    disp.location = (600, -500)
+    disp.inputs["Midlevel"].default_value = 0.5
+    disp.inputs["Scale"].default_value = 0.001  # 1 height unit = 1 mm, in metres
+    nt.links.new(hsep.outputs[0], disp.inputs["Height"])
+    nt.links.new(disp.outputs["Displacement"], out.inputs["Displacement"])
+    if hasattr(mat, "cycles"):
+        mat.cycles.displacement_method = "BUMP"
+
+    obj.data.materials.clear()
+    obj.data.materials.append(mat)
+    for p in obj.data.polygons:
+        p.material_index = 0
+    return mat
+
+
+class SKINSIM_OT_build_material(bpy.types.Operator):
+    """Run skinsim for the active mesh and build a time-driven skin material"""
+
+    bl_idname = "skinsim.build_material"
+    bl_label = "Build skinsim material"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        o = context.active_object
+        return o is not None and o.type == "MESH"
+
+    def execute(self, context):
+        obj = context.active_object
+        st = context.scene.skinsim
+        st.last_error = ""
+        try:
+            if not obj.data.uv_layers:
+                raise RuntimeError("%s: the mesh has no UV map" % obj.name)
+            days = parse_days(st.days)
+            out_dir = bpy.path.abspath(st.out_dir) if st.out_dir else ""
+            if not out_dir:
+                base = (bpy.path.abspath("//") if bpy.data.filepath else
+                        tempfile.mkdtemp(prefix="skinsim_"))
+                out_dir = os.path.join(base, "skinsim_" + bpy.path.clean_name(obj.name))
+            frames = run_abrasion(find_cli(context), st, days, out_dir)
+            mat = build_material(obj, frames, days, st)
+        except (RuntimeError, ValueError) as e:
+            st.last_error = str(e)
+            msg = str(e)
+            self.report({"ERROR"}, msg if msg.startswith("skinsim") else "skinsim: " + msg)
+            return {"CANCELLED"}
+        scene = context.scene
+        scene.frame_start = st.start_frame
+        scene.frame_end = max(scene.frame_end,
+                              int(math.ceil(st.start_frame + days[-1] * st.frames_per_day)))
+        self.report({"INFO"}, "skinsim: material %s, days %g..%g over frames %d..%d" % (
+            mat.name, days[0], days[-1], scene.frame_start, scene.frame_end))
+        return {"FINISHED"}
+
+
+class SKINSIM_PT_panel(bpy.types.Panel):
+    bl_label = "skinsim"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "material"
+
+    def draw(self, context):
+        st = context.scene.skinsim
+        col = self.layout.column()
+        for p in ("wound_u", "wound_v", "wound_radius", "stroke_csv", "size", "world_size_cm",
+                  "days", "start_frame", "frames_per_day", "seed", "out_dir"):
+            col.prop(st, p)
+        col.operator(SKINSIM_OT_build_material.bl_idname)
+        if st.last_error:
+            col.label(text=st.last_error, icon="ERROR")
+
+
+CLASSES = (SkinsimPreferences, SkinsimSettings, SKINSIM_OT_build_material, SKINSIM_PT_panel)
+
+
+def register():
+    for c in CLASSES:
+        bpy.utils.register_class(c)
+    bpy.types.Scene.skinsim = bpy.props.PointerProperty(type=SkinsimSettings)
+
+
+def unregister():
+    del bpy.types.Scene.skinsim
+    for c in reversed(CLASSES):
+        bpy.utils.unregister_class(c)

@@ -1,0 +1,230 @@
+"""Headless test of the skinsim Blender add-on (run by tests/e2e_blender.sh):
+
+    blender -b --factory-startup --python-exit-code 1 --python test_addon.py -- SRC CLI OUT MESH
+
+Registers the add-on, imports the hand mesh, checks that bad input is
+refused with skinsim's own message and leaves no material, builds the
+material (abrasion timeline, days 0, 3, 20 at one frame per day), checks its
+nodes, colour spaces, keyframes and drivers, renders frames 1 (day 0), 4 (day 3)
+and 21 (day 20) with Cycles on the CPU, and checks that the later renders
+differ from the first where the wound is and nowhere else. Writes
+OUT/frame_NNN.png and OUT/compare.png (the three frames and the difference
+of the first and last) to look at."""
+import math
+import os
+import sys
+
+import bpy
+import numpy as np
+from bpy_extras.object_utils import world_to_camera_view
+from mathutils import Vector
+
+argv = sys.argv[sys.argv.index("--") + 1:]
+SRC, CLI, OUT, MESH = argv[0], argv[1], argv[2], argv[3]
+os.makedirs(OUT, exist_ok=True)
+os.environ["SKINSIM_CLI"] = CLI
+
+
+def check(cond, what):
+    if not cond:
+        raise AssertionError(what)
+    print("ok:", what)
+
+
+bpy.ops.wm.read_factory_settings(use_empty=True)
+sys.path.insert(0, os.path.join(SRC, "integrations", "blender"))
+import skinsim_blender  # noqa: E402
+
+skinsim_blender.register()
+check(hasattr(bpy.ops.skinsim, "build_material") and hasattr(bpy.types.Scene, "skinsim"),
+      "add-on registers its operator and settings")
+
+# Debian 12's Blender 3.4 glTF importer needs SMOOTH shading (DESIGN.md pitfalls)
+bpy.ops.import_scene.gltf(filepath=MESH, import_shading="SMOOTH")
+obj = next(o for o in bpy.data.objects if o.type == "MESH")
+for o in bpy.context.view_layer.objects:
+    o.select_set(o == obj)
+bpy.context.view_layer.objects.active = obj
+scene = bpy.context.scene
+st = scene.skinsim
+st.size = 256
+st.days = "0,3,20"
+st.frames_per_day = 1.0
+st.start_frame = 1
+st.out_dir = os.path.join(OUT, "textures")
+mats_before = len(bpy.data.materials)
+
+# ---- bad input: refused with a message, nothing built ----
+st.days = "0,abc"
+try:
+    bpy.ops.skinsim.build_material()
+    check(False, "bad day list is refused")
+except RuntimeError as e:
+    check("abc" in str(e) and "abc" in st.last_error, "bad day list: message names it (%s)" % e)
+st.days = "0,3,20"
+bad_csv = os.path.join(OUT, "bad_strokes.csv")
+with open(bad_csv, "w") as f:
+    f.write("u,v\n0.2,0.2\n1.5,0.3\n0.3,0.5\n")
+st.stroke_csv = bad_csv
+try:
+    bpy.ops.skinsim.build_material()
+    check(False, "bad stroke file is refused")
+except RuntimeError:
+    check("bad_strokes.csv:3" in st.last_error and "outside [0,1]" in st.last_error,
+          "bad stroke file: skinsim's message names file and line (%s)" % st.last_error)
+check(len(bpy.data.materials) == mats_before, "a failed run builds no material")
+st.stroke_csv = ""
+
+# ---- the material ----
+res = bpy.ops.skinsim.build_material()
+check(res == {"FINISHED"}, "build_material finished")
+mat = obj.active_material
+check(mat is not None and mat.name.startswith("skinsim_"), "the mesh wears the skinsim material")
+nt = mat.node_tree
+bsdf = next(n for n in nt.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+for name in ("Base Color", "Roughness", "Normal"):
+    check(bsdf.inputs[name].is_linked, "Principled %s is wired" % name)
+spec = bsdf.inputs["Specular"] if "Specular" in bsdf.inputs else bsdf.inputs["Specular IOR Level"]
+check(spec.is_linked, "Principled specular is wired")
+nmap = next(n for n in nt.nodes if n.bl_idname == "ShaderNodeNormalMap")
+check(nmap.space == "TANGENT" and nmap.outputs["Normal"].is_linked, "normal map node, tangent space")
+out = next(n for n in nt.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+check(out.inputs["Displacement"].is_linked, "height drives displacement")
+imgs = [n.image for n in nt.nodes if n.bl_idname == "ShaderNodeTexImage"]
+check(len(imgs) == 12, "4 maps x 3 days of images")
+for im in imgs:
+    want = "sRGB" if "_color" in im.filepath else "Non-Color"
+    check(im.colorspace_settings.name == want, "%s is %s" % (os.path.basename(im.filepath), want))
+fcs = [fc for fc in mat.animation_data.action.fcurves if fc.data_path == '["skinsim_day"]']
+check(len(fcs) == 1 and len(fcs[0].keyframe_points) == 2, "skinsim_day is keyframed")
+check([tuple(k.co) for k in fcs[0].keyframe_points] == [(1.0, 0.0), (21.0, 20.0)],
+      "day 0 at frame 1, day 20 at frame 21")
+drivers = nt.animation_data.drivers
+check(len(drivers) == 8, "two blends per map, each driven by the day")
+check(all(d.driver.is_valid and d.driver.is_simple_expression for d in drivers),
+      "blend drivers are simple expressions (no Python auto-run needed)")
+scene.frame_set(11)  # day 10: between the day-3 and day-20 sets
+dg = bpy.context.evaluated_depsgraph_get()
+me = mat.evaluated_get(dg)
+check(abs(me["skinsim_day"] - 10.0) < 1e-6, "frame 11 is day 10")
+facs = sorted(round(n.inputs["Fac"].default_value, 4)
+              for n in me.node_tree.nodes if n.bl_idname == "ShaderNodeMixRGB")
+check(facs == [0.4118] * 4 + [1.0] * 4, "blend weights at day 10: %s" % facs)
+
+# ---- render frame 1 and frame 21, looking at the wound ----
+dg = bpy.context.evaluated_depsgraph_get()
+ev = obj.evaluated_get(dg)
+mesh = ev.to_mesh()
+uvl = mesh.uv_layers.active.data
+centre = Vector((st.wound_u, st.wound_v))
+wound_pts, best, faces = [], None, []
+for p in mesh.polygons:
+    c = sum((uvl[i].uv for i in p.loop_indices), Vector((0, 0))) / len(p.loop_indices)
+    d = (c - centre).length
+    w = obj.matrix_world @ p.center
+    faces.append(([tuple(uvl[i].uv) for i in p.loop_indices] + [tuple(c)], w))
+    if d < st.wound_radius * 0.9:
+        wound_pts.append(w)
+    if best is None or d < best[0]:
+        best = (d, w, (obj.matrix_world.to_3x3() @ p.normal).normalized())
+ev.to_mesh_clear()
+check(len(wound_pts) >= 5, "the wound covers %d faces of the hand" % len(wound_pts))
+_, pos, normal = best
+cam_data = bpy.data.cameras.new("cam")
+cam_data.lens = 50
+cam_data.clip_start = 0.001  # the hand is 20 cm long; the default 10 cm would cut it
+cam = bpy.data.objects.new("cam", cam_data)
+scene.collection.objects.link(cam)
+cam.location = pos + normal * 0.10
+cam.rotation_euler = (pos - cam.location).to_track_quat("-Z", "Y").to_euler()
+scene.camera = cam
+sun_data = bpy.data.lights.new("sun", "SUN")
+sun_data.energy = 3.0
+sun = bpy.data.objects.new("sun", sun_data)
+sun.rotation_euler = ((cam.location + Vector((0.03, 0.02, 0.05))) - pos).to_track_quat(
+    "Z", "Y").to_euler()
+scene.collection.objects.link(sun)
+world = bpy.data.worlds.new("w")
+world.use_nodes = True
+world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.3, 0.3, 0.3, 1)
+scene.world = world
+scene.render.engine = "CYCLES"
+scene.cycles.device = "CPU"
+scene.cycles.samples = 16
+scene.cycles.use_denoising = False
+scene.render.resolution_x = scene.render.resolution_y = 200
+scene.render.resolution_percentage = 100
+scene.render.image_settings.file_format = "PNG"
+
+
+def render(frame):
+    scene.frame_set(frame)
+    path = os.path.join(OUT, "frame_%03d.png" % frame)
+    scene.render.filepath = path
+    bpy.ops.render.render(write_still=True)
+    img = bpy.data.images.load(path)
+    w, h = img.size
+    a = np.array(img.pixels[:], dtype=np.float32).reshape(h, w, 4)[::-1, :, :3]  # rows top-down
+    return a
+
+
+a, b, c = render(1), render(4), render(21)  # days 0, 3 (scab), 20 (maturation)
+H, W = a.shape[:2]
+yy, xx = np.mgrid[0:H, 0:W]
+
+
+def pixel_distance(points):
+    """Per render pixel, the distance (pixels) to the nearest of the world
+    points as the camera sees them."""
+    dist = np.full((H, W), np.inf)
+    for p in points:
+        x, y, z = world_to_camera_view(scene, cam, p)
+        if z > 0 and -0.2 <= x < 1.2 and -0.2 <= y < 1.2:
+            dist = np.minimum(dist, np.hypot(yy - (1 - y) * H, xx - x * W))
+    return dist
+
+
+def texture(day, m):
+    im = bpy.data.images.load(os.path.join(st.out_dir, "frames", "t%g_%s.png" % (day, m)))
+    w, h = im.size
+    return np.array(im.pixels[:], dtype=np.float32).reshape(h, w, 4)  # row 0 = v 0, as UV
+
+
+def changed_faces(day):
+    """World centres of the faces whose texels change between day 0 and day:
+    the wound and whatever of the skin around it the timeline touches."""
+    ch = None
+    for m in ("color", "normal", "height"):
+        t = np.abs(texture(0, m) - texture(day, m))[..., :3].max(axis=2) > 2.0 / 255
+        ch = t if ch is None else ch | t
+    n = ch.shape[0]
+    out = []
+    for uvs, w in faces:
+        if any(ch[min(int(v * n), n - 1), min(int(u * n), n - 1)] for u, v in uvs):
+            out.append(w)
+    return out
+
+
+core = pixel_distance(wound_pts)
+check((core <= 3).sum() >= 20, "the wound is in view")
+for later, frame, day in ((b, 4, 3.0), (c, 21, 20.0)):
+    diff = np.abs(a - later).mean(axis=2)
+    region = pixel_distance(changed_faces(day))
+    away = region > 20  # beyond a face's size from every face whose texels changed
+    print("mean |frame %d - frame 1|: on the wound %.4f, away from it %.5f (max %.5f, %d%% of "
+          "the picture)" % (frame, diff[core <= 3].mean(), diff[away].mean(), diff[away].max(),
+                            100 * away.mean()))
+    check(diff[core <= 3].mean() > 0.05, "frames 1 and %d differ on the wound" % frame)
+    check(away.mean() > 0.15 and diff[away].max() < 0.01,
+          "frames 1 and %d agree away from the wound" % frame)
+
+# a picture to look at: frames 1 | 4 | 21 | difference 1-21 (x4)
+diff = np.abs(a - c).mean(axis=2)
+sheet = np.concatenate([a, b, c, np.repeat(np.clip(diff * 4, 0, 1)[..., None], 3, axis=2)], axis=1)
+img = bpy.data.images.new("compare", sheet.shape[1], sheet.shape[0])
+rgba = np.concatenate([sheet, np.ones(sheet.shape[:2] + (1,), np.float32)], axis=2)[::-1]
+img.pixels[:] = rgba.ravel()
+img.filepath_raw = os.path.join(OUT, "compare.png")
+img.file_format = "PNG"
+img.save()
+print("PASS: renders in", OUT)

@@ -1,0 +1,600 @@
+"""Loading libskinsim and the C declarations the package uses (ctypes).
+
+Design: the package is a thin layer over the shared library. Every struct
+the bindings touch is declared here once, field by field as in
+include/skinsim/*.h; tests/test_layout.py compares sizes and offsets with
+what the C compiler says (integrations/python/tests/abi_layout.c), so a
+header change that is not mirrored here fails a test instead of corrupting
+memory. Every library call goes through `check`, which turns a non-zero
+ss_status into a Python exception carrying the library's own message.
+
+Arrays cross the boundary without copies where the layout allows: results
+the library allocates are wrapped as numpy views that keep their owner (and
+so the C memory) alive; images the caller passes or receives are numpy
+float32 arrays whose buffers the library reads or writes directly through an
+ss_image header that points into them.
+
+Which library: $SKINSIM_LIB (a path) if set; else the one an installed copy
+of this package was installed with (_installed.py, written by cmake
+--install); else build/libskinsim.so.0 of the source tree this file is in;
+else the system's (ldconfig).
+"""
+
+import ctypes
+import ctypes.util
+import os
+
+import numpy as np
+
+c_int = ctypes.c_int
+c_double = ctypes.c_double
+c_float = ctypes.c_float
+c_uint64 = ctypes.c_uint64
+c_size_t = ctypes.c_size_t
+c_char_p = ctypes.c_char_p
+c_void_p = ctypes.c_void_p
+POINTER = ctypes.POINTER
+byref = ctypes.byref
+
+
+def _candidates():
+    env = os.environ.get("SKINSIM_LIB")
+    if env:
+        return [env]
+    out = []
+    try:
+        from . import _installed  # written by cmake --install
+
+        out.append(os.path.normpath(_installed.LIBRARY))
+    except ImportError:
+        pass
+    here = os.path.dirname(os.path.abspath(__file__))
+    src = os.path.normpath(os.path.join(here, "..", "..", ".."))
+    out.append(os.path.join(src, "build", "libskinsim.so.0"))
+    found = ctypes.util.find_library("skinsim")
+    out.append(found or "libskinsim.so.0")
+    return out
+
+
+def _load():
+    tried = []
+    for path in _candidates():
+        try:
+            return ctypes.CDLL(path), path
+        except OSError as e:
+            tried.append("%s (%s)" % (path, e))
+    raise ImportError(
+        "skinsim: cannot load libskinsim; set SKINSIM_LIB to the library's path. Tried: "
+        + "; ".join(tried)
+    )
+
+
+lib, library_path = _load()
+
+# ---- errors ------------------------------------------------------------------
+
+SS_OK, SS_ERR_RUNTIME, SS_ERR_INPUT, SS_ERR_NOMEM = 0, 1, 2, 3
+
+
+class ss_error(ctypes.Structure):
+    _fields_ = [("code", c_int), ("msg", ctypes.c_char * 1024)]
+
+
+class SkinsimError(Exception):
+    """A failure reported by libskinsim; `code` is the library's ss_status
+    (1 runtime, 2 input, 3 memory) and the text is the library's message."""
+
+    def __init__(self, message, code=SS_ERR_RUNTIME):
+        super().__init__(message)
+        self.code = code
+
+
+class InputError(SkinsimError, ValueError):
+    """Bad argument, malformed or missing file, bad value (ss_status 2: the
+    command-line tool exits 2 for these)."""
+
+
+class OutOfMemoryError(SkinsimError, MemoryError):
+    """The library could not allocate what the job needs."""
+
+
+def raise_for(code, message):
+    if code == SS_ERR_INPUT:
+        raise InputError(message, code)
+    if code == SS_ERR_NOMEM:
+        raise OutOfMemoryError(message, code)
+    raise SkinsimError(message, code)
+
+
+def check(fn, *args):
+    """Calls fn(*args, &err) and raises on a non-zero status."""
+    err = ss_error()
+    st = fn(*args, byref(err))
+    if st != SS_OK:
+        raise_for(st, err.msg.decode("utf-8", "replace"))
+    return st
+
+
+def check_ptr(fn, *args):
+    """Calls fn(*args, &err) for a function returning a pointer; raises when NULL."""
+    err = ss_error()
+    p = fn(*args, byref(err))
+    if not p:
+        raise_for(err.code or SS_ERR_RUNTIME, err.msg.decode("utf-8", "replace"))
+    return p
+
+
+class Handle:
+    """Owns library objects: calls each free function on its pointer when the
+    last reference goes. Python objects hold a Handle and the numpy views of
+    library memory reference it too, so memory is never freed under a view
+    (closing an object only drops its own reference)."""
+
+    def __init__(self):
+        self._frees = []
+
+    def own(self, free_fn, ptr):
+        self._frees.append((free_fn, ptr))
+        return ptr
+
+    def __del__(self):
+        while self._frees and lib:
+            fn, ptr = self._frees.pop()
+            fn(ptr)
+
+
+def _fn(name, restype, *argtypes):
+    f = getattr(lib, name)
+    f.restype = restype
+    f.argtypes = list(argtypes)
+    return f
+
+
+# ---- core: images --------------------------------------------------------------
+
+
+class ss_image(ctypes.Structure):
+    _fields_ = [
+        ("width", c_int),
+        ("height", c_int),
+        ("channels", c_int),
+        ("data", POINTER(c_float)),
+    ]
+
+
+P_IMAGE = POINTER(ss_image)
+
+
+def image_header(arr):
+    """An ss_image that points into the float32 C-contiguous array arr of
+    shape (h, w) or (h, w, c). The caller keeps arr alive while it is used."""
+    if arr.dtype != np.float32 or not arr.flags.c_contiguous:
+        raise TypeError("image arrays must be C-contiguous float32")
+    if arr.ndim == 2:
+        h, w, c = arr.shape[0], arr.shape[1], 1
+    elif arr.ndim == 3:
+        h, w, c = arr.shape
+    else:
+        raise ValueError("an image is a (height, width) or (height, width, channels) array")
+    img = ss_image(w, h, c, arr.ctypes.data_as(POINTER(c_float)))
+    img._keep = arr
+    return img
+
+
+def as_image_input(arr, name, channels=None):
+    """Validates and converts an image argument to C-contiguous float32
+    (copied only when its dtype or layout requires it)."""
+    a = np.asarray(arr)
+    if a.ndim not in (2, 3) or a.shape[0] < 1 or a.shape[1] < 1:
+        raise InputError("%s: want an image array (height, width[, channels]), got shape %s"
+                         % (name, a.shape), SS_ERR_INPUT)
+    if a.ndim == 3 and not 1 <= a.shape[2] <= 4:
+        raise InputError("%s: 1 to 4 channels, got %d" % (name, a.shape[2]), SS_ERR_INPUT)
+    if channels is not None and (a.shape[2] if a.ndim == 3 else 1) not in channels:
+        raise InputError("%s: want %s channel(s), got %d" % (
+            name, " or ".join(str(c) for c in channels), a.shape[2] if a.ndim == 3 else 1),
+            SS_ERR_INPUT)
+    a = np.ascontiguousarray(a, dtype=np.float32)
+    if not np.all(np.isfinite(a)):
+        raise InputError("%s: contains NaN or infinite values" % name, SS_ERR_INPUT)
+    return a
+
+
+def image_view(p_img, owner):
+    """A numpy view (h, w) or (h, w, c) of a library-owned ss_image*; the view
+    keeps owner alive."""
+    img = p_img.contents
+    n = img.width * img.height * img.channels
+    buf = (c_float * n).from_address(ctypes.addressof(img.data.contents))
+    buf._owner = owner
+    a = np.frombuffer(buf, dtype=np.float32)
+    if img.channels == 1:
+        return a.reshape(img.height, img.width)
+    return a.reshape(img.height, img.width, img.channels)
+
+
+def double_view(ptr, n, owner, shape=None):
+    """A numpy float64 view of n doubles the library allocated."""
+    if n == 0:
+        return np.zeros(0 if shape is None else shape)
+    buf = (c_double * n).from_address(ctypes.cast(ptr, c_void_p).value)
+    buf._owner = owner
+    a = np.frombuffer(buf, dtype=np.float64)
+    return a if shape is None else a.reshape(shape)
+
+
+def float_view(ptr, n, owner, shape=None):
+    buf = (c_float * n).from_address(ctypes.cast(ptr, c_void_p).value)
+    buf._owner = owner
+    a = np.frombuffer(buf, dtype=np.float32)
+    return a if shape is None else a.reshape(shape)
+
+
+_fn("ss_image_create", P_IMAGE, c_int, c_int, c_int, POINTER(ss_error))
+_fn("ss_image_free", None, P_IMAGE)
+_fn("ss_png_write", c_int, c_char_p, P_IMAGE, c_int, c_int, POINTER(ss_error))
+_fn("ss_image_read", P_IMAGE, c_char_p, c_int, POINTER(ss_error))
+_fn("ss_version", c_char_p)
+_fn("ss_data_dir", c_char_p)
+_fn("ss_threads_set", c_int, c_int)
+_fn("ss_threads_get", c_int)
+_fn("ss_srgb_encode", c_float, c_float)
+_fn("ss_srgb_decode", c_float, c_float)
+_fn("ss_srgb_encode_array", None, POINTER(c_float), POINTER(c_float), c_size_t)
+
+# ---- optics -------------------------------------------------------------------
+
+
+class ss_bio_params(ctypes.Structure):
+    _fields_ = [
+        ("melanin", c_double),
+        ("pheomelanin_ratio", c_double),
+        ("blood", c_double),
+        ("oxygenation", c_double),
+        ("sc_thickness_cm", c_double),
+        ("epidermis_thickness_cm", c_double),
+        ("bilirubin_g_per_l", c_double),
+        ("betacarotene_g_per_l", c_double),
+    ]
+
+
+class ss_mc_options(ctypes.Structure):
+    _fields_ = [
+        ("photons", c_uint64),
+        ("seed", c_uint64),
+        ("theta_i_rad", c_double),
+        ("roughness_sigma", c_double),
+        ("stochastic_absorb", c_int),
+        ("brdf_n_theta", c_int),
+        ("brdf_n_phi", c_int),
+        ("radial_bins", c_int),
+        ("radial_max_cm", c_double),
+    ]
+
+
+PROGRESS_FN = ctypes.CFUNCTYPE(None, c_void_p, c_double)
+
+
+class ss_spectrum_options(ctypes.Structure):
+    _fields_ = [
+        ("wl_min_nm", c_double),
+        ("wl_max_nm", c_double),
+        ("wl_step_nm", c_double),
+        ("mc", ss_mc_options),
+        ("progress", PROGRESS_FN),
+        ("progress_user", c_void_p),
+    ]
+
+
+class ss_reflectance_spectrum(ctypes.Structure):
+    _fields_ = [
+        ("n", c_int),
+        ("wavelength_nm", POINTER(c_double)),
+        ("reflectance", POINTER(c_double)),
+        ("std_error", POINTER(c_double)),
+        ("specular", c_double),
+    ]
+
+
+class ss_brdf_sampled(ctypes.Structure):
+    _fields_ = [
+        ("n_theta_i", c_int),
+        ("n_theta_r", c_int),
+        ("n_phi", c_int),
+        ("f_rgb", POINTER(c_double)),
+    ]
+
+
+class ss_render_params(ctypes.Structure):
+    _fields_ = [("base_rgb", c_double * 3), ("specular", c_double), ("roughness", c_double)]
+
+
+class ss_fit_options(ctypes.Structure):
+    _fields_ = [
+        ("subsamples", c_int),
+        ("max_iter", c_int),
+        ("tol", c_double),
+        ("weighting", c_int),
+        ("max_theta_rad", c_double),
+    ]
+
+
+class ss_fit_result(ctypes.Structure):
+    _fields_ = [
+        ("model", c_int),
+        ("params", ss_render_params),
+        ("distance", c_double),
+        ("residual_rms", c_double),
+        ("residual_rel", c_double),
+        ("evaluations", c_int),
+    ]
+
+
+SS_RENDER_NMODELS = 2
+SS_MM_NAXES = 6
+SS_MM_NFIELDS = 18
+
+
+class ss_mm_entry(ctypes.Structure):
+    _fields_ = [
+        ("fit", ss_render_params * SS_RENDER_NMODELS),
+        ("residual_rel", c_double * SS_RENDER_NMODELS),
+        ("sss_radius_cm", c_double * 3),
+        ("albedo_rgb", c_double * 3),
+    ]
+
+
+class ss_mm_table(ctypes.Structure):
+    _fields_ = [
+        ("nsamples", c_int * SS_MM_NAXES),
+        ("axis", POINTER(c_double) * SS_MM_NAXES),
+        ("nentries", c_size_t),
+        ("entries", POINTER(c_double)),
+        ("photons", c_uint64),
+        ("seed", c_uint64),
+        ("n_theta_i", c_int),
+        ("n_theta_r", c_int),
+        ("n_phi", c_int),
+        ("wl_min_nm", c_double),
+        ("wl_max_nm", c_double),
+        ("wl_step_nm", c_double),
+    ]
+
+
+class ss_mm_build_options(ctypes.Structure):
+    _fields_ = [
+        ("spectrum", ss_spectrum_options),
+        ("n_theta_i", c_int),
+        ("n_theta_r", c_int),
+        ("n_phi", c_int),
+        ("fit", ss_fit_options),
+        ("base", ss_bio_params),
+        ("quiet", c_int),
+    ]
+
+
+P_ERR = POINTER(ss_error)
+P_BIO = POINTER(ss_bio_params)
+P_TABLE = POINTER(ss_mm_table)
+_fn("ss_bio_params_default", None, P_BIO)
+_fn("ss_bio_params_validate", c_int, P_BIO, P_ERR)
+_fn("ss_spectrum_options_default", None, POINTER(ss_spectrum_options))
+_fn("ss_optics_reflectance_spectrum", c_int, P_BIO, POINTER(ss_spectrum_options),
+    POINTER(ss_reflectance_spectrum), P_ERR)
+_fn("ss_reflectance_spectrum_free", None, POINTER(ss_reflectance_spectrum))
+_fn("ss_spectrum_to_srgb_linear", c_int, POINTER(c_double), POINTER(c_double), c_int,
+    POINTER(c_double), P_ERR)
+_fn("ss_optics_brdf_sample", c_int, P_BIO, POINTER(ss_spectrum_options), c_int, c_int, c_int,
+    POINTER(ss_brdf_sampled), P_ERR)
+_fn("ss_brdf_sampled_free", None, POINTER(ss_brdf_sampled))
+_fn("ss_fit_options_default", None, POINTER(ss_fit_options))
+_fn("ss_render_fit", c_int, c_int, POINTER(ss_brdf_sampled), POINTER(ss_fit_options),
+    POINTER(ss_fit_result), P_ERR)
+_fn("ss_render_model_name", c_char_p, c_int)
+_fn("ss_render_brdf_eval", None, c_int, POINTER(ss_render_params), c_double, c_double, c_double,
+    POINTER(c_double))
+_fn("ss_render_brdf_sample", c_int, c_int, POINTER(ss_render_params), c_int, c_int, c_int, c_int,
+    POINTER(ss_brdf_sampled), P_ERR)
+_fn("ss_srgb_linear_to_lab", None, POINTER(c_double), POINTER(c_double))
+_fn("ss_lab_to_srgb_linear", None, POINTER(c_double), POINTER(c_double))
+_fn("ss_lab_describe", None, POINTER(c_double), POINTER(c_double), POINTER(c_double),
+    POINTER(c_double))
+_fn("ss_ciede2000", c_double, POINTER(c_double), POINTER(c_double))
+_fn("ss_mm_build_options_default", None, POINTER(ss_mm_build_options))
+_fn("ss_mm_sample_fast", c_int, P_BIO, POINTER(ss_mm_build_options), POINTER(ss_brdf_sampled),
+    POINTER(c_double), POINTER(c_double), P_ERR)
+_fn("ss_mm_table_read", P_TABLE, c_char_p, P_ERR)
+_fn("ss_mm_table_free", None, P_TABLE)
+_fn("ss_mm_table_lookup", None, P_TABLE, POINTER(c_double), POINTER(c_double))
+_fn("ss_mm_table_lookup_bio", c_int, P_TABLE, P_BIO, POINTER(ss_mm_entry), P_ERR)
+_fn("ss_mm_entry_unpack", None, POINTER(c_double), POINTER(ss_mm_entry))
+_fn("ss_mm_axis_name", c_char_p, c_int)
+
+# ---- geom + abrasion ------------------------------------------------------------
+
+
+class ss_stroke_set(ctypes.Structure):
+    _fields_ = [
+        ("npoints", c_int),
+        ("u", POINTER(c_double)),
+        ("v", POINTER(c_double)),
+        ("stroke", POINTER(c_int)),
+        ("nstrokes", c_int),
+        ("stroke_ids", POINTER(c_int)),
+    ]
+
+
+class ss_wound_shape(ctypes.Structure):
+    _fields_ = [
+        ("size", c_int),
+        ("mask", P_IMAGE),
+        ("dist", P_IMAGE),
+        ("label", POINTER(c_int)),
+        ("nwounds", c_int),
+        ("closing_px", POINTER(c_double)),
+        ("inner_ratio", POINTER(c_double)),
+        ("box_x", c_int),
+        ("box_y", c_int),
+        ("box_w", c_int),
+        ("box_h", c_int),
+        ("npolys", c_int),
+        ("polys", c_void_p),
+    ]
+
+
+class ss_base_skin(ctypes.Structure):
+    _fields_ = [("upper", P_IMAGE), ("lower", P_IMAGE), ("upper_srgb", P_IMAGE),
+                ("lower_srgb", P_IMAGE)]
+
+
+class ss_texture_set(ctypes.Structure):
+    _fields_ = [("color", P_IMAGE), ("reflection", P_IMAGE), ("height", P_IMAGE),
+                ("normal", P_IMAGE)]
+
+
+class ss_abrasion_settings(ctypes.Structure):
+    _fields_ = [
+        ("size", c_int),
+        ("world_size_cm", c_double),
+        ("reference_px", c_double),
+        ("scab_height_mm", c_double),
+        ("seed", c_uint64),
+    ]
+
+
+SS_TIMELINE_MAX_KEYS = 32
+SS_PHASE_COUNT = 5
+
+
+class ss_timeline_key(ctypes.Structure):
+    _fields_ = [("phase", c_int), ("day", c_double)]
+
+
+class ss_timeline(ctypes.Structure):
+    _fields_ = [
+        ("nkeys", c_int),
+        ("key", ss_timeline_key * SS_TIMELINE_MAX_KEYS),
+        ("end_day", c_double),
+    ]
+
+
+class ss_abrasion(ctypes.Structure):
+    _fields_ = [
+        ("settings", ss_abrasion_settings),
+        ("timeline", ss_timeline),
+        ("shape", POINTER(ss_wound_shape)),
+        ("skin", POINTER(ss_base_skin)),
+        ("phase", ss_texture_set * SS_PHASE_COUNT),
+        ("rendered", c_int * SS_PHASE_COUNT),
+    ]
+
+
+P_SHAPE = POINTER(ss_wound_shape)
+P_ABR = POINTER(ss_abrasion)
+_fn("ss_stroke_csv_parse", c_int, c_char_p, c_char_p, POINTER(ss_stroke_set), P_ERR)
+_fn("ss_stroke_set_free", None, POINTER(ss_stroke_set))
+_fn("ss_abrasion_example_strokes", c_int, POINTER(ss_stroke_set), P_ERR)
+_fn("ss_wound_shape_from_strokes", c_int, POINTER(ss_stroke_set), c_int, c_int, c_int, c_uint64,
+    POINTER(P_SHAPE), P_ERR)
+_fn("ss_wound_shape_from_mask", c_int, P_IMAGE, c_int, c_uint64, POINTER(P_SHAPE), P_ERR)
+_fn("ss_wound_shape_free", None, P_SHAPE)
+_fn("ss_base_skin_create", c_int, P_IMAGE, P_IMAGE, c_int, c_uint64, POINTER(ss_base_skin), P_ERR)
+_fn("ss_base_skin_free", None, POINTER(ss_base_skin))
+_fn("ss_abrasion_settings_default", None, POINTER(ss_abrasion_settings))
+_fn("ss_timeline_default", None, POINTER(ss_timeline))
+_fn("ss_timeline_validate", c_int, POINTER(ss_timeline), P_ERR)
+_fn("ss_phase_name", c_char_p, c_int)
+_fn("ss_phase_from_name", c_int, c_char_p)
+_fn("ss_abrasion_create", c_int, POINTER(ss_abrasion_settings), POINTER(ss_timeline), P_SHAPE,
+    POINTER(ss_base_skin), POINTER(P_ABR), P_ERR)
+_fn("ss_abrasion_free", None, P_ABR)
+_fn("ss_abrasion_frame", c_int, P_ABR, c_double, POINTER(ss_texture_set), P_ERR)
+
+# ---- heal ------------------------------------------------------------------------
+
+SS_HEAL_NFIELDS = 8
+
+
+class ss_heal_stats(ctypes.Structure):
+    _fields_ = [
+        ("open_area_mm2", c_double),
+        ("wound_region_area_mm2", c_double),
+        ("initial_area_mm2", c_double),
+        ("field_mean", c_double * SS_HEAL_NFIELDS),
+    ]
+
+
+class ss_heal_area_row(ctypes.Structure):
+    _fields_ = [("t_days", c_double), ("st", ss_heal_stats)]
+
+
+class ss_heal_grid(ctypes.Structure):
+    _fields_ = [
+        ("nx", c_int),
+        ("ny", c_int),
+        ("nz", c_int),
+        ("dx_mm", c_double),
+        ("skin_top_mm", c_double),
+        ("cell", POINTER(ctypes.c_uint8)),
+        ("field", POINTER(c_float) * SS_HEAL_NFIELDS),
+        ("velocity", POINTER(c_float) * 3),
+        ("t_days", c_double),
+        ("step", c_uint64),
+    ]
+
+
+class ss_heal_run_config(ctypes.Structure):
+    _fields_ = [
+        ("scenario", c_char_p),
+        ("params_path", c_char_p),
+        ("no_scab", c_int),
+        ("static_region", c_int),
+        ("grid", c_int * 3),
+        ("size_mm", c_double * 3),
+        ("skin_top_mm", c_double),
+        ("epidermis_mm", c_double),
+        ("wound_mask", c_char_p),
+        ("wound_stroke", c_char_p),
+        ("concave_k", c_int),
+        ("wound_mesh", c_char_p),
+        ("wound_footprint", P_IMAGE),
+        ("wound_depth_mm", c_double),
+        ("wound_depth_image", c_char_p),
+        ("days", c_double),
+        ("scheme", c_int),
+        ("dt_days", c_double),
+        ("snapshot_every", c_double),
+        ("area_every", c_double),
+        ("checkpoint_every", c_double),
+        ("out_dir", c_char_p),
+        ("force", c_int),
+        ("resume_dir", c_char_p),
+        ("seed", c_uint64),
+    ]
+
+
+P_RUN = c_void_p  # opaque ss_heal_run *
+P_GRID = POINTER(ss_heal_grid)
+_fn("ss_heal_field_name", c_char_p, c_int)
+_fn("ss_heal_run_config_default", None, POINTER(ss_heal_run_config))
+_fn("ss_heal_run_create", c_int, POINTER(ss_heal_run_config), POINTER(P_RUN), P_ERR)
+_fn("ss_heal_run_free", None, P_RUN)
+_fn("ss_heal_run_step", c_int, P_RUN, P_ERR)
+_fn("ss_heal_run_advance_to", c_int, P_RUN, c_double, P_ERR)
+_fn("ss_heal_run_finish", c_int, P_RUN, POINTER(c_void_p), P_ERR)
+_fn("ss_heal_run_grid", P_GRID, P_RUN)
+_fn("ss_heal_run_scenario", c_char_p, P_RUN)
+_fn("ss_heal_run_day", c_double, P_RUN)
+_fn("ss_heal_run_dt", c_double, P_RUN)
+_fn("ss_heal_run_end_day", c_double, P_RUN)
+_fn("ss_heal_run_step_index", ctypes.c_longlong, P_RUN)
+_fn("ss_heal_run_steps_total", ctypes.c_longlong, P_RUN)
+_fn("ss_heal_run_done", c_int, P_RUN)
+_fn("ss_heal_run_area", POINTER(ss_heal_area_row), P_RUN, POINTER(c_int))
+_fn("ss_heal_area_normalised", c_double, POINTER(ss_heal_stats))
+_fn("ss_heal_open_threshold", c_double)
+_fn("ss_heal_surface_map", P_IMAGE, P_GRID, c_int, c_int, P_ERR)
+_fn("ss_heal_time_to_closure", c_double, POINTER(ss_heal_area_row), c_int, c_double)
+libc_free = ctypes.CDLL(None).free
+libc_free.argtypes = [c_void_p]
+libc_free.restype = None

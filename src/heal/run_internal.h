@@ -1,0 +1,55 @@
+/* Internal to src/heal (run side): the state of an ss_heal_run shared by
+ * run.c (object, stepping, accessors), run_setup.c (fresh set-up and resume)
+ * and run_output.c (snapshots, checkpoints and their metadata, tables). Not
+ * installed; other modules use skinsim/heal_run.h. */
+#ifndef SKINSIM_HEAL_RUN_INTERNAL_H
+#define SKINSIM_HEAL_RUN_INTERNAL_H
+
+#include <cjson/cJSON.h>
+
+#include "skinsim/heal_run.h"
+
+struct ss_heal_run {
+    ss_heal_run_config c; /* copy; string fields point at the caller's strings */
+    char *out_dir;        /* owned copy of out_dir (resume_dir on resume), NULL = in memory */
+    char scenario[32];
+    ss_heal_params *p;
+    ss_heal_grid *g;
+    ss_heal_solver *s;
+    char *params_json;
+    ss_heal_scheme scheme;
+    double dt, days; /* days: the requested end (recorded in checkpoints) */
+    long long nsteps, snap_every, area_every, ckpt_every;
+    ss_heal_area_row *rows;
+    int nrows, caprows;
+    double *snap_t;
+    char **snap_file;
+    int nsnap, capsnap;
+    double t0, wall_prev; /* wall clock at create; wall time of the runs before a resume */
+    long long resumed_from;
+    int started; /* output directory prepared (and day-0 snapshot written) */
+    char note[2048];
+    cJSON *wound; /* description for summary.json */
+};
+
+/* run.c */
+ss_status ss_heal_run__add_row(ss_heal_run *r, ss_error *err);
+ss_status ss_heal_run__add_snap(ss_heal_run *r, double t, const char *file, ss_error *err);
+
+/* run_setup.c: fill r from r->c (no file is written) */
+ss_status ss_heal_run__setup_fresh(ss_heal_run *r, ss_error *err);
+ss_status ss_heal_run__setup_resume(ss_heal_run *r, ss_error *err);
+
+/* run_output.c */
+/* Checkpoint metadata: intervals, seed, wall time, wound, area rows, snapshots. */
+char *ss_heal_run__aux_json(const ss_heal_run *r, double wall);
+ss_status ss_heal_run__aux_restore(ss_heal_run *r, const char *aux, const char *dir, ss_error *err);
+/* Checks out_dir is writable and, unless force, holds no previous run. */
+ss_status ss_heal_run__check_out_dir(const ss_heal_run *r, ss_error *err);
+/* Removes a previous run's outputs (force), makes fields/ and surface/. */
+ss_status ss_heal_run__prepare_out_dir(ss_heal_run *r, ss_error *err);
+/* area.csv, area.png, summary.json; the summary as cJSON in *summary. */
+ss_status ss_heal_run__write_tables(ss_heal_run *r, double wall, cJSON **summary, ss_error *err);
+cJSON *ss_heal_run__summary(const ss_heal_run *r, double wall);
+
+#endif

@@ -1,0 +1,248 @@
+/* Tests for the heal run object (skinsim/heal_run.h): an in-memory run equals
+ * the solver stepped by hand on the same grid (the run adds bookkeeping, never
+ * changes the state); a run stopped after a checkpoint and resumed through the
+ * config ends bit-identical to an uninterrupted one, with the same area curve;
+ * an in-memory footprint gives the same wound as the same mask from a file;
+ * bad configs are input errors that write nothing; stepping outside the run
+ * is refused. */
+#define _POSIX_C_SOURCE 200809L
+#include "testutil.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "skinsim/heal_run.h"
+
+static void small_config(ss_heal_run_config *c) {
+    ss_heal_run_config_default(c);
+    c->grid[0] = 20;
+    c->grid[1] = 16;
+    c->grid[2] = 8;
+    c->scenario = "scab";
+    c->days = 1;
+}
+
+static void assert_fields_equal(const ss_heal_grid *a, const ss_heal_grid *b) {
+    size_t n = (size_t)a->nx * a->ny * a->nz;
+    assert_int_equal(a->nx, b->nx);
+    assert_int_equal(a->step, b->step);
+    assert_memory_equal(a->cell, b->cell, n);
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+        assert_memory_equal(a->field[f], b->field[f], n * sizeof(float));
+}
+
+/* The run's state after advance_to equals the solver stepped by hand. */
+static void test_run_matches_solver(void **state) {
+    (void)state;
+    ss_error err;
+    ss_heal_run_config c;
+    small_config(&c);
+    ss_heal_run *r;
+    assert_int_equal(ss_heal_run_create(&c, &r, &err), SS_OK);
+    assert_int_equal(ss_heal_run_step_index(r), 0);
+    assert_int_equal(ss_heal_run_steps_total(r), 20); /* 1 day of 0.05 */
+    assert_int_equal(ss_heal_run_advance_to(r, 0.5, &err), SS_OK);
+    assert_int_equal(ss_heal_run_step_index(r), 10);
+    assert_true(ss_heal_run_day(r) > 0.49 && ss_heal_run_day(r) < 0.51);
+
+    /* by hand: the same default problem */
+    ss_heal_params *p = ss_heal_params_preset("scab", &err);
+    ss_heal_grid *g = ss_heal_grid_create(20, 16, 8, 0.5, &err);
+    assert_non_null(g);
+    double side = 16 * 0.5 * 2.0 / 3.0; /* 2/3 of the smaller side */
+    uint8_t *w3 = ss_heal_wound_box(g, 3.0, side, side, 1.0, &err);
+    assert_non_null(w3);
+    assert_int_equal(ss_heal_grid_init(g, 3.0, 0.1, w3, p, &err), SS_OK);
+    free(w3);
+    ss_heal_solver *s = ss_heal_solver_create(g, p, SS_HEAL_SPLIT, 0, &err);
+    for (int k = 0; k < 10; k++) assert_int_equal(ss_heal_step(s, g, &err), SS_OK);
+    assert_fields_equal(ss_heal_run_grid(r), g);
+
+    /* the area curve: day 0 plus every step (0.01 days rounds to one step) */
+    int n;
+    const ss_heal_area_row *rows = ss_heal_run_area(r, &n);
+    assert_int_equal(n, 11);
+    assert_true(rows[0].t_days == 0);
+    assert_true(rows[0].st.initial_area_mm2 > 0);
+
+    /* outside the run */
+    assert_int_equal(ss_heal_run_advance_to(r, 0.2, &err), SS_ERR_INPUT);
+    assert_int_equal(ss_heal_run_advance_to(r, 1.5, &err), SS_ERR_INPUT);
+    assert_int_equal(ss_heal_run_write_snapshot(r, &err), SS_ERR_INPUT); /* no out_dir */
+    assert_int_equal(ss_heal_run_advance_to(r, 1.0, &err), SS_OK);
+    assert_true(ss_heal_run_done(r));
+    assert_int_equal(ss_heal_run_step(r, &err), SS_ERR_INPUT);
+    char *summary = NULL;
+    assert_int_equal(ss_heal_run_finish(r, &summary, &err), SS_OK);
+    assert_non_null(strstr(summary, "\"scenario\":\t\"scab\""));
+    free(summary);
+
+    ss_heal_solver_free(s);
+    ss_heal_grid_free(g);
+    ss_heal_params_free(p);
+    ss_heal_run_free(r);
+}
+
+/* Checkpoint at day 0.5, stop, resume through the config: same end state and
+ * the same area curve as one uninterrupted run in memory. */
+static void test_run_resume(void **state) {
+    (void)state;
+    ss_error err;
+    char *dir = tu_tmpdir("heal-run");
+    char out[1024];
+    snprintf(out, sizeof out, "%s/run", dir);
+    ss_heal_run_config c;
+    small_config(&c);
+    c.out_dir = out;
+    c.checkpoint_every = 0.25;
+    c.days = 0.5;
+    ss_heal_run *r;
+    assert_int_equal(ss_heal_run_create(&c, &r, &err), SS_OK);
+    struct stat sb;
+    assert_int_not_equal(stat(out, &sb), 0); /* create writes nothing */
+    while (!ss_heal_run_done(r)) assert_int_equal(ss_heal_run_step(r, &err), SS_OK);
+    assert_int_equal(ss_heal_run_snapshot_count(r), 2); /* day 0 and the end */
+    ss_heal_run_free(r);                                /* killed before finish */
+
+    ss_heal_run_config rc;
+    ss_heal_run_config_default(&rc);
+    rc.resume_dir = out;
+    rc.days = 1;
+    assert_int_equal(ss_heal_run_create(&rc, &r, &err), SS_OK);
+    assert_int_equal(ss_heal_run_resumed_from(r), 10);
+    assert_string_equal(ss_heal_run_scenario(r), "scab");
+    while (!ss_heal_run_done(r)) assert_int_equal(ss_heal_run_step(r, &err), SS_OK);
+    assert_int_equal(ss_heal_run_finish(r, NULL, &err), SS_OK);
+    char path[1100];
+    snprintf(path, sizeof path, "%s/summary.json", out);
+    assert_true(tu_file_exists(path));
+
+    ss_heal_run_config mc;
+    small_config(&mc);
+    ss_heal_run *m;
+    assert_int_equal(ss_heal_run_create(&mc, &m, &err), SS_OK);
+    assert_int_equal(ss_heal_run_advance_to(m, 1, &err), SS_OK);
+    assert_fields_equal(ss_heal_run_grid(r), ss_heal_run_grid(m));
+    int na, nb;
+    const ss_heal_area_row *a = ss_heal_run_area(r, &na), *b = ss_heal_run_area(m, &nb);
+    assert_int_equal(na, nb);
+    /* rows up to the checkpoint come back through its JSON metadata (cJSON
+     * prints doubles to about 1e-15 relative); rows after it are exact */
+    for (int i = 0; i < na; i++) {
+        const double *x = &a[i].t_days, *y = &b[i].t_days;
+        for (size_t k = 0; k < sizeof *a / sizeof(double); k++)
+            if (i <= 10)
+                assert_true(fabs(x[k] - y[k]) <= 1e-14 * fabs(y[k]));
+            else
+                assert_true(x[k] == y[k]);
+    }
+    ss_heal_run_free(m);
+    ss_heal_run_free(r);
+    tu_rmtree(dir);
+    free(dir);
+}
+
+/* A footprint image in memory equals the same mask read from a PNG. */
+static void test_run_footprint(void **state) {
+    (void)state;
+    ss_error err;
+    char *dir = tu_tmpdir("heal-run-fp");
+    ss_image *fp = ss_image_create(40, 32, 1, &err);
+    assert_non_null(fp);
+    for (int y = 8; y < 20; y++)
+        for (int x = 10; x < 31; x++) fp->data[y * 40 + x] = 1;
+    char png[1024];
+    snprintf(png, sizeof png, "%s/mask.png", dir);
+    assert_int_equal(ss_png_write(png, fp, 8, SS_ENC_LINEAR, &err), SS_OK);
+
+    ss_heal_run_config c;
+    small_config(&c);
+    c.wound_footprint = fp;
+    ss_heal_run *a, *b;
+    assert_int_equal(ss_heal_run_create(&c, &a, &err), SS_OK);
+    c.wound_footprint = NULL;
+    c.wound_mask = png;
+    assert_int_equal(ss_heal_run_create(&c, &b, &err), SS_OK);
+    assert_fields_equal(ss_heal_run_grid(a), ss_heal_run_grid(b));
+    int n;
+    /* 2x2 pixels per voxel: 10 x 6 columns of 0.25 mm^2 */
+    assert_true(ss_heal_run_area(a, &n)[0].st.initial_area_mm2 == 15);
+    ss_heal_run_free(a);
+    ss_heal_run_free(b);
+    /* two sources at once */
+    c.wound_footprint = fp;
+    assert_int_equal(ss_heal_run_create(&c, &a, &err), SS_ERR_INPUT);
+    assert_null(a);
+    ss_image_free(fp);
+    tu_rmtree(dir);
+    free(dir);
+}
+
+/* Bad configs: input errors naming the setting, nothing written. */
+static void test_run_bad_config(void **state) {
+    (void)state;
+    ss_error err;
+    char *dir = tu_tmpdir("heal-run-bad");
+    char out[1024];
+    snprintf(out, sizeof out, "%s/out", dir);
+    static const char *const expect[] = {"--size-mm",         "--grid",     "--days",
+                                         "--wound-depth-mm",  "--scenario", "--concave-k",
+                                         "--checkpoint-every"};
+    for (int k = 0; k < 7; k++) {
+        ss_heal_run_config c;
+        small_config(&c);
+        c.out_dir = out;
+        switch (k) {
+        case 0:
+            c.grid[0] = c.grid[1] = c.grid[2] = 0;
+            c.size_mm[0] = -1, c.size_mm[1] = 2, c.size_mm[2] = 3;
+            break;
+        case 1:
+            c.grid[2] = 2;
+            break;
+        case 2:
+            c.days = -1;
+            break;
+        case 3:
+            c.wound_depth_mm = 9;
+            break;
+        case 4:
+            c.scenario = "bogus";
+            break;
+        case 5:
+            c.concave_k = 2;
+            break;
+        default:
+            c.checkpoint_every = NAN;
+            break;
+        }
+        ss_heal_run *r = (ss_heal_run *)&c;
+        ss_error_clear(&err);
+        assert_int_equal(ss_heal_run_create(&c, &r, &err), SS_ERR_INPUT);
+        assert_null(r);
+        if (k != 4) assert_non_null(strstr(err.msg, expect[k]));
+        struct stat sb;
+        assert_int_not_equal(stat(out, &sb), 0);
+    }
+    ss_heal_run_config c;
+    ss_heal_run_config_default(&c);
+    snprintf(out, sizeof out, "%s/none", dir);
+    c.resume_dir = out;
+    ss_heal_run *r;
+    assert_int_equal(ss_heal_run_create(&c, &r, &err), SS_ERR_INPUT);
+    tu_rmtree(dir);
+    free(dir);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_run_matches_solver),
+        cmocka_unit_test(test_run_resume),
+        cmocka_unit_test(test_run_footprint),
+        cmocka_unit_test(test_run_bad_config),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
