@@ -58,6 +58,9 @@ typedef struct ss_image {
 /* Returns NULL (and sets err) on a bad size or when memory runs out. Pixels are
  * zeroed. Sizes above SS_IMAGE_MAX_SIDE per side are refused. */
 #define SS_IMAGE_MAX_SIDE 65536
+/* Up to 16 channels: RGBA images, and parameter maps (skin and wound bio maps)
+ * (file writers other than ss_exr_write_channels take 1-4). */
+#define SS_IMAGE_MAX_CHANNELS 16
 ss_image *ss_image_create(int width, int height, int channels, ss_error *err);
 /* Same, pixels left undefined: for images the caller overwrites entirely. */
 ss_image *ss_image_create_uninit(int width, int height, int channels, ss_error *err);
@@ -105,6 +108,12 @@ ss_image *ss_png_read(const char *path, ss_encoding enc, ss_error *err);
  * channels named Y / YA / RGB / RGBA. Atomic. */
 ss_status ss_exr_write(const char *path, const ss_image *img, int use_half, ss_error *err);
 ss_image *ss_exr_read(const char *path, ss_error *err);
+/* Any number of channels (1-64) with the given names, in the image's
+ * channel order (a float map of several quantities, e.g. skin's bio.exr).
+ * Reading: each named channel must exist; the image has them in that order. */
+ss_status ss_exr_write_channels(const char *path, const ss_image *img, const char *const *names,
+                                int use_half, ss_error *err);
+ss_image *ss_exr_read_channels(const char *path, const char *const *names, int n, ss_error *err);
 /* Picks PNG or EXR from the extension (.png, .exr). For PNG, enc applies. */
 ss_image *ss_image_read(const char *path, ss_encoding enc, ss_error *err);
 

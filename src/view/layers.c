@@ -1,0 +1,449 @@
+/* The texture stack the time slider scrubs (seed 000 §3.2, §4.2): a list of
+ * layers (packed RGBA8 maps, uploaded once as OpenGL texture arrays) and
+ * stops (day -> layer). A frame at day t blends the two stops around t, as
+ * the seed's timeline blends its two key positions; the GPU does it per
+ * pixel, so scrubbing never touches the CPU images again.
+ *
+ * Maturation is not a blend on the CPU path (its colour is re-rendered at
+ * every position, §4.3.5). To keep the slider a pure blend, maturation is
+ * sampled at extra positions (0, 1/4, 1/2, 3/4, 1) and the GPU blends
+ * between those samples: a piecewise-linear approximation of the CPU frame
+ * whose error shrinks with the sample count (5 samples: the colour differs
+ * from `skinsim abrasion`'s frame by a few 8-bit steps in the wound). A
+ * loaded `skinsim abrasion` folder contributes its maturation frames the
+ * same way.
+ *
+ * Packing: cr = sRGB colour (hardware-decoded to linear when sampled) and
+ * linear reflection in alpha; nh = normal and height, 8 bits each. 8-bit
+ * height is 1/255 of the scab thickness (about 4 um): invisible as
+ * displacement on a hand-sized mesh. */
+#define _POSIX_C_SOURCE 200809L
+#include "view.h"
+
+#include <cjson/cJSON.h>
+#include <dirent.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#define MAX_SIZE 4096
+
+void view_layers_free(view_layers *l) {
+    if (!l) return;
+    free(l->cr);
+    free(l->nh);
+    memset(l, 0, sizeof *l);
+}
+
+void view_layers_locate(const view_layers *l, double day, int *a, int *b, float *w, int *stop) {
+    *a = *b = l->nstops > 0 ? l->stop_layer[0] : 0;
+    *w = 0;
+    if (stop) *stop = 0;
+    if (l->nstops <= 1 || !(day > l->stop_day[0])) return;
+    int last = l->nstops - 1;
+    if (day >= l->stop_day[last]) {
+        *a = *b = l->stop_layer[last];
+        if (stop) *stop = last;
+        return;
+    }
+    int i = 0;
+    while (i + 1 < last && day >= l->stop_day[i + 1]) i++;
+    double span = l->stop_day[i + 1] - l->stop_day[i];
+    *a = l->stop_layer[i];
+    *b = l->stop_layer[i + 1];
+    *w = span > 0 ? (float)((day - l->stop_day[i]) / span) : 1.0f;
+    if (stop) *stop = i;
+}
+
+static ss_status alloc_layers(view_layers *l, int size, int n, ss_error *err) {
+    memset(l, 0, sizeof *l);
+    size_t bytes = (size_t)size * (size_t)size * 4 * (size_t)n;
+    l->cr = malloc(bytes);
+    l->nh = malloc(bytes);
+    if (!l->cr || !l->nh) {
+        view_layers_free(l);
+        return ss_error_set(err, SS_ERR_NOMEM, "viewer: out of memory for %d layers of %d^2", n,
+                            size);
+    }
+    l->size = size;
+    l->nlayers = n;
+    ss_abrasion_settings s;
+    ss_abrasion_settings_default(&s);
+    l->height_mm = s.scab_height_mm;
+    return SS_OK;
+}
+
+static unsigned char to_byte(float v) {
+    if (!(v > 0)) return 0;
+    if (v >= 1) return 255;
+    return (unsigned char)(v * 255.0f + 0.5f);
+}
+
+/* Packs one layer. Any map but colour may be NULL (defaults: reflection
+ * 0.3, flat normal, height 0.5). colour is linear RGB (or grey). */
+static void pack_layer(view_layers *l, int layer, const ss_image *color, const ss_image *refl,
+                       const ss_image *height, const ss_image *normal) {
+    size_t n = (size_t)l->size * (size_t)l->size;
+    unsigned char *cr = l->cr + (size_t)layer * n * 4, *nh = l->nh + (size_t)layer * n * 4;
+#pragma omp parallel for schedule(static)
+    for (long long i = 0; i < (long long)n; i++) {
+        const float *c = color->data + (size_t)i * (size_t)color->channels;
+        for (int k = 0; k < 3; k++)
+            cr[4 * i + k] = to_byte(ss_srgb_encode(c[color->channels >= 3 ? k : 0]));
+        cr[4 * i + 3] = to_byte(refl ? refl->data[(size_t)i * (size_t)refl->channels] : 0.3f);
+        if (normal) {
+            const float *q = normal->data + (size_t)i * (size_t)normal->channels;
+            for (int k = 0; k < 3; k++)
+                nh[4 * i + k] = to_byte(normal->channels >= 3 ? q[k] : 0.5f);
+        } else {
+            nh[4 * i] = nh[4 * i + 1] = 128;
+            nh[4 * i + 2] = 255;
+        }
+        nh[4 * i + 3] = to_byte(height ? height->data[(size_t)i * (size_t)height->channels] : 0.5f);
+    }
+}
+
+static void add_stop(view_layers *l, double day, int layer, const char *name) {
+    if (l->nstops >= VIEW_MAX_STOPS) return;
+    l->stop_day[l->nstops] = day;
+    l->stop_layer[l->nstops] = layer;
+    snprintf(l->stop_name[l->nstops], sizeof l->stop_name[0], "%s", name);
+    l->nstops++;
+}
+
+ss_status view_layers_plain_skin(int size, uint64_t seed, view_layers *out, ss_error *err) {
+    ss_base_skin skin = {0};
+    ss_status st = ss_base_skin_create(NULL, NULL, size, seed, &skin, err);
+    if (!st) st = alloc_layers(out, size, 1, err);
+    if (!st) {
+        pack_layer(out, 0, skin.upper, NULL, NULL, NULL);
+        add_stop(out, 0, 0, "healthy skin");
+        snprintf(out->source, sizeof out->source, "healthy skin (no wound)");
+    }
+    ss_base_skin_free(&skin);
+    return st;
+}
+
+/* ---- Generate -------------------------------------------------------------- */
+
+static const double MAT_POS[] = {0.25, 0.5, 0.75, 1.0};
+#define NMAT ((int)(sizeof MAT_POS / sizeof MAT_POS[0]))
+
+ss_status view_layers_generate(const ss_stroke_set *strokes, int size, uint64_t seed,
+                               volatile double *progress, view_layers *out, ss_error *err) {
+    memset(out, 0, sizeof *out);
+    const double steps = 2 + SS_PHASE_COUNT + NMAT;
+    double done = 0;
+    if (progress) *progress = 0;
+    ss_abrasion_settings set;
+    ss_abrasion_settings_default(&set);
+    set.size = size;
+    set.seed = seed;
+    ss_timeline tl;
+    ss_timeline_default(&tl);
+    ss_wound_shape *shape = NULL;
+    ss_base_skin skin = {0};
+    ss_texture_set ts = {0};
+    ss_image *mat_color = NULL;
+    ss_status st = ss_wound_shape_from_strokes(strokes, SS_HULL_CONVEX, 5, size, seed, &shape, err);
+    if (progress) *progress = ++done / steps;
+    if (!st) st = ss_base_skin_create(NULL, NULL, size, seed, &skin, err);
+    if (progress) *progress = ++done / steps;
+    if (!st) st = alloc_layers(out, size, SS_PHASE_COUNT + NMAT, err);
+    if (!st) st = ss_texture_set_create(size, &ts, err);
+    for (int p = 0; p < SS_PHASE_COUNT && !st; p++) {
+        st = ss_abrasion_render_phase((ss_phase)p, 0.0, shape, &skin, &set, &ts, err);
+        if (!st) pack_layer(out, p, ts.color, ts.reflection, ts.height, ts.normal);
+        if (progress) *progress = ++done / steps;
+    }
+    /* ts now holds maturation at position 0: re-render its colour at the
+     * extra positions (only the wound's box changes). */
+    if (!st) mat_color = ss_image_clone(ts.color, err);
+    if (!st && !mat_color) st = err->code;
+    for (int i = 0; i < NMAT && !st; i++) {
+        memcpy(mat_color->data, ts.color->data,
+               sizeof(float) * (size_t)size * (size_t)size * (size_t)ts.color->channels);
+        st = ss_abrasion_maturation_color(shape, &skin, &set, MAT_POS[i], mat_color, err);
+        if (!st)
+            pack_layer(out, SS_PHASE_COUNT + i, mat_color, ts.reflection, ts.height, ts.normal);
+        if (progress) *progress = ++done / steps;
+    }
+    if (!st) {
+        double mat_day = 0;
+        for (int k = 0; k < tl.nkeys; k++) {
+            add_stop(out, tl.key[k].day, (int)tl.key[k].phase, ss_phase_name(tl.key[k].phase));
+            if (tl.key[k].phase == SS_PHASE_MATURATION) mat_day = tl.key[k].day;
+        }
+        for (int i = 0; i < NMAT; i++)
+            add_stop(out, mat_day + MAT_POS[i] * (tl.end_day - mat_day), SS_PHASE_COUNT + i,
+                     "maturation");
+        out->end_day = tl.end_day;
+        out->height_mm = set.scab_height_mm;
+        snprintf(out->source, sizeof out->source, "%d painted stroke(s), %d^2", strokes->nstrokes,
+                 size);
+    } else {
+        view_layers_free(out);
+    }
+    ss_image_free(mat_color);
+    ss_texture_set_free(&ts);
+    ss_base_skin_free(&skin);
+    ss_wound_shape_free(shape);
+    return st;
+}
+
+/* ---- loading folders --------------------------------------------------------- */
+
+static int file_exists(const char *p) {
+    struct stat st;
+    return stat(p, &st) == 0 && S_ISREG(st.st_mode);
+}
+
+/* Reads a map (NULL path: NULL, no error) at `size` (resampled when the
+ * file is another size; size 0 takes the file's, capped at MAX_SIZE). */
+static ss_image *read_map(const char *path, ss_encoding enc, int *size, ss_error *err) {
+    ss_image *img = ss_image_read(path, enc, err);
+    if (!img) return NULL;
+    if (img->width != img->height && *size == 0) {
+        ss_error_set(err, SS_ERR_INPUT, "%s: texture is %dx%d; the viewer needs square textures",
+                     path, img->width, img->height);
+        ss_image_free(img);
+        return NULL;
+    }
+    if (*size == 0) *size = img->width > MAX_SIZE ? MAX_SIZE : img->width;
+    if (img->width != *size || img->height != *size) {
+        ss_image *r = ss_image_resize(img, *size, *size, err);
+        ss_image_free(img);
+        img = r;
+    }
+    return img;
+}
+
+typedef struct set_paths {
+    char color[4096], refl[4096], rough[4096], height[4096], normal[4096];
+} set_paths;
+
+/* Reads a set and packs it into layer (allocating the layers at the first). */
+static ss_status load_set(const set_paths *p, view_layers *l, int layer, int nlayers,
+                          ss_error *err) {
+    int size = l->size;
+    ss_image *c = read_map(p->color, SS_ENC_SRGB, &size, err);
+    if (!c) return err->code;
+    ss_status st = SS_OK;
+    if (!l->cr) st = alloc_layers(l, size, nlayers, err);
+    ss_image *r = NULL, *h = NULL, *n = NULL;
+    if (!st && p->refl[0] && !(r = read_map(p->refl, SS_ENC_LINEAR, &size, err))) st = err->code;
+    if (!st && !r && p->rough[0]) {
+        if (!(r = read_map(p->rough, SS_ENC_LINEAR, &size, err)))
+            st = err->code;
+        else /* roughness = 1 - 0.8 reflection (abrasion's glTF export), inverted */
+            for (size_t i = 0; i < (size_t)size * (size_t)size * (size_t)r->channels; i++) {
+                float v = (1.0f - r->data[i]) / 0.8f;
+                r->data[i] = v < 0 ? 0 : v > 1 ? 1 : v;
+            }
+    }
+    if (!st && p->height[0] && !(h = read_map(p->height, SS_ENC_LINEAR, &size, err)))
+        st = err->code;
+    if (!st && p->normal[0] && !(n = read_map(p->normal, SS_ENC_LINEAR, &size, err)))
+        st = err->code;
+    if (!st) pack_layer(l, layer, c, r, h, n);
+    ss_image_free(c), ss_image_free(r), ss_image_free(h), ss_image_free(n);
+    return st;
+}
+
+static const char *json_str(const cJSON *o, const char *k) {
+    const cJSON *v = cJSON_GetObjectItemCaseSensitive(o, k);
+    return cJSON_IsString(v) ? v->valuestring : NULL;
+}
+
+static void join(char *out, const char *dir, const char *rel) {
+    snprintf(out, 4096, "%s/%s", dir, rel);
+}
+
+static ss_status files_to_paths(const char *dir, const cJSON *files, const char *where,
+                                set_paths *p, ss_error *err) {
+    memset(p, 0, sizeof *p);
+    const char *c = json_str(files, "color");
+    if (!c)
+        return ss_error_set(err, SS_ERR_INPUT, "%s/timeline.json: %s has no colour file", dir,
+                            where);
+    join(p->color, dir, c);
+    const char *r = json_str(files, "reflection"), *h = json_str(files, "height"),
+               *n = json_str(files, "normal");
+    if (r) join(p->refl, dir, r);
+    if (h) join(p->height, dir, h);
+    if (n) join(p->normal, dir, n);
+    return SS_OK;
+}
+
+static ss_status load_timeline_dir(const char *dir, const char *json_path, view_layers *out,
+                                   ss_error *err) {
+    char *text = ss_read_file(json_path, NULL, err);
+    if (!text) return err->code;
+    cJSON *root = cJSON_Parse(text);
+    free(text);
+    if (!root) return ss_error_set(err, SS_ERR_INPUT, "%s: not valid JSON", json_path);
+    const cJSON *keys = cJSON_GetObjectItemCaseSensitive(root, "keys");
+    const cJSON *frames = cJSON_GetObjectItemCaseSensitive(root, "frames");
+    const cJSON *end = cJSON_GetObjectItemCaseSensitive(root, "end_day");
+    ss_status st = SS_OK;
+    if (!cJSON_IsArray(keys) || cJSON_GetArraySize(keys) < 1)
+        st = ss_error_set(err, SS_ERR_INPUT,
+                          "%s: no \"keys\" array (not a skinsim abrasion folder?)", json_path);
+    /* Candidate stops: keys, then maturation frames after the last key. */
+    typedef struct cand {
+        double day;
+        char name[24];
+        set_paths paths;
+    } cand;
+    int nk = cJSON_IsArray(keys) ? cJSON_GetArraySize(keys) : 0;
+    int nf = cJSON_IsArray(frames) ? cJSON_GetArraySize(frames) : 0;
+    cand *cs = calloc((size_t)(nk + nf + 1), sizeof *cs);
+    int nc = 0;
+    if (!cs && !st) st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    double last_key_day = -1;
+    for (int i = 0; i < nk && !st; i++) {
+        const cJSON *k = cJSON_GetArrayItem(keys, i);
+        const cJSON *day = cJSON_GetObjectItemCaseSensitive(k, "day");
+        const char *phase = json_str(k, "phase");
+        char where[64];
+        snprintf(where, sizeof where, "key %d", i);
+        if (!cJSON_IsNumber(day) || !isfinite(day->valuedouble) || day->valuedouble < 0 ||
+            day->valuedouble < last_key_day || !phase)
+            st = ss_error_set(err, SS_ERR_INPUT, "%s: key %d needs a phase and an increasing day",
+                              json_path, i);
+        else
+            st = files_to_paths(dir, cJSON_GetObjectItemCaseSensitive(k, "files"), where,
+                                &cs[nc].paths, err);
+        if (!st) {
+            cs[nc].day = last_key_day = day->valuedouble;
+            snprintf(cs[nc].name, sizeof cs[nc].name, "%s", phase);
+            nc++;
+        }
+    }
+    /* Maturation frames (re-rendered positions) extend the blend past the last key. */
+    for (int i = 0; i < nf && !st; i++) {
+        const cJSON *f = cJSON_GetArrayItem(frames, i);
+        const cJSON *day = cJSON_GetObjectItemCaseSensitive(f, "day");
+        const char *phase = json_str(f, "phase");
+        if (!phase || strcmp(phase, "maturation") || !cJSON_IsNumber(day) ||
+            !(day->valuedouble > last_key_day))
+            continue;
+        char where[64];
+        snprintf(where, sizeof where, "frame %d", i);
+        if (files_to_paths(dir, cJSON_GetObjectItemCaseSensitive(f, "files"), where, &cs[nc].paths,
+                           err) == SS_OK) {
+            cs[nc].day = day->valuedouble;
+            snprintf(cs[nc].name, sizeof cs[nc].name, "maturation");
+            nc++;
+        }
+    }
+    /* Sort the frames part by day (keys are already in order). */
+    for (int i = 1; i < nc; i++)
+        for (int j = i; j > 0 && cs[j].day < cs[j - 1].day; j--) {
+            cand t = cs[j];
+            cs[j] = cs[j - 1];
+            cs[j - 1] = t;
+        }
+    if (nc > VIEW_MAX_STOPS) nc = VIEW_MAX_STOPS;
+    /* Unique layers by colour file. */
+    int *layer_of = calloc((size_t)(nc + 1), sizeof *layer_of);
+    int nl = 0;
+    if (!layer_of && !st) st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    for (int i = 0; i < nc && !st; i++) {
+        layer_of[i] = -1;
+        for (int j = 0; j < i && layer_of[i] < 0; j++)
+            if (!strcmp(cs[j].paths.color, cs[i].paths.color)) layer_of[i] = layer_of[j];
+        if (layer_of[i] < 0) layer_of[i] = nl++;
+    }
+    memset(out, 0, sizeof *out);
+    for (int i = 0, next = 0; i < nc && !st; i++) {
+        if (layer_of[i] == next) {
+            st = load_set(&cs[i].paths, out, next, nl, err);
+            next++;
+        }
+    }
+    if (!st) {
+        for (int i = 0; i < nc; i++) {
+            if (i > 0 && cs[i].day == cs[i - 1].day && layer_of[i] == layer_of[i - 1]) continue;
+            add_stop(out, cs[i].day, layer_of[i], cs[i].name);
+        }
+        out->end_day = cJSON_IsNumber(end) && end->valuedouble > 0 ? end->valuedouble
+                                                                   : out->stop_day[out->nstops - 1];
+        if (out->end_day < out->stop_day[out->nstops - 1])
+            out->end_day = out->stop_day[out->nstops - 1];
+        snprintf(out->source, sizeof out->source, "%s (%d keys, %d layers)", dir, nk, nl);
+    } else {
+        view_layers_free(out);
+    }
+    free(layer_of);
+    free(cs);
+    cJSON_Delete(root);
+    return st;
+}
+
+/* A single texture set: base_color.png / color.png / <stem>_color.png and
+ * the siblings named alike. */
+static ss_status load_single_set(const char *dir, view_layers *out, ss_error *err) {
+    set_paths p;
+    memset(&p, 0, sizeof p);
+    const char *stems[] = {"base_color", "color", "albedo"};
+    for (int i = 0; i < 3 && !p.color[0]; i++) {
+        char t[4096];
+        snprintf(t, sizeof t, "%s/%s.png", dir, stems[i]);
+        if (file_exists(t)) snprintf(p.color, sizeof p.color, "%s", t);
+    }
+    char prefix[256] = "";
+    if (!p.color[0]) { /* <stem>_color.png, first in name order */
+        DIR *d = opendir(dir);
+        char best[256] = "";
+        struct dirent *e;
+        while (d && (e = readdir(d))) {
+            size_t n = strlen(e->d_name);
+            if (n > 10 && n < 200 && !strcmp(e->d_name + n - 10, "_color.png") &&
+                (!best[0] || strcmp(e->d_name, best) < 0))
+                snprintf(best, sizeof best, "%s", e->d_name);
+        }
+        if (d) closedir(d);
+        if (best[0]) {
+            snprintf(p.color, sizeof p.color, "%s/%s", dir, best);
+            snprintf(prefix, sizeof prefix, "%.*s_", (int)(strlen(best) - 10), best);
+        }
+    }
+    if (!p.color[0])
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "%s: no textures found (expected timeline.json from skinsim abrasion, "
+                            "or base_color.png / *_color.png)",
+                            dir);
+    struct {
+        const char *name;
+        char *dst;
+    } opt[] = {{"reflection", p.refl},
+               {"specular", p.refl},
+               {"roughness", p.rough},
+               {"height", p.height},
+               {"normal", p.normal}};
+    for (size_t i = 0; i < sizeof opt / sizeof *opt; i++) {
+        char t[4096];
+        snprintf(t, sizeof t, "%s/%s%s.png", dir, prefix, opt[i].name);
+        if (!opt[i].dst[0] && file_exists(t)) snprintf(opt[i].dst, 4096, "%s", t);
+    }
+    memset(out, 0, sizeof *out);
+    ss_status st = load_set(&p, out, 0, 1, err);
+    if (!st) {
+        add_stop(out, 0, 0, "texture set");
+        snprintf(out->source, sizeof out->source, "%s", p.color);
+    }
+    return st;
+}
+
+ss_status view_layers_load_dir(const char *dir, view_layers *out, ss_error *err) {
+    memset(out, 0, sizeof *out);
+    struct stat sb;
+    if (stat(dir, &sb) != 0 || !S_ISDIR(sb.st_mode))
+        return ss_error_set(err, SS_ERR_INPUT, "%s: not a folder", dir);
+    char json[4096];
+    snprintf(json, sizeof json, "%s/timeline.json", dir);
+    if (file_exists(json)) return load_timeline_dir(dir, json, out, err);
+    return load_single_set(dir, out, err);
+}

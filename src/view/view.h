@@ -1,0 +1,108 @@
+/* skinsim view: internal interfaces of the interactive viewer (seed 000
+ * §4.2, §4.4). Three parts, only the last knows GTK:
+ *   layers.c  the texture stack the time slider scrubs: layers of packed
+ *             RGBA8 maps and the stops (day -> layer) between which a frame
+ *             blends; filled from `skinsim abrasion` / `skinsim skin`
+ *             output folders or generated from painted strokes;
+ *   render.c  OpenGL 3.3 core (libepoxy): the mesh (subdivided once for
+ *             displacement), the texture arrays, the blend shader, stroke
+ *             points, an offscreen framebuffer for screenshots and benches;
+ *   camera.c  orbit/pan/zoom and the ray through a pixel;
+ *   app.c     GTK 4 window (GtkGLArea), options, scripts, headless EGL.
+ * Nothing here is part of libskinsim: GTK stays out of the library. */
+#ifndef SKINSIM_VIEW_H
+#define SKINSIM_VIEW_H
+
+#include "skinsim/abrasion.h"
+#include "skinsim/mesh.h"
+#include "skinsim/paint.h"
+
+/* ---- layers -------------------------------------------------------------- */
+
+#define VIEW_MAX_STOPS 64
+
+/* Two packed RGBA8 maps per layer: cr = sRGB colour + linear reflection
+ * (specular strength 0..1) in alpha; nh = tangent-space normal (0..1
+ * encoded, OpenGL +Y) + height in alpha (0.5 = skin surface). */
+typedef struct view_layers {
+    int size, nlayers;
+    unsigned char *cr, *nh; /* nlayers * size * size * 4 each */
+    int nstops;
+    double stop_day[VIEW_MAX_STOPS];
+    int stop_layer[VIEW_MAX_STOPS];
+    char stop_name[VIEW_MAX_STOPS][24];
+    double end_day;
+    double height_mm; /* height 1 - height 0 in millimetres */
+    char source[4200]; /* what the layers were made from, for the title */
+} view_layers;
+
+void view_layers_free(view_layers *l);
+/* Where a day falls: layers a and b and the weight of b. */
+void view_layers_locate(const view_layers *l, double day, int *a, int *b, float *w, int *stop);
+/* One layer from the procedural healthy skin (what the hand shows before
+ * any wound): size x size. */
+ss_status view_layers_plain_skin(int size, uint64_t seed, view_layers *out, ss_error *err);
+/* From a folder: `skinsim abrasion --out DIR` (timeline.json, keys and the
+ * maturation frames) or a single texture set (`skinsim skin`: base_color,
+ * roughness or specular, normal, height; or *_color.png and siblings). */
+ss_status view_layers_load_dir(const char *dir, view_layers *out, ss_error *err);
+
+/* The Generate job: the abrasion timeline from strokes, at size, with
+ * maturation re-rendered at extra positions so the slider can blend it.
+ * progress (0..1) is written as it goes (read by the UI thread). Pure
+ * computation: safe in a worker thread. */
+ss_status view_layers_generate(const ss_stroke_set *strokes, int size, uint64_t seed,
+                               volatile double *progress, view_layers *out, ss_error *err);
+
+/* ---- camera -------------------------------------------------------------- */
+
+typedef struct view_camera {
+    float target[3];
+    float dist, yaw, pitch; /* radians; orbit around target */
+    float fov_y;            /* radians */
+    float radius;           /* of the mesh, for clip planes and pan speed */
+    int width, height;      /* viewport in pixels */
+} view_camera;
+
+/* Looks at the mesh from the side of the back of the hand (the island
+ * holding UV (0.5, 0.5)), the whole mesh in view. */
+void view_camera_frame(view_camera *c, const ss_mesh *m);
+void view_camera_eye(const view_camera *c, float eye[3]);
+/* Column-major view-projection matrix. */
+void view_camera_matrix(const view_camera *c, float mvp[16]);
+/* Ray through window pixel (x, y) (origin top-left), and the camera's right
+ * and up vectors (for the brush ring). */
+void view_camera_ray(const view_camera *c, double x, double y, float origin[3], float dir[3],
+                     float right[3], float up[3]);
+void view_camera_orbit(view_camera *c, double dx_px, double dy_px);
+void view_camera_pan(view_camera *c, double dx_px, double dy_px);
+void view_camera_zoom(view_camera *c, double steps); /* > 0 closer */
+/* Surface size of one pixel at distance d (for the brush radius). */
+double view_camera_pixel_size(const view_camera *c, double d);
+
+/* ---- renderer ------------------------------------------------------------ */
+
+typedef struct view_renderer view_renderer;
+
+/* Needs a current OpenGL >= 3.3 core context. */
+view_renderer *view_renderer_create(const ss_mesh *m, ss_error *err);
+void view_renderer_free(view_renderer *r);
+/* Replaces the texture arrays (uploaded once; the slider never uploads). */
+ss_status view_renderer_set_layers(view_renderer *r, const view_layers *l, ss_error *err);
+/* Stroke samples to show (positions with NaN are skipped). */
+void view_renderer_set_strokes(view_renderer *r, const ss_paint_sample *s, int n);
+/* Draws the frame at `day` into the currently bound framebuffer of w x h. */
+void view_renderer_draw(view_renderer *r, const view_camera *c, const view_layers *l, double day,
+                        float displace_scale, int show_strokes);
+/* Offscreen: renders at w x h and reads back RGB8 rows top-first (sRGB
+ * encoded) into rgb (w*h*3). */
+ss_status view_renderer_offscreen(view_renderer *r, const view_camera *c, const view_layers *l,
+                                  double day, float displace_scale, int show_strokes,
+                                  unsigned char *rgb, ss_error *err);
+/* Times n frames scrubbed across 0..end_day offscreen at w x h (glFinish
+ * after each); ms[i] per frame. */
+ss_status view_renderer_bench(view_renderer *r, const view_camera *c, const view_layers *l, int n,
+                              float displace_scale, double *ms, ss_error *err);
+const char *view_renderer_gl_info(view_renderer *r);
+
+#endif

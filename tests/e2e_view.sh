@@ -1,0 +1,140 @@
+#!/usr/bin/env bash
+# End-to-end: `skinsim view` as a user drives it, through GTK 4 on a display
+# (a private Xvfb when there is none) and through EGL surfaceless: the hand at
+# day 0 shows skin; the built-in wound at day 1 is redder than the skin
+# around it (generated in the viewer and loaded from `skinsim abrasion`); a
+# scripted paint session writes strokes that stay in the UV island under the
+# cursor (split at seams) and whose hulls cover the picks, which `skinsim
+# abrasion` reads; paint + Generate + slider puts a wound where the paint
+# was; --bench-frames prints its figures; bad input exits 2 naming the input
+# and writes nothing. Skips (77) only when skinsim-view was not built or no
+# display and no EGL can be made. Checks use tests/view_check.py (python3).
+set -u
+CLI=$1
+SRC=$2
+CHECK="python3 $SRC/tests/view_check.py"
+HAND="$SRC/data/meshes/generic-hand-left.glb"
+T=$(mktemp -d /tmp/skinsim-e2e-view-XXXXXX)
+XPID=""
+trap 'rm -rf "$T"; [ -n "$XPID" ] && kill "$XPID" 2>/dev/null' EXIT
+fail=0; pass=0
+ok()   { pass=$((pass+1)); }
+bad()  { echo "FAIL: $*"; fail=$((fail+1)); }
+check() { if eval "$1"; then ok; else bad "$2"; fi; }
+
+if [ ! -x "$(dirname "$CLI")/skinsim-view" ]; then
+  echo "skip: skinsim-view not built (GTK 4 or libepoxy missing at build time)"; exit 77
+fi
+# GTK, Mesa and fontconfig keep allocations to exit: leak reports from them
+# are noise here (the library's own leaks are caught by test_mesh/test_paint).
+export ASAN_OPTIONS="${ASAN_OPTIONS:-}:detect_leaks=0"
+export GTK_A11Y=none NO_AT_BRIDGE=1
+
+# A display: the caller's, else a private Xvfb.
+if [ -z "${DISPLAY:-}" ] && command -v Xvfb >/dev/null; then
+  Xvfb -displayfd 3 -screen 0 1280x1024x24 -nolisten tcp 3>"$T/dpy" 2>"$T/xvfb.log" &
+  XPID=$!
+  for _ in $(seq 100); do [ -s "$T/dpy" ] && break; sleep 0.1; done
+  [ -s "$T/dpy" ] && export DISPLAY=":$(head -1 "$T/dpy")"
+fi
+V() { "$CLI" view --size 480x270 --texture-size 256 "$@"; }
+GTK=1
+if [ -z "${DISPLAY:-}" ] || ! V --screenshot "$T/probe.png" --quiet 2>"$T/probe.err"; then
+  GTK=0
+  echo "no usable display ($(cat "$T/probe.err" 2>/dev/null)); testing through EGL only"
+  if ! V --egl --screenshot "$T/probe.png" --quiet 2>"$T/probe.err"; then
+    echo "skip: no display and no EGL: $(cat "$T/probe.err")"; exit 77
+  fi
+fi
+G=""; [ $GTK -eq 0 ] && G="--egl"
+
+# 1. The hand at day 0, no wound: skin.
+V $G --screenshot "$T/day0.png" --quiet
+check '[ $? -eq 0 ] && $CHECK skin "$T/day0.png"' "day 0 is not skin"
+# The same frame through EGL surfaceless (no display involved).
+V --egl --screenshot "$T/day0_egl.png" --quiet
+check '[ $? -eq 0 ] && $CHECK skin "$T/day0_egl.png"' "EGL day 0 is not skin"
+
+# 2. The built-in wound at day 1 is redder than the skin around it:
+#    generated in the viewer, and loaded from `skinsim abrasion`.
+V $G --generate --time 1 --screenshot "$T/gen1.png" --quiet
+check '[ $? -eq 0 ] && $CHECK redder "$T/gen1.png" "$T/day0.png"' "generated wound at day 1 not redder"
+"$CLI" abrasion --size 256 --out "$T/ab" --quiet --times 1,20,30
+V $G --load "$T/ab" --time 1 --screenshot "$T/load1.png" --json --quiet >"$T/load1.json"
+check '[ $? -eq 0 ] && $CHECK redder "$T/load1.png" "$T/day0.png"' "loaded wound at day 1 not redder"
+check 'python3 -c "import json,sys; d=json.load(open(sys.argv[1])); assert d[\"layers\"]>=7 and d[\"end_day\"]==30" "$T/load1.json"' "loaded stack: keys and maturation frames"
+
+# 3. Paint across the hand from the side (seams in view) and save strokes.
+cat >"$T/paint.txt" <<'EOF'
+# turn the hand to show its side, then paint three bands across it
+drag 200 150 340 150 10
+key p
+drag 150 90 345 90 30
+drag 150 128 345 128 30
+drag 150 165 345 165 30
+key p
+EOF
+V $G --script "$T/paint.txt" --save-strokes "$T/strokes.csv" --screenshot "$T/paint.png" --json --quiet >"$T/paint.json"
+check '[ $? -eq 0 ] && [ -s "$T/strokes.csv" ]' "scripted paint session wrote no strokes"
+check '$CHECK strokes "$HAND" "$T/strokes.csv" "$T/paint.json" 2' "painted strokes leave their UV island or hull"
+"$CLI" abrasion --stroke "$T/strokes.csv" --size 64 --times 1 --out "$T/ab_painted" --quiet
+check '[ $? -eq 0 ]' "skinsim abrasion cannot read the painted strokes"
+
+# 4. Paint a cross on the back of the hand, Generate, slide to day 5: the
+#    wound is where the paint was; the strokes load back.
+cat >"$T/gen.txt" <<'EOF'
+key p
+drag 235 80 280 110 15
+drag 280 80 235 110 15
+key p
+key h
+key g
+wait
+slider 5
+EOF
+V $G --script "$T/gen.txt" --screenshot "$T/gen5.png" --save-strokes "$T/cross.csv" --quiet
+check '[ $? -eq 0 ] && $CHECK changed "$T/gen5.png" "$T/day0.png" 257 95 8' "no wound where the cross was painted"
+V $G --strokes "$T/cross.csv" --screenshot "$T/cross.png" --quiet
+check '[ $? -eq 0 ] && $CHECK changed "$T/cross.png" "$T/day0.png" 257 95 8' "loaded strokes not shown"
+
+# 5. --bench-frames prints median and 95th percentile with the resolution.
+V $G --load "$T/ab" --bench-frames 8 --quiet >"$T/bench.txt"
+check '[ $? -eq 0 ] && grep -q "median .* ms/frame, 95th percentile .* ms" "$T/bench.txt" && grep -q "480x270" "$T/bench.txt"' "bench output: $(cat "$T/bench.txt")"
+cat "$T/bench.txt"
+
+# 6. Bad input: exit 2, message names the input, nothing written.
+expect2() { # name, grep pattern, args...
+  local name=$1 pat=$2; shift 2
+  rm -f "$T/bad.png"
+  V $G --screenshot "$T/bad.png" --quiet "$@" >"$T/bad.out" 2>"$T/bad.err"
+  local rc=$?
+  if [ $rc -eq 2 ] && grep -q -- "$pat" "$T/bad.err" && [ ! -e "$T/bad.png" ]; then ok
+  else bad "$name: rc=$rc, $(cat "$T/bad.err")"; fi
+}
+expect2 "missing mesh" "nope.glb" --mesh "$T/nope.glb"
+head -c 5000 "$HAND" >"$T/cut.glb"
+expect2 "truncated glb" "cut.glb" --mesh "$T/cut.glb"
+printf '{"asset":{"version":"2.0"},"meshes":[' >"$T/broken.gltf"
+expect2 "broken gltf" "broken.gltf" --mesh "$T/broken.gltf"
+expect2 "missing texture folder" "nofolder" --load "$T/nofolder"
+mkdir -p "$T/abbad" && cp "$T/ab/timeline.json" "$T/abbad/"
+expect2 "folder without its textures" "abbad" --load "$T/abbad"
+printf 'u,v\n0.5,0.5\n1.5,0.5\n0.5,0.6\n' >"$T/out01.csv"
+expect2 "stroke UVs outside 0..1" "out01.csv" --strokes "$T/out01.csv"
+printf 'u,v\n0.001,0.001\n0.003,0.001\n0.001,0.003\n' >"$T/other.csv"
+expect2 "strokes for another mesh" "another mesh" --strokes "$T/other.csv"
+printf 'move 1 2\nfly 3 4\n' >"$T/bad.txt"
+expect2 "bad script line" "bad.txt:2" --script "$T/bad.txt"
+expect2 "bad size" "--size" --size 12x-3
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n' >"$T/nouv.obj"
+expect2 "strokes on a mesh without UVs" "no UVs" --mesh "$T/nouv.obj" --strokes "$T/cross.csv"
+# A mesh without UVs still shows (untextured) and says so.
+V $G --mesh "$T/nouv.obj" --screenshot "$T/nouv.png" 2>"$T/nouv.err" >/dev/null
+check '[ $? -eq 0 ] && grep -q "no texture coordinates" "$T/nouv.err"' "mesh without UVs: $(cat "$T/nouv.err")"
+"$CLI" view --help >/dev/null
+check '[ $? -eq 0 ]' "view --help"
+
+# Keep the pictures for a person to look at when asked.
+[ -n "${SKINSIM_VIEW_KEEP:-}" ] && cp "$T"/*.png "$SKINSIM_VIEW_KEEP"/
+echo "e2e_view: $pass passed, $fail failed (GTK path: $GTK)"
+[ $fail -eq 0 ]
