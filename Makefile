@@ -34,12 +34,16 @@ demo: build
 	$(BUILD)/skinsim abrasion --out $(DEMO_OUT)/abrasion
 	$(BUILD)/skinsim optics swatch --out $(DEMO_OUT)/skin_swatch.png
 	$(BUILD)/skinsim heal --days 21 --out $(DEMO_OUT)/heal
+	$(BUILD)/skinsim skin --size 1024 --gltf --out $(DEMO_OUT)/skin
+	$(BUILD)/skinsim wound --scenario scab --skin $(DEMO_OUT)/skin --out $(DEMO_OUT)/wound
 	@echo
 	@echo "Look at:"
 	@echo "  $(DEMO_OUT)/abrasion/contact_sheet.png   abrasion from injury to day 30"
 	@echo "  $(DEMO_OUT)/skin_swatch.png              skin colours over melanin x blood"
 	@echo "  $(DEMO_OUT)/heal/area.png                wound closure over 21 days"
 	@echo "  $(DEMO_OUT)/heal/fields/fields.pvd       open in ParaView"
+	@echo "  $(DEMO_OUT)/skin/contact_sheet.png       a patch of forearm skin: every map side by side"
+	@echo "  $(DEMO_OUT)/wound/contact_sheet.png      simulated healing as skin, day 0 to 365"
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
@@ -66,14 +70,27 @@ test-blender: build
 bench: build
 	@for b in $(BUILD)/bench_*; do echo "== $$b"; $$b; done
 
-# Fuzz the input readers for FUZZ_SECONDS (clang's libFuzzer).
+# Fuzz every input reader with clang's libFuzzer: one target per format
+# (tests/fuzz/fuzz_<format>.c), seeded by make_seeds with valid and hostile
+# inputs, FUZZ_SECONDS each; FUZZ=png,mci picks targets. Corpora grow in
+# build-fuzz/corpus/, crashes land in build-fuzz/crash-* (docs/reliability.md).
 FUZZ_SECONDS ?= 60
+FUZZ ?= $(patsubst tests/fuzz/fuzz_%.c,%,$(wildcard tests/fuzz/fuzz_*.c))
 fuzz: deps
-	clang -O1 -g -fsanitize=fuzzer,address,undefined -Iinclude $$(pkg-config --cflags libpng libcjson cairo) \
-	  tests/fuzz/fuzz_inputs.c $$(ls src/*/*.c | grep -v '^src/view/') -o build-fuzz/fuzz_inputs -fopenmp \
-	  $$(pkg-config --libs libpng libcjson cairo) -lOpenEXRCore-3_1 -lz -lm
-	@mkdir -p build-fuzz/corpus
-	build-fuzz/fuzz_inputs -max_total_time=$(FUZZ_SECONDS) -max_len=4096 build-fuzz/corpus
+	@command -v clang >/dev/null || { SUDO=""; [ "$$(id -u)" = 0 ] || SUDO=sudo; \
+	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq clang; }
+	@mkdir -p build-fuzz
+	cmake -S tests/fuzz -B build-fuzz -DCMAKE_C_COMPILER=clang >/dev/null
+	cmake --build build-fuzz -j $(JOBS)
+	build-fuzz/make_seeds build-fuzz/seeds .
+	@for t in $(subst $(comma), ,$(FUZZ)); do \
+	  mkdir -p build-fuzz/corpus/$$t; echo "== fuzz_$$t, $(FUZZ_SECONDS) s"; \
+	  build-fuzz/fuzz_$$t -max_total_time=$(FUZZ_SECONDS) -rss_limit_mb=2048 -timeout=20 \
+	    -artifact_prefix=build-fuzz/crash-$$t- build-fuzz/corpus/$$t build-fuzz/seeds/$$t \
+	    >build-fuzz/$$t.log 2>&1 || { tail -40 build-fuzz/$$t.log; exit 1; }; \
+	  grep DONE build-fuzz/$$t.log | tail -1; \
+	done
+comma := ,
 
 clean:
-	rm -rf $(BUILD) $(ASAN)
+	rm -rf $(BUILD) $(ASAN) build-fuzz

@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "cli.h"
+#include "heal_opts.h"
 #include "skinsim/heal_run.h"
 
 #define CMD "heal"
@@ -33,14 +34,14 @@ static void help(void) {
            "  --static-region        keep the wound region fixed (no keloid growth)\n"
            "\n"
            "Grid (default: a 30 x 30 x 4 mm block, 0.5 mm voxels = 60x60x8, skin\n"
-           "surface at 3 mm, 0.1 mm epidermis (at least 2 voxels))\n"
+           "surface at 3 mm, 0.1 mm epidermis (a sheet in the surface voxel))\n"
            "  --grid NXxNYxNZ        voxels; alone it keeps 0.5 mm voxels\n"
            "  --size-mm X,Y,Z        block size in mm; alone it keeps 0.5 mm voxels;\n"
            "                         with --grid the voxels must come out cubic\n"
            "  --skin-top-mm H        height of the skin surface (default: NZ-2 voxels,\n"
            "                         3 mm in the default block, one air layer)\n"
-           "  --epidermis-mm E       epidermis thickness (default 0.1; at least 2 voxels\n"
-           "                         are used)\n"
+           "  --epidermis-mm E       epidermis thickness (default 0.1; thinner than a\n"
+           "                         voxel, it is a sheet in the surface voxel)\n"
            "\n"
            "Wound (default: a centred square 20 x 20 mm, or 2/3 of the smaller block\n"
            "side if that is less, 1 mm deep)\n"
@@ -108,26 +109,6 @@ typedef struct opts {
 
 /* ---- argument parsing -------------------------------------------------------------- */
 
-static ss_status parse_grid(const char *s, int g[3], ss_error *err) {
-    long v[3];
-    char *end;
-    const char *p = s;
-    for (int k = 0; k < 3; k++) {
-        v[k] = strtol(p, &end, 10);
-        if (end == p || v[k] < 3 || v[k] > 100000) goto bad;
-        if (k < 2) {
-            if (*end != 'x' && *end != 'X') goto bad;
-            p = end + 1;
-        }
-    }
-    if (*end) goto bad;
-    for (int k = 0; k < 3; k++) g[k] = (int)v[k];
-    return SS_OK;
-bad:
-    return ss_error_set(err, SS_ERR_INPUT,
-                        "--grid: '%s' is not NXxNYxNZ with each count between 3 and 100000", s);
-}
-
 static int parse_args(int argc, char **argv, opts *o, ss_error *err) {
     memset(o, 0, sizeof *o);
     ss_heal_run_config *c = &o->c;
@@ -137,10 +118,8 @@ static int parse_args(int argc, char **argv, opts *o, ss_error *err) {
         const char *a = argv[i];
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) return 1;
         int flag = 1;
-        if (!strcmp(a, "--no-scab")) {
-            c->no_scab = 1, o->nonresume_opts++;
-        } else if (!strcmp(a, "--static-region")) {
-            c->static_region = 1, o->nonresume_opts++;
+        if (heal_parse_problem_flag(a, c)) {
+            o->nonresume_opts++;
         } else if (!strcmp(a, "--quiet")) {
             o->quiet = 1;
         } else if (!strcmp(a, "--json")) {
@@ -163,53 +142,16 @@ static int parse_args(int argc, char **argv, opts *o, ss_error *err) {
         ss_status st = SS_OK;
         long l;
         int resume_ok = 0;
-        if (!strcmp(a, "--scenario")) {
-            c->scenario = v;
-        } else if (!strcmp(a, "--params")) {
-            c->params_path = v;
-        } else if (!strcmp(a, "--grid")) {
-            st = parse_grid(v, c->grid, err);
-        } else if (!strcmp(a, "--size-mm")) {
-            double *d;
-            int n;
-            st = cli_parse_double_list(a, v, 1e-6, 1e6, &d, &n, err);
-            if (!st && n != 3) st = ss_error_set(err, SS_ERR_INPUT, "--size-mm: need X,Y,Z");
-            if (!st)
-                for (int k = 0; k < 3; k++) c->size_mm[k] = d[k];
-            if (!st) free(d);
-        } else if (!strcmp(a, "--skin-top-mm")) {
-            st = cli_parse_double(a, v, 1e-6, 1e6, &c->skin_top_mm, err);
-        } else if (!strcmp(a, "--epidermis-mm")) {
-            st = cli_parse_double(a, v, 0, 1e6, &c->epidermis_mm, err);
-        } else if (!strcmp(a, "--wound-mask")) {
-            c->wound_mask = v;
-        } else if (!strcmp(a, "--stroke")) {
-            c->wound_stroke = v;
-        } else if (!strcmp(a, "--concave-k")) {
-            st = cli_parse_int(a, v, 0, 10000, &l, err);
-            c->concave_k = (int)l;
-            if (!st && l > 0 && l < 3)
-                st = ss_error_set(err, SS_ERR_INPUT, "--concave-k: use 0 (convex) or >= 3");
-        } else if (!strcmp(a, "--wound-mesh")) {
-            c->wound_mesh = v;
-        } else if (!strcmp(a, "--wound-depth-mm")) {
-            st = cli_parse_double(a, v, 1e-6, 1e6, &c->wound_depth_mm, err);
-        } else if (!strcmp(a, "--wound-depth-image")) {
-            c->wound_depth_image = v;
-        } else if (!strcmp(a, "--days")) {
+        int pr = heal_parse_problem_option(a, v, c, err);
+        if (pr < 0) return -1;
+        if (pr > 0) {
+            o->nonresume_opts++;
+            continue;
+        }
+        if (!strcmp(a, "--days")) {
             st = cli_parse_double(a, v, 1e-9, 1e6, &c->days, err);
             o->have_days = 1;
             resume_ok = 1;
-        } else if (!strcmp(a, "--dt")) {
-            st = cli_parse_double(a, v, 1e-12, 1e3, &c->dt_days, err);
-        } else if (!strcmp(a, "--scheme")) {
-            if (!strcmp(v, "explicit"))
-                c->scheme = SS_HEAL_EXPLICIT;
-            else if (!strcmp(v, "split"))
-                c->scheme = SS_HEAL_SPLIT;
-            else
-                st = ss_error_set(err, SS_ERR_INPUT, "--scheme: '%s' is not 'explicit' or 'split'",
-                                  v);
         } else if (!strcmp(a, "--snapshot-every")) {
             st = cli_parse_double(a, v, 0, 1e6, &c->snapshot_every, err);
         } else if (!strcmp(a, "--area-every")) {
@@ -298,6 +240,13 @@ int cmd_heal(int argc, char **argv) {
     if (ss_heal_run_create(&o.c, &r, &err)) return cli_fail(CMD, &err);
     print_notes(&o, r);
 
+    /* The output folder: locked, checked against the free space, staged or
+     * marked unfinished; errors here are still about the input (exit 2). */
+    if (ss_heal_run_start(r, &err)) {
+        int rc = cli_fail(CMD, &err);
+        ss_heal_run_free(r);
+        return rc;
+    }
     /* Everything is validated: from here on, files are written. */
     ss_status st = SS_OK;
     ss_progress pr;

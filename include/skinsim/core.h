@@ -58,6 +58,9 @@ typedef struct ss_image {
 /* Returns NULL (and sets err) on a bad size or when memory runs out. Pixels are
  * zeroed. Sizes above SS_IMAGE_MAX_SIDE per side are refused. */
 #define SS_IMAGE_MAX_SIDE 65536
+/* Up to 16 channels: RGBA images, and parameter maps (skin and wound bio maps)
+ * (file writers other than ss_exr_write_channels take 1-4). */
+#define SS_IMAGE_MAX_CHANNELS 16
 ss_image *ss_image_create(int width, int height, int channels, ss_error *err);
 /* Same, pixels left undefined: for images the caller overwrites entirely. */
 ss_image *ss_image_create_uninit(int width, int height, int channels, ss_error *err);
@@ -105,6 +108,12 @@ ss_image *ss_png_read(const char *path, ss_encoding enc, ss_error *err);
  * channels named Y / YA / RGB / RGBA. Atomic. */
 ss_status ss_exr_write(const char *path, const ss_image *img, int use_half, ss_error *err);
 ss_image *ss_exr_read(const char *path, ss_error *err);
+/* Any number of channels (1-64) with the given names, in the image's
+ * channel order (a float map of several quantities, e.g. skin's bio.exr).
+ * Reading: each named channel must exist; the image has them in that order. */
+ss_status ss_exr_write_channels(const char *path, const ss_image *img, const char *const *names,
+                                int use_half, ss_error *err);
+ss_image *ss_exr_read_channels(const char *path, const char *const *names, int n, ss_error *err);
 /* Picks PNG or EXR from the extension (.png, .exr). For PNG, enc applies. */
 ss_image *ss_image_read(const char *path, ss_encoding enc, ss_error *err);
 
@@ -165,7 +174,14 @@ void ss_remove_tree(const char *path);
  * and rewrites staging paths in err back to the names the user gave. */
 typedef enum ss_output_kind {
     SS_OUTPUT_FILE = 0, /* one regular file */
-    SS_OUTPUT_DIR = 1   /* a folder the command owns and replaces whole */
+    SS_OUTPUT_DIR = 1,  /* a folder the command owns and replaces whole */
+    /* A folder written where it stands, for runs that must survive a kill
+     * and be resumed from what they wrote (heal's checkpoints). It may be
+     * new, empty, or this owner's folder (finished or not); begin marks it
+     * unfinished (.skinsim-unfinished), finish(SS_OK) marks it complete,
+     * finish(error) leaves it unfinished for a resume. Nothing else of the
+     * discipline changes (checks, lock, leftovers, disk space). */
+    SS_OUTPUT_DIR_IN_PLACE = 2
 } ss_output_kind;
 typedef struct ss_outputs ss_outputs;
 
@@ -191,13 +207,19 @@ const char *ss_outputs_target(const ss_outputs *o, int i);
 ss_status ss_outputs_finish(ss_outputs *o, ss_status status, ss_error *err);
 /* Rolls back anything begun and not finished, releases locks, frees. */
 void ss_outputs_free(ss_outputs *o);
+/* The process id of the skinsim run writing path now (holding its lock),
+ * -1 when that run's id is unreadable, 0 when no run is writing it. */
+long ss_output_lock_holder(const char *path);
 /* 1 when dir holds a completion marker (of owner, or of any owner when NULL). */
 int ss_output_dir_is_complete(const char *dir, const char *owner);
 /* Writes or removes dir's completion marker (for outputs a command keeps
  * updating in place, such as a resumable run). */
 ss_status ss_output_dir_mark_complete(const char *dir, const char *owner, ss_error *err);
 ss_status ss_output_dir_mark_incomplete(const char *dir, ss_error *err);
+/* 1 when dir is an unfinished in-place folder of owner (or any when NULL). */
+int ss_output_dir_is_unfinished(const char *dir, const char *owner);
 #define SS_OUTPUT_MARKER ".skinsim-complete"
+#define SS_OUTPUT_UNFINISHED ".skinsim-unfinished"
 
 /* An output path named by an input file (an .mci's run outputs): name is
  * taken relative to base_dir; absolute names and names that leave base_dir

@@ -120,6 +120,14 @@ ss_status ss_gltf_write_textured_square(const char *path, double side_m, const c
                                         const char *base_color_uri,
                                         const char *metallic_roughness_uri, const char *normal_uri,
                                         ss_error *err);
+/* The same material on a mesh's own UVs (include/skinsim/mesh.h; positions
+ * in the mesh's units, glTF: metres), with per-vertex tangents derived from
+ * the UVs for the normal map. The mesh needs UVs. */
+struct ss_mesh;
+ss_status ss_gltf_write_textured_mesh(const char *path, const struct ss_mesh *mesh,
+                                      const char *name, const char *base_color_uri,
+                                      const char *metallic_roughness_uri, const char *normal_uri,
+                                      ss_error *err);
 
 #ifdef __cplusplus
 }

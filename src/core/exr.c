@@ -177,6 +177,15 @@ ss_status ss_exr_write(const char *path, const ss_image *img, int use_half, ss_e
         img->channels > 4)
         return ss_error_set(err, SS_ERR_INPUT, "%s: EXR needs a 1-4 channel image of positive size",
                             path);
+    return ss_exr_write_channels(path, img, NAMES[img->channels], use_half, err);
+}
+
+ss_status ss_exr_write_channels(const char *path, const ss_image *img, const char *const *names,
+                                int use_half, ss_error *err) {
+    if (!img || !img->data || img->width <= 0 || img->height <= 0 || img->channels < 1 ||
+        img->channels > 64 || !names)
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "%s: EXR needs a 1-64 channel image of positive size and names", path);
     ss_atomic_file af;
     ss_status st = ss_atomic_open(&af, path, err);
     if (st) return st;
@@ -187,7 +196,6 @@ ss_status ss_exr_write(const char *path, const ss_image *img, int use_half, ss_e
     exr_context_t ctx = NULL;
     exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
     int nch = img->channels, part = 0, have_enc = 0, spc = 1;
-    const char *const *names = NAMES[nch];
     exr_pixel_type_t pt = use_half ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT;
 
     exr_result_t rv = exr_start_write(&ctx, path, EXR_WRITE_FILE_DIRECTLY, &init);
@@ -225,7 +233,8 @@ ss_status ss_exr_write(const char *path, const ss_image *img, int use_half, ss_e
 }
 
 /* Decodes part 0 of an open read context into a new image; NULL + err on failure. */
-static ss_image *read_pixels(exr_context_t ctx, const char *path, exr_io *io, ss_error *err) {
+static ss_image *read_pixels(exr_context_t ctx, const char *path, exr_io *io,
+                             const char *const *want, int nwant, ss_error *err) {
     exr_storage_t storage;
     exr_attr_box2i_t dw;
     const exr_attr_chlist_t *cl = NULL;
@@ -250,6 +259,19 @@ static ss_image *read_pixels(exr_context_t ctx, const char *path, exr_io *io, ss
         if (p && *p && e->x_sampling == 1 && e->y_sampling == 1) has[p - order] = 1;
     }
     int nch = (has[0] && has[1] && has[2]) ? 3 + has[3] : has[4] ? 1 + has[3] : 0;
+    if (want) { /* the caller names the channels: each must be there */
+        for (int k = 0; k < nwant; k++) {
+            int found = 0;
+            for (int i = 0; i < cl->num_channels; i++)
+                found |= !strcmp(cl->entries[i].name.str, want[k]) &&
+                         cl->entries[i].x_sampling == 1 && cl->entries[i].y_sampling == 1;
+            if (!found) {
+                ss_error_set(err, SS_ERR_INPUT, "%s: EXR has no channel '%s'", path, want[k]);
+                return NULL;
+            }
+        }
+        nch = nwant;
+    }
     if (!nch) {
         ss_error_set(err, SS_ERR_INPUT, "%s: EXR has neither R,G,B nor Y channels", path);
         return NULL;
@@ -264,7 +286,7 @@ static ss_image *read_pixels(exr_context_t ctx, const char *path, exr_io *io, ss
     ss_image *img = ss_image_create((int)w64, (int)h64, nch, err);
     if (!img) return NULL;
 
-    const char *const *names = NAMES[nch];
+    const char *const *names = want ? want : NAMES[nch];
     exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
     int spc = 1, have_dec = 0;
     rv = exr_get_scanlines_per_chunk(ctx, 0, &spc);
@@ -294,7 +316,19 @@ static ss_image *read_pixels(exr_context_t ctx, const char *path, exr_io *io, ss
     return img;
 }
 
-ss_image *ss_exr_read(const char *path, ss_error *err) {
+static ss_image *exr_read_impl(const char *path, const char *const *want, int nwant,
+                               ss_error *err);
+ss_image *ss_exr_read(const char *path, ss_error *err) { return exr_read_impl(path, NULL, 0, err); }
+ss_image *ss_exr_read_channels(const char *path, const char *const *names, int n, ss_error *err) {
+    if (!names || n < 1 || n > 64) {
+        ss_error_set(err, SS_ERR_INPUT, "%s: 1-64 channel names needed", path);
+        return NULL;
+    }
+    return exr_read_impl(path, names, n, err);
+}
+
+static ss_image *exr_read_impl(const char *path, const char *const *want, int nwant,
+                               ss_error *err) {
     /* regular files only, and the open never blocks (named pipes) */
     exr_io io = {.fd = ss_input_open_fd(path, NULL, err), .msg = ""};
     if (io.fd < 0) return NULL;
@@ -308,7 +342,7 @@ ss_image *ss_exr_read(const char *path, ss_error *err) {
     if (rv)
         ss_error_set(err, SS_ERR_INPUT, "%s: not a readable OpenEXR file: %s", path, why(&io, rv));
     else
-        img = read_pixels(ctx, path, &io, err);
+        img = read_pixels(ctx, path, &io, want, nwant, err);
     if (ctx) exr_finish(&ctx);
     close(io.fd);
     return img;

@@ -41,8 +41,9 @@ static ss_image *image_new(int width, int height, int channels, int zero, ss_err
                      SS_IMAGE_MAX_SIDE);
         return NULL;
     }
-    if (channels < 1 || channels > 4) {
-        ss_error_set(err, SS_ERR_INPUT, "image channel count %d is out of range 1..4", channels);
+    if (channels < 1 || channels > SS_IMAGE_MAX_CHANNELS) {
+        ss_error_set(err, SS_ERR_INPUT, "image channel count %d is out of range 1..%d", channels,
+                     SS_IMAGE_MAX_CHANNELS);
         return NULL;
     }
     ss_image *img = malloc(sizeof *img);

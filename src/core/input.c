@@ -137,7 +137,7 @@ double ss_memory_available_bytes(void) {
 
 ss_status ss_image_check_alloc(const char *name, long width, long height, int channels,
                                ss_error *err) {
-    if (width < 1 || height < 1 || channels < 1 || channels > 4)
+    if (width < 1 || height < 1 || channels < 1 || channels > SS_IMAGE_MAX_CHANNELS)
         return ss_error_set(err, SS_ERR_INPUT, "%s: bad image size %ld x %ld x %d", name, width,
                             height, channels);
     if (width > SS_IMAGE_MAX_SIDE || height > SS_IMAGE_MAX_SIDE)

@@ -2,6 +2,7 @@
  * colour channels only at this boundary (images in memory are linear). */
 #include "skinsim/core.h"
 
+#include <errno.h>
 #include <png.h>
 #include <setjmp.h>
 #include <stdlib.h>
@@ -33,6 +34,8 @@ ss_status ss_png_write(const char *path, const ss_image *img, int bits, ss_encod
     static const int types[5] = {0, PNG_COLOR_TYPE_GRAY, PNG_COLOR_TYPE_GRAY_ALPHA,
                                  PNG_COLOR_TYPE_RGB, PNG_COLOR_TYPE_RGBA};
     int ch = img->channels;
+    if (ch < 1 || ch > 4)
+        return ss_error_set(err, SS_ERR_INPUT, "%s: PNG holds 1..4 channels, not %d", path, ch);
     size_t rowbytes = (size_t)img->width * (size_t)ch * (size_t)(bits / 8);
     unsigned char *row = malloc(rowbytes);
     if (!row) return ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", path);
@@ -46,9 +49,13 @@ ss_status ss_png_write(const char *path, const ss_image *img, int bits, ss_encod
         png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, png_error_quiet, png_warning_quiet);
     png_infop info = png ? png_create_info_struct(png) : NULL;
     if (!info || setjmp(png_jmpbuf(png))) {
+        int e = errno, wrote_badly = af.fp && ferror(af.fp);
         png_destroy_write_struct(&png, &info);
         ss_atomic_abort(&af);
         free(row);
+        if (wrote_badly) /* a full disk, a quota, an I/O error */
+            return ss_error_set(err, SS_ERR_RUNTIME, "%s: cannot write: %s", path,
+                                e ? strerror(e) : "write error");
         return ss_error_set(err, SS_ERR_RUNTIME, "%s: PNG encoding failed", path);
     }
     png_init_io(png, af.fp);

@@ -124,6 +124,25 @@ def check_ptr(fn, *args):
     return p
 
 
+class Handle:
+    """Owns library objects: calls each free function on its pointer when the
+    last reference goes. Python objects hold a Handle and the numpy views of
+    library memory reference it too, so memory is never freed under a view
+    (closing an object only drops its own reference)."""
+
+    def __init__(self):
+        self._frees = []
+
+    def own(self, free_fn, ptr):
+        self._frees.append((free_fn, ptr))
+        return ptr
+
+    def __del__(self):
+        while self._frees and lib:
+            fn, ptr = self._frees.pop()
+            fn(ptr)
+
+
 def _fn(name, restype, *argtypes):
     f = getattr(lib, name)
     f.restype = restype
@@ -376,6 +395,11 @@ _fn("ss_render_brdf_eval", None, c_int, POINTER(ss_render_params), c_double, c_d
     POINTER(c_double))
 _fn("ss_render_brdf_sample", c_int, c_int, POINTER(ss_render_params), c_int, c_int, c_int, c_int,
     POINTER(ss_brdf_sampled), P_ERR)
+_fn("ss_srgb_linear_to_lab", None, POINTER(c_double), POINTER(c_double))
+_fn("ss_lab_to_srgb_linear", None, POINTER(c_double), POINTER(c_double))
+_fn("ss_lab_describe", None, POINTER(c_double), POINTER(c_double), POINTER(c_double),
+    POINTER(c_double))
+_fn("ss_ciede2000", c_double, POINTER(c_double), POINTER(c_double))
 _fn("ss_mm_build_options_default", None, POINTER(ss_mm_build_options))
 _fn("ss_mm_sample_fast", c_int, P_BIO, POINTER(ss_mm_build_options), POINTER(ss_brdf_sampled),
     POINTER(c_double), POINTER(c_double), P_ERR)
@@ -485,3 +509,183 @@ _fn("ss_abrasion_create", c_int, POINTER(ss_abrasion_settings), POINTER(ss_timel
     POINTER(ss_base_skin), POINTER(P_ABR), P_ERR)
 _fn("ss_abrasion_free", None, P_ABR)
 _fn("ss_abrasion_frame", c_int, P_ABR, c_double, POINTER(ss_texture_set), P_ERR)
+
+# ---- heal ------------------------------------------------------------------------
+
+SS_HEAL_NFIELDS = 8
+
+
+class ss_heal_stats(ctypes.Structure):
+    _fields_ = [
+        ("open_area_mm2", c_double),
+        ("wound_region_area_mm2", c_double),
+        ("initial_area_mm2", c_double),
+        ("field_mean", c_double * SS_HEAL_NFIELDS),
+        ("eschar_wound_mean", c_double),
+        ("scar_volume_mm3", c_double),
+        ("scar_max", c_double),
+    ]
+
+
+class ss_heal_area_row(ctypes.Structure):
+    _fields_ = [("t_days", c_double), ("st", ss_heal_stats)]
+
+
+class ss_heal_grid(ctypes.Structure):
+    _fields_ = [
+        ("nx", c_int),
+        ("ny", c_int),
+        ("nz", c_int),
+        ("dx_mm", c_double),
+        ("skin_top_mm", c_double),
+        ("cell", POINTER(ctypes.c_uint8)),
+        ("field", POINTER(c_float) * SS_HEAL_NFIELDS),
+        ("velocity", POINTER(c_float) * 3),
+        ("t_days", c_double),
+        ("step", c_uint64),
+    ]
+
+
+class ss_heal_run_config(ctypes.Structure):
+    _fields_ = [
+        ("scenario", c_char_p),
+        ("params_path", c_char_p),
+        ("no_scab", c_int),
+        ("static_region", c_int),
+        ("grid", c_int * 3),
+        ("size_mm", c_double * 3),
+        ("skin_top_mm", c_double),
+        ("epidermis_mm", c_double),
+        ("wound_mask", c_char_p),
+        ("wound_stroke", c_char_p),
+        ("concave_k", c_int),
+        ("wound_mesh", c_char_p),
+        ("wound_footprint", P_IMAGE),
+        ("wound_depth_mm", c_double),
+        ("wound_depth_image", c_char_p),
+        ("days", c_double),
+        ("scheme", c_int),
+        ("dt_days", c_double),
+        ("snapshot_every", c_double),
+        ("area_every", c_double),
+        ("checkpoint_every", c_double),
+        ("out_dir", c_char_p),
+        ("force", c_int),
+        ("resume_dir", c_char_p),
+        ("seed", c_uint64),
+    ]
+
+
+P_RUN = c_void_p  # opaque ss_heal_run *
+P_GRID = POINTER(ss_heal_grid)
+_fn("ss_heal_field_name", c_char_p, c_int)
+_fn("ss_heal_run_config_default", None, POINTER(ss_heal_run_config))
+_fn("ss_heal_run_create", c_int, POINTER(ss_heal_run_config), POINTER(P_RUN), P_ERR)
+_fn("ss_heal_run_free", None, P_RUN)
+_fn("ss_heal_run_step", c_int, P_RUN, P_ERR)
+_fn("ss_heal_run_advance_to", c_int, P_RUN, c_double, P_ERR)
+_fn("ss_heal_run_finish", c_int, P_RUN, POINTER(c_void_p), P_ERR)
+_fn("ss_heal_run_grid", P_GRID, P_RUN)
+_fn("ss_heal_run_scenario", c_char_p, P_RUN)
+_fn("ss_heal_run_day", c_double, P_RUN)
+_fn("ss_heal_run_dt", c_double, P_RUN)
+_fn("ss_heal_run_end_day", c_double, P_RUN)
+_fn("ss_heal_run_step_index", ctypes.c_longlong, P_RUN)
+_fn("ss_heal_run_steps_total", ctypes.c_longlong, P_RUN)
+_fn("ss_heal_run_done", c_int, P_RUN)
+_fn("ss_heal_run_area", POINTER(ss_heal_area_row), P_RUN, POINTER(c_int))
+_fn("ss_heal_area_normalised", c_double, POINTER(ss_heal_stats))
+_fn("ss_heal_open_threshold", c_double)
+_fn("ss_heal_surface_map", P_IMAGE, P_GRID, c_int, c_int, P_ERR)
+_fn("ss_heal_time_to_closure", c_double, POINTER(ss_heal_area_row), c_int, c_double)
+libc_free = ctypes.CDLL(None).free
+libc_free.argtypes = [c_void_p]
+libc_free.restype = None
+
+# ---- skin ------------------------------------------------------------------------
+
+SS_FEAT_NTYPES = 5
+SS_BIO_NCHANNELS = 11
+
+
+class ss_skin_dist(ctypes.Structure):
+    # the distribution constants, set and read by name (ss_skin_dist_set/get)
+    _fields_ = [("v", c_double * 26)]
+
+
+class ss_skin_settings(ctypes.Structure):
+    _fields_ = [
+        ("size", c_int),
+        ("world_size_cm", c_double),
+        ("seed", c_uint64),
+        ("wrap", c_int),
+        ("sampler", c_int),
+        ("count", ctypes.c_long * SS_FEAT_NTYPES),
+        ("dist", ss_skin_dist),
+        ("base_lo", c_double * 6),
+        ("base_hi", c_double * 6),
+        ("phi", c_double),
+    ]
+
+
+class ss_skin_fields(ctypes.Structure):
+    _fields_ = [("density", P_IMAGE * SS_FEAT_NTYPES), ("lips", P_IMAGE),
+                ("wrinkle_vectors", P_IMAGE)]
+
+
+class ss_bezier3(ctypes.Structure):
+    _fields_ = [("x", c_double * 4), ("y", c_double * 4)]
+
+
+class ss_skin_feature(ctypes.Structure):
+    _fields_ = [
+        ("type", c_int),
+        ("x", c_double),
+        ("y", c_double),
+        ("r", c_double),
+        ("r2", c_double),
+        ("h", c_double),
+        ("m", c_double),
+        ("p", c_double),
+        ("w", c_double),
+        ("curve", ss_bezier3),
+    ]
+
+
+class ss_skin_feature_list(ctypes.Structure):
+    _fields_ = [("n", c_size_t), ("f", POINTER(ss_skin_feature))]
+
+
+class ss_skin_maps(ctypes.Structure):
+    _fields_ = [
+        ("base_color", P_IMAGE),
+        ("roughness", P_IMAGE),
+        ("specular", P_IMAGE),
+        ("height_mm", P_IMAGE),
+        ("normal", P_IMAGE),
+        ("height_min_mm", c_double),
+        ("height_max_mm", c_double),
+    ]
+
+
+if hasattr(lib, "ss_skin_generate"):
+    P_SKINSET = POINTER(ss_skin_settings)
+    _fn("ss_skin_settings_preset", c_int, P_SKINSET, c_char_p, c_int, P_ERR)
+    _fn("ss_skin_forearm_counts", None, c_double, POINTER(ctypes.c_long))
+    _fn("ss_skin_settings_validate", c_int, P_SKINSET, P_ERR)
+    _fn("ss_skin_dist_set", c_int, POINTER(ss_skin_dist), c_char_p, c_double, P_ERR)
+    _fn("ss_skin_dist_get", c_double, POINTER(ss_skin_dist), c_char_p)
+    _fn("ss_skin_dist_names", POINTER(c_char_p))
+    _fn("ss_feature_type_name", c_char_p, c_int)
+    _fn("ss_feature_type_from_name", c_int, c_char_p)
+    _fn("ss_bio_channel_name", c_char_p, c_int)
+    _fn("ss_skin_generate", c_int, P_SKINSET, POINTER(ss_skin_fields),
+        POINTER(ss_skin_feature_list), c_char_p, c_size_t, P_ERR)
+    _fn("ss_skin_feature_list_free", None, POINTER(ss_skin_feature_list))
+    _fn("ss_skin_bio_maps", P_IMAGE, P_SKINSET, POINTER(ss_skin_fields),
+        POINTER(ss_skin_feature_list), P_ERR)
+    _fn("ss_skin_lut_create", c_void_p, P_TABLE, P_ERR)
+    _fn("ss_skin_lut_free", None, c_void_p)
+    _fn("ss_skin_render_maps", c_int, P_IMAGE, c_void_p, c_double, c_int, POINTER(ss_skin_maps),
+        P_ERR)
+    _fn("ss_skin_maps_free", None, POINTER(ss_skin_maps))

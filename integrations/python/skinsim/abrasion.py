@@ -66,9 +66,7 @@ class Abrasion:
 
     def __init__(self, size=512, strokes=None, stroke_csv=None, mask=None, hull="convex",
                  concave_k=8, timeline=None, end_day=None, seed=None, world_size_cm=None):
-        self._ab = None
-        self._shape = None
-        self._skin = None
+        self._h = None
         if sum(x is not None for x in (strokes, stroke_csv, mask)) > 1:
             raise L.InputError("give one of strokes, stroke_csv and mask", L.SS_ERR_INPUT)
         if hull not in ("convex", "concave"):
@@ -101,71 +99,56 @@ class Abrasion:
         L.check(L.lib.ss_timeline_validate, ctypes.byref(t))
         self._timeline = t
 
+        h = L.Handle()  # frees shape, skin and key textures after the last view
         shape = L.P_SHAPE()
-        try:
-            if mask is not None:
-                m = L.as_image_input(mask, "mask", channels=(1,))
-                hdr = L.image_header(m if m.ndim == 2 else m[..., 0].copy())
-                L.check(L.lib.ss_wound_shape_from_mask, ctypes.byref(hdr), s.size, s.seed,
-                        ctypes.byref(shape))
-            else:
-                ss = L.ss_stroke_set()
-                try:
-                    if strokes is not None:
-                        L.check(L.lib.ss_stroke_csv_parse, _strokes_text(strokes), b"strokes",
-                                ctypes.byref(ss))
-                    elif stroke_csv is not None:
-                        path = os.fspath(stroke_csv)
-                        try:
-                            with open(path, "rb") as f:
-                                text = f.read()
-                        except OSError as e:
-                            raise L.InputError("%s: %s" % (path, e.strerror), L.SS_ERR_INPUT)
-                        L.check(L.lib.ss_stroke_csv_parse, text, os.fsencode(path),
-                                ctypes.byref(ss))
-                    else:
-                        L.check(L.lib.ss_abrasion_example_strokes, ctypes.byref(ss))
+        if mask is not None:
+            m = L.as_image_input(mask, "mask", channels=(1,))
+            hdr = L.image_header(m if m.ndim == 2 else np.ascontiguousarray(m[..., 0]))
+            L.check(L.lib.ss_wound_shape_from_mask, ctypes.byref(hdr), s.size, s.seed,
+                    ctypes.byref(shape))
+        else:
+            ss = L.ss_stroke_set()
+            try:
+                if strokes is not None:
+                    L.check(L.lib.ss_stroke_csv_parse, _strokes_text(strokes), b"strokes",
+                            ctypes.byref(ss))
+                elif stroke_csv is not None:
+                    path = os.fspath(stroke_csv)
                     try:
-                        L.check(L.lib.ss_wound_shape_from_strokes, ctypes.byref(ss),
-                                1 if hull == "concave" else 0,
-                                int(concave_k) if hull == "concave" else 0, s.size, s.seed,
-                                ctypes.byref(shape))
-                    except L.SkinsimError as e:
-                        # name the input, as the command line does
-                        if strokes is None and stroke_csv is None:
-                            raise
-                        name = "strokes" if strokes is not None else os.fspath(stroke_csv)
-                        L.raise_for(e.code, "%s: %s" % (name, e))
-                finally:
-                    L.lib.ss_stroke_set_free(ctypes.byref(ss))
-            self._shape = shape
-            self._skin = L.ss_base_skin()
-            L.check(L.lib.ss_base_skin_create, None, None, s.size, s.seed,
-                    ctypes.byref(self._skin))
-            ab = L.P_ABR()
-            L.check(L.lib.ss_abrasion_create, ctypes.byref(s), ctypes.byref(t), shape,
-                    ctypes.byref(self._skin), ctypes.byref(ab))
-            self._ab = ab
-        except BaseException:
-            self.close()
-            raise
+                        with open(path, "rb") as f:
+                            text = f.read()
+                    except OSError as e:
+                        raise L.InputError("%s: %s" % (path, e.strerror), L.SS_ERR_INPUT)
+                    L.check(L.lib.ss_stroke_csv_parse, text, os.fsencode(path), ctypes.byref(ss))
+                else:
+                    L.check(L.lib.ss_abrasion_example_strokes, ctypes.byref(ss))
+                try:
+                    L.check(L.lib.ss_wound_shape_from_strokes, ctypes.byref(ss),
+                            1 if hull == "concave" else 0,
+                            int(concave_k) if hull == "concave" else 0, s.size, s.seed,
+                            ctypes.byref(shape))
+                except L.SkinsimError as e:
+                    # name the input, as the command line does
+                    if strokes is None and stroke_csv is None:
+                        raise
+                    name = "strokes" if strokes is not None else os.fspath(stroke_csv)
+                    L.raise_for(e.code, "%s: %s" % (name, e))
+            finally:
+                L.lib.ss_stroke_set_free(ctypes.byref(ss))
+        self._shape = h.own(L.lib.ss_wound_shape_free, shape)
+        skin = L.ss_base_skin()
+        L.check(L.lib.ss_base_skin_create, None, None, s.size, s.seed, ctypes.byref(skin))
+        h.own(L.lib.ss_base_skin_free, ctypes.pointer(skin))
+        ab = L.P_ABR()
+        L.check(L.lib.ss_abrasion_create, ctypes.byref(s), ctypes.byref(t), shape,
+                ctypes.byref(skin), ctypes.byref(ab))
+        self._ab = h.own(L.lib.ss_abrasion_free, ab)
+        self._h = h
 
     def close(self):
-        """Frees the library's memory now (views of keys become invalid)."""
-        if not L.lib:
-            return
-        if self._ab:
-            L.lib.ss_abrasion_free(self._ab)
-            self._ab = None
-        if self._skin is not None:
-            L.lib.ss_base_skin_free(ctypes.byref(self._skin))
-            self._skin = None
-        if self._shape:
-            L.lib.ss_wound_shape_free(self._shape)
-            self._shape = None
-
-    def __del__(self):
-        self.close()
+        """Drops this object's hold on the library's memory; it is freed when
+        no view of a key texture or the mask is left either."""
+        self._h = None
 
     def __enter__(self):
         return self
@@ -174,14 +157,14 @@ class Abrasion:
         self.close()
 
     def _need_open(self):
-        if not self._ab:
+        if self._h is None:
             raise L.SkinsimError("this Abrasion was closed", L.SS_ERR_INPUT)
 
     @property
     def mask(self):
         """The wound shape (size, size), 1 inside a wound: a read-only view."""
         self._need_open()
-        v = L.image_view(self._shape.contents.mask, self)
+        v = L.image_view(self._shape.contents.mask, self._h)
         v.flags.writeable = False
         return v
 
@@ -209,7 +192,7 @@ class Abrasion:
         ts = self._ab.contents.phase[pid]
         out = {}
         for m in MAPS:
-            v = L.image_view(getattr(ts, m), self)
+            v = L.image_view(getattr(ts, m), self._h)
             v.flags.writeable = False
             out[m] = v
         return out

@@ -118,6 +118,47 @@ def colour(wavelength_nm, reflectance):
     return np.array(rgb[:])
 
 
+def _rows3(name, a):
+    a = np.ascontiguousarray(a, dtype=np.float64)
+    if a.shape[-1:] != (3,):
+        raise L.InputError("%s: want values (..., 3), got shape %s" % (name, a.shape),
+                           L.SS_ERR_INPUT)
+    return a
+
+
+def lab(rgb):
+    """Linear sRGB albedo (..., 3) -> CIELAB (D65 white), same shape."""
+    a = _rows3("rgb", rgb)
+    out = np.empty_like(a)
+    P = ctypes.POINTER(ctypes.c_double)
+    src, dst = a.reshape(-1, 3), out.reshape(-1, 3)
+    for i in range(src.shape[0]):
+        L.lib.ss_srgb_linear_to_lab(src[i].ctypes.data_as(P), dst[i].ctypes.data_as(P))
+    return out
+
+
+def describe_lab(lab_value):
+    """(chroma C*ab, hue angle h_ab in degrees, individual typology angle ITA
+    in degrees) of one CIELAB colour: ITA > 55 very light ... < -30 dark."""
+    a = _rows3("lab", lab_value)
+    if a.shape != (3,):
+        raise L.InputError("lab: one colour (3 values), got shape %s" % (a.shape,),
+                           L.SS_ERR_INPUT)
+    c, h, ita = ctypes.c_double(), ctypes.c_double(), ctypes.c_double()
+    L.lib.ss_lab_describe(a.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), ctypes.byref(c),
+                          ctypes.byref(h), ctypes.byref(ita))
+    return c.value, h.value, ita.value
+
+
+def ciede2000(lab1, lab2):
+    """CIEDE2000 colour difference of two CIELAB colours."""
+    a, b = _rows3("lab1", lab1), _rows3("lab2", lab2)
+    if a.shape != (3,) or b.shape != (3,):
+        raise L.InputError("ciede2000: two colours of 3 values each", L.SS_ERR_INPUT)
+    P = ctypes.POINTER(ctypes.c_double)
+    return L.lib.ss_ciede2000(a.ctypes.data_as(P), b.ctypes.data_as(P))
+
+
 def srgb_encode(linear):
     """Linear values -> sRGB-encoded 0..1 (the library's table, float32)."""
     a = np.ascontiguousarray(np.clip(linear, 0.0, 1.0), dtype=np.float32)

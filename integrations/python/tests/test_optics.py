@@ -47,6 +47,20 @@ class Spectrum(unittest.TestCase):
         grey = optics.colour(wl, np.full_like(wl, 0.18))
         np.testing.assert_allclose(grey, [0.18] * 3, atol=1e-3)
 
+    def test_lab_and_colour_difference(self):
+        np.testing.assert_allclose(optics.lab([1.0, 1.0, 1.0]), [100, 0, 0], atol=1e-6)
+        grey = optics.lab([[0.18, 0.18, 0.18], [0.5, 0.5, 0.5]])
+        self.assertEqual(grey.shape, (2, 3))
+        self.assertLess(grey[0, 0], grey[1, 0])
+        # Sharma, Wu & Dalal (2005) Table 1, pair 1: dE00 = 2.0425
+        self.assertAlmostEqual(optics.ciede2000([50, 2.6772, -79.7751], [50, 0, -82.7485]),
+                               2.0425, places=4)
+        light = optics.lab(optics.spectrum(melanin=0.02, photons=1500, wl_step_nm=20).colour())
+        dark = optics.lab(optics.spectrum(melanin=0.3, photons=1500, wl_step_nm=20).colour())
+        self.assertGreater(optics.describe_lab(light)[2], optics.describe_lab(dark)[2])  # ITA
+        with self.assertRaises(skinsim.InputError):
+            optics.lab([1, 2])
+
     def test_skin_colour_matches_the_cli(self):
         import json
         import subprocess

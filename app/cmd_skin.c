@@ -1,0 +1,722 @@
+/* skinsim skin: procedural skin textures from biological features (seed 003
+ * §4.8, §5). Parses options, reads the fields, the table and an optional
+ * feature list, calls the skin library (generate, bio maps, render maps) and
+ * writes the texture set into a folder that appears whole or not at all.
+ * Every input is read and checked before any output is touched. */
+#define _POSIX_C_SOURCE 200809L
+#include <cjson/cJSON.h>
+#include <getopt.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli.h"
+#include "skinsim/geom.h"
+#include "skinsim/mesh.h"
+#include "skinsim/skin.h"
+
+static const char *CMD = "skin";
+
+static void help(void) {
+    printf("usage: skinsim skin [options]\n\n"
+           "Procedural skin textures (seed 003 §4.8, §5): cysts, moles, freckles, wrinkles\n"
+           "and hair follicles scattered by probability fields over a baseline skin, lips\n"
+           "from a field, turned into biological parameters per texel and through the\n"
+           "ModelMatch table into render maps. Lengths in mm; see docs/skin.md.\n\n"
+           "Skin:\n"
+           "  --preset NAME         forearm (default: counts per cm^2 of a forearm, 5 cm)\n"
+           "                        or seed (the seed's 5000 cysts, 700 moles, 3000\n"
+           "                        freckles, 170000 follicles, 4000 wrinkles on 20 cm)\n"
+           "  --count TYPE=N        features of a type: cysts, moles, freckles, wrinkles,\n"
+           "                        follicles (repeatable; N >= 0)\n"
+           "  --field TYPE=FILE     greyscale probability field (PNG or EXR, any size,\n"
+           "                        stretched over the texture; colour images are read as\n"
+           "                        luminance) for a feature type, or lips=FILE (lip\n"
+           "                        weight), or vectors=FILE (RGB wrinkle vector field:\n"
+           "                        R,G direction with 0.5 = 0, B length)\n"
+           "  --param NAME=V        a distribution constant, e.g. moles.r_sigma=1.5\n"
+           "                        (--list-params prints them with their values)\n"
+           "  --base NAME=LO        low end of a baseline parameter: melanin, pheomelanin,\n"
+           "                        blood, oxygenation, sc (cm), epidermis (cm)\n"
+           "  --features-in FILE    render this features.csv instead of generating\n"
+           "  --sampler NAME        alias (default, exact and fast) or rejection (the\n"
+           "                        seed's ChoosePoint loop; same distribution)\n"
+           "  --no-wrap             features do not wrap around the edges (for meshes\n"
+           "                        with UV islands); default: the texture is a torus\n"
+           "                        and the maps tile seamlessly\n\n"
+           "Output:\n"
+           "  --size N              texture side in texels (default 2048, 8..16384)\n"
+           "  --world-size-cm X     side of the texture on the body (default: preset's)\n"
+           "  --table FILE          ModelMatch table (default data/modelmatch_default.sstab)\n"
+           "  --normal-convention C opengl (default, +Y up) or directx (green flipped)\n"
+           "  --seed S              random seed (default 1); bit-identical for any threads\n"
+           "  --gltf                also write skin.gltf: the material on a square of the\n"
+           "                        world size\n"
+           "  --out DIR             output folder (default skin-out)\n"
+           "  --threads N, --quiet, --json, --list-params, --help\n\n"
+           "Writes DIR/base_color.png (sRGB), roughness.png, specular.png (GGX, linear\n"
+           "8-bit), height.png (16-bit; 0..1 spans skin.json's height_min_mm..max_mm),\n"
+           "normal.png, bio.exr (float channels: melanin, pheomelanin_ratio, blood,\n"
+           "oxygenation, sc_thickness_cm, epidermis_thickness_cm, height_mm,\n"
+           "extra.R/G/B/A), features.csv, contact_sheet.png and skin.json.\n\n"
+           "Example:\n"
+           "  skinsim skin --preset seed --field follicles=data/skin_face/follicles.png \\\n"
+           "      --field lips=data/skin_face/lips.png --out face\n");
+}
+
+#define MAX_FIELDS 16
+typedef struct opts {
+    const char *out, *table, *features_in, *preset, *mesh;
+    const char *field_name[MAX_FIELDS], *field_path[MAX_FIELDS];
+    int nfields;
+    char *counts[64], *params[64], *bases[16];
+    int ncounts, nparams, nbases;
+    int size, threads, quiet, json, gltf, no_wrap, directx, sampler, list_params;
+    double world_cm;
+    int world_set;
+    uint64_t seed;
+} opts;
+
+static ss_status split_kv(const char *opt, const char *s, char *key, size_t keylen,
+                          const char **val, ss_error *err) {
+    const char *eq = strchr(s, '=');
+    if (!eq || eq == s || !eq[1] || (size_t)(eq - s) >= keylen)
+        return ss_error_set(err, SS_ERR_INPUT, "%s '%s': expected NAME=VALUE", opt, s);
+    memcpy(key, s, (size_t)(eq - s));
+    key[eq - s] = '\0';
+    *val = eq + 1;
+    return SS_OK;
+}
+
+static int parse(int argc, char **argv, opts *o, ss_error *err) {
+    static const struct option longopts[] = {{"out", required_argument, 0, 'o'},
+                                             {"size", required_argument, 0, 'n'},
+                                             {"preset", required_argument, 0, 'P'},
+                                             {"count", required_argument, 0, 'c'},
+                                             {"field", required_argument, 0, 'f'},
+                                             {"param", required_argument, 0, 'p'},
+                                             {"base", required_argument, 0, 'b'},
+                                             {"features-in", required_argument, 0, 'F'},
+                                             {"sampler", required_argument, 0, 'A'},
+                                             {"no-wrap", no_argument, 0, 'W'},
+                                             {"world-size-cm", required_argument, 0, 'w'},
+                                             {"table", required_argument, 0, 'T'},
+                                             {"normal-convention", required_argument, 0, 'N'},
+                                             {"seed", required_argument, 0, 'S'},
+                                             {"gltf", no_argument, 0, 'G'},
+                                             {"mesh", required_argument, 0, 'M'},
+                                             {"threads", required_argument, 0, 'j'},
+                                             {"quiet", no_argument, 0, 'q'},
+                                             {"json", no_argument, 0, 'J'},
+                                             {"list-params", no_argument, 0, 'L'},
+                                             {"help", no_argument, 0, 'h'},
+                                             {0, 0, 0, 0}};
+    memset(o, 0, sizeof *o);
+    o->out = "skin-out";
+    o->size = 2048;
+    o->seed = 1;
+    o->preset = "forearm";
+    optind = 1;
+    opterr = 0;
+    int c;
+    long v;
+    ss_status st = SS_OK;
+    while (!st && (c = getopt_long(argc, argv, "", longopts, NULL)) != -1) {
+        switch (c) {
+        case 'o':
+            o->out = optarg;
+            break;
+        case 'n':
+            st = cli_parse_int("--size", optarg, 8, 16384, &v, err);
+            o->size = (int)v;
+            break;
+        case 'P':
+            o->preset = optarg;
+            break;
+        case 'c':
+            if (o->ncounts >= 64)
+                st = ss_error_set(err, SS_ERR_INPUT, "--count: too many");
+            else
+                o->counts[o->ncounts++] = optarg;
+            break;
+        case 'p':
+            if (o->nparams >= 64)
+                st = ss_error_set(err, SS_ERR_INPUT, "--param: too many");
+            else
+                o->params[o->nparams++] = optarg;
+            break;
+        case 'b':
+            if (o->nbases >= 16)
+                st = ss_error_set(err, SS_ERR_INPUT, "--base: too many");
+            else
+                o->bases[o->nbases++] = optarg;
+            break;
+        case 'f': {
+            const char *eq = strchr(optarg, '=');
+            if (!eq || eq == optarg || !eq[1])
+                st = ss_error_set(err, SS_ERR_INPUT, "--field '%s': expected TYPE=FILE", optarg);
+            else if (o->nfields >= MAX_FIELDS)
+                st = ss_error_set(err, SS_ERR_INPUT, "--field: too many");
+            else {
+                char *name = strndup(optarg, (size_t)(eq - optarg));
+                o->field_name[o->nfields] = name;
+                o->field_path[o->nfields++] = eq + 1;
+            }
+            break;
+        }
+        case 'F':
+            o->features_in = optarg;
+            break;
+        case 'A':
+            if (!strcmp(optarg, "alias"))
+                o->sampler = SS_SAMPLER_ALIAS;
+            else if (!strcmp(optarg, "rejection"))
+                o->sampler = SS_SAMPLER_REJECTION;
+            else
+                st = ss_error_set(err, SS_ERR_INPUT, "--sampler: '%s' is not alias or rejection",
+                                  optarg);
+            break;
+        case 'W':
+            o->no_wrap = 1;
+            break;
+        case 'w':
+            st = cli_parse_double("--world-size-cm", optarg, 1e-3, 1e4, &o->world_cm, err);
+            o->world_set = 1;
+            break;
+        case 'T':
+            o->table = optarg;
+            break;
+        case 'N':
+            if (!strcmp(optarg, "opengl"))
+                o->directx = 0;
+            else if (!strcmp(optarg, "directx"))
+                o->directx = 1;
+            else
+                st = ss_error_set(err, SS_ERR_INPUT,
+                                  "--normal-convention: '%s' is not opengl or directx", optarg);
+            break;
+        case 'S':
+            st = cli_parse_u64("--seed", optarg, &o->seed, err);
+            break;
+        case 'G':
+            o->gltf = 1;
+            break;
+        case 'M':
+            o->mesh = optarg;
+            break;
+        case 'j':
+            st = cli_parse_int("--threads", optarg, 1, 4096, &v, err);
+            o->threads = (int)v;
+            break;
+        case 'q':
+            o->quiet = 1;
+            break;
+        case 'J':
+            o->json = 1;
+            break;
+        case 'L':
+            o->list_params = 1;
+            break;
+        case 'h':
+            help();
+            return -1;
+        default:
+            st = ss_error_set(err, SS_ERR_INPUT, "unknown or incomplete option '%s'",
+                              argv[optind - 1]);
+        }
+    }
+    if (!st && optind < argc)
+        st = ss_error_set(err, SS_ERR_INPUT, "unexpected argument '%s'", argv[optind]);
+    if (!st && o->mesh && !o->gltf)
+        st = ss_error_set(err, SS_ERR_INPUT, "--mesh needs --gltf (the mesh is only used there)");
+    return st ? (int)st : 0;
+}
+
+static void opts_free(opts *o) {
+    for (int i = 0; i < o->nfields; i++) free((char *)o->field_name[i]);
+}
+
+/* Settings from the preset and the options. */
+static ss_status make_settings(const opts *o, ss_skin_settings *s, ss_error *err) {
+    ss_status st = ss_skin_settings_preset(s, o->preset, o->size, err);
+    if (st) return st;
+    s->seed = o->seed;
+    s->wrap = !o->no_wrap;
+    s->sampler = o->sampler;
+    if (o->world_set) {
+        s->world_size_cm = o->world_cm;
+        if (!strcmp(o->preset, "forearm")) ss_skin_forearm_counts(o->world_cm, s->count);
+    }
+    char key[128];
+    const char *val;
+    for (int i = 0; i < o->ncounts && !st; i++) {
+        st = split_kv("--count", o->counts[i], key, sizeof key, &val, err);
+        if (st) break;
+        int t = ss_feature_type_from_name(key);
+        if (t < 0) {
+            st = ss_error_set(err, SS_ERR_INPUT,
+                              "--count: unknown feature '%s' (cysts, moles, freckles, wrinkles, "
+                              "follicles)",
+                              key);
+            break;
+        }
+        long n;
+        st = cli_parse_int("--count", val, 0, 100000000L, &n, err);
+        s->count[t] = n;
+    }
+    for (int i = 0; i < o->nparams && !st; i++) {
+        st = split_kv("--param", o->params[i], key, sizeof key, &val, err);
+        double x;
+        if (!st) st = cli_parse_double("--param", val, -1e9, 1e9, &x, err);
+        if (!st) st = ss_skin_dist_set(&s->dist, key, x, err);
+    }
+    static const char *const base_names[6] = {"melanin",     "pheomelanin", "blood",
+                                              "oxygenation", "sc",          "epidermis"};
+    for (int i = 0; i < o->nbases && !st; i++) {
+        st = split_kv("--base", o->bases[i], key, sizeof key, &val, err);
+        if (st) break;
+        int a = -1;
+        for (int k = 0; k < 6; k++)
+            if (!strcmp(key, base_names[k])) a = k;
+        if (a < 0) {
+            st = ss_error_set(err, SS_ERR_INPUT,
+                              "--base: unknown parameter '%s' (melanin, pheomelanin, blood, "
+                              "oxygenation, sc, epidermis)",
+                              key);
+            break;
+        }
+        double x;
+        st = cli_parse_double("--base", val, 0.0, a >= 4 ? 0.1 : 1.0, &x, err);
+        if (!st && x > s->base_hi[a])
+            st = ss_error_set(err, SS_ERR_INPUT, "--base %s=%g: above the range's top %g", key, x,
+                              s->base_hi[a]);
+        if (!st) s->base_lo[a] = x;
+    }
+    if (!st) st = ss_skin_settings_validate(s, err);
+    return st;
+}
+
+typedef struct inputs {
+    ss_image *img[MAX_FIELDS];
+    ss_skin_fields fields;
+    ss_mm_table *table;
+    ss_skin_feature_list features;
+    int have_features;
+    ss_mesh mesh;
+    char table_path[4096];
+} inputs;
+
+static void inputs_free(inputs *in) {
+    for (int i = 0; i < MAX_FIELDS; i++) ss_image_free(in->img[i]);
+    ss_mm_table_free(in->table);
+    ss_skin_feature_list_free(&in->features);
+    ss_mesh_free(&in->mesh);
+}
+
+/* A probability field: PNG/EXR, colour converted to luminance (said in notes). */
+static ss_image *read_grey(const char *name, const char *path, cJSON *notes, ss_error *err) {
+    ss_error e2;
+    ss_image *img = ss_image_read(path, SS_ENC_LINEAR, &e2);
+    if (!img) {
+        ss_error_set(err, e2.code, "--field %s: %s", name, e2.msg);
+        return NULL;
+    }
+    if (img->channels == 1) return img;
+    ss_image *g = ss_image_create_uninit(img->width, img->height, 1, err);
+    if (!g) {
+        ss_image_free(img);
+        return NULL;
+    }
+    size_t n = (size_t)img->width * img->height;
+    for (size_t i = 0; i < n; i++) {
+        const float *p = img->data + i * (size_t)img->channels;
+        g->data[i] = img->channels >= 3 ? 0.2126f * p[0] + 0.7152f * p[1] + 0.0722f * p[2] : p[0];
+    }
+    if (img->channels >= 3) {
+        char msg[600];
+        snprintf(msg, sizeof msg,
+                 "%s: colour image read as luminance (0.2126 R + 0.7152 G + "
+                 "0.0722 B)",
+                 path);
+        cJSON_AddItemToArray(notes, cJSON_CreateString(msg));
+    }
+    ss_image_free(img);
+    return g;
+}
+
+static ss_status read_inputs(const opts *o, inputs *in, cJSON *notes, ss_error *err) {
+    memset(in, 0, sizeof *in);
+    ss_status st = SS_OK;
+    for (int i = 0; i < o->nfields && !st; i++) {
+        const char *name = o->field_name[i], *path = o->field_path[i];
+        if (!strcmp(name, "vectors")) {
+            ss_error e2;
+            in->img[i] = ss_image_read(path, SS_ENC_LINEAR, &e2);
+            if (!in->img[i])
+                st = ss_error_set(err, e2.code, "--field vectors: %s", e2.msg);
+            else if (in->img[i]->channels < 3)
+                st = ss_error_set(err, SS_ERR_INPUT,
+                                  "--field vectors: %s is greyscale; the wrinkle vector field "
+                                  "needs RGB (R, G direction, B length)",
+                                  path);
+            else
+                in->fields.wrinkle_vectors = in->img[i];
+            continue;
+        }
+        int t = ss_feature_type_from_name(name);
+        if (t < 0 && strcmp(name, "lips")) {
+            st = ss_error_set(err, SS_ERR_INPUT,
+                              "--field: unknown name '%s' (cysts, moles, freckles, wrinkles, "
+                              "follicles, lips, vectors)",
+                              name);
+            break;
+        }
+        in->img[i] = read_grey(name, path, notes, err);
+        if (!in->img[i]) {
+            st = err->code;
+            break;
+        }
+        size_t n = (size_t)in->img[i]->width * in->img[i]->height;
+        for (size_t k = 0; k < n; k++)
+            if (!isfinite(in->img[i]->data[k])) {
+                st = ss_error_set(err, SS_ERR_INPUT, "--field %s: %s has a non-finite value", name,
+                                  path);
+                break;
+            }
+        if (st) break;
+        if (in->img[i]->width != o->size || in->img[i]->height != o->size) {
+            char msg[600];
+            snprintf(msg, sizeof msg, "%s: %dx%d field stretched over the %dx%d texture", path,
+                     in->img[i]->width, in->img[i]->height, o->size, o->size);
+            cJSON_AddItemToArray(notes, cJSON_CreateString(msg));
+        }
+        if (t < 0)
+            in->fields.lips = in->img[i];
+        else
+            in->fields.density[t] = in->img[i];
+    }
+    if (!st) {
+        if (o->table)
+            snprintf(in->table_path, sizeof in->table_path, "%s", o->table);
+        else
+            snprintf(in->table_path, sizeof in->table_path, "%s/modelmatch_default.sstab",
+                     ss_data_dir());
+        ss_error e2;
+        in->table = ss_mm_table_read(in->table_path, &e2);
+        if (!in->table) st = ss_error_set(err, SS_ERR_INPUT, "--table: %s", e2.msg);
+    }
+    if (!st && o->mesh) {
+        ss_error e2;
+        st = ss_mesh_load(o->mesh, &in->mesh, &e2);
+        if (st)
+            ss_error_set(err, st, "--mesh: %s", e2.msg);
+        else if (!in->mesh.has_uvs)
+            st = ss_error_set(err, SS_ERR_INPUT, "--mesh: %s has no texture coordinates", o->mesh);
+    }
+    if (!st && o->features_in) {
+        st = ss_skin_features_read_csv(o->features_in, &in->features, err);
+        in->have_features = !st;
+    }
+    return st;
+}
+
+static ss_status write_maps(const char *dir, const ss_skin_maps *m, const ss_image *bio,
+                            const ss_image *mr, ss_error *err) {
+    enum { N = 7 };
+    static const char *names[N] = {"base_color.png", "roughness.png", "specular.png",
+                                   "height.png",     "normal.png",    "bio.exr",
+                                   "metal_rough.png"};
+    ss_image *h16 = ss_image_create_uninit(m->height_mm->width, m->height_mm->height, 1, err);
+    if (!h16) return err->code;
+    double lo = m->height_min_mm, span = m->height_max_mm - m->height_min_mm;
+    size_t n = (size_t)h16->width * h16->height;
+    for (size_t i = 0; i < n; i++)
+        h16->data[i] = span > 0 ? (float)((m->height_mm->data[i] - lo) / span) : 0.5f;
+    const char *bio_names[SS_BIO_NCHANNELS];
+    for (int c = 0; c < SS_BIO_NCHANNELS; c++) bio_names[c] = ss_bio_channel_name(c);
+    ss_error errs[N];
+    ss_status sts[N] = {0};
+#pragma omp parallel for schedule(dynamic, 1)
+    for (int k = 0; k < N; k++) {
+        char path[4200];
+        snprintf(path, sizeof path, "%s/%s", dir, names[k]);
+        switch (k) {
+        case 0:
+            sts[k] = ss_png_write(path, m->base_color, 8, SS_ENC_SRGB, &errs[k]);
+            break;
+        case 1:
+            sts[k] = ss_png_write(path, m->roughness, 8, SS_ENC_LINEAR, &errs[k]);
+            break;
+        case 2:
+            sts[k] = ss_png_write(path, m->specular, 8, SS_ENC_LINEAR, &errs[k]);
+            break;
+        case 3:
+            sts[k] = ss_png_write(path, h16, 16, SS_ENC_LINEAR, &errs[k]);
+            break;
+        case 4:
+            sts[k] = ss_png_write(path, m->normal, 8, SS_ENC_LINEAR, &errs[k]);
+            break;
+        case 5:
+            sts[k] = ss_exr_write_channels(path, bio, bio_names, 0, &errs[k]);
+            break;
+        case 6:
+            if (mr) sts[k] = ss_png_write(path, mr, 8, SS_ENC_LINEAR, &errs[k]);
+            break;
+        }
+    }
+    ss_image_free(h16);
+    for (int k = 0; k < N; k++)
+        if (sts[k]) {
+            *err = errs[k];
+            return sts[k];
+        }
+    return SS_OK;
+}
+
+/* A w x w crop of img at its centre (1:1 texels for the contact sheet). */
+static ss_image *crop_centre(const ss_image *img, int w, ss_error *err) {
+    if (w > img->width) w = img->width;
+    if (w > img->height) w = img->height;
+    ss_image *c = ss_image_create_uninit(w, w, img->channels, err);
+    if (!c) return NULL;
+    int x0 = (img->width - w) / 2, y0 = (img->height - w) / 2;
+    for (int y = 0; y < w; y++)
+        memcpy(ss_image_px(c, 0, y), ss_image_px(img, x0, y0 + y),
+               (size_t)w * (size_t)img->channels * sizeof(float));
+    return c;
+}
+
+/* Maps a 1-channel quantity onto 0..1 grey for display, from mean - 4 sd to
+ * mean + 4 sd (clamped to the data's range): a few tall cysts do not turn
+ * everything else into one grey. Decoded, since the sheet encodes sRGB. */
+static ss_image *display_grey(const ss_image *bio, int channel, const ss_image *plain,
+                              ss_error *err) {
+    const ss_image *src = plain ? plain : bio;
+    const int C = plain ? 1 : SS_BIO_NCHANNELS, ch = plain ? 0 : channel;
+    ss_image *g = ss_image_create_uninit(src->width, src->height, 1, err);
+    if (!g) return NULL;
+    size_t n = (size_t)src->width * src->height;
+    double s1 = 0, s2 = 0, mn = INFINITY, mx = -INFINITY;
+    for (size_t i = 0; i < n; i++) {
+        double v = src->data[i * C + ch];
+        s1 += v, s2 += v * v;
+        mn = fmin(mn, v), mx = fmax(mx, v);
+    }
+    double mean = s1 / n, sd = sqrt(fmax(0.0, s2 / n - mean * mean));
+    double lo = fmax(mn, mean - 4 * sd), hi = fmin(mx, mean + 4 * sd);
+    for (size_t i = 0; i < n; i++) {
+        double v = hi > lo ? (src->data[i * C + ch] - lo) / (hi - lo) : 0.5;
+        g->data[i] = ss_srgb_decode((float)(v < 0 ? 0 : v > 1 ? 1 : v));
+    }
+    return g;
+}
+
+/* All maps side by side: base colour (whole and a 1:1 crop), roughness,
+ * specular, height, normal (1:1 crop: at a glance the whole map is flat
+ * blue), melanin, blood. */
+static ss_status write_sheet(const char *dir, const ss_skin_maps *m, const ss_image *bio,
+                             ss_error *err) {
+    enum { N = 8 };
+    const int S = m->base_color->width, T = S < 512 ? S : 512, CROP = S < 256 ? S : 256;
+    ss_image *tiles[N] = {0}, *work[N] = {0};
+    static const char *labels[N] = {"base colour", "base colour 1:1", "roughness", "specular",
+                                    "height",      "normal 1:1",      "melanin",   "blood"};
+    ss_status st = SS_OK;
+    work[0] = ss_image_clone(m->base_color, err);
+    work[1] = work[0] ? crop_centre(m->base_color, CROP, err) : NULL;
+    work[2] = work[1] ? display_grey(NULL, 0, m->roughness, err) : NULL;
+    work[3] = work[2] ? display_grey(NULL, 0, m->specular, err) : NULL;
+    work[4] = work[3] ? display_grey(NULL, 0, m->height_mm, err) : NULL;
+    work[5] = work[4] ? crop_centre(m->normal, CROP, err) : NULL;
+    work[6] = work[5] ? display_grey(bio, SS_BIO_MELANIN, NULL, err) : NULL;
+    work[7] = work[6] ? display_grey(bio, SS_BIO_BLOOD, NULL, err) : NULL;
+    if (!work[7]) st = err->code;
+    if (!st) { /* the normal map's stored values, shown as they are */
+        size_t nv = (size_t)work[5]->width * work[5]->height * 3;
+        for (size_t i = 0; i < nv; i++) work[5]->data[i] = ss_srgb_decode(work[5]->data[i]);
+    }
+    for (int k = 0; k < N && !st; k++) {
+        tiles[k] = work[k]->width > T ? ss_image_resize(work[k], T, T, err) : work[k];
+        if (!tiles[k]) st = err->code;
+        if (tiles[k] == work[k]) work[k] = NULL;
+    }
+    if (!st) {
+        ss_image *sheet = ss_contact_sheet((const ss_image *const *)tiles, labels, N, 256, N, err);
+        if (!sheet)
+            st = err->code;
+        else {
+            char path[4200];
+            snprintf(path, sizeof path, "%s/contact_sheet.png", dir);
+            st = ss_png_write(path, sheet, 8, SS_ENC_SRGB, err);
+            ss_image_free(sheet);
+        }
+    }
+    for (int k = 0; k < N; k++) {
+        ss_image_free(tiles[k]);
+        ss_image_free(work[k]);
+    }
+    return st;
+}
+
+static ss_status run(const opts *o, const ss_skin_settings *s, inputs *in, const char *dir,
+                     cJSON *summary, cJSON *notes, ss_error *err) {
+    ss_status st = SS_OK;
+    ss_skin_timing tm = {0};
+    ss_skin_lut *lut = NULL;
+    ss_image *bio = NULL, *mr = NULL;
+    ss_skin_maps maps = {0};
+    double t0 = ss_now();
+    char note_buf[512] = "";
+    if (!in->have_features)
+        st = ss_skin_generate(s, &in->fields, &in->features, note_buf, sizeof note_buf, err);
+    if (note_buf[0]) cJSON_AddItemToArray(notes, cJSON_CreateString(note_buf));
+    tm.generate_s = ss_now() - t0;
+    if (!st && !(bio = ss_skin_bio_maps_timed(s, &in->fields, &in->features, &tm, err)))
+        st = err->code;
+    if (!st && !(lut = ss_skin_lut_create(in->table, err))) st = err->code;
+    double t1 = ss_now();
+    if (!st) st = ss_skin_render_maps(bio, lut, s->world_size_cm, o->directx, &maps, err);
+    tm.lookup_s = ss_now() - t1;
+    double t2 = ss_now();
+    if (!st && o->gltf) {
+        if (!(mr = ss_image_create_uninit(s->size, s->size, 3, err))) st = err->code;
+        for (size_t i = 0; !st && i < (size_t)s->size * s->size; i++) {
+            mr->data[i * 3] = 1.0f;
+            mr->data[i * 3 + 1] = maps.roughness->data[i];
+            mr->data[i * 3 + 2] = 0.0f;
+        }
+    }
+    if (!st) st = write_maps(dir, &maps, bio, mr, err);
+    char path[4200];
+    if (!st) {
+        snprintf(path, sizeof path, "%s/features.csv", dir);
+        st = ss_skin_features_write_csv(path, &in->features, err);
+    }
+    if (!st) st = write_sheet(dir, &maps, bio, err);
+    if (!st && o->gltf) {
+        snprintf(path, sizeof path, "%s/skin.gltf", dir);
+        if (o->mesh)
+            st = ss_gltf_write_textured_mesh(path, &in->mesh, "skin", "base_color.png",
+                                             "metal_rough.png", "normal.png", err);
+        else
+            st = ss_gltf_write_textured_square(path, s->world_size_cm / 100.0, "skin",
+                                               "base_color.png", "metal_rough.png", "normal.png",
+                                               err);
+    }
+    double t3 = ss_now();
+    if (!st) {
+        long cnt[SS_FEAT_NTYPES] = {0};
+        for (size_t i = 0; i < in->features.n; i++) cnt[in->features.f[i].type]++;
+        cJSON *c = cJSON_AddObjectToObject(summary, "counts");
+        for (int t = 0; t < SS_FEAT_NTYPES; t++)
+            cJSON_AddNumberToObject(c, ss_feature_type_name(t), (double)cnt[t]);
+        cJSON_AddStringToObject(summary, "preset", o->preset);
+        cJSON_AddNumberToObject(summary, "seed", (double)s->seed);
+        cJSON_AddNumberToObject(summary, "size", s->size);
+        cJSON_AddNumberToObject(summary, "world_size_cm", s->world_size_cm);
+        cJSON_AddNumberToObject(summary, "texel_mm", s->world_size_cm * 10.0 / s->size);
+        cJSON_AddStringToObject(summary, "length_unit", "mm");
+        cJSON_AddBoolToObject(summary, "wrap", s->wrap);
+        cJSON_AddStringToObject(summary, "sampler",
+                                s->sampler == SS_SAMPLER_REJECTION ? "rejection" : "alias");
+        cJSON_AddStringToObject(summary, "normal_convention", o->directx ? "directx" : "opengl");
+        cJSON_AddStringToObject(summary, "table", in->table_path);
+        cJSON_AddStringToObject(summary, "render_model", "ggx");
+        cJSON_AddNumberToObject(summary, "height_min_mm", maps.height_min_mm);
+        cJSON_AddNumberToObject(summary, "height_max_mm", maps.height_max_mm);
+        if (o->features_in) cJSON_AddStringToObject(summary, "features_in", o->features_in);
+        cJSON *ch = cJSON_AddArrayToObject(summary, "bio_channels");
+        for (int k = 0; k < SS_BIO_NCHANNELS; k++)
+            cJSON_AddItemToArray(ch, cJSON_CreateString(ss_bio_channel_name(k)));
+        cJSON *ti = cJSON_AddObjectToObject(summary, "timings_ms");
+        cJSON_AddNumberToObject(ti, "generate", tm.generate_s * 1e3);
+        cJSON_AddNumberToObject(ti, "index", tm.index_s * 1e3);
+        cJSON_AddNumberToObject(ti, "texels", tm.texels_s * 1e3);
+        cJSON_AddNumberToObject(ti, "lookup_and_normals", tm.lookup_s * 1e3);
+        cJSON_AddNumberToObject(ti, "write", (t3 - t2) * 1e3);
+        cJSON *p = cJSON_AddObjectToObject(summary, "params");
+        for (const char *const *nm = ss_skin_dist_names(); *nm; nm++)
+            cJSON_AddNumberToObject(p, *nm, ss_skin_dist_get(&s->dist, *nm));
+        cJSON_AddItemReferenceToObject(summary, "notes", notes);
+        char *text = cJSON_Print(summary);
+        cJSON_DeleteItemFromObject(summary, "notes");
+        snprintf(path, sizeof path, "%s/skin.json", dir);
+        st = text ? ss_write_file_atomic(path, text, strlen(text), err)
+                  : ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+        free(text);
+    }
+    ss_image_free(mr);
+    ss_skin_maps_free(&maps);
+    ss_image_free(bio);
+    ss_skin_lut_free(lut);
+    return st;
+}
+
+int cmd_skin(int argc, char **argv) {
+    opts o;
+    ss_error err;
+    ss_error_clear(&err);
+    int rc = parse(argc, argv, &o, &err);
+    if (rc < 0) {
+        opts_free(&o);
+        return 0;
+    }
+    if (rc) {
+        opts_free(&o);
+        return cli_usage_error(CMD, "%s", err.msg);
+    }
+    ss_skin_settings s;
+    ss_status st = make_settings(&o, &s, &err);
+    if (!st && o.list_params) {
+        for (const char *const *nm = ss_skin_dist_names(); *nm; nm++)
+            printf("%-24s %g\n", *nm, ss_skin_dist_get(&s.dist, *nm));
+        opts_free(&o);
+        return 0;
+    }
+    ss_threads_set(o.threads);
+    /* memory: bio map 44 B, render maps 36 B, writing copies ~24 B a texel */
+    double need = (double)s.size * s.size * 110.0;
+    double phys = ss_memory_physical_bytes();
+    if (!st && phys > 0 && need > 0.8 * phys)
+        st = ss_error_set(&err, SS_ERR_INPUT,
+                          "--size %d needs about %.1f GB, more than this machine's %.1f GB", s.size,
+                          need / 1e9, phys / 1e9);
+    cJSON *summary = cJSON_CreateObject(), *notes = cJSON_CreateArray();
+    inputs in;
+    memset(&in, 0, sizeof in);
+    /* The output folder: checked now, staged by begin, swapped in whole by
+     * finish (src/core/output.c). Estimate: bio.exr 44 B, maps ~8 B a texel. */
+    ss_outputs *outs = st ? NULL : ss_outputs_create(CMD, &err);
+    if (!st && !outs) st = SS_ERR_NOMEM;
+    for (int i = 0; i < o.nfields && !st; i++) st = ss_outputs_input(outs, o.field_path[i], &err);
+    if (!st) st = ss_outputs_input(outs, o.features_in, &err);
+    if (!st) st = ss_outputs_input(outs, o.table, &err);
+    if (!st) st = ss_outputs_input(outs, o.mesh, &err);
+    if (!st)
+        st = ss_outputs_add(outs, "--out", o.out, SS_OUTPUT_DIR, (double)s.size * s.size * 52.0,
+                            &err);
+    if (!st) st = read_inputs(&o, &in, notes, &err);
+    if (!st) st = ss_outputs_begin(outs, &err);
+    if (!st) st = run(&o, &s, &in, ss_outputs_path(outs, 0), summary, notes, &err);
+    if (outs) st = ss_outputs_finish(outs, st, &err);
+    ss_outputs_free(outs);
+    if (!st && !o.quiet) {
+        for (int i = 0; i < cJSON_GetArraySize(notes); i++)
+            fprintf(stderr, "skinsim skin: note: %s\n", cJSON_GetArrayItem(notes, i)->valuestring);
+    }
+    if (!st && o.json) {
+        cJSON_AddStringToObject(summary, "out", o.out);
+        cJSON_AddItemReferenceToObject(summary, "notes", notes);
+        char *text = cJSON_PrintUnformatted(summary);
+        if (text) printf("%s\n", text);
+        free(text);
+        cJSON_DeleteItemFromObject(summary, "notes");
+    } else if (!st && !o.quiet) {
+        fprintf(stderr, "wrote %s (contact sheet: %s/contact_sheet.png)\n", o.out, o.out);
+    }
+    cJSON_Delete(summary);
+    cJSON_Delete(notes);
+    inputs_free(&in);
+    opts_free(&o);
+    return st ? cli_fail(CMD, &err) : 0;
+}

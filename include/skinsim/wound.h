@@ -1,0 +1,223 @@
+/* skinsim wound: the three seeds joined. Healing fields of a heal run (seed 001
+ * §4.1, sampled at the skin surface as §5.4 does) become biological parameters
+ * per texel (seed 003 §5.2), which the ModelMatch table (seed 003 §4.8.6) turns
+ * into render textures, over a base skin given as bio-parameter maps; a
+ * dried-blood layer of the optics model colours the scab. Outputs follow the
+ * texture-timeline format of seed 000 (`skinsim abrasion`).
+ *
+ *   heal run --(ss_wound_tissue_observe, every step)--> tissue maps (grid resolution)
+ *   tissue maps + base bio maps --(ss_wound_render)--> base colour, roughness,
+ *                                                      height, normal (texture size)
+ *
+ * Every mapping, its reason and its source are in docs/wound.md; its numbers
+ * are a recipe (JSON, with units) that a user can ramp and multiply (§5.4's
+ * artistic control). Units: mm and days for tissue, cm for optics (as MCML). */
+#ifndef SKINSIM_WOUND_H
+#define SKINSIM_WOUND_H
+
+#include "skinsim/core.h"
+#include "skinsim/heal.h"
+#include "skinsim/heal_run.h"
+#include "skinsim/optics.h"
+#include "skinsim/optics_fit.h"
+#include "skinsim/skin.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- recipe: the numbers of the tissue -> biology mapping ------------------------ */
+
+enum {
+    SS_WR_CAPILLARY_THRESHOLD,    /* 1: capillary density (of healthy) that defines the wound
+                                     bed's depth (§5.4) */
+    SS_WR_EPITHELIUM_LO,          /* 1: epithelium level where cover starts (ramp) */
+    SS_WR_EPITHELIUM_HI,          /* 1: epithelium level of full cover */
+    SS_WR_REGION_LO,              /* 1: plasma level where the wound region starts (ramp) */
+    SS_WR_REGION_HI,              /* 1: plasma level of the full wound region */
+    SS_WR_BED_BLOOD,              /* 1: blood volume fraction of the open wound bed */
+    SS_WR_TISSUE_MIN_OXYGENATION, /* 1: blood oxygenation in tissue without oxygen */
+    SS_WR_YOUNG_BLOOD,            /* 1: extra blood fraction of freshly closed tissue */
+    SS_WR_SCAR_DAYS,              /* day: time constant of scar maturation after closure */
+    SS_WR_EPIDERMIS_DAYS,         /* day: time constant of epidermal maturation */
+    SS_WR_PIGMENT_DAYS,           /* day: time constant of repigmentation */
+    SS_WR_NEW_MELANIN,            /* 1: melanin of new epithelium, fraction of the skin's */
+    SS_WR_SCAR_MELANIN,           /* 1: melanin of the mature scar, fraction (< 1 hypo-, > 1
+                                     hyperpigmented) */
+    SS_WR_NEW_EPIDERMIS,          /* 1: thickness of new epidermis, fraction of the skin's */
+    SS_WR_SCAR_DENSITY_HI,        /* 1: scar (collagen) density of the full scar look */
+    SS_WR_SCAR_BLOOD,             /* 1: blood of the mature dense scar, fraction of the skin's */
+    SS_WR_SCAR_WHITENING,         /* 1: albedo lift of the mature dense scar towards white */
+    SS_WR_SCAB_SCALE,             /* 1: scab thickness per mm of eschar column (density x mm) */
+    SS_WR_SCAB_HB_FACTOR,         /* 1: haemoglobin of the scab, multiple of whole blood's */
+    SS_WR_SCAB_MIN_DENSITY,       /* 1: eschar density around which a cell becomes crust */
+    SS_WR_CLOT_SCALE,             /* 1: clot thickness per mm of open, avascular wound depth */
+    SS_WR_BED_OXYGENATION,        /* 1: blood oxygenation of the open bed (air-exposed) */
+    SS_WR_WET_ROUGHNESS,          /* 1: roughness of the moist open bed */
+    SS_WR_SCAB_ROUGHNESS,         /* 1: roughness of the dry scab */
+    SS_WR_SCAR_ROUGHNESS,         /* 1: roughness of the mature scar (shiny) */
+    SS_WR_DEPTH_SCALE,            /* 1: multiplier of the displacement depth */
+    SS_WR_KELOID_SCALE,           /* 1: raise per mm of collagen above the keloid threshold */
+    SS_WR_HEIGHT_RANGE_MM,        /* mm: height map 0..1 spans -range..+range */
+    SS_WR_NKEYS
+};
+
+typedef struct ss_wound_recipe {
+    double v[SS_WR_NKEYS];
+} ss_wound_recipe;
+void ss_wound_recipe_default(ss_wound_recipe *r);
+/* Key name ("capillary_threshold", ...) and unit ("1", "day", "mm") of a key. */
+const char *ss_wound_recipe_key(int key);
+const char *ss_wound_recipe_unit(int key);
+/* Defaults overridden by a JSON file {"recipe": {"bed_blood": {"value": 0.04,
+ * "unit": "1"}, ...}}. Malformed JSON, an unknown key, a missing or wrong unit,
+ * a value outside the key's range -> SS_ERR_INPUT naming the file and key. */
+ss_status ss_wound_recipe_load(const char *path, ss_wound_recipe *r, ss_error *err);
+ss_status ss_wound_recipe_parse(const char *json, const char *name, ss_wound_recipe *r,
+                                ss_error *err);
+/* malloc'd JSON text in the load format. */
+char *ss_wound_recipe_to_json(const ss_wound_recipe *r);
+
+/* ---- tissue at the skin surface (grid resolution) --------------------------------
+ * Maps of nx x ny columns, image orientation like ss_heal_surface_map (row 0 =
+ * grid y = ny-1). Values relative to healthy where the field has a healthy
+ * level (epithelium, capillary, oxygen: 1 = healthy). */
+typedef struct ss_wound_tissue {
+    int nx, ny;
+    double dx_mm, day;
+    float *epithelium;  /* epithelial layer (max of the two topmost tissue cells) */
+    float *capillary;   /* topmost tissue cell, / u3_eq */
+    float *oxygen;      /* topmost tissue cell, / healthy u1 */
+    float *plasma;      /* topmost tissue cell: the wound region (§4.1.8) */
+    float *scab_mm;     /* eschar integrated over the column, density x mm */
+    float *scar;        /* scar (collagen) density, column maximum */
+    float *keloid_mm;   /* collagen above rho_max integrated over the column, x mm */
+    float *depth_mm;    /* §5.4: skin surface down to the capillary threshold */
+    float *age_days;    /* time since the column's epithelium closed (0 = open;
+                           intact skin: SS_WOUND_AGE_INTACT) */
+    double *closed_day; /* internal: day of closure (+inf open, -inf intact) */
+    float u3_eq, u1_healthy, rho_max, scab_min;
+    double threshold; /* capillary threshold used for depth_mm */
+} ss_wound_tissue;
+#define SS_WOUND_AGE_INTACT 1e5f
+
+ss_wound_tissue *ss_wound_tissue_create(const ss_heal_grid *g, const ss_heal_params *p,
+                                        const ss_wound_recipe *r, ss_error *err);
+/* Samples the grid's current state into the maps and updates each column's
+ * closure day (first time its epithelium reaches 0.5; reset if it reopens).
+ * Call it after every step for exact closure days (it costs a pass over the
+ * grid's columns), or at least at every day to be rendered. */
+void ss_wound_tissue_observe(ss_wound_tissue *t, const ss_heal_grid *g);
+void ss_wound_tissue_free(ss_wound_tissue *t);
+
+/* ---- base skin: bio-parameter maps -------------------------------------------------
+ * The skin a wound is drawn on is a bio map of skinsim/skin.h: SS_BIO_NCHANNELS
+ * float channels per texel (melanin, pheomelanin ratio, blood, oxygenation,
+ * stratum corneum cm, epidermis cm, height mm, extra colour RGBA), as
+ * ss_skin_bio_default makes it or `skinsim skin` writes it to bio.exr. */
+/* Checks a bio map: channel count, finite values, fractions and the extra
+ * colour in 0..1, thicknesses > 0 (SS_ERR_INPUT naming `name` and the texel). */
+ss_status ss_wound_skin_validate(const ss_image *bio, const char *name, ss_error *err);
+/* Reads DIR/bio.exr (or the .exr file itself) by channel name. */
+ss_image *ss_wound_skin_read(const char *path, ss_error *err);
+
+/* ---- blood layers over the skin: the scab (dried blood) and the clot ------------------ */
+/* A layer of blood (haemoglobin at hb_factor times whole blood's 150 g/L, at an
+ * oxygenation) with its scattering, on top of the skin. */
+typedef struct ss_blood_layer {
+    double hb_factor, oxygenation;
+    double mus_per_cm, g, n;
+} ss_blood_layer;
+/* The scab (dried blood, docs/wound.md) and fresh clotted blood. */
+void ss_blood_layer_scab(double hb_factor, ss_blood_layer *l);
+void ss_blood_layer_clot(double oxygenation, ss_blood_layer *l);
+/* Diffuse reflectance (over a black background) and transmittance of the layer
+ * per linear-sRGB channel, tabulated over thickness by Monte Carlo transport
+ * of the optics model at 400..700 nm. */
+#define SS_LAYER_NTHICK 10
+typedef struct ss_layer_table {
+    double thickness_mm[SS_LAYER_NTHICK];
+    double reflect[SS_LAYER_NTHICK][3], transmit[SS_LAYER_NTHICK][3];
+} ss_layer_table;
+ss_status ss_layer_table_build(const ss_blood_layer *l, uint64_t photons, uint64_t seed,
+                               ss_layer_table *out, ss_error *err);
+/* R and T at a thickness (linear between samples, constant beyond the last). */
+void ss_layer_table_eval(const ss_layer_table *t, double thickness_mm, double reflect[3],
+                         double transmit[3]);
+/* Albedo of the layer over a skin of albedo `skin` (adding: R + T^2 A / (1 - R A)). */
+void ss_layer_over(const double reflect[3], const double transmit[3], const double skin[3],
+                   double out[3]);
+
+/* ---- the renderer --------------------------------------------------------------------- */
+
+typedef struct ss_wound_render_options {
+    int size;             /* texture side in texels; the texture covers the heal block */
+    double side_mm;       /* the texture's side in the world (the block's x size, default 30) */
+    const ss_image *skin; /* base bio maps (SS_BIO_NCHANNELS, resampled to size) */
+    const ss_mm_table *table;
+    ss_wound_recipe recipe;
+    uint64_t scab_photons; /* Monte Carlo packets per wavelength and thickness (default 2000) */
+    uint64_t seed;
+} ss_wound_render_options;
+void ss_wound_render_options_default(ss_wound_render_options *o);
+
+/* One day's textures: base_color linear RGB, roughness (GGX perceptual, 1
+ * channel), height in mm (1 channel, 0 = skin surface), normal RGB (tangent
+ * space, OpenGL +Y up, from the height). */
+typedef struct ss_wound_textures {
+    ss_image *base_color, *roughness, *height, *normal;
+} ss_wound_textures;
+ss_status ss_wound_textures_create(int size, ss_wound_textures *t, ss_error *err);
+void ss_wound_textures_free(ss_wound_textures *t);
+
+typedef struct ss_wound_renderer ss_wound_renderer;
+/* Resamples and validates the base skin, renders its textures once (texels
+ * that the wound leaves alone are copied from them), builds the scab table. */
+ss_status ss_wound_renderer_create(const ss_wound_render_options *o, ss_wound_renderer **out,
+                                   ss_error *err);
+void ss_wound_renderer_free(ss_wound_renderer *r);
+/* The base skin's own textures (what the skin looks like without a wound). */
+const ss_wound_textures *ss_wound_renderer_base(const ss_wound_renderer *r);
+/* Textures of the tissue t over the base skin; side_mm: the block's x and y
+ * size (the texture covers it). deformation: NULL, or the mechanics' per-texel
+ * displacement (3 channels, mm: x, y along the texture (x right, y up), z up),
+ * which moves where the fields are sampled and adds to the height. */
+ss_status ss_wound_render(ss_wound_renderer *r, const ss_wound_tissue *t,
+                          const ss_image *deformation, ss_wound_textures *out, ss_error *err);
+
+/* ---- the whole job: `skinsim wound` --------------------------------------------------- */
+
+typedef struct ss_wound_make_config {
+    ss_heal_run_config heal; /* the healing problem (out_dir, resume_dir and days are ignored:
+                                the run is in memory and ends at the last day) */
+    const double *days;      /* output days, increasing, whole steps of the heal run */
+    int ndays;
+    int size;                /* texture side (default 1024) */
+    const char *skin_path;   /* base skin: `skinsim skin`'s output folder or its bio.exr;
+                                NULL = ss_skin_bio_default (forearm skin) */
+    const char *table_path;  /* NULL = data/modelmatch_default.sstab */
+    const char *recipe_path; /* NULL = defaults */
+    const char *out_dir;
+    int exr;     /* also write every map as half-float EXR (height in mm) */
+    int compare; /* write compare_abrasion.png (default 1) */
+    int quiet;   /* no progress bar */
+    uint64_t seed;
+} ss_wound_make_config;
+void ss_wound_make_config_default(ss_wound_make_config *c);
+/* Validates every input (nothing is written on bad input: SS_ERR_INPUT), then
+ * writes out_dir: frames/t<day>_{base_color,roughness,height,normal}.png,
+ * t<day>_metal_rough.png and t<day>.gltf per day, contact_sheet.png,
+ * compare_abrasion.png, timeline.json (the summary, also returned as
+ * malloc'd JSON text when summary_json is not NULL). */
+ss_status ss_wound_make(const ss_wound_make_config *c, char **summary_json, ss_error *err);
+
+/* ---- colour checks ------------------------------------------------------------------ */
+/* Linear sRGB -> CIELAB (D65 white) and the CIEDE2000 difference (Sharma, Wu
+ * & Dalal 2005). */
+void ss_linear_srgb_to_lab(const double rgb[3], double lab[3]);
+double ss_delta_e2000(const double lab1[3], const double lab2[3]);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,632 @@
+/* The contraction mechanics coupled to the healing grid (seed 001 §5.1-5.3).
+ *
+ * One frame (ss_mech_step), after the biochemistry has advanced the grid:
+ *  1. sample at every spring node, with the B-spline weights, the
+ *     myofibroblast density: the fibroblasts under an open wound surface
+ *     (a column whose top is in the wound region, initial wound or omega,
+ *     weighted by 1 - epithelium at the top), through the whole thickness
+ *     (the wound bed's activated dermis pulls with it). Fibroblasts in open
+ *     granulation tissue differentiate into myofibroblasts and these go by
+ *     apoptosis once the wound is covered (Desmouliere et al. 1995, Am J
+ *     Pathol 146:56); intact skin exerts no net pull. Then the volumetric
+ *     strain theta (from the last frame) and
+ *     rho_ecm / rho_ecm_hat (1 in intact tissue; in the initial wound the
+ *     clot's ecm_floor plus the deposited collagen, the scar field rho,
+ *     capped at 1);
+ *  2. per spring: sigma = p_cell(theta) n K_m, its GOH energy weighted by
+ *     the spring's direction against the fibres, the new rest length
+ *     l0 (1 - Delta l / l0) (material.c); stiffness k_hat rho_ecm / rho_ecm_hat,
+ *     the seed's linear dependence of the energy on the tissue density;
+ *  3. relax with damped sub-steps to the convergence criterion (springs.c);
+ *  4. particle velocities (moved distance / frame time, mm/day) and
+ *     displacements go to the grid with the B-spline transfer (bspline.c);
+ *     the velocity is the grid's convection velocity for the next heal step,
+ *     the displacement's divergence is theta for the next frame.
+ * Boundary: the top surface is free; the bottom and side faces sit on an
+ * elastic foundation (anchor, kPa/mm per face area): the subcutis below and
+ * the skin beyond the block, which give way but pull back. Rest lengths
+ * never lengthen: new collagen is laid down in the contracted state and
+ * locks it (the permanent strain of morphoelastic wound models, e.g. Hall
+ * 2008 / Menon et al. 2017), so a scar stays contracted after the
+ * myofibroblasts are gone; theta's feedback through p_cell (zero pressure
+ * at theta1) ends the contraction. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "mech_internal.h"
+
+static int tissue(uint8_t c) {
+    return c == SS_CELL_EPIDERMIS || c == SS_CELL_DERMIS || c == SS_CELL_WOUND;
+}
+
+void ss_mech_free(ss_mech *m) {
+    if (!m) return;
+    ss_tetmesh_free(m->mesh);
+    ss_springs_free(m->S);
+    ss_mech_transfer_free(m->T);
+    free(m->mask);
+    free(m->wound0);
+    free(m->ecm);
+    free(m->myo);
+    for (int d = 0; d < 3; d++) free(m->usub[d]);
+    free(m->thsub);
+    free(m->usub_valid);
+    for (int d = 0; d < 3; d++) free(m->u[d]);
+    free(m->kbase);
+    free(m->nmyo);
+    free(m->nth);
+    free(m->necm);
+    free(m->stress);
+    free(m->vel);
+    free(m->xprev);
+    free(m->grad);
+    free(m->disp);
+    free(m->tri);
+    free(m->tri_wound);
+    free(m->suture_spring);
+    free(m->suture_day);
+    free(m);
+}
+
+typedef struct face {
+    uint64_t key;
+    int32_t tet, local;
+} face;
+
+static int cmp_face(const void *a, const void *b) {
+    uint64_t x = ((const face *)a)->key, y = ((const face *)b)->key;
+    return x < y ? -1 : x > y;
+}
+
+/* Boundary faces: top ones (outward normal z > 0.5) become the surface
+ * triangles; the others carry the foundation. */
+static ss_status boundary(ss_mech *m, ss_error *err) {
+    const ss_tetmesh *M = m->mesh;
+    if (M->nnodes >= (1 << 21))
+        return ss_error_set(err, SS_ERR_INPUT, "mechanics: %d nodes is more than 2^21", M->nnodes);
+    static const int F[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}}; /* outward */
+    size_t nf = 4 * (size_t)M->ntets;
+    face *fs = malloc(nf * sizeof *fs);
+    if (!fs) return ss_error_set(err, SS_ERR_NOMEM, "mechanics: out of memory");
+    for (int t = 0; t < M->ntets; t++)
+        for (int k = 0; k < 4; k++) {
+            int32_t a = M->tet[4 * t + F[k][0]], b = M->tet[4 * t + F[k][1]],
+                    c = M->tet[4 * t + F[k][2]], tmp;
+            if (a > b) tmp = a, a = b, b = tmp;
+            if (b > c) tmp = b, b = c, c = tmp;
+            if (a > b) tmp = a, a = b, b = tmp;
+            fs[4 * (size_t)t + k] =
+                (face){((uint64_t)a << 42) | ((uint64_t)b << 21) | (uint64_t)c, t, k};
+        }
+    qsort(fs, nf, sizeof *fs, cmp_face);
+    int cap = 1024;
+    m->tri = malloc(3 * (size_t)cap * sizeof(int32_t));
+    if (!m->tri) {
+        free(fs);
+        return ss_error_set(err, SS_ERR_NOMEM, "mechanics: out of memory");
+    }
+    for (size_t i = 0; i < nf; i++) {
+        int dup =
+            (i > 0 && fs[i].key == fs[i - 1].key) || (i + 1 < nf && fs[i].key == fs[i + 1].key);
+        if (dup) continue;
+        const int32_t *q = M->tet + 4 * fs[i].tet;
+        int32_t v[3] = {q[F[fs[i].local][0]], q[F[fs[i].local][1]], q[F[fs[i].local][2]]};
+        const double *a = M->x + 3 * v[0], *b = M->x + 3 * v[1], *c = M->x + 3 * v[2];
+        double u[3], w[3], n[3];
+        for (int d = 0; d < 3; d++) {
+            u[d] = b[d] - a[d];
+            w[d] = c[d] - a[d];
+        }
+        n[0] = u[1] * w[2] - u[2] * w[1];
+        n[1] = u[2] * w[0] - u[0] * w[2];
+        n[2] = u[0] * w[1] - u[1] * w[0];
+        double area2 = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        if (!(area2 > 0)) continue;
+        if (n[2] / area2 > 0.5) {
+            if (m->ntri == cap) {
+                cap *= 2;
+                int32_t *nt = realloc(m->tri, 3 * (size_t)cap * sizeof(int32_t));
+                if (!nt) {
+                    free(fs);
+                    return ss_error_set(err, SS_ERR_NOMEM, "mechanics: out of memory");
+                }
+                m->tri = nt;
+            }
+            memcpy(m->tri + 3 * (size_t)m->ntri++, v, sizeof v);
+        } else {
+            for (int k = 0; k < 3; k++) m->S->anchor[v[k]] += m->p.anchor * 0.5 * area2 / 3.0;
+        }
+    }
+    free(fs);
+    return SS_OK;
+}
+
+static int nearest_node(const ss_mech *m, const double p[3], double *dist) {
+    int best = -1;
+    double bd = INFINITY;
+    for (int i = 0; i < m->mesh->nnodes; i++) {
+        const double *x = m->mesh->x + 3 * i;
+        double d = (x[0] - p[0]) * (x[0] - p[0]) + (x[1] - p[1]) * (x[1] - p[1]) +
+                   (x[2] - p[2]) * (x[2] - p[2]);
+        if (d < bd) bd = d, best = i;
+    }
+    *dist = sqrt(bd);
+    return best;
+}
+
+ss_mech *ss_mech_create(ss_heal_grid *g, const ss_heal_params *heal, const ss_mech_params *p,
+                        const ss_tetmesh *mesh, const ss_mech_suture *sut, int nsut,
+                        ss_error *err) {
+    if (!g || !heal || !p) {
+        ss_error_set(err, SS_ERR_INPUT, "mechanics: no grid or parameters");
+        return NULL;
+    }
+    if (ss_mech_params_check(p, err) != SS_OK) return NULL;
+    const size_t n = (size_t)g->nx * g->ny * g->nz;
+    ss_mech *m = calloc(1, sizeof *m);
+    if (!m) goto nomem;
+    m->p = *p;
+    m->nx = g->nx;
+    m->ny = g->ny;
+    m->nz = g->nz;
+    m->dx = g->dx_mm;
+    float hv[SS_HEAL_NFIELDS];
+    ss_heal_params_healthy(heal, hv);
+    m->n_healthy = hv[SS_HEAL_FIBROBLAST];
+    m->mask = malloc(n);
+    m->wound0 = malloc(n);
+    m->ecm = malloc(n * sizeof(float));
+    m->myo = malloc(n * sizeof(float));
+    if (!m->mask || !m->wound0 || !m->ecm || !m->myo) goto nomem;
+    size_t ncells = 0;
+    for (size_t i = 0; i < n; i++) {
+        m->mask[i] = tissue(g->cell[i]);
+        m->wound0[i] = g->cell[i] == SS_CELL_WOUND;
+        ncells += m->mask[i];
+    }
+    for (int d = 0; d < 3; d++) {
+        if (!g->velocity[d] && !(g->velocity[d] = calloc(n, sizeof(float)))) goto nomem;
+    }
+    if (mesh) {
+        m->mesh = calloc(1, sizeof *m->mesh);
+        if (!m->mesh) goto nomem;
+        m->mesh->nnodes = mesh->nnodes;
+        m->mesh->ntets = mesh->ntets;
+        m->mesh->x = malloc(3 * (size_t)mesh->nnodes * sizeof(double));
+        m->mesh->tet = malloc(4 * (size_t)mesh->ntets * sizeof(int32_t));
+        if (!m->mesh->x || !m->mesh->tet) goto nomem;
+        memcpy(m->mesh->x, mesh->x, 3 * (size_t)mesh->nnodes * sizeof(double));
+        memcpy(m->mesh->tet, mesh->tet, 4 * (size_t)mesh->ntets * sizeof(int32_t));
+        for (int i = 0; i < mesh->nnodes; i++) {
+            const double *x = mesh->x + 3 * i;
+            if (!(x[0] >= 0 && x[1] >= 0 && x[2] >= 0 && x[0] <= g->nx * g->dx_mm &&
+                  x[1] <= g->ny * g->dx_mm && x[2] <= g->nz * g->dx_mm)) {
+                ss_error_set(err, SS_ERR_INPUT,
+                             "mechanics: mesh node %d (%g, %g, %g) mm lies outside the grid", i + 1,
+                             x[0], x[1], x[2]);
+                goto fail;
+            }
+        }
+    } else if (!(m->mesh = ss_tetmesh_lattice(m->mask, g->nx, g->ny, g->nz, g->dx_mm,
+                                              p->tet_size_mm, err)))
+        goto fail;
+    if (!(m->S = ss_springs_create(m->mesh, 9.0 * p->K_bulk, err))) goto fail;
+    const int nn = m->mesh->nnodes, ns = m->S->nsprings;
+    if (boundary(m, err) != SS_OK) goto fail;
+    /* sutures */
+    if (nsut > 0) {
+        m->suture_spring = malloc((size_t)nsut * sizeof(int));
+        m->suture_day = malloc((size_t)nsut * sizeof(double));
+        if (!m->suture_spring || !m->suture_day) goto nomem;
+        double reach = 1.5 * p->tet_size_mm;
+        for (int i = 0; i < nsut; i++) {
+            double da, db;
+            int a = nearest_node(m, sut[i].a, &da), b = nearest_node(m, sut[i].b, &db);
+            if (da > reach || db > reach || a == b) {
+                ss_error_set(
+                    err, SS_ERR_INPUT, "sutures: stitch %d (%g,%g,%g)-(%g,%g,%g) mm %s", i + 1,
+                    sut[i].a[0], sut[i].a[1], sut[i].a[2], sut[i].b[0], sut[i].b[1], sut[i].b[2],
+                    a == b ? "joins a node to itself" : "has a point outside the skin domain");
+                goto fail;
+            }
+            if (ss_springs_add(m->S, a, b, 0.0, p->k_suture, err) != SS_OK) goto fail;
+            m->suture_spring[i] = m->S->nsprings - 1;
+            m->suture_day[i] = sut[i].remove_day;
+        }
+        m->nsutures = nsut;
+    }
+    const int nsp = m->S->nsprings;
+    (void)ns;
+    m->kbase = malloc((size_t)nsp * sizeof(double));
+    m->nmyo = calloc((size_t)nn, sizeof(double));
+    m->nth = calloc((size_t)nn, sizeof(double));
+    m->necm = calloc((size_t)nn, sizeof(double));
+    m->stress = calloc((size_t)nn, sizeof(double));
+    m->vel = calloc(3 * (size_t)nn, sizeof(double));
+    m->xprev = malloc(3 * (size_t)nn * sizeof(double));
+    m->grad = calloc(9 * (size_t)nn, sizeof(double));
+    m->disp = calloc(3 * (size_t)nn, sizeof(double));
+    m->tri_wound = calloc((size_t)m->ntri + 1, 1);
+    if (!m->kbase || !m->nmyo || !m->nth || !m->necm || !m->stress || !m->vel || !m->xprev ||
+        !m->grad || !m->disp || !m->tri_wound)
+        goto nomem;
+    memcpy(m->kbase, m->S->k, (size_t)nsp * sizeof(double));
+    ss_springs_update_mass(m->S);
+    /* the wound's top triangles: reference centroid over a column with a wound voxel */
+    uint8_t *foot = calloc((size_t)g->nx * g->ny, 1);
+    if (!foot) goto nomem;
+    for (size_t i = 0; i < n; i++)
+        if (m->wound0[i]) foot[i % ((size_t)g->nx * g->ny)] = 1;
+    for (int t = 0; t < m->ntri; t++) {
+        /* the midpoint of the longest edge: on a lattice, the centre of the
+         * square face the triangle halves, so both halves agree */
+        double c[2] = {0, 0}, best = -1;
+        for (int k = 0; k < 3; k++) {
+            const double *a = m->mesh->x + 3 * m->tri[3 * t + k],
+                         *b = m->mesh->x + 3 * m->tri[3 * t + (k + 1) % 3];
+            double l = (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]);
+            if (l > best) {
+                best = l;
+                c[0] = 0.5 * (a[0] + b[0]);
+                c[1] = 0.5 * (a[1] + b[1]);
+            }
+        }
+        int ix = (int)floor(c[0] / g->dx_mm), iy = (int)floor(c[1] / g->dx_mm);
+        if (ix >= 0 && iy >= 0 && ix < g->nx && iy < g->ny)
+            m->tri_wound[t] = foot[(size_t)iy * g->nx + ix];
+    }
+    free(foot);
+    double w = ss_mech_kernel_width(ncells, (size_t)nn);
+    int stride = (int)floor(w + 0.5);
+    if (stride < 1) stride = 1;
+    if (!(m->T = ss_mech_transfer_create(g->nx, g->ny, g->nz, g->dx_mm, stride, err))) goto fail;
+    m->kernel_width = w;
+    {
+        size_t ms = ss_mech_sub_count(m->T);
+        for (int d = 0; d < 3; d++)
+            if (!(m->usub[d] = calloc(ms, sizeof(double)))) goto nomem;
+        m->thsub = calloc(ms, sizeof(double));
+        m->usub_valid = calloc(ms, 1);
+        if (!m->thsub || !m->usub_valid) goto nomem;
+    }
+    ss_mech_stats st;
+    ss_mech_stats_compute(m, &st);
+    m->outline0 = st.outline_area_mm2;
+    return m;
+nomem:
+    ss_error_set(err, SS_ERR_NOMEM, "mechanics: out of memory");
+fail:
+    ss_mech_free(m);
+    return NULL;
+}
+
+const ss_tetmesh *ss_mech_mesh(const ss_mech *m) { return m->mesh; }
+const double *ss_mech_positions(const ss_mech *m) { return m->S->x; }
+const double *ss_mech_velocities(const ss_mech *m) { return m->vel; }
+const double *ss_mech_node_stress(const ss_mech *m) { return m->stress; }
+float *const *ss_mech_grid_displacement(ss_mech *m) {
+    const size_t n = (size_t)m->nx * m->ny * m->nz;
+    for (int d = 0; d < 3; d++)
+        if (!m->u[d] && !(m->u[d] = calloc(n, sizeof(float)))) return NULL;
+    ss_mech_sub_upsample(m->T, m->usub, m->usub_valid, 3, m->mask, m->u);
+    return m->u;
+}
+
+/* Volume-weighted average over each node's tets of the P1 gradient of a
+ * 3-component nodal field f (3n) in the current configuration: grad (9n),
+ * grad[9i + 3c + d] = d f_c / d x_d. */
+static void node_gradients(ss_mech *m, const double *f, double *grad) {
+    const ss_tetmesh *M = m->mesh;
+    const double *x = m->S->x;
+    const int nn = M->nnodes;
+    double *wsum = calloc((size_t)nn, sizeof(double));
+    if (!wsum) return;
+    memset(grad, 0, 9 * (size_t)nn * sizeof(double));
+    for (int t = 0; t < M->ntets; t++) { /* serial: a fixed summation order */
+        const int32_t *q = M->tet + 4 * t;
+        double D[3][3], F[3][3];
+        for (int k = 0; k < 3; k++)
+            for (int d = 0; d < 3; d++) {
+                D[d][k] = x[3 * q[k + 1] + d] - x[3 * q[0] + d];
+                F[d][k] = f[3 * q[k + 1] + d] - f[3 * q[0] + d];
+            }
+        double det = D[0][0] * (D[1][1] * D[2][2] - D[1][2] * D[2][1]) -
+                     D[0][1] * (D[1][0] * D[2][2] - D[1][2] * D[2][0]) +
+                     D[0][2] * (D[1][0] * D[2][1] - D[1][1] * D[2][0]);
+        if (fabs(det) < 1e-300) continue;
+        double I[3][3];
+        I[0][0] = (D[1][1] * D[2][2] - D[1][2] * D[2][1]) / det;
+        I[0][1] = (D[0][2] * D[2][1] - D[0][1] * D[2][2]) / det;
+        I[0][2] = (D[0][1] * D[1][2] - D[0][2] * D[1][1]) / det;
+        I[1][0] = (D[1][2] * D[2][0] - D[1][0] * D[2][2]) / det;
+        I[1][1] = (D[0][0] * D[2][2] - D[0][2] * D[2][0]) / det;
+        I[1][2] = (D[0][2] * D[1][0] - D[0][0] * D[1][2]) / det;
+        I[2][0] = (D[1][0] * D[2][1] - D[1][1] * D[2][0]) / det;
+        I[2][1] = (D[0][1] * D[2][0] - D[0][0] * D[2][1]) / det;
+        I[2][2] = (D[0][0] * D[1][1] - D[0][1] * D[1][0]) / det;
+        double G[3][3], vol = fabs(det) / 6.0;
+        for (int c = 0; c < 3; c++)
+            for (int d = 0; d < 3; d++)
+                G[c][d] = F[c][0] * I[0][d] + F[c][1] * I[1][d] + F[c][2] * I[2][d];
+        for (int k = 0; k < 4; k++) {
+            wsum[q[k]] += vol;
+            for (int c = 0; c < 3; c++)
+                for (int d = 0; d < 3; d++) grad[9 * (size_t)q[k] + 3 * c + d] += vol * G[c][d];
+        }
+    }
+    for (int i = 0; i < nn; i++)
+        if (wsum[i] > 0)
+            for (int c = 0; c < 9; c++) grad[9 * (size_t)i + c] /= wsum[i];
+    free(wsum);
+}
+
+/* Particle fields to the grid: velocity into g->velocity; displacement and
+ * theta = div u on the transfer's sub-lattice (theta is only ever sampled
+ * there; the grid displacement is upsampled when asked for). */
+static void to_grid(ss_mech *m, ss_heal_grid *g) {
+    const int nn = m->mesh->nnodes;
+    node_gradients(m, m->vel, m->grad);
+    ss_mech_p2g(m->T, m->S->x, nn, m->vel, m->grad, 3, m->mask, g->velocity);
+    for (int i = 0; i < 3 * nn; i++) m->disp[i] = m->S->x[i] - m->S->X[i];
+    node_gradients(m, m->disp, m->grad);
+    ss_mech_p2g_sub(m->T, m->S->x, nn, m->disp, m->grad, 3);
+    ss_mech_sub_get(m->T, 3, m->usub, m->usub_valid);
+    ss_mech_sub_divergence(m->T, m->usub, m->usub_valid, m->thsub);
+}
+
+ss_status ss_mech_step(ss_mech *m, ss_heal_grid *g, double dt_days, ss_error *err) {
+    if (!m || !g || g->nx != m->nx || g->ny != m->ny || g->nz != m->nz)
+        return ss_error_set(err, SS_ERR_INPUT, "mechanics step: grid does not match");
+    if (!(dt_days >= 0) || !isfinite(dt_days))
+        return ss_error_set(err, SS_ERR_INPUT, "mechanics step: bad frame time %g days", dt_days);
+    const ss_mech_params *p = &m->p;
+    ss_springs *S = m->S;
+    const int nn = m->mesh->nnodes;
+    /* 1. fields at the nodes */
+    const float *rho = g->field[SS_HEAL_SCAR], *fib = g->field[SS_HEAL_FIBROBLAST];
+    const float *epi = g->field[SS_HEAL_EPITHELIUM], *pla = g->field[SS_HEAL_PLASMA];
+    const int nx = m->nx, ny = m->ny, nz = m->nz;
+#pragma omp parallel for schedule(static)
+    for (int col = 0; col < nx * ny; col++) {
+        /* the column's surface: its top tissue cell; open when in the wound
+         * region (initial wound or omega) and not yet covered by epithelium */
+        int top = -1, region = 0;
+        for (int z = nz - 1; z >= 0; z--) {
+            size_t i = (size_t)z * nx * ny + (size_t)col;
+            if (!m->mask[i]) continue;
+            if (top < 0) top = z;
+            region |= m->wound0[i] || pla[i] > SS_HEAL_P_MIN;
+        }
+        float open = 0.0f;
+        if (top >= 0 && region) {
+            float cover = epi[(size_t)top * nx * ny + (size_t)col];
+            open = 1.0f - (cover > 1.0f ? 1.0f : cover < 0.0f ? 0.0f : cover);
+        }
+        for (int z = 0; z < nz; z++) {
+            size_t i = (size_t)z * nx * ny + (size_t)col;
+            float e = 1.0f;
+            if (m->wound0[i]) {
+                e = (float)p->ecm_floor + rho[i];
+                if (e > 1.0f) e = 1.0f;
+            }
+            m->ecm[i] = e;
+            m->myo[i] = m->mask[i] ? fib[i] * open : 0.0f;
+        }
+    }
+    ss_mech_g2p(m->T, m->myo, m->mask, S->x, nn, m->nmyo);
+    ss_mech_g2p_sub(m->T, m->thsub, m->usub_valid, S->x, nn, m->nth);
+    ss_mech_g2p(m->T, m->ecm, m->mask, S->x, nn, m->necm);
+    for (int i = 0; i < nn; i++) {
+        if (m->nmyo[i] < 0) m->nmyo[i] = 0;
+        m->stress[i] = ss_mech_pcell(p, m->nth[i]) * m->nmyo[i] * p->K_m;
+    }
+    /* 2. rest lengths and stiffness of the tissue springs */
+    const int ntis = S->nsprings - m->nsutures;
+#pragma omp parallel for schedule(static)
+    for (int s = 0; s < ntis; s++) {
+        int a = S->e[2 * s], b = S->e[2 * s + 1];
+        double sig = 0.5 * (m->stress[a] + m->stress[b]);
+        double ecm = 0.5 * (m->necm[a] + m->necm[b]);
+        double e[3];
+        for (int d = 0; d < 3; d++) e[d] = S->X[3 * b + d] - S->X[3 * a + d];
+        double psi = ss_mech_spring_energy_density(p, fabs(sig), e);
+        double dl = ss_mech_shortening(p, psi);
+        double r = S->l0[s] * (1.0 - (sig >= 0 ? dl : -dl));
+        if (r < S->rest[s]) S->rest[s] = r; /* the contracted state is kept */
+        S->k[s] = m->kbase[s] * (ecm > 0 ? ecm : p->ecm_floor);
+    }
+    for (int i = 0; i < m->nsutures; i++)
+        S->k[m->suture_spring[i]] =
+            g->t_days >= m->suture_day[i] ? 0.0 : m->kbase[m->suture_spring[i]];
+    ss_springs_update_mass(S);
+    /* 3. relax from the last configuration, at rest */
+    memcpy(m->xprev, S->x, 3 * (size_t)nn * sizeof(double));
+    memset(S->v, 0, 3 * (size_t)nn * sizeof(double));
+    m->last_substeps = ss_springs_relax(S, p->tol, p->max_substeps, &m->last_converged);
+    /* 4. velocities and the grid */
+    double vmax = 0;
+    for (int i = 0; i < 3 * nn; i++) {
+        m->vel[i] = dt_days > 0 ? (S->x[i] - m->xprev[i]) / dt_days : 0.0;
+    }
+    for (int i = 0; i < nn; i++) {
+        double s2 = m->vel[3 * i] * m->vel[3 * i] + m->vel[3 * i + 1] * m->vel[3 * i + 1] +
+                    m->vel[3 * i + 2] * m->vel[3 * i + 2];
+        if (s2 > vmax) vmax = s2;
+    }
+    m->last_vmax = sqrt(vmax);
+    to_grid(m, g);
+    m->frames++;
+    return SS_OK;
+}
+
+void ss_mech_stats_compute(const ss_mech *m, ss_mech_stats *st) {
+    memset(st, 0, sizeof *st);
+    st->substeps = m->last_substeps;
+    st->converged = m->last_converged;
+    st->max_speed_mm_day = m->last_vmax;
+    st->initial_outline_area_mm2 = m->outline0;
+    const double *x = m->S->x;
+    double A = 0, cx = 0, cy = 0, sxx = 0, syy = 0, sxy = 0;
+    double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+    for (int t = 0; t < m->ntri; t++) {
+        if (!m->tri_wound[t]) continue;
+        const double *a = x + 3 * m->tri[3 * t], *b = x + 3 * m->tri[3 * t + 1],
+                     *c = x + 3 * m->tri[3 * t + 2];
+        double ar = 0.5 * fabs((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]));
+        double gx = (a[0] + b[0] + c[0]) / 3, gy = (a[1] + b[1] + c[1]) / 3;
+        A += ar;
+        cx += ar * gx;
+        cy += ar * gy;
+        sxx += ar * gx * gx;
+        syy += ar * gy * gy;
+        sxy += ar * gx * gy;
+        const double *v[3] = {a, b, c};
+        for (int k = 0; k < 3; k++)
+            for (int d = 0; d < 2; d++) {
+                if (v[k][d] < lo[d]) lo[d] = v[k][d];
+                if (v[k][d] > hi[d]) hi[d] = v[k][d];
+            }
+    }
+    st->outline_area_mm2 = A;
+    if (A <= 0) return;
+    cx /= A;
+    cy /= A;
+    sxx = sxx / A - cx * cx;
+    syy = syy / A - cy * cy;
+    sxy = sxy / A - cx * cy;
+    st->extent_x_mm = hi[0] - lo[0];
+    st->extent_y_mm = hi[1] - lo[1];
+    double tr = sxx + syy, det = sxx * syy - sxy * sxy;
+    double disc = sqrt(fmax(0, tr * tr / 4 - det));
+    double l1 = tr / 2 + disc, l2 = tr / 2 - disc;
+    double ang = 0.5 * atan2(2 * sxy, sxx - syy);
+    st->principal[0] = cos(ang);
+    st->principal[1] = sin(ang);
+    st->aspect_major_minor = l2 > 0 ? sqrt(l1 / l2) : 0;
+}
+
+size_t ss_mech_state_size(const ss_mech *m) {
+    return ((size_t)m->mesh->nnodes * 7 + (size_t)m->S->nsprings) * sizeof(double) +
+           sizeof(uint64_t);
+}
+
+void ss_mech_state_get(const ss_mech *m, void *buf) {
+    const size_t nn = (size_t)m->mesh->nnodes;
+    char *b = buf;
+    uint64_t fr = (uint64_t)m->frames;
+    memcpy(b, &fr, sizeof fr);
+    b += sizeof fr;
+    memcpy(b, m->S->x, 3 * nn * sizeof(double));
+    memcpy(b + 3 * nn * sizeof(double), m->vel, 3 * nn * sizeof(double));
+    memcpy(b + 6 * nn * sizeof(double), m->stress, nn * sizeof(double));
+    memcpy(b + 7 * nn * sizeof(double), m->S->rest, (size_t)m->S->nsprings * sizeof(double));
+}
+
+ss_status ss_mech_state_set(ss_mech *m, const void *buf, size_t size, ss_error *err) {
+    if (size != ss_mech_state_size(m))
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "mechanics state: %zu bytes, expected %zu (another mesh?)", size,
+                            ss_mech_state_size(m));
+    const size_t nn = (size_t)m->mesh->nnodes;
+    const char *b = buf;
+    uint64_t fr;
+    memcpy(&fr, b, sizeof fr);
+    b += sizeof fr;
+    m->frames = (long)fr;
+    memcpy(m->S->x, b, 3 * nn * sizeof(double));
+    memcpy(m->vel, b + 3 * nn * sizeof(double), 3 * nn * sizeof(double));
+    memcpy(m->stress, b + 6 * nn * sizeof(double), nn * sizeof(double));
+    memcpy(m->S->rest, b + 7 * nn * sizeof(double), (size_t)m->S->nsprings * sizeof(double));
+    for (size_t i = 0; i < 3 * nn; i++)
+        if (!isfinite(m->S->x[i]) || !isfinite(m->vel[i]))
+            return ss_error_set(err, SS_ERR_INPUT, "mechanics state: non-finite value");
+    return SS_OK;
+}
+
+/* Grid arrays from the restored particles (the same function a step ends
+ * with, so a resumed run continues bit for bit). */
+ss_status ss_mech_state_apply(ss_mech *m, ss_heal_grid *g, ss_error *err) {
+    if (!m || !g || g->nx != m->nx || g->ny != m->ny || g->nz != m->nz)
+        return ss_error_set(err, SS_ERR_INPUT, "mechanics state: grid does not match");
+    to_grid(m, g);
+    return SS_OK;
+}
+
+ss_mech_suture *ss_mech_sutures_read(const char *path, int *count, ss_error *err) {
+    char *text = ss_read_file(path, NULL, err);
+    if (!text) return NULL;
+    int cap = 16, n = 0, line = 0;
+    ss_mech_suture *s = malloc((size_t)cap * sizeof *s);
+    const char *p = text;
+    char buf[1024];
+    if (!s) goto nomem;
+    while (p) {
+        int too_long = 0;
+        p = ss_text_next_line(p, buf, sizeof buf, &too_long);
+        if (!p) break;
+        line++;
+        char *h = strchr(buf, '#');
+        if (h) *h = 0;
+        char *t = ss_text_trim(buf);
+        if (!*t) continue;
+        double v[7];
+        int k = 0;
+        char *tok = t, *save = NULL;
+        int bad = 0;
+        for (char *q = strtok_r(tok, ",", &save); q; q = strtok_r(NULL, ",", &save)) {
+            if (k == 7) {
+                bad = 1;
+                break;
+            }
+            int r = ss_text_parse_number(ss_text_trim(q), &v[k]);
+            if (r) {
+                bad = r == 1 ? 2 : 1;
+                break;
+            }
+            k++;
+        }
+        if (bad == 2 && n == 0 && line == 1) continue; /* a header line */
+        if (bad || too_long || (k != 6 && k != 7)) {
+            ss_error_set(err, SS_ERR_INPUT,
+                         "%s:%d: expected 'x1,y1,z1,x2,y2,z2[,remove_day]' in mm and days", path,
+                         line);
+            goto fail;
+        }
+        if (k == 7 && !(v[6] >= 0)) {
+            ss_error_set(err, SS_ERR_INPUT, "%s:%d: removal day %g must be >= 0", path, line, v[6]);
+            goto fail;
+        }
+        if (n == cap) {
+            cap *= 2;
+            ss_mech_suture *ns = realloc(s, (size_t)cap * sizeof *s);
+            if (!ns) goto nomem;
+            s = ns;
+        }
+        for (int d = 0; d < 3; d++) {
+            s[n].a[d] = v[d];
+            s[n].b[d] = v[3 + d];
+        }
+        s[n].remove_day = k == 7 ? v[6] : INFINITY;
+        n++;
+    }
+    if (n == 0) {
+        ss_error_set(err, SS_ERR_INPUT, "%s: no stitches", path);
+        goto fail;
+    }
+    free(text);
+    *count = n;
+    return s;
+nomem:
+    ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", path);
+fail:
+    free(text);
+    free(s);
+    return NULL;
+}
+
+double ss_mech_kernel(const ss_mech *m, int *stride) {
+    if (stride) *stride = ss_mech_transfer_stride(m->T);
+    return m->kernel_width;
+}

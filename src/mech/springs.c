@@ -1,0 +1,379 @@
+/* Mass-spring system on the edges of a tet mesh (seed 001 §5.2) and its
+ * relaxation by damped sub-steps.
+ *
+ * Every unique tet edge is a linear spring (force k (|e| - rest) along e);
+ * its stiffness k = modulus V / l0^2, V a sixth of every adjacent tet's
+ * volume, so the springs' energy density matches a material of that modulus
+ * under uniform stretch. The seed relaxes with 60 sub-steps per frame; here
+ * the sub-steps are dynamic relaxation (Underwood 1983; Barnes 1999):
+ * semi-implicit Euler with fictitious nodal masses m_i = sum of the node's
+ * spring and anchor stiffnesses (Gershgorin: the step is stable with room to
+ * spare), viscous damping, and the velocities reset to zero whenever the power
+ * f.v turns negative (the kinetic-damping idea, as in FIRE). Sub-steps stop
+ * when the largest nodal move of a step falls under tol x the mean edge,
+ * and the count is reported. Forces are gathered per node (each spring
+ * evaluated from both ends) so the loop is parallel without atomics and the
+ * result is bit-identical for any thread count. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "skinsim/mech.h"
+
+typedef struct edge_share {
+    uint64_t key;
+    double vol;
+} edge_share;
+
+static int cmp_share(const void *a, const void *b) {
+    uint64_t x = ((const edge_share *)a)->key, y = ((const edge_share *)b)->key;
+    return x < y ? -1 : x > y;
+}
+
+void ss_springs_free(ss_springs *s) {
+    if (!s) return;
+    free(s->X);
+    free(s->x);
+    free(s->v);
+    free(s->e);
+    free(s->l0);
+    free(s->rest);
+    free(s->k);
+    free(s->vol);
+    free(s->anchor);
+    free(s->fixed);
+    free(s->adj_start);
+    free(s->adj);
+    free(s->mass);
+    free(s->f);
+    free(s->f2);
+    free(s->x2);
+    free(s->unode);
+    free(s);
+}
+
+static ss_status build_adjacency(ss_springs *s, ss_error *err) {
+    free(s->adj_start);
+    free(s->adj);
+    s->adj_start = calloc((size_t)s->nnodes + 1, sizeof(int32_t));
+    s->adj = malloc(2 * (size_t)s->nsprings * sizeof(int32_t) + 1);
+    if (!s->adj_start || !s->adj) return ss_error_set(err, SS_ERR_NOMEM, "springs: out of memory");
+    for (int i = 0; i < s->nsprings; i++) {
+        s->adj_start[s->e[2 * i] + 1]++;
+        s->adj_start[s->e[2 * i + 1] + 1]++;
+    }
+    for (int i = 0; i < s->nnodes; i++) s->adj_start[i + 1] += s->adj_start[i];
+    int32_t *fill = malloc((size_t)s->nnodes * sizeof(int32_t) + 1);
+    if (!fill) return ss_error_set(err, SS_ERR_NOMEM, "springs: out of memory");
+    memcpy(fill, s->adj_start, (size_t)s->nnodes * sizeof(int32_t));
+    for (int i = 0; i < s->nsprings; i++) { /* spring order: ascending per node */
+        s->adj[fill[s->e[2 * i]]++] = i;
+        s->adj[fill[s->e[2 * i + 1]]++] = i;
+    }
+    free(fill);
+    return SS_OK;
+}
+
+void ss_springs_update_mass(ss_springs *s) {
+    for (int i = 0; i < s->nnodes; i++) {
+        double m = s->anchor[i];
+        for (int a = s->adj_start[i]; a < s->adj_start[i + 1]; a++) m += s->k[s->adj[a]];
+        s->mass[i] = m > 0 ? m : 1.0;
+    }
+}
+
+ss_springs *ss_springs_create(const ss_tetmesh *m, double modulus, ss_error *err) {
+    if (!m || m->nnodes < 4 || m->ntets < 1) {
+        ss_error_set(err, SS_ERR_INPUT, "springs: empty tet mesh");
+        return NULL;
+    }
+    static const int E6[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+    size_t ns = 6 * (size_t)m->ntets;
+    edge_share *sh = malloc(ns * sizeof *sh);
+    ss_springs *s = calloc(1, sizeof *s);
+    if (!sh || !s) goto nomem;
+    for (int t = 0; t < m->ntets; t++) {
+        const int32_t *q = m->tet + 4 * t;
+        const double *a = m->x + 3 * q[0], *b = m->x + 3 * q[1], *c = m->x + 3 * q[2],
+                     *d = m->x + 3 * q[3];
+        double u[3], v[3], w[3];
+        for (int i = 0; i < 3; i++) {
+            u[i] = b[i] - a[i];
+            v[i] = c[i] - a[i];
+            w[i] = d[i] - a[i];
+        }
+        double vol = fabs(u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) +
+                          u[2] * (v[0] * w[1] - v[1] * w[0])) /
+                     6.0;
+        for (int k = 0; k < 6; k++) {
+            uint32_t i = (uint32_t)q[E6[k][0]], j = (uint32_t)q[E6[k][1]];
+            if (i > j) {
+                uint32_t tmp = i;
+                i = j;
+                j = tmp;
+            }
+            sh[6 * (size_t)t + k] = (edge_share){((uint64_t)i << 32) | j, vol / 6.0};
+        }
+    }
+    qsort(sh, ns, sizeof *sh, cmp_share);
+    size_t ne = 0;
+    for (size_t i = 0; i < ns; i++)
+        if (i == 0 || sh[i].key != sh[i - 1].key) ne++;
+    s->nnodes = m->nnodes;
+    s->nsprings = (int)ne;
+    size_t n3 = 3 * (size_t)m->nnodes;
+    s->X = malloc(n3 * sizeof(double));
+    s->x = malloc(n3 * sizeof(double));
+    s->v = calloc(n3, sizeof(double));
+    s->e = malloc(2 * ne * sizeof(int32_t));
+    s->l0 = malloc(ne * sizeof(double));
+    s->rest = malloc(ne * sizeof(double));
+    s->k = malloc(ne * sizeof(double));
+    s->vol = calloc(ne, sizeof(double));
+    s->anchor = calloc((size_t)m->nnodes, sizeof(double));
+    s->fixed = calloc((size_t)m->nnodes, 1);
+    s->mass = malloc((size_t)m->nnodes * sizeof(double));
+    s->f = malloc(n3 * sizeof(double));
+    s->f2 = malloc(n3 * sizeof(double));
+    s->x2 = malloc(n3 * sizeof(double));
+    s->unode = malloc((size_t)m->nnodes * sizeof(double));
+    if (!s->unode || !s->f || !s->f2 || !s->x2 || !s->X || !s->x || !s->v || !s->e || !s->l0 ||
+        !s->rest || !s->k || !s->vol || !s->anchor || !s->fixed || !s->mass)
+        goto nomem;
+    memcpy(s->X, m->x, n3 * sizeof(double));
+    memcpy(s->x, m->x, n3 * sizeof(double));
+    long j = -1;
+    for (size_t i = 0; i < ns; i++) {
+        if (i == 0 || sh[i].key != sh[i - 1].key) {
+            j++;
+            s->e[2 * j] = (int32_t)(sh[i].key >> 32);
+            s->e[2 * j + 1] = (int32_t)(sh[i].key & 0xffffffffu);
+        }
+        s->vol[j] += sh[i].vol;
+    }
+    free(sh);
+    sh = NULL;
+    for (int i = 0; i < s->nsprings; i++) {
+        const double *a = s->X + 3 * s->e[2 * i], *b = s->X + 3 * s->e[2 * i + 1];
+        double l = sqrt((b[0] - a[0]) * (b[0] - a[0]) + (b[1] - a[1]) * (b[1] - a[1]) +
+                        (b[2] - a[2]) * (b[2] - a[2]));
+        s->l0[i] = s->rest[i] = l;
+        s->k[i] = modulus * s->vol[i] / (l * l);
+    }
+    s->damping = 0.98;
+    if (build_adjacency(s, err) != SS_OK) {
+        ss_springs_free(s);
+        return NULL;
+    }
+    ss_springs_update_mass(s);
+    return s;
+nomem:
+    free(sh);
+    ss_springs_free(s);
+    ss_error_set(err, SS_ERR_NOMEM, "springs: out of memory for %d tets", m->ntets);
+    return NULL;
+}
+
+ss_status ss_springs_add(ss_springs *s, int a, int b, double rest, double k, ss_error *err) {
+    if (a < 0 || b < 0 || a >= s->nnodes || b >= s->nnodes || a == b)
+        return ss_error_set(err, SS_ERR_INPUT, "springs: bad node pair %d-%d", a, b);
+    int n = s->nsprings + 1;
+    int32_t *e = realloc(s->e, 2 * (size_t)n * sizeof(int32_t));
+    if (e) s->e = e;
+    double *l0 = realloc(s->l0, (size_t)n * sizeof(double));
+    if (l0) s->l0 = l0;
+    double *rs = realloc(s->rest, (size_t)n * sizeof(double));
+    if (rs) s->rest = rs;
+    double *kk = realloc(s->k, (size_t)n * sizeof(double));
+    if (kk) s->k = kk;
+    double *vv = realloc(s->vol, (size_t)n * sizeof(double));
+    if (vv) s->vol = vv;
+    if (!e || !l0 || !rs || !kk || !vv)
+        return ss_error_set(err, SS_ERR_NOMEM, "springs: out of memory");
+    s->e[2 * s->nsprings] = a;
+    s->e[2 * s->nsprings + 1] = b;
+    const double *pa = s->X + 3 * a, *pb = s->X + 3 * b;
+    s->l0[s->nsprings] =
+        sqrt((pb[0] - pa[0]) * (pb[0] - pa[0]) + (pb[1] - pa[1]) * (pb[1] - pa[1]) +
+             (pb[2] - pa[2]) * (pb[2] - pa[2]));
+    s->rest[s->nsprings] = rest;
+    s->k[s->nsprings] = k;
+    s->vol[s->nsprings] = 0;
+    s->nsprings = n;
+    ss_status st = build_adjacency(s, err);
+    if (st == SS_OK) ss_springs_update_mass(s);
+    return st;
+}
+
+/* Force on node i at positions x (gathered over its springs, in spring
+ * order); returns the node's share of the energy (half of each spring's,
+ * all of its anchor's). */
+static inline double node_force(const ss_springs *s, const double *x, int i, double f[3]) {
+    const double *xi = x + 3 * (size_t)i;
+    double ax = s->X[3 * i] - xi[0], ay = s->X[3 * i + 1] - xi[1], az = s->X[3 * i + 2] - xi[2];
+    double fx = s->anchor[i] * ax, fy = s->anchor[i] * ay, fz = s->anchor[i] * az;
+    double u = 0.5 * s->anchor[i] * (ax * ax + ay * ay + az * az);
+    for (int a = s->adj_start[i]; a < s->adj_start[i + 1]; a++) {
+        int sp = s->adj[a];
+        int j = s->e[2 * sp] == i ? s->e[2 * sp + 1] : s->e[2 * sp];
+        const double *xj = x + 3 * (size_t)j;
+        double d0 = xj[0] - xi[0], d1 = xj[1] - xi[1], d2 = xj[2] - xi[2];
+        double l = sqrt(d0 * d0 + d1 * d1 + d2 * d2);
+        double dl = l - s->rest[sp];
+        u += 0.25 * s->k[sp] * dl * dl;
+        if (l <= 0) continue;
+        double c = s->k[sp] * dl / l;
+        fx += c * d0;
+        fy += c * d1;
+        fz += c * d2;
+    }
+    f[0] = fx;
+    f[1] = fy;
+    f[2] = fz;
+    return u;
+}
+
+/* Forces at x into f (3n) and the potential energy, summed in node order. */
+static double forces_at(const ss_springs *s, const double *x, double *f, double *unode) {
+#pragma omp parallel for schedule(static)
+    for (int i = 0; i < s->nnodes; i++) unode[i] = node_force(s, x, i, f + 3 * (size_t)i);
+    double u = 0;
+    for (int i = 0; i < s->nnodes; i++) u += unode[i];
+    return u;
+}
+
+double ss_springs_forces(const ss_springs *s, double *f) {
+#pragma omp parallel for schedule(static)
+    for (int i = 0; i < s->nnodes; i++) node_force(s, s->x, i, f + 3 * (size_t)i);
+    return ss_springs_energy(s);
+}
+
+double ss_springs_energy(const ss_springs *s) {
+    double u = 0;
+    for (int i = 0; i < s->nsprings; i++) {
+        const double *a = s->x + 3 * s->e[2 * i], *b = s->x + 3 * s->e[2 * i + 1];
+        double l = sqrt((b[0] - a[0]) * (b[0] - a[0]) + (b[1] - a[1]) * (b[1] - a[1]) +
+                        (b[2] - a[2]) * (b[2] - a[2]));
+        u += 0.5 * s->k[i] * (l - s->rest[i]) * (l - s->rest[i]);
+    }
+    for (int i = 0; i < s->nnodes; i++) {
+        if (s->anchor[i] <= 0) continue;
+        double d2 = 0;
+        for (int d = 0; d < 3; d++)
+            d2 += (s->x[3 * i + d] - s->X[3 * i + d]) * (s->x[3 * i + d] - s->X[3 * i + d]);
+        u += 0.5 * s->anchor[i] * d2;
+    }
+    return u;
+}
+
+double ss_springs_kinetic(const ss_springs *s) {
+    double k = 0;
+    for (int i = 0; i < s->nnodes; i++)
+        k += 0.5 * s->mass[i] *
+             (s->v[3 * i] * s->v[3 * i] + s->v[3 * i + 1] * s->v[3 * i + 1] +
+              s->v[3 * i + 2] * s->v[3 * i + 2]);
+    return k;
+}
+
+static double mean_rest(ss_springs *s) {
+    if (s->mean_l0 <= 0) {
+        double m = 0;
+        for (int i = 0; i < s->nsprings; i++) m += s->l0[i];
+        s->mean_l0 = s->nsprings ? m / s->nsprings : 1.0;
+    }
+    return s->mean_l0;
+}
+
+/* Largest move a pure gradient step would make: max_i |f_i| / m_i. */
+static double residual(const ss_springs *s, const double *f) {
+    double r = 0;
+    for (int i = 0; i < s->nnodes; i++) {
+        if (s->fixed[i]) continue;
+        double f2 = f[3 * i] * f[3 * i] + f[3 * i + 1] * f[3 * i + 1] + f[3 * i + 2] * f[3 * i + 2];
+        r = fmax(r, sqrt(f2) / s->mass[i]);
+    }
+    return r;
+}
+
+static double kinetic(const ss_springs *s, const double *v) {
+    double k = 0;
+    for (int i = 0; i < s->nnodes; i++)
+        k += 0.5 * s->mass[i] *
+             (v[3 * i] * v[3 * i] + v[3 * i + 1] * v[3 * i + 1] + v[3 * i + 2] * v[3 * i + 2]);
+    return k;
+}
+
+double ss_springs_substep(ss_springs *s) {
+    const int n = s->nnodes;
+    const size_t n3 = 3 * (size_t)n;
+    double *un = s->unode;
+    if (!s->fvalid) {
+        s->U = forces_at(s, s->x, s->f, un);
+        s->fvalid = 1;
+    }
+    const double E0 = s->U + kinetic(s, s->v);
+    const double gam = s->damping;
+    /* proposal: damped semi-implicit Euler, momentum dropped when going uphill */
+    double power = 0;
+    for (int i = 0; i < n; i++) {
+        double *v = s->v + 3 * (size_t)i;
+        if (s->fixed[i]) {
+            v[0] = v[1] = v[2] = 0;
+            continue;
+        }
+        double im = 1.0 / s->mass[i];
+        for (int d = 0; d < 3; d++) {
+            v[d] = gam * v[d] + s->f[3 * (size_t)i + d] * im;
+            power += s->f[3 * (size_t)i + d] * v[d];
+        }
+    }
+    if (power < 0)
+        for (int i = 0; i < n; i++) {
+            if (s->fixed[i]) continue;
+            for (int d = 0; d < 3; d++)
+                s->v[3 * (size_t)i + d] = s->f[3 * (size_t)i + d] / s->mass[i];
+        }
+    for (size_t i = 0; i < n3; i++) s->x2[i] = s->x[i] + s->v[i];
+    double U1 = forces_at(s, s->x2, s->f2, un);
+    double moved = 0;
+    if (U1 + kinetic(s, s->v) > E0) {
+        /* reject: drop the momentum, gradient steps halved until downhill */
+        memset(s->v, 0, n3 * sizeof(double));
+        double a = 1.0;
+        for (int tries = 0; tries < 30; tries++, a *= 0.5) {
+            for (int i = 0; i < n; i++)
+                for (int d = 0; d < 3; d++) {
+                    size_t k = 3 * (size_t)i + d;
+                    s->x2[k] = s->x[k] + (s->fixed[i] ? 0 : a * s->f[k] / s->mass[i]);
+                }
+            U1 = forces_at(s, s->x2, s->f2, un);
+            if (U1 <= s->U) break;
+        }
+        if (U1 > s->U) /* no descent at all (rounding level): stay */
+            return residual(s, s->f) / mean_rest(s);
+    }
+    (void)moved;
+    double *t = s->x;
+    s->x = s->x2;
+    s->x2 = t;
+    t = s->f;
+    s->f = s->f2;
+    s->f2 = t;
+    s->U = U1;
+    return residual(s, s->f) / mean_rest(s);
+}
+
+int ss_springs_relax(ss_springs *s, double tol, int max_steps, int *converged) {
+    int it = 0, ok = 0;
+    s->fvalid = 0;
+    while (it < max_steps) {
+        double d = ss_springs_substep(s);
+        it++;
+        if (it >= 2 && d < tol) {
+            ok = 1;
+            break;
+        }
+    }
+    if (converged) *converged = ok;
+    return it;
+}

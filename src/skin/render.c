@@ -1,0 +1,232 @@
+/* From biological parameter maps to render maps (seed 003 §4.8.8 line 16,
+ * mmd(FEATURE(...))): every texel's optical parameters go through the
+ * ModelMatch table (optics_fit.h, the same table `skinsim optics table
+ * --lookup` reads) to the GGX render parameters; the extra colour (hair)
+ * is laid over the base colour; height becomes a normal map.
+ *
+ * The lookup: ss_mm_table_lookup interpolates all 18 fields of an entry in
+ * double over 64 corners with a weight product per corner. A texture needs
+ * 5 of them at millions of texels, so ss_skin_lut copies the GGX base
+ * colour, specular and roughness of every node (read through the public
+ * table struct) into 8 floats, and interpolates by successive linear
+ * interpolation along the axes (63 8-wide lerps, which vectorise). The
+ * result equals ss_mm_table_lookup's to float rounding (tested); a new
+ * table file plugs in unchanged. */
+#include "skinsim/skin.h"
+#include "skinsim/texture.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define LUT_F 5 /* base R, G, B, specular, roughness */
+
+struct ss_skin_lut {
+    int n[SS_MM_NAXES];
+    size_t stride[SS_MM_NAXES];
+    float *axis[SS_MM_NAXES];
+    size_t corner[64]; /* node offset of each cell corner from the cell's first node */
+    float *node;       /* nentries x LUT_F */
+};
+
+void ss_skin_lut_free(ss_skin_lut *l) {
+    if (!l) return;
+    for (int a = 0; a < SS_MM_NAXES; a++) free(l->axis[a]);
+    free(l->node);
+    free(l);
+}
+
+ss_skin_lut *ss_skin_lut_create(const ss_mm_table *t, ss_error *err) {
+    if (!t || !t->entries || t->nentries == 0) {
+        ss_error_set(err, SS_ERR_INPUT, "ModelMatch table: empty");
+        return NULL;
+    }
+    ss_skin_lut *l = calloc(1, sizeof *l);
+    if (!l) goto nomem;
+    size_t stride = 1;
+    for (int a = SS_MM_NAXES - 1; a >= 0; a--) {
+        l->n[a] = t->nsamples[a];
+        l->stride[a] = stride;
+        stride *= (size_t)t->nsamples[a];
+        l->axis[a] = malloc((size_t)t->nsamples[a] * sizeof(float));
+        if (!l->axis[a]) goto nomem;
+        for (int i = 0; i < t->nsamples[a]; i++) l->axis[a][i] = (float)t->axis[a][i];
+    }
+    /* corner c: bit (5 - a) set = upper node on axis a (0 when the axis has
+     * one sample), so axis 0 is reduced first over contiguous halves */
+    for (int c = 0; c < 64; c++) {
+        size_t off = 0;
+        for (int a = 0; a < SS_MM_NAXES; a++)
+            if (((c >> (5 - a)) & 1) && l->n[a] > 1) off += l->stride[a];
+        l->corner[c] = off;
+    }
+    l->node = calloc(t->nentries * LUT_F, sizeof(float));
+    if (!l->node) goto nomem;
+    for (size_t e = 0; e < t->nentries; e++) {
+        ss_mm_entry en;
+        ss_mm_entry_unpack(t->entries + e * SS_MM_NFIELDS, &en);
+        const ss_render_params *g = &en.fit[SS_RENDER_GGX];
+        float *o = l->node + e * LUT_F;
+        for (int c = 0; c < 3; c++) o[c] = (float)g->base_rgb[c];
+        o[3] = (float)g->specular;
+        o[4] = (float)g->roughness;
+        for (int c = 0; c < LUT_F; c++)
+            if (!isfinite(o[c])) {
+                ss_error_set(err, SS_ERR_INPUT, "ModelMatch table: entry %zu is not finite", e);
+                ss_skin_lut_free(l);
+                return NULL;
+            }
+    }
+    return l;
+nomem:
+    ss_skin_lut_free(l);
+    ss_error_set(err, SS_ERR_NOMEM, "ModelMatch lookup: out of memory");
+    return NULL;
+}
+
+/* Lookup state of one thread: the corners of the last few cells (8 slots,
+ * direct-mapped by the cell's first node): the baseline noise moves texels
+ * between a handful of neighbouring cells, and gathering 64 corners is the
+ * expensive part of a lookup. */
+#define LUT_SLOTS 8
+typedef struct lut_cache {
+    size_t base[LUT_SLOTS];
+    float cor[LUT_SLOTS][LUT_F][64];
+} lut_cache;
+
+static void lut_cache_init(lut_cache *c) {
+    for (int i = 0; i < LUT_SLOTS; i++) c->base[i] = (size_t)-1;
+}
+
+static inline void lut_lookup(const ss_skin_lut *l, lut_cache *c, const float x[6],
+                              float out[LUT_F]) {
+    size_t base = 0;
+    float fr[SS_MM_NAXES];
+    for (int a = 0; a < SS_MM_NAXES; a++) {
+        const int n = l->n[a];
+        const float *v = l->axis[a];
+        fr[a] = 0.0f;
+        if (n == 1) continue;
+        float xa = x[a];
+        if (!(xa > v[0])) xa = v[0];
+        if (xa > v[n - 1]) xa = v[n - 1];
+        int i = 0;
+        while (i < n - 2 && xa >= v[i + 1]) i++;
+        fr[a] = (xa - v[i]) / (v[i + 1] - v[i]);
+        base += (size_t)i * l->stride[a];
+    }
+    const int slot = (int)(((uint64_t)base * 0x9E3779B97F4A7C15ull) >> 61);
+    float(*cor)[64] = c->cor[slot];
+    if (base != c->base[slot]) {
+        c->base[slot] = base;
+        for (int k = 0; k < 64; k++) {
+            const float *nd = l->node + (base + l->corner[k]) * LUT_F;
+            for (int f = 0; f < LUT_F; f++) cor[f][k] = nd[f];
+        }
+    }
+    /* fixed trip counts so that the lerps vectorise */
+#define LERP_LEVEL(DST, SRC, HALF, A)                                                              \
+    do {                                                                                           \
+        const float w1 = fr[A], w0 = 1.0f - w1;                                                    \
+        for (int j = 0; j < HALF; j++) DST[j] = SRC[j] * w0 + SRC[j + HALF] * w1;                  \
+    } while (0)
+    for (int f = 0; f < LUT_F; f++) {
+        float b[32];
+        LERP_LEVEL(b, cor[f], 32, 0);
+        LERP_LEVEL(b, b, 16, 1);
+        LERP_LEVEL(b, b, 8, 2);
+        LERP_LEVEL(b, b, 4, 3);
+        LERP_LEVEL(b, b, 2, 4);
+        LERP_LEVEL(b, b, 1, 5);
+        out[f] = b[0];
+    }
+#undef LERP_LEVEL
+}
+
+void ss_skin_lut_lookup(const ss_skin_lut *l, const float x[6], float out[5]) {
+    lut_cache *c = malloc(sizeof *c);
+    if (!c) {
+        for (int f = 0; f < LUT_F; f++) out[f] = NAN;
+        return;
+    }
+    lut_cache_init(c);
+    lut_lookup(l, c, x, out);
+    free(c);
+}
+
+void ss_skin_bio_texel(const ss_image *bio, int x, int y, ss_bio_params *out) {
+    ss_bio_params_default(out);
+    const float *p = ss_image_px(bio, x, y);
+    out->melanin = p[SS_BIO_MELANIN];
+    out->pheomelanin_ratio = p[SS_BIO_PHEOMELANIN];
+    out->blood = p[SS_BIO_BLOOD];
+    out->oxygenation = p[SS_BIO_OXYGENATION];
+    out->sc_thickness_cm = p[SS_BIO_SC_CM];
+    out->epidermis_thickness_cm = p[SS_BIO_EPIDERMIS_CM];
+}
+
+void ss_skin_maps_free(ss_skin_maps *m) {
+    if (!m) return;
+    ss_image_free(m->base_color);
+    ss_image_free(m->roughness);
+    ss_image_free(m->specular);
+    ss_image_free(m->height_mm);
+    ss_image_free(m->normal);
+    memset(m, 0, sizeof *m);
+}
+
+ss_status ss_skin_render_maps(const ss_image *bio, const ss_skin_lut *lut, double world_size_cm,
+                              int normal_directx, ss_skin_maps *out, ss_error *err) {
+    memset(out, 0, sizeof *out);
+    if (!bio || bio->channels != SS_BIO_NCHANNELS || !lut)
+        return ss_error_set(err, SS_ERR_INPUT, "render maps: need a %d-channel bio map",
+                            SS_BIO_NCHANNELS);
+    if (!(world_size_cm > 0.0))
+        return ss_error_set(err, SS_ERR_INPUT, "render maps: world size %g cm", world_size_cm);
+    const int W = bio->width, H = bio->height;
+    if (!(out->base_color = ss_image_create_uninit(W, H, 3, err)) ||
+        !(out->roughness = ss_image_create_uninit(W, H, 1, err)) ||
+        !(out->specular = ss_image_create_uninit(W, H, 1, err)) ||
+        !(out->height_mm = ss_image_create_uninit(W, H, 1, err)) ||
+        !(out->normal = ss_image_create_uninit(W, H, 3, err))) {
+        ss_skin_maps_free(out);
+        return err->code;
+    }
+    const size_t n = (size_t)W * (size_t)H;
+    double hmin = INFINITY, hmax = -INFINITY;
+#pragma omp parallel reduction(min : hmin) reduction(max : hmax)
+    {
+        lut_cache *cache = malloc(sizeof *cache);
+        if (cache) lut_cache_init(cache);
+#pragma omp for schedule(static)
+        for (size_t i = 0; i < n; i++) {
+            const float *p = bio->data + i * SS_BIO_NCHANNELS;
+            float r[5];
+            if (cache)
+                lut_lookup(lut, cache, p, r);
+            else
+                ss_skin_lut_lookup(lut, p, r);
+            const float a = p[SS_BIO_EXTRA_A];
+            for (int c = 0; c < 3; c++) {
+                float b = r[c] < 0.0f ? 0.0f : r[c] > 1.0f ? 1.0f : r[c];
+                out->base_color->data[i * 3 + c] = b * (1.0f - a) + p[SS_BIO_EXTRA_R + c] * a;
+            }
+            out->specular->data[i] = r[3] < 0.0f ? 0.0f : r[3] > 1.0f ? 1.0f : r[3];
+            out->roughness->data[i] = r[4] < 0.0f ? 0.0f : r[4] > 1.0f ? 1.0f : r[4];
+            const float h = p[SS_BIO_HEIGHT_MM];
+            out->height_mm->data[i] = h;
+            if (h < hmin) hmin = h;
+            if (h > hmax) hmax = h;
+        }
+        free(cache);
+    }
+    const double texel_mm = world_size_cm * 10.0 / W;
+    ss_height_to_normal(out->height_mm, (float)(1.0 / texel_mm), out->normal);
+    if (normal_directx)
+#pragma omp parallel for schedule(static)
+        for (size_t i = 0; i < n; i++)
+            out->normal->data[i * 3 + 1] = 1.0f - out->normal->data[i * 3 + 1];
+    out->height_min_mm = hmin;
+    out->height_max_mm = hmax;
+    return SS_OK;
+}

@@ -1,0 +1,399 @@
+/* TexGen (seed 003 §4.8.8): the spatial index of the features and the texel
+ * evaluation into biological parameter maps (§4.8.5 blend, §5.3 features).
+ *
+ * Spatial index: the texture is cut into 32 x 32 texel tiles; every feature
+ * is listed in each tile its support box overlaps (the seed suggests an
+ * R-tree; a uniform tile grid answers "which features touch this texel" in
+ * O(1) and suits features of similar size). On the torus (wrap, §4.8.7) a
+ * box crossing an edge is also listed, with a -1/+1 texture offset, in the
+ * tiles on the other side, so features wrap and the maps tile. Lists are
+ * built in feature order, and features are ordered by type = priority, so
+ * within a tile the list is already the blend order.
+ *
+ * Texels: tiles are independent (OpenMP over tiles); inside a tile the
+ * baseline skin is written first, then the lips, then each listed feature
+ * over the texels of its box in list order, so each texel sees the
+ * features in priority order (§4.8.5: everything that adds blood before the
+ * follicles take it away). The baseline noise is a per-texel uniform per
+ * parameter (§5.3.1, phi x range width), drawn from the counter-based RNG by
+ * texel index, so the result does not depend on tiles or threads.
+ *
+ * Supports (where a feature is evaluated): cyst and mole 2 r (the sigmoid
+ * profile is below 7e-4 there), freckle r / 1.2 (its profile is 0 beyond),
+ * follicle r_o, wrinkle the control points' box grown by the width (a cubic
+ * lies in the hull of its control points). Inside it, per row, only the x
+ * range where the boxes of a 16-segment flattening of the curve (grown by
+ * the width and a texel) meet the row gets the golden-section distance. */
+#include "skinsim/skin.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define TILE 32
+
+const char *ss_bio_channel_name(int c) {
+    static const char *const names[SS_BIO_NCHANNELS] = {"melanin",         "pheomelanin_ratio",
+                                                        "blood",           "oxygenation",
+                                                        "sc_thickness_cm", "epidermis_thickness_cm",
+                                                        "height_mm",       "extra.R",
+                                                        "extra.G",         "extra.B",
+                                                        "extra.A"};
+    return c >= 0 && c < SS_BIO_NCHANNELS ? names[c] : "unknown";
+}
+
+typedef struct entry {
+    uint32_t feature;
+    int16_t ox, oy; /* texture-unit offset of this copy (torus) */
+} entry;
+
+typedef struct tile_index {
+    int ntiles;    /* per side */
+    size_t *start; /* ntiles^2 + 1 */
+    entry *e;
+} tile_index;
+
+/* Support box of a feature in texture units. */
+static void support_box(const ss_skin_feature *f, double mm_per_unit, double *x0, double *y0,
+                        double *x1, double *y1) {
+    double R = 0.0;
+    switch (f->type) {
+    case SS_FEAT_CYST:
+    case SS_FEAT_MOLE:
+        R = 2.0 * f->r;
+        break;
+    case SS_FEAT_FRECKLE:
+        R = f->r / 1.2;
+        break;
+    case SS_FEAT_FOLLICLE:
+        R = f->r2 > f->r ? f->r2 : f->r;
+        break;
+    case SS_FEAT_WRINKLE: {
+        double w = f->w / mm_per_unit;
+        *x0 = *x1 = f->curve.x[0];
+        *y0 = *y1 = f->curve.y[0];
+        for (int i = 1; i < 4; i++) {
+            if (f->curve.x[i] < *x0) *x0 = f->curve.x[i];
+            if (f->curve.x[i] > *x1) *x1 = f->curve.x[i];
+            if (f->curve.y[i] < *y0) *y0 = f->curve.y[i];
+            if (f->curve.y[i] > *y1) *y1 = f->curve.y[i];
+        }
+        *x0 -= w, *y0 -= w, *x1 += w, *y1 += w;
+        return;
+    }
+    default:
+        break;
+    }
+    R /= mm_per_unit;
+    *x0 = f->x - R, *x1 = f->x + R, *y0 = f->y - R, *y1 = f->y + R;
+}
+
+/* Calls visit(ti, tj, ox, oy) for every tile the box overlaps. */
+#define FOR_TILES(...)                                                                             \
+    do {                                                                                           \
+        double bx0, by0, bx1, by1;                                                                 \
+        support_box(f, mm_per_unit, &bx0, &by0, &bx1, &by1);                                       \
+        long tx0 = (long)floor(bx0 * size / TILE), tx1 = (long)floor(bx1 * size / TILE);           \
+        long ty0 = (long)floor(by0 * size / TILE), ty1 = (long)floor(by1 * size / TILE);           \
+        if (tx1 - tx0 >= nt) tx1 = tx0 + nt - 1;                                                   \
+        if (ty1 - ty0 >= nt) ty1 = ty0 + nt - 1;                                                   \
+        if (!wrap) {                                                                               \
+            if (tx0 < 0) tx0 = 0;                                                                  \
+            if (ty0 < 0) ty0 = 0;                                                                  \
+            if (tx1 >= nt) tx1 = nt - 1;                                                           \
+            if (ty1 >= nt) ty1 = nt - 1;                                                           \
+        }                                                                                          \
+        for (long ty = ty0; ty <= ty1; ty++)                                                       \
+            for (long tx = tx0; tx <= tx1; tx++) {                                                 \
+                long wx = ((tx % nt) + nt) % nt, wy = ((ty % nt) + nt) % nt;                       \
+                int ox = (int)((wx - tx) / nt), oy = (int)((wy - ty) / nt);                        \
+                size_t tile = (size_t)wy * (size_t)nt + (size_t)wx;                                \
+                __VA_ARGS__;                                                                       \
+            }                                                                                      \
+    } while (0)
+
+static ss_status index_build(const ss_skin_feature_list *l, const uint32_t *order, int size,
+                             double mm_per_unit, int wrap, tile_index *ix, ss_error *err) {
+    const long nt = (size + TILE - 1) / TILE;
+    ix->ntiles = (int)nt;
+    ix->start = calloc((size_t)(nt * nt + 1), sizeof *ix->start);
+    ix->e = NULL;
+    if (!ix->start) return ss_error_set(err, SS_ERR_NOMEM, "feature index: out of memory");
+    for (size_t q = 0; q < l->n; q++) {
+        const ss_skin_feature *f = &l->f[order[q]];
+        FOR_TILES((void)ox; (void)oy; ix->start[tile + 1]++);
+    }
+    for (long t = 0; t < nt * nt; t++) ix->start[t + 1] += ix->start[t];
+    size_t total = ix->start[nt * nt];
+    ix->e = malloc((total ? total : 1) * sizeof *ix->e);
+    size_t *fill = malloc((size_t)(nt * nt) * sizeof *fill);
+    if (!ix->e || !fill) {
+        free(fill);
+        return ss_error_set(err, SS_ERR_NOMEM, "feature index: out of memory (%zu entries)", total);
+    }
+    memcpy(fill, ix->start, (size_t)(nt * nt) * sizeof *fill);
+    for (size_t q = 0; q < l->n; q++) {
+        const ss_skin_feature *f = &l->f[order[q]];
+        FOR_TILES(ix->e[fill[tile]++] = (entry){order[q], (int16_t)ox, (int16_t)oy});
+    }
+    free(fill);
+    return SS_OK;
+}
+
+static void index_free(tile_index *ix) {
+    free(ix->start);
+    free(ix->e);
+}
+
+/* Per-wrinkle data for the texel pass: the flattened curve. */
+#define FLAT 16
+typedef struct wrinkle_flat {
+    float x[FLAT + 1], y[FLAT + 1];
+} wrinkle_flat;
+
+static float u24(uint32_t v) { return (float)(v >> 8) * 0x1p-24f; }
+
+/* Baseline skin for one tile (§5.3.1) and the lips (§5.3.6). */
+static void tile_baseline(const ss_skin_settings *s, const ss_image *lips, int tx0, int ty0, int tw,
+                          int th, ss_image *bio) {
+    const int size = s->size;
+    float lo[6], wid[6];
+    for (int a = 0; a < 6; a++) {
+        lo[a] = (float)s->base_lo[a];
+        wid[a] = (float)(s->phi * (s->base_hi[a] - s->base_lo[a]));
+    }
+    for (int y = ty0; y < ty0 + th; y++)
+        for (int x = tx0; x < tx0 + tw; x += 4) {
+            uint64_t k =
+                (uint64_t)y * (uint64_t)size + (uint64_t)x; /* multiple of 4 when size is */
+            uint32_t r[6][4];
+            for (int a = 0; a < 6; a++) ss_rng4(s->seed, 32 + (uint64_t)a, k / 4, r[a]);
+            for (int j = 0; j < 4 && x + j < tx0 + tw; j++) {
+                float *p = ss_image_px(bio, x + j, y);
+                int lane = (int)((k + (uint64_t)j) % 4);
+                uint32_t rr[6];
+                if ((k % 4) == 0) {
+                    for (int a = 0; a < 6; a++) rr[a] = r[a][lane];
+                } else { /* size not a multiple of 4: draw this texel's own block */
+                    uint64_t kk = k + (uint64_t)j;
+                    for (int a = 0; a < 6; a++) {
+                        uint32_t o[4];
+                        ss_rng4(s->seed, 32 + (uint64_t)a, kk / 4, o);
+                        rr[a] = o[kk % 4];
+                    }
+                }
+                for (int a = 0; a < 6; a++) p[a] = lo[a] + wid[a] * u24(rr[a]);
+                p[SS_BIO_HEIGHT_MM] = 0.0f;
+                p[7] = p[8] = p[9] = p[10] = 0.0f;
+                if (lips) {
+                    float w;
+                    ss_image_sample_wrap(lips, (x + j + 0.5f) / size, (y + 0.5f) / size, &w);
+                    w = w < 0.0f ? 0.0f : w > 1.0f ? 1.0f : w;
+                    p[SS_BIO_BLOOD] += ((float)s->dist.lip_blood - p[SS_BIO_BLOOD]) * w;
+                    p[SS_BIO_PHEOMELANIN] +=
+                        ((float)s->dist.lip_pheomelanin - p[SS_BIO_PHEOMELANIN]) * w;
+                }
+            }
+        }
+}
+
+/* One feature over the texels of its box inside the tile. */
+static void apply_feature(const ss_skin_settings *s, const ss_skin_feature *f, uint32_t fi,
+                          const wrinkle_flat *wf, double ox, double oy, int tx0, int ty0, int tw,
+                          int th, double mm_per_unit, ss_image *bio) {
+    const int size = s->size;
+    double bx0, by0, bx1, by1;
+    support_box(f, mm_per_unit, &bx0, &by0, &bx1, &by1);
+    bx0 += ox, bx1 += ox, by0 += oy, by1 += oy;
+    int x0 = (int)floor(bx0 * size - 0.5), x1 = (int)ceil(bx1 * size - 0.5);
+    int y0 = (int)floor(by0 * size - 0.5), y1 = (int)ceil(by1 * size - 0.5);
+    if (x0 < tx0) x0 = tx0;
+    if (y0 < ty0) y0 = ty0;
+    if (x1 > tx0 + tw - 1) x1 = tx0 + tw - 1;
+    if (y1 > ty0 + th - 1) y1 = ty0 + th - 1;
+    const double cx = f->x + ox, cy = f->y + oy;
+    const ss_skin_dist *d = &s->dist;
+    if (f->type == SS_FEAT_WRINKLE) {
+        /* per row, the x range where a flattened segment's box grown by the
+         * reach (the width, plus a texel for the flattening) meets the row;
+         * only those texels get the golden-section distance */
+        const float R = (float)(f->w / mm_per_unit) + 1.0f / (float)size;
+        for (int y = y0; y <= y1; y++) {
+            const double v = (y + 0.5) / size;
+            const float fv = (float)(v - oy);
+            float xmin = INFINITY, xmax = -INFINITY;
+            for (int i = 0; i < FLAT; i++) {
+                float ya = fminf(wf->y[i], wf->y[i + 1]) - R,
+                      yb = fmaxf(wf->y[i], wf->y[i + 1]) + R;
+                if (fv < ya || fv > yb) continue;
+                xmin = fminf(xmin, fminf(wf->x[i], wf->x[i + 1]) - R);
+                xmax = fmaxf(xmax, fmaxf(wf->x[i], wf->x[i + 1]) + R);
+            }
+            if (!(xmin <= xmax)) continue;
+            int xa = (int)floor((xmin + ox) * size - 0.5), xb = (int)ceil((xmax + ox) * size - 0.5);
+            if (xa < x0) xa = x0;
+            if (xb > x1) xb = x1;
+            for (int x = xa; x <= xb; x++) {
+                const double u = (x + 0.5) / size;
+                double t;
+                double dist = ss_bezier3_distance(&f->curve, u - ox, v - oy, 8, 2e-3,
+                                                  f->w / mm_per_unit, &t) *
+                              mm_per_unit;
+                double prof = ss_profile_wrinkle(dist, ss_wrinkle_taper(t, f->w));
+                if (prof > 0.0) ss_image_px(bio, x, y)[SS_BIO_HEIGHT_MM] -= (float)(prof * f->h);
+            }
+        }
+        return;
+    }
+    for (int y = y0; y <= y1; y++)
+        for (int x = x0; x <= x1; x++) {
+            const double u = (x + 0.5) / size, v = (y + 0.5) / size;
+            float *p = ss_image_px(bio, x, y);
+            const double dist = sqrt((u - cx) * (u - cx) + (v - cy) * (v - cy)) * mm_per_unit;
+            switch (f->type) {
+            case SS_FEAT_CYST:
+                if (dist < 2.0 * f->r)
+                    p[SS_BIO_HEIGHT_MM] += (float)(ss_profile_sigmoid(dist, f->r) * f->h);
+                break;
+            case SS_FEAT_MOLE:
+                if (dist < 2.0 * f->r) {
+                    double sg = ss_profile_sigmoid(dist, f->r);
+                    p[SS_BIO_MELANIN] += (float)(sg * f->m);
+                    p[SS_BIO_HEIGHT_MM] += (float)(f->h * sg * f->m);
+                }
+                break;
+            case SS_FEAT_FRECKLE: {
+                double a = ss_profile_freckle(dist, f->r);
+                if (a > 0.0) {
+                    double U = ss_rng_uniform(s->seed, 40, (uint64_t)y * size + (uint64_t)x);
+                    p[SS_BIO_MELANIN] += (float)(a * f->m * U);
+                    p[SS_BIO_PHEOMELANIN] += (float)(a * f->p * U);
+                }
+                break;
+            }
+            case SS_FEAT_FOLLICLE: {
+                double al = ss_profile_follicle(dist, f->r, f->r2);
+                if (al > 0.0) {
+                    /* premultiplied "over" while evaluating; un-premultiplied at the end */
+                    for (int c = 0; c < 3; c++)
+                        p[7 + c] = (float)(d->hair_rgb[c] * al + p[7 + c] * (1.0 - al));
+                    p[10] = (float)(al + p[10] * (1.0 - al));
+                    p[SS_BIO_BLOOD] *= (float)(1.0 - d->follicle_blood_drop * al);
+                    if (dist <= f->r && p[SS_BIO_HEIGHT_MM] < d->follicle_height)
+                        p[SS_BIO_HEIGHT_MM] = (float)d->follicle_height;
+                }
+                break;
+            }
+            default:
+                break;
+            }
+            (void)fi;
+        }
+}
+
+ss_image *ss_skin_bio_maps_timed(const ss_skin_settings *s, const ss_skin_fields *fields,
+                                 const ss_skin_feature_list *l, ss_skin_timing *tm, ss_error *err) {
+    ss_status st = ss_skin_settings_validate(s, err);
+    if (st) return NULL;
+    static const ss_skin_fields none;
+    if (!fields) fields = &none;
+    for (size_t i = 0; i < l->n; i++)
+        if (l->f[i].type < 0 || l->f[i].type >= SS_FEAT_NTYPES) {
+            ss_error_set(err, SS_ERR_INPUT, "feature %zu: unknown type %d", i, l->f[i].type);
+            return NULL;
+        }
+    if (l->n > 0xffffffffu) {
+        ss_error_set(err, SS_ERR_INPUT, "too many features (%zu)", l->n);
+        return NULL;
+    }
+    double t0 = ss_now();
+    const double mm_per_unit = s->world_size_cm * 10.0;
+    const int size = s->size;
+    /* priority order: stable sort of indices by type (merge of per-type runs) */
+    uint32_t *order = malloc((l->n ? l->n : 1) * sizeof *order);
+    wrinkle_flat *flat = NULL;
+    size_t nw = 0;
+    for (size_t i = 0; i < l->n; i++) nw += l->f[i].type == SS_FEAT_WRINKLE;
+    uint32_t *flat_of = calloc(l->n ? l->n : 1, sizeof *flat_of);
+    flat = malloc((nw ? nw : 1) * sizeof *flat);
+    ss_image *bio = NULL;
+    tile_index ix = {0};
+    if (!order || !flat || !flat_of) {
+        ss_error_set(err, SS_ERR_NOMEM, "features: out of memory");
+        goto done;
+    }
+    {
+        size_t q = 0;
+        for (int t = 0; t < SS_FEAT_NTYPES; t++)
+            for (size_t i = 0; i < l->n; i++)
+                if (l->f[i].type == t) order[q++] = (uint32_t)i;
+        size_t w = 0;
+        for (size_t i = 0; i < l->n; i++)
+            if (l->f[i].type == SS_FEAT_WRINKLE) {
+                flat_of[i] = (uint32_t)w;
+                for (int k = 0; k <= FLAT; k++) {
+                    double x, y;
+                    ss_bezier3_eval(&l->f[i].curve, (double)k / FLAT, &x, &y);
+                    flat[w].x[k] = (float)x;
+                    flat[w].y[k] = (float)y;
+                }
+                w++;
+            }
+    }
+    if (index_build(l, order, size, mm_per_unit, s->wrap, &ix, err)) goto done;
+    double t1 = ss_now();
+    bio = ss_image_create_uninit(size, size, SS_BIO_NCHANNELS, err);
+    if (!bio) goto done;
+    const int nt = ix.ntiles;
+    const ss_image *lips = fields->lips;
+#pragma omp parallel for schedule(dynamic, 4)
+    for (int t = 0; t < nt * nt; t++) {
+        const int tx0 = (t % nt) * TILE, ty0 = (t / nt) * TILE;
+        const int tw = tx0 + TILE <= size ? TILE : size - tx0;
+        const int th = ty0 + TILE <= size ? TILE : size - ty0;
+        tile_baseline(s, lips, tx0, ty0, tw, th, bio);
+        for (size_t q = ix.start[t]; q < ix.start[t + 1]; q++) {
+            const entry *e = &ix.e[q];
+            const ss_skin_feature *f = &l->f[e->feature];
+            apply_feature(s, f, e->feature,
+                          f->type == SS_FEAT_WRINKLE ? &flat[flat_of[e->feature]] : NULL, e->ox,
+                          e->oy, tx0, ty0, tw, th, mm_per_unit, bio);
+        }
+        /* clamp fractions, un-premultiply the extra colour */
+        for (int y = ty0; y < ty0 + th; y++)
+            for (int x = tx0; x < tx0 + tw; x++) {
+                float *p = ss_image_px(bio, x, y);
+                for (int a = 0; a < 4; a++) p[a] = p[a] < 0.0f ? 0.0f : p[a] > 1.0f ? 1.0f : p[a];
+                if (p[10] > 0.0f)
+                    for (int c = 7; c < 10; c++) p[c] /= p[10];
+            }
+    }
+    if (tm) {
+        tm->index_s = t1 - t0;
+        tm->texels_s = ss_now() - t1;
+    }
+done:
+    index_free(&ix);
+    free(order);
+    free(flat);
+    free(flat_of);
+    return bio;
+}
+
+ss_image *ss_skin_bio_maps(const ss_skin_settings *s, const ss_skin_fields *fields,
+                           const ss_skin_feature_list *features, ss_error *err) {
+    return ss_skin_bio_maps_timed(s, fields, features, NULL, err);
+}
+
+ss_image *ss_skin_bio_default(int size, double world_size_cm, uint64_t seed, ss_error *err) {
+    ss_skin_settings s;
+    if (ss_skin_settings_preset(&s, "forearm", size, err)) return NULL;
+    s.world_size_cm = world_size_cm;
+    s.seed = seed;
+    ss_skin_forearm_counts(world_size_cm, s.count);
+    ss_skin_feature_list l;
+    if (ss_skin_generate(&s, NULL, &l, NULL, 0, err)) return NULL;
+    ss_image *bio = ss_skin_bio_maps(&s, NULL, &l, err);
+    ss_skin_feature_list_free(&l);
+    return bio;
+}

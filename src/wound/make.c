@@ -1,0 +1,421 @@
+/* `skinsim wound` as a library call: run the heal simulation in memory,
+ * observe the tissue after every step, and at each requested day render the
+ * textures and write them in the texture-timeline layout of `skinsim
+ * abrasion` (frames/t<days>_*.png, timeline.json, contact_sheet.png), plus a
+ * glTF scene per day and compare_abrasion.png (the same wound through seed
+ * 000's artist phases, row above row).
+ *
+ * Order of work, so that bad input writes nothing: parse and check the days,
+ * read the table, the recipe and the base skin, create the heal run (which
+ * validates the whole healing problem), check the output directory; only then
+ * stage the output directory (ss_output_dir_begin), fill it and swap it in. */
+#define _POSIX_C_SOURCE 200809L
+#include <cjson/cJSON.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "skinsim/abrasion.h"
+#include "skinsim/wound.h"
+
+void ss_wound_make_config_default(ss_wound_make_config *c) {
+    memset(c, 0, sizeof *c);
+    ss_heal_run_config_default(&c->heal);
+    c->size = 1024;
+    c->compare = 1;
+    c->seed = 1;
+}
+
+/* ---- inputs --------------------------------------------------------------------------- */
+
+typedef struct job {
+    const ss_wound_make_config *c;
+    ss_mm_table *table;
+    ss_wound_recipe recipe;
+    ss_image *skin;
+    ss_heal_run *run;
+    ss_wound_tissue *tissue;
+    ss_wound_renderer *renderer;
+    double side_mm;
+    double t_heal, t_render, t_write, t_setup, t_compare;
+} job;
+
+static void job_free(job *j) {
+    ss_mm_table_free(j->table);
+    ss_image_free(j->skin);
+    ss_wound_renderer_free(j->renderer);
+    ss_wound_tissue_free(j->tissue);
+    ss_heal_run_free(j->run);
+}
+
+static ss_status check_days(const ss_wound_make_config *c, ss_error *err) {
+    if (c->ndays < 1 || c->ndays > 64)
+        return ss_error_set(err, SS_ERR_INPUT, "--days: give 1..64 days");
+    for (int i = 0; i < c->ndays; i++) {
+        if (!(c->days[i] >= 0 && c->days[i] <= 1e4))
+            return ss_error_set(err, SS_ERR_INPUT, "--days: %g is outside 0..10000", c->days[i]);
+        if (i && !(c->days[i] > c->days[i - 1]))
+            return ss_error_set(err, SS_ERR_INPUT,
+                                "--days: list them in increasing order (%g after %g)", c->days[i],
+                                c->days[i - 1]);
+    }
+    if (c->size < 16 || c->size > 16384)
+        return ss_error_set(err, SS_ERR_INPUT, "--size %d is outside 16..16384", c->size);
+    return SS_OK;
+}
+
+static ss_status read_skin(job *j, ss_error *err) {
+    const ss_wound_make_config *c = j->c;
+    j->skin = c->skin_path ? ss_wound_skin_read(c->skin_path, err)
+                           : ss_skin_bio_default(c->size, j->side_mm / 10.0, c->seed, err);
+    return j->skin ? SS_OK : (err->code ? err->code : SS_ERR_INPUT);
+}
+
+static ss_status read_inputs(job *j, ss_error *err) {
+    const ss_wound_make_config *c = j->c;
+    ss_status st = check_days(c, err);
+    if (st) return st;
+    char def[4096];
+    snprintf(def, sizeof def, "%s/modelmatch_default.sstab", ss_data_dir());
+    j->table = ss_mm_table_read(c->table_path ? c->table_path : def, err);
+    if (!j->table) return err->code;
+    ss_wound_recipe_default(&j->recipe);
+    if (c->recipe_path && (st = ss_wound_recipe_load(c->recipe_path, &j->recipe, err))) return st;
+    /* the heal run: in memory, to the last requested day (at least one step) */
+    ss_heal_run_config hc = c->heal;
+    hc.out_dir = NULL;
+    hc.resume_dir = NULL;
+    double last = c->days[c->ndays - 1];
+    hc.days = last > 0 ? last : 1;
+    if ((st = ss_heal_run_create(&hc, &j->run, err))) return st;
+    const ss_heal_grid *g = ss_heal_run_grid(j->run);
+    j->side_mm = g->nx * g->dx_mm;
+    if (fabs(g->ny * g->dx_mm - j->side_mm) > 1e-9 * j->side_mm)
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "the heal block is %g x %g mm; the texture needs a square block "
+                            "(--size-mm X,X,Z)",
+                            j->side_mm, g->ny * g->dx_mm);
+    for (int i = 0; i < c->ndays; i++) {
+        long long k = llround(c->days[i] / ss_heal_run_dt(j->run));
+        if (fabs(k * ss_heal_run_dt(j->run) - c->days[i]) > 1e-6 * (c->days[i] + 1))
+            return ss_error_set(err, SS_ERR_INPUT,
+                                "--days: %g is not a whole number of steps of %g days", c->days[i],
+                                ss_heal_run_dt(j->run));
+    }
+    return read_skin(j, err);
+}
+
+/* The output folder and the inputs it must not overwrite (src/core/output.c). */
+static ss_status declare_outputs(const ss_wound_make_config *c, ss_outputs *outs, ss_error *err) {
+    const char *ins[] = {
+        c->heal.wound_stroke,      c->heal.wound_mask, c->heal.wound_mesh, c->heal.params_path,
+        c->heal.wound_depth_image, c->skin_path,       c->table_path,      c->recipe_path};
+    ss_status st = SS_OK;
+    for (size_t k = 0; k < sizeof ins / sizeof *ins && !st; k++)
+        if (ins[k]) st = ss_outputs_input(outs, ins[k], err);
+    /* per day: PNGs of about 9 bytes a texel before compression, EXRs 20 */
+    double texels = (double)c->size * (double)c->size;
+    double bytes = c->ndays * texels * (c->exr ? 29.0 : 9.0) + 4e6;
+    if (!st) st = ss_outputs_add(outs, "--out", c->out_dir, SS_OUTPUT_DIR, bytes, err);
+    return st;
+}
+
+/* ---- writing --------------------------------------------------------------------------- */
+
+static ss_status write_frame(const char *dir, const char *stem, const ss_wound_textures *t,
+                             double range_mm, int exr, cJSON *files, ss_error *err) {
+    static const char *names[4] = {"base_color", "roughness", "height", "normal"};
+    static const int bits[4] = {8, 8, 16, 8};
+    ss_image *h01 = ss_image_create(t->height->width, t->height->height, 1, err);
+    if (!h01) return err->code;
+    size_t n = (size_t)t->height->width * (size_t)t->height->height;
+    for (size_t i = 0; i < n; i++) {
+        float v = 0.5f + 0.5f * (float)(t->height->data[i] / range_mm);
+        h01->data[i] = v < 0 ? 0 : v > 1 ? 1 : v;
+    }
+    const ss_image *imgs[4] = {t->base_color, t->roughness, h01, t->normal};
+    const ss_image *raw[4] = {t->base_color, t->roughness, t->height, t->normal};
+    ss_error errs[8];
+    ss_status sts[8] = {0};
+    int nfile = exr ? 8 : 4;
+#pragma omp parallel for schedule(dynamic, 1)
+    for (int k = 0; k < nfile; k++) {
+        char path[4600];
+        int m = k % 4;
+        snprintf(path, sizeof path, "%s/%s_%s.%s", dir, stem, names[m], k < 4 ? "png" : "exr");
+        sts[k] = k < 4 ? ss_png_write(path, imgs[m], bits[m], m == 0 ? SS_ENC_SRGB : SS_ENC_LINEAR,
+                                      &errs[k])
+                       : ss_exr_write(path, raw[m], 1, &errs[k]);
+    }
+    ss_image_free(h01);
+    for (int k = 0; k < nfile; k++) {
+        if (sts[k]) {
+            *err = errs[k];
+            return sts[k];
+        }
+        char rel[600], key[32];
+        snprintf(rel, sizeof rel, "%s_%s.%s", stem, names[k % 4], k < 4 ? "png" : "exr");
+        snprintf(key, sizeof key, "%s%s", names[k % 4], k < 4 ? "" : "_exr");
+        cJSON_AddStringToObject(files, key, rel);
+        if (k == 0) cJSON_AddStringToObject(files, "color", rel); /* abrasion's key */
+    }
+    return SS_OK;
+}
+
+/* glTF metallic-roughness: G = roughness, B = metallic 0, R unused (1). */
+static ss_status write_gltf(const char *dir, const char *stem, const ss_wound_textures *t,
+                            double side_mm, cJSON *files, ss_error *err) {
+    int w = t->roughness->width, h = t->roughness->height;
+    ss_image *mr = ss_image_create(w, h, 3, err);
+    if (!mr) return err->code;
+    for (size_t i = 0; i < (size_t)w * (size_t)h; i++) {
+        mr->data[i * 3] = 1;
+        mr->data[i * 3 + 1] = t->roughness->data[i];
+    }
+    char path[4600], rel[600];
+    snprintf(rel, sizeof rel, "%s_metal_rough.png", stem);
+    snprintf(path, sizeof path, "%s/%s", dir, rel);
+    ss_status st = ss_png_write(path, mr, 8, SS_ENC_LINEAR, err);
+    ss_image_free(mr);
+    if (st) return st;
+    cJSON_AddStringToObject(files, "metal_rough", rel);
+    const char *base = strrchr(stem, '/') ? strrchr(stem, '/') + 1 : stem;
+    char col[300], mrn[300], nrm[300];
+    snprintf(col, sizeof col, "%s_base_color.png", base);
+    snprintf(mrn, sizeof mrn, "%s_metal_rough.png", base);
+    snprintf(nrm, sizeof nrm, "%s_normal.png", base);
+    snprintf(rel, sizeof rel, "%s.gltf", stem);
+    snprintf(path, sizeof path, "%s/%s", dir, rel);
+    st = ss_gltf_write_textured_square(path, side_mm / 1000.0, base, col, mrn, nrm, err);
+    if (!st) cJSON_AddStringToObject(files, "gltf", rel);
+    return st;
+}
+
+static void day_label(double day, char *buf, size_t n) { snprintf(buf, n, "day %g", day); }
+
+static ss_status write_sheet(const char *path, ss_image *const *tiles, const char *const *labels,
+                             int n, int columns, ss_error *err) {
+    ss_image *sheet =
+        ss_contact_sheet((const ss_image *const *)tiles, labels, n, 256, columns, err);
+    if (!sheet) return err->code;
+    ss_status st = ss_png_write(path, sheet, 8, SS_ENC_SRGB, err);
+    ss_image_free(sheet);
+    return st;
+}
+
+/* The same wound through seed 000's abrasion phases (top row) and through the
+ * simulation (bottom row), at the same days. */
+static ss_status write_compare(job *j, const char *dir, const ss_image *mask0,
+                               ss_image *const *wound_thumbs, ss_error *err) {
+    const ss_wound_make_config *c = j->c;
+    int size = c->size < 256 ? c->size : 256, n = c->ndays; /* the sheet's tile size */
+    ss_wound_shape *shape = NULL;
+    ss_status st;
+    if (c->heal.wound_stroke) {
+        ss_stroke_set ss;
+        st = ss_stroke_csv_read(c->heal.wound_stroke, &ss, err);
+        if (!st)
+            st = ss_wound_shape_from_strokes(
+                &ss, c->heal.concave_k ? SS_HULL_CONCAVE : SS_HULL_CONVEX,
+                c->heal.concave_k ? c->heal.concave_k : 5, size, c->seed, &shape, err);
+        ss_stroke_set_free(&ss);
+    } else { /* the wound region of day 0 as a mask */
+        st = ss_wound_shape_from_mask(mask0, size, c->seed, &shape, err);
+    }
+    ss_base_skin skin = {0};
+    ss_abrasion *ab = NULL;
+    ss_texture_set frame = {0};
+    ss_abrasion_settings set;
+    ss_abrasion_settings_default(&set);
+    set.size = size;
+    set.world_size_cm = j->side_mm / 10.0;
+    set.seed = c->seed;
+    ss_timeline tl;
+    ss_timeline_default(&tl);
+    if (!st) st = ss_base_skin_create(NULL, NULL, size, c->seed, &skin, err);
+    if (!st) st = ss_abrasion_create(&set, &tl, shape, &skin, &ab, err);
+    if (!st) st = ss_texture_set_create(size, &frame, err);
+    ss_image **tiles = calloc((size_t)(2 * n), sizeof *tiles);
+    char **labels = calloc((size_t)(2 * n), sizeof *labels);
+    if (!st && (!tiles || !labels)) st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    for (int i = 0; !st && i < n; i++) {
+        ss_texture_set col = {frame.color, NULL, NULL, NULL};
+        st = ss_abrasion_frame(ab, c->days[i], &col, err);
+        if (!st && !(tiles[i] = ss_image_clone(frame.color, err))) st = err->code;
+        tiles[n + i] = wound_thumbs[i];
+        char buf[64];
+        snprintf(buf, sizeof buf, "abrasion, day %g", c->days[i]);
+        labels[i] = strdup(buf);
+        snprintf(buf, sizeof buf, "simulated, day %g", c->days[i]);
+        labels[n + i] = strdup(buf);
+        if (!labels[i] || !labels[n + i]) st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    }
+    char path[4600];
+    snprintf(path, sizeof path, "%s/compare_abrasion.png", dir);
+    if (!st) st = write_sheet(path, tiles, (const char *const *)labels, 2 * n, n, err);
+    for (int i = 0; tiles && i < n; i++) ss_image_free(tiles[i]);
+    for (int i = 0; labels && i < 2 * n; i++) free(labels[i]);
+    free(tiles);
+    free(labels);
+    ss_texture_set_free(&frame);
+    ss_abrasion_free(ab);
+    ss_base_skin_free(&skin);
+    ss_wound_shape_free(shape);
+    return st;
+}
+
+/* ---- the run ----------------------------------------------------------------------------- */
+
+static ss_status run_days(job *j, const char *dir, cJSON *frames, ss_image **thumbs,
+                          ss_error *err) {
+    const ss_wound_make_config *c = j->c;
+    ss_wound_textures tex = {0};
+    ss_status st = ss_wound_textures_create(c->size, &tex, err);
+    ss_progress pr;
+    ss_progress_begin(&pr, "wound", (double)ss_heal_run_steps_total(j->run), c->quiet);
+    double range = j->recipe.v[SS_WR_HEIGHT_RANGE_MM];
+    for (int i = 0; !st && i < c->ndays; i++) {
+        long long target = llround(c->days[i] / ss_heal_run_dt(j->run));
+        double t0 = ss_now();
+        while (!st && ss_heal_run_step_index(j->run) < target) {
+            st = ss_heal_run_step(j->run, err);
+            if (!st) ss_wound_tissue_observe(j->tissue, ss_heal_run_grid(j->run));
+            ss_progress_update(&pr, (double)ss_heal_run_step_index(j->run));
+        }
+        double t1 = ss_now();
+        if (!st) st = ss_wound_render(j->renderer, j->tissue, NULL, &tex, err);
+        double t2 = ss_now();
+        char stem[128];
+        snprintf(stem, sizeof stem, "frames/t%g", c->days[i]);
+        cJSON *f = cJSON_CreateObject();
+        cJSON_AddItemToArray(frames, f);
+        cJSON_AddNumberToObject(f, "day", c->days[i]);
+        cJSON_AddStringToObject(f, "phase", "simulated");
+        cJSON *files = cJSON_AddObjectToObject(f, "files");
+        if (!st) st = write_frame(dir, stem, &tex, range, c->exr, files, err);
+        if (!st) st = write_gltf(dir, stem, &tex, j->side_mm, files, err);
+        int ts = c->size < 512 ? c->size : 512;
+        if (!st && !(thumbs[i] = ss_image_resize(tex.base_color, ts, ts, err))) st = err->code;
+        j->t_heal += t1 - t0;
+        j->t_render += t2 - t1;
+        j->t_write += ss_now() - t2;
+        cJSON_AddNumberToObject(f, "heal_s", t1 - t0);
+        cJSON_AddNumberToObject(f, "texture_s", t2 - t1);
+    }
+    ss_progress_end(&pr);
+    ss_wound_textures_free(&tex);
+    return st;
+}
+
+static ss_status make(job *j, const char *dir, cJSON *sum, ss_error *err) {
+    const ss_wound_make_config *c = j->c;
+    ss_wound_render_options ro;
+    ss_wound_render_options_default(&ro);
+    ro.size = c->size;
+    ro.side_mm = j->side_mm;
+    ro.skin = j->skin;
+    ro.table = j->table;
+    ro.recipe = j->recipe;
+    ro.seed = c->seed;
+    double t0 = ss_now();
+    ss_status st = ss_wound_renderer_create(&ro, &j->renderer, err);
+    j->t_setup = ss_now() - t0;
+    if (!st) {
+        j->tissue = ss_wound_tissue_create(ss_heal_run_grid(j->run), ss_heal_run_params(j->run),
+                                           &j->recipe, err);
+        if (!j->tissue) st = err->code;
+    }
+    /* the wound region of day 0, for the abrasion comparison */
+    ss_image *mask0 = NULL;
+    if (!st && !(mask0 = ss_image_create(j->tissue->nx, j->tissue->ny, 1, err))) st = err->code;
+    for (size_t i = 0; !st && i < (size_t)j->tissue->nx * (size_t)j->tissue->ny; i++)
+        mask0->data[i] = j->tissue->plasma[i] > 0.5f ? 1.f : 0.f;
+    char path[4600];
+    snprintf(path, sizeof path, "%s/frames", dir);
+    if (!st) st = ss_mkdir_p(path, err);
+    ss_image **thumbs = calloc((size_t)c->ndays, sizeof *thumbs);
+    char **labels = calloc((size_t)c->ndays, sizeof *labels);
+    if (!thumbs || !labels) st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    cJSON *frames = cJSON_AddArrayToObject(sum, "frames");
+    if (!st) st = run_days(j, dir, frames, thumbs, err);
+    for (int i = 0; !st && i < c->ndays; i++) {
+        char buf[64];
+        day_label(c->days[i], buf, sizeof buf);
+        if (!(labels[i] = strdup(buf))) st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    }
+    snprintf(path, sizeof path, "%s/contact_sheet.png", dir);
+    if (!st)
+        st = write_sheet(path, thumbs, (const char *const *)labels, c->ndays,
+                         c->ndays <= 8 ? c->ndays : 8, err);
+    t0 = ss_now();
+    if (!st && c->compare) st = write_compare(j, dir, mask0, thumbs, err);
+    j->t_compare = ss_now() - t0;
+    ss_image_free(mask0);
+    for (int i = 0; thumbs && i < c->ndays; i++) ss_image_free(thumbs[i]);
+    for (int i = 0; labels && i < c->ndays; i++) free(labels[i]);
+    free(thumbs);
+    free(labels);
+    return st;
+}
+
+static cJSON *summary_base(const job *j) {
+    const ss_wound_make_config *c = j->c;
+    cJSON *s = cJSON_CreateObject();
+    cJSON_AddStringToObject(s, "command", "wound");
+    cJSON_AddStringToObject(s, "scenario", ss_heal_run_scenario(j->run));
+    cJSON_AddArrayToObject(s,
+                           "keys"); /* abrasion's key positions: none, every frame is simulated */
+    cJSON_AddNumberToObject(s, "end_day", c->days[c->ndays - 1]);
+    cJSON_AddNumberToObject(s, "size", c->size);
+    cJSON_AddNumberToObject(s, "world_size_cm", j->side_mm / 10.0);
+    cJSON_AddNumberToObject(s, "seed", (double)c->seed);
+    cJSON_AddNumberToObject(s, "height_range_mm", j->recipe.v[SS_WR_HEIGHT_RANGE_MM]);
+    cJSON_AddStringToObject(s, "height_encoding", "0.5 + 0.5 * height_mm / height_range_mm");
+    cJSON_AddStringToObject(s, "base_skin", c->skin_path ? c->skin_path : "forearm (built-in)");
+    char *rj = ss_wound_recipe_to_json(&j->recipe);
+    cJSON *r = rj ? cJSON_Parse(rj) : NULL;
+    free(rj);
+    if (r) cJSON_AddItemToObject(s, "recipe", cJSON_DetachItemFromObject(r, "recipe"));
+    cJSON_Delete(r);
+    return s;
+}
+
+ss_status ss_wound_make(const ss_wound_make_config *c, char **summary_json, ss_error *err) {
+    if (summary_json) *summary_json = NULL;
+    job j = {0};
+    j.c = c;
+    double t0 = ss_now();
+    ss_outputs *outs = ss_outputs_create("wound", err);
+    ss_status st = outs ? declare_outputs(c, outs, err) : err->code;
+    if (!st) st = read_inputs(&j, err);
+    if (!st) st = ss_outputs_begin(outs, err);
+    if (st) {
+        ss_outputs_free(outs);
+        job_free(&j);
+        return st;
+    }
+    /* everything is validated: from here on, failures are runtime errors */
+    cJSON *sum = summary_base(&j);
+    const char *staging = ss_outputs_path(outs, 0);
+    st = make(&j, staging, sum, err);
+    if (!st) {
+        cJSON_AddNumberToObject(sum, "heal_s", j.t_heal);
+        cJSON_AddNumberToObject(sum, "texture_s", j.t_render);
+        cJSON_AddNumberToObject(sum, "write_s", j.t_write);
+        cJSON_AddNumberToObject(sum, "setup_s", j.t_setup);
+        cJSON_AddNumberToObject(sum, "compare_s", j.t_compare);
+        cJSON_AddNumberToObject(sum, "total_s", ss_now() - t0);
+        char *text = cJSON_Print(sum), path[4600];
+        snprintf(path, sizeof path, "%s/timeline.json", staging);
+        st = text ? ss_write_file_atomic(path, text, strlen(text), err)
+                  : ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+        free(text);
+    }
+    if (st && err->code == SS_ERR_INPUT) st = err->code = SS_ERR_RUNTIME;
+    st = ss_outputs_finish(outs, st, err);
+    ss_outputs_free(outs);
+    if (!st && summary_json) *summary_json = cJSON_PrintUnformatted(sum);
+    cJSON_Delete(sum);
+    job_free(&j);
+    return st;
+}

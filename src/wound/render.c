@@ -1,0 +1,330 @@
+/* Tissue -> biology -> textures, per texel (docs/wound.md has every mapping
+ * with its reason and source):
+ *
+ *   cover = ramp(epithelium)            new epidermis over the bed (1 = closed)
+ *   reg   = ramp(plasma)                the wound region (§4.1.8): tissue that was destroyed
+ *   maturity m(a) = 1 - exp(-a / tau)   a = days since the column closed (observed)
+ *   skin  = lerp(base texel, base mean, reg)     destroyed tissue loses its features
+ *   melanin   = skin x cover x (reg: lerp(new_melanin, scar_melanin, m_pigment))
+ *   epidermis = lerp(floor, skin x (reg: lerp(new_epidermis, 1, m_epidermis)), cover)
+ *   blood     = lerp(skin x capillary x (reg: lerp(1, scar_blood, scar x m_scar))
+ *                    + young_blood x reg x cover x (1 - m_scar),  bed_blood,  open x reg)
+ *   oxygenation = lerp(clot_oxygenation, skin, oxygen)
+ *   -> ModelMatch (GGX base colour, roughness), then the scar's whitening, the
+ *      scab (dried-blood layer, adding formula), roughness of the wet bed, the
+ *      scab and the mature scar, and the height: skin relief - depth (§5.4) +
+ *      scab + keloid (+ the mechanics' displacement).
+ *
+ * Design: the tissue maps are at grid resolution and sampled bilinearly; a
+ * texel whose four source columns are all healthy (and undeformed) is copied
+ * from the base skin's textures (`skinsim skin`'s render maps of the bio map),
+ * so the skin away from the wound is the base skin exactly and only the
+ * wound's texels cost a table lookup (skin.h's render lookup of the GGX fit).
+ * The skin's extra colour (hair) is laid over everything, except where the
+ * tissue was destroyed. Gave up: sub-texel detail of the fields (the grid is
+ * 0.5 mm; bilinear keeps edges soft, as healing edges are). */
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "skinsim/texture.h"
+#include "wound_internal.h"
+
+/* Floors of the open bed: no epidermis and no stratum corneum, held at the
+ * table's smallest samples (the transport needs layers of non-zero
+ * thickness); the melanin floor is the table's too. */
+#define EPI_FLOOR_CM 0.004
+#define SC_FLOOR_CM 0.001
+#define MELANIN_FLOOR 0.0
+
+struct ss_wound_renderer {
+    ss_wound_render_options o;
+    ss_image *skin; /* size x size x SS_BIO_NCHANNELS */
+    ss_skin_lut *lut;
+    float mean[SS_BIO_NCHANNELS];
+    ss_layer_table scab, clot;
+    ss_image *crust; /* value noise 0..1 at ~1.5 mm: the crust is uneven */
+    ss_wound_textures base;
+};
+
+void ss_wound_render_options_default(ss_wound_render_options *o) {
+    memset(o, 0, sizeof *o);
+    o->size = 1024;
+    o->side_mm = 30;
+    ss_wound_recipe_default(&o->recipe);
+    o->scab_photons = 2000;
+    o->seed = 1;
+}
+
+ss_status ss_wound_textures_create(int size, ss_wound_textures *t, ss_error *err) {
+    memset(t, 0, sizeof *t);
+    if (!(t->base_color = ss_image_create(size, size, 3, err)) ||
+        !(t->roughness = ss_image_create(size, size, 1, err)) ||
+        !(t->height = ss_image_create(size, size, 1, err)) ||
+        !(t->normal = ss_image_create(size, size, 3, err))) {
+        ss_wound_textures_free(t);
+        return err->code ? err->code : SS_ERR_NOMEM;
+    }
+    return SS_OK;
+}
+
+void ss_wound_textures_free(ss_wound_textures *t) {
+    ss_image_free(t->base_color);
+    ss_image_free(t->roughness);
+    ss_image_free(t->height);
+    ss_image_free(t->normal);
+    memset(t, 0, sizeof *t);
+}
+
+/* ---- the table lookup (skinsim/skin.h's render lookup of the GGX fit) ------------- */
+
+typedef struct lookup5 {
+    double rgb[3], roughness;
+} lookup5;
+
+/* One texel's bio parameters -> base colour and roughness. */
+static void bio_to_render(const ss_skin_lut *lut, const float *b, lookup5 *out) {
+    float x[6] = {b[SS_BIO_MELANIN],     b[SS_BIO_PHEOMELANIN], b[SS_BIO_BLOOD],
+                  b[SS_BIO_OXYGENATION], b[SS_BIO_SC_CM],       b[SS_BIO_EPIDERMIS_CM]};
+    float r[5];
+    ss_skin_lut_lookup(lut, x, r);
+    for (int c = 0; c < 3; c++) out->rgb[c] = r[c] < 0 ? 0 : r[c] > 1 ? 1 : r[c];
+    out->roughness = r[4] < 0 ? 0 : r[4] > 1 ? 1 : r[4];
+}
+
+/* ---- create ----------------------------------------------------------------------------- */
+
+/* The base skin's textures are `skinsim skin`'s render maps of the bio map. */
+static ss_status render_base(ss_wound_renderer *r, ss_error *err) {
+    ss_skin_maps m;
+    ss_status st = ss_skin_render_maps(r->skin, r->lut, r->o.side_mm / 10.0, 0, &m, err);
+    if (st) return st;
+    r->base.base_color = m.base_color;
+    r->base.roughness = m.roughness;
+    r->base.height = m.height_mm;
+    r->base.normal = m.normal;
+    ss_image_free(m.specular);
+    return SS_OK;
+}
+
+ss_status ss_wound_renderer_create(const ss_wound_render_options *o, ss_wound_renderer **out,
+                                   ss_error *err) {
+    *out = NULL;
+    if (!o->table || !o->skin || o->size < 4 || o->size > 16384 || !(o->side_mm > 0))
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "wound renderer: need a table, a skin, a size "
+                            "of 4..16384 and a side > 0 mm");
+    ss_status st = ss_wound_skin_validate(o->skin, "base skin", err);
+    if (st) return st;
+    ss_wound_renderer *r = calloc(1, sizeof *r);
+    if (!r) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    r->o = *o;
+    r->skin = (o->skin->width == o->size && o->skin->height == o->size)
+                  ? ss_image_clone(o->skin, err)
+                  : ss_image_resize(o->skin, o->size, o->size, err);
+    if (!r->skin) st = err->code ? err->code : SS_ERR_NOMEM;
+    if (!st) {
+        size_t n = (size_t)o->size * (size_t)o->size;
+        for (int c = 0; c < SS_BIO_NCHANNELS; c++) {
+            double acc = 0;
+            for (size_t i = 0; i < n; i++) acc += r->skin->data[i * SS_BIO_NCHANNELS + c];
+            r->mean[c] = (float)(acc / (double)n);
+        }
+    }
+    ss_blood_layer scab, clot;
+    ss_blood_layer_scab(o->recipe.v[SS_WR_SCAB_HB_FACTOR], &scab);
+    ss_blood_layer_clot(o->recipe.v[SS_WR_BED_OXYGENATION], &clot);
+    if (!st) st = ss_layer_table_build(&scab, o->scab_photons, o->seed, &r->scab, err);
+    if (!st) st = ss_layer_table_build(&clot, o->scab_photons, o->seed + 1000, &r->clot, err);
+    if (!st && !(r->lut = ss_skin_lut_create(o->table, err))) st = err->code;
+    if (!st && !(r->crust = ss_image_create(o->size, o->size, 1, err))) st = err->code;
+    if (!st) st = ss_wound__noise(o->size, o->side_mm, 1.5, 2, o->seed, 201, r->crust, err);
+    if (!st) st = render_base(r, err);
+    if (st) {
+        ss_wound_renderer_free(r);
+        return st;
+    }
+    *out = r;
+    return SS_OK;
+}
+
+void ss_wound_renderer_free(ss_wound_renderer *r) {
+    if (!r) return;
+    ss_image_free(r->skin);
+    ss_image_free(r->crust);
+    ss_skin_lut_free(r->lut);
+    ss_wound_textures_free(&r->base);
+    free(r);
+}
+
+const ss_wound_textures *ss_wound_renderer_base(const ss_wound_renderer *r) { return &r->base; }
+
+/* ---- render ------------------------------------------------------------------------------ */
+
+static double ramp(double v, double lo, double hi) {
+    double f = (v - lo) / (hi - lo);
+    f = f < 0 ? 0 : f > 1 ? 1 : f;
+    return f * f * (3 - 2 * f); /* smoothstep: no kinks at the ends */
+}
+static double clamp01(double v) { return v < 0 ? 0 : v > 1 ? 1 : v; }
+static double lerp(double a, double b, double t) { return a + (b - a) * t; }
+
+/* The tissue at one texel (bilinear between column centres, clamped at the edges). */
+typedef struct texel_tissue {
+    double e, cap, oxy, plasma, scab, scar, keloid, depth, age;
+} texel_tissue;
+
+static void sample_tissue(const ss_wound_tissue *t, double mx, double my, texel_tissue *s) {
+    if (mx < 0) mx = 0;
+    if (my < 0) my = 0;
+    if (mx > t->nx - 1) mx = t->nx - 1;
+    if (my > t->ny - 1) my = t->ny - 1;
+    int x0 = (int)mx, y0 = (int)my;
+    int x1 = x0 + 1 < t->nx ? x0 + 1 : x0, y1 = y0 + 1 < t->ny ? y0 + 1 : y0;
+    double fx = mx - x0, fy = my - y0;
+    size_t i00 = (size_t)y0 * t->nx + x0, i01 = (size_t)y0 * t->nx + x1,
+           i10 = (size_t)y1 * t->nx + x0, i11 = (size_t)y1 * t->nx + x1;
+#define BL(m)                                                                                      \
+    ((1 - fy) * ((1 - fx) * (double)(m)[i00] + fx * (double)(m)[i01]) +                            \
+     fy * ((1 - fx) * (double)(m)[i10] + fx * (double)(m)[i11]))
+    s->e = BL(t->epithelium);
+    s->cap = BL(t->capillary);
+    s->oxy = BL(t->oxygen);
+    s->plasma = BL(t->plasma);
+    s->scab = BL(t->scab_mm);
+    s->scar = BL(t->scar);
+    s->keloid = BL(t->keloid_mm);
+    s->depth = BL(t->depth_mm);
+    s->age = BL(t->age_days);
+#undef BL
+}
+
+/* 1 when a column is healthy skin: the mapping is the identity there. */
+static int column_healthy(const ss_wound_tissue *t, size_t i) {
+    return t->epithelium[i] >= 0.999f && fabsf(t->capillary[i] - 1) < 1e-3f &&
+           fabsf(t->oxygen[i] - 1) < 1e-3f && t->plasma[i] < 1e-3f && t->scab_mm[i] < 1e-4f &&
+           t->scar[i] < 1e-4f && t->keloid_mm[i] <= 0 && t->depth_mm[i] < 1e-4f &&
+           t->age_days[i] >= SS_WOUND_AGE_INTACT;
+}
+
+typedef struct texel_out {
+    double rgb[3], roughness, height_mm;
+} texel_out;
+
+static void render_texel(const ss_wound_renderer *r, const float *skin, float crust,
+                         const texel_tissue *s, texel_out *o) {
+    const double *v = r->o.recipe.v;
+    double cover = ramp(s->e, v[SS_WR_EPITHELIUM_LO], v[SS_WR_EPITHELIUM_HI]), open = 1 - cover;
+    double reg = ramp(s->plasma, v[SS_WR_REGION_LO], v[SS_WR_REGION_HI]);
+    double m_scar = 1 - exp(-s->age / v[SS_WR_SCAR_DAYS]);
+    double m_epi = 1 - exp(-s->age / v[SS_WR_EPIDERMIS_DAYS]);
+    double m_pig = 1 - exp(-s->age / v[SS_WR_PIGMENT_DAYS]);
+    double scar = ramp(s->scar, 0, v[SS_WR_SCAR_DENSITY_HI]);
+    float b[SS_BIO_NCHANNELS], k[SS_BIO_NCHANNELS];
+    for (int c = 0; c < SS_BIO_NCHANNELS; c++) k[c] = (float)lerp(skin[c], r->mean[c], reg);
+    double mel = k[SS_BIO_MELANIN] * cover *
+                 lerp(1, lerp(v[SS_WR_NEW_MELANIN], v[SS_WR_SCAR_MELANIN], m_pig), reg);
+    double epi =
+        lerp(EPI_FLOOR_CM,
+             k[SS_BIO_EPIDERMIS_CM] * lerp(1, lerp(v[SS_WR_NEW_EPIDERMIS], 1, m_epi), reg), cover);
+    double sc = lerp(SC_FLOOR_CM, k[SS_BIO_SC_CM], cover * lerp(1, m_epi, reg));
+    double cap = s->cap < 0 ? 0 : s->cap;
+    double tissue_blood =
+        k[SS_BIO_BLOOD] * cap * lerp(1, v[SS_WR_SCAR_BLOOD], reg * scar * m_scar) +
+        v[SS_WR_YOUNG_BLOOD] * reg * cover * (1 - m_scar);
+    double blood = lerp(tissue_blood, v[SS_WR_BED_BLOOD], open * reg);
+    /* blood under cover follows the tissue's oxygen; blood in the open bed is
+     * oxygenated by the air (atmospheric O2 reaches ~0.3 mm deep) */
+    double oxy = lerp(lerp(v[SS_WR_TISSUE_MIN_OXYGENATION], k[SS_BIO_OXYGENATION], clamp01(s->oxy)),
+                      v[SS_WR_BED_OXYGENATION], open * reg);
+    b[SS_BIO_MELANIN] = (float)(mel > MELANIN_FLOOR ? mel : MELANIN_FLOOR);
+    b[SS_BIO_PHEOMELANIN] = k[SS_BIO_PHEOMELANIN];
+    b[SS_BIO_BLOOD] = (float)clamp01(blood);
+    b[SS_BIO_OXYGENATION] = (float)clamp01(oxy);
+    b[SS_BIO_SC_CM] = (float)sc;
+    b[SS_BIO_EPIDERMIS_CM] = (float)epi;
+    lookup5 l;
+    bio_to_render(r->lut, b, &l);
+    /* dense mature collagen scatters more: lift the albedo towards white */
+    double white = v[SS_WR_SCAR_WHITENING] * reg * scar * m_scar * cover;
+    double skin_rgb[3];
+    for (int c = 0; c < 3; c++) skin_rgb[c] = clamp01(l.rgb[c] + white * (1 - l.rgb[c]));
+    /* the clot filling the open, avascular part of the bed (below the
+     * crust), then the scab: blood layers over the skin */
+    /* a crust is uneven: its thickness varies by +-30 % at ~1.5 mm */
+    double thick = s->scab * v[SS_WR_SCAB_SCALE] * (0.7 + 0.6 * crust), R[3], T[3], mid[3];
+    double clot =
+        open * reg * (s->depth - s->scab > 0 ? s->depth - s->scab : 0) * v[SS_WR_CLOT_SCALE];
+    ss_layer_table_eval(&r->clot, clot, R, T);
+    ss_layer_over(R, T, skin_rgb, mid);
+    ss_layer_table_eval(&r->scab, thick, R, T);
+    ss_layer_over(R, T, mid, o->rgb);
+    /* the extra colour (hair) over everything, gone where the tissue was destroyed */
+    double ea = k[SS_BIO_EXTRA_A] * (1 - reg);
+    for (int c = 0; c < 3; c++)
+        o->rgb[c] = clamp01(clamp01(o->rgb[c]) * (1 - ea) + k[SS_BIO_EXTRA_R + c] * ea);
+    double scab_cover = 1 - exp(-thick / 0.05); /* a 0.05 mm crust is matte */
+    double rough = l.roughness;
+    rough = lerp(rough, v[SS_WR_WET_ROUGHNESS], open * reg);
+    rough = lerp(rough, v[SS_WR_SCAR_ROUGHNESS], reg * cover * m_epi * scar);
+    rough = lerp(rough, v[SS_WR_SCAB_ROUGHNESS], scab_cover);
+    o->roughness = clamp01(rough);
+    o->height_mm = k[SS_BIO_HEIGHT_MM] - v[SS_WR_DEPTH_SCALE] * s->depth + thick +
+                   v[SS_WR_KELOID_SCALE] * s->keloid;
+}
+
+ss_status ss_wound_render(ss_wound_renderer *r, const ss_wound_tissue *t,
+                          const ss_image *deformation, ss_wound_textures *out, ss_error *err) {
+    const int n = r->o.size;
+    if (!out->base_color || out->base_color->width != n || !out->roughness || !out->height ||
+        !out->normal)
+        return ss_error_set(err, SS_ERR_INPUT, "wound render: textures must be %dx%d", n, n);
+    if (deformation &&
+        (deformation->width != n || deformation->height != n || deformation->channels != 3))
+        return ss_error_set(err, SS_ERR_INPUT, "wound render: deformation must be %dx%d x 3", n, n);
+    /* per column: healthy (identity mapping) */
+    size_t ncol = (size_t)t->nx * (size_t)t->ny;
+    uint8_t *healthy = malloc(ncol);
+    if (!healthy) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    for (size_t i = 0; i < ncol; i++) healthy[i] = (uint8_t)column_healthy(t, i);
+    const double side_x = t->nx * t->dx_mm, side_y = t->ny * t->dx_mm;
+#pragma omp parallel for schedule(dynamic, 8)
+    for (int y = 0; y < n; y++) {
+        for (int x = 0; x < n; x++) {
+            size_t i = (size_t)y * (size_t)n + (size_t)x;
+            double u = (x + 0.5) / n, vv = (y + 0.5) / n, dz = 0;
+            if (deformation) { /* the material point now sits displaced: sample there */
+                const float *d = deformation->data + i * 3;
+                u += d[0] / side_x;
+                vv -= d[1] / side_y;
+                dz = d[2];
+            }
+            double mx = u * t->nx - 0.5, my = vv * t->ny - 0.5;
+            double cx = mx < 0 ? 0 : mx > t->nx - 1 ? t->nx - 1 : mx;
+            double cy = my < 0 ? 0 : my > t->ny - 1 ? t->ny - 1 : my;
+            int x0 = (int)cx, y0 = (int)cy;
+            int x1 = x0 + 1 < t->nx ? x0 + 1 : x0, y1 = y0 + 1 < t->ny ? y0 + 1 : y0;
+            int base = healthy[(size_t)y0 * t->nx + x0] && healthy[(size_t)y0 * t->nx + x1] &&
+                       healthy[(size_t)y1 * t->nx + x0] && healthy[(size_t)y1 * t->nx + x1];
+            if (base) {
+                for (int c = 0; c < 3; c++)
+                    out->base_color->data[i * 3 + c] = r->base.base_color->data[i * 3 + c];
+                out->roughness->data[i] = r->base.roughness->data[i];
+                out->height->data[i] = r->base.height->data[i] + (float)dz;
+                continue;
+            }
+            texel_tissue s;
+            sample_tissue(t, mx, my, &s);
+            texel_out o;
+            render_texel(r, r->skin->data + i * SS_BIO_NCHANNELS, r->crust->data[i], &s, &o);
+            for (int c = 0; c < 3; c++) out->base_color->data[i * 3 + c] = (float)o.rgb[c];
+            out->roughness->data[i] = (float)o.roughness;
+            out->height->data[i] = (float)(o.height_mm + dz);
+        }
+    }
+    free(healthy);
+    /* height in mm -> normal: slope per texel times texels per mm */
+    ss_height_to_normal(out->height, (float)(n / r->o.side_mm), out->normal);
+    return SS_OK;
+}

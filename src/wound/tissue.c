@@ -1,0 +1,154 @@
+/* The tissue at the skin surface, per grid column (seed 001 §5.4: "we map the
+ * simulated fields back onto the ... mesh"): the epithelial layer, capillary
+ * density and oxygen at the surface, the wound region (plasma, §4.1.8), the
+ * eschar and the collagen above the keloid threshold integrated over the
+ * column, the scar density maximum, the §5.4 wound depth (surface down to the
+ * height where capillaries reach a threshold, interpolated between cells so it
+ * does not step with the voxels), and the time since each column's epithelium
+ * closed (the age of the new tissue, which no field holds: the tracker learns
+ * it by observing the run).
+ *
+ * Design: the maps are at grid resolution (cheap to update every step); the
+ * renderer samples them bilinearly at texel resolution. Columns use the same
+ * tissue rule as ss_heal_surface_map (skip air and the boundary layers), so the
+ * maps equal heal's surface PNGs where both exist. */
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "skinsim/wound.h"
+
+ss_wound_tissue *ss_wound_tissue_create(const ss_heal_grid *g, const ss_heal_params *p,
+                                        const ss_wound_recipe *r, ss_error *err) {
+    ss_wound_tissue *t = calloc(1, sizeof *t);
+    if (!t) {
+        ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+        return NULL;
+    }
+    t->nx = g->nx;
+    t->ny = g->ny;
+    t->dx_mm = g->dx_mm;
+    size_t n = (size_t)g->nx * (size_t)g->ny;
+    float **maps[] = {&t->epithelium, &t->capillary, &t->oxygen,   &t->plasma,  &t->scab_mm,
+                      &t->scar,       &t->keloid_mm, &t->depth_mm, &t->age_days};
+    int ok = 1;
+    for (size_t k = 0; k < sizeof maps / sizeof *maps; k++) ok &= !!(*maps[k] = calloc(n, 4));
+    ok &= !!(t->closed_day = malloc(n * sizeof *t->closed_day));
+    if (!ok) {
+        ss_wound_tissue_free(t);
+        ss_error_set(err, SS_ERR_NOMEM, "out of memory (tissue maps)");
+        return NULL;
+    }
+    float healthy[SS_HEAL_NFIELDS];
+    ss_heal_params_healthy(p, healthy);
+    t->u3_eq = healthy[SS_HEAL_CAPILLARY] > 0 ? healthy[SS_HEAL_CAPILLARY] : 1;
+    t->u1_healthy = healthy[SS_HEAL_OXYGEN] > 0 ? healthy[SS_HEAL_OXYGEN] : 1;
+    t->rho_max = (float)p->rho_max;
+    t->threshold = r->v[SS_WR_CAPILLARY_THRESHOLD];
+    t->scab_min = (float)r->v[SS_WR_SCAB_MIN_DENSITY];
+    for (size_t i = 0; i < n; i++) t->closed_day[i] = -INFINITY; /* intact until seen open */
+    ss_wound_tissue_observe(t, g);
+    return t;
+}
+
+void ss_wound_tissue_free(ss_wound_tissue *t) {
+    if (!t) return;
+    free(t->epithelium);
+    free(t->capillary);
+    free(t->oxygen);
+    free(t->plasma);
+    free(t->scab_mm);
+    free(t->scar);
+    free(t->keloid_mm);
+    free(t->depth_mm);
+    free(t->age_days);
+    free(t->closed_day);
+    free(t);
+}
+
+static int is_tissue(const ss_heal_grid *g, size_t i, int z) {
+    uint8_t c = g->cell[i];
+    return !(c == SS_CELL_AIR || (c == SS_CELL_BOUND && (z == 0 || z == g->nz - 1 ||
+                                                         (z + 0.5) * g->dx_mm > g->skin_top_mm)));
+}
+
+/* §5.4 depth: from the skin surface down to where the capillary density
+ * (relative to healthy) first reaches the threshold, scanning down from the
+ * top tissue cell; linear between cell centres. */
+static float column_depth(const ss_heal_grid *g, const ss_wound_tissue *t, int x, int y, int ztop) {
+    const float *u3 = g->field[SS_HEAL_CAPILLARY];
+    double thr = t->threshold, dx = g->dx_mm;
+    double prev = -1, zc_prev = 0;
+    for (int z = ztop; z >= 1; z--) {
+        size_t i = ss_heal_idx(g, x, y, z);
+        if (!is_tissue(g, i, z)) break;
+        double c = u3[i] / t->u3_eq, zc = (z + 0.5) * dx;
+        if (c >= thr) {
+            if (prev < 0) return 0; /* the top cell is vascular: no depth */
+            double f = (thr - prev) / (c - prev);
+            double zcross = zc_prev + f * (zc - zc_prev);
+            double d = g->skin_top_mm - zcross - 0.5 * dx;
+            return d > 0 ? (float)d : 0;
+        }
+        prev = c;
+        zc_prev = zc;
+    }
+    return (float)(g->skin_top_mm - dx); /* no vascular tissue: the whole column */
+}
+
+void ss_wound_tissue_observe(ss_wound_tissue *t, const ss_heal_grid *g) {
+    const int nx = g->nx, ny = g->ny, nz = g->nz;
+    const float *e = g->field[SS_HEAL_EPITHELIUM], *u3 = g->field[SS_HEAL_CAPILLARY],
+                *u1 = g->field[SS_HEAL_OXYGEN], *pl = g->field[SS_HEAL_PLASMA],
+                *s = g->field[SS_HEAL_ESCHAR], *rho = g->field[SS_HEAL_SCAR];
+    const double day = g->t_days, dx = g->dx_mm;
+    t->day = day;
+#pragma omp parallel for schedule(static) if (nx * ny > 16384)
+    for (int y = 0; y < ny; y++) {
+        for (int x = 0; x < nx; x++) {
+            size_t o = (size_t)(ny - 1 - y) * (size_t)nx + (size_t)x;
+            int ztop = -1, nlayer = 0;
+            float ev = 0, scar = 0;
+            double scab = 0, kel = 0;
+            for (int z = nz - 1; z >= 0; z--) {
+                size_t i = ss_heal_idx(g, x, y, z);
+                if (!is_tissue(g, i, z)) continue;
+                if (ztop < 0) ztop = z;
+                if (nlayer < 2 && (nlayer == 0 || e[i] > ev)) ev = e[i];
+                nlayer++;
+                /* dense eschar is the crust: a ramp of +-0.2 around scab_min */
+                float f = (s[i] - t->scab_min + 0.2f) / 0.4f;
+                f = f < 0 ? 0 : f > 1 ? 1 : f;
+                scab += f * f * (3 - 2 * f) * s[i] * dx;
+                if (rho[i] > scar) scar = rho[i];
+                if (rho[i] > t->rho_max) kel += (rho[i] - t->rho_max) * dx;
+            }
+            if (ztop < 0) { /* a column of air only */
+                t->epithelium[o] = 1, t->capillary[o] = 1, t->oxygen[o] = 1;
+                t->plasma[o] = t->scab_mm[o] = t->scar[o] = t->keloid_mm[o] = t->depth_mm[o] = 0;
+                t->age_days[o] = SS_WOUND_AGE_INTACT;
+                continue;
+            }
+            size_t it = ss_heal_idx(g, x, y, ztop);
+            t->epithelium[o] = ev;
+            t->capillary[o] = u3[it] / t->u3_eq;
+            t->oxygen[o] = u1[it] / t->u1_healthy;
+            t->plasma[o] = pl[it];
+            t->scab_mm[o] = (float)scab;
+            t->scar[o] = scar;
+            t->keloid_mm[o] = (float)kel;
+            t->depth_mm[o] = column_depth(g, t, x, y, ztop);
+            /* closure tracking: open (e < 0.5) sets +inf; the first observation
+             * at or above 0.5 after that records the day */
+            if (ev < 0.5f)
+                t->closed_day[o] = INFINITY;
+            else if (t->closed_day[o] == INFINITY)
+                t->closed_day[o] = day;
+            double cd = t->closed_day[o];
+            t->age_days[o] = cd == -INFINITY  ? SS_WOUND_AGE_INTACT
+                             : cd == INFINITY ? 0.0f
+                                              : (float)(day - cd);
+        }
+    }
+}
