@@ -490,13 +490,14 @@ static ss_status load_single_set(const char *dir, view_layers *out, ss_error *er
         const char *name;
         char *dst;
     } opt[] = {{"reflection", p.refl},
-               {"specular", p.refl},
                {"roughness", p.rough},
+               {"specular", p.refl}, /* only without roughness (skinsim skin writes both) */
                {"height", p.height},
                {"normal", p.normal}};
     for (size_t i = 0; i < sizeof opt / sizeof *opt; i++) {
         char t[4096];
         snprintf(t, sizeof t, "%s/%s%s.png", dir, prefix, opt[i].name);
+        if (opt[i].dst == p.refl && p.rough[0]) continue;
         if (!opt[i].dst[0] && file_exists(t)) snprintf(opt[i].dst, 4096, "%s", t);
     }
     memset(out, 0, sizeof *out);
