@@ -7,8 +7,10 @@
  *
  * Order of work, so that bad input writes nothing: parse and check the days,
  * read the table, the recipe and the base skin, create the heal run (which
- * validates the whole healing problem), check the output directory; only then
- * stage the output directory (ss_output_dir_begin), fill it and swap it in. */
+ * validates the whole healing problem), check the output folder (ss_outputs:
+ * path, lock, a previous folder that is not a finished `wound` one); only
+ * then begin the outputs (lock, leftovers of killed runs, free space against
+ * the estimate), fill the staged folder and swap it in whole. */
 #define _POSIX_C_SOURCE 200809L
 #include <cjson/cJSON.h>
 #include <math.h>
@@ -36,6 +38,7 @@ typedef struct job {
     ss_heal_run *run;
     ss_wound_tissue *tissue;
     ss_wound_renderer *renderer;
+    ss_outputs *outs; /* the output folder (src/core/output.c) */
     double side_mm;
     double t_heal, t_render, t_write, t_setup, t_compare;
 } job;
@@ -46,6 +49,7 @@ static void job_free(job *j) {
     ss_wound_renderer_free(j->renderer);
     ss_wound_tissue_free(j->tissue);
     ss_heal_run_free(j->run);
+    ss_outputs_free(j->outs); /* rolls back anything not finished */
 }
 
 static ss_status check_days(const ss_wound_make_config *c, ss_error *err) {
@@ -123,7 +127,20 @@ static ss_status read_inputs(job *j, ss_error *err) {
                                 ss_heal_run_dt(j->run));
     }
     if ((st = read_skin(j, err))) return st;
-    return ss_check_writable_dir(c->out_dir, err);
+    /* the output folder, checked now; every input file may not be in it */
+    if (!(j->outs = ss_outputs_create("wound", err))) return SS_ERR_NOMEM;
+    const char *ins[] = {
+        c->skin_path,       c->table_path,        c->recipe_path,     c->heal.params_path,
+        c->heal.wound_mask, c->heal.wound_stroke, c->heal.wound_mesh, c->heal.wound_depth_image};
+    for (size_t k = 0; k < sizeof ins / sizeof *ins && !st; k++)
+        st = ss_outputs_input(j->outs, ins[k], err);
+    /* per day: four maps, metal-rough (raw bytes, half of that compressed) and
+     * the glTF; the contact sheet and the comparison */
+    double px = (double)c->size * c->size;
+    double bytes = c->ndays * (0.5 * px * (3 + 1 + 2 + 3 + 3) + 16384) + 4e6;
+    if (c->exr) bytes += c->ndays * px * 16.0;
+    if (!st) st = ss_outputs_add(j->outs, "--out", c->out_dir, SS_OUTPUT_DIR, bytes, err);
+    return st;
 }
 
 /* ---- writing --------------------------------------------------------------------------- */
@@ -398,9 +415,14 @@ ss_status ss_wound_make(const ss_wound_make_config *c, char **summary_json, ss_e
     }
     /* everything is validated: from here on, failures are runtime errors */
     cJSON *sum = summary_base(&j);
-    char *staging = NULL;
-    st = ss_output_dir_begin(c->out_dir, &staging, err);
-    if (!st) st = make(&j, staging, sum, err);
+    /* a busy folder or a disk too small is still bad input (exit 2) */
+    if ((st = ss_outputs_begin(j.outs, err))) {
+        cJSON_Delete(sum);
+        job_free(&j);
+        return st;
+    }
+    const char *staging = ss_outputs_path(j.outs, 0);
+    st = make(&j, staging, sum, err);
     if (!st) {
         cJSON_AddNumberToObject(sum, "heal_s", j.t_heal);
         cJSON_AddNumberToObject(sum, "texture_s", j.t_render);
@@ -414,10 +436,9 @@ ss_status ss_wound_make(const ss_wound_make_config *c, char **summary_json, ss_e
                   : ss_error_set(err, SS_ERR_NOMEM, "out of memory");
         free(text);
     }
-    if (staging) st = ss_output_dir_end(c->out_dir, staging, st, err);
+    st = ss_outputs_finish(j.outs, st, err); /* swapped in whole, or rolled back */
     if (!st && summary_json) *summary_json = cJSON_PrintUnformatted(sum);
     if (st && err->code == SS_ERR_INPUT) st = err->code = SS_ERR_RUNTIME;
-    free(staging);
     cJSON_Delete(sum);
     job_free(&j);
     return st;
