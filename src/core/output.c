@@ -28,6 +28,7 @@
  * without this command's marker is refused rather than replaced. */
 #define _GNU_SOURCE /* renameat2, RENAME_EXCHANGE */
 #include "skinsim/core.h"
+#include "core_internal.h"
 
 #include <dirent.h>
 #include <errno.h>
@@ -112,16 +113,6 @@ static char *dirname_of(const char *p) {
     if (!sl) return strdup(".");
     if (sl == p) return strdup("/");
     return strndup(p, (size_t)(sl - p));
-}
-
-static const char *kind_name(mode_t m) {
-    if (S_ISCHR(m)) return "a character device";
-    if (S_ISBLK(m)) return "a block device";
-    if (S_ISFIFO(m)) return "a named pipe";
-    if (S_ISSOCK(m)) return "a socket";
-    if (S_ISDIR(m)) return "a folder";
-    if (S_ISLNK(m)) return "a symbolic link";
-    return "not a regular file";
 }
 
 static int path_within(const char *inner, const char *outer) {
@@ -365,11 +356,11 @@ static ss_status check_target(const ss_outputs *o, out_entry *e, ss_error *err) 
                 return OUTMSG(e,
                               "is %s; skinsim writes regular files and never replaces anything "
                               "else",
-                              kind_name(st.st_mode));
+                              ss__file_kind(st.st_mode));
         } else {
             if (!S_ISDIR(st.st_mode))
                 return OUTMSG(e, "exists and is %s, not a folder",
-                              S_ISREG(st.st_mode) ? "a file" : kind_name(st.st_mode));
+                              S_ISREG(st.st_mode) ? "a file" : ss__file_kind(st.st_mode));
             if (!strcmp(e->real, "/"))
                 return OUTMSG(e, "%s", "is the root folder; give a folder of its own");
             int ours = ss_output_dir_is_complete(e->real, o->owner) ||
