@@ -205,7 +205,7 @@ static int parse(int argc, char **argv, opts *o, ss_error *err) {
             o->mesh = optarg;
             break;
         case 'j':
-            st = cli_parse_int("--threads", optarg, 1, 4096, &v, err);
+            st = cli_parse_int("--threads", optarg, 1, SS_THREADS_MAX, &v, err);
             o->threads = (int)v;
             break;
         case 'q':
