@@ -275,10 +275,13 @@ double ss_springs_kinetic(const ss_springs *s) {
     return k;
 }
 
-static double mean_rest(const ss_springs *s) {
-    double m = 0;
-    for (int i = 0; i < s->nsprings; i++) m += s->l0[i];
-    return s->nsprings ? m / s->nsprings : 1.0;
+static double mean_rest(ss_springs *s) {
+    if (s->mean_l0 <= 0) {
+        double m = 0;
+        for (int i = 0; i < s->nsprings; i++) m += s->l0[i];
+        s->mean_l0 = s->nsprings ? m / s->nsprings : 1.0;
+    }
+    return s->mean_l0;
 }
 
 /* Largest move a pure gradient step would make: max_i |f_i| / m_i. */
