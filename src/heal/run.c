@@ -27,6 +27,7 @@ void ss_heal_run_config_default(ss_heal_run_config *c) {
     c->snapshot_every = 1;
     c->area_every = 0.01;
     c->checkpoint_every = -1;
+    c->kappa = -1;
 }
 
 void ss_heal_run_free(ss_heal_run *r) {
@@ -41,6 +42,7 @@ void ss_heal_run_free(ss_heal_run *r) {
     free(r->snap_file);
     free(r->out_dir);
     cJSON_Delete(r->wound);
+    ss_heal_run__mech_free(r);
     free(r);
 }
 
@@ -55,7 +57,7 @@ ss_status ss_heal_run__add_row(ss_heal_run *r, ss_error *err) {
     ss_heal_area_row *row = &r->rows[r->nrows++];
     row->t_days = r->g->t_days;
     ss_heal_stats_compute(r->g, &row->st);
-    return SS_OK;
+    return ss_heal_run__mech_row(r, err);
 }
 
 ss_status ss_heal_run__add_snap(ss_heal_run *r, double t, const char *file, ss_error *err) {
@@ -138,6 +140,7 @@ ss_status ss_heal_run_step(ss_heal_run *r, ss_error *err) {
                             ss_heal_run_end_day(r));
     ss_status st = start_output(r, err);
     if (!st) st = ss_heal_step(r->s, r->g, err);
+    if (!st && r->mech) st = ss_mech_step(r->mech, r->g, r->dt, err);
     if (st) return st;
     long long k = (long long)r->g->step;
     int last = k == r->nsteps;
@@ -203,3 +206,6 @@ const ss_heal_area_row *ss_heal_run_area(const ss_heal_run *r, int *n) {
 int ss_heal_run_snapshot_count(const ss_heal_run *r) { return r->nsnap; }
 long long ss_heal_run_resumed_from(const ss_heal_run *r) { return r->resumed_from; }
 const char *ss_heal_run_note(const ss_heal_run *r) { return r->note; }
+struct ss_mech *ss_heal_run_mech(ss_heal_run *r) {
+    return r->mech;
+}
