@@ -2,10 +2,13 @@
  *
  * One frame (ss_mech_step), after the biochemistry has advanced the grid:
  *  1. sample at every spring node, with the B-spline weights, the
- *     myofibroblast density: the fibroblasts under an open wound surface
- *     (a column whose top is in the wound region, initial wound or omega,
- *     weighted by 1 - epithelium at the top), through the whole thickness
- *     (the wound bed's activated dermis pulls with it). Fibroblasts in open
+ *     myofibroblast density: the mean fibroblast density of a column's
+ *     wound-region cells (initial wound or omega: the granulation tissue the
+ *     fibroblasts invade), weighted by 1 - epithelium at the column's top,
+ *     through the column's whole thickness (the wound bed's activated dermis
+ *     pulls with it). It starts at zero (the clot has no fibroblasts) and
+ *     rises as they invade, so contraction sets in after a few days as
+ *     observed clinically. Fibroblasts in open
  *     granulation tissue differentiate into myofibroblasts and these go by
  *     apoptosis once the wound is covered (Desmouliere et al. 1995, Am J
  *     Pathol 146:56); intact skin exerts no net pull. Then the volumetric
@@ -392,15 +395,19 @@ ss_status ss_mech_step(ss_mech *m, ss_heal_grid *g, double dt_days, ss_error *er
     for (int col = 0; col < nx * ny; col++) {
         /* the column's surface: its top tissue cell; open when in the wound
          * region (initial wound or omega) and not yet covered by epithelium */
-        int top = -1, region = 0;
+        int top = -1, nw = 0;
+        float sum = 0.0f;
         for (int z = nz - 1; z >= 0; z--) {
             size_t i = (size_t)z * nx * ny + (size_t)col;
             if (!m->mask[i]) continue;
             if (top < 0) top = z;
-            region |= m->wound0[i] || pla[i] > SS_HEAL_P_MIN;
+            if (m->wound0[i] || pla[i] > SS_HEAL_P_MIN) {
+                sum += fib[i];
+                nw++;
+            }
         }
-        float open = 0.0f;
-        if (top >= 0 && region) {
+        float open = 0.0f, nmean = nw ? sum / (float)nw : 0.0f;
+        if (top >= 0 && nw) {
             float cover = epi[(size_t)top * nx * ny + (size_t)col];
             open = 1.0f - (cover > 1.0f ? 1.0f : cover < 0.0f ? 0.0f : cover);
         }
@@ -412,7 +419,7 @@ ss_status ss_mech_step(ss_mech *m, ss_heal_grid *g, double dt_days, ss_error *er
                 if (e > 1.0f) e = 1.0f;
             }
             m->ecm[i] = e;
-            m->myo[i] = m->mask[i] ? fib[i] * open : 0.0f;
+            m->myo[i] = m->mask[i] ? nmean * open : 0.0f;
         }
     }
     ss_mech_g2p(m->T, m->myo, m->mask, S->x, nn, m->nmyo);
