@@ -134,13 +134,38 @@ ss_status ss_heal_run_write_checkpoint(ss_heal_run *r, ss_error *err) {
     return st;
 }
 
+/* The explicit scheme's step cannot follow every spike of the mechanics'
+ * velocity (the springs snapping into a new configuration): the grid velocity
+ * is capped at what the step admits, 95 % of the CFL budget that diffusion and
+ * reaction leave (docs/mech.md). The split scheme sub-cycles its convection
+ * and needs no cap. */
+static void cap_velocity(ss_heal_run *r) {
+    ss_heal_grid *g = r->g;
+    if (r->scheme != SS_HEAL_EXPLICIT || ss_heal_stable_dt(g, r->p, SS_HEAL_EXPLICIT) >= r->dt)
+        return;
+    float *v[3] = {g->velocity[0], g->velocity[1], g->velocity[2]};
+    g->velocity[0] = g->velocity[1] = g->velocity[2] = NULL;
+    double lim0 = ss_heal_stable_dt(g, r->p, SS_HEAL_EXPLICIT);
+    for (int d = 0; d < 3; d++) g->velocity[d] = v[d];
+    const size_t n = (size_t)g->nx * g->ny * g->nz;
+    double room = 0.95 * g->dx_mm * (1.0 / r->dt - 1.0 / lim0), vmax = 0;
+    for (size_t i = 0; i < n; i++) {
+        double s = fabs(v[0][i]) + fabs(v[1][i]) + fabs(v[2][i]);
+        if (s > vmax) vmax = s;
+    }
+    if (!(vmax > room)) return;
+    float f = room > 0 ? (float)(room / vmax) : 0.0f;
+    for (int d = 0; d < 3; d++)
+        for (size_t i = 0; i < n; i++) v[d][i] *= f;
+}
+
 ss_status ss_heal_run_step(ss_heal_run *r, ss_error *err) {
     if (ss_heal_run_done(r))
         return ss_error_set(err, SS_ERR_INPUT, "heal run: already at its end (day %g)",
                             ss_heal_run_end_day(r));
     ss_status st = start_output(r, err);
     if (!st) st = ss_heal_step(r->s, r->g, err);
-    if (!st && r->mech) st = ss_mech_step(r->mech, r->g, r->dt, err);
+    if (!st && r->mech && !(st = ss_mech_step(r->mech, r->g, r->dt, err))) cap_velocity(r);
     if (st) return st;
     long long k = (long long)r->g->step;
     int last = k == r->nsteps;

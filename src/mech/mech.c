@@ -368,15 +368,20 @@ static void node_gradients(ss_mech *m, const double *f, double *grad) {
 /* Particle fields to the grid: velocity into g->velocity; displacement and
  * theta = div u on the transfer's sub-lattice (theta is only ever sampled
  * there; the grid displacement is upsampled when asked for). */
-static void to_grid(ss_mech *m, ss_heal_grid *g) {
+static void displacement_to_grid(ss_mech *m) {
     const int nn = m->mesh->nnodes;
-    node_gradients(m, m->vel, m->grad);
-    ss_mech_p2g(m->T, m->S->x, nn, m->vel, m->grad, 3, m->mask, g->velocity);
     for (int i = 0; i < 3 * nn; i++) m->disp[i] = m->S->x[i] - m->S->X[i];
     node_gradients(m, m->disp, m->grad);
     ss_mech_p2g_sub(m->T, m->S->x, nn, m->disp, m->grad, 3);
     ss_mech_sub_get(m->T, 3, m->usub, m->usub_valid);
     ss_mech_sub_divergence(m->T, m->usub, m->usub_valid, m->thsub);
+}
+
+static void to_grid(ss_mech *m, ss_heal_grid *g) {
+    const int nn = m->mesh->nnodes;
+    node_gradients(m, m->vel, m->grad);
+    ss_mech_p2g(m->T, m->S->x, nn, m->vel, m->grad, 3, m->mask, g->velocity);
+    displacement_to_grid(m);
 }
 
 ss_status ss_mech_step(ss_mech *m, ss_heal_grid *g, double dt_days, ss_error *err) {
@@ -552,12 +557,24 @@ ss_status ss_mech_state_set(ss_mech *m, const void *buf, size_t size, ss_error *
     return SS_OK;
 }
 
-/* Grid arrays from the restored particles (the same function a step ends
- * with, so a resumed run continues bit for bit). */
+/* The strain from the restored particles (the same function a step ends
+ * with, so a resumed run continues bit for bit); the grid velocity is the
+ * checkpoint's own (a caller may have capped it) unless the grid has none. */
 ss_status ss_mech_state_apply(ss_mech *m, ss_heal_grid *g, ss_error *err) {
     if (!m || !g || g->nx != m->nx || g->ny != m->ny || g->nz != m->nz)
         return ss_error_set(err, SS_ERR_INPUT, "mechanics state: grid does not match");
-    to_grid(m, g);
+    const size_t n = (size_t)g->nx * g->ny * g->nz;
+    int have = 1;
+    for (int d = 0; d < 3; d++)
+        if (!g->velocity[d]) {
+            have = 0;
+            if (!(g->velocity[d] = calloc(n, sizeof(float))))
+                return ss_error_set(err, SS_ERR_NOMEM, "mechanics state: out of memory");
+        }
+    if (have)
+        displacement_to_grid(m);
+    else
+        to_grid(m, g);
     return SS_OK;
 }
 
