@@ -459,6 +459,12 @@ class ss_abrasion_settings(ctypes.Structure):
         ("reference_px", c_double),
         ("scab_height_mm", c_double),
         ("seed", c_uint64),
+        ("mechanics", c_int),
+        ("fibres", c_char_p),
+        ("kappa", c_double),
+        ("tet_size_mm", c_double),
+        ("sutures", c_char_p),
+        ("tet_mesh", c_char_p),
     ]
 
 
