@@ -16,6 +16,7 @@
 #include "skinsim/optics.h"
 #include "skinsim/optics_fit.h"
 #include "skinsim/skin.h"
+#include "skinsim/wound.h"
 
 #define S(t) printf("struct %s %zu\n", #t, sizeof(t))
 #define F(t, f) printf("field %s %s %zu\n", #t, #f, offsetof(t, f))
@@ -82,5 +83,11 @@ int main(void) {
     S(ss_skin_feature_list), F(ss_skin_feature_list, f);
     S(ss_skin_maps), F(ss_skin_maps, specular), F(ss_skin_maps, normal),
         F(ss_skin_maps, height_min_mm), F(ss_skin_maps, height_max_mm);
+    S(ss_wound_recipe);
+    S(ss_wound_render_options), F(ss_wound_render_options, side_mm),
+        F(ss_wound_render_options, skin), F(ss_wound_render_options, table),
+        F(ss_wound_render_options, recipe), F(ss_wound_render_options, scab_photons),
+        F(ss_wound_render_options, seed);
+    S(ss_wound_textures), F(ss_wound_textures, height), F(ss_wound_textures, normal);
     return 0;
 }
