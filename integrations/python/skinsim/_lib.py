@@ -181,6 +181,19 @@ def image_header(arr):
     return img
 
 
+def set_out_image(struct, field, arr, shape, what, keep):
+    """Points struct.field (an ss_image *) at the caller's output array arr,
+    which must be C-contiguous float32 of the given shape; keep collects the
+    headers, which must live until the call that writes through them."""
+    if (not isinstance(arr, np.ndarray) or arr.shape != tuple(shape)
+            or arr.dtype != np.float32 or not arr.flags.c_contiguous):
+        raise InputError("%s must be C-contiguous float32 of shape %s" % (what, tuple(shape)),
+                         SS_ERR_INPUT)
+    h = image_header(arr)
+    keep.append(h)
+    setattr(struct, field, ctypes.pointer(h))
+
+
 def as_image_input(arr, name, channels=None):
     """Validates and converts an image argument to C-contiguous float32
     (copied only when its dtype or layout requires it)."""

@@ -118,13 +118,7 @@ class Textures:
         ts = L.ss_wound_textures()
         hdrs = []
         for m, field in zip(MAPS, ("base_color", "roughness", "height", "normal")):
-            a = out[m]
             want = (n, n, 3) if m in ("base_color", "normal") else (n, n)
-            if a.shape != want or a.dtype != np.float32 or not a.flags.c_contiguous:
-                raise L.InputError("render: out[%r] must be C-contiguous float32 of shape %s"
-                                   % (m, want), L.SS_ERR_INPUT)
-            hh = L.image_header(a)
-            hdrs.append(hh)
-            setattr(ts, field, ctypes.pointer(hh))
+            L.set_out_image(ts, field, out.get(m), want, "render: out[%r]" % m, hdrs)
         L.check(L.lib.ss_wound_render, self._renderer, self._tissue, None, ctypes.byref(ts))
         return out
