@@ -178,12 +178,19 @@ ss_status ss_wound_renderer_create(const ss_wound_render_options *o, ss_wound_re
 void ss_wound_renderer_free(ss_wound_renderer *r);
 /* The base skin's own textures (what the skin looks like without a wound). */
 const ss_wound_textures *ss_wound_renderer_base(const ss_wound_renderer *r);
-/* Textures of the tissue t over the base skin; side_mm: the block's x and y
- * size (the texture covers it). deformation: NULL, or the mechanics' per-texel
- * displacement (3 channels, mm: x, y along the texture (x right, y up), z up),
- * which moves where the fields are sampled and adds to the height. */
+/* Textures of the tissue t over the base skin (the texture covers the heal
+ * block). deformation: NULL, or the mechanics' per-texel displacement of the
+ * material point (3 channels, mm: x, y along the texture (x right, y up), z
+ * up), which moves where the fields are sampled and adds to the height
+ * (ss_wound_deformation_from_grid makes it from the mechanics' grid arrays). */
 ss_status ss_wound_render(ss_wound_renderer *r, const ss_wound_tissue *t,
                           const ss_image *deformation, ss_wound_textures *out, ss_error *err);
+
+/* The per-texel deformation (size x size x 3, mm) from a displacement field on
+ * the heal grid (3 arrays of nx*ny*nz, mm, e.g. ss_mech_grid_displacement):
+ * each column's topmost tissue cell, bilinear between column centres. */
+ss_image *ss_wound_deformation_from_grid(const ss_heal_grid *g, float *const *disp, int size,
+                                         ss_error *err);
 
 /* ---- the whole job: `skinsim wound` --------------------------------------------------- */
 
@@ -198,9 +205,11 @@ typedef struct ss_wound_make_config {
     const char *table_path;  /* NULL = data/modelmatch_default.sstab */
     const char *recipe_path; /* NULL = defaults */
     const char *out_dir;
-    int exr;     /* also write every map as half-float EXR (height in mm) */
-    int compare; /* write compare_abrasion.png (default 1) */
-    int quiet;   /* no progress bar */
+    int exr;       /* also write every map as half-float EXR (height in mm) */
+    int compare;   /* write compare_abrasion.png (default 1) */
+    int mechanics; /* 1: couple the contraction mechanics (skinsim/mech.h, default
+                      parameters, one frame a day) and apply its displacement */
+    int quiet;     /* no progress bar */
     uint64_t seed;
 } ss_wound_make_config;
 void ss_wound_make_config_default(ss_wound_make_config *c);
