@@ -569,6 +569,7 @@ class ss_heal_run_config(ctypes.Structure):
         ("snapshot_every", c_double),
         ("area_every", c_double),
         ("checkpoint_every", c_double),
+        ("velocity", c_int),
         ("out_dir", c_char_p),
         ("force", c_int),
         ("resume_dir", c_char_p),
