@@ -97,8 +97,10 @@ static void test_isotropic_symmetric(void **state) {
     assert_true(r.st.outline_area_mm2 < r.st.initial_outline_area_mm2 * 0.99);
     /* symmetric up to the split scheme's x-then-y-then-z diffusion order */
     assert_float_equal(r.st.extent_x_mm, r.st.extent_y_mm, 1e-2 * r.st.extent_x_mm);
-    assert_float_equal(r.cx, 15.0, 0.02);
-    assert_float_equal(r.cy, 15.0, 0.02);
+    /* the centre stays put to 0.1 mm (the lattice's mirrored cubes are exactly
+     * symmetric only for an even cube count; the default block has 29) */
+    assert_float_equal(r.cx, 15.0, 0.1);
+    assert_float_equal(r.cy, 15.0, 0.1);
     assert_true(r.vmax_grid > 0);
     free(r.pos);
 }

@@ -83,6 +83,14 @@ typedef struct ss_heal_run_config {
                                grid, wound and intervals then come from the checkpoint: only
                                days and checkpoint_every are taken from this config */
     uint64_t seed;          /* recorded in summary.json (the solver draws no random numbers) */
+
+    /* ---- contraction mechanics (seed 001 §4.2-5.3, docs/mech.md; fresh runs) ---- */
+    int mechanics;         /* 1: mass-spring contraction drives the convection (default 0) */
+    const char *fibres;    /* "X,Y,Z[:X,Y,Z]" fibre families; NULL = params file or default */
+    double kappa;          /* fibre dispersion 0..1/3; < 0 = params file or default */
+    double tet_size_mm;    /* lattice tet edge; 0 = params file or default */
+    const char *sutures;   /* stitches CSV "x1,y1,z1,x2,y2,z2[,remove_day]" (mm); NULL = none */
+    const char *tet_mesh;  /* TetGen .node/.ele or Gmsh .msh instead of the lattice; NULL */
 } ss_heal_run_config;
 
 /* The defaults listed above (every other field 0 / NULL). */
@@ -148,6 +156,8 @@ int ss_heal_run_snapshot_count(const ss_heal_run *r);
 long long ss_heal_run_resumed_from(const ss_heal_run *r);
 /* Checkpoints skipped as damaged while resuming ("" if none). */
 const char *ss_heal_run_note(const ss_heal_run *r);
+/* The contraction mechanics of the run (skinsim/mech.h), NULL when off. */
+struct ss_mech *ss_heal_run_mech(ss_heal_run *r);
 
 #ifdef __cplusplus
 }

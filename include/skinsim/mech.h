@@ -255,8 +255,9 @@ float *const *ss_mech_grid_displacement(ss_mech *m);
 size_t ss_mech_state_size(const ss_mech *m);
 void ss_mech_state_get(const ss_mech *m, void *buf);
 ss_status ss_mech_state_set(ss_mech *m, const void *buf, size_t size, ss_error *err);
-/* After state_set: rebuilds the grid velocity, displacement and strain from
- * the restored particles, exactly as the step that saved them left them. */
+/* After state_set: rebuilds the displacement and strain from the restored
+ * particles, exactly as the step that saved them left them; the grid's
+ * velocity is kept when it has one (restored with it), else rebuilt. */
 ss_status ss_mech_state_apply(ss_mech *m, ss_heal_grid *g, ss_error *err);
 /* Kernel width w = (N_c/N_m)^(1/3) in cells and the sub-lattice stride used. */
 double ss_mech_kernel(const ss_mech *m, int *stride);

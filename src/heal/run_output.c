@@ -60,6 +60,7 @@ char *ss_heal_run__aux_json(const ss_heal_run *r, double wall) {
         cJSON_AddItemToArray(e, cJSON_CreateString(r->snap_file[i]));
         cJSON_AddItemToArray(sn, e);
     }
+    ss_heal_run__mech_aux(r, j);
     char *s = cJSON_PrintUnformatted(j);
     cJSON_Delete(j);
     return s;
@@ -131,6 +132,9 @@ ss_status ss_heal_run__aux_restore(ss_heal_run *r, const char *aux, const char *
     if (cJSON_IsNumber(wall)) r->wall_prev = wall->valuedouble;
     cJSON *w = cJSON_GetObjectItem(j, "wound");
     if (w) r->wound = cJSON_Duplicate(w, 1);
+    cJSON *mo = cJSON_GetObjectItem(j, "mechanics");
+    if (mo && !(r->mech_aux = cJSON_Duplicate(mo, 1)))
+        st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     if (!st) st = restore_rows(r, area, dir, err);
     if (!st) st = restore_snaps(r, snaps, dir, err);
     cJSON_Delete(j);
@@ -401,7 +405,17 @@ ss_status ss_heal_run__snapshot(ss_heal_run *r, ss_error *err) {
     /* a resumed run may redo snapshots the killed run wrote after its checkpoint */
     snprintf(rel, sizeof rel, "fields_%04d.vti", idx);
     snprintf(path, sizeof path, "%s/fields/%s", r->out_dir, rel);
-    ss_status st = ss_heal_vti_write(path, r->g, err);
+    ss_status st;
+    if (r->mech) { /* the displacement next to the velocity */
+        float *const *u = ss_mech_grid_displacement(r->mech);
+        if (!u) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+        const char *name = "displacement";
+        float *const vec[1][3] = {{u[0], u[1], u[2]}};
+        st = ss_heal_vti_write_vectors(path, r->g, 1, &name, vec, err);
+    } else {
+        st = ss_heal_vti_write(path, r->g, err);
+    }
+    if (!st) st = ss_heal_run__mech_snapshot(r, idx, err);
     if (!st) st = ss_heal_run__add_snap(r, r->g->t_days, rel, err);
     if (st) return st;
     snprintf(path, sizeof path, "%s/fields/fields.pvd", r->out_dir);
@@ -485,6 +499,7 @@ cJSON *ss_heal_run__summary(const ss_heal_run *r, double wall) {
         cJSON_AddNumberToObject(j, "resumed_from_step", (double)r->resumed_from);
     cJSON *pj = cJSON_Parse(r->params_json);
     cJSON_AddItemToObject(j, "params", pj ? pj : cJSON_CreateString(r->params_json));
+    ss_heal_run__mech_summary(r, j);
     return j;
 }
 
@@ -511,7 +526,12 @@ ss_status ss_heal_run__write_tables(ss_heal_run *r, double wall, cJSON **summary
     char path[4400], title[256];
     *summary = NULL;
     snprintf(path, sizeof path, "%s/area.csv", r->out_dir);
-    ss_status st = ss_heal_area_csv_write(path, r->rows, r->nrows, err);
+    const char *const *cn = NULL;
+    double *cv = NULL;
+    int nc = ss_heal_run__mech_columns(r, &cn, &cv);
+    if (nc < 0) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    ss_status st = ss_heal_area_csv_write_columns(path, r->rows, r->nrows, nc, cn, cv, err);
+    free(cv);
     if (st) return st;
     snprintf(path, sizeof path, "%s/area.png", r->out_dir);
     snprintf(title, sizeof title, "Normalised open wound area - %s scenario", r->scenario);

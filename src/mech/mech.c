@@ -2,10 +2,13 @@
  *
  * One frame (ss_mech_step), after the biochemistry has advanced the grid:
  *  1. sample at every spring node, with the B-spline weights, the
- *     myofibroblast density: the fibroblasts under an open wound surface
- *     (a column whose top is in the wound region, initial wound or omega,
- *     weighted by 1 - epithelium at the top), through the whole thickness
- *     (the wound bed's activated dermis pulls with it). Fibroblasts in open
+ *     myofibroblast density: the mean fibroblast density of a column's
+ *     wound-region cells (initial wound or omega: the granulation tissue the
+ *     fibroblasts invade), weighted by 1 - epithelium at the column's top,
+ *     through the column's whole thickness (the wound bed's activated dermis
+ *     pulls with it). It starts at zero (the clot has no fibroblasts) and
+ *     rises as they invade, so contraction sets in after a few days as
+ *     observed clinically. Fibroblasts in open
  *     granulation tissue differentiate into myofibroblasts and these go by
  *     apoptosis once the wound is covered (Desmouliere et al. 1995, Am J
  *     Pathol 146:56); intact skin exerts no net pull. Then the volumetric
@@ -365,15 +368,20 @@ static void node_gradients(ss_mech *m, const double *f, double *grad) {
 /* Particle fields to the grid: velocity into g->velocity; displacement and
  * theta = div u on the transfer's sub-lattice (theta is only ever sampled
  * there; the grid displacement is upsampled when asked for). */
-static void to_grid(ss_mech *m, ss_heal_grid *g) {
+static void displacement_to_grid(ss_mech *m) {
     const int nn = m->mesh->nnodes;
-    node_gradients(m, m->vel, m->grad);
-    ss_mech_p2g(m->T, m->S->x, nn, m->vel, m->grad, 3, m->mask, g->velocity);
     for (int i = 0; i < 3 * nn; i++) m->disp[i] = m->S->x[i] - m->S->X[i];
     node_gradients(m, m->disp, m->grad);
     ss_mech_p2g_sub(m->T, m->S->x, nn, m->disp, m->grad, 3);
     ss_mech_sub_get(m->T, 3, m->usub, m->usub_valid);
     ss_mech_sub_divergence(m->T, m->usub, m->usub_valid, m->thsub);
+}
+
+static void to_grid(ss_mech *m, ss_heal_grid *g) {
+    const int nn = m->mesh->nnodes;
+    node_gradients(m, m->vel, m->grad);
+    ss_mech_p2g(m->T, m->S->x, nn, m->vel, m->grad, 3, m->mask, g->velocity);
+    displacement_to_grid(m);
 }
 
 ss_status ss_mech_step(ss_mech *m, ss_heal_grid *g, double dt_days, ss_error *err) {
@@ -392,15 +400,19 @@ ss_status ss_mech_step(ss_mech *m, ss_heal_grid *g, double dt_days, ss_error *er
     for (int col = 0; col < nx * ny; col++) {
         /* the column's surface: its top tissue cell; open when in the wound
          * region (initial wound or omega) and not yet covered by epithelium */
-        int top = -1, region = 0;
+        int top = -1, nw = 0;
+        float sum = 0.0f;
         for (int z = nz - 1; z >= 0; z--) {
             size_t i = (size_t)z * nx * ny + (size_t)col;
             if (!m->mask[i]) continue;
             if (top < 0) top = z;
-            region |= m->wound0[i] || pla[i] > SS_HEAL_P_MIN;
+            if (m->wound0[i] || pla[i] > SS_HEAL_P_MIN) {
+                sum += fib[i];
+                nw++;
+            }
         }
-        float open = 0.0f;
-        if (top >= 0 && region) {
+        float open = 0.0f, nmean = nw ? sum / (float)nw : 0.0f;
+        if (top >= 0 && nw) {
             float cover = epi[(size_t)top * nx * ny + (size_t)col];
             open = 1.0f - (cover > 1.0f ? 1.0f : cover < 0.0f ? 0.0f : cover);
         }
@@ -412,7 +424,7 @@ ss_status ss_mech_step(ss_mech *m, ss_heal_grid *g, double dt_days, ss_error *er
                 if (e > 1.0f) e = 1.0f;
             }
             m->ecm[i] = e;
-            m->myo[i] = m->mask[i] ? fib[i] * open : 0.0f;
+            m->myo[i] = m->mask[i] ? nmean * open : 0.0f;
         }
     }
     ss_mech_g2p(m->T, m->myo, m->mask, S->x, nn, m->nmyo);
@@ -545,12 +557,24 @@ ss_status ss_mech_state_set(ss_mech *m, const void *buf, size_t size, ss_error *
     return SS_OK;
 }
 
-/* Grid arrays from the restored particles (the same function a step ends
- * with, so a resumed run continues bit for bit). */
+/* The strain from the restored particles (the same function a step ends
+ * with, so a resumed run continues bit for bit); the grid velocity is the
+ * checkpoint's own (a caller may have capped it) unless the grid has none. */
 ss_status ss_mech_state_apply(ss_mech *m, ss_heal_grid *g, ss_error *err) {
     if (!m || !g || g->nx != m->nx || g->ny != m->ny || g->nz != m->nz)
         return ss_error_set(err, SS_ERR_INPUT, "mechanics state: grid does not match");
-    to_grid(m, g);
+    const size_t n = (size_t)g->nx * g->ny * g->nz;
+    int have = 1;
+    for (int d = 0; d < 3; d++)
+        if (!g->velocity[d]) {
+            have = 0;
+            if (!(g->velocity[d] = calloc(n, sizeof(float))))
+                return ss_error_set(err, SS_ERR_NOMEM, "mechanics state: out of memory");
+        }
+    if (have)
+        displacement_to_grid(m);
+    else
+        to_grid(m, g);
     return SS_OK;
 }
 

@@ -15,12 +15,28 @@
 #include "skinsim/heal_run.h"
 #include "skinsim/optics.h"
 #include "skinsim/optics_fit.h"
+/* skin.h and wound.h both define SS_BIO_* channel enums (11 and 7
+ * channels) and cannot share a translation unit: the script compiles this
+ * file twice, once with SKINSIM_ABI_WOUND. */
+#ifdef SKINSIM_ABI_WOUND
+#include "skinsim/wound.h"
+#else
 #include "skinsim/skin.h"
+#endif
 
 #define S(t) printf("struct %s %zu\n", #t, sizeof(t))
 #define F(t, f) printf("field %s %s %zu\n", #t, #f, offsetof(t, f))
 
 int main(void) {
+#ifdef SKINSIM_ABI_WOUND
+    S(ss_wound_recipe);
+    S(ss_wound_render_options), F(ss_wound_render_options, side_mm),
+        F(ss_wound_render_options, skin), F(ss_wound_render_options, table),
+        F(ss_wound_render_options, recipe), F(ss_wound_render_options, scab_photons),
+        F(ss_wound_render_options, seed);
+    S(ss_wound_textures), F(ss_wound_textures, height), F(ss_wound_textures, normal);
+    return 0;
+#else
     S(ss_error), F(ss_error, code), F(ss_error, msg);
     S(ss_image), F(ss_image, width), F(ss_image, channels), F(ss_image, data);
     S(ss_bio_params), F(ss_bio_params, melanin), F(ss_bio_params, betacarotene_g_per_l);
@@ -85,4 +101,5 @@ int main(void) {
     S(ss_skin_maps), F(ss_skin_maps, specular), F(ss_skin_maps, normal),
         F(ss_skin_maps, height_min_mm), F(ss_skin_maps, height_max_mm);
     return 0;
+#endif
 }
