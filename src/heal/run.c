@@ -27,6 +27,7 @@ void ss_heal_run_config_default(ss_heal_run_config *c) {
     c->snapshot_every = 1;
     c->area_every = 0.01;
     c->checkpoint_every = -1;
+    c->kappa = -1;
 }
 
 void ss_heal_run_free(ss_heal_run *r) {
@@ -42,6 +43,7 @@ void ss_heal_run_free(ss_heal_run *r) {
     free(r->out_dir);
     ss_outputs_free(r->outs); /* rolls back outputs not finished */
     cJSON_Delete(r->wound);
+    ss_heal_run__mech_free(r);
     free(r);
 }
 
@@ -56,7 +58,7 @@ ss_status ss_heal_run__add_row(ss_heal_run *r, ss_error *err) {
     ss_heal_area_row *row = &r->rows[r->nrows++];
     row->t_days = r->g->t_days;
     ss_heal_stats_compute(r->g, &row->st);
-    return SS_OK;
+    return ss_heal_run__mech_row(r, err);
 }
 
 ss_status ss_heal_run__add_snap(ss_heal_run *r, double t, const char *file, ss_error *err) {
@@ -158,12 +160,38 @@ ss_status ss_heal_run_write_checkpoint(ss_heal_run *r, ss_error *err) {
     return st;
 }
 
+/* The explicit scheme's step cannot follow every spike of the mechanics'
+ * velocity (the springs snapping into a new configuration): the grid velocity
+ * is capped at what the step admits, 95 % of the CFL budget that diffusion and
+ * reaction leave (docs/mech.md). The split scheme sub-cycles its convection
+ * and needs no cap. */
+static void cap_velocity(ss_heal_run *r) {
+    ss_heal_grid *g = r->g;
+    if (r->scheme != SS_HEAL_EXPLICIT || ss_heal_stable_dt(g, r->p, SS_HEAL_EXPLICIT) >= r->dt)
+        return;
+    float *v[3] = {g->velocity[0], g->velocity[1], g->velocity[2]};
+    g->velocity[0] = g->velocity[1] = g->velocity[2] = NULL;
+    double lim0 = ss_heal_stable_dt(g, r->p, SS_HEAL_EXPLICIT);
+    for (int d = 0; d < 3; d++) g->velocity[d] = v[d];
+    const size_t n = (size_t)g->nx * g->ny * g->nz;
+    double room = 0.95 * g->dx_mm * (1.0 / r->dt - 1.0 / lim0), vmax = 0;
+    for (size_t i = 0; i < n; i++) {
+        double s = fabs(v[0][i]) + fabs(v[1][i]) + fabs(v[2][i]);
+        if (s > vmax) vmax = s;
+    }
+    if (!(vmax > room)) return;
+    float f = room > 0 ? (float)(room / vmax) : 0.0f;
+    for (int d = 0; d < 3; d++)
+        for (size_t i = 0; i < n; i++) v[d][i] *= f;
+}
+
 ss_status ss_heal_run_step(ss_heal_run *r, ss_error *err) {
     if (ss_heal_run_done(r))
         return ss_error_set(err, SS_ERR_INPUT, "heal run: already at its end (day %g)",
                             ss_heal_run_end_day(r));
     ss_status st = start_output(r, err);
     if (!st) st = ss_heal_step(r->s, r->g, err);
+    if (!st && r->mech && !(st = ss_mech_step(r->mech, r->g, r->dt, err))) cap_velocity(r);
     if (st) return st;
     long long k = (long long)r->g->step;
     int last = k == r->nsteps;
@@ -232,3 +260,6 @@ const ss_heal_area_row *ss_heal_run_area(const ss_heal_run *r, int *n) {
 int ss_heal_run_snapshot_count(const ss_heal_run *r) { return r->nsnap; }
 long long ss_heal_run_resumed_from(const ss_heal_run *r) { return r->resumed_from; }
 const char *ss_heal_run_note(const ss_heal_run *r) { return r->note; }
+struct ss_mech *ss_heal_run_mech(ss_heal_run *r) {
+    return r->mech;
+}

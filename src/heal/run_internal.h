@@ -8,6 +8,7 @@
 #include <cjson/cJSON.h>
 
 #include "skinsim/heal_run.h"
+#include "skinsim/mech.h"
 
 struct ss_heal_run {
     ss_heal_run_config c; /* copy; string fields point at the caller's strings */
@@ -33,6 +34,17 @@ struct ss_heal_run {
     int started; /* output directory prepared (and day-0 snapshot written) */
     char note[2048];
     cJSON *wound; /* description for summary.json */
+    /* contraction mechanics (run_mech.c); mech NULL when off */
+    ss_mech *mech;
+    ss_mech_params mp;
+    ss_mech_suture *sutures;
+    int nsutures;
+    double *outline; /* per area row: the deformed initial outline's area, mm^2 */
+    int capoutline;
+    int closed;            /* 95 % closure reached; close_* hold the state then */
+    double close_day;
+    ss_mech_stats close_st;
+    cJSON *mech_aux;       /* the checkpoint's "mechanics" object while resuming */
 };
 
 /* run.c */
@@ -64,5 +76,16 @@ ss_status ss_heal_run__check_identity(const char *dir, const ss_heal_checkpoint 
 /* area.csv, area.png, summary.json; the summary as cJSON in *summary. */
 ss_status ss_heal_run__write_tables(ss_heal_run *r, double wall, cJSON **summary, ss_error *err);
 cJSON *ss_heal_run__summary(const ss_heal_run *r, double wall);
+
+/* run_mech.c: the contraction mechanics inside a run */
+ss_status ss_heal_run__mech_setup_fresh(ss_heal_run *r, ss_error *err);
+ss_status ss_heal_run__mech_setup_resume(ss_heal_run *r, const char *dir, ss_error *err);
+ss_status ss_heal_run__mech_row(ss_heal_run *r, ss_error *err); /* after a row was added */
+ss_status ss_heal_run__mech_snapshot(ss_heal_run *r, int idx, ss_error *err);
+void ss_heal_run__mech_aux(const ss_heal_run *r, cJSON *aux);     /* into checkpoint metadata */
+void ss_heal_run__mech_summary(const ss_heal_run *r, cJSON *summary);
+/* Extra area.csv columns: *names (static) and values n x ncols (malloc'd); 0 when off. */
+int ss_heal_run__mech_columns(const ss_heal_run *r, const char *const **names, double **vals);
+void ss_heal_run__mech_free(ss_heal_run *r);
 
 #endif

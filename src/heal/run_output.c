@@ -26,6 +26,13 @@
 
 /* ---- checkpoint metadata ------------------------------------------------------------ */
 
+/* Values per stored area row: t, open, region and initial area, the field
+ * means, then eschar over the wound, scar volume and scar maximum (rows of
+ * checkpoints written before these three existed have only the first ones;
+ * they read as 0). */
+#define ROW_VALUES_OLD (4 + SS_HEAL_NFIELDS)
+#define ROW_VALUES (7 + SS_HEAL_NFIELDS)
+
 char *ss_heal_run__aux_json(const ss_heal_run *r, double wall) {
     cJSON *j = cJSON_CreateObject();
     cJSON_AddNumberToObject(j, "days", r->days);
@@ -38,10 +45,13 @@ char *ss_heal_run__aux_json(const ss_heal_run *r, double wall) {
     cJSON *a = cJSON_AddArrayToObject(j, "area");
     for (int i = 0; i < r->nrows; i++) {
         const ss_heal_area_row *row = &r->rows[i];
-        double v[4 + SS_HEAL_NFIELDS] = {row->t_days, row->st.open_area_mm2,
-                                         row->st.wound_region_area_mm2, row->st.initial_area_mm2};
+        double v[ROW_VALUES] = {row->t_days, row->st.open_area_mm2, row->st.wound_region_area_mm2,
+                                row->st.initial_area_mm2};
         for (int k = 0; k < SS_HEAL_NFIELDS; k++) v[4 + k] = row->st.field_mean[k];
-        cJSON_AddItemToArray(a, cJSON_CreateDoubleArray(v, 4 + SS_HEAL_NFIELDS));
+        v[4 + SS_HEAL_NFIELDS] = row->st.eschar_wound_mean;
+        v[5 + SS_HEAL_NFIELDS] = row->st.scar_volume_mm3;
+        v[6 + SS_HEAL_NFIELDS] = row->st.scar_max;
+        cJSON_AddItemToArray(a, cJSON_CreateDoubleArray(v, ROW_VALUES));
     }
     cJSON *sn = cJSON_AddArrayToObject(j, "snapshots");
     for (int i = 0; i < r->nsnap; i++) {
@@ -50,6 +60,7 @@ char *ss_heal_run__aux_json(const ss_heal_run *r, double wall) {
         cJSON_AddItemToArray(e, cJSON_CreateString(r->snap_file[i]));
         cJSON_AddItemToArray(sn, e);
     }
+    ss_heal_run__mech_aux(r, j);
     char *s = cJSON_PrintUnformatted(j);
     cJSON_Delete(j);
     return s;
@@ -58,10 +69,11 @@ char *ss_heal_run__aux_json(const ss_heal_run *r, double wall) {
 static ss_status restore_rows(ss_heal_run *r, const cJSON *area, const char *dir, ss_error *err) {
     const cJSON *e;
     cJSON_ArrayForEach(e, area) {
-        if (cJSON_GetArraySize(e) != 4 + SS_HEAL_NFIELDS)
+        const int nv = cJSON_GetArraySize(e);
+        if (nv != ROW_VALUES && nv != ROW_VALUES_OLD)
             return ss_error_set(err, SS_ERR_INPUT, "%s: checkpoint area rows malformed", dir);
-        double v[4 + SS_HEAL_NFIELDS];
-        for (int k = 0; k < 4 + SS_HEAL_NFIELDS; k++) {
+        double v[ROW_VALUES] = {0};
+        for (int k = 0; k < nv; k++) {
             const cJSON *x = cJSON_GetArrayItem(e, k);
             if (!cJSON_IsNumber(x))
                 return ss_error_set(err, SS_ERR_INPUT, "%s: checkpoint area rows malformed", dir);
@@ -75,6 +87,9 @@ static ss_status restore_rows(ss_heal_run *r, const cJSON *area, const char *dir
         row->st.wound_region_area_mm2 = v[2];
         row->st.initial_area_mm2 = v[3];
         for (int k = 0; k < SS_HEAL_NFIELDS; k++) row->st.field_mean[k] = v[4 + k];
+        row->st.eschar_wound_mean = v[4 + SS_HEAL_NFIELDS];
+        row->st.scar_volume_mm3 = v[5 + SS_HEAL_NFIELDS];
+        row->st.scar_max = v[6 + SS_HEAL_NFIELDS];
     }
     return SS_OK;
 }
@@ -117,6 +132,9 @@ ss_status ss_heal_run__aux_restore(ss_heal_run *r, const char *aux, const char *
     if (cJSON_IsNumber(wall)) r->wall_prev = wall->valuedouble;
     cJSON *w = cJSON_GetObjectItem(j, "wound");
     if (w) r->wound = cJSON_Duplicate(w, 1);
+    cJSON *mo = cJSON_GetObjectItem(j, "mechanics");
+    if (mo && !(r->mech_aux = cJSON_Duplicate(mo, 1)))
+        st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     if (!st) st = restore_rows(r, area, dir, err);
     if (!st) st = restore_snaps(r, snaps, dir, err);
     cJSON_Delete(j);
@@ -387,7 +405,17 @@ ss_status ss_heal_run__snapshot(ss_heal_run *r, ss_error *err) {
     /* a resumed run may redo snapshots the killed run wrote after its checkpoint */
     snprintf(rel, sizeof rel, "fields_%04d.vti", idx);
     snprintf(path, sizeof path, "%s/fields/%s", r->out_dir, rel);
-    ss_status st = ss_heal_vti_write(path, r->g, err);
+    ss_status st;
+    if (r->mech) { /* the displacement next to the velocity */
+        float *const *u = ss_mech_grid_displacement(r->mech);
+        if (!u) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+        const char *name = "displacement";
+        float *const vec[1][3] = {{u[0], u[1], u[2]}};
+        st = ss_heal_vti_write_vectors(path, r->g, 1, &name, vec, err);
+    } else {
+        st = ss_heal_vti_write(path, r->g, err);
+    }
+    if (!st) st = ss_heal_run__mech_snapshot(r, idx, err);
     if (!st) st = ss_heal_run__add_snap(r, r->g->t_days, rel, err);
     if (st) return st;
     snprintf(path, sizeof path, "%s/fields/fields.pvd", r->out_dir);
@@ -403,6 +431,34 @@ static void add_closure_time(cJSON *j, const char *key, double t) {
         cJSON_AddNumberToObject(j, key, t);
     else
         cJSON_AddNullToObject(j, key);
+}
+
+/* The course figures of docs/heal-model.md §6 from the area rows: scab
+ * formation and detachment, scar peak (largest density, volume) and the
+ * state at the end. */
+static void add_course(cJSON *j, const ss_heal_run *r) {
+    if (!r->nrows) return;
+    const double t95 = ss_heal_time_to_closure(r->rows, r->nrows, 0.05);
+    double formed = -1, gone = -1, pmax = 0, pmax_day = 0, pvol = 0, pvol_day = 0;
+    for (int i = 0; i < r->nrows; i++) {
+        const ss_heal_area_row *w = &r->rows[i];
+        if (formed < 0 && w->st.eschar_wound_mean > 0.5) formed = w->t_days;
+        if (formed >= 0 && t95 >= 0 && gone < 0 && w->t_days >= t95 &&
+            w->st.eschar_wound_mean < 0.05)
+            gone = w->t_days;
+        if (w->st.scar_max > pmax) pmax = w->st.scar_max, pmax_day = w->t_days;
+        if (w->st.scar_volume_mm3 > pvol) pvol = w->st.scar_volume_mm3, pvol_day = w->t_days;
+    }
+    const ss_heal_stats *e = &r->rows[r->nrows - 1].st;
+    add_closure_time(j, "scab_formed_day", formed);
+    add_closure_time(j, "scab_detached_day", gone);
+    cJSON_AddNumberToObject(j, "final_eschar_wound_mean", e->eschar_wound_mean);
+    cJSON_AddNumberToObject(j, "scar_peak_density", pmax);
+    cJSON_AddNumberToObject(j, "scar_peak_density_day", pmax_day);
+    cJSON_AddNumberToObject(j, "scar_peak_volume_mm3", pvol);
+    cJSON_AddNumberToObject(j, "scar_peak_volume_day", pvol_day);
+    cJSON_AddNumberToObject(j, "final_scar_volume_mm3", e->scar_volume_mm3);
+    cJSON_AddNumberToObject(j, "final_wound_region_area_mm2", e->wound_region_area_mm2);
 }
 
 cJSON *ss_heal_run__summary(const ss_heal_run *r, double wall) {
@@ -434,6 +490,7 @@ cJSON *ss_heal_run__summary(const ss_heal_run *r, double wall) {
         cJSON_AddNumberToObject(j, "final_normalised_area", ss_heal_area_normalised(s1));
     }
     cJSON_AddNumberToObject(j, "open_threshold", ss_heal_open_threshold());
+    add_course(j, r);
     cJSON_AddNumberToObject(j, "wall_time_s", wall);
     cJSON_AddNumberToObject(j, "threads", ss_threads_get());
     cJSON_AddNumberToObject(j, "seed", (double)r->c.seed);
@@ -442,6 +499,7 @@ cJSON *ss_heal_run__summary(const ss_heal_run *r, double wall) {
         cJSON_AddNumberToObject(j, "resumed_from_step", (double)r->resumed_from);
     cJSON *pj = cJSON_Parse(r->params_json);
     cJSON_AddItemToObject(j, "params", pj ? pj : cJSON_CreateString(r->params_json));
+    ss_heal_run__mech_summary(r, j);
     return j;
 }
 
@@ -468,7 +526,12 @@ ss_status ss_heal_run__write_tables(ss_heal_run *r, double wall, cJSON **summary
     char path[4400], title[256];
     *summary = NULL;
     snprintf(path, sizeof path, "%s/area.csv", r->out_dir);
-    ss_status st = ss_heal_area_csv_write(path, r->rows, r->nrows, err);
+    const char *const *cn = NULL;
+    double *cv = NULL;
+    int nc = ss_heal_run__mech_columns(r, &cn, &cv);
+    if (nc < 0) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    ss_status st = ss_heal_area_csv_write_columns(path, r->rows, r->nrows, nc, cn, cv, err);
+    free(cv);
     if (st) return st;
     snprintf(path, sizeof path, "%s/area.png", r->out_dir);
     snprintf(title, sizeof title, "Normalised open wound area - %s scenario", r->scenario);
