@@ -68,6 +68,11 @@ uint8_t *ss_heal_voxelise_mesh(const ss_tri_mesh *m, int nx, int ny, int nz, dou
  * WholeExtent 0 nx 0 ny 0 nz, Origin 0 0 0, Spacing dx dx dx (mm). FieldData
  * TimeValue holds t in days. Written atomically. */
 ss_status ss_heal_vti_write(const char *path, const ss_heal_grid *g, ss_error *err);
+/* The same with nvec more 3-component cell arrays (names[v], vecs[v][c] of
+ * nx*ny*nz floats), e.g. the mechanics' displacement. */
+ss_status ss_heal_vti_write_vectors(const char *path, const ss_heal_grid *g, int nvec,
+                                    const char *const *names, float *const (*vecs)[3],
+                                    ss_error *err);
 
 /* ParaView collection: `n` datasets with their times (days) and file names
  * relative to the .pvd. Written atomically. */
@@ -107,6 +112,10 @@ double ss_heal_area_normalised(const ss_heal_stats *st);
  * mean_<field>...`, one row per entry. Atomic. */
 ss_status ss_heal_area_csv_write(const char *path, const ss_heal_area_row *rows, int n,
                                  ss_error *err);
+/* The same with ncols more columns (names[c], vals[i * ncols + c] for row i). */
+ss_status ss_heal_area_csv_write_columns(const char *path, const ss_heal_area_row *rows, int n,
+                                         int ncols, const char *const *names, const double *vals,
+                                         ss_error *err);
 /* First time (days, linear interpolation between rows) at which the
  * normalised area drops to <= level; negative when never reached. */
 double ss_heal_time_to_closure(const ss_heal_area_row *rows, int n, double level);

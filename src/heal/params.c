@@ -254,10 +254,11 @@ ss_heal_params *ss_heal_params_parse(const char *text, const char *what, const c
     if (!p) goto fail;
     for (const cJSON *it = root->child; it; it = it->next) {
         if (strcmp(it->string, "scenario") && strcmp(it->string, "params") &&
-            strcmp(it->string, "switches") && strcmp(it->string, "comment")) {
+            strcmp(it->string, "switches") && strcmp(it->string, "comment") &&
+            strcmp(it->string, "mechanics")) { /* mechanics: read by src/mech */
             ss_error_set(err, SS_ERR_INPUT,
                          "%s: unknown top-level key '%s' (expected scenario, params, switches, "
-                         "comment)",
+                         "mechanics, comment)",
                          what, it->string);
             goto fail;
         }

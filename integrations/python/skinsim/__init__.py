@@ -6,6 +6,8 @@ how the library is found and how arrays cross without copies). Modules:
     skinsim.optics    spectra, colour, sampled BRDF, render-BRDF fit, ModelMatch
     skinsim.abrasion  the abrasion-healing texture timeline (seed 000)
     skinsim.heal      the wound-healing simulation (seed 001): run, step, fields, area curve
+    skinsim.skin      procedural skin textures (seed 003 §4.8): bio maps and render maps
+    skinsim.wound     a heal run's wound as render textures over a base skin (seeds joined)
 
 Errors raise skinsim.SkinsimError (InputError for bad input, also a
 ValueError) with the library's own message.
@@ -14,6 +16,12 @@ ValueError) with the library's own message.
 from . import _lib
 from ._lib import InputError, OutOfMemoryError, SkinsimError
 from . import optics, abrasion, heal  # noqa: E402
+
+try:  # libraries built before these modules have none
+    from . import skin  # noqa: F401
+    from . import wound  # noqa: F401
+except ImportError:
+    pass
 
 __all__ = ["optics", "abrasion", "heal", "SkinsimError", "InputError", "OutOfMemoryError",
            "version", "data_dir", "set_threads", "library_path", "read_image", "write_png"]

@@ -181,6 +181,19 @@ def image_header(arr):
     return img
 
 
+def set_out_image(struct, field, arr, shape, what, keep):
+    """Points struct.field (an ss_image *) at the caller's output array arr,
+    which must be C-contiguous float32 of the given shape; keep collects the
+    headers, which must live until the call that writes through them."""
+    if (not isinstance(arr, np.ndarray) or arr.shape != tuple(shape)
+            or arr.dtype != np.float32 or not arr.flags.c_contiguous):
+        raise InputError("%s must be C-contiguous float32 of shape %s" % (what, tuple(shape)),
+                         SS_ERR_INPUT)
+    h = image_header(arr)
+    keep.append(h)
+    setattr(struct, field, ctypes.pointer(h))
+
+
 def as_image_input(arr, name, channels=None):
     """Validates and converts an image argument to C-contiguous float32
     (copied only when its dtype or layout requires it)."""
@@ -459,6 +472,12 @@ class ss_abrasion_settings(ctypes.Structure):
         ("reference_px", c_double),
         ("scab_height_mm", c_double),
         ("seed", c_uint64),
+        ("mechanics", c_int),
+        ("fibres", c_char_p),
+        ("kappa", c_double),
+        ("tet_size_mm", c_double),
+        ("sutures", c_char_p),
+        ("tet_mesh", c_char_p),
     ]
 
 
@@ -601,3 +620,133 @@ _fn("ss_heal_time_to_closure", c_double, POINTER(ss_heal_area_row), c_int, c_dou
 libc_free = ctypes.CDLL(None).free
 libc_free.argtypes = [c_void_p]
 libc_free.restype = None
+
+# ---- skin ------------------------------------------------------------------------
+
+SS_FEAT_NTYPES = 5
+SS_BIO_NCHANNELS = 11
+
+
+class ss_skin_dist(ctypes.Structure):
+    # the distribution constants, set and read by name (ss_skin_dist_set/get)
+    _fields_ = [("v", c_double * 26)]
+
+
+class ss_skin_settings(ctypes.Structure):
+    _fields_ = [
+        ("size", c_int),
+        ("world_size_cm", c_double),
+        ("seed", c_uint64),
+        ("wrap", c_int),
+        ("sampler", c_int),
+        ("count", ctypes.c_long * SS_FEAT_NTYPES),
+        ("dist", ss_skin_dist),
+        ("base_lo", c_double * 6),
+        ("base_hi", c_double * 6),
+        ("phi", c_double),
+    ]
+
+
+class ss_skin_fields(ctypes.Structure):
+    _fields_ = [("density", P_IMAGE * SS_FEAT_NTYPES), ("lips", P_IMAGE),
+                ("wrinkle_vectors", P_IMAGE)]
+
+
+class ss_bezier3(ctypes.Structure):
+    _fields_ = [("x", c_double * 4), ("y", c_double * 4)]
+
+
+class ss_skin_feature(ctypes.Structure):
+    _fields_ = [
+        ("type", c_int),
+        ("x", c_double),
+        ("y", c_double),
+        ("r", c_double),
+        ("r2", c_double),
+        ("h", c_double),
+        ("m", c_double),
+        ("p", c_double),
+        ("w", c_double),
+        ("curve", ss_bezier3),
+    ]
+
+
+class ss_skin_feature_list(ctypes.Structure):
+    _fields_ = [("n", c_size_t), ("f", POINTER(ss_skin_feature))]
+
+
+class ss_skin_maps(ctypes.Structure):
+    _fields_ = [
+        ("base_color", P_IMAGE),
+        ("roughness", P_IMAGE),
+        ("specular", P_IMAGE),
+        ("height_mm", P_IMAGE),
+        ("normal", P_IMAGE),
+        ("height_min_mm", c_double),
+        ("height_max_mm", c_double),
+    ]
+
+
+if hasattr(lib, "ss_skin_generate"):
+    P_SKINSET = POINTER(ss_skin_settings)
+    _fn("ss_skin_settings_preset", c_int, P_SKINSET, c_char_p, c_int, P_ERR)
+    _fn("ss_skin_forearm_counts", None, c_double, POINTER(ctypes.c_long))
+    _fn("ss_skin_settings_validate", c_int, P_SKINSET, P_ERR)
+    _fn("ss_skin_dist_set", c_int, POINTER(ss_skin_dist), c_char_p, c_double, P_ERR)
+    _fn("ss_skin_dist_get", c_double, POINTER(ss_skin_dist), c_char_p)
+    _fn("ss_skin_dist_names", POINTER(c_char_p))
+    _fn("ss_feature_type_name", c_char_p, c_int)
+    _fn("ss_feature_type_from_name", c_int, c_char_p)
+    _fn("ss_bio_channel_name", c_char_p, c_int)
+    _fn("ss_skin_generate", c_int, P_SKINSET, POINTER(ss_skin_fields),
+        POINTER(ss_skin_feature_list), c_char_p, c_size_t, P_ERR)
+    _fn("ss_skin_feature_list_free", None, POINTER(ss_skin_feature_list))
+    _fn("ss_skin_bio_maps", P_IMAGE, P_SKINSET, POINTER(ss_skin_fields),
+        POINTER(ss_skin_feature_list), P_ERR)
+    _fn("ss_skin_lut_create", c_void_p, P_TABLE, P_ERR)
+    _fn("ss_skin_lut_free", None, c_void_p)
+    _fn("ss_skin_render_maps", c_int, P_IMAGE, c_void_p, c_double, c_int, POINTER(ss_skin_maps),
+        P_ERR)
+    _fn("ss_skin_maps_free", None, POINTER(ss_skin_maps))
+
+# ---- wound ------------------------------------------------------------------------
+
+SS_WR_NKEYS = 28
+
+
+class ss_wound_recipe(ctypes.Structure):
+    _fields_ = [("v", c_double * SS_WR_NKEYS)]
+
+
+class ss_wound_render_options(ctypes.Structure):
+    _fields_ = [
+        ("size", c_int),
+        ("side_mm", c_double),
+        ("skin", P_IMAGE),
+        ("table", P_TABLE),
+        ("recipe", ss_wound_recipe),
+        ("scab_photons", c_uint64),
+        ("seed", c_uint64),
+    ]
+
+
+class ss_wound_textures(ctypes.Structure):
+    _fields_ = [("base_color", P_IMAGE), ("roughness", P_IMAGE), ("height", P_IMAGE),
+                ("normal", P_IMAGE)]
+
+
+if hasattr(lib, "ss_wound_render"):
+    _fn("ss_heal_run_params", c_void_p, P_RUN)
+    _fn("ss_wound_recipe_default", None, POINTER(ss_wound_recipe))
+    _fn("ss_wound_recipe_key", c_char_p, c_int)
+    _fn("ss_wound_recipe_load", c_int, c_char_p, POINTER(ss_wound_recipe), P_ERR)
+    _fn("ss_wound_default_skin", P_IMAGE, c_int, c_double, c_uint64, P_ERR)
+    _fn("ss_wound_skin_validate", c_int, P_IMAGE, c_char_p, P_ERR)
+    _fn("ss_wound_render_options_default", None, POINTER(ss_wound_render_options))
+    _fn("ss_wound_renderer_create", c_int, POINTER(ss_wound_render_options), POINTER(c_void_p),
+        P_ERR)
+    _fn("ss_wound_renderer_free", None, c_void_p)
+    _fn("ss_wound_tissue_create", c_void_p, P_GRID, c_void_p, POINTER(ss_wound_recipe), P_ERR)
+    _fn("ss_wound_tissue_observe", None, c_void_p, P_GRID)
+    _fn("ss_wound_tissue_free", None, c_void_p)
+    _fn("ss_wound_render", c_int, c_void_p, c_void_p, P_IMAGE, POINTER(ss_wound_textures), P_ERR)

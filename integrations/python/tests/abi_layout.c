@@ -15,11 +15,28 @@
 #include "skinsim/heal_run.h"
 #include "skinsim/optics.h"
 #include "skinsim/optics_fit.h"
+/* skin.h and wound.h both define SS_BIO_* channel enums (11 and 7
+ * channels) and cannot share a translation unit: the script compiles this
+ * file twice, once with SKINSIM_ABI_WOUND. */
+#ifdef SKINSIM_ABI_WOUND
+#include "skinsim/wound.h"
+#else
+#include "skinsim/skin.h"
+#endif
 
 #define S(t) printf("struct %s %zu\n", #t, sizeof(t))
 #define F(t, f) printf("field %s %s %zu\n", #t, #f, offsetof(t, f))
 
 int main(void) {
+#ifdef SKINSIM_ABI_WOUND
+    S(ss_wound_recipe);
+    S(ss_wound_render_options), F(ss_wound_render_options, side_mm),
+        F(ss_wound_render_options, skin), F(ss_wound_render_options, table),
+        F(ss_wound_render_options, recipe), F(ss_wound_render_options, scab_photons),
+        F(ss_wound_render_options, seed);
+    S(ss_wound_textures), F(ss_wound_textures, height), F(ss_wound_textures, normal);
+    return 0;
+#else
     S(ss_error), F(ss_error, code), F(ss_error, msg);
     S(ss_image), F(ss_image, width), F(ss_image, channels), F(ss_image, data);
     S(ss_bio_params), F(ss_bio_params, melanin), F(ss_bio_params, betacarotene_g_per_l);
@@ -70,5 +87,18 @@ int main(void) {
         F(ss_heal_run_config, checkpoint_every), F(ss_heal_run_config, out_dir),
         F(ss_heal_run_config, force), F(ss_heal_run_config, resume_dir),
         F(ss_heal_run_config, seed);
+    S(ss_skin_dist);
+    S(ss_skin_settings), F(ss_skin_settings, world_size_cm), F(ss_skin_settings, seed),
+        F(ss_skin_settings, wrap), F(ss_skin_settings, sampler), F(ss_skin_settings, count),
+        F(ss_skin_settings, dist), F(ss_skin_settings, base_lo), F(ss_skin_settings, base_hi),
+        F(ss_skin_settings, phi);
+    S(ss_skin_fields), F(ss_skin_fields, lips), F(ss_skin_fields, wrinkle_vectors);
+    S(ss_bezier3), F(ss_bezier3, y);
+    S(ss_skin_feature), F(ss_skin_feature, x), F(ss_skin_feature, r2), F(ss_skin_feature, w),
+        F(ss_skin_feature, curve);
+    S(ss_skin_feature_list), F(ss_skin_feature_list, f);
+    S(ss_skin_maps), F(ss_skin_maps, specular), F(ss_skin_maps, normal),
+        F(ss_skin_maps, height_min_mm), F(ss_skin_maps, height_max_mm);
     return 0;
+#endif
 }
