@@ -34,14 +34,14 @@ static void help(void) {
            "  --static-region        keep the wound region fixed (no keloid growth)\n"
            "\n"
            "Grid (default: a 30 x 30 x 4 mm block, 0.5 mm voxels = 60x60x8, skin\n"
-           "surface at 3 mm, 0.1 mm epidermis (at least 2 voxels))\n"
+           "surface at 3 mm, 0.1 mm epidermis (a sheet in the surface voxel))\n"
            "  --grid NXxNYxNZ        voxels; alone it keeps 0.5 mm voxels\n"
            "  --size-mm X,Y,Z        block size in mm; alone it keeps 0.5 mm voxels;\n"
            "                         with --grid the voxels must come out cubic\n"
            "  --skin-top-mm H        height of the skin surface (default: NZ-2 voxels,\n"
            "                         3 mm in the default block, one air layer)\n"
-           "  --epidermis-mm E       epidermis thickness (default 0.1; at least 2 voxels\n"
-           "                         are used)\n"
+           "  --epidermis-mm E       epidermis thickness (default 0.1; thinner than a\n"
+           "                         voxel, it is a sheet in the surface voxel)\n"
            "\n"
            "Wound (default: a centred square 20 x 20 mm, or 2/3 of the smaller block\n"
            "side if that is less, 1 mm deep)\n"
@@ -259,6 +259,13 @@ int cmd_heal(int argc, char **argv) {
     if (ss_heal_run_create(&o.c, &r, &err)) return cli_fail(CMD, &err);
     print_notes(&o, r);
 
+    /* The output folder: locked, checked against the free space, staged or
+     * marked unfinished; errors here are still about the input (exit 2). */
+    if (ss_heal_run_start(r, &err)) {
+        int rc = cli_fail(CMD, &err);
+        ss_heal_run_free(r);
+        return rc;
+    }
     /* Everything is validated: from here on, files are written. */
     ss_status st = SS_OK;
     ss_progress pr;

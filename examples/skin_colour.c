@@ -3,6 +3,7 @@
  *
  *   cc skin_colour.c $(pkg-config --cflags --libs skinsim) -o skin_colour
  *   ./skin_colour 0.08 0.02          # melanin fraction, blood fraction
+ *   ./skin_colour 0.08 0.02 50000    # more photons per wavelength, less noise
  *
  * Prints the diffuse reflectance every 50 nm, the linear sRGB albedo and the
  * 8-bit sRGB colour. Bad values are refused with the library's message. */
@@ -21,6 +22,7 @@ int main(int argc, char **argv) {
     ss_spectrum_options opt;
     ss_spectrum_options_default(&opt); /* 380..780 nm every 10 nm */
     opt.mc.photons = 5000;             /* per wavelength: quick, a few % noise */
+    if (argc > 3) opt.mc.photons = (uint64_t)strtoull(argv[3], NULL, 10);
 
     ss_error err = {0};
     ss_reflectance_spectrum spec = {0};

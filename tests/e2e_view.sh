@@ -64,6 +64,16 @@ V $G --load "$T/ab" --time 1 --screenshot "$T/load1.png" --json --quiet >"$T/loa
 check '[ $? -eq 0 ] && $CHECK redder "$T/load1.png" "$T/day0.png"' "loaded wound at day 1 not redder"
 check 'python3 -c "import json,sys; d=json.load(open(sys.argv[1])); assert d[\"layers\"]>=7 and d[\"end_day\"]==30" "$T/load1.json"' "loaded stack: keys and maturation frames"
 
+# A single texture set (`skinsim skin` names: base_color, roughness, normal,
+# height) loads as one layer.
+mkdir -p "$T/set"
+cp "$T/ab/frames/t1_color.png" "$T/set/base_color.png"
+cp "$T/ab/frames/t1_normal.png" "$T/set/normal.png"
+cp "$T/ab/frames/t1_height.png" "$T/set/height.png"
+V $G --load "$T/set" --screenshot "$T/set1.png" --json --quiet >"$T/set1.json"
+check '[ $? -eq 0 ] && $CHECK redder "$T/set1.png" "$T/day0.png"' "single texture set not shown"
+check 'python3 -c "import json,sys; d=json.load(open(sys.argv[1])); assert d[\"layers\"]==1" "$T/set1.json"' "single set: one layer"
+
 # 3. Paint across the hand from the side (seams in view) and save strokes.
 cat >"$T/paint.txt" <<'EOF'
 # turn the hand to show its side, then paint three bands across it

@@ -366,6 +366,7 @@ static void test_determinism_and_roundtrip(void **state) {
     assert_non_null(rd);
     assert_memory_equal(rd->data, bio2->data, n * SS_BIO_NCHANNELS * sizeof(float));
     ss_image_free(rd);
+    ss_skin_feature_list_free(&back);
     /* bad rows name the file and line */
     assert_int_equal(ss_skin_features_parse_csv("type,x,y,r,r2,h,m,p,w,x1,y1,x2,y2,x3,y3\n"
                                                 "wart,0.5,0.5,1,0,0,0,0,0,0,0,0,0,0,0\n",
@@ -377,6 +378,18 @@ static void test_determinism_and_roundtrip(void **state) {
                                                 "f.csv", &back, &err),
                      SS_ERR_INPUT);
     assert_int_equal(ss_skin_features_parse_csv("x,y\n", "f.csv", &back, &err), SS_ERR_INPUT);
+    /* a texel as the optics model's parameters: valid, and the table lookup of
+     * them equals the render map */
+    ss_bio_params bp;
+    ss_skin_bio_texel(bio2, 5, 7, &bp);
+    assert_int_equal(ss_bio_params_validate(&bp, &err), SS_OK);
+    ss_mm_entry me;
+    assert_int_equal(ss_mm_table_lookup_bio(t, &bp, &me, &err), SS_OK);
+    const float *px = ss_image_px(bio2, 5, 7);
+    if (px[SS_BIO_EXTRA_A] == 0.0f)
+        for (int c = 0; c < 3; c++)
+            assert_float_equal(ss_image_px(maps[0].base_color, 5, 7)[c],
+                               fmin(1.0, fmax(0.0, me.fit[SS_RENDER_GGX].base_rgb[c])), 2e-5);
     ss_image_free(bio2);
     tu_rmtree(dir);
     free(dir);

@@ -83,8 +83,9 @@ ss_status ss_heal_pvd_write(const char *path, int n, const double *t_days, const
 typedef enum ss_heal_surface_mode {
     SS_SURFACE_TOP = 0,  /* value in the topmost tissue cell of each column */
     SS_SURFACE_MAX = 1,  /* maximum over the tissue cells of each column */
-    SS_SURFACE_LAYER = 2 /* maximum over the two topmost tissue cells: the
-                            epithelial layer of §5.1, the value the open-area
+    SS_SURFACE_LAYER = 2 /* maximum over the two topmost tissue cells; for the
+                            epithelium (a surface sheet, 0 below the surface
+                            cell) the surface coverage that the open-area
                             statistic (ss_heal_stats_compute) thresholds */
 } ss_heal_surface_mode;
 /* Tissue cells: all but AIR, the BOUND layers z = 0 and z = nz-1, and BOUND

@@ -48,7 +48,8 @@ typedef struct ss_heal_run_config {
     int grid[3];         /* voxels; all 0 = from size_mm with 0.5 mm voxels */
     double size_mm[3];   /* block size; all 0 = 30 x 30 x 4 mm (or grid x 0.5 mm) */
     double skin_top_mm;  /* skin surface height; 0 = nz-2 voxels (one air layer) */
-    double epidermis_mm; /* default SS_HEAL_DEFAULT_EPIDERMIS_MM (at least 2 voxels used) */
+    double epidermis_mm; /* default SS_HEAL_DEFAULT_EPIDERMIS_MM (a sub-voxel sheet in the
+                            surface voxel when thinner than a voxel) */
 
     /* ---- wound (fresh runs): at most one of mask, stroke, mesh, footprint;
      * none = a centred square of 20 mm (at most 2/3 of the smaller side) ---- */
@@ -101,6 +102,15 @@ typedef struct ss_heal_run ss_heal_run;
 ss_status ss_heal_run_create(const ss_heal_run_config *c, ss_heal_run **out, ss_error *err);
 void ss_heal_run_free(ss_heal_run *r);
 
+/* With out_dir: begins the outputs now (src/core/output.c): takes the
+ * folder's lock (another run writing it -> SS_ERR_INPUT naming its process),
+ * removes what killed runs left next to it, checks the estimated disk use
+ * against the free space (SS_ERR_INPUT with both figures), stages the folder
+ * (--force over a previous run) or marks it unfinished (a new or resumed
+ * one), writes run.json and the day-0 snapshot of a fresh run. The first step
+ * does this if it was not called; calling it first lets a caller tell these
+ * input errors from failures during the run. */
+ss_status ss_heal_run_start(ss_heal_run *r, ss_error *err);
 /* One solver step and its bookkeeping: an area row every area_every (and at
  * the end), with out_dir a snapshot every snapshot_every (and at the end) and a
  * checkpoint every checkpoint_every (newest two kept). The first call that

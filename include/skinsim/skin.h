@@ -122,6 +122,10 @@ enum {
     SS_BIO_EXTRA_A = 10,
     SS_BIO_NCHANNELS = 11
 };
+/* The optics model's parameters (optics.h) of one texel of a bio map:
+ * melanin, pheomelanin ratio, blood, oxygenation and the two thicknesses
+ * from the map, bilirubin and beta-carotene from ss_bio_params_default. */
+void ss_skin_bio_texel(const ss_image *bio, int x, int y, ss_bio_params *out);
 /* Channel names as written to bio.exr: "melanin", "pheomelanin_ratio",
  * "blood", "oxygenation", "sc_thickness_cm", "epidermis_thickness_cm",
  * "height_mm", "extra.R", "extra.G", "extra.B", "extra.A". */

@@ -20,6 +20,7 @@
 #include "skinsim/heal_run.h"
 #include "skinsim/optics.h"
 #include "skinsim/optics_fit.h"
+#include "skinsim/skin.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -110,25 +111,15 @@ void ss_wound_tissue_observe(ss_wound_tissue *t, const ss_heal_grid *g);
 void ss_wound_tissue_free(ss_wound_tissue *t);
 
 /* ---- base skin: bio-parameter maps -------------------------------------------------
- * One float image of SS_BIO_NCHANNELS channels per texel in this order (the
- * order of `skinsim skin`'s bio.exr). */
-enum {
-    SS_BIO_MELANIN,
-    SS_BIO_PHEOMELANIN,
-    SS_BIO_BLOOD,
-    SS_BIO_OXYGENATION,
-    SS_BIO_SC_CM,
-    SS_BIO_EPIDERMIS_CM,
-    SS_BIO_HEIGHT_MM, /* skin relief, mm */
-    SS_BIO_NCHANNELS
-};
-/* The built-in base skin: a light skin (melanin 0.03, blood 0.01) with value
- * noise mottling of melanin (+-20 %, ~2 mm), blood (+-25 %, ~5 mm) and a
- * 0.02 mm relief, size x size texels over side_mm. */
-ss_image *ss_wound_default_skin(int size, double side_mm, uint64_t seed, ss_error *err);
-/* Checks a bio-parameter image: channel count, finite values, fractions in
- * 0..1, thicknesses > 0 (SS_ERR_INPUT naming `name` and the texel). */
+ * The skin a wound is drawn on is a bio map of skinsim/skin.h: SS_BIO_NCHANNELS
+ * float channels per texel (melanin, pheomelanin ratio, blood, oxygenation,
+ * stratum corneum cm, epidermis cm, height mm, extra colour RGBA), as
+ * ss_skin_bio_default makes it or `skinsim skin` writes it to bio.exr. */
+/* Checks a bio map: channel count, finite values, fractions and the extra
+ * colour in 0..1, thicknesses > 0 (SS_ERR_INPUT naming `name` and the texel). */
 ss_status ss_wound_skin_validate(const ss_image *bio, const char *name, ss_error *err);
+/* Reads DIR/bio.exr (or the .exr file itself) by channel name. */
+ss_image *ss_wound_skin_read(const char *path, ss_error *err);
 
 /* ---- blood layers over the skin: the scab (dried blood) and the clot ------------------ */
 /* A layer of blood (haemoglobin at hb_factor times whole blood's 150 g/L, at an
@@ -202,8 +193,8 @@ typedef struct ss_wound_make_config {
     const double *days;      /* output days, increasing, whole steps of the heal run */
     int ndays;
     int size;                /* texture side (default 1024) */
-    const char *skin_path;   /* base skin bio maps (EXR, >= SS_BIO_NCHANNELS channels, the first
-                                in the SS_BIO_* order); NULL = ss_wound_default_skin */
+    const char *skin_path;   /* base skin: `skinsim skin`'s output folder or its bio.exr;
+                                NULL = ss_skin_bio_default (forearm skin) */
     const char *table_path;  /* NULL = data/modelmatch_default.sstab */
     const char *recipe_path; /* NULL = defaults */
     const char *out_dir;

@@ -8,6 +8,7 @@
 #include <cairo.h>
 #include <math.h>
 #include <stdlib.h>
+#include <errno.h>
 #include <string.h>
 
 #define FONT "DejaVu Sans"
@@ -49,8 +50,9 @@ ss_status ss_heal_area_csv_write_columns(const char *path, const ss_heal_area_ro
         fputc('\n', f);
     }
     if (ferror(f)) {
+        int e = errno;
         ss_atomic_abort(&af);
-        return ss_error_set(err, SS_ERR_RUNTIME, "%s: write failed", path);
+        return ss_error_set(err, SS_ERR_RUNTIME, "%s: write failed: %s", path, strerror(e));
     }
     return ss_atomic_commit(&af, err);
 }

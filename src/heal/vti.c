@@ -156,8 +156,9 @@ ss_status ss_heal_pvd_write(const char *path, int n, const double *t_days, const
     }
     fprintf(f, "  </Collection>\n</VTKFile>\n");
     if (ferror(f)) {
+        int e = errno;
         ss_atomic_abort(&af);
-        return ss_error_set(err, SS_ERR_RUNTIME, "%s: write failed", path);
+        return ss_error_set(err, SS_ERR_RUNTIME, "%s: write failed: %s", path, strerror(e));
     }
     return ss_atomic_commit(&af, err);
 }

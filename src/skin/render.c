@@ -154,6 +154,17 @@ void ss_skin_lut_lookup(const ss_skin_lut *l, const float x[6], float out[5]) {
     free(c);
 }
 
+void ss_skin_bio_texel(const ss_image *bio, int x, int y, ss_bio_params *out) {
+    ss_bio_params_default(out);
+    const float *p = ss_image_px(bio, x, y);
+    out->melanin = p[SS_BIO_MELANIN];
+    out->pheomelanin_ratio = p[SS_BIO_PHEOMELANIN];
+    out->blood = p[SS_BIO_BLOOD];
+    out->oxygenation = p[SS_BIO_OXYGENATION];
+    out->sc_thickness_cm = p[SS_BIO_SC_CM];
+    out->epidermis_thickness_cm = p[SS_BIO_EPIDERMIS_CM];
+}
+
 void ss_skin_maps_free(ss_skin_maps *m) {
     if (!m) return;
     ss_image_free(m->base_color);

@@ -1,4 +1,5 @@
-"""skinsim for Blender: an abrasion-healing timeline on the selected mesh.
+"""skinsim for Blender: an abrasion-healing timeline (or procedural skin
+textures) on the selected mesh.
 
 What it does: for the active mesh object, runs the `skinsim abrasion`
 command (seed 000's texture timeline) for a wound painted as a circle (or
@@ -21,10 +22,16 @@ material needs anyway, and its error messages are the ones users already
 see. A failing run is reported with the command's own message and leaves the
 scene untouched.
 
+The "Skin textures" source runs `skinsim skin` over the whole UV square and
+wires its base colour, roughness, specular, normal and height (scaled by
+skin.json's height range) into a static material; "Procedural skin around
+the wound" gives that skin's colour to the abrasion as its healthy skin.
+
 Gave up: the maturation phase (after the scab falls off) is re-rendered by
 skinsim at every time; here it is sampled at the listed days and blended
-linearly in between. Healing fields (`skinsim heal`) and skin textures are
-not wired yet: they produce tissue fields, not render textures.
+linearly in between. The simulated healing (`skinsim wound`) is not wired
+yet: its textures cover a heal block of a few cm, which would need placing
+inside the UV square.
 """
 
 bl_info = {
@@ -66,6 +73,16 @@ class SkinsimPreferences(bpy.types.AddonPreferences):
 
 
 class SkinsimSettings(bpy.types.PropertyGroup):
+    source: bpy.props.EnumProperty(
+        name="Source",
+        items=[("ABRASION", "Abrasion timeline", "skinsim abrasion: a wound healing over days"),
+               ("SKIN", "Skin textures", "skinsim skin: procedural skin (moles, freckles, "
+                "follicles, wrinkles), no timeline")],
+        default="ABRASION")
+    skin_under_abrasion: bpy.props.BoolProperty(
+        name="Procedural skin around the wound", default=False,
+        description="Run skinsim skin first and use its colour as the healthy skin of the "
+                    "abrasion (--upper)")
     wound_u: bpy.props.FloatProperty(name="Wound U", min=0.0, max=1.0, default=0.25,
                                      description="Wound centre, U in the mesh's UV map")
     wound_v: bpy.props.FloatProperty(name="Wound V", min=0.0, max=1.0, default=0.38,
@@ -141,7 +158,27 @@ def day_label(d):
 # ---- running skinsim ---------------------------------------------------------------
 
 
-def run_abrasion(cli, settings, days, out_dir):
+def _run(cmd, cli):
+    try:
+        p = subprocess.run(cmd, capture_output=True, text=True)
+    except OSError as e:
+        raise RuntimeError("cannot run skinsim (%s): %s; set its path in the add-on's "
+                           "preferences or $SKINSIM_CLI" % (cli, e.strerror))
+    if p.returncode != 0:
+        msg = (p.stderr or p.stdout).strip().splitlines()
+        raise RuntimeError(msg[-1] if msg else "skinsim exited with code %d" % p.returncode)
+
+
+def run_skin(cli, settings, out_dir):
+    """Runs `skinsim skin` over the whole UV square; returns its folder."""
+    os.makedirs(os.path.dirname(os.path.abspath(out_dir)) or ".", exist_ok=True)
+    _run([cli, "skin", "--size", str(settings.size), "--world-size-cm",
+          repr(settings.world_size_cm), "--seed", str(settings.seed), "--quiet", "--out",
+          out_dir], cli)
+    return out_dir
+
+
+def run_abrasion(cli, settings, days, out_dir, upper=None):
     """Runs `skinsim abrasion`; returns the frames folder. Raises
     RuntimeError with the command's message when it fails."""
     os.makedirs(os.path.dirname(os.path.abspath(out_dir)) or ".", exist_ok=True)
@@ -157,14 +194,9 @@ def run_abrasion(cli, settings, days, out_dir):
         cmd = [cli, "abrasion", "--stroke", stroke, "--size", str(settings.size),
                "--world-size-cm", repr(settings.world_size_cm), "--seed", str(settings.seed),
                "--times", ",".join("%g" % d for d in days), "--out", out_dir, "--quiet"]
-        try:
-            p = subprocess.run(cmd, capture_output=True, text=True)
-        except OSError as e:
-            raise RuntimeError("cannot run skinsim (%s): %s; set its path in the add-on's "
-                               "preferences or $SKINSIM_CLI" % (cli, e.strerror))
-    if p.returncode != 0:
-        msg = (p.stderr or p.stdout).strip().splitlines()
-        raise RuntimeError(msg[-1] if msg else "skinsim exited with code %d" % p.returncode)
+        if upper:
+            cmd += ["--upper", upper]
+        _run(cmd, cli)
     return os.path.join(out_dir, "frames")
 
 
@@ -306,6 +338,56 @@ def build_material(obj, frames_dir, days, settings, name=None):
     return mat
 
 
+def build_skin_material(obj, skin_dir, name=None):
+    """A static material from `skinsim skin`'s maps (no timeline)."""
+    import json
+
+    with open(os.path.join(skin_dir, "skin.json")) as f:
+        info = json.load(f)
+    lo, hi = info.get("height_min_mm", 0.0), info.get("height_max_mm", 0.0)
+    mat = bpy.data.materials.new(name or "skinsim_skin_" + obj.name)
+    mat.use_nodes = True
+    nt = mat.node_tree
+    nt.nodes.clear()
+    out = nt.nodes.new("ShaderNodeOutputMaterial")
+    out.location = (700, 0)
+    bsdf = nt.nodes.new("ShaderNodeBsdfPrincipled")
+    bsdf.location = (400, 0)
+    nt.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
+
+    def tex(fname, non_color, y):
+        n = nt.nodes.new("ShaderNodeTexImage")
+        n.image = _load_image(os.path.join(skin_dir, fname), non_color)
+        n.label = fname
+        n.location = (-500, y)
+        return n
+
+    nt.links.new(tex("base_color.png", False, 300).outputs["Color"], _input(bsdf, "Base Color"))
+    nt.links.new(tex("roughness.png", True, 0).outputs["Color"], _input(bsdf, "Roughness"))
+    nt.links.new(tex("specular.png", True, -300).outputs["Color"],
+                 _input(bsdf, "Specular", "Specular IOR Level"))
+    nmap = nt.nodes.new("ShaderNodeNormalMap")
+    nmap.space = "TANGENT"
+    if obj.data.uv_layers.active:
+        nmap.uv_map = obj.data.uv_layers.active.name
+    nmap.location = (100, -350)
+    nt.links.new(tex("normal.png", True, -600).outputs["Color"], nmap.inputs["Color"])
+    nt.links.new(nmap.outputs["Normal"], _input(bsdf, "Normal"))
+    # height.png: 0..1 spans height_min_mm..height_max_mm (skin.json)
+    disp = nt.nodes.new("ShaderNodeDisplacement")
+    disp.location = (400, -500)
+    span = hi - lo
+    disp.inputs["Midlevel"].default_value = -lo / span if span > 0 else 0.0
+    disp.inputs["Scale"].default_value = span / 1000.0  # mm -> m
+    nt.links.new(tex("height.png", True, -900).outputs["Color"], disp.inputs["Height"])
+    nt.links.new(disp.outputs["Displacement"], out.inputs["Displacement"])
+    obj.data.materials.clear()
+    obj.data.materials.append(mat)
+    for p in obj.data.polygons:
+        p.material_index = 0
+    return mat
+
+
 class SKINSIM_OT_build_material(bpy.types.Operator):
     """Run skinsim for the active mesh and build a time-driven skin material"""
 
@@ -325,13 +407,22 @@ class SKINSIM_OT_build_material(bpy.types.Operator):
         try:
             if not obj.data.uv_layers:
                 raise RuntimeError("%s: the mesh has no UV map" % obj.name)
-            days = parse_days(st.days)
+            days = parse_days(st.days) if st.source == "ABRASION" else None
             out_dir = bpy.path.abspath(st.out_dir) if st.out_dir else ""
             if not out_dir:
                 base = (bpy.path.abspath("//") if bpy.data.filepath else
                         tempfile.mkdtemp(prefix="skinsim_"))
                 out_dir = os.path.join(base, "skinsim_" + bpy.path.clean_name(obj.name))
-            frames = run_abrasion(find_cli(context), st, days, out_dir)
+            cli = find_cli(context)
+            if st.source == "SKIN":
+                mat = build_skin_material(obj, run_skin(cli, st, os.path.join(out_dir, "skin")))
+                self.report({"INFO"}, "skinsim: material %s (skin textures)" % mat.name)
+                return {"FINISHED"}
+            upper = None
+            if st.skin_under_abrasion:
+                upper = os.path.join(run_skin(cli, st, os.path.join(out_dir, "skin")),
+                                     "base_color.png")
+            frames = run_abrasion(cli, st, days, os.path.join(out_dir, "abrasion"), upper)
             mat = build_material(obj, frames, days, st)
         except (RuntimeError, ValueError) as e:
             st.last_error = str(e)
@@ -356,8 +447,9 @@ class SKINSIM_PT_panel(bpy.types.Panel):
     def draw(self, context):
         st = context.scene.skinsim
         col = self.layout.column()
-        for p in ("wound_u", "wound_v", "wound_radius", "stroke_csv", "size", "world_size_cm",
-                  "days", "start_frame", "frames_per_day", "seed", "out_dir"):
+        for p in ("source", "skin_under_abrasion", "wound_u", "wound_v", "wound_radius",
+                  "stroke_csv", "size", "world_size_cm", "days", "start_frame",
+                  "frames_per_day", "seed", "out_dir"):
             col.prop(st, p)
         col.operator(SKINSIM_OT_build_material.bl_idname)
         if st.last_error:

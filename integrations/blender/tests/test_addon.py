@@ -7,9 +7,10 @@ refused with skinsim's own message and leaves no material, builds the
 material (abrasion timeline, days 0, 3, 20 at one frame per day), checks its
 nodes, colour spaces, keyframes and drivers, renders frames 1 (day 0), 4 (day 3)
 and 21 (day 20) with Cycles on the CPU, and checks that the later renders
-differ from the first where the wound is and nowhere else. Writes
-OUT/frame_NNN.png and OUT/compare.png (the three frames and the difference
-of the first and last) to look at."""
+differ from the first where the wound is and nowhere else; then builds the
+static skin-texture material and an abrasion over procedural skin. Writes
+OUT/frame_NNN.png and OUT/compare.png (the three frames, the difference of
+the first and last, the skin material, and day 3 over that skin) to look at."""
 import math
 import os
 import sys
@@ -185,7 +186,8 @@ def pixel_distance(points):
 
 
 def texture(day, m):
-    im = bpy.data.images.load(os.path.join(st.out_dir, "frames", "t%g_%s.png" % (day, m)))
+    im = bpy.data.images.load(os.path.join(st.out_dir, "abrasion", "frames",
+                                           "t%g_%s.png" % (day, m)))
     w, h = im.size
     return np.array(im.pixels[:], dtype=np.float32).reshape(h, w, 4)  # row 0 = v 0, as UV
 
@@ -218,9 +220,36 @@ for later, frame, day in ((b, 4, 3.0), (c, 21, 20.0)):
     check(away.mean() > 0.15 and diff[away].max() < 0.01,
           "frames 1 and %d agree away from the wound" % frame)
 
-# a picture to look at: frames 1 | 4 | 21 | difference 1-21 (x4)
+# ---- skin textures (static material) and skin under the abrasion ----
+st.source = "SKIN"
+check(bpy.ops.skinsim.build_material() == {"FINISHED"}, "skin source: build_material finished")
+skin_mat = obj.active_material
+snt = skin_mat.node_tree
+sbsdf = next(n for n in snt.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+spec = sbsdf.inputs["Specular"] if "Specular" in sbsdf.inputs else sbsdf.inputs["Specular IOR Level"]
+linked = {l.to_socket.name: os.path.basename(l.from_node.image.filepath)
+          for l in snt.links if l.from_node.bl_idname == "ShaderNodeTexImage"
+          and l.to_node == sbsdf}
+check(linked.get("Base Color") == "base_color.png" and linked.get("Roughness") == "roughness.png"
+      and spec.is_linked, "skin maps wired: %s" % linked)
+check(skin_mat.animation_data is None, "skin textures are static")
+d = render(1)
+skin_render = d
+check(np.abs(d - a).mean() > 0.005, "the skin material looks different from the abrasion's")
+st.source = "ABRASION"
+st.skin_under_abrasion = True
+plain = texture(0, "color")
+st.out_dir = os.path.join(OUT, "textures_on_skin")
+check(bpy.ops.skinsim.build_material() == {"FINISHED"}, "abrasion over procedural skin")
+im = bpy.data.images.load(os.path.join(st.out_dir, "abrasion", "frames", "t0_color.png"))
+on_skin = np.array(im.pixels[:], dtype=np.float32).reshape(im.size[1], im.size[0], 4)
+check(np.abs(on_skin - plain)[..., :3].mean() > 0.01, "the abrasion's healthy skin is skinsim skin's")
+scab_on_skin = render(4)
+
+# a picture to look at: frames 1 | 4 | 21 | difference 1-21 (x4) | skin textures | day 3 on them
 diff = np.abs(a - c).mean(axis=2)
-sheet = np.concatenate([a, b, c, np.repeat(np.clip(diff * 4, 0, 1)[..., None], 3, axis=2)], axis=1)
+sheet = np.concatenate([a, b, c, np.repeat(np.clip(diff * 4, 0, 1)[..., None], 3, axis=2),
+                        skin_render, scab_on_skin], axis=1)
 img = bpy.data.images.new("compare", sheet.shape[1], sheet.shape[0])
 rgba = np.concatenate([sheet, np.ones(sheet.shape[:2] + (1,), np.float32)], axis=2)[::-1]
 img.pixels[:] = rgba.ravel()

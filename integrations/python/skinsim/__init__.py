@@ -6,6 +6,7 @@ how the library is found and how arrays cross without copies). Modules:
     skinsim.optics    spectra, colour, sampled BRDF, render-BRDF fit, ModelMatch
     skinsim.abrasion  the abrasion-healing texture timeline (seed 000)
     skinsim.heal      the wound-healing simulation (seed 001): run, step, fields, area curve
+    skinsim.skin      procedural skin textures (seed 003 §4.8): bio maps and render maps
 
 Errors raise skinsim.SkinsimError (InputError for bad input, also a
 ValueError) with the library's own message.
@@ -14,6 +15,11 @@ ValueError) with the library's own message.
 from . import _lib
 from ._lib import InputError, OutOfMemoryError, SkinsimError
 from . import optics, abrasion, heal  # noqa: E402
+
+try:  # libraries built before the skin module have none
+    from . import skin  # noqa: F401
+except ImportError:
+    pass
 
 __all__ = ["optics", "abrasion", "heal", "SkinsimError", "InputError", "OutOfMemoryError",
            "version", "data_dir", "set_threads", "library_path", "read_image", "write_png"]

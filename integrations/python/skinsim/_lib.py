@@ -527,6 +527,9 @@ class ss_heal_stats(ctypes.Structure):
         ("wound_region_area_mm2", c_double),
         ("initial_area_mm2", c_double),
         ("field_mean", c_double * SS_HEAL_NFIELDS),
+        ("eschar_wound_mean", c_double),
+        ("scar_volume_mm3", c_double),
+        ("scar_max", c_double),
     ]
 
 
@@ -604,3 +607,91 @@ _fn("ss_heal_time_to_closure", c_double, POINTER(ss_heal_area_row), c_int, c_dou
 libc_free = ctypes.CDLL(None).free
 libc_free.argtypes = [c_void_p]
 libc_free.restype = None
+
+# ---- skin ------------------------------------------------------------------------
+
+SS_FEAT_NTYPES = 5
+SS_BIO_NCHANNELS = 11
+
+
+class ss_skin_dist(ctypes.Structure):
+    # the distribution constants, set and read by name (ss_skin_dist_set/get)
+    _fields_ = [("v", c_double * 26)]
+
+
+class ss_skin_settings(ctypes.Structure):
+    _fields_ = [
+        ("size", c_int),
+        ("world_size_cm", c_double),
+        ("seed", c_uint64),
+        ("wrap", c_int),
+        ("sampler", c_int),
+        ("count", ctypes.c_long * SS_FEAT_NTYPES),
+        ("dist", ss_skin_dist),
+        ("base_lo", c_double * 6),
+        ("base_hi", c_double * 6),
+        ("phi", c_double),
+    ]
+
+
+class ss_skin_fields(ctypes.Structure):
+    _fields_ = [("density", P_IMAGE * SS_FEAT_NTYPES), ("lips", P_IMAGE),
+                ("wrinkle_vectors", P_IMAGE)]
+
+
+class ss_bezier3(ctypes.Structure):
+    _fields_ = [("x", c_double * 4), ("y", c_double * 4)]
+
+
+class ss_skin_feature(ctypes.Structure):
+    _fields_ = [
+        ("type", c_int),
+        ("x", c_double),
+        ("y", c_double),
+        ("r", c_double),
+        ("r2", c_double),
+        ("h", c_double),
+        ("m", c_double),
+        ("p", c_double),
+        ("w", c_double),
+        ("curve", ss_bezier3),
+    ]
+
+
+class ss_skin_feature_list(ctypes.Structure):
+    _fields_ = [("n", c_size_t), ("f", POINTER(ss_skin_feature))]
+
+
+class ss_skin_maps(ctypes.Structure):
+    _fields_ = [
+        ("base_color", P_IMAGE),
+        ("roughness", P_IMAGE),
+        ("specular", P_IMAGE),
+        ("height_mm", P_IMAGE),
+        ("normal", P_IMAGE),
+        ("height_min_mm", c_double),
+        ("height_max_mm", c_double),
+    ]
+
+
+if hasattr(lib, "ss_skin_generate"):
+    P_SKINSET = POINTER(ss_skin_settings)
+    _fn("ss_skin_settings_preset", c_int, P_SKINSET, c_char_p, c_int, P_ERR)
+    _fn("ss_skin_forearm_counts", None, c_double, POINTER(ctypes.c_long))
+    _fn("ss_skin_settings_validate", c_int, P_SKINSET, P_ERR)
+    _fn("ss_skin_dist_set", c_int, POINTER(ss_skin_dist), c_char_p, c_double, P_ERR)
+    _fn("ss_skin_dist_get", c_double, POINTER(ss_skin_dist), c_char_p)
+    _fn("ss_skin_dist_names", POINTER(c_char_p))
+    _fn("ss_feature_type_name", c_char_p, c_int)
+    _fn("ss_feature_type_from_name", c_int, c_char_p)
+    _fn("ss_bio_channel_name", c_char_p, c_int)
+    _fn("ss_skin_generate", c_int, P_SKINSET, POINTER(ss_skin_fields),
+        POINTER(ss_skin_feature_list), c_char_p, c_size_t, P_ERR)
+    _fn("ss_skin_feature_list_free", None, POINTER(ss_skin_feature_list))
+    _fn("ss_skin_bio_maps", P_IMAGE, P_SKINSET, POINTER(ss_skin_fields),
+        POINTER(ss_skin_feature_list), P_ERR)
+    _fn("ss_skin_lut_create", c_void_p, P_TABLE, P_ERR)
+    _fn("ss_skin_lut_free", None, c_void_p)
+    _fn("ss_skin_render_maps", c_int, P_IMAGE, c_void_p, c_double, c_int, POINTER(ss_skin_maps),
+        P_ERR)
+    _fn("ss_skin_maps_free", None, POINTER(ss_skin_maps))

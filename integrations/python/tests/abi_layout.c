@@ -15,6 +15,7 @@
 #include "skinsim/heal_run.h"
 #include "skinsim/optics.h"
 #include "skinsim/optics_fit.h"
+#include "skinsim/skin.h"
 
 #define S(t) printf("struct %s %zu\n", #t, sizeof(t))
 #define F(t, f) printf("field %s %s %zu\n", #t, #f, offsetof(t, f))
@@ -56,7 +57,8 @@ int main(void) {
     S(ss_timeline), F(ss_timeline, key), F(ss_timeline, end_day);
     S(ss_abrasion), F(ss_abrasion, timeline), F(ss_abrasion, shape), F(ss_abrasion, skin),
         F(ss_abrasion, phase), F(ss_abrasion, rendered);
-    S(ss_heal_stats), F(ss_heal_stats, initial_area_mm2), F(ss_heal_stats, field_mean);
+    S(ss_heal_stats), F(ss_heal_stats, initial_area_mm2), F(ss_heal_stats, field_mean),
+        F(ss_heal_stats, scar_max);
     S(ss_heal_area_row), F(ss_heal_area_row, st);
     S(ss_heal_grid), F(ss_heal_grid, dx_mm), F(ss_heal_grid, cell), F(ss_heal_grid, field),
         F(ss_heal_grid, velocity), F(ss_heal_grid, t_days), F(ss_heal_grid, step);
@@ -69,5 +71,17 @@ int main(void) {
         F(ss_heal_run_config, checkpoint_every), F(ss_heal_run_config, out_dir),
         F(ss_heal_run_config, force), F(ss_heal_run_config, resume_dir),
         F(ss_heal_run_config, seed);
+    S(ss_skin_dist);
+    S(ss_skin_settings), F(ss_skin_settings, world_size_cm), F(ss_skin_settings, seed),
+        F(ss_skin_settings, wrap), F(ss_skin_settings, sampler), F(ss_skin_settings, count),
+        F(ss_skin_settings, dist), F(ss_skin_settings, base_lo), F(ss_skin_settings, base_hi),
+        F(ss_skin_settings, phi);
+    S(ss_skin_fields), F(ss_skin_fields, lips), F(ss_skin_fields, wrinkle_vectors);
+    S(ss_bezier3), F(ss_bezier3, y);
+    S(ss_skin_feature), F(ss_skin_feature, x), F(ss_skin_feature, r2), F(ss_skin_feature, w),
+        F(ss_skin_feature, curve);
+    S(ss_skin_feature_list), F(ss_skin_feature_list, f);
+    S(ss_skin_maps), F(ss_skin_maps, specular), F(ss_skin_maps, normal),
+        F(ss_skin_maps, height_min_mm), F(ss_skin_maps, height_max_mm);
     return 0;
 }

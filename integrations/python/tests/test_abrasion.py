@@ -11,17 +11,20 @@ import numpy as np
 import skinsim
 from skinsim import abrasion, optics
 
+# the sanitizer suite sets SKINSIM_TEST_QUICK: smaller textures, same checks
+N = 64 if os.environ.get("SKINSIM_TEST_QUICK") else 128
+
 
 class Frames(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
-        cls.ab = abrasion.Abrasion(size=128)
+        cls.ab = abrasion.Abrasion(size=N)
 
     def test_maps_shapes_and_ranges(self):
         f = self.ab.frame(3.0)
-        self.assertEqual(f["color"].shape, (128, 128, 3))
-        self.assertEqual(f["normal"].shape, (128, 128, 3))
-        self.assertEqual(f["height"].shape, (128, 128))
+        self.assertEqual(f["color"].shape, (N, N, 3))
+        self.assertEqual(f["normal"].shape, (N, N, 3))
+        self.assertEqual(f["height"].shape, (N, N))
         self.assertEqual(f["reflection"].dtype, np.float32)
         for m in f.values():
             self.assertTrue(np.all((m >= 0) & (m <= 1)))
@@ -47,13 +50,13 @@ class Frames(unittest.TestCase):
         # far from the wound (beyond the widest gradient), nothing changes
         ys, xs = np.nonzero(inside)
         far = np.ones_like(inside)
-        pad = 20
+        pad = N * 20 // 128
         far[max(ys.min() - pad, 0):ys.max() + pad, max(xs.min() - pad, 0):xs.max() + pad] = False
         self.assertLess(diff[far].max(), 1e-6)
 
     def test_key_positions_are_views(self):
         k = self.ab.key("scab")
-        self.assertEqual(k["color"].shape, (128, 128, 3))
+        self.assertEqual(k["color"].shape, (N, N, 3))
         self.assertFalse(k["color"].flags.writeable)
         keys, end = self.ab.timeline
         self.assertEqual(keys[0][0], "vasoconstriction")
@@ -66,7 +69,7 @@ class Frames(unittest.TestCase):
         if not cli:
             self.skipTest("SKINSIM_CLI not set")
         with tempfile.TemporaryDirectory() as d:
-            subprocess.run([cli, "abrasion", "--size", "128", "--times", "3", "--out",
+            subprocess.run([cli, "abrasion", "--size", str(N), "--times", "3", "--out",
                             os.path.join(d, "o"), "--quiet"], check=True)
             png = skinsim.read_image(os.path.join(d, "o", "frames", "t3_color.png"), srgb=False)
         ours = optics.srgb_encode(self.ab.frame(3.0)["color"])
