@@ -35,6 +35,7 @@ demo: build
 	$(BUILD)/skinsim optics swatch --out $(DEMO_OUT)/skin_swatch.png
 	$(BUILD)/skinsim heal --days 21 --out $(DEMO_OUT)/heal
 	$(BUILD)/skinsim skin --size 1024 --gltf --out $(DEMO_OUT)/skin
+	$(BUILD)/skinsim wound --scenario scab --skin $(DEMO_OUT)/skin --out $(DEMO_OUT)/wound
 	@echo
 	@echo "Look at:"
 	@echo "  $(DEMO_OUT)/abrasion/contact_sheet.png   abrasion from injury to day 30"
@@ -42,6 +43,7 @@ demo: build
 	@echo "  $(DEMO_OUT)/heal/area.png                wound closure over 21 days"
 	@echo "  $(DEMO_OUT)/heal/fields/fields.pvd       open in ParaView"
 	@echo "  $(DEMO_OUT)/skin/contact_sheet.png       a patch of forearm skin: every map side by side"
+	@echo "  $(DEMO_OUT)/wound/contact_sheet.png      simulated healing as skin, day 0 to 365"
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)

@@ -22,6 +22,8 @@ int cmd_view(int argc, char **argv); /* execs skinsim-view (app/cmd_view.c) */
 /* `skinsim optics fit` and `skinsim optics table` (app/cmd_optics_fit.c). */
 int cmd_optics_fit(int argc, char **argv);
 int cmd_optics_table(int argc, char **argv);
+/* `skinsim optics match` (app/cmd_optics_match.c). */
+int cmd_optics_match(int argc, char **argv);
 
 /* Prints "skinsim <cmd>: <msg>" on stderr and returns the exit code for err. */
 int cli_fail(const char *cmd, const ss_error *err);

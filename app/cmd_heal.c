@@ -34,14 +34,14 @@ static void help(void) {
            "  --static-region        keep the wound region fixed (no keloid growth)\n"
            "\n"
            "Grid (default: a 30 x 30 x 4 mm block, 0.5 mm voxels = 60x60x8, skin\n"
-           "surface at 3 mm, 0.1 mm epidermis (at least 2 voxels))\n"
+           "surface at 3 mm, 0.1 mm epidermis (a sheet in the surface voxel))\n"
            "  --grid NXxNYxNZ        voxels; alone it keeps 0.5 mm voxels\n"
            "  --size-mm X,Y,Z        block size in mm; alone it keeps 0.5 mm voxels;\n"
            "                         with --grid the voxels must come out cubic\n"
            "  --skin-top-mm H        height of the skin surface (default: NZ-2 voxels,\n"
            "                         3 mm in the default block, one air layer)\n"
-           "  --epidermis-mm E       epidermis thickness (default 0.1; at least 2 voxels\n"
-           "                         are used)\n"
+           "  --epidermis-mm E       epidermis thickness (default 0.1; thinner than a\n"
+           "                         voxel, it is a sheet in the surface voxel)\n"
            "\n"
            "Wound (default: a centred square 20 x 20 mm, or 2/3 of the smaller block\n"
            "side if that is less, 1 mm deep)\n"
@@ -59,6 +59,20 @@ static void help(void) {
            "  --wound-depth-image F  per-pixel depth: PNG grey 0..1 x --wound-depth-mm,\n"
            "                         or EXR in mm; alone it is also the footprint\n"
            "                         (depth > 0)\n"
+           "\n");
+    printf("Contraction mechanics (seed 001 §4.2-5.3, docs/mech.md)\n"
+           "  --mechanics            myofibroblasts contract the wound on a mass-spring\n"
+           "                         tet mesh; its velocity convects every field\n"
+           "  --no-mechanics         epithelialisation only (the default)\n"
+           "  --fibres X,Y,Z[:X,Y,Z] collagen fibre families (default 1,0,0)\n"
+           "  --kappa K              fibre dispersion 0 (aligned, default) .. 0.333\n"
+           "                         (isotropic)\n"
+           "  --tet-size-mm H        lattice tet edge (default 1; max tet volume H^3/6)\n"
+           "  --tet-mesh FILE        TetGen .node/.ele or Gmsh 2.2 .msh instead of the\n"
+           "                         lattice (mm, in the grid frame)\n"
+           "  --sutures CSV          stitches 'x1,y1,z1,x2,y2,z2[,remove_day]' in mm\n"
+           "  mechanical parameters: the \"mechanics\" object of --params (see\n"
+           "  data/heal/mechanics.json)\n"
            "\n");
     printf("Time\n"
            "  --days T               simulated time (default 10)\n"
@@ -94,6 +108,11 @@ static void help(void) {
            "  surface/<f>_NNNN.png   top views of epithelium, capillary (surface value),\n"
            "                         eschar, scar (column maximum)\n"
            "  checkpoints/ckpt_*.sshc  with --checkpoint-every (newest 2 kept)\n"
+           "  with --mechanics: fields/mesh_NNNN.vtu + mesh.pvd (deformed tets:\n"
+           "                         displacement, velocity, stress), displacement in the\n"
+           "                         .vti, surface/velocity_NNNN.png (Fig. 7 top view),\n"
+           "                         area.csv outline_area_mm2, contraction and closure\n"
+           "                         shares, summary.json \"mechanics\"\n"
            "  summary.json           scenario, grid, dt, scheme, days, time to 50%% and\n"
            "                         95%% closure, wall time, parameters\n"
            "See docs/heal-outputs.md. Exit codes: 0 ok, 1 runtime failure, 2 bad input\n"
@@ -165,7 +184,7 @@ static int parse_args(int argc, char **argv, opts *o, ss_error *err) {
         } else if (!strcmp(a, "--out")) {
             c->out_dir = v;
         } else if (!strcmp(a, "--threads")) {
-            st = cli_parse_int(a, v, 0, 4096, &l, err);
+            st = cli_parse_int(a, v, 0, SS_THREADS_MAX, &l, err);
             o->threads = (int)l;
             resume_ok = 1;
         } else if (!strcmp(a, "--seed")) {
@@ -240,6 +259,13 @@ int cmd_heal(int argc, char **argv) {
     if (ss_heal_run_create(&o.c, &r, &err)) return cli_fail(CMD, &err);
     print_notes(&o, r);
 
+    /* The output folder: locked, checked against the free space, staged or
+     * marked unfinished; errors here are still about the input (exit 2). */
+    if (ss_heal_run_start(r, &err)) {
+        int rc = cli_fail(CMD, &err);
+        ss_heal_run_free(r);
+        return rc;
+    }
     /* Everything is validated: from here on, files are written. */
     ss_status st = SS_OK;
     ss_progress pr;

@@ -487,6 +487,11 @@ static void srgb8(const double lin[3], double out[3]) {
     for (int k = 0; k < 3; k++) out[k] = ss_srgb_encode((float)fmin(1.0, fmax(0.0, lin[k])));
 }
 
+static void swatch_progress(void *user, double f) {
+    ss_progress *p = user;
+    ss_progress_update(p, f * p->total);
+}
+
 static int optics_swatch(int argc, char **argv) {
     const char *cmd = "optics swatch";
     common_opts c;
@@ -559,55 +564,21 @@ static int optics_swatch(int argc, char **argv) {
     const double *M = mel ? mel : mel_def, *B = bl ? bl : bl_def;
     if (!mel) nmel = (int)(sizeof mel_def / sizeof mel_def[0]);
     if (!bl) nbl = (int)(sizeof bl_def / sizeof bl_def[0]);
-    /* spectra for every cell via the absorption-free path method */
+    /* albedo of every cell via the absorption-free path method */
     int nwl = (int)floor((c.spec.wl_max_nm - c.spec.wl_min_nm) / c.spec.wl_step_nm + 1e-9) + 1;
-    double *wl = calloc((size_t)nwl, sizeof *wl);
-    double *refl = calloc((size_t)nwl * nmel * nbl, sizeof *refl);
     double *rgb = calloc((size_t)nmel * nbl * 3, sizeof *rgb);
-    if (!wl || !refl || !rgb) {
-        free(wl);
-        free(refl);
-        free(rgb);
+    if (!rgb) {
         ss_error_set(&e, SS_ERR_NOMEM, "out of memory");
         rc = cli_fail(cmd, &e);
         goto out;
     }
     ss_progress pr;
-    ss_optics_data *data = NULL;
-    ss_status st = ss_optics_data_open(&data, &e);
     ss_progress_begin(&pr, "swatch", nwl, c.quiet);
-    for (int k = 0; k < nwl && !st; k++) {
-        wl[k] = c.spec.wl_min_nm + k * c.spec.wl_step_nm;
-        ss_optics_slab geom;
-        st = ss_optics_skin_slab_with(data, &c.bio, wl[k], &geom, &e);
-        ss_mc_paths *paths = NULL;
-        if (!st) st = ss_mc_trace_paths(&geom, &c.spec.mc, &paths, &e);
-        for (int bi = 0; bi < nbl && !st; bi++)
-            for (int mi = 0; mi < nmel && !st; mi++) {
-                ss_bio_params b = c.bio;
-                b.melanin = M[mi];
-                b.blood = B[bi];
-                ss_optics_slab s;
-                st = ss_optics_skin_slab_with(data, &b, wl[k], &s, &e);
-                if (st) break;
-                double mua[SS_OPTICS_MAX_LAYERS];
-                for (int l = 0; l < s.nlayers; l++) mua[l] = s.layer[l].mua_per_cm;
-                ss_mc_result r;
-                st = ss_mc_paths_apply(paths, mua, &r, &e);
-                if (st) break;
-                refl[((size_t)bi * nmel + mi) * nwl + k] = r.diffuse;
-                ss_mc_result_free(&r);
-            }
-        ss_mc_paths_free(paths);
-        ss_progress_update(&pr, k + 1);
-    }
+    ss_spectrum_options so = c.spec;
+    so.progress = swatch_progress;
+    so.progress_user = &pr;
+    ss_status st = ss_optics_albedo_grid(&c.bio, &so, M, nmel, B, nbl, rgb, &e);
     ss_progress_end(&pr);
-    for (int q = 0; q < nmel * nbl && !st; q++)
-        st =
-            ss_spectrum_to_srgb_linear_with(data, wl, refl + (size_t)q * nwl, nwl, rgb + 3 * q, &e);
-    ss_optics_data_close(data);
-    free(refl);
-    free(wl);
     if (st) {
         free(rgb);
         rc = cli_fail(cmd, &e);
@@ -690,6 +661,16 @@ static int optics_swatch(int argc, char **argv) {
         for (int q = 0; q < nmel * nbl; q++)
             printf("%s[%.5f, %.5f, %.5f]", q ? ", " : "", rgb[3 * q], rgb[3 * q + 1],
                    rgb[3 * q + 2]);
+        /* CIELAB (D65), chroma, hue angle and individual typology angle per cell */
+        printf("], \"lab\": [");
+        for (int q = 0; q < nmel * nbl; q++) {
+            double lab[3], C, h, ita;
+            ss_srgb_linear_to_lab(rgb + 3 * q, lab);
+            ss_lab_describe(lab, &C, &h, &ita);
+            printf("%s{\"L\": %.2f, \"a\": %.2f, \"b\": %.2f, \"C\": %.2f, \"h\": %.2f, "
+                   "\"ITA\": %.2f}",
+                   q ? ", " : "", lab[0], lab[1], lab[2], C, h, ita);
+        }
         printf("]}\n");
     }
     free(rgb);
@@ -712,6 +693,7 @@ static void optics_help(FILE *f) {
                "  swatch     PNG grid of skin colours over melanin x blood\n");
     fprintf(f, "  fit        fit a render BRDF to the sampled skin BRDF\n");
     fprintf(f, "  table      precomputed ModelMatch table\n");
+    fprintf(f, "  match      biological parameters for a target skin colour (sRGB or L*a*b*)\n");
 }
 
 int cmd_optics(int argc, char **argv) {
@@ -730,6 +712,7 @@ int cmd_optics(int argc, char **argv) {
     if (!strcmp(sub, "swatch")) return optics_swatch(argc - 1, argv + 1);
     if (!strcmp(sub, "fit")) return cmd_optics_fit(argc - 1, argv + 1);
     if (!strcmp(sub, "table")) return cmd_optics_table(argc - 1, argv + 1);
+    if (!strcmp(sub, "match")) return cmd_optics_match(argc - 1, argv + 1);
     fprintf(stderr, "skinsim optics: unknown subcommand '%s'\n\n", sub);
     optics_help(stderr);
     return 2;

@@ -30,7 +30,11 @@ bad:
 }
 
 int heal_parse_problem_flag(const char *a, ss_heal_run_config *c) {
-    if (!strcmp(a, "--no-scab"))
+    if (!strcmp(a, "--mechanics"))
+        c->mechanics = 1;
+    else if (!strcmp(a, "--no-mechanics"))
+        c->mechanics = 0;
+    else if (!strcmp(a, "--no-scab"))
         c->no_scab = 1;
     else if (!strcmp(a, "--static-region"))
         c->static_region = 1;
@@ -75,6 +79,16 @@ int heal_parse_problem_option(const char *a, const char *v, ss_heal_run_config *
         st = cli_parse_double(a, v, 1e-6, 1e6, &c->wound_depth_mm, err);
     } else if (!strcmp(a, "--wound-depth-image")) {
         c->wound_depth_image = v;
+    } else if (!strcmp(a, "--fibres")) {
+        c->fibres = v;
+    } else if (!strcmp(a, "--kappa")) {
+        st = cli_parse_double(a, v, 0, 1.0 / 3.0 + 1e-9, &c->kappa, err);
+    } else if (!strcmp(a, "--tet-size-mm")) {
+        st = cli_parse_double(a, v, 1e-6, 1e3, &c->tet_size_mm, err);
+    } else if (!strcmp(a, "--sutures")) {
+        c->sutures = v;
+    } else if (!strcmp(a, "--tet-mesh")) {
+        c->tet_mesh = v;
     } else if (!strcmp(a, "--dt")) {
         st = cli_parse_double(a, v, 1e-12, 1e3, &c->dt_days, err);
     } else if (!strcmp(a, "--scheme")) {

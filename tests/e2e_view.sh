@@ -7,7 +7,8 @@
 # cursor (split at seams) and whose hulls cover the picks, which `skinsim
 # abrasion` reads; paint + Generate + slider puts a wound where the paint
 # was; --bench-frames prints its figures; bad input exits 2 naming the input
-# and writes nothing. Skips (77) only when skinsim-view was not built or no
+# and writes nothing; the window and EGL paths render the same frame, and
+# Generate equals `skinsim abrasion`. Skips (77) only when skinsim-view was not built or no
 # display and no EGL can be made. Checks use tests/view_check.py (python3).
 set -u
 CLI=$1
@@ -54,6 +55,7 @@ check '[ $? -eq 0 ] && $CHECK skin "$T/day0.png"' "day 0 is not skin"
 # The same frame through EGL surfaceless (no display involved).
 V --egl --screenshot "$T/day0_egl.png" --quiet
 check '[ $? -eq 0 ] && $CHECK skin "$T/day0_egl.png"' "EGL day 0 is not skin"
+[ $GTK -eq 1 ] && check 'cmp -s "$T/day0.png" "$T/day0_egl.png"' "the window and EGL paths render different frames"
 
 # 2. The built-in wound at day 1 is redder than the skin around it:
 #    generated in the viewer, and loaded from `skinsim abrasion`.
@@ -63,6 +65,21 @@ check '[ $? -eq 0 ] && $CHECK redder "$T/gen1.png" "$T/day0.png"' "generated wou
 V $G --load "$T/ab" --time 1 --screenshot "$T/load1.png" --json --quiet >"$T/load1.json"
 check '[ $? -eq 0 ] && $CHECK redder "$T/load1.png" "$T/day0.png"' "loaded wound at day 1 not redder"
 check 'python3 -c "import json,sys; d=json.load(open(sys.argv[1])); assert d[\"layers\"]>=7 and d[\"end_day\"]==30" "$T/load1.json"' "loaded stack: keys and maturation frames"
+# Generate in the viewer makes the same key textures as `skinsim abrasion`:
+# at day 5 (the scab key held) the two frames are the same bytes.
+V $G --generate --time 5 --screenshot "$T/gen5k.png" --quiet
+V $G --load "$T/ab" --time 5 --screenshot "$T/load5k.png" --quiet
+check 'cmp -s "$T/gen5k.png" "$T/load5k.png"' "Generate differs from skinsim abrasion at day 5"
+
+# A single texture set (`skinsim skin` names: base_color, roughness, normal,
+# height) loads as one layer.
+mkdir -p "$T/set"
+cp "$T/ab/frames/t1_color.png" "$T/set/base_color.png"
+cp "$T/ab/frames/t1_normal.png" "$T/set/normal.png"
+cp "$T/ab/frames/t1_height.png" "$T/set/height.png"
+V $G --load "$T/set" --screenshot "$T/set1.png" --json --quiet >"$T/set1.json"
+check '[ $? -eq 0 ] && $CHECK redder "$T/set1.png" "$T/day0.png"' "single texture set not shown"
+check 'python3 -c "import json,sys; d=json.load(open(sys.argv[1])); assert d[\"layers\"]==1" "$T/set1.json"' "single set: one layer"
 
 # 3. Paint across the hand from the side (seams in view) and save strokes.
 cat >"$T/paint.txt" <<'EOF'

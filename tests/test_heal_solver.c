@@ -116,8 +116,9 @@ static void test_grid_init(void **state) {
     int nx = g->nx, ny = g->ny;
     /* skin top at 4 mm = 8 layers: z 1..7 tissue, z 8 air, z 9 bound */
     assert_int_equal(g->cell[ss_heal_idx(g, 1, 1, 8)], SS_CELL_AIR);
+    /* the 0.1 mm epidermis lies in the surface voxel (a sub-voxel sheet) */
     assert_int_equal(g->cell[ss_heal_idx(g, 1, 1, 7)], SS_CELL_EPIDERMIS);
-    assert_int_equal(g->cell[ss_heal_idx(g, 1, 1, 6)], SS_CELL_EPIDERMIS);
+    assert_int_equal(g->cell[ss_heal_idx(g, 1, 1, 6)], SS_CELL_DERMIS);
     assert_int_equal(g->cell[ss_heal_idx(g, 1, 1, 5)], SS_CELL_DERMIS);
     assert_int_equal(g->cell[ss_heal_idx(g, 0, 5, 5)], SS_CELL_BOUND);
     assert_int_equal(g->cell[ss_heal_idx(g, 5, 5, 9)], SS_CELL_BOUND);
@@ -128,9 +129,9 @@ static void test_grid_init(void **state) {
     assert_int_equal(g->cell[ss_heal_idx(g, 10, 10, 7)], SS_CELL_WOUND);
     assert_int_equal(g->cell[ss_heal_idx(g, 10, 10, 5)], SS_CELL_DERMIS);
     assert_int_equal(g->cell[ss_heal_idx(g, 5, 10, 7)], SS_CELL_EPIDERMIS);
-    /* initial fields: epithelium layer = the two cells on top outside the wound */
+    /* initial fields: the epithelium is the surface sheet outside the wound */
     assert_true(g->field[SS_HEAL_EPITHELIUM][ss_heal_idx(g, 3, 3, 7)] == 1.0f);
-    assert_true(g->field[SS_HEAL_EPITHELIUM][ss_heal_idx(g, 3, 3, 6)] == 1.0f);
+    assert_true(g->field[SS_HEAL_EPITHELIUM][ss_heal_idx(g, 3, 3, 6)] == 0.0f);
     assert_true(g->field[SS_HEAL_EPITHELIUM][ss_heal_idx(g, 3, 3, 5)] == 0.0f);
     assert_true(g->field[SS_HEAL_EPITHELIUM][ss_heal_idx(g, 10, 10, 7)] == 0.0f);
     float hv[SS_HEAL_NFIELDS];
@@ -288,85 +289,112 @@ static void test_threads_bitidentical(void **state) {
     ss_heal_params_free(p);
 }
 
-typedef struct course {
-    double close_day;                     /* first day the open area is < 1% of the initial area */
-    double scab_day;                      /* first sample with eschar > 0.5 on the centre surface */
-    double rho_peak, rho_end, region_end; /* mean scar, region / initial area */
-    int bounds_ok;
-} course;
-
-static course run_course(const ss_heal_params *p, double days) {
+static ss_heal_course course(const char *scen, double block, double wound, double dx, double days,
+                             double late_dt, double deep_day, double kthr) {
     ss_error err;
-    course c = {-1, -1, 0, 0, 0, 1};
-    ss_heal_grid *g = make_problem(p, 0.5, 26.0, 20.0);
-    ss_heal_solver *s = ss_heal_solver_create(g, p, SS_HEAL_SPLIT, 0.05, &err);
-    assert_non_null(s);
-    ss_heal_stats st;
-    ss_heal_stats_compute(g, &st);
-    const double a0 = st.initial_area_mm2;
-    const size_t ctr = ss_heal_idx(g, g->nx / 2, g->ny / 2, 7);
-    const size_t n = (size_t)g->nx * g->ny * g->nz;
-    int k = 0;
-    while (g->t_days < days - 1e-9) {
-        assert_int_equal(ss_heal_step(s, g, &err), SS_OK);
-        if (++k % 5) continue; /* sample every 0.25 day */
-        ss_heal_stats_compute(g, &st);
-        if (c.close_day < 0 && st.open_area_mm2 < 0.01 * a0) c.close_day = g->t_days;
-        if (c.scab_day < 0 && g->field[SS_HEAL_ESCHAR][ctr] > 0.5f) c.scab_day = g->t_days;
-        c.rho_peak = fmax(c.rho_peak, st.field_mean[SS_HEAL_SCAR]);
-        c.rho_end = st.field_mean[SS_HEAL_SCAR];
-        c.region_end = st.wound_region_area_mm2 / a0;
-        for (int f = 0; f < SS_HEAL_NFIELDS; f++)
-            for (size_t i = 0; i < n; i++) {
-                float v = g->field[f][i];
-                if (!(v >= 0.0f)) c.bounds_ok = 0;
-                if ((f == SS_HEAL_EPITHELIUM || f == SS_HEAL_ESCHAR || f == SS_HEAL_PLASMA) &&
-                    v > 1.0f)
-                    c.bounds_ok = 0;
-            }
-    }
-    ss_heal_solver_free(s);
-    ss_heal_grid_free(g);
+    ss_heal_params *p = ss_heal_params_preset(scen, &err);
+    assert_non_null(p);
+    ss_heal_course_opts o = {block, wound, 1.0, dx, days, 0.05, late_dt, deep_day, kthr};
+    ss_heal_course c;
+    if (ss_heal_course_run(p, &o, &c, &err)) print_error("%s\n", err.msg);
+    assert_true(c.bounds_ok);
+    print_message("%s block %g wound %g dx %g: t50 %.3f t95 %.3f scab %.2f..%.2f scar max %.3f "
+                  "vol %.1f (day %.1f) half-life %.1f deep e %.4f keloid %.2f (t95 %.2f) mm "
+                  "%.0f mm2, %ld steps %.2f s\n",
+                  scen, block, wound, dx, c.t50, c.t95, c.scab_day, c.scab_gone_day,
+                  c.scar_max_peak, c.scar_peak_mm3, c.scar_peak_day, c.half_life_days,
+                  c.deep_e_fraction, c.keloid_beyond_mm, c.keloid_beyond_t95, c.keloid_area_mm2,
+                  c.steps, c.wall_s);
+    ss_heal_params_free(p);
     return c;
 }
 
-/* Calibration targets (docs/heal-model.md) on the 2 x 2 cm shallow wound. */
+/* Issue 8 targets on the default 2 cm wound (30 mm block, 0.5 mm voxels):
+ * moist closure, the epithelium a surface sheet, dry/moist closure ratio
+ * (Winter 1962), more scar under a scab, the scab going after closure. */
 static void test_scenarios(void **state) {
     (void)state;
-    ss_error err;
-    const double days = tu_quick() ? 16.0 : 21.0;
-    ss_heal_params *pc = ss_heal_params_preset("clean", &err);
-    ss_heal_params *ps = ss_heal_params_preset("scab", &err);
-    ss_heal_params *pk = ss_heal_params_preset("keloid", &err);
-    course cc = run_course(pc, days), cs = run_course(ps, days), ck = run_course(pk, days);
-    print_message("clean: closed day %.2f, scar peak %.4f end %.4f, region %.3f\n", cc.close_day,
-                  cc.rho_peak, cc.rho_end, cc.region_end);
-    print_message("scab: scab day %.2f, closed day %.2f, scar peak %.4f\n", cs.scab_day,
-                  cs.close_day, cs.rho_peak);
-    print_message("keloid: closed day %.2f, scar peak %.4f end %.4f, region %.3f\n", ck.close_day,
-                  ck.rho_peak, ck.rho_end, ck.region_end);
-    assert_true(cc.bounds_ok && cs.bounds_ok && ck.bounds_ok);
+    ss_heal_course cc = course("clean", 30, 20, 0.5, 21, 0, 21, 0);
+    ss_heal_course cs = course("scab", 30, 20, 0.5, 28, 0, 21, 0);
     /* moist healing: re-epithelialised in about 10-14 days (we accept 9-14) */
-    assert_true(cc.close_day >= 9.0 && cc.close_day <= 14.0);
+    assert_true(cc.t95 >= 9.0 && cc.t95 <= 14.0);
     assert_true(cc.scab_day < 0); /* no eschar without the scab switch */
-    /* dry: a scab within the first day, closure later than moist */
+    /* the epithelium lives at the surface: at day 21 no voxel deeper than
+     * 0.5 mm holds e > 0.5 (the issue's bound: < 5 %) */
+    assert_true(cc.deep_e_fraction < 0.05 && cs.deep_e_fraction < 0.05);
+    /* dry: a scab within the first day; closure 1.6-2.6x later than moist */
     assert_true(cs.scab_day > 0 && cs.scab_day <= 1.0);
-    assert_true(cs.close_day > cc.close_day + 0.5);
-    /* scar forms and fades (clean) */
-    assert_true(cc.rho_peak > 0.005);
-    if (!tu_quick()) assert_true(cc.rho_end < 0.75 * cc.rho_peak);
-    assert_true(fabs(cc.region_end - 1.0) < 1e-9); /* static region */
-    /* keloid: more scar, kept, and the region grows past the original boundary */
-    assert_true(ck.rho_peak > 2.0 * cc.rho_peak);
-    assert_true(ck.rho_end > 0.9 * ck.rho_peak);
-    assert_true(ck.region_end > 1.15);
+    assert_true(cs.t95 > 0);
+    double ratio = cs.t95 / cc.t95;
+    print_message("scab/clean time to 95 %% closure: %.2f\n", ratio);
+    assert_true(ratio >= 1.6 && ratio <= 2.6);
+    /* more scar under a scab (peak density) */
+    assert_true(cs.scar_max_peak > 1.1 * cc.scar_max_peak);
+    /* the scab detaches after closure, within 14 days */
+    assert_true(cs.scab_gone_day > cs.t95 && cs.scab_gone_day <= cs.t95 + 14.0);
+    /* scar forms (clean) */
+    assert_true(cc.scar_max_peak > 0.5);
     /* --no-scab on the scab preset gives the clean course */
+    ss_error err;
+    ss_heal_params *ps = ss_heal_params_preset("scab", &err),
+                   *pc = ss_heal_params_preset("clean", &err);
     ss_heal_params_set_switches(ps, 0, -1);
-    course cn = run_course(ps, 3.0);
-    assert_true(cn.scab_day < 0);
-    ss_heal_params_free(pc);
+    ss_heal_course_opts o = {16, 10, 1.0, 0.5, 8, 0.05, 0, -1, 0};
+    ss_heal_course a, b;
+    assert_int_equal(ss_heal_course_run(ps, &o, &a, &err), SS_OK);
+    assert_int_equal(ss_heal_course_run(pc, &o, &b, &err), SS_OK);
+    assert_true(a.scab_day < 0 && a.t95 == b.t95 && a.t50 == b.t50);
     ss_heal_params_free(ps);
-    ss_heal_params_free(pk);
+    ss_heal_params_free(pc);
+}
+
+/* Remodelling: after its peak the clean scar decays with the half-life the
+ * parameters state (ln 2 / lamrhop = 120 days), inside the clinical 30-365
+ * days; measured with large steps once the wound is closed (late_dt). */
+static void test_remodelling(void **state) {
+    (void)state;
+    const int quick = tu_quick();
+    ss_heal_course c = course("clean", 16, 10, 0.5, quick ? 40 : 90, 0.5, -1, 0);
+    ss_error err;
+    ss_heal_params *p = ss_heal_params_preset("clean", &err);
+    const double expect = log(2.0) / p->lamrhop;
+    ss_heal_params_free(p);
+    assert_true(c.scar_peak_day < 20.0);
+    assert_true(c.half_life_days >= 30.0 && c.half_life_days <= 365.0);
+    assert_true(fabs(c.half_life_days - expect) < 0.1 * expect);
+}
+
+/* Keloid: scar above the clean course's peak density (1.44 on the default
+ * problem; threshold 1.6) reaches >= 2 mm beyond the original margin by
+ * day 60, keeps growing after closure, and does not depend on the block
+ * size (the far field relaxes to healthy tissue, the walls do not shape
+ * it). A 10 mm wound in 20 and 30 mm blocks, large steps after closure. */
+static void test_keloid(void **state) {
+    (void)state;
+    ss_heal_course a = course("keloid", 20, 10, 0.5, 60, 0.25, -1, 1.6);
+    ss_heal_course b = course("keloid", 30, 10, 0.5, 60, 0.25, -1, 1.6);
+    assert_true(a.keloid_beyond_mm >= 2.0 && b.keloid_beyond_mm >= 2.0);
+    assert_true(a.t95 > 0 && a.keloid_beyond_mm > a.keloid_beyond_t95 + 1.0);
+    assert_true(fabs(a.keloid_area_mm2 - b.keloid_area_mm2) <= 0.1 * b.keloid_area_mm2);
+    assert_true(fabs(a.keloid_beyond_mm - b.keloid_beyond_mm) <= 0.1 * b.keloid_beyond_mm);
+}
+
+/* Grid convergence of the closure times (physical thicknesses, not voxel
+ * counts): 0.5 vs 0.25 mm voxels within 5 % for clean and scab, on a 10 mm
+ * wound in a 16 mm block (docs/heal-model.md has the full-size table). */
+static void test_grid_convergence(void **state) {
+    (void)state;
+    const char *sc[2] = {"clean", "scab"};
+    /* quick (ASan) runs check the clean pair only */
+    for (int k = 0; k < (tu_quick() ? 1 : 2); k++) {
+        ss_heal_course a = course(sc[k], 16, 10, 0.5, k ? 12 : 7, 0, -1, 0);
+        ss_heal_course b = course(sc[k], 16, 10, 0.25, k ? 12 : 7, 0, -1, 0);
+        assert_true(a.t50 > 0 && a.t95 > 0 && b.t50 > 0 && b.t95 > 0);
+        double d50 = fabs(a.t50 - b.t50) / b.t50, d95 = fabs(a.t95 - b.t95) / b.t95;
+        print_message("%s: 0.5 vs 0.25 mm: t50 %.2f %%, t95 %.2f %%\n", sc[k], 100 * d50,
+                      100 * d95);
+        assert_true(d50 <= 0.05 && d95 <= 0.05);
+    }
 }
 
 /* Smooth normalised open area: mean epithelial deficit 1 - max(e) over the
@@ -466,10 +494,12 @@ static void test_fig4_convergence(void **state) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_params),         cmocka_unit_test(test_grid_init),
-        cmocka_unit_test(test_healthy_steady), cmocka_unit_test(test_dt_limit),
-        cmocka_unit_test(test_symmetry),       cmocka_unit_test(test_threads_bitidentical),
-        cmocka_unit_test(test_scenarios),      cmocka_unit_test(test_fig4_convergence),
+        cmocka_unit_test(test_params),           cmocka_unit_test(test_grid_init),
+        cmocka_unit_test(test_healthy_steady),   cmocka_unit_test(test_dt_limit),
+        cmocka_unit_test(test_symmetry),         cmocka_unit_test(test_threads_bitidentical),
+        cmocka_unit_test(test_scenarios),        cmocka_unit_test(test_fig4_convergence),
+        cmocka_unit_test(test_remodelling),      cmocka_unit_test(test_keloid),
+        cmocka_unit_test(test_grid_convergence),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -506,6 +506,71 @@ static void test_free_block(void **state) {
     ss_heal_params_free(hp);
 }
 
+/* Sutures: the CSV reader's errors, a stitch outside the domain, and a
+ * stitch pulling its two points together until its removal day. */
+static void test_sutures(void **state) {
+    (void)state;
+    char *dir = tu_tmpdir("mech_sutures");
+    char path[4096];
+    ss_error err;
+    int n = 0;
+    snprintf(path, sizeof path, "%s/s.csv", dir);
+    write_text(path, "x1,y1,z1,x2,y2,z2,remove_day\n# a stitch\n4,5,5,8,5,5,2\n");
+    ss_mech_suture *s = ss_mech_sutures_read(path, &n, &err);
+    assert_non_null(s);
+    assert_int_equal(n, 1);
+    assert_float_equal(s[0].remove_day, 2, 0);
+    static const char *bad[] = {"1,2,3\n", "1,2,3,4,5,x\n", "1,2,3,4,5,6,-1\n", "",
+                                "1,2,3,4,5,6,7,8\n"};
+    for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
+        write_text(path, bad[i]);
+        assert_null(ss_mech_sutures_read(path, &n, &err));
+        assert_int_equal(err.code, SS_ERR_INPUT);
+        assert_non_null(strstr(err.msg, "s.csv"));
+    }
+    /* a 12 x 10 x 6 mm block; the stitch joins (4,5,5) and (8,5,5) */
+    ss_heal_params *hp = ss_heal_params_preset("clean", &err);
+    ss_heal_grid *g = ss_heal_grid_create(24, 20, 14, 0.5, &err);
+    assert_int_equal(ss_heal_grid_init(g, 6.0, 0.1, NULL, hp, &err), SS_OK);
+    ss_mech_params p;
+    ss_mech_params_default(&p);
+    ss_mech_suture out = {{4, 5, 5}, {40, 5, 5}, INFINITY};
+    assert_null(ss_mech_create(g, hp, &p, NULL, &out, 1, &err));
+    assert_int_equal(err.code, SS_ERR_INPUT);
+    assert_non_null(strstr(err.msg, "outside"));
+    ss_mech *m = ss_mech_create(g, hp, &p, NULL, s, 1, &err);
+    assert_non_null(m);
+    const ss_tetmesh *M = ss_mech_mesh(m);
+    int a = -1, b = -1;
+    double da = 1e9, db = 1e9;
+    for (int i = 0; i < M->nnodes; i++) { /* the stitched nodes: nearest to the points */
+        const double *x = M->x + 3 * i;
+        double ea = hypot(hypot(x[0] - 4, x[1] - 5), x[2] - 5);
+        double eb = hypot(hypot(x[0] - 8, x[1] - 5), x[2] - 5);
+        if (ea < da) da = ea, a = i;
+        if (eb < db) db = eb, b = i;
+    }
+    assert_true(a >= 0 && b >= 0);
+    double d0 = fabs(M->x[3 * b] - M->x[3 * a]);
+    for (int k = 0; k < 10; k++) { /* day 0 .. 1: stitched */
+        g->t_days += 0.1;
+        assert_int_equal(ss_mech_step(m, g, 0.1, &err), SS_OK);
+    }
+    const double *x = ss_mech_positions(m);
+    double d1 = fabs(x[3 * b] - x[3 * a]);
+    assert_true(d1 < 0.8 * d0);
+    g->t_days = 3; /* taken out: the skin springs back */
+    assert_int_equal(ss_mech_step(m, g, 0.1, &err), SS_OK);
+    x = ss_mech_positions(m);
+    assert_float_equal(fabs(x[3 * b] - x[3 * a]), d0, 1e-2);
+    ss_mech_free(m);
+    ss_heal_grid_free(g);
+    ss_heal_params_free(hp);
+    free(s);
+    tu_rmtree(dir);
+    free(dir);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_pcell),
@@ -517,6 +582,7 @@ int main(void) {
         cmocka_unit_test(test_springs_energy_monotone),
         cmocka_unit_test(test_bspline),
         cmocka_unit_test(test_free_block),
+        cmocka_unit_test(test_sutures),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -38,18 +38,16 @@ static void test_reciprocity(void **state) {
 
 static void test_energy_bound(void **state) {
     (void)state;
-    /* Directional albedo by numerical integration stays <= 1 for white base
-     * colour and any specular strength over roughness and incidence (the
-     * glTF 1-F(h.k) Lambert weight would reach 1.5 at grazing incidence). A
-     * sanity check of the quadrature first: a white GGX model with specular 0
-     * at normal incidence is Lambert times 1-(1-cos)^5 transmission plus a
-     * weak Schlick lobe, close to but below 1. */
+    /* GGX: the Lambert term is coupled to the specular lobe (Kelemen &
+     * Szirmay-Kalos 2001), so a white base colour gives a directional albedo
+     * of exactly E + (1 - E) = 1 (to the quadrature of this test and the
+     * model's E table); the specular-lobe albedo the model tabulates equals
+     * the black-base albedo integrated here. Ashikhmin-Shirley stays <= 1.
+     * (glTF's 1-F(h.k) Lambert weight would reach 1.5 at grazing incidence.) */
     int n = tu_quick() ? 300 : 600;
-    ss_render_params lam = {{1, 1, 1}, 0.0, 1.0};
-    double a0 = ss_render_albedo(SS_RENDER_GGX, &lam, 0.0, 0, n);
-    assert_true(a0 > 0.85 && a0 <= 1.0);
     double rough[] = {0.2, 0.4, 0.7, 1.0};
     double spec[] = {0.0, 0.5, 1.0};
+    double worst = 0, worst_e = 0;
     for (int m = 0; m < SS_RENDER_NMODELS; m++)
         for (int r = 0; r < 4; r++)
             for (int s = 0; s < 3; s++)
@@ -57,8 +55,19 @@ static void test_energy_bound(void **state) {
                     ss_render_params p = {{1, 1, 1}, spec[s], rough[r]};
                     double ti = t * 0.29; /* up to 83 degrees */
                     double alb = ss_render_albedo((ss_render_model)m, &p, ti, 1, n);
-                    assert_true(alb > 0.0 && alb <= 1.0);
+                    if (m == SS_RENDER_GGX) {
+                        if (fabs(alb - 1.0) > worst) worst = fabs(alb - 1.0);
+                        assert_true(fabs(alb - 1.0) < 0.002);
+                        ss_render_params blk = {{0, 0, 0}, spec[s], rough[r]};
+                        double es = ss_render_albedo(SS_RENDER_GGX, &blk, ti, 1, n);
+                        double et = ss_render_ggx_spec_albedo(spec[s], rough[r], cos(ti));
+                        if (fabs(es - et) > worst_e) worst_e = fabs(es - et);
+                        assert_true(fabs(es - et) < 0.002);
+                    } else
+                        assert_true(alb > 0.0 && alb <= 1.0);
                 }
+    printf("GGX white albedo within %.4f of 1; specular albedo table within %.4f\n", worst,
+           worst_e);
     /* Black base colour: only the specular lobe, bounded by ~F0 at normal
      * incidence for rough surfaces (no more than 0.08 + Schlick share). */
     ss_render_params blk = {{0, 0, 0}, 1.0, 0.5};

@@ -1,6 +1,7 @@
 /* MCML files: parsing a multi-run .mci (comments, blank lines), errors with
  * line numbers, and the .mco output: RAT against van de Hulst's slab and the
- * MCML normalisations of A_z, Rd_r, Rd_a (they integrate back to RAT). */
+ * MCML normalisations of A_z, Rd_r, Rd_a and of the 2-D arrays A_rz, Rd_ra,
+ * Tt_ra (they integrate back to RAT and to the 1-D arrays). */
 #include "testutil.h"
 
 #include <math.h>
@@ -168,6 +169,35 @@ static void test_simulate_van_de_hulst(void **state) {
     s = 0;
     for (int i = 0; i < 30; i++) s += ta[i] * 2 * M_PI * sin((i + 0.5) * da) * da;
     assert_true(fabs(s - tt) < 1e-4);
+    /* the 2-D arrays in MCML's layout and units integrate back too:
+     * A_rz [1/cm^3] x 2 pi (ir+0.5) dr^2 dz -> A; Rd_ra, Tt_ra [1/(cm^2 sr)] x
+     * 4 pi^2 dr^2 sin(da/2) (ir+0.5) sin(2 (ia+0.5) da) -> Rd, Tt; their
+     * angle sums give Rd_r (row ir) and their radius sums Rd_a */
+    double *arz = array(mco, "A_rz\n", 200 * 20);
+    double *rra = array(mco, "Rd_ra\n", 200 * 30), *tra = array(mco, "Tt_ra\n", 200 * 30);
+    double sa = 0, sr = 0, st = 0;
+    for (int ir = 0; ir < 200; ir++) {
+        for (int iz = 0; iz < 20; iz++)
+            sa += arz[ir * 20 + iz] * 2 * M_PI * (ir + 0.5) * 0.01 * 0.01 * 0.001;
+        double row = 0;
+        for (int ia = 0; ia < 30; ia++) {
+            double w =
+                4 * M_PI * M_PI * 0.01 * 0.01 * sin(da / 2) * (ir + 0.5) * sin(2 * (ia + 0.5) * da);
+            sr += rra[ir * 30 + ia] * w;
+            st += tra[ir * 30 + ia] * w;
+            row += rra[ir * 30 + ia] * w;
+        }
+        /* row ir summed over angles = Rd_r[ir] x annulus area */
+        double ann = rr[ir] * 2 * M_PI * (ir + 0.5) * 0.01 * 0.01;
+        assert_true(fabs(row - ann) < 1e-3 * rd + 1e-3 * ann);
+    }
+    printf("2-D arrays: A %.5f (%.5f) Rd %.5f (%.5f) Tt %.5f (%.5f)\n", sa, a, sr, rd, st, tt);
+    assert_true(fabs(sa - a) < 1e-3 * a);
+    assert_true(fabs(sr - rd) < 1e-3 * rd);
+    assert_true(fabs(st - tt) < 1e-3 * tt);
+    free(arz);
+    free(rra);
+    free(tra);
     free(al);
     free(az);
     free(rr);

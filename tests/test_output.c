@@ -227,6 +227,51 @@ static void test_hostile_paths_refused(void **state) {
     free(dir);
 }
 
+static void test_in_place_folder(void **state) {
+    (void)state;
+    ss_error err;
+    char *dir = tu_tmpdir("out-inplace");
+    char *d = path_in(dir, "run");
+    /* a new folder is written where it stands, marked unfinished meanwhile */
+    ss_outputs *o = ss_outputs_create("heal", &err);
+    assert_int_equal(ss_outputs_add(o, "--out", d, SS_OUTPUT_DIR_IN_PLACE, 0, &err), SS_OK);
+    assert_int_equal(ss_outputs_begin(o, &err), SS_OK);
+    assert_string_equal(ss_outputs_path(o, 0), ss_outputs_target(o, 0));
+    assert_true(ss_output_dir_is_unfinished(d, "heal"));
+    assert_false(ss_output_dir_is_complete(d, NULL));
+    /* while it runs, nobody else may start on it (and is told who holds it) */
+    assert_int_equal(ss_output_lock_holder(d), (long)getpid());
+    ss_outputs *b = ss_outputs_create("heal", &err);
+    assert_int_equal(ss_outputs_add(b, "--out", d, SS_OUTPUT_DIR_IN_PLACE, 0, &err), SS_ERR_INPUT);
+    assert_non_null(strstr(err.msg, "is writing it"));
+    ss_outputs_free(b);
+    char *f = path_in(d, "ckpt.bin");
+    put(f, "progress");
+    /* a failure leaves it, unfinished, for a resume */
+    assert_int_equal(ss_outputs_finish(o, SS_ERR_RUNTIME, &err), SS_ERR_RUNTIME);
+    ss_outputs_free(o);
+    assert_text(f, "progress");
+    assert_true(ss_output_dir_is_unfinished(d, "heal"));
+    assert_int_equal(ss_output_lock_holder(d), 0);
+    /* another owner may not take it; its owner resumes and completes it */
+    o = ss_outputs_create("abrasion", &err);
+    assert_int_equal(ss_outputs_add(o, "--out", d, SS_OUTPUT_DIR_IN_PLACE, 0, &err), SS_ERR_INPUT);
+    ss_outputs_free(o);
+    o = ss_outputs_create("heal", &err);
+    assert_int_equal(ss_outputs_add(o, "--resume", d, SS_OUTPUT_DIR_IN_PLACE, 0, &err), SS_OK);
+    assert_int_equal(ss_outputs_begin(o, &err), SS_OK);
+    assert_int_equal(ss_outputs_finish(o, SS_OK, &err), SS_OK);
+    ss_outputs_free(o);
+    assert_true(ss_output_dir_is_complete(d, "heal"));
+    assert_false(ss_output_dir_is_unfinished(d, NULL));
+    assert_text(f, "progress");
+    assert_int_equal(tu_count_entries(dir), 1);
+    free(f);
+    free(d);
+    tu_rmtree(dir);
+    free(dir);
+}
+
 static void test_lock_and_stale_cleanup(void **state) {
     (void)state;
     ss_error err;
@@ -478,11 +523,17 @@ static void test_threads_and_messages(void **state) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_file_whole_or_old),     cmocka_unit_test(test_folder_replaced_whole),
-        cmocka_unit_test(test_hostile_paths_refused), cmocka_unit_test(test_lock_and_stale_cleanup),
-        cmocka_unit_test(test_multi_output_rollback), cmocka_unit_test(test_full_disk),
-        cmocka_unit_test(test_paths_under_a_folder),  cmocka_unit_test(test_inputs_never_block),
-        cmocka_unit_test(test_png_header_bomb),       cmocka_unit_test(test_threads_and_messages),
+        cmocka_unit_test(test_file_whole_or_old),
+        cmocka_unit_test(test_folder_replaced_whole),
+        cmocka_unit_test(test_hostile_paths_refused),
+        cmocka_unit_test(test_in_place_folder),
+        cmocka_unit_test(test_lock_and_stale_cleanup),
+        cmocka_unit_test(test_multi_output_rollback),
+        cmocka_unit_test(test_full_disk),
+        cmocka_unit_test(test_paths_under_a_folder),
+        cmocka_unit_test(test_inputs_never_block),
+        cmocka_unit_test(test_png_header_bomb),
+        cmocka_unit_test(test_threads_and_messages),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

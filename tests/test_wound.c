@@ -128,7 +128,7 @@ static void scene_init(scene *s) {
     snprintf(path, sizeof path, "%s/data/modelmatch_default.sstab", SKINSIM_SOURCE_DIR);
     s->table = ss_mm_table_read(path, &err);
     assert_non_null(s->table);
-    s->skin = ss_wound_default_skin(TEX, 20.0, 1, &err);
+    s->skin = ss_skin_bio_default(TEX, 2.0, 1, &err);
     assert_non_null(s->skin);
     ss_wound_render_options o;
     ss_wound_render_options_default(&o);
@@ -285,6 +285,27 @@ static void test_clinical(void **state) {
     if (model_failures) skip();
 }
 
+/* The base skin's textures are the ModelMatch lookup of its bio map. */
+static void test_base_lookup(void **state) {
+    (void)state;
+    scene s;
+    scene_init(&s);
+    const ss_wound_textures *b = ss_wound_renderer_base(s.r);
+    for (size_t i = 0; i < (size_t)TEX * TEX; i += 97) {
+        const float *bio = s.skin->data + i * SS_BIO_NCHANNELS;
+        if (bio[SS_BIO_EXTRA_A] != 0) continue; /* hair over the skin */
+        double x[SS_MM_NAXES] = {bio[SS_BIO_MELANIN], bio[SS_BIO_PHEOMELANIN],
+                                 bio[SS_BIO_BLOOD],   bio[SS_BIO_OXYGENATION],
+                                 bio[SS_BIO_SC_CM],   bio[SS_BIO_EPIDERMIS_CM]};
+        double e[SS_MM_NFIELDS];
+        ss_mm_table_lookup(s.table, x, e);
+        for (int c = 0; c < 3; c++) assert_true(fabs(b->base_color->data[i * 3 + c] - e[c]) < 1e-5);
+        assert_true(fabs(b->roughness->data[i] - e[4]) < 1e-5);
+        assert_true(b->height->data[i] == bio[SS_BIO_HEIGHT_MM]);
+    }
+    scene_free(&s);
+}
+
 /* The same textures for 1 and 2 threads. */
 static void test_threads(void **state) {
     (void)state;
@@ -318,6 +339,25 @@ static void test_threads(void **state) {
     assert_memory_equal(a.roughness->data, b.roughness->data, n * sizeof(float));
     assert_memory_equal(a.height->data, b.height->data, n * sizeof(float));
     assert_memory_equal(a.normal->data, b.normal->data, n * 3 * sizeof(float));
+    /* the mechanics' displacement: zero is no displacement; a uniform lift
+     * of 0.1 mm raises the height everywhere and changes no colour */
+    ss_image *def = ss_image_create(TEX, TEX, 3, &err);
+    assert_non_null(def);
+    assert_int_equal(ss_wound_render(s.r, t, def, &b, &err), SS_OK);
+    assert_memory_equal(a.base_color->data, b.base_color->data, n * 3 * sizeof(float));
+    assert_memory_equal(a.height->data, b.height->data, n * sizeof(float));
+    for (size_t i = 0; i < n; i++) def->data[i * 3 + 2] = 0.1f;
+    assert_int_equal(ss_wound_render(s.r, t, def, &b, &err), SS_OK);
+    assert_memory_equal(a.base_color->data, b.base_color->data, n * 3 * sizeof(float));
+    for (size_t i = 0; i < n; i++)
+        assert_true(fabsf(b.height->data[i] - a.height->data[i] - 0.1f) < 1e-6f);
+    /* a sideways shift of the whole texture by 2 mm moves the wound with it */
+    for (size_t i = 0; i < n; i++) def->data[i * 3] = 2.0f, def->data[i * 3 + 2] = 0;
+    assert_int_equal(ss_wound_render(s.r, t, def, &b, &err), SS_OK);
+    int moved = 0;
+    for (size_t i = 0; i < n * 3; i++) moved |= a.base_color->data[i] != b.base_color->data[i];
+    assert_true(moved);
+    ss_image_free(def);
     ss_wound_textures_free(&a);
     ss_wound_textures_free(&b);
     ss_wound_tissue_free(t);
@@ -329,7 +369,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_delta_e2000), cmocka_unit_test(test_recipe),
         cmocka_unit_test(test_layers),      cmocka_unit_test(test_clinical),
-        cmocka_unit_test(test_threads),
+        cmocka_unit_test(test_threads),     cmocka_unit_test(test_base_lookup),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,7 +1,8 @@
 /* skinsim core: errors, float images, PNG/EXR I/O, counter-based RNG, threads,
- * progress and atomic file writes. Every other module builds on these; none of
- * it exits or aborts: failures come back as an ss_status with a message that
- * names the input and what was wrong.
+ * progress, atomic file writes and the output discipline (ss_outputs). Every
+ * other module builds on these; none of it exits or aborts: failures come
+ * back as an ss_status with a message that names the input and what was
+ * wrong.
  *
  * What is stable: every type and function declared in include/skinsim/ is the
  * library's API (one header per module). The shared library's soname
@@ -134,12 +135,6 @@ char *ss_read_file(const char *path, size_t *len, ss_error *err);
 ss_status ss_mkdir_p(const char *path, ss_error *err);
 /* Checks that dir exists (or can be created) and a file can be created in it. */
 ss_status ss_check_writable_dir(const char *dir, ss_error *err);
-/* Older form of the folder discipline, kept for callers not yet on
- * ss_outputs: begin stages dir (new or existing) as "dir.skinsim-staging.*"
- * and *work is where to write; end swaps it in whole on SS_OK (with the
- * completion marker) or removes it. No lock and no checks: use ss_outputs. */
-ss_status ss_output_dir_begin(const char *dir, char **work, ss_error *err);
-ss_status ss_output_dir_end(const char *dir, const char *work, ss_status status, ss_error *err);
 /* rm -rf of a directory tree (used to clean up a failed staging directory). */
 void ss_remove_tree(const char *path);
 
@@ -174,7 +169,14 @@ void ss_remove_tree(const char *path);
  * and rewrites staging paths in err back to the names the user gave. */
 typedef enum ss_output_kind {
     SS_OUTPUT_FILE = 0, /* one regular file */
-    SS_OUTPUT_DIR = 1   /* a folder the command owns and replaces whole */
+    SS_OUTPUT_DIR = 1,  /* a folder the command owns and replaces whole */
+    /* A folder written where it stands, for runs that must survive a kill
+     * and be resumed from what they wrote (heal's checkpoints). It may be
+     * new, empty, or this owner's folder (finished or not); begin marks it
+     * unfinished (.skinsim-unfinished), finish(SS_OK) marks it complete,
+     * finish(error) leaves it unfinished for a resume. Nothing else of the
+     * discipline changes (checks, lock, leftovers, disk space). */
+    SS_OUTPUT_DIR_IN_PLACE = 2
 } ss_output_kind;
 typedef struct ss_outputs ss_outputs;
 
@@ -200,13 +202,19 @@ const char *ss_outputs_target(const ss_outputs *o, int i);
 ss_status ss_outputs_finish(ss_outputs *o, ss_status status, ss_error *err);
 /* Rolls back anything begun and not finished, releases locks, frees. */
 void ss_outputs_free(ss_outputs *o);
+/* The process id of the skinsim run writing path now (holding its lock),
+ * -1 when that run's id is unreadable, 0 when no run is writing it. */
+long ss_output_lock_holder(const char *path);
 /* 1 when dir holds a completion marker (of owner, or of any owner when NULL). */
 int ss_output_dir_is_complete(const char *dir, const char *owner);
 /* Writes or removes dir's completion marker (for outputs a command keeps
  * updating in place, such as a resumable run). */
 ss_status ss_output_dir_mark_complete(const char *dir, const char *owner, ss_error *err);
 ss_status ss_output_dir_mark_incomplete(const char *dir, ss_error *err);
+/* 1 when dir is an unfinished in-place folder of owner (or any when NULL). */
+int ss_output_dir_is_unfinished(const char *dir, const char *owner);
 #define SS_OUTPUT_MARKER ".skinsim-complete"
+#define SS_OUTPUT_UNFINISHED ".skinsim-unfinished"
 
 /* An output path named by an input file (an .mci's run outputs): name is
  * taken relative to base_dir; absolute names and names that leave base_dir

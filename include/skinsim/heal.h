@@ -80,13 +80,20 @@ typedef struct ss_heal_params {
     double lamee;  /* 1/day, epithelial loss */
     double gamma1; /* 1, capillary density of maximal Q(u3) */
     /* scar rho */
-    double lamnrho; /* 1/day per unit n, collagen deposition by fibroblasts */
-    double lamrhop; /* 1/day, scar remodelling (fading) */
+    double lamnrho;  /* 1/day per unit n, collagen deposition by fibroblasts */
+    double lamrhop;  /* 1/day, scar remodelling (fading) */
+    double lamkrho;  /* 1/day per unit n, keloid (autocrine) deposition in omega, 0 = none */
+    double rho_open; /* 1, share of the deposition that goes on in vascularised tissue while
+                        the wound is open: (1-u3) becomes 1 - (1 - rho_open) u3 */
     /* plasma p / wound region */
     double Dp;       /* mm^2/day */
     double lampp;    /* 1/day, signed: negative = plasma resorption */
     double rho_max;  /* 1, collagen level above which C(rho) pushes the region */
     double u1_wound; /* 1, initial oxygen in the wound (clot) */
+    /* physical layers (docs/heal-model.md §2): thicknesses in mm, never voxel counts */
+    double bed_mm;  /* mm, depth of the wound bed whose mean u3 the epithelium reads */
+    double scab_mm; /* mm, thickness of the exposed layer that dries into eschar */
+    double kscab;   /* 1, fraction by which a full eschar slows the epithelial sheet under it */
 } ss_heal_params;
 
 /* omega = [p > SS_HEAL_P_MIN] (plasma is normalised to 1 in the fresh clot). */
@@ -116,6 +123,12 @@ ss_heal_params *ss_heal_params_clone(const ss_heal_params *p, ss_error *err);
 char *ss_heal_params_to_json(const ss_heal_params *p);
 /* Unit string of a parameter key ("D1" -> "mm^2/day"); NULL if unknown. */
 const char *ss_heal_param_unit(const char *key);
+/* Parameter keys in file order: the i-th key, NULL past the last. */
+const char *ss_heal_param_key(int i);
+/* Value of a key (SS_ERR_INPUT if unknown), and setting it with the checks of
+ * the JSON loader (unknown key or bad value -> SS_ERR_INPUT naming the key). */
+ss_status ss_heal_param_get(const ss_heal_params *p, const char *key, double *v, ss_error *err);
+ss_status ss_heal_param_set(ss_heal_params *p, const char *key, double v, ss_error *err);
 
 /* ---- grid (§5.1) ------------------------------------------------------------ */
 
@@ -141,11 +154,12 @@ static inline size_t ss_heal_idx(const ss_heal_grid *g, int x, int y, int z) {
 }
 /* wound3d: nx*ny*nz bytes, 1 = wound voxel (tissue removed, filled by clot).
  * Sets cell states (BOUND on the outermost voxel shell, AIR above skin_top_mm,
- * EPIDERMIS in the top epidermis_mm of the skin (at least two voxels), DERMIS
- * below, WOUND where wound3d says) and initial fields: healthy values in
+ * EPIDERMIS in the voxels reaching into the top epidermis_mm of the skin (at
+ * least the surface voxel, which then holds a thinner epidermis as a sheet),
+ * DERMIS below, WOUND where wound3d says) and initial fields: healthy values in
  * intact tissue, wound values in the wound (u1 = u1_wound, u2 = u3 = n = 0,
- * plasma 1), the epithelium = 1 in the two-voxel layer on top of the skin
- * outside the wound (§5.1). wound3d NULL = no wound. */
+ * plasma 1), the epithelium = 1 in the intact epidermis, 0 elsewhere (§5.1's
+ * layer on top of the skin, in mm). wound3d NULL = no wound. */
 ss_status ss_heal_grid_init(ss_heal_grid *g, double skin_top_mm, double epidermis_mm,
                             const uint8_t *wound3d, const ss_heal_params *p, ss_error *err);
 /* A footprint (1-channel image, value > 0.5 = wound, mapped onto x,y over the
@@ -161,7 +175,7 @@ uint8_t *ss_heal_wound_box(const ss_heal_grid *g, double skin_top_mm, double sid
 
 /* Default problem (docs/heal-model.md): a 30 x 30 x 4 mm block of 0.5 mm voxels
  * (60 x 60 x 8), skin surface at 3 mm (one air layer under the top bound),
- * 0.1 mm epidermis (held as the two-voxel layer), a 20 x 20 mm wound 1 mm deep.
+ * 0.1 mm epidermis (a sheet in the surface voxel), a 20 x 20 mm wound 1 mm deep.
  * The calibration holds at 0.25 mm too (docs/heal-model.md). */
 #define SS_HEAL_DEFAULT_BLOCK_X_MM 30.0
 #define SS_HEAL_DEFAULT_BLOCK_Y_MM 30.0
@@ -189,6 +203,11 @@ typedef struct ss_heal_solver ss_heal_solver;
 ss_heal_solver *ss_heal_solver_create(const ss_heal_grid *g, const ss_heal_params *p,
                                       ss_heal_scheme s, double dt_days, ss_error *err);
 double ss_heal_solver_dt(const ss_heal_solver *s);
+/* Changes the step (adaptive stepping). EXPLICIT: up to the stability limit;
+ * SPLIT: up to SS_HEAL_SPLIT_LATE_MAX_DT_DAYS, for the slow phases once the
+ * fast ones are over (the caller owns the accuracy: docs/heal-model.md §4). */
+#define SS_HEAL_SPLIT_LATE_MAX_DT_DAYS 2.0
+ss_status ss_heal_solver_set_dt(ss_heal_solver *s, double dt_days, ss_error *err);
 /* Advances g->t_days by dt, g->step++. All state lives in g (fields, cell,
  * t_days, step); the solver holds only params, dt and scratch memory. */
 ss_status ss_heal_step(ss_heal_solver *s, ss_heal_grid *g, ss_error *err);
@@ -201,12 +220,60 @@ typedef struct ss_heal_stats {
     double wound_region_area_mm2;       /* columns whose surface cell is in omega */
     double initial_area_mm2;            /* columns that had a WOUND cell at the surface */
     double field_mean[SS_HEAL_NFIELDS]; /* over tissue cells (not AIR/BOUND) */
+    double eschar_wound_mean;           /* mean over the initial wound columns of the
+                                           column maximum of s (the scab, 0..1) */
+    double scar_volume_mm3;             /* integral of rho over the tissue (mm^3 of
+                                           normal-dermis-equivalent scar collagen) */
+    double scar_max;                    /* largest rho of any tissue cell */
 } ss_heal_stats;
 /* Epithelium level below which the surface counts as open: 0.5. */
 double ss_heal_open_threshold(void);
 void ss_heal_stats_compute(const ss_heal_grid *g, ss_heal_stats *st);
 /* omega for one cell (1 = wound region) under params p. */
 int ss_heal_in_region(const ss_heal_grid *g, const ss_heal_params *p, size_t idx);
+
+/* ---- clinical course of a square wound ---------------------------------------------
+ * The figures docs/heal-model.md calibrates against, measured on a centred
+ * square wound in a block (skin surface at 3 mm, one air layer, block 4 mm
+ * high), split scheme. Used by the tests, bench_heal_course and the
+ * convergence and sensitivity tables (bench/heal_tables.sh). */
+typedef struct ss_heal_course_opts {
+    double block_mm;       /* block side (x = y) */
+    double wound_mm;       /* wound side */
+    double depth_mm;       /* wound depth */
+    double dx_mm;          /* voxel */
+    double days;           /* simulated time */
+    double dt_days;        /* split step; 0 = SS_HEAL_SPLIT_DEFAULT_DT_DAYS */
+    double late_dt_days;   /* > dt: step used once the wound is closed and the scab
+                              gone (the slow remodelling phase); 0 = dt throughout */
+    double deep_check_day; /* day of the deep-epithelium check; < 0 = none */
+    double keloid_thr;     /* scar level of the keloid extent; 0 = none */
+} ss_heal_course_opts;
+typedef struct ss_heal_course {
+    double t50, t95;      /* days to 50 % / 95 % closure (-1 = not reached) */
+    double scab_day;      /* first day the wound's mean eschar exceeds 0.5 */
+    double scab_gone_day; /* first day after t95 it is below 0.05 (-1 = not) */
+    double scar_peak_mm3; /* peak scar volume (integral of rho) and its day */
+    double scar_peak_day;
+    double scar_end_mm3;      /* at the end */
+    double scar_max_peak;     /* peak of the largest rho */
+    double half_life_days;    /* remodelling: ln 2 over the decay rate of the scar volume
+                                 over the last quarter of the run (after the peak;
+                                 -1 = not decaying, 0 = no peak yet) */
+    double deep_e_fraction;   /* tissue voxels deeper than 0.5 mm below the skin surface
+                                 with e > 0.5, fraction, at deep_check_day */
+    double keloid_beyond_mm;  /* mean advance beyond the original margin of the scar above
+                                 keloid_thr (column maximum), along the four mid-edge
+                                 lines, at the end */
+    double keloid_beyond_t95; /* the same at t95 (growth after closure) */
+    double keloid_area_mm2;   /* columns whose scar exceeds keloid_thr, at the end */
+    double region_area_mm2;   /* wound region (omega) at the surface, at the end */
+    int bounds_ok;            /* final fields non-negative, finite; s, e, p <= 1 */
+    long steps;
+    double wall_s;
+} ss_heal_course;
+ss_status ss_heal_course_run(const ss_heal_params *p, const ss_heal_course_opts *o,
+                             ss_heal_course *c, ss_error *err);
 
 /* ---- generic reaction-diffusion-convection core ---------------------------------
  * u_f,t + div(u_f v) = m_f(u) D_f lap u_f + R_f(u) on a regular grid of cubic
@@ -235,6 +302,12 @@ typedef struct ss_heal_rd_row {
     float *m[SS_HEAL_RD_MAXSLOT];
 } ss_heal_rd_row;
 typedef void (*ss_heal_reaction_fn)(void *ctx, const ss_heal_rd_row *row);
+/* Called with the current fields before every evaluation pass of the
+ * reaction function (explicit: once per step; split: before each half
+ * reaction pass), so a model can gather non-local inputs (column values,
+ * depth averages) into its context; the reaction must then read only those
+ * and the row it is given. NULL = nothing to gather. */
+typedef void (*ss_heal_prepare_fn)(void *ctx, float *const *u);
 
 typedef struct ss_heal_rd_system {
     int nx, ny, nz;
@@ -250,9 +323,11 @@ typedef struct ss_heal_rd_system {
     float lo[SS_HEAL_RD_MAXF], hi[SS_HEAL_RD_MAXF]; /* admissible range (clamp) */
     const float *velocity[3];                       /* NULL = zero; mm/day */
     ss_heal_reaction_fn react;                      /* NULL = no reaction */
+    ss_heal_prepare_fn prepare;                     /* NULL = none */
     void *ctx;
-    double mmax;     /* bound on every multiplier m (for the stability limit) */
-    double rate_max; /* bound on every loss_f (1/day), explicit positivity limit */
+    uint8_t lateral[SS_HEAL_RD_MAXF]; /* 1 = field diffuses along x and y only */
+    double mmax;                      /* bound on every multiplier m (for the stability limit) */
+    double rate_max;                  /* bound on every loss_f (1/day), explicit positivity limit */
 } ss_heal_rd_system;
 
 typedef struct ss_heal_rd_work ss_heal_rd_work;

@@ -68,6 +68,11 @@ uint8_t *ss_heal_voxelise_mesh(const ss_tri_mesh *m, int nx, int ny, int nz, dou
  * WholeExtent 0 nx 0 ny 0 nz, Origin 0 0 0, Spacing dx dx dx (mm). FieldData
  * TimeValue holds t in days. Written atomically. */
 ss_status ss_heal_vti_write(const char *path, const ss_heal_grid *g, ss_error *err);
+/* The same with nvec more 3-component cell arrays (names[v], vecs[v][c] of
+ * nx*ny*nz floats), e.g. the mechanics' displacement. */
+ss_status ss_heal_vti_write_vectors(const char *path, const ss_heal_grid *g, int nvec,
+                                    const char *const *names, float *const (*vecs)[3],
+                                    ss_error *err);
 
 /* ParaView collection: `n` datasets with their times (days) and file names
  * relative to the .pvd. Written atomically. */
@@ -78,8 +83,9 @@ ss_status ss_heal_pvd_write(const char *path, int n, const double *t_days, const
 typedef enum ss_heal_surface_mode {
     SS_SURFACE_TOP = 0,  /* value in the topmost tissue cell of each column */
     SS_SURFACE_MAX = 1,  /* maximum over the tissue cells of each column */
-    SS_SURFACE_LAYER = 2 /* maximum over the two topmost tissue cells: the
-                            epithelial layer of §5.1, the value the open-area
+    SS_SURFACE_LAYER = 2 /* maximum over the two topmost tissue cells; for the
+                            epithelium (a surface sheet, 0 below the surface
+                            cell) the surface coverage that the open-area
                             statistic (ss_heal_stats_compute) thresholds */
 } ss_heal_surface_mode;
 /* Tissue cells: all but AIR, the BOUND layers z = 0 and z = nz-1, and BOUND
@@ -106,6 +112,10 @@ double ss_heal_area_normalised(const ss_heal_stats *st);
  * mean_<field>...`, one row per entry. Atomic. */
 ss_status ss_heal_area_csv_write(const char *path, const ss_heal_area_row *rows, int n,
                                  ss_error *err);
+/* The same with ncols more columns (names[c], vals[i * ncols + c] for row i). */
+ss_status ss_heal_area_csv_write_columns(const char *path, const ss_heal_area_row *rows, int n,
+                                         int ncols, const char *const *names, const double *vals,
+                                         ss_error *err);
 /* First time (days, linear interpolation between rows) at which the
  * normalised area drops to <= level; negative when never reached. */
 double ss_heal_time_to_closure(const ss_heal_area_row *rows, int n, double level);

@@ -48,7 +48,8 @@ typedef struct ss_heal_run_config {
     int grid[3];         /* voxels; all 0 = from size_mm with 0.5 mm voxels */
     double size_mm[3];   /* block size; all 0 = 30 x 30 x 4 mm (or grid x 0.5 mm) */
     double skin_top_mm;  /* skin surface height; 0 = nz-2 voxels (one air layer) */
-    double epidermis_mm; /* default SS_HEAL_DEFAULT_EPIDERMIS_MM (at least 2 voxels used) */
+    double epidermis_mm; /* default SS_HEAL_DEFAULT_EPIDERMIS_MM (a sub-voxel sheet in the
+                            surface voxel when thinner than a voxel) */
 
     /* ---- wound (fresh runs): at most one of mask, stroke, mesh, footprint;
      * none = a centred square of 20 mm (at most 2/3 of the smaller side) ---- */
@@ -70,6 +71,9 @@ typedef struct ss_heal_run_config {
     double area_every;       /* days between area rows (default 0.01, at least one step) */
     double checkpoint_every; /* days between checkpoints; 0 = none; < 0 = default (none, or
                                 the checkpoint's interval on resume) */
+    int velocity;            /* 1: give the grid zero velocity arrays before the solver is
+                                made, so a coupled mechanics (skinsim/mech.h) can drive the
+                                convection of every field (fresh runs) */
 
     /* ---- files ---- */
     const char *out_dir;    /* run directory; NULL = in memory, no file written */
@@ -79,6 +83,14 @@ typedef struct ss_heal_run_config {
                                grid, wound and intervals then come from the checkpoint: only
                                days and checkpoint_every are taken from this config */
     uint64_t seed;          /* recorded in summary.json (the solver draws no random numbers) */
+
+    /* ---- contraction mechanics (seed 001 §4.2-5.3, docs/mech.md; fresh runs) ---- */
+    int mechanics;         /* 1: mass-spring contraction drives the convection (default 0) */
+    const char *fibres;    /* "X,Y,Z[:X,Y,Z]" fibre families; NULL = params file or default */
+    double kappa;          /* fibre dispersion 0..1/3; < 0 = params file or default */
+    double tet_size_mm;    /* lattice tet edge; 0 = params file or default */
+    const char *sutures;   /* stitches CSV "x1,y1,z1,x2,y2,z2[,remove_day]" (mm); NULL = none */
+    const char *tet_mesh;  /* TetGen .node/.ele or Gmsh .msh instead of the lattice; NULL */
 } ss_heal_run_config;
 
 /* The defaults listed above (every other field 0 / NULL). */
@@ -93,6 +105,15 @@ typedef struct ss_heal_run ss_heal_run;
 ss_status ss_heal_run_create(const ss_heal_run_config *c, ss_heal_run **out, ss_error *err);
 void ss_heal_run_free(ss_heal_run *r);
 
+/* With out_dir: begins the outputs now (src/core/output.c): takes the
+ * folder's lock (another run writing it -> SS_ERR_INPUT naming its process),
+ * removes what killed runs left next to it, checks the estimated disk use
+ * against the free space (SS_ERR_INPUT with both figures), stages the folder
+ * (--force over a previous run) or marks it unfinished (a new or resumed
+ * one), writes run.json and the day-0 snapshot of a fresh run. The first step
+ * does this if it was not called; calling it first lets a caller tell these
+ * input errors from failures during the run. */
+ss_status ss_heal_run_start(ss_heal_run *r, ss_error *err);
 /* One solver step and its bookkeeping: an area row every area_every (and at
  * the end), with out_dir a snapshot every snapshot_every (and at the end) and a
  * checkpoint every checkpoint_every (newest two kept). The first call that
@@ -135,6 +156,8 @@ int ss_heal_run_snapshot_count(const ss_heal_run *r);
 long long ss_heal_run_resumed_from(const ss_heal_run *r);
 /* Checkpoints skipped as damaged while resuming ("" if none). */
 const char *ss_heal_run_note(const ss_heal_run *r);
+/* The contraction mechanics of the run (skinsim/mech.h), NULL when off. */
+struct ss_mech *ss_heal_run_mech(ss_heal_run *r);
 
 #ifdef __cplusplus
 }

@@ -32,8 +32,8 @@ typedef struct ss_tetmesh {
  * (z*ny + y)*nx + x, voxel centres at (i + 0.5) * dx_mm) is covered by cubes
  * of edge about tet_size_mm (fitted to the domain's bounding box so it is
  * spanned exactly), a cube kept when the voxel at its centre is inside, each
- * cube cut into the 6 tets of the Kuhn (Freudenthal) split around its main
- * diagonal, which conforms across faces. Every tet has volume <= edge^3 / 6:
+ * cube cut into the 6 tets of the Kuhn (Freudenthal) split around a main
+ * diagonal, mirrored in cubes with odd coordinates (symmetric, conforming). Every tet has volume <= edge^3 / 6:
  * this is the maximum-volume constraint of §5.2. */
 ss_tetmesh *ss_tetmesh_lattice(const uint8_t *inside, int nx, int ny, int nz, double dx_mm,
                                double tet_size_mm, ss_error *err);
@@ -144,6 +144,7 @@ typedef struct ss_springs {
     /* forces and energy at x, cached between sub-steps; set fvalid = 0 after
      * changing x, rest, k or anchor from outside (ss_springs_relax does) */
     double *f, *f2, *x2, *unode, U;
+    double mean_l0; /* cached mean reference edge length */
     int fvalid;
 } ss_springs;
 
@@ -242,18 +243,21 @@ typedef struct ss_mech_stats {
 void ss_mech_stats_compute(const ss_mech *m, ss_mech_stats *st);
 
 /* Access for output and checkpoints. */
-const ss_tetmesh *ss_mech_mesh(const ss_mech *m);          /* reference mesh */
-const double *ss_mech_positions(const ss_mech *m);         /* 3n current, mm */
-const double *ss_mech_velocities(const ss_mech *m);        /* 3n, mm/day, last frame */
-const double *ss_mech_node_stress(const ss_mech *m);       /* n, active stress kPa */
-float *const *ss_mech_grid_displacement(const ss_mech *m); /* 3 grid arrays, mm */
+const ss_tetmesh *ss_mech_mesh(const ss_mech *m);    /* reference mesh */
+const double *ss_mech_positions(const ss_mech *m);   /* 3n current, mm */
+const double *ss_mech_velocities(const ss_mech *m);  /* 3n, mm/day, last frame */
+const double *ss_mech_node_stress(const ss_mech *m); /* n, active stress kPa */
+/* The displacement on the grid (3 arrays, mm), upsampled on call; NULL
+ * when out of memory. */
+float *const *ss_mech_grid_displacement(ss_mech *m);
 /* Flat state for checkpoints: positions, velocities, rest lengths, stress,
  * grid displacement. size in bytes; set returns SS_ERR_INPUT on a size mismatch. */
 size_t ss_mech_state_size(const ss_mech *m);
 void ss_mech_state_get(const ss_mech *m, void *buf);
 ss_status ss_mech_state_set(ss_mech *m, const void *buf, size_t size, ss_error *err);
-/* After state_set: rebuilds the grid velocity, displacement and strain from
- * the restored particles, exactly as the step that saved them left them. */
+/* After state_set: rebuilds the displacement and strain from the restored
+ * particles, exactly as the step that saved them left them; the grid's
+ * velocity is kept when it has one (restored with it), else rebuilt. */
 ss_status ss_mech_state_apply(ss_mech *m, ss_heal_grid *g, ss_error *err);
 /* Kernel width w = (N_c/N_m)^(1/3) in cells and the sub-lattice stride used. */
 double ss_mech_kernel(const ss_mech *m, int *stride);

@@ -191,6 +191,15 @@ void ss_brdf_sampled_free(ss_brdf_sampled *b);
 ss_status ss_optics_radial_profile_rgb(const ss_bio_params *bio, const ss_spectrum_options *o,
                                        int bins, double max_cm, double *rgb, ss_error *err);
 
+/* Albedo grid over melanin x blood (the swatch): linear-sRGB diffuse albedo at
+ * normal incidence (specular excluded) of every (melanin[m], blood[b]) cell,
+ * other parameters from bio; rgb[(b * nmel + m) * 3 + c]. Photon paths are
+ * traced once per wavelength without absorption and reweighted per cell
+ * (exact for the fixed layer geometry). o->progress is called per wavelength. */
+ss_status ss_optics_albedo_grid(const ss_bio_params *bio, const ss_spectrum_options *o,
+                                const double *melanin, int nmel, const double *blood, int nbl,
+                                double *rgb, ss_error *err);
+
 /* ---- CIELAB and CIEDE2000 (src/optics/colour.c) ---------------------------------- */
 /* Linear sRGB (white-normalised albedo, as above) <-> CIELAB, D65 white. */
 void ss_srgb_linear_to_lab(const double rgb[3], double lab[3]);

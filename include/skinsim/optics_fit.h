@@ -64,6 +64,10 @@ typedef struct ss_render_geom {
     int valid;           /* 0 when either direction is at or below the horizon */
 } ss_render_geom;
 void ss_render_geom_init(double theta_i, double theta_r, double dphi, ss_render_geom *g);
+/* Directional albedo E(cos_theta) of the GGX model's specular lobe (Schlick F,
+ * height-correlated Smith), from the table the GGX diffuse coupling uses;
+ * roughness is clamped to [SS_RENDER_ROUGHNESS_MIN, 1]. */
+double ss_render_ggx_spec_albedo(double specular, double roughness, double cos_theta);
 void ss_render_terms_geom(ss_render_model m, double specular, double roughness,
                           const ss_render_geom *g, double *diffuse, double *spec);
 
@@ -222,6 +226,32 @@ void ss_mm_radial_albedo(const double *radial_rgb, int bins, double max_cm, doub
 
 /* Fills every entry of t (axes set by ss_mm_table_create). */
 ss_status ss_mm_table_build(ss_mm_table *t, const ss_mm_build_options *o, ss_error *err);
+
+/* ---- colour -> biology (src/optics/match.c, `skinsim optics match`) ---------- */
+typedef struct ss_mm_match_options {
+    ss_spectrum_options spectrum; /* transport stage: wavelengths, mc.photons, mc.seed,
+                                     mc.roughness_sigma (defaults: 400..700 step 20, 20000) */
+    int refine;                   /* 1 (default): refine the table's answer by transport */
+    double prior_weight;          /* pull towards default pheomelanin, oxygenation,
+                                     thicknesses (0.02) */
+    int base_set;                 /* 1: take the non-axis parameters from base */
+    ss_bio_params base;
+} ss_mm_match_options;
+void ss_mm_match_options_default(ss_mm_match_options *o);
+typedef struct ss_mm_match_result {
+    ss_bio_params bio;       /* the answer (transport-refined if refined) */
+    double albedo_rgb[3];    /* its albedo (linear sRGB, normal incidence, no specular) */
+    double lab[3];           /* and CIELAB */
+    double delta_e00;        /* CIEDE2000 to the target */
+    int refined;             /* 1 if the transport stage ran */
+    ss_bio_params table_bio; /* the table stage's answer, its interpolated albedo, Lab, dE00 */
+    double table_albedo_rgb[3], table_lab[3], table_delta_e00;
+} ss_mm_match_result;
+/* The biological parameters (within the table's axis ranges) whose albedo is
+ * closest in CIEDE2000 to target_lab (D65 CIELAB): table search, then
+ * transport refinement (design in match.c). Deterministic. */
+ss_status ss_mm_match(const ss_mm_table *t, const double target_lab[3],
+                      const ss_mm_match_options *o, ss_mm_match_result *out, ss_error *err);
 
 #ifdef __cplusplus
 }

@@ -122,6 +122,10 @@ enum {
     SS_BIO_EXTRA_A = 10,
     SS_BIO_NCHANNELS = 11
 };
+/* The optics model's parameters (optics.h) of one texel of a bio map:
+ * melanin, pheomelanin ratio, blood, oxygenation and the two thicknesses
+ * from the map, bilirubin and beta-carotene from ss_bio_params_default. */
+void ss_skin_bio_texel(const ss_image *bio, int x, int y, ss_bio_params *out);
 /* Channel names as written to bio.exr: "melanin", "pheomelanin_ratio",
  * "blood", "oxygenation", "sc_thickness_cm", "epidermis_thickness_cm",
  * "height_mm", "extra.R", "extra.G", "extra.B", "extra.A". */
@@ -159,7 +163,7 @@ typedef struct ss_skin_settings {
 } ss_skin_settings;
 /* Presets: "forearm" (default: counts per cm^2 of a forearm, world 5 cm) and
  * "seed" (the seed's counts 5000 cysts, 700 moles, 170000 follicles, 3000
- * freckles, 4000 wrinkles, on a 20 cm face-sized texture). */
+ * freckles, 1000 wrinkles, on a 20 cm face-sized texture). */
 ss_status ss_skin_settings_preset(ss_skin_settings *s, const char *preset, int size, ss_error *err);
 /* Counts from densities for the forearm preset at this world size. */
 void ss_skin_forearm_counts(double world_size_cm, long count[SS_FEAT_NTYPES]);

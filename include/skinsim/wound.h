@@ -20,6 +20,7 @@
 #include "skinsim/heal_run.h"
 #include "skinsim/optics.h"
 #include "skinsim/optics_fit.h"
+#include "skinsim/skin.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -110,25 +111,15 @@ void ss_wound_tissue_observe(ss_wound_tissue *t, const ss_heal_grid *g);
 void ss_wound_tissue_free(ss_wound_tissue *t);
 
 /* ---- base skin: bio-parameter maps -------------------------------------------------
- * One float image of SS_BIO_NCHANNELS channels per texel in this order (the
- * order of `skinsim skin`'s bio.exr). */
-enum {
-    SS_BIO_MELANIN,
-    SS_BIO_PHEOMELANIN,
-    SS_BIO_BLOOD,
-    SS_BIO_OXYGENATION,
-    SS_BIO_SC_CM,
-    SS_BIO_EPIDERMIS_CM,
-    SS_BIO_HEIGHT_MM, /* skin relief, mm */
-    SS_BIO_NCHANNELS
-};
-/* The built-in base skin: a light skin (melanin 0.03, blood 0.01) with value
- * noise mottling of melanin (+-20 %, ~2 mm), blood (+-25 %, ~5 mm) and a
- * 0.02 mm relief, size x size texels over side_mm. */
-ss_image *ss_wound_default_skin(int size, double side_mm, uint64_t seed, ss_error *err);
-/* Checks a bio-parameter image: channel count, finite values, fractions in
- * 0..1, thicknesses > 0 (SS_ERR_INPUT naming `name` and the texel). */
+ * The skin a wound is drawn on is a bio map of skinsim/skin.h: SS_BIO_NCHANNELS
+ * float channels per texel (melanin, pheomelanin ratio, blood, oxygenation,
+ * stratum corneum cm, epidermis cm, height mm, extra colour RGBA), as
+ * ss_skin_bio_default makes it or `skinsim skin` writes it to bio.exr. */
+/* Checks a bio map: channel count, finite values, fractions and the extra
+ * colour in 0..1, thicknesses > 0 (SS_ERR_INPUT naming `name` and the texel). */
 ss_status ss_wound_skin_validate(const ss_image *bio, const char *name, ss_error *err);
+/* Reads DIR/bio.exr (or the .exr file itself) by channel name. */
+ss_image *ss_wound_skin_read(const char *path, ss_error *err);
 
 /* ---- blood layers over the skin: the scab (dried blood) and the clot ------------------ */
 /* A layer of blood (haemoglobin at hb_factor times whole blood's 150 g/L, at an
@@ -187,12 +178,19 @@ ss_status ss_wound_renderer_create(const ss_wound_render_options *o, ss_wound_re
 void ss_wound_renderer_free(ss_wound_renderer *r);
 /* The base skin's own textures (what the skin looks like without a wound). */
 const ss_wound_textures *ss_wound_renderer_base(const ss_wound_renderer *r);
-/* Textures of the tissue t over the base skin; side_mm: the block's x and y
- * size (the texture covers it). deformation: NULL, or the mechanics' per-texel
- * displacement (3 channels, mm: x, y along the texture (x right, y up), z up),
- * which moves where the fields are sampled and adds to the height. */
+/* Textures of the tissue t over the base skin (the texture covers the heal
+ * block). deformation: NULL, or the mechanics' per-texel displacement of the
+ * material point (3 channels, mm: x, y along the texture (x right, y up), z
+ * up), which moves where the fields are sampled and adds to the height
+ * (ss_wound_deformation_from_grid makes it from the mechanics' grid arrays). */
 ss_status ss_wound_render(ss_wound_renderer *r, const ss_wound_tissue *t,
                           const ss_image *deformation, ss_wound_textures *out, ss_error *err);
+
+/* The per-texel deformation (size x size x 3, mm) from a displacement field on
+ * the heal grid (3 arrays of nx*ny*nz, mm, e.g. ss_mech_grid_displacement):
+ * each column's topmost tissue cell, bilinear between column centres. */
+ss_image *ss_wound_deformation_from_grid(const ss_heal_grid *g, float *const *disp, int size,
+                                         ss_error *err);
 
 /* ---- the whole job: `skinsim wound` --------------------------------------------------- */
 
@@ -202,14 +200,16 @@ typedef struct ss_wound_make_config {
     const double *days;      /* output days, increasing, whole steps of the heal run */
     int ndays;
     int size;                /* texture side (default 1024) */
-    const char *skin_path;   /* base skin bio maps (EXR, >= SS_BIO_NCHANNELS channels, the first
-                                in the SS_BIO_* order); NULL = ss_wound_default_skin */
+    const char *skin_path;   /* base skin: `skinsim skin`'s output folder or its bio.exr;
+                                NULL = ss_skin_bio_default (forearm skin) */
     const char *table_path;  /* NULL = data/modelmatch_default.sstab */
     const char *recipe_path; /* NULL = defaults */
     const char *out_dir;
-    int exr;     /* also write every map as half-float EXR (height in mm) */
-    int compare; /* write compare_abrasion.png (default 1) */
-    int quiet;   /* no progress bar */
+    int exr;       /* also write every map as half-float EXR (height in mm) */
+    int compare;   /* write compare_abrasion.png (default 1) */
+    int mechanics; /* 1: couple the contraction mechanics (skinsim/mech.h, default
+                      parameters, one frame a day) and apply its displacement */
+    int quiet;     /* no progress bar */
     uint64_t seed;
 } ss_wound_make_config;
 void ss_wound_make_config_default(ss_wound_make_config *c);

@@ -59,8 +59,9 @@ ss_status ss_write_file_atomic(const char *path, const void *data, size_t len, s
     ss_status st = ss_atomic_open(&af, path, err);
     if (st) return st;
     if (len && fwrite(data, 1, len, af.fp) != len) {
+        int e = errno;
         ss_atomic_abort(&af);
-        return ss_error_set(err, SS_ERR_RUNTIME, "%s: write failed", path);
+        return ss_error_set(err, SS_ERR_RUNTIME, "%s: write failed: %s", path, strerror(e));
     }
     return ss_atomic_commit(&af, err);
 }

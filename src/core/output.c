@@ -28,6 +28,7 @@
  * without this command's marker is refused rather than replaced. */
 #define _GNU_SOURCE /* renameat2, RENAME_EXCHANGE */
 #include "skinsim/core.h"
+#include "core_internal.h"
 
 #include <dirent.h>
 #include <errno.h>
@@ -114,16 +115,6 @@ static char *dirname_of(const char *p) {
     return strndup(p, (size_t)(sl - p));
 }
 
-static const char *kind_name(mode_t m) {
-    if (S_ISCHR(m)) return "a character device";
-    if (S_ISBLK(m)) return "a block device";
-    if (S_ISFIFO(m)) return "a named pipe";
-    if (S_ISSOCK(m)) return "a socket";
-    if (S_ISDIR(m)) return "a folder";
-    if (S_ISLNK(m)) return "a symbolic link";
-    return "not a regular file";
-}
-
 static int path_within(const char *inner, const char *outer) {
     size_t n = strlen(outer);
     if (strncmp(inner, outer, n) != 0) return 0;
@@ -206,8 +197,9 @@ static int dir_is_empty(const char *path) {
 
 /* ---- markers ---------------------------------------------------------------- */
 
-int ss_output_dir_is_complete(const char *dir, const char *owner) {
-    char *m = join(dir, SS_OUTPUT_MARKER);
+/* 1 when dir/name is a regular file reading "skinsim <owner>\n". */
+static int marker_says(const char *dir, const char *name, const char *owner) {
+    char *m = join(dir, name);
     if (!m) return 0;
     int fd = open(m, O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOFOLLOW);
     free(m);
@@ -223,8 +215,16 @@ int ss_output_dir_is_complete(const char *dir, const char *owner) {
     return strcmp(buf, want) == 0;
 }
 
-ss_status ss_output_dir_mark_complete(const char *dir, const char *owner, ss_error *err) {
-    char *m = join(dir, SS_OUTPUT_MARKER);
+int ss_output_dir_is_complete(const char *dir, const char *owner) {
+    return marker_says(dir, SS_OUTPUT_MARKER, owner);
+}
+
+int ss_output_dir_is_unfinished(const char *dir, const char *owner) {
+    return marker_says(dir, SS_OUTPUT_UNFINISHED, owner);
+}
+
+static ss_status put_marker(const char *dir, const char *name, const char *owner, ss_error *err) {
+    char *m = join(dir, name);
     if (!m) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     char text[100];
     snprintf(text, sizeof text, "skinsim %s\n", owner ? owner : "");
@@ -233,16 +233,32 @@ ss_status ss_output_dir_mark_complete(const char *dir, const char *owner, ss_err
     return st;
 }
 
-ss_status ss_output_dir_mark_incomplete(const char *dir, ss_error *err) {
-    char *m = join(dir, SS_OUTPUT_MARKER);
+static ss_status drop_marker(const char *dir, const char *name, ss_error *err) {
+    char *m = join(dir, name);
     if (!m) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     int bad = unlink(m) != 0 && errno != ENOENT;
     int e = errno;
     free(m);
     if (bad)
-        return ss_error_set(err, SS_ERR_RUNTIME, "%s: cannot remove its completion marker: %s", dir,
+        return ss_error_set(err, SS_ERR_RUNTIME, "%s: cannot remove its marker %s: %s", dir, name,
                             strerror(e));
     return SS_OK;
+}
+
+/* Complete: the unfinished marker goes once the complete one is in. */
+ss_status ss_output_dir_mark_complete(const char *dir, const char *owner, ss_error *err) {
+    ss_status st = put_marker(dir, SS_OUTPUT_MARKER, owner, err);
+    return st ? st : drop_marker(dir, SS_OUTPUT_UNFINISHED, err);
+}
+
+ss_status ss_output_dir_mark_incomplete(const char *dir, ss_error *err) {
+    return drop_marker(dir, SS_OUTPUT_MARKER, err);
+}
+
+/* Unfinished: that marker first, then the complete one goes. */
+static ss_status mark_unfinished(const char *dir, const char *owner, ss_error *err) {
+    ss_status st = put_marker(dir, SS_OUTPUT_UNFINISHED, owner, err);
+    return st ? st : drop_marker(dir, SS_OUTPUT_MARKER, err);
 }
 
 /* ---- the set ---------------------------------------------------------------- */
@@ -279,7 +295,7 @@ static int clash_with_input(const ss_outputs *o, const out_entry *e, const in_en
     struct stat st;
     if (in->ino && stat(e->real, &st) == 0 && st.st_dev == in->dev && st.st_ino == in->ino)
         return 1;
-    return e->kind == SS_OUTPUT_DIR && path_within(in->real, e->real);
+    return e->kind != SS_OUTPUT_FILE && path_within(in->real, e->real);
 }
 
 ss_status ss_outputs_input(ss_outputs *o, const char *path, ss_error *err) {
@@ -340,14 +356,16 @@ static ss_status check_target(const ss_outputs *o, out_entry *e, ss_error *err) 
                 return OUTMSG(e,
                               "is %s; skinsim writes regular files and never replaces anything "
                               "else",
-                              kind_name(st.st_mode));
+                              ss__file_kind(st.st_mode));
         } else {
             if (!S_ISDIR(st.st_mode))
                 return OUTMSG(e, "exists and is %s, not a folder",
-                              S_ISREG(st.st_mode) ? "a file" : kind_name(st.st_mode));
+                              S_ISREG(st.st_mode) ? "a file" : ss__file_kind(st.st_mode));
             if (!strcmp(e->real, "/"))
                 return OUTMSG(e, "%s", "is the root folder; give a folder of its own");
-            if (!ss_output_dir_is_complete(e->real, o->owner) && !dir_is_empty(e->real))
+            int ours = ss_output_dir_is_complete(e->real, o->owner) ||
+                       ss_output_dir_is_unfinished(e->real, o->owner) || dir_is_empty(e->real);
+            if (!ours)
                 return OUTMSG(e,
                               "exists and is not a finished 'skinsim %s' output folder (no %s "
                               "marker from a completed run), so it is not replaced; remove it "
@@ -383,7 +401,7 @@ ss_status ss_outputs_add(ss_outputs *o, const char *label, const char *path, ss_
     if (o->begun) return ss_error_set(err, SS_ERR_RUNTIME, "%s: added after begin", lab);
     if (!path || !*path)
         return ss_error_set(err, SS_ERR_INPUT, "%s: the path is empty; give a %s name", lab,
-                            kind == SS_OUTPUT_DIR ? "folder" : "file");
+                            kind != SS_OUTPUT_FILE ? "folder" : "file");
     size_t n = strlen(path);
     if (n >= PATH_MAX)
         return ss_error_set(err, SS_ERR_INPUT, "%s %s: path too long (at most %d characters)", lab,
@@ -419,21 +437,30 @@ ss_status ss_outputs_add(ss_outputs *o, const char *label, const char *path, ss_
         return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     }
     ss_status s = SS_OK;
-    size_t room = kind == SS_OUTPUT_DIR ? DIR_CONTENT_ROOM : 0;
+    size_t room = kind != SS_OUTPUT_FILE ? DIR_CONTENT_ROOM : 0;
     if (strlen(real) + STAGING_SUFFIX + room >= PATH_MAX)
         s = OUTMSG(e, "path too long (%zu characters resolved; at most %zu)", strlen(real),
                    (size_t)PATH_MAX - STAGING_SUFFIX - room - 1);
     else if (strlen(e->base) + STAGING_SUFFIX > NAME_MAX)
         s = OUTMSG(e, "the name %s is too long (at most %d bytes here)", shown(e->base, sb2),
                    NAME_MAX - STAGING_SUFFIX);
+    long holder = s ? 0 : ss_output_lock_holder(real);
+    if (holder)
+        s = holder > 0 ? OUTMSG(e,
+                                "another skinsim run (process %ld) is writing it; wait for it to "
+                                "finish or choose another output",
+                                holder)
+                       : OUTMSG(e, "%s",
+                                "another skinsim run is writing it; wait for it to finish or "
+                                "choose another output");
     if (!s) s = check_target(o, e, err);
     for (int i = 0; i < o->nout - 1 && !s; i++) {
         out_entry *p = &o->out[i];
         if (!strcmp(p->real, e->real))
             s = OUTMSG(e, "names the same place as %s %s", p->label ? p->label : "output",
                        shown(p->user, sb2));
-        else if ((p->kind == SS_OUTPUT_DIR && path_within(e->real, p->real)) ||
-                 (e->kind == SS_OUTPUT_DIR && path_within(p->real, e->real)))
+        else if ((p->kind != SS_OUTPUT_FILE && path_within(e->real, p->real)) ||
+                 (e->kind != SS_OUTPUT_FILE && path_within(p->real, e->real)))
             s = OUTMSG(e, "overlaps %s %s (a folder output is replaced whole)",
                        p->label ? p->label : "output", shown(p->user, sb2));
     }
@@ -541,6 +568,30 @@ static ss_status take_lock(out_entry *e, ss_error *err) {
                         shown(e->user, sb), e->lock_path);
 }
 
+long ss_output_lock_holder(const char *path) {
+    const char *why = NULL;
+    char *real = path && *path ? resolve(path, &why) : NULL;
+    if (!real) return 0;
+    size_t n = strlen(real) + 16;
+    char *lp = malloc(n);
+    if (lp) snprintf(lp, n, "%s.skinsim-lock", real);
+    free(real);
+    int fd = lp ? open(lp, O_RDONLY | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK) : -1;
+    free(lp);
+    if (fd < 0) return 0;
+    long pid = 0;
+    if (flock(fd, LOCK_SH | LOCK_NB) == 0) {
+        flock(fd, LOCK_UN);
+    } else {
+        char buf[64] = {0};
+        ssize_t got = pread(fd, buf, sizeof buf - 1, 0);
+        pid = got > 0 ? strtol(buf, NULL, 10) : 0;
+        if (pid <= 0) pid = -1;
+    }
+    close(fd);
+    return pid;
+}
+
 static int has_prefix_tail(const char *name, const char *base, const char *mid, size_t tail) {
     size_t nb = strlen(base), nm = strlen(mid);
     if (strncmp(name, base, nb) || strncmp(name + nb, mid, nm)) return 0;
@@ -588,8 +639,16 @@ static void clean_stale(out_entry *e) {
     free(names);
 }
 
-static ss_status make_staging(out_entry *e, ss_error *err) {
+static ss_status make_staging(const ss_outputs *o, out_entry *e, ss_error *err) {
     char sb[200];
+    if (e->kind == SS_OUTPUT_DIR_IN_PLACE) { /* the folder itself, marked unfinished */
+        if (mkdir(e->real, 0755) != 0 && errno != EEXIST)
+            return ss_error_set(err, SS_ERR_INPUT, "%s: cannot create the folder: %s",
+                                shown(e->user, sb), strerror(errno));
+        e->write = strdup(e->real);
+        if (!e->write) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+        return mark_unfinished(e->real, o->owner, err);
+    }
     size_t n = strlen(e->real) + STAGING_SUFFIX;
     char *t = malloc(n);
     if (!t) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
@@ -605,6 +664,16 @@ static ss_status make_staging(out_entry *e, ss_error *err) {
     e->staging = t;
     e->write = e->kind == SS_OUTPUT_DIR ? strdup(t) : join(t, e->base);
     return e->write ? SS_OK : ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+}
+
+static const char *human_bytes(double v, char buf[32]) {
+    if (v >= 1e12)
+        snprintf(buf, 32, "%.1f TB", v / 1e12);
+    else if (v >= 1e9)
+        snprintf(buf, 32, "%.1f GB", v / 1e9);
+    else
+        snprintf(buf, 32, "%.1f MB", v / 1e6);
+    return buf;
 }
 
 /* Free space against the estimates, summed per file system. */
@@ -625,11 +694,12 @@ static ss_status check_space(ss_outputs *o, ss_error *err) {
         double avail = (double)vi.f_bavail * (double)vi.f_frsize;
         if (need > avail) {
             out_entry *e = &o->out[i];
+            char a[32], b[32];
             return ss_error_set(err, SS_ERR_INPUT,
-                                "%s%s%s: needs about %.1f MB of disk, but only %.1f MB are free "
-                                "in %s; free some space or write less",
+                                "%s%s%s: needs about %s of disk, but only %s are free in %s; "
+                                "free some space or write less",
                                 e->label ? e->label : "", e->label ? " " : "", shown(e->user, sb),
-                                need / 1e6, avail / 1e6, e->parent);
+                                human_bytes(need, a), human_bytes(avail, b), e->parent);
         }
     }
     return SS_OK;
@@ -638,6 +708,11 @@ static ss_status check_space(ss_outputs *o, ss_error *err) {
 static void rollback(ss_outputs *o) {
     for (int i = 0; i < o->nout; i++) {
         out_entry *e = &o->out[i];
+        if (e->kind == SS_OUTPUT_DIR_IN_PLACE && e->write) {
+            /* left as it is, marked unfinished, for a resume */
+            for (int k = 0; k < e->nmade; k++) free(e->made[k]);
+            e->nmade = 0;
+        }
         if (e->staging) ss_remove_tree(e->staging);
         free(e->staging);
         free(e->write);
@@ -659,7 +734,7 @@ ss_status ss_outputs_begin(ss_outputs *o, ss_error *err) {
         if (!s) s = check_target(o, e, err); /* again, now that it is ours */
     }
     if (!s) s = check_space(o, err);
-    for (int i = 0; i < o->nout && !s; i++) s = make_staging(&o->out[i], err);
+    for (int i = 0; i < o->nout && !s; i++) s = make_staging(o, &o->out[i], err);
     if (s) {
         rollback(o);
         o->finished = 1;
@@ -799,6 +874,7 @@ ss_status ss_outputs_finish(ss_outputs *o, ss_status status, ss_error *err) {
     int done = 0;
     for (; done < o->nout && !s; done++) {
         out_entry *e = &o->out[done];
+        if (e->kind == SS_OUTPUT_DIR_IN_PLACE) continue; /* marked complete below */
         if (swap_in(e) != 0) {
             s = ss_error_set(err, SS_ERR_RUNTIME,
                              "%s: cannot move the new output into place: %s; the previous "
@@ -809,6 +885,9 @@ ss_status ss_outputs_finish(ss_outputs *o, ss_status status, ss_error *err) {
     }
     if (s)
         for (int i = done - 1; i >= 0; i--) swap_back(&o->out[i]);
+    for (int i = 0; i < o->nout && !s; i++)
+        if (o->out[i].kind == SS_OUTPUT_DIR_IN_PLACE)
+            s = ss_output_dir_mark_complete(o->out[i].write, o->owner, err);
     for (int i = 0; i < o->nout; i++) {
         out_entry *e = &o->out[i];
         if (!s) {
@@ -875,49 +954,5 @@ ss_status ss_path_under(const char *base_dir, const char *name, int allow_outsid
     free(base);
     free(joined);
     free(real);
-    return s;
-}
-
-/* ---- the older folder calls, on top of the same pieces ------------------ */
-
-ss_status ss_output_dir_begin(const char *dir, char **work, ss_error *err) {
-    *work = NULL;
-    ss_outputs *o = ss_outputs_create(NULL, err);
-    if (!o) return SS_ERR_NOMEM;
-    ss_status s = ss_outputs_add(o, NULL, dir, SS_OUTPUT_DIR, 0, err);
-    out_entry *e = o->nout ? &o->out[0] : NULL;
-    if (s == SS_ERR_INPUT && e && ss_output_dir_is_complete(e->real, NULL)) {
-        ss_error_clear(err); /* any finished skinsim folder may be replaced here */
-        s = SS_OK;
-    }
-    if (!s) s = make_parents(e, err);
-    if (!s) s = make_staging(e, err);
-    if (!s) {
-        *work = e->staging;
-        e->staging = NULL;
-    }
-    ss_outputs_free(o);
-    return s;
-}
-
-ss_status ss_output_dir_end(const char *dir, const char *work, ss_status status, ss_error *err) {
-    if (!work || !strcmp(dir, work)) return status;
-    if (status) {
-        ss_remove_tree(work);
-        return status;
-    }
-    out_entry e = {0};
-    const char *why = "out of memory";
-    e.real = resolve(dir, &why);
-    e.write = (char *)work;
-    ss_status s = e.real ? ss_output_dir_mark_complete(work, "skinsim", err)
-                         : ss_error_set(err, SS_ERR_RUNTIME, "%s: %s", dir, why);
-    if (!s && swap_in(&e) != 0)
-        s = ss_error_set(err, SS_ERR_RUNTIME, "%s: cannot move output into place: %s", dir,
-                         strerror(errno));
-    if (!s && e.old) ss_remove_tree(e.old);
-    if (s) ss_remove_tree(work);
-    free(e.old);
-    free(e.real);
     return s;
 }

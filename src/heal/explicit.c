@@ -226,6 +226,7 @@ void ss_heal_rd_step_explicit(ss_heal_rd_system *sys, ss_heal_rd_work *w, double
     const float dtf = (float)dt;
     const double ih2 = 1.0 / (sys->h_mm * sys->h_mm);
     const int has_vel = sys->velocity[0] || sys->velocity[1] || sys->velocity[2];
+    if (sys->react && sys->prepare) sys->prepare(sys->ctx, sys->u);
 #pragma omp parallel num_threads(thread_count(w)) if (w->ncell >= RD_PAR_MIN_CELLS)
     {
         float *scr = w->tscratch[omp_get_thread_num()];
@@ -273,11 +274,13 @@ void ss_heal_rd_step_explicit(ss_heal_rd_system *sys, ss_heal_rd_work *w, double
                     const float *restrict mk = sys->mslot[f] >= 0 ? row.m[sys->mslot[f]] : ones;
                     const float Dh = (float)(sys->D[f] * ih2);
                     const float lo = sys->lo[f], hi = sys->hi[f];
+                    /* lateral fields: the z faces do not conduct */
+                    const uint8_t bmask = sys->lateral[f] ? (uint8_t)0x0F : (uint8_t)0x3F;
                     un[0] = u[0];
                     un[nx - 1] = u[nx - 1];
 #pragma omp simd
                     for (int x = 1; x <= n; x++) {
-                        const uint8_t b = nbr[x];
+                        const uint8_t b = nbr[x] & bmask;
                         const float uc = u[x];
                         const float lap = (float)(b & 1) * (u[x - 1] - uc) +
                                           (float)((b >> 1) & 1) * (u[x + 1] - uc) +

@@ -107,8 +107,10 @@ ss_status ss_heal_grid_init(ss_heal_grid *g, double skin_top_mm, double epidermi
         return ss_error_set(err, SS_ERR_INPUT,
                             "heal grid init: epidermis thickness %g mm must be in 0..%g mm",
                             epidermis_mm, skin_top_mm);
+    /* the voxels whose depth range reaches into the top epidermis_mm: the
+     * surface voxel holds a thinner epidermis as a sub-voxel sheet */
     int nepi = (int)ceil(epidermis_mm / g->dx_mm - 1e-9);
-    if (nepi < 2) nepi = 2; /* §5.1: a two-cell epithelial layer */
+    if (nepi < 1) nepi = 1;
     if (nepi > top - 2) nepi = top - 2;
     g->skin_top_mm = skin_top_mm;
     g->t_days = 0.0;
@@ -135,8 +137,8 @@ ss_status ss_heal_grid_init(ss_heal_grid *g, double skin_top_mm, double epidermi
                 if (s == SS_CELL_EPIDERMIS || s == SS_CELL_DERMIS ||
                     (s == SS_CELL_BOUND && z > 0 && z < top)) {
                     for (int f = 0; f < SS_HEAL_NFIELDS; f++) v[f] = hv[f];
-                    /* §5.1: the epithelial field starts as the two cells on top of the skin */
-                    if (z >= top - 2) v[SS_HEAL_EPITHELIUM] = 1.0f;
+                    /* the intact epidermis (§5.1's layer on top of the skin, in mm) */
+                    if (z >= top - nepi) v[SS_HEAL_EPITHELIUM] = 1.0f;
                 } else if (s == SS_CELL_WOUND) {
                     v[SS_HEAL_OXYGEN] = (float)p->u1_wound;
                     v[SS_HEAL_PLASMA] = 1.0f;
@@ -246,40 +248,54 @@ void ss_heal_stats_compute(const ss_heal_grid *g, ss_heal_stats *st) {
     memset(st, 0, sizeof *st);
     const double a = g->dx_mm * g->dx_mm, thr = ss_heal_open_threshold();
     const float *e = g->field[SS_HEAL_EPITHELIUM], *p = g->field[SS_HEAL_PLASMA];
-    double sum[SS_HEAL_NFIELDS] = {0};
-    size_t ntissue = 0;
-    /* columns: the surface layer is the top two tissue voxels (the §5.1 epithelial
-     * layer); a column is open when the epithelium there stays below thr and
-     * it belongs to the wound (had a wound voxel or lies in the wound region). */
+    const float *s = g->field[SS_HEAL_ESCHAR], *rho = g->field[SS_HEAL_SCAR];
+    double sum[SS_HEAL_NFIELDS] = {0}, esum = 0;
+    size_t ntissue = 0, nwcol = 0;
+    /* columns: the epithelium is a sheet on the tissue surface, so a column of
+     * the wound (a WOUND voxel at the surface at t = 0, or in omega now) is
+     * open while the epithelial coverage of its surface cell is below thr */
     for (int y = 1; y < g->ny - 1; y++) {
         for (int x = 1; x < g->nx - 1; x++) {
-            int ztop = -1, wounded = 0;
+            int ztop = -1;
             for (int z = g->nz - 2; z >= 1; z--) {
-                uint8_t s = g->cell[ss_heal_idx(g, x, y, z)];
-                if (s != SS_CELL_AIR && s != SS_CELL_BOUND) {
+                uint8_t c = g->cell[ss_heal_idx(g, x, y, z)];
+                if (c != SS_CELL_AIR && c != SS_CELL_BOUND) {
                     ztop = z;
                     break;
                 }
             }
             if (ztop < 0) continue;
-            size_t c0 = ss_heal_idx(g, x, y, ztop), c1 = ss_heal_idx(g, x, y, ztop - 1);
-            double emax = e[c0];
-            uint8_t s1 = g->cell[c1];
-            if (s1 != SS_CELL_AIR && s1 != SS_CELL_BOUND && e[c1] > emax) emax = e[c1];
+            size_t c0 = ss_heal_idx(g, x, y, ztop);
             int initial = g->cell[c0] == SS_CELL_WOUND;
             int region = p[c0] > (float)SS_HEAL_P_MIN;
-            wounded = initial || region;
-            if (initial) st->initial_area_mm2 += a;
+            if (initial) {
+                st->initial_area_mm2 += a;
+                float smax = 0;
+                for (int z = ztop; z >= 1; z--) {
+                    size_t c = ss_heal_idx(g, x, y, z);
+                    uint8_t k = g->cell[c];
+                    if (k == SS_CELL_AIR || k == SS_CELL_BOUND) break;
+                    if (s[c] > smax) smax = s[c];
+                }
+                esum += smax;
+                nwcol++;
+            }
             if (region) st->wound_region_area_mm2 += a;
-            if (wounded && emax < thr) st->open_area_mm2 += a;
+            if ((initial || region) && e[c0] < thr) st->open_area_mm2 += a;
         }
     }
+    st->eschar_wound_mean = nwcol ? esum / (double)nwcol : 0.0;
     size_t n = (size_t)g->nx * (size_t)g->ny * (size_t)g->nz;
+    double rsum = 0, rmax = 0;
     for (size_t c = 0; c < n; c++) {
-        uint8_t s = g->cell[c];
-        if (s == SS_CELL_AIR || s == SS_CELL_BOUND) continue;
+        uint8_t k = g->cell[c];
+        if (k == SS_CELL_AIR || k == SS_CELL_BOUND) continue;
         ntissue++;
         for (int f = 0; f < SS_HEAL_NFIELDS; f++) sum[f] += g->field[f][c];
+        rsum += rho[c];
+        if (rho[c] > rmax) rmax = rho[c];
     }
     for (int f = 0; f < SS_HEAL_NFIELDS; f++) st->field_mean[f] = ntissue ? sum[f] / ntissue : 0;
+    st->scar_volume_mm3 = rsum * a * g->dx_mm;
+    st->scar_max = rmax;
 }

@@ -3,10 +3,19 @@
  * explicit or the split scheme. Each equation is written in the core's
  * production/loss form R = prod - loss * u (same terms as §4.1, only sorted by
  * sign), with diffusion multipliers (1 - s) for u1, u2, u3, n (slot 0) and
- * Q(u3) for e (slot 1). Cell classes: AIR and BOUND are walls (no flux), the
- * intact EPIDERMIS holds e at its healthy value 1 (Dirichlet), DERMIS and
- * WOUND evolve. omega = [p > SS_HEAL_P_MIN]; R(omega) = Rs on wound-region
- * cells whose upper neighbour is air (the exposed wound surface). */
+ * (1 - s) Q(u3_bed) for e (slot 1). Cell classes: AIR and BOUND are walls (no
+ * flux), the intact EPIDERMIS holds e at its healthy value 1 (Dirichlet),
+ * DERMIS and WOUND evolve. omega = [p > SS_HEAL_P_MIN].
+ * The epithelium is a sheet on the tissue surface, not a volume species: e
+ * (its coverage, 0..1) evolves only in the topmost tissue cell of each
+ * column and diffuses along x and y only; it reads the wound bed's capillary
+ * density as the mean u3 over the top bed_mm (physical depth, not voxels).
+ * Its effects below the surface ((1 - e) in eschar and scar production, the
+ * eschar dissolution lames e s) use the column's surface coverage. The
+ * eschar source R(omega) acts in the top scab_mm of the exposed wound. These
+ * column inputs are gathered before each reaction pass (prepare hook), so
+ * rows stay independent and results bit-identical for any thread count.
+ * docs/heal-model.md §2 lists where and why this departs from §4.1 as printed. */
 /* The hot loops are written branch-free for SIMD. At -O2 GCC vectorises
  * their compares/selects only with loop if-conversion and without treating
  * FP exception flags as observable (-fno-trapping-math: values are unchanged,
@@ -23,12 +32,24 @@
 ss_heal_rd_work *ss_heal_rd__work_create_ex(const ss_heal_rd_system *sys, int need_buf,
                                             int need_mslot, ss_error *err);
 
+/* Most depth levels a layer weight table holds (deeper levels weigh 0). */
+#define MAXLEV 64
+
 typedef struct model_ctx {
     float lam11, lam31, lam12, lam22, beta2, lam33, lam32, inv_u3eq, rn, inv_K, lamnn;
-    float Rs, lames, lamge, lamee, gamma1, lamnrho, lamrhop, lampp, inv_rhomax, rhomax;
+    float Rs, lames, lamge, lamee, gamma1, lamnrho, lamrhop, lamkrho, lampp, inv_rhomax, rhomax;
+    float kscab, bed_mm, h, rho_closed;
     int scab, static_region;
     const uint8_t *cell;
     int nx, ny, nz;
+    /* per column (y * nx + x): surface cell z (-1: none), gathered surface
+     * epithelium and wound-bed capillary density */
+    int *ztop;
+    float *ecol, *bed;
+    const uint8_t *ztop_of; /* the cell array ztop was computed from */
+    /* per depth level k below the surface cell: its fraction inside the scab layer */
+    float wscab[MAXLEV];
+    int nscab;
 } model_ctx;
 
 struct ss_heal_solver {
@@ -44,13 +65,17 @@ struct ss_heal_solver {
 
 static inline float pos(float v) { return v > 0.0f ? v : 0.0f; }
 
+static inline float qwin(float u3, float g1, float ig1, float ig2) {
+    const float qa = u3 * ig1, qb = (1.0f - u3) * ig2;
+    return pos(u3 < g1 ? qa : qb);
+}
+
 static void heal_react(void *vctx, const ss_heal_rd_row *row) {
     const model_ctx *m = vctx;
     const int n = row->n;
-    const size_t sz = (size_t)m->nx * (size_t)m->ny;
-    const size_t base =
-        ((size_t)row->z * (size_t)m->ny + (size_t)row->y) * (size_t)m->nx + (size_t)row->x0;
-    const uint8_t *above = m->cell + base + sz; /* z + 1 <= nz - 1 always */
+    const size_t col0 = (size_t)row->y * (size_t)m->nx + (size_t)row->x0;
+    const int *restrict ZT = m->ztop + col0;
+    const float *restrict EC = m->ecol + col0, *restrict BED = m->bed + col0;
     const float
         *restrict U1 = row->u[SS_HEAL_OXYGEN],
                   *restrict U2 = row->u[SS_HEAL_MDGF], *restrict U3 = row->u[SS_HEAL_CAPILLARY],
@@ -65,6 +90,7 @@ static void heal_react(void *vctx, const ss_heal_rd_row *row) {
     const float ppos = pos(m->lampp), pneg = pos(-m->lampp);
     const float dyn = m->static_region ? 0.0f : 1.0f;
     const float ibeta = 1.0f / m->beta2;
+    const int z = row->z;
     float *restrict m0 = row->m[0], *restrict m1 = row->m[1];
     float *restrict p1 = pr[0], *restrict p2 = pr[1], *restrict p3 = pr[2], *restrict p4 = pr[3];
     float *restrict p5 = pr[4], *restrict p6 = pr[5], *restrict p7 = pr[6], *restrict p8 = pr[7];
@@ -77,6 +103,10 @@ static void heal_react(void *vctx, const ss_heal_rd_row *row) {
         const float om = (float)(p > pmin);
         const float ns = pos(1.0f - s);
         const float open3 = pos(1.0f - u3);
+        const int k = ZT[i] - z; /* depth level below the surface cell (0 = surface) */
+        const float surf = (float)(k == 0);
+        const float wsc = k >= 0 && k < MAXLEV ? m->wscab[k < 0 ? 0 : k] : 0.0f;
+        const float ecl = EC[i], necl = pos(1.0f - ecl);
         /* 4.1.1 oxygen: (1-s)(D1 lap u1 + lam31 u3) - lam11 u1 */
         p1[i] = ns * m->lam31 * u3;
         l1[i] = m->lam11;
@@ -92,29 +122,106 @@ static void heal_react(void *vctx, const ss_heal_rd_row *row) {
         const float gn = ns * m->rn * u1 * nn;
         p4[i] = gn;
         l4[i] = gn * m->inv_K + m->lamnn;
-        /* 4.1.5 eschar: Ds lap s + (1-s)(1-u3) R(omega) - lames e s */
-        const float R = Rs * (float)(above[i] == SS_CELL_AIR) * om; /* R(omega) */
-        const float X = open3 * R;
+        /* 4.1.5 eschar: Ds lap s + (1-s)(1-u3)(1-e) R(omega) - lames e s; R acts in
+         * the top scab_mm of the wound region, e is the column's surface sheet */
+        const float X = open3 * necl * Rs * wsc * om;
         p5[i] = X;
-        l5[i] = X + m->lames * e;
-        /* 4.1.6 epithelium: Q(u3)(De lap e + lamge e) - lamee e */
-        const float qa = u3 * ig1, qb = (1.0f - u3) * ig2;
-        const float Q = pos(u3 < g1 ? qa : qb);
-        p6[i] = Q * m->lamge * e;
-        l6[i] = m->lamee;
-        /* 4.1.7 scar: (1-s)(1-u3)(1-e) lamnrho n - lamrhop rho, restricted to omega */
-        p7[i] = om * ns * open3 * pos(1.0f - e) * m->lamnrho * nn;
+        l5[i] = X + m->lames * ecl;
+        /* 4.1.6 epithelium, on the surface only:
+         * (1 - kscab s) Q(u3_bed)(De lap_xy e + lamge e) - lamee e */
+        const float me = surf * pos(1.0f - m->kscab * s) * qwin(BED[i], g1, ig1, ig2);
+        p6[i] = me * m->lamge * e;
+        l6[i] = surf * m->lamee;
+        /* 4.1.7 scar, restricted to omega: (1-s) n ((1-u3)(1-e) lamnrho + lamkrho)
+         * - lamrhop rho */
+        const float imm = pos(1.0f - m->rho_closed * u3); /* (1 - u3) at rho_open = 0 */
+        p7[i] = om * ns * nn * (imm * necl * m->lamnrho + m->lamkrho);
         l7[i] = m->lamrhop;
         /* 4.1.8 plasma: Dp lap p + lampp p + C(rho)(1-p) */
         const float C = pos(rho - m->rhomax) * m->inv_rhomax;
         p8[i] = dyn * (C + ppos * p);
         l8[i] = dyn * (C + pneg);
         m0[i] = ns;
-        m1[i] = Q;
+        m1[i] = me;
+        (void)e;
     }
 }
 
+/* Level weights of a layer [0, thick_mm] below the surface cell: the
+ * fraction of each voxel (edge h) inside it. */
+static int layer_weights(double thick_mm, double h, float *w) {
+    int n = 0;
+    for (int k = 0; k < MAXLEV; k++) {
+        double top = k * h, bot = (k + 1) * h;
+        double in = (bot < thick_mm ? bot : thick_mm) - top;
+        w[k] = in > 0 ? (float)(in / h) : 0.0f;
+        if (in > 0) n = k + 1;
+    }
+    return n;
+}
+
+static int is_tissue(uint8_t c) { return c != SS_CELL_AIR && c != SS_CELL_BOUND; }
+
+/* Surface cell of every column: the topmost tissue cell inside the bounds. */
+static void find_surface(model_ctx *c) {
+    const int nx = c->nx, ny = c->ny, nz = c->nz;
+    for (int y = 0; y < ny; y++)
+        for (int x = 0; x < nx; x++) {
+            int zt = -1;
+            if (x > 0 && y > 0 && x < nx - 1 && y < ny - 1)
+                for (int z = nz - 2; z >= 1; z--)
+                    if (is_tissue(c->cell[((size_t)z * ny + y) * nx + x])) {
+                        zt = z;
+                        break;
+                    }
+            c->ztop[(size_t)y * nx + x] = zt;
+        }
+    c->ztop_of = c->cell;
+}
+
+/* prepare hook: the surface epithelium and the bed's mean capillary density
+ * of every column, from the current fields. */
+static void heal_prepare(void *vctx, float *const *u) {
+    model_ctx *c = vctx;
+    const int nx = c->nx, ny = c->ny;
+    const size_t sz = (size_t)nx * (size_t)ny;
+    const float *E = u[SS_HEAL_EPITHELIUM], *U3 = u[SS_HEAL_CAPILLARY], *S = u[SS_HEAL_ESCHAR];
+    const float h = c->h;
+#pragma omp parallel for schedule(static) if (sz * (size_t)c->nz >= RD_PAR_MIN_CELLS)
+    for (int y = 0; y < ny; y++)
+        for (int x = 0; x < nx; x++) {
+            const size_t col = (size_t)y * nx + x;
+            const int zt = c->ztop[col];
+            if (zt < 0) {
+                c->ecol[col] = c->bed[col] = 0.0f;
+                continue;
+            }
+            const size_t top = (size_t)zt * sz + col;
+            c->ecol[col] = E[top];
+            /* the bed: the top bed_mm of viable tissue, below the column's
+             * eschar (its thickness: the depth integral of s) */
+            int kmax = 0;
+            float ds = 0.0f;
+            for (int k = 0; zt - k >= 1; k++) {
+                const size_t i = top - (size_t)k * sz;
+                if (!is_tissue(c->cell[i])) break;
+                ds += S[i] * h;
+                kmax = k + 1;
+            }
+            const float a = ds, b = ds + c->bed_mm;
+            float sum = 0.0f, wsum = 0.0f;
+            for (int k = 0; k < kmax; k++) {
+                const float lo = k * h > a ? k * h : a, hi = (k + 1) * h < b ? (k + 1) * h : b;
+                if (hi <= lo) continue;
+                sum += (hi - lo) * U3[top - (size_t)k * sz];
+                wsum += hi - lo;
+            }
+            c->bed[col] = wsum > 0 ? sum / wsum : U3[top - (size_t)(kmax - 1) * sz];
+        }
+}
+
 static void ctx_init(model_ctx *c, const ss_heal_params *p, const ss_heal_grid *g) {
+    memset(c, 0, sizeof *c);
     c->lam11 = (float)p->lam11;
     c->lam31 = (float)p->lam31;
     c->lam12 = (float)p->lam12;
@@ -133,6 +240,7 @@ static void ctx_init(model_ctx *c, const ss_heal_params *p, const ss_heal_grid *
     c->gamma1 = (float)p->gamma1;
     c->lamnrho = (float)p->lamnrho;
     c->lamrhop = (float)p->lamrhop;
+    c->lamkrho = (float)p->lamkrho;
     c->lampp = (float)p->lampp;
     c->rhomax = (float)p->rho_max;
     c->inv_rhomax = (float)(1.0 / p->rho_max);
@@ -142,6 +250,11 @@ static void ctx_init(model_ctx *c, const ss_heal_params *p, const ss_heal_grid *
     c->nx = g->nx;
     c->ny = g->ny;
     c->nz = g->nz;
+    c->kscab = (float)p->kscab;
+    c->rho_closed = (float)(1.0 - p->rho_open);
+    c->bed_mm = (float)p->bed_mm;
+    c->h = (float)g->dx_mm;
+    c->nscab = layer_weights(p->scab_mm, g->dx_mm, c->wscab);
 }
 
 /* Bound on the reaction rates (growth + loss, 1/day) for the explicit limit. */
@@ -182,6 +295,7 @@ static void sys_init(ss_heal_rd_system *s, model_ctx *c, const ss_heal_grid *g,
     s->wall[SS_CELL_BOUND] = 1;
     for (int k = SS_CELL_BOUND + 1; k < SS_HEAL_RD_MAXCLASS; k++) s->wall[k] = 1;
     s->fixed[SS_HEAL_EPITHELIUM][SS_CELL_EPIDERMIS] = 1;
+    s->lateral[SS_HEAL_EPITHELIUM] = 1; /* a surface sheet */
     s->D[SS_HEAL_OXYGEN] = p->D1;
     s->D[SS_HEAL_MDGF] = p->D2;
     s->D[SS_HEAL_CAPILLARY] = p->D3;
@@ -197,6 +311,7 @@ static void sys_init(ss_heal_rd_system *s, model_ctx *c, const ss_heal_grid *g,
     s->hi[SS_HEAL_ESCHAR] = s->hi[SS_HEAL_EPITHELIUM] = s->hi[SS_HEAL_PLASMA] = 1.0f;
     for (int d = 0; d < 3; d++) s->velocity[d] = g->velocity[d];
     s->react = heal_react;
+    s->prepare = c->ztop ? heal_prepare : NULL;
     s->ctx = c;
     s->mmax = 1.0;
     s->rate_max = rate_bound(p);
@@ -204,10 +319,11 @@ static void sys_init(ss_heal_rd_system *s, model_ctx *c, const ss_heal_grid *g,
 
 static ss_status check_params(const ss_heal_params *p, ss_error *err) {
     if (!(p->lam11 > 0) || !(p->u3_eq > 0) || !(p->K > 0) || !(p->rho_max > 0) ||
-        !(p->u1_beta2 > 0) || !(p->gamma1 > 0 && p->gamma1 < 1))
+        !(p->u1_beta2 > 0) || !(p->gamma1 > 0 && p->gamma1 < 1) || !(p->bed_mm > 0) ||
+        !(p->scab_mm >= 0))
         return ss_error_set(err, SS_ERR_INPUT,
-                            "heal params: lam11, u3_eq, K, rho_max, u1_beta2 must be > 0 and "
-                            "gamma1 in (0, 1)");
+                            "heal params: lam11, u3_eq, K, rho_max, u1_beta2, bed_mm must be > 0, "
+                            "scab_mm >= 0 and gamma1 in (0, 1)");
     return SS_OK;
 }
 
@@ -264,6 +380,16 @@ ss_heal_solver *ss_heal_solver_create(const ss_heal_grid *g, const ss_heal_param
     s->ny = g->ny;
     s->nz = g->nz;
     ctx_init(&s->ctx, &s->p, g);
+    const size_t ncol = (size_t)g->nx * (size_t)g->ny;
+    s->ctx.ztop = malloc(ncol * sizeof(int));
+    s->ctx.ecol = calloc(ncol, sizeof(float));
+    s->ctx.bed = calloc(ncol, sizeof(float));
+    if (!s->ctx.ztop || !s->ctx.ecol || !s->ctx.bed) {
+        ss_heal_solver_free(s);
+        ss_error_set(err, SS_ERR_NOMEM, "heal solver: out of memory");
+        return NULL;
+    }
+    find_surface(&s->ctx);
     sys_init(&s->sys, &s->ctx, g, &s->p);
     double r = s->sys.rate_max;
     /* reaction substeps of at most 0.1 / rate_max (both halves together) */
@@ -273,7 +399,7 @@ ss_heal_solver *ss_heal_solver_create(const ss_heal_grid *g, const ss_heal_param
     s->w = ss_heal_rd__work_create_ex(&s->sys, scheme == SS_HEAL_EXPLICIT || has_vel,
                                       scheme == SS_HEAL_SPLIT, err);
     if (!s->w) {
-        free(s);
+        ss_heal_solver_free(s);
         return NULL;
     }
     return s;
@@ -281,9 +407,25 @@ ss_heal_solver *ss_heal_solver_create(const ss_heal_grid *g, const ss_heal_param
 
 double ss_heal_solver_dt(const ss_heal_solver *s) { return s ? s->dt : 0.0; }
 
+ss_status ss_heal_solver_set_dt(ss_heal_solver *s, double dt, ss_error *err) {
+    if (!s) return ss_error_set(err, SS_ERR_INPUT, "heal solver: none");
+    double limit = s->scheme == SS_HEAL_SPLIT ? SS_HEAL_SPLIT_LATE_MAX_DT_DAYS
+                                              : ss_heal_rd_explicit_dt(&s->sys);
+    if (!(dt > 0) || !isfinite(dt) || dt > limit * (1.0 + 1e-12))
+        return ss_error_set(err, SS_ERR_INPUT, "heal solver: time step %g days not in (0, %g]", dt,
+                            limit);
+    s->dt = dt;
+    s->nsub = (int)ceil(dt * s->sys.rate_max / 0.1);
+    if (s->nsub < 1) s->nsub = 1;
+    return SS_OK;
+}
+
 void ss_heal_solver_free(ss_heal_solver *s) {
     if (!s) return;
     ss_heal_rd_work_free(s->w);
+    free(s->ctx.ztop);
+    free(s->ctx.ecol);
+    free(s->ctx.bed);
     free(s);
 }
 
@@ -295,6 +437,7 @@ ss_status ss_heal_step(ss_heal_solver *s, ss_heal_grid *g, ss_error *err) {
                             g->ny, g->nz, s->nx, s->ny, s->nz);
     s->ctx.cell = g->cell;
     s->sys.cls = g->cell;
+    if (s->ctx.ztop_of != g->cell) find_surface(&s->ctx);
     for (int f = 0; f < SS_HEAL_NFIELDS; f++) s->sys.u[f] = g->field[f];
     int has_vel = 0;
     for (int d = 0; d < 3; d++) {

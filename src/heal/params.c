@@ -49,38 +49,74 @@ static const pdef PDEFS[] = {
     {"rn", OFF(rn), "1/day", DIM ": fibroblast doubling ~1 day when oxygenated", 0.8, 0.8, 0.8},
     {"K", OFF(K), "1", "normalisation: fibroblast capacity = 1", 1.0, 1.0, 1.0},
     {"lamnn", OFF(lamnn), "1/day", DIM ": fibroblast lifetime ~1 week", 0.15, 0.15, 0.15},
-    {"Ds", OFF(Ds), "mm^2/day", CAL ": eschar reaches ~0.5 mm into the wound", 0.05, 0.05, 0.05},
+    {"Ds", OFF(Ds), "mm^2/day",
+     CAL ": the eschar stays a surface crust (penetrates ~0.3 mm in 2 weeks) instead of diffusing "
+         "into the healthy dermis",
+     0.005, 0.005, 0.005},
     {"Rs", OFF(Rs), "1/day",
      CAL ": scab within the first day on a dry wound (seed §3); only used with scab = 1", 4.0, 4.0,
      4.0},
-    {"lames", OFF(lames), "1/day", CAL ": keratinocytes dissolve the eschar in ~days", 1.0, 1.0,
-     1.0},
-    {"De", OFF(De), "mm^2/day", CAL ": epithelial front ~0.5-1 mm/day", 0.15, 0.15, 0.15},
-    {"lamge", OFF(lamge), "1/day", CAL, 3.0, 3.0, 3.0},
-    {"lamee", OFF(lamee), "1/day", CAL ": slow epithelial loss", 0.01, 0.01, 0.01},
+    {"lames", OFF(lames), "1/day",
+     CAL ": keratinocytes dissolve the eschar from underneath (Kubo et al. 2001, seed [KWP01]); "
+         "the scab detaches days after closure (clinically within 1-2 weeks)",
+     0.3, 0.3, 0.3},
+    {"De", OFF(De), "mm^2/day",
+     CAL ": epithelial front 2 sqrt(De lamge) = 1.3 mm/day on a ready bed; front width "
+         "sqrt(De/lamge) = 0.9 mm so 0.5 mm voxels resolve it (docs/heal-model.md)",
+     0.6, 0.6, 0.6},
+    {"lamge", OFF(lamge), "1/day", CAL ": with De, the front speed above", 0.75, 0.75, 0.75},
+    {"lamee", OFF(lamee), "1/day",
+     "seed §4.1.6 loss term kept, set to 0: a closed new epidermis renews itself like the intact "
+     "one (held at 1); a positive value strips it within months once Q(u3) -> 0 on the "
+     "revascularised bed",
+     0, 0, 0},
     {"gamma1", OFF(gamma1), "1",
      CAL ": capillary density of maximal Q (seed §4.1.6); high so the epithelial window stays open "
          "while granulation matures",
      0.8, 0.8, 0.8},
     {"lamnrho", OFF(lamnrho), "1/day",
-     CAL ": scar forms during the first 1-2 weeks; keloid value calibrated so rho exceeds rho_max "
-         "and the region grows (docs/heal-model.md)",
-     0.6, 0.6, 3.0},
+     CAL ": scar forms during the first 1-2 weeks, peak density ~1.5 x normal dermis", 0.6, 0.6,
+     0.6},
     {"lamrhop", OFF(lamrhop), "1/day",
-     CAL ": scar fades over weeks (clean); weak remodelling for keloid (seed §3)", 0.1, 0.1, 0.01},
+     "remodelling half-life ln 2 / lamrhop = 120 days (clean, scab): scar maturation takes 6-24 "
+     "months (Gurtner et al. 2008, Nature 453:314; Bayat et al. 2003, BMJ 326:88); keloid 365 "
+     "days: keloids do not regress",
+     0.005776, 0.005776, 0.0019},
+    {"rho_open", OFF(rho_open), "1",
+     "departure from §4.1.7 (docs/heal-model.md): fibroblasts keep depositing collagen in "
+     "vascularised granulation tissue as long as the wound above is open, so delayed closure "
+     "scars more (seed §4.1.5; Deitch 1983). Calibrated: peak scar scab > clean",
+     0.3, 0.3, 0.3},
+    {"lamkrho", OFF(lamkrho), "1/day",
+     "keloid only (departure from §4.1.7, docs/heal-model.md): autocrine collagen deposition of "
+     "keloid fibroblasts in the wound region, independent of vascularisation and closure",
+     0, 0, 0.2},
     {"Dp", OFF(Dp), "mm^2/day",
-     DIM ": clot plasma spreads ~mm in days; keloid value calibrated for region growth ~20-40% in "
-         "3 weeks",
-     0.05, 0.05, 0.3},
+     DIM ": clot plasma spreads ~mm in days; keloid: calibrated with lamkrho, rho_max so the "
+         "keloid advances ~3 mm beyond the margin by day 60",
+     0.05, 0.05, 0.08},
     {"lampp", OFF(lampp), "1/day",
-     "signed; negative = plasma resorption; keloid 0 (clot kept); only used with "
-     "static_region = 0",
-     -0.02, -0.02, 0.0},
+     "signed; negative = resorption of the clot (half-life 35 days); with it the far field relaxes "
+     "to p = 0 within sqrt(Dp/|lampp|) = 2 mm of the keloid, so the block walls do not shape it; "
+     "only used with static_region = 0",
+     -0.02, -0.02, -0.02},
     {"rho_max", OFF(rho_max), "1",
-     "seed §4.1.8 collagen threshold of C(rho); clean/scab: never reached; keloid: calibrated low "
-     "so overgrowth occurs",
-     1.0, 1.0, 0.1},
+     "seed §4.1.8 collagen threshold of C(rho); clean/scab: unused (static region); keloid: "
+     "calibrated with lamkrho and Dp (docs/heal-model.md)",
+     1, 1, 0.3},
     {"u1_wound", OFF(u1_wound), "1", "hypoxic clot: no oxygen at t = 0 (seed §3)", 0.0, 0.0, 0.0},
+    {"bed_mm", OFF(bed_mm), "mm",
+     "depth of the wound bed under the epithelial sheet whose mean capillary density enters "
+     "Q(u3) (seed §4.1.6: the epithelium grows on granulation tissue)",
+     1.0, 1.0, 1.0},
+    {"scab_mm", OFF(scab_mm), "mm",
+     "thickness of the exposed layer that dries into eschar (R(omega) of seed §4.1.5)", 0.5, 0.5,
+     0.5},
+    {"kscab", OFF(kscab), "1",
+     "departure from §4.1.6 (docs/heal-model.md): under a scab the epithelium has to cleave its "
+     "way beneath the eschar (Winter 1962; Hinman & Maibach 1963); a full eschar slows its "
+     "migration and growth by this fraction. Calibrated: dry/moist time to 95 % closure ~2",
+     0.65, 0.65, 0.65},
 };
 #define NPDEFS ((int)(sizeof PDEFS / sizeof PDEFS[0]))
 /* keys whose value may be negative */
@@ -154,13 +190,43 @@ static ss_status check_value(const char *what, const pdef *d, double v, ss_error
         return ss_error_set(err, SS_ERR_INPUT, "%s: parameter '%s' = %g must be a finite %s", what,
                             d->key, v, may_be_negative(d->key) ? "number" : "value >= 0");
     if ((!strcmp(d->key, "u3_eq") || !strcmp(d->key, "K") || !strcmp(d->key, "lam11") ||
-         !strcmp(d->key, "rho_max") || !strcmp(d->key, "u1_beta2")) &&
+         !strcmp(d->key, "rho_max") || !strcmp(d->key, "u1_beta2") || !strcmp(d->key, "bed_mm")) &&
         !(v > 0))
         return ss_error_set(err, SS_ERR_INPUT, "%s: parameter '%s' = %g must be > 0", what, d->key,
+                            v);
+    if (!strcmp(d->key, "rho_open") && !(v >= 0 && v <= 1))
+        return ss_error_set(err, SS_ERR_INPUT, "%s: parameter 'rho_open' = %g must be in [0, 1]",
+                            what, v);
+    if (!strcmp(d->key, "kscab") && !(v >= 0 && v < 1))
+        return ss_error_set(err, SS_ERR_INPUT, "%s: parameter 'kscab' = %g must be in [0, 1)", what,
                             v);
     if (!strcmp(d->key, "gamma1") && !(v > 0 && v < 1))
         return ss_error_set(err, SS_ERR_INPUT, "%s: parameter 'gamma1' = %g must be in (0, 1)",
                             what, v);
+    return SS_OK;
+}
+
+const char *ss_heal_param_key(int i) { return i >= 0 && i < NPDEFS ? PDEFS[i].key : NULL; }
+
+static const pdef *find_def(const char *key) {
+    for (int i = 0; key && i < NPDEFS; i++)
+        if (!strcmp(PDEFS[i].key, key)) return &PDEFS[i];
+    return NULL;
+}
+
+ss_status ss_heal_param_get(const ss_heal_params *p, const char *key, double *v, ss_error *err) {
+    const pdef *d = find_def(key);
+    if (!p || !d) return ss_error_set(err, SS_ERR_INPUT, "unknown heal parameter '%s'", key);
+    *v = *(const double *)((const char *)p + d->off);
+    return SS_OK;
+}
+
+ss_status ss_heal_param_set(ss_heal_params *p, const char *key, double v, ss_error *err) {
+    const pdef *d = find_def(key);
+    if (!p || !d) return ss_error_set(err, SS_ERR_INPUT, "unknown heal parameter '%s'", key);
+    ss_status st = check_value("heal parameter", d, v, err);
+    if (st) return st;
+    *pval(p, d) = v;
     return SS_OK;
 }
 
@@ -188,10 +254,11 @@ ss_heal_params *ss_heal_params_parse(const char *text, const char *what, const c
     if (!p) goto fail;
     for (const cJSON *it = root->child; it; it = it->next) {
         if (strcmp(it->string, "scenario") && strcmp(it->string, "params") &&
-            strcmp(it->string, "switches") && strcmp(it->string, "comment")) {
+            strcmp(it->string, "switches") && strcmp(it->string, "comment") &&
+            strcmp(it->string, "mechanics")) { /* mechanics: read by src/mech */
             ss_error_set(err, SS_ERR_INPUT,
                          "%s: unknown top-level key '%s' (expected scenario, params, switches, "
-                         "comment)",
+                         "mechanics, comment)",
                          what, it->string);
             goto fail;
         }

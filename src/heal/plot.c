@@ -8,6 +8,7 @@
 #include <cairo.h>
 #include <math.h>
 #include <stdlib.h>
+#include <errno.h>
 #include <string.h>
 
 #define FONT "DejaVu Sans"
@@ -23,6 +24,12 @@ double ss_heal_area_normalised(const ss_heal_stats *st) {
 
 ss_status ss_heal_area_csv_write(const char *path, const ss_heal_area_row *rows, int n,
                                  ss_error *err) {
+    return ss_heal_area_csv_write_columns(path, rows, n, 0, NULL, NULL, err);
+}
+
+ss_status ss_heal_area_csv_write_columns(const char *path, const ss_heal_area_row *rows, int n,
+                                         int ncols, const char *const *names, const double *vals,
+                                         ss_error *err) {
     ss_atomic_file af;
     ss_status st = ss_atomic_open(&af, path, err);
     if (st) return st;
@@ -32,17 +39,20 @@ ss_status ss_heal_area_csv_write(const char *path, const ss_heal_area_row *rows,
         const char *name = ss_heal_field_name(k);
         fprintf(f, ",mean_%s", name ? name : "field");
     }
+    for (int c = 0; c < ncols; c++) fprintf(f, ",%s", names[c]);
     fputc('\n', f);
     for (int i = 0; i < n; i++) {
         const ss_heal_stats *s = &rows[i].st;
         fprintf(f, "%.9g,%.9g,%.9g,%.9g", rows[i].t_days, s->open_area_mm2,
                 ss_heal_area_normalised(s), s->wound_region_area_mm2);
         for (int k = 0; k < SS_HEAL_NFIELDS; k++) fprintf(f, ",%.9g", s->field_mean[k]);
+        for (int c = 0; c < ncols; c++) fprintf(f, ",%.9g", vals[(size_t)i * ncols + c]);
         fputc('\n', f);
     }
     if (ferror(f)) {
+        int e = errno;
         ss_atomic_abort(&af);
-        return ss_error_set(err, SS_ERR_RUNTIME, "%s: write failed", path);
+        return ss_error_set(err, SS_ERR_RUNTIME, "%s: write failed: %s", path, strerror(e));
     }
     return ss_atomic_commit(&af, err);
 }

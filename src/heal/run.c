@@ -27,6 +27,7 @@ void ss_heal_run_config_default(ss_heal_run_config *c) {
     c->snapshot_every = 1;
     c->area_every = 0.01;
     c->checkpoint_every = -1;
+    c->kappa = -1;
 }
 
 void ss_heal_run_free(ss_heal_run *r) {
@@ -40,7 +41,9 @@ void ss_heal_run_free(ss_heal_run *r) {
     for (int i = 0; i < r->nsnap; i++) free(r->snap_file[i]);
     free(r->snap_file);
     free(r->out_dir);
+    ss_outputs_free(r->outs); /* rolls back outputs not finished */
     cJSON_Delete(r->wound);
+    ss_heal_run__mech_free(r);
     free(r);
 }
 
@@ -55,7 +58,7 @@ ss_status ss_heal_run__add_row(ss_heal_run *r, ss_error *err) {
     ss_heal_area_row *row = &r->rows[r->nrows++];
     row->t_days = r->g->t_days;
     ss_heal_stats_compute(r->g, &row->st);
-    return SS_OK;
+    return ss_heal_run__mech_row(r, err);
 }
 
 ss_status ss_heal_run__add_snap(ss_heal_run *r, double t, const char *file, ss_error *err) {
@@ -102,7 +105,7 @@ ss_status ss_heal_run_create(const ss_heal_run_config *c, ss_heal_run **out, ss_
     if (!st)
         st = c->resume_dir ? ss_heal_run__setup_resume(r, err) : ss_heal_run__setup_fresh(r, err);
     if (!st) st = set_end(r, err);
-    if (!st && !c->resume_dir && r->out_dir) st = ss_heal_run__check_out_dir(r, err);
+    if (!st && r->out_dir) st = ss_heal_run__outputs_open(r, err);
     if (!st && !c->resume_dir) st = ss_heal_run__add_row(r, err); /* day 0 */
     if (st) {
         ss_heal_run_free(r);
@@ -113,17 +116,42 @@ ss_status ss_heal_run_create(const ss_heal_run_config *c, ss_heal_run **out, ss_
     return SS_OK;
 }
 
+/* A failed output step stops the run: its outputs are rolled back (a staged
+ * folder removed, an in-place one left unfinished for a resume) and the
+ * message names the folder the user gave. */
+static ss_status fail_outputs(ss_heal_run *r, ss_status st, ss_error *err) {
+    if (st && r->outs && !r->failed) {
+        r->failed = 1;
+        st = ss_outputs_finish(r->outs, st, err);
+    }
+    return st;
+}
+
 /* Prepares the output directory and writes the day-0 snapshot of a fresh run. */
 static ss_status start_output(ss_heal_run *r, ss_error *err) {
+    if (r->failed)
+        return ss_error_set(err, SS_ERR_RUNTIME, "heal run: stopped by an earlier error");
     if (r->started || !r->out_dir) return SS_OK;
     ss_status st = ss_heal_run__prepare_out_dir(r, err);
-    if (!st && r->resumed_from < 0) st = ss_heal_run_write_snapshot(r, err);
+    if (!st && r->resumed_from < 0) st = ss_heal_run__snapshot(r, err);
     if (!st) r->started = 1;
+    return fail_outputs(r, st, err);
+}
+
+ss_status ss_heal_run_start(ss_heal_run *r, ss_error *err) { return start_output(r, err); }
+
+ss_status ss_heal_run_write_snapshot(ss_heal_run *r, ss_error *err) {
+    if (!r->out_dir) return ss_error_set(err, SS_ERR_INPUT, "heal run: no output directory");
+    int fresh_start = !r->started && r->resumed_from < 0; /* start writes the day-0 one */
+    ss_status st = start_output(r, err);
+    if (!st && !fresh_start) st = fail_outputs(r, ss_heal_run__snapshot(r, err), err);
     return st;
 }
 
 ss_status ss_heal_run_write_checkpoint(ss_heal_run *r, ss_error *err) {
     if (!r->out_dir) return ss_error_set(err, SS_ERR_INPUT, "heal run: no output directory");
+    ss_status st0 = start_output(r, err);
+    if (st0) return st0;
     char *aux = ss_heal_run__aux_json(r, r->wall_prev + ss_now() - r->t0);
     if (!aux) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     ss_status st = ss_heal_checkpoint_save(r->out_dir, r->g, r->scenario, r->params_json,
@@ -132,21 +160,47 @@ ss_status ss_heal_run_write_checkpoint(ss_heal_run *r, ss_error *err) {
     return st;
 }
 
+/* The explicit scheme's step cannot follow every spike of the mechanics'
+ * velocity (the springs snapping into a new configuration): the grid velocity
+ * is capped at what the step admits, 95 % of the CFL budget that diffusion and
+ * reaction leave (docs/mech.md). The split scheme sub-cycles its convection
+ * and needs no cap. */
+static void cap_velocity(ss_heal_run *r) {
+    ss_heal_grid *g = r->g;
+    if (r->scheme != SS_HEAL_EXPLICIT || ss_heal_stable_dt(g, r->p, SS_HEAL_EXPLICIT) >= r->dt)
+        return;
+    float *v[3] = {g->velocity[0], g->velocity[1], g->velocity[2]};
+    g->velocity[0] = g->velocity[1] = g->velocity[2] = NULL;
+    double lim0 = ss_heal_stable_dt(g, r->p, SS_HEAL_EXPLICIT);
+    for (int d = 0; d < 3; d++) g->velocity[d] = v[d];
+    const size_t n = (size_t)g->nx * g->ny * g->nz;
+    double room = 0.95 * g->dx_mm * (1.0 / r->dt - 1.0 / lim0), vmax = 0;
+    for (size_t i = 0; i < n; i++) {
+        double s = fabs(v[0][i]) + fabs(v[1][i]) + fabs(v[2][i]);
+        if (s > vmax) vmax = s;
+    }
+    if (!(vmax > room)) return;
+    float f = room > 0 ? (float)(room / vmax) : 0.0f;
+    for (int d = 0; d < 3; d++)
+        for (size_t i = 0; i < n; i++) v[d][i] *= f;
+}
+
 ss_status ss_heal_run_step(ss_heal_run *r, ss_error *err) {
     if (ss_heal_run_done(r))
         return ss_error_set(err, SS_ERR_INPUT, "heal run: already at its end (day %g)",
                             ss_heal_run_end_day(r));
     ss_status st = start_output(r, err);
     if (!st) st = ss_heal_step(r->s, r->g, err);
+    if (!st && r->mech && !(st = ss_mech_step(r->mech, r->g, r->dt, err))) cap_velocity(r);
     if (st) return st;
     long long k = (long long)r->g->step;
     int last = k == r->nsteps;
     if (k % r->area_every == 0 || last) st = ss_heal_run__add_row(r, err);
     if (!st && r->out_dir && ((r->snap_every && k % r->snap_every == 0) || last))
-        st = ss_heal_run_write_snapshot(r, err);
+        st = ss_heal_run__snapshot(r, err);
     if (!st && r->out_dir && r->ckpt_every && (k % r->ckpt_every == 0 || last))
         st = ss_heal_run_write_checkpoint(r, err);
-    return st;
+    return fail_outputs(r, st, err);
 }
 
 ss_status ss_heal_run_advance_to(ss_heal_run *r, double day, ss_error *err) {
@@ -172,6 +226,9 @@ ss_status ss_heal_run_finish(ss_heal_run *r, char **summary_json, ss_error *err)
     if (st) return st;
     if (r->out_dir) {
         st = ss_heal_run__write_tables(r, wall, &summary, err);
+        /* everything is written: the folder is complete (or swapped in whole) */
+        if (!st) st = ss_outputs_finish(r->outs, st, err);
+        st = fail_outputs(r, st, err);
     } else {
         summary = ss_heal_run__summary(r, wall);
         if (!summary) st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
@@ -203,3 +260,6 @@ const ss_heal_area_row *ss_heal_run_area(const ss_heal_run *r, int *n) {
 int ss_heal_run_snapshot_count(const ss_heal_run *r) { return r->nsnap; }
 long long ss_heal_run_resumed_from(const ss_heal_run *r) { return r->resumed_from; }
 const char *ss_heal_run_note(const ss_heal_run *r) { return r->note; }
+struct ss_mech *ss_heal_run_mech(ss_heal_run *r) {
+    return r->mech;
+}

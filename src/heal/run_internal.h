@@ -8,10 +8,14 @@
 #include <cjson/cJSON.h>
 
 #include "skinsim/heal_run.h"
+#include "skinsim/mech.h"
 
 struct ss_heal_run {
     ss_heal_run_config c; /* copy; string fields point at the caller's strings */
-    char *out_dir;        /* owned copy of out_dir (resume_dir on resume), NULL = in memory */
+    char *out_dir;        /* where files go: out_dir (resume_dir on resume) until the outputs
+                             begin, then the folder they stage or write in place; NULL = in memory */
+    ss_outputs *outs;     /* the output folder's discipline (src/core/output.c) */
+    int failed;           /* an output step failed: the run is stopped */
     char scenario[32];
     ss_heal_params *p;
     ss_heal_grid *g;
@@ -30,6 +34,17 @@ struct ss_heal_run {
     int started; /* output directory prepared (and day-0 snapshot written) */
     char note[2048];
     cJSON *wound; /* description for summary.json */
+    /* contraction mechanics (run_mech.c); mech NULL when off */
+    ss_mech *mech;
+    ss_mech_params mp;
+    ss_mech_suture *sutures;
+    int nsutures;
+    double *outline; /* per area row: the deformed initial outline's area, mm^2 */
+    int capoutline;
+    int closed;            /* 95 % closure reached; close_* hold the state then */
+    double close_day;
+    ss_mech_stats close_st;
+    cJSON *mech_aux;       /* the checkpoint's "mechanics" object while resuming */
 };
 
 /* run.c */
@@ -41,15 +56,36 @@ ss_status ss_heal_run__setup_fresh(ss_heal_run *r, ss_error *err);
 ss_status ss_heal_run__setup_resume(ss_heal_run *r, ss_error *err);
 
 /* run_output.c */
+/* Writes a snapshot now (the outputs must have begun). */
+ss_status ss_heal_run__snapshot(ss_heal_run *r, ss_error *err);
 /* Checkpoint metadata: intervals, seed, wall time, wound, area rows, snapshots. */
 char *ss_heal_run__aux_json(const ss_heal_run *r, double wall);
 ss_status ss_heal_run__aux_restore(ss_heal_run *r, const char *aux, const char *dir, ss_error *err);
-/* Checks out_dir is writable and, unless force, holds no previous run. */
-ss_status ss_heal_run__check_out_dir(const ss_heal_run *r, ss_error *err);
-/* Removes a previous run's outputs (force), makes fields/ and surface/. */
+/* Checks the output folder before any work (a previous run needs force; a
+ * path the core refuses) and registers the inputs and the disk estimate. */
+ss_status ss_heal_run__outputs_open(ss_heal_run *r, ss_error *err);
+/* Begins the outputs (lock, leftovers, disk, staging), points out_dir at
+ * where files go, makes fields/ and surface/, writes run.json (fresh runs). */
 ss_status ss_heal_run__prepare_out_dir(ss_heal_run *r, ss_error *err);
+/* run.json: the run's identity (run id, scenario, grid, parameter hash). */
+ss_status ss_heal_run__write_identity(const ss_heal_run *r, ss_error *err);
+/* Every checkpoint in dir must belong to the run of `newest` (and of
+ * dir/run.json): SS_ERR_INPUT naming a foreign one. */
+ss_status ss_heal_run__check_identity(const char *dir, const ss_heal_checkpoint *newest,
+                                      ss_error *err);
 /* area.csv, area.png, summary.json; the summary as cJSON in *summary. */
 ss_status ss_heal_run__write_tables(ss_heal_run *r, double wall, cJSON **summary, ss_error *err);
 cJSON *ss_heal_run__summary(const ss_heal_run *r, double wall);
+
+/* run_mech.c: the contraction mechanics inside a run */
+ss_status ss_heal_run__mech_setup_fresh(ss_heal_run *r, ss_error *err);
+ss_status ss_heal_run__mech_setup_resume(ss_heal_run *r, const char *dir, ss_error *err);
+ss_status ss_heal_run__mech_row(ss_heal_run *r, ss_error *err); /* after a row was added */
+ss_status ss_heal_run__mech_snapshot(ss_heal_run *r, int idx, ss_error *err);
+void ss_heal_run__mech_aux(const ss_heal_run *r, cJSON *aux);     /* into checkpoint metadata */
+void ss_heal_run__mech_summary(const ss_heal_run *r, cJSON *summary);
+/* Extra area.csv columns: *names (static) and values n x ncols (malloc'd); 0 when off. */
+int ss_heal_run__mech_columns(const ss_heal_run *r, const char *const **names, double **vals);
+void ss_heal_run__mech_free(ss_heal_run *r);
 
 #endif

@@ -4,10 +4,16 @@
  * continues the area curve and the snapshot list, and the closing tables
  * (area.csv, the Fig. 4 plot area.png, summary.json).
  *
- * Design: every file is written atomically by the heal_io writers; the
- * directory itself is checked before any work (writable, no previous run
- * unless forced) and a forced re-run removes only the files this command
- * writes. Snapshot colour scales are a function of the state alone, so a
+ * Design: every file is written atomically by the heal_io writers, and the
+ * folder goes through the core output discipline (src/core/output.c): checked
+ * before any work, locked against a second run, its disk use estimated. A new
+ * folder is written in place and marked unfinished until the end, so a killed
+ * run resumes from its checkpoints and is never taken for a finished one;
+ * --force over a previous run is staged next to it and swapped in whole at
+ * the end, so the old run stays intact until then. A resume checks that
+ * every checkpoint in the folder belongs to the run (run.json: a hash of
+ * scenario, grid, parameters, wound, scheme and step) before anything is
+ * touched. Snapshot colour scales are a function of the state alone, so a
  * resumed run draws the same pictures as an uninterrupted one. */
 #define _POSIX_C_SOURCE 200809L
 #include <dirent.h>
@@ -19,6 +25,13 @@
 #include "run_internal.h"
 
 /* ---- checkpoint metadata ------------------------------------------------------------ */
+
+/* Values per stored area row: t, open, region and initial area, the field
+ * means, then eschar over the wound, scar volume and scar maximum (rows of
+ * checkpoints written before these three existed have only the first ones;
+ * they read as 0). */
+#define ROW_VALUES_OLD (4 + SS_HEAL_NFIELDS)
+#define ROW_VALUES (7 + SS_HEAL_NFIELDS)
 
 char *ss_heal_run__aux_json(const ss_heal_run *r, double wall) {
     cJSON *j = cJSON_CreateObject();
@@ -32,10 +45,13 @@ char *ss_heal_run__aux_json(const ss_heal_run *r, double wall) {
     cJSON *a = cJSON_AddArrayToObject(j, "area");
     for (int i = 0; i < r->nrows; i++) {
         const ss_heal_area_row *row = &r->rows[i];
-        double v[4 + SS_HEAL_NFIELDS] = {row->t_days, row->st.open_area_mm2,
-                                         row->st.wound_region_area_mm2, row->st.initial_area_mm2};
+        double v[ROW_VALUES] = {row->t_days, row->st.open_area_mm2, row->st.wound_region_area_mm2,
+                                row->st.initial_area_mm2};
         for (int k = 0; k < SS_HEAL_NFIELDS; k++) v[4 + k] = row->st.field_mean[k];
-        cJSON_AddItemToArray(a, cJSON_CreateDoubleArray(v, 4 + SS_HEAL_NFIELDS));
+        v[4 + SS_HEAL_NFIELDS] = row->st.eschar_wound_mean;
+        v[5 + SS_HEAL_NFIELDS] = row->st.scar_volume_mm3;
+        v[6 + SS_HEAL_NFIELDS] = row->st.scar_max;
+        cJSON_AddItemToArray(a, cJSON_CreateDoubleArray(v, ROW_VALUES));
     }
     cJSON *sn = cJSON_AddArrayToObject(j, "snapshots");
     for (int i = 0; i < r->nsnap; i++) {
@@ -44,6 +60,7 @@ char *ss_heal_run__aux_json(const ss_heal_run *r, double wall) {
         cJSON_AddItemToArray(e, cJSON_CreateString(r->snap_file[i]));
         cJSON_AddItemToArray(sn, e);
     }
+    ss_heal_run__mech_aux(r, j);
     char *s = cJSON_PrintUnformatted(j);
     cJSON_Delete(j);
     return s;
@@ -52,10 +69,11 @@ char *ss_heal_run__aux_json(const ss_heal_run *r, double wall) {
 static ss_status restore_rows(ss_heal_run *r, const cJSON *area, const char *dir, ss_error *err) {
     const cJSON *e;
     cJSON_ArrayForEach(e, area) {
-        if (cJSON_GetArraySize(e) != 4 + SS_HEAL_NFIELDS)
+        const int nv = cJSON_GetArraySize(e);
+        if (nv != ROW_VALUES && nv != ROW_VALUES_OLD)
             return ss_error_set(err, SS_ERR_INPUT, "%s: checkpoint area rows malformed", dir);
-        double v[4 + SS_HEAL_NFIELDS];
-        for (int k = 0; k < 4 + SS_HEAL_NFIELDS; k++) {
+        double v[ROW_VALUES] = {0};
+        for (int k = 0; k < nv; k++) {
             const cJSON *x = cJSON_GetArrayItem(e, k);
             if (!cJSON_IsNumber(x))
                 return ss_error_set(err, SS_ERR_INPUT, "%s: checkpoint area rows malformed", dir);
@@ -69,6 +87,9 @@ static ss_status restore_rows(ss_heal_run *r, const cJSON *area, const char *dir
         row->st.wound_region_area_mm2 = v[2];
         row->st.initial_area_mm2 = v[3];
         for (int k = 0; k < SS_HEAL_NFIELDS; k++) row->st.field_mean[k] = v[4 + k];
+        row->st.eschar_wound_mean = v[4 + SS_HEAL_NFIELDS];
+        row->st.scar_volume_mm3 = v[5 + SS_HEAL_NFIELDS];
+        row->st.scar_max = v[6 + SS_HEAL_NFIELDS];
     }
     return SS_OK;
 }
@@ -111,6 +132,9 @@ ss_status ss_heal_run__aux_restore(ss_heal_run *r, const char *aux, const char *
     if (cJSON_IsNumber(wall)) r->wall_prev = wall->valuedouble;
     cJSON *w = cJSON_GetObjectItem(j, "wound");
     if (w) r->wound = cJSON_Duplicate(w, 1);
+    cJSON *mo = cJSON_GetObjectItem(j, "mechanics");
+    if (mo && !(r->mech_aux = cJSON_Duplicate(mo, 1)))
+        st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     if (!st) st = restore_rows(r, area, dir, err);
     if (!st) st = restore_snaps(r, snaps, dir, err);
     cJSON_Delete(j);
@@ -124,53 +148,215 @@ static int file_exists(const char *path) {
     return stat(path, &st) == 0;
 }
 
-ss_status ss_heal_run__check_out_dir(const ss_heal_run *r, ss_error *err) {
-    const char *out = r->out_dir;
-    ss_status st = ss_check_writable_dir(out, err);
-    if (st) return st;
-    char probe[4400], probe2[4400];
-    snprintf(probe, sizeof probe, "%s/summary.json", out);
-    snprintf(probe2, sizeof probe2, "%s/checkpoints", out);
-    if (!r->c.force && (file_exists(probe) || file_exists(probe2)))
-        return ss_error_set(err, SS_ERR_INPUT,
-                            "%s holds a previous run; use --resume %s to continue it, --force "
-                            "to overwrite it, or another --out",
-                            out, out);
-    return SS_OK;
+static int dir_has_entries(const char *path) {
+    DIR *d = opendir(path);
+    if (!d) return 0;
+    struct dirent *e;
+    int n = 0;
+    while (!n && (e = readdir(d))) n = strcmp(e->d_name, ".") && strcmp(e->d_name, "..");
+    closedir(d);
+    return n;
 }
 
-/* Removes the outputs of a previous run in dir (only files this command writes). */
-static void clean_previous(const char *out) {
-    static const char *const sub[3] = {"fields", "surface", "checkpoints"};
-    char path[4400];
-    for (int k = 0; k < 3; k++) {
-        snprintf(path, sizeof path, "%s/%s", out, sub[k]);
-        DIR *d = opendir(path);
-        if (!d) continue;
-        struct dirent *e;
-        while ((e = readdir(d))) {
-            const char *nm = e->d_name, *dot = strrchr(nm, '.');
-            if (!dot) continue;
-            if ((k == 0 && (!strcmp(dot, ".vti") || !strcmp(dot, ".pvd"))) ||
-                (k == 1 && !strcmp(dot, ".png")) || (k == 2 && !strcmp(dot, ".sshc"))) {
-                char f[4700];
-                snprintf(f, sizeof f, "%s/%s", path, nm);
-                unlink(f);
-            }
-        }
-        closedir(d);
+/* Disk a run writes from here to its end: every snapshot still due (VTK
+ * fields, 8 bits of cell state and float32 fields and velocity per voxel,
+ * and four surface maps), the checkpoints kept (two, plus the one being
+ * written), the area table and plot. */
+static double estimate_bytes(const ss_heal_run *r) {
+    double cells = (double)r->g->nx * r->g->ny * r->g->nz;
+    double vti = cells * (1 + 4.0 * (SS_HEAL_NFIELDS + 3)) + 8192;
+    double map = 4 * 80e3; /* colour-mapped PNGs: about 12 KB each at 20 x 20 voxels */
+    long long left = r->nsteps - (long long)r->g->step;
+    double snaps = (r->snap_every ? (double)left / (double)r->snap_every : 0) + 2;
+    double ckpt = r->ckpt_every ? 3 * (cells * (1 + 4.0 * (SS_HEAL_NFIELDS + 3)) + 65536) : 0;
+    double rows = (double)left / (double)(r->area_every > 0 ? r->area_every : 1) + 2;
+    return snaps * (vti + map) + ckpt + rows * 24.0 * (4 + SS_HEAL_NFIELDS) + 500e3;
+}
+
+ss_status ss_heal_run__outputs_open(ss_heal_run *r, ss_error *err) {
+    const ss_heal_run_config *c = &r->c;
+    const char *dir = r->out_dir;
+    const char *opt = c->resume_dir ? "--resume" : "--out";
+    struct stat st;
+    long holder = ss_output_lock_holder(dir);
+    if (holder)
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "%s %s: another skinsim run (process %ld) is writing it; wait for it "
+                            "to finish or choose another folder",
+                            opt, dir, holder);
+    int exists = stat(dir, &st) == 0 && S_ISDIR(st.st_mode) && dir_has_entries(dir);
+    if (!c->resume_dir && exists && !c->force) {
+        char probe[4400];
+        snprintf(probe, sizeof probe, "%s/checkpoints", dir);
+        int unfinished = ss_output_dir_is_unfinished(dir, "heal") ||
+                         (!ss_output_dir_is_complete(dir, "heal") && file_exists(probe));
+        return ss_error_set(
+            err, SS_ERR_INPUT,
+            "%s holds %s; use --resume %s to continue it, --force to replace "
+            "it, or another --out",
+            dir, unfinished ? "an unfinished run (stopped before its end)" : "a previous run", dir);
     }
+    r->outs = ss_outputs_create("heal", err);
+    if (!r->outs) return SS_ERR_NOMEM;
+    const char *ins[] = {c->params_path, c->wound_mask, c->wound_stroke, c->wound_mesh,
+                         c->wound_depth_image};
+    ss_status s = SS_OK;
+    for (size_t k = 0; k < sizeof ins / sizeof *ins && !s; k++)
+        s = ss_outputs_input(r->outs, ins[k], err);
+    /* A new folder (and a resumed one) is written in place, so a killed run
+     * can be resumed from its checkpoints; --force over a previous run is
+     * staged and swapped in whole at the end, so the old run stays until
+     * then. */
+    ss_output_kind kind = !c->resume_dir && exists ? SS_OUTPUT_DIR : SS_OUTPUT_DIR_IN_PLACE;
+    if (!s) s = ss_outputs_add(r->outs, opt, dir, kind, estimate_bytes(r), err);
+    return s;
 }
 
 ss_status ss_heal_run__prepare_out_dir(ss_heal_run *r, ss_error *err) {
-    if (r->c.force && r->resumed_from < 0) clean_previous(r->out_dir);
+    ss_status st = ss_outputs_begin(r->outs, err);
+    if (st) return st;
+    char *work = strdup(ss_outputs_path(r->outs, 0));
+    if (!work) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    free(r->out_dir);
+    r->out_dir = work; /* from here on every file goes here */
     static const char *const subs[2] = {"fields", "surface"};
     char path[4400];
-    ss_status st = SS_OK;
     for (int k = 0; k < 2 && !st; k++) {
         snprintf(path, sizeof path, "%s/%s", r->out_dir, subs[k]);
         st = ss_mkdir_p(path, err);
     }
+    if (!st && r->resumed_from < 0) st = ss_heal_run__write_identity(r, err);
+    return st;
+}
+
+/* ---- run identity ------------------------------------------------------------------------ */
+
+static uint64_t fnv1a(uint64_t h, const void *p, size_t n) {
+    const unsigned char *b = p;
+    for (size_t i = 0; i < n; i++) h = (h ^ b[i]) * 1099511628211ull;
+    return h;
+}
+
+/* What makes two runs the same run: scenario, grid, parameters, wound,
+ * scheme and step. Equal identities give equal states at equal steps, so a
+ * checkpoint of one resumes the other exactly. */
+typedef struct heal_identity {
+    char run_id[17], params_hash[17], scenario[32];
+    int n[3];
+    double dx;
+} heal_identity;
+
+static void identity_of(const char *scenario, const ss_heal_grid *g, const char *params_json,
+                        const cJSON *wound, int scheme, double dt, heal_identity *id) {
+    memset(id, 0, sizeof *id);
+    snprintf(id->scenario, sizeof id->scenario, "%s", scenario ? scenario : "");
+    id->n[0] = g->nx, id->n[1] = g->ny, id->n[2] = g->nz;
+    id->dx = g->dx_mm;
+    const char *pj = params_json ? params_json : "";
+    snprintf(id->params_hash, sizeof id->params_hash, "%016llx",
+             (unsigned long long)fnv1a(14695981039346656037ull, pj, strlen(pj)));
+    char *w = wound ? cJSON_PrintUnformatted(wound) : NULL;
+    char head[256];
+    snprintf(head, sizeof head, "%s|%d|%d|%d|%.17g|%.17g|%d|%.17g|", id->scenario, g->nx, g->ny,
+             g->nz, g->dx_mm, g->skin_top_mm, scheme, dt);
+    uint64_t h = fnv1a(14695981039346656037ull, head, strlen(head));
+    h = fnv1a(h, pj, strlen(pj));
+    if (w) h = fnv1a(h, w, strlen(w));
+    snprintf(id->run_id, sizeof id->run_id, "%016llx", (unsigned long long)h);
+    free(w);
+}
+
+static void describe(const heal_identity *id, char *buf, size_t n) {
+    snprintf(buf, n, "run %s: scenario %s, grid %dx%dx%d of %g mm, parameters %s", id->run_id,
+             id->scenario, id->n[0], id->n[1], id->n[2], id->dx, id->params_hash);
+}
+
+ss_status ss_heal_run__write_identity(const ss_heal_run *r, ss_error *err) {
+    heal_identity id;
+    identity_of(r->scenario, r->g, r->params_json, r->wound, (int)r->scheme, r->dt, &id);
+    cJSON *j = cJSON_CreateObject();
+    if (!j) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    cJSON_AddStringToObject(j, "command", "heal");
+    cJSON_AddStringToObject(j, "run_id", id.run_id);
+    cJSON_AddStringToObject(j, "scenario", id.scenario);
+    cJSON_AddItemToObject(j, "grid", cJSON_CreateIntArray(id.n, 3));
+    cJSON_AddNumberToObject(j, "dx_mm", id.dx);
+    cJSON_AddStringToObject(j, "params_hash", id.params_hash);
+    char *text = cJSON_Print(j);
+    cJSON_Delete(j);
+    if (!text) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    char path[4400];
+    snprintf(path, sizeof path, "%s/run.json", r->out_dir);
+    ss_status st = ss_write_file_atomic(path, text, strlen(text), err);
+    free(text);
+    return st;
+}
+
+static ss_status checkpoint_identity(const ss_heal_checkpoint *ck, heal_identity *id) {
+    cJSON *aux = ck->aux && *ck->aux ? cJSON_Parse(ck->aux) : NULL;
+    identity_of(ck->scenario, ck->grid, ck->params_json, cJSON_GetObjectItem(aux, "wound"),
+                ck->scheme, ck->dt_days, id);
+    cJSON_Delete(aux);
+    return SS_OK;
+}
+
+ss_status ss_heal_run__check_identity(const char *dir, const ss_heal_checkpoint *newest,
+                                      ss_error *err) {
+    heal_identity want, have;
+    char a[512], b[512], path[4400];
+    checkpoint_identity(newest, &want);
+    const char *ref = "its newest checkpoint";
+    /* the folder's own identity, written when the run began */
+    snprintf(path, sizeof path, "%s/run.json", dir);
+    if (file_exists(path)) {
+        ss_error e2;
+        char *text = ss_read_file(path, NULL, &e2);
+        cJSON *j = text ? cJSON_Parse(text) : NULL;
+        free(text);
+        const cJSON *rid = cJSON_GetObjectItem(j, "run_id");
+        if (!cJSON_IsString(rid)) {
+            cJSON_Delete(j);
+            return ss_error_set(err, SS_ERR_INPUT, "%s: run.json is damaged (no run_id)", dir);
+        }
+        if (strcmp(rid->valuestring, want.run_id)) {
+            describe(&want, a, sizeof a);
+            ss_status st = ss_error_set(
+                err, SS_ERR_INPUT,
+                "%s: its newest checkpoint belongs to another run (%s; run.json says run %s); "
+                "move the foreign checkpoint out of %s/checkpoints to resume",
+                dir, a, rid->valuestring, dir);
+            cJSON_Delete(j);
+            return st;
+        }
+        cJSON_Delete(j);
+        ref = "run.json";
+    }
+    /* every other checkpoint there must be of the same run, or a later save
+     * would prune or mix it */
+    snprintf(path, sizeof path, "%s/checkpoints", dir);
+    DIR *d = opendir(path);
+    struct dirent *e;
+    ss_status st = SS_OK;
+    while (!st && d && (e = readdir(d))) {
+        size_t n = strlen(e->d_name);
+        if (strncmp(e->d_name, "ckpt_", 5) || n < 6 || strcmp(e->d_name + n - 5, ".sshc")) continue;
+        char file[4700];
+        snprintf(file, sizeof file, "%s/%s", path, e->d_name);
+        ss_heal_checkpoint ck;
+        ss_error e2;
+        if (ss_heal_checkpoint_read(file, &ck, &e2)) continue; /* damaged: skipped as before */
+        checkpoint_identity(&ck, &have);
+        ss_heal_checkpoint_free(&ck);
+        if (strcmp(have.run_id, want.run_id)) {
+            describe(&have, a, sizeof a);
+            describe(&want, b, sizeof b);
+            st = ss_error_set(err, SS_ERR_INPUT,
+                              "%s: checkpoints/%s belongs to another run (%s; this run per %s: "
+                              "%s); move it out to resume",
+                              dir, e->d_name, a, ref, b);
+        }
+    }
+    if (d) closedir(d);
     return st;
 }
 
@@ -212,14 +398,24 @@ static ss_status write_surface_maps(ss_heal_run *r, int idx, ss_error *err) {
     return SS_OK;
 }
 
-ss_status ss_heal_run_write_snapshot(ss_heal_run *r, ss_error *err) {
+ss_status ss_heal_run__snapshot(ss_heal_run *r, ss_error *err) {
     if (!r->out_dir) return ss_error_set(err, SS_ERR_INPUT, "heal run: no output directory");
     char rel[64], path[4400];
     int idx = r->nsnap;
     /* a resumed run may redo snapshots the killed run wrote after its checkpoint */
     snprintf(rel, sizeof rel, "fields_%04d.vti", idx);
     snprintf(path, sizeof path, "%s/fields/%s", r->out_dir, rel);
-    ss_status st = ss_heal_vti_write(path, r->g, err);
+    ss_status st;
+    if (r->mech) { /* the displacement next to the velocity */
+        float *const *u = ss_mech_grid_displacement(r->mech);
+        if (!u) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+        const char *name = "displacement";
+        float *const vec[1][3] = {{u[0], u[1], u[2]}};
+        st = ss_heal_vti_write_vectors(path, r->g, 1, &name, vec, err);
+    } else {
+        st = ss_heal_vti_write(path, r->g, err);
+    }
+    if (!st) st = ss_heal_run__mech_snapshot(r, idx, err);
     if (!st) st = ss_heal_run__add_snap(r, r->g->t_days, rel, err);
     if (st) return st;
     snprintf(path, sizeof path, "%s/fields/fields.pvd", r->out_dir);
@@ -235,6 +431,34 @@ static void add_closure_time(cJSON *j, const char *key, double t) {
         cJSON_AddNumberToObject(j, key, t);
     else
         cJSON_AddNullToObject(j, key);
+}
+
+/* The course figures of docs/heal-model.md §6 from the area rows: scab
+ * formation and detachment, scar peak (largest density, volume) and the
+ * state at the end. */
+static void add_course(cJSON *j, const ss_heal_run *r) {
+    if (!r->nrows) return;
+    const double t95 = ss_heal_time_to_closure(r->rows, r->nrows, 0.05);
+    double formed = -1, gone = -1, pmax = 0, pmax_day = 0, pvol = 0, pvol_day = 0;
+    for (int i = 0; i < r->nrows; i++) {
+        const ss_heal_area_row *w = &r->rows[i];
+        if (formed < 0 && w->st.eschar_wound_mean > 0.5) formed = w->t_days;
+        if (formed >= 0 && t95 >= 0 && gone < 0 && w->t_days >= t95 &&
+            w->st.eschar_wound_mean < 0.05)
+            gone = w->t_days;
+        if (w->st.scar_max > pmax) pmax = w->st.scar_max, pmax_day = w->t_days;
+        if (w->st.scar_volume_mm3 > pvol) pvol = w->st.scar_volume_mm3, pvol_day = w->t_days;
+    }
+    const ss_heal_stats *e = &r->rows[r->nrows - 1].st;
+    add_closure_time(j, "scab_formed_day", formed);
+    add_closure_time(j, "scab_detached_day", gone);
+    cJSON_AddNumberToObject(j, "final_eschar_wound_mean", e->eschar_wound_mean);
+    cJSON_AddNumberToObject(j, "scar_peak_density", pmax);
+    cJSON_AddNumberToObject(j, "scar_peak_density_day", pmax_day);
+    cJSON_AddNumberToObject(j, "scar_peak_volume_mm3", pvol);
+    cJSON_AddNumberToObject(j, "scar_peak_volume_day", pvol_day);
+    cJSON_AddNumberToObject(j, "final_scar_volume_mm3", e->scar_volume_mm3);
+    cJSON_AddNumberToObject(j, "final_wound_region_area_mm2", e->wound_region_area_mm2);
 }
 
 cJSON *ss_heal_run__summary(const ss_heal_run *r, double wall) {
@@ -266,6 +490,7 @@ cJSON *ss_heal_run__summary(const ss_heal_run *r, double wall) {
         cJSON_AddNumberToObject(j, "final_normalised_area", ss_heal_area_normalised(s1));
     }
     cJSON_AddNumberToObject(j, "open_threshold", ss_heal_open_threshold());
+    add_course(j, r);
     cJSON_AddNumberToObject(j, "wall_time_s", wall);
     cJSON_AddNumberToObject(j, "threads", ss_threads_get());
     cJSON_AddNumberToObject(j, "seed", (double)r->c.seed);
@@ -274,6 +499,7 @@ cJSON *ss_heal_run__summary(const ss_heal_run *r, double wall) {
         cJSON_AddNumberToObject(j, "resumed_from_step", (double)r->resumed_from);
     cJSON *pj = cJSON_Parse(r->params_json);
     cJSON_AddItemToObject(j, "params", pj ? pj : cJSON_CreateString(r->params_json));
+    ss_heal_run__mech_summary(r, j);
     return j;
 }
 
@@ -300,7 +526,12 @@ ss_status ss_heal_run__write_tables(ss_heal_run *r, double wall, cJSON **summary
     char path[4400], title[256];
     *summary = NULL;
     snprintf(path, sizeof path, "%s/area.csv", r->out_dir);
-    ss_status st = ss_heal_area_csv_write(path, r->rows, r->nrows, err);
+    const char *const *cn = NULL;
+    double *cv = NULL;
+    int nc = ss_heal_run__mech_columns(r, &cn, &cv);
+    if (nc < 0) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    ss_status st = ss_heal_area_csv_write_columns(path, r->rows, r->nrows, nc, cn, cv, err);
+    free(cv);
     if (st) return st;
     snprintf(path, sizeof path, "%s/area.png", r->out_dir);
     snprintf(title, sizeof title, "Normalised open wound area - %s scenario", r->scenario);

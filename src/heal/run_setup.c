@@ -339,6 +339,12 @@ ss_status ss_heal_run__setup_fresh(ss_heal_run *r, ss_error *err) {
     wound_inputs_free(&w);
     if (!st) st = ss_heal_grid_init(r->g, gm.top, c->epidermis_mm, w3, r->p, err);
     free(w3);
+    if (!st) st = ss_heal_run__mech_setup_fresh(r, err); /* before the solver: velocity */
+    for (int d = 0; !st && c->velocity && d < 3; d++) {
+        size_t n = (size_t)gm.n[0] * (size_t)gm.n[1] * (size_t)gm.n[2];
+        if (!r->g->velocity[d] && !(r->g->velocity[d] = calloc(n, sizeof(float))))
+            st = ss_error_set(err, SS_ERR_NOMEM, "out of memory (velocity)");
+    }
     if (!st) st = setup_solver(r, err);
     return st;
 }
@@ -351,6 +357,11 @@ ss_status ss_heal_run__setup_resume(ss_heal_run *r, ss_error *err) {
     ss_heal_checkpoint ck;
     ss_status st = ss_heal_checkpoint_load_latest(dir, &ck, r->note, sizeof r->note, err);
     if (st) return st;
+    /* a checkpoint of another run (copied in) is refused before anything is touched */
+    if ((st = ss_heal_run__check_identity(dir, &ck, err))) {
+        ss_heal_checkpoint_free(&ck);
+        return st;
+    }
     r->g = ck.grid;
     ck.grid = NULL;
     snprintf(r->scenario, sizeof r->scenario, "%s", ck.scenario);
@@ -364,6 +375,8 @@ ss_status ss_heal_run__setup_resume(ss_heal_run *r, ss_error *err) {
     if (c->days != 0) r->days = c->days;
     r->p = ss_heal_params_parse(r->params_json, "checkpoint parameters", r->scenario, err);
     if (!r->p) return err->code ? err->code : SS_ERR_INPUT;
+    st = ss_heal_run__mech_setup_resume(r, dir, err);
+    if (st) return st;
     r->s = ss_heal_solver_create(r->g, r->p, r->scheme, r->dt, err);
     if (!r->s) return err->code ? err->code : SS_ERR_INPUT;
     if (ss_heal_solver_dt(r->s) != r->dt)

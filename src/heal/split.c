@@ -41,6 +41,7 @@ static void reaction_pass(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt,
     const int n = nx - 2;
     if (nsub < 1) nsub = 1;
     const float h = (float)(dt / nsub);
+    if (sys->react && sys->prepare) sys->prepare(sys->ctx, sys->u);
 #pragma omp parallel num_threads(thread_count(w)) if (w->ncell >= RD_PAR_MIN_CELLS)
     {
         float *scr = w->tscratch[omp_get_thread_num()];
@@ -226,7 +227,8 @@ static inline void bundle_x(const ss_heal_rd_system *sys, const ss_heal_rd_work 
 
 /* Implicit-Euler LOD diffusion of every field with D > 0: one parallel
  * region, three work-shared sweeps (x bundles per z, y bundles per z, z bundles per
- * y), fields looped inside, the admissible-range clamp fused into the last. */
+ * y), fields looped inside, the admissible-range clamp fused into the last
+ * (the y sweep for lateral fields, which skip z). */
 static void diffuse_all(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt) {
     const int nx = sys->nx, ny = sys->ny, nz = sys->nz, nf = sys->nfields;
     const double ih2 = 1.0 / (sys->h_mm * sys->h_mm);
@@ -255,14 +257,16 @@ static void diffuse_all(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt) {
             for (int x0 = 1; x0 < nx - 1; x0 += BUNDLE) {
                 const int cw = nx - 1 - x0 < BUNDLE ? nx - 1 - x0 : BUNDLE;
                 for (int a = 0; a < na; a++)
-                    bundle_yz(sys, w, act[a], kD[act[a]], mk[act[a]], 1, z, x0, cw, scr, 0);
+                    bundle_yz(sys, w, act[a], kD[act[a]], mk[act[a]], 1, z, x0, cw, scr,
+                              sys->lateral[act[a]]);
             }
 #pragma omp for collapse(2) schedule(static)
         for (int y = 1; y < ny - 1; y++)
             for (int x0 = 1; x0 < nx - 1; x0 += BUNDLE) {
                 const int cw = nx - 1 - x0 < BUNDLE ? nx - 1 - x0 : BUNDLE;
                 for (int a = 0; a < na; a++)
-                    bundle_yz(sys, w, act[a], kD[act[a]], mk[act[a]], 2, y, x0, cw, scr, 1);
+                    if (!sys->lateral[act[a]])
+                        bundle_yz(sys, w, act[a], kD[act[a]], mk[act[a]], 2, y, x0, cw, scr, 1);
             }
     }
 }

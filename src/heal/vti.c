@@ -35,6 +35,23 @@ static void put_f32le(FILE *f, const float *a, size_t n) {
 }
 
 ss_status ss_heal_vti_write(const char *path, const ss_heal_grid *g, ss_error *err) {
+    return ss_heal_vti_write_vectors(path, g, 0, NULL, NULL, err);
+}
+
+static void put_vec3(FILE *f, float *const v[3], size_t n) {
+    put_u64le(f, (uint64_t)(12 * n));
+    float buf[3 * 256];
+    for (size_t i = 0; i < n; i += 256) {
+        size_t m = n - i < 256 ? n - i : 256;
+        for (size_t j = 0; j < m; j++)
+            for (int c = 0; c < 3; c++) buf[3 * j + (size_t)c] = v[c][i + j];
+        put_f32le(f, buf, 3 * m);
+    }
+}
+
+ss_status ss_heal_vti_write_vectors(const char *path, const ss_heal_grid *g, int nvec,
+                                    const char *const *names, float *const (*vecs)[3],
+                                    ss_error *err) {
     if (!g || !g->cell) return ss_error_set(err, SS_ERR_INPUT, "%s: no grid", path);
     int vel = g->velocity[0] && g->velocity[1] && g->velocity[2];
     size_t n = (size_t)g->nx * (size_t)g->ny * (size_t)g->nz;
@@ -76,6 +93,14 @@ ss_status ss_heal_vti_write(const char *path, const ss_heal_grid *g, ss_error *e
                 "        <DataArray type=\"Float32\" Name=\"velocity\" NumberOfComponents=\"3\" "
                 "format=\"appended\" offset=\"%llu\"/>\n",
                 (unsigned long long)off);
+    if (vel) off += 8 + 12 * n;
+    for (int v = 0; v < nvec; v++) {
+        fprintf(f,
+                "        <DataArray type=\"Float32\" Name=\"%s\" NumberOfComponents=\"3\" "
+                "format=\"appended\" offset=\"%llu\"/>\n",
+                names[v], (unsigned long long)off);
+        off += 8 + 12 * n;
+    }
     fprintf(f, "      </CellData>\n    </Piece>\n  </ImageData>\n"
                "  <AppendedData encoding=\"raw\">\n   _");
     put_u64le(f, (uint64_t)n);
@@ -84,16 +109,8 @@ ss_status ss_heal_vti_write(const char *path, const ss_heal_grid *g, ss_error *e
         put_u64le(f, (uint64_t)(4 * n));
         put_f32le(f, g->field[k], n);
     }
-    if (vel) {
-        put_u64le(f, (uint64_t)(12 * n));
-        float buf[3 * 256];
-        for (size_t i = 0; i < n; i += 256) {
-            size_t m = n - i < 256 ? n - i : 256;
-            for (size_t j = 0; j < m; j++)
-                for (int c = 0; c < 3; c++) buf[3 * j + (size_t)c] = g->velocity[c][i + j];
-            put_f32le(f, buf, 3 * m);
-        }
-    }
+    if (vel) put_vec3(f, g->velocity, n);
+    for (int v = 0; v < nvec; v++) put_vec3(f, vecs[v], n);
     fprintf(f, "\n  </AppendedData>\n</VTKFile>\n");
     if (ferror(f)) {
         ss_atomic_abort(&af);
@@ -139,8 +156,9 @@ ss_status ss_heal_pvd_write(const char *path, int n, const double *t_days, const
     }
     fprintf(f, "  </Collection>\n</VTKFile>\n");
     if (ferror(f)) {
+        int e = errno;
         ss_atomic_abort(&af);
-        return ss_error_set(err, SS_ERR_RUNTIME, "%s: write failed", path);
+        return ss_error_set(err, SS_ERR_RUNTIME, "%s: write failed: %s", path, strerror(e));
     }
     return ss_atomic_commit(&af, err);
 }

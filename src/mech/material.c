@@ -68,9 +68,9 @@ void ss_mech_params_default(ss_mech_params *p) {
     p->K_pas = 1.0;
     p->K_act = 100.0;
     p->p_max = 5.0;
-    p->theta1 = -0.3;
+    p->theta1 = -0.6;
     p->theta2 = 0.5;
-    p->K_m = 6.0;
+    p->K_m = 50.0;
     p->mu = 13.5;
     p->K_bulk = 29.0;
     p->k1 = 1500.0;

@@ -2,10 +2,13 @@
  *
  * One frame (ss_mech_step), after the biochemistry has advanced the grid:
  *  1. sample at every spring node, with the B-spline weights, the
- *     myofibroblast density: the fibroblasts under an open wound surface
- *     (a column whose top is in the wound region, initial wound or omega,
- *     weighted by 1 - epithelium at the top), through the whole thickness
- *     (the wound bed's activated dermis pulls with it). Fibroblasts in open
+ *     myofibroblast density: the mean fibroblast density of a column's
+ *     wound-region cells (initial wound or omega: the granulation tissue the
+ *     fibroblasts invade), weighted by 1 - epithelium at the column's top,
+ *     through the column's whole thickness (the wound bed's activated dermis
+ *     pulls with it). It starts at zero (the clot has no fibroblasts) and
+ *     rises as they invade, so contraction sets in after a few days as
+ *     observed clinically. Fibroblasts in open
  *     granulation tissue differentiate into myofibroblasts and these go by
  *     apoptosis once the wound is covered (Desmouliere et al. 1995, Am J
  *     Pathol 146:56); intact skin exerts no net pull. Then the volumetric
@@ -50,7 +53,9 @@ void ss_mech_free(ss_mech *m) {
     free(m->wound0);
     free(m->ecm);
     free(m->myo);
-    free(m->theta);
+    for (int d = 0; d < 3; d++) free(m->usub[d]);
+    free(m->thsub);
+    free(m->usub_valid);
     for (int d = 0; d < 3; d++) free(m->u[d]);
     free(m->kbase);
     free(m->nmyo);
@@ -177,8 +182,7 @@ ss_mech *ss_mech_create(ss_heal_grid *g, const ss_heal_params *heal, const ss_me
     m->wound0 = malloc(n);
     m->ecm = malloc(n * sizeof(float));
     m->myo = malloc(n * sizeof(float));
-    m->theta = calloc(n, sizeof(float));
-    if (!m->mask || !m->wound0 || !m->ecm || !m->myo || !m->theta) goto nomem;
+    if (!m->mask || !m->wound0 || !m->ecm || !m->myo) goto nomem;
     size_t ncells = 0;
     for (size_t i = 0; i < n; i++) {
         m->mask[i] = tissue(g->cell[i]);
@@ -186,7 +190,6 @@ ss_mech *ss_mech_create(ss_heal_grid *g, const ss_heal_params *heal, const ss_me
         ncells += m->mask[i];
     }
     for (int d = 0; d < 3; d++) {
-        if (!(m->u[d] = calloc(n, sizeof(float)))) goto nomem;
         if (!g->velocity[d] && !(g->velocity[d] = calloc(n, sizeof(float)))) goto nomem;
     }
     if (mesh) {
@@ -260,9 +263,19 @@ ss_mech *ss_mech_create(ss_heal_grid *g, const ss_heal_params *heal, const ss_me
     for (size_t i = 0; i < n; i++)
         if (m->wound0[i]) foot[i % ((size_t)g->nx * g->ny)] = 1;
     for (int t = 0; t < m->ntri; t++) {
-        double c[2] = {0, 0};
-        for (int k = 0; k < 3; k++)
-            for (int d = 0; d < 2; d++) c[d] += m->mesh->x[3 * m->tri[3 * t + k] + d] / 3.0;
+        /* the midpoint of the longest edge: on a lattice, the centre of the
+         * square face the triangle halves, so both halves agree */
+        double c[2] = {0, 0}, best = -1;
+        for (int k = 0; k < 3; k++) {
+            const double *a = m->mesh->x + 3 * m->tri[3 * t + k],
+                         *b = m->mesh->x + 3 * m->tri[3 * t + (k + 1) % 3];
+            double l = (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]);
+            if (l > best) {
+                best = l;
+                c[0] = 0.5 * (a[0] + b[0]);
+                c[1] = 0.5 * (a[1] + b[1]);
+            }
+        }
         int ix = (int)floor(c[0] / g->dx_mm), iy = (int)floor(c[1] / g->dx_mm);
         if (ix >= 0 && iy >= 0 && ix < g->nx && iy < g->ny)
             m->tri_wound[t] = foot[(size_t)iy * g->nx + ix];
@@ -273,6 +286,14 @@ ss_mech *ss_mech_create(ss_heal_grid *g, const ss_heal_params *heal, const ss_me
     if (stride < 1) stride = 1;
     if (!(m->T = ss_mech_transfer_create(g->nx, g->ny, g->nz, g->dx_mm, stride, err))) goto fail;
     m->kernel_width = w;
+    {
+        size_t ms = ss_mech_sub_count(m->T);
+        for (int d = 0; d < 3; d++)
+            if (!(m->usub[d] = calloc(ms, sizeof(double)))) goto nomem;
+        m->thsub = calloc(ms, sizeof(double));
+        m->usub_valid = calloc(ms, 1);
+        if (!m->thsub || !m->usub_valid) goto nomem;
+    }
     ss_mech_stats st;
     ss_mech_stats_compute(m, &st);
     m->outline0 = st.outline_area_mm2;
@@ -288,7 +309,13 @@ const ss_tetmesh *ss_mech_mesh(const ss_mech *m) { return m->mesh; }
 const double *ss_mech_positions(const ss_mech *m) { return m->S->x; }
 const double *ss_mech_velocities(const ss_mech *m) { return m->vel; }
 const double *ss_mech_node_stress(const ss_mech *m) { return m->stress; }
-float *const *ss_mech_grid_displacement(const ss_mech *m) { return m->u; }
+float *const *ss_mech_grid_displacement(ss_mech *m) {
+    const size_t n = (size_t)m->nx * m->ny * m->nz;
+    for (int d = 0; d < 3; d++)
+        if (!m->u[d] && !(m->u[d] = calloc(n, sizeof(float)))) return NULL;
+    ss_mech_sub_upsample(m->T, m->usub, m->usub_valid, 3, m->mask, m->u);
+    return m->u;
+}
 
 /* Volume-weighted average over each node's tets of the P1 gradient of a
  * 3-component nodal field f (3n) in the current configuration: grad (9n),
@@ -338,16 +365,23 @@ static void node_gradients(ss_mech *m, const double *f, double *grad) {
     free(wsum);
 }
 
-/* Particle fields to the grid: velocity into g->velocity, displacement into
- * m->u, theta = div u. */
+/* Particle fields to the grid: velocity into g->velocity; displacement and
+ * theta = div u on the transfer's sub-lattice (theta is only ever sampled
+ * there; the grid displacement is upsampled when asked for). */
+static void displacement_to_grid(ss_mech *m) {
+    const int nn = m->mesh->nnodes;
+    for (int i = 0; i < 3 * nn; i++) m->disp[i] = m->S->x[i] - m->S->X[i];
+    node_gradients(m, m->disp, m->grad);
+    ss_mech_p2g_sub(m->T, m->S->x, nn, m->disp, m->grad, 3);
+    ss_mech_sub_get(m->T, 3, m->usub, m->usub_valid);
+    ss_mech_sub_divergence(m->T, m->usub, m->usub_valid, m->thsub);
+}
+
 static void to_grid(ss_mech *m, ss_heal_grid *g) {
     const int nn = m->mesh->nnodes;
     node_gradients(m, m->vel, m->grad);
     ss_mech_p2g(m->T, m->S->x, nn, m->vel, m->grad, 3, m->mask, g->velocity);
-    for (int i = 0; i < 3 * nn; i++) m->disp[i] = m->S->x[i] - m->S->X[i];
-    node_gradients(m, m->disp, m->grad);
-    ss_mech_p2g(m->T, m->S->x, nn, m->disp, m->grad, 3, m->mask, m->u);
-    ss_mech_divergence(m->T, m->u, m->mask, m->theta);
+    displacement_to_grid(m);
 }
 
 ss_status ss_mech_step(ss_mech *m, ss_heal_grid *g, double dt_days, ss_error *err) {
@@ -366,15 +400,19 @@ ss_status ss_mech_step(ss_mech *m, ss_heal_grid *g, double dt_days, ss_error *er
     for (int col = 0; col < nx * ny; col++) {
         /* the column's surface: its top tissue cell; open when in the wound
          * region (initial wound or omega) and not yet covered by epithelium */
-        int top = -1, region = 0;
+        int top = -1, nw = 0;
+        float sum = 0.0f;
         for (int z = nz - 1; z >= 0; z--) {
             size_t i = (size_t)z * nx * ny + (size_t)col;
             if (!m->mask[i]) continue;
             if (top < 0) top = z;
-            region |= m->wound0[i] || pla[i] > SS_HEAL_P_MIN;
+            if (m->wound0[i] || pla[i] > SS_HEAL_P_MIN) {
+                sum += fib[i];
+                nw++;
+            }
         }
-        float open = 0.0f;
-        if (top >= 0 && region) {
+        float open = 0.0f, nmean = nw ? sum / (float)nw : 0.0f;
+        if (top >= 0 && nw) {
             float cover = epi[(size_t)top * nx * ny + (size_t)col];
             open = 1.0f - (cover > 1.0f ? 1.0f : cover < 0.0f ? 0.0f : cover);
         }
@@ -386,11 +424,11 @@ ss_status ss_mech_step(ss_mech *m, ss_heal_grid *g, double dt_days, ss_error *er
                 if (e > 1.0f) e = 1.0f;
             }
             m->ecm[i] = e;
-            m->myo[i] = m->mask[i] ? fib[i] * open : 0.0f;
+            m->myo[i] = m->mask[i] ? nmean * open : 0.0f;
         }
     }
     ss_mech_g2p(m->T, m->myo, m->mask, S->x, nn, m->nmyo);
-    ss_mech_g2p(m->T, m->theta, m->mask, S->x, nn, m->nth);
+    ss_mech_g2p_sub(m->T, m->thsub, m->usub_valid, S->x, nn, m->nth);
     ss_mech_g2p(m->T, m->ecm, m->mask, S->x, nn, m->necm);
     for (int i = 0; i < nn; i++) {
         if (m->nmyo[i] < 0) m->nmyo[i] = 0;
@@ -519,12 +557,24 @@ ss_status ss_mech_state_set(ss_mech *m, const void *buf, size_t size, ss_error *
     return SS_OK;
 }
 
-/* Grid arrays from the restored particles (the same function a step ends
- * with, so a resumed run continues bit for bit). */
+/* The strain from the restored particles (the same function a step ends
+ * with, so a resumed run continues bit for bit); the grid velocity is the
+ * checkpoint's own (a caller may have capped it) unless the grid has none. */
 ss_status ss_mech_state_apply(ss_mech *m, ss_heal_grid *g, ss_error *err) {
     if (!m || !g || g->nx != m->nx || g->ny != m->ny || g->nz != m->nz)
         return ss_error_set(err, SS_ERR_INPUT, "mechanics state: grid does not match");
-    to_grid(m, g);
+    const size_t n = (size_t)g->nx * g->ny * g->nz;
+    int have = 1;
+    for (int d = 0; d < 3; d++)
+        if (!g->velocity[d]) {
+            have = 0;
+            if (!(g->velocity[d] = calloc(n, sizeof(float))))
+                return ss_error_set(err, SS_ERR_NOMEM, "mechanics state: out of memory");
+        }
+    if (have)
+        displacement_to_grid(m);
+    else
+        to_grid(m, g);
     return SS_OK;
 }
 
@@ -539,6 +589,7 @@ ss_mech_suture *ss_mech_sutures_read(const char *path, int *count, ss_error *err
     while (p) {
         int too_long = 0;
         p = ss_text_next_line(p, buf, sizeof buf, &too_long);
+        if (!p) break;
         line++;
         char *h = strchr(buf, '#');
         if (h) *h = 0;

@@ -14,12 +14,13 @@ struct ss_mech {
     ss_springs *S;       /* springs; S->x are the current positions */
     ss_mech_transfer *T; /* grid <-> particle */
     double kernel_width;
-    uint8_t *mask;                      /* tissue cells */
-    uint8_t *wound0;                    /* initial wound cells */
-    float *ecm;                         /* rho_ecm / rho_ecm_hat per cell (scratch) */
-    float *myo;    /* myofibroblast density per cell (scratch) */
-    float *theta;                       /* grid volumetric strain */
-    float *u[3];                        /* grid displacement, mm */
+    uint8_t *mask;           /* tissue cells */
+    uint8_t *wound0;         /* initial wound cells */
+    float *ecm;              /* rho_ecm / rho_ecm_hat per cell (scratch) */
+    float *myo;              /* myofibroblast density per cell (scratch) */
+    double *usub[3], *thsub; /* sub-lattice displacement and volumetric strain */
+    uint8_t *usub_valid;
+    float *u[3];                        /* grid displacement, mm (filled on demand) */
     double *kbase;                      /* undamaged spring stiffness */
     double *nmyo, *nth, *necm, *stress; /* per node */
     double *vel;                        /* 3n, mm/day */
@@ -35,5 +36,19 @@ struct ss_mech {
     double last_vmax;
     long frames;
 };
+
+/* Sub-lattice level of the transfer (bspline.c): P2G without the upsampling,
+ * copies of the sub-lattice values, upsampling of stored values, divergence
+ * and G2P on the sub-lattice. */
+void ss_mech_p2g_sub(ss_mech_transfer *t, const double *pts, int np, const double *val,
+                     const double *grad, int ncomp);
+size_t ss_mech_sub_count(const ss_mech_transfer *t);
+void ss_mech_sub_get(const ss_mech_transfer *t, int ncomp, double **vals, uint8_t *valid);
+void ss_mech_sub_upsample(const ss_mech_transfer *t, double *const *vals, const uint8_t *valid,
+                          int ncomp, const uint8_t *mask, float **out);
+void ss_mech_sub_divergence(const ss_mech_transfer *t, double *const *u, const uint8_t *uv,
+                            double *div);
+void ss_mech_g2p_sub(const ss_mech_transfer *t, const double *sub, const uint8_t *valid,
+                     const double *pts, int np, double *out);
 
 #endif

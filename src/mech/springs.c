@@ -233,13 +233,26 @@ static inline double node_force(const ss_springs *s, const double *x, int i, dou
     return u;
 }
 
-/* Forces at x into f (3n) and the potential energy, summed in node order. */
-static double forces_at(const ss_springs *s, const double *x, double *f, double *unode) {
+/* Sums in fixed blocks of nodes, then the blocks in order: the same bits on
+ * any thread count, with the work spread over the threads. */
+#define BLOCK 1024
+static double block_sum(const double *partial, int nb) {
+    double t = 0;
+    for (int b = 0; b < nb; b++) t += partial[b];
+    return t;
+}
+
+/* Forces at x into f (3n) and the potential energy. */
+static double forces_at(const ss_springs *s, const double *x, double *f, double *partial) {
+    const int n = s->nnodes, nb = (n + BLOCK - 1) / BLOCK;
 #pragma omp parallel for schedule(static)
-    for (int i = 0; i < s->nnodes; i++) unode[i] = node_force(s, x, i, f + 3 * (size_t)i);
-    double u = 0;
-    for (int i = 0; i < s->nnodes; i++) u += unode[i];
-    return u;
+    for (int b = 0; b < nb; b++) {
+        double u = 0;
+        int hi = (b + 1) * BLOCK < n ? (b + 1) * BLOCK : n;
+        for (int i = b * BLOCK; i < hi; i++) u += node_force(s, x, i, f + 3 * (size_t)i);
+        partial[b] = u;
+    }
+    return block_sum(partial, nb);
 }
 
 double ss_springs_forces(const ss_springs *s, double *f) {
@@ -275,81 +288,98 @@ double ss_springs_kinetic(const ss_springs *s) {
     return k;
 }
 
-static double mean_rest(const ss_springs *s) {
-    double m = 0;
-    for (int i = 0; i < s->nsprings; i++) m += s->l0[i];
-    return s->nsprings ? m / s->nsprings : 1.0;
+static double mean_rest(ss_springs *s) {
+    if (s->mean_l0 <= 0) {
+        double m = 0;
+        for (int i = 0; i < s->nsprings; i++) m += s->l0[i];
+        s->mean_l0 = s->nsprings ? m / s->nsprings : 1.0;
+    }
+    return s->mean_l0;
 }
 
-/* Largest move a pure gradient step would make: max_i |f_i| / m_i. */
+/* Largest move a pure gradient step would make: max_i |f_i| / m_i (a max:
+ * the same on any thread count). */
 static double residual(const ss_springs *s, const double *f) {
     double r = 0;
+#pragma omp parallel for schedule(static) reduction(max : r)
     for (int i = 0; i < s->nnodes; i++) {
         if (s->fixed[i]) continue;
         double f2 = f[3 * i] * f[3 * i] + f[3 * i + 1] * f[3 * i + 1] + f[3 * i + 2] * f[3 * i + 2];
-        r = fmax(r, sqrt(f2) / s->mass[i]);
+        double q = sqrt(f2) / s->mass[i];
+        if (q > r) r = q;
     }
     return r;
 }
 
-static double kinetic(const ss_springs *s, const double *v) {
-    double k = 0;
-    for (int i = 0; i < s->nnodes; i++)
-        k += 0.5 * s->mass[i] *
-             (v[3 * i] * v[3 * i] + v[3 * i + 1] * v[3 * i + 1] + v[3 * i + 2] * v[3 * i + 2]);
-    return k;
+static double kinetic(const ss_springs *s, const double *v, double *partial) {
+    const int n = s->nnodes, nb = (n + BLOCK - 1) / BLOCK;
+#pragma omp parallel for schedule(static)
+    for (int b = 0; b < nb; b++) {
+        double k = 0;
+        int hi = (b + 1) * BLOCK < n ? (b + 1) * BLOCK : n;
+        for (int i = b * BLOCK; i < hi; i++)
+            k += 0.5 * s->mass[i] *
+                 (v[3 * i] * v[3 * i] + v[3 * i + 1] * v[3 * i + 1] + v[3 * i + 2] * v[3 * i + 2]);
+        partial[b] = k;
+    }
+    return block_sum(partial, nb);
 }
 
 double ss_springs_substep(ss_springs *s) {
-    const int n = s->nnodes;
-    const size_t n3 = 3 * (size_t)n;
-    double *un = s->unode;
+    const int n = s->nnodes, nb = (n + BLOCK - 1) / BLOCK;
+    double *part = s->unode; /* nb <= n partial sums */
     if (!s->fvalid) {
-        s->U = forces_at(s, s->x, s->f, un);
+        s->U = forces_at(s, s->x, s->f, part);
         s->fvalid = 1;
     }
-    const double E0 = s->U + kinetic(s, s->v);
+    const double E0 = s->U + kinetic(s, s->v, part);
     const double gam = s->damping;
     /* proposal: damped semi-implicit Euler, momentum dropped when going uphill */
-    double power = 0;
-    for (int i = 0; i < n; i++) {
-        double *v = s->v + 3 * (size_t)i;
-        if (s->fixed[i]) {
-            v[0] = v[1] = v[2] = 0;
-            continue;
+#pragma omp parallel for schedule(static)
+    for (int b = 0; b < nb; b++) {
+        double pw = 0;
+        int hi = (b + 1) * BLOCK < n ? (b + 1) * BLOCK : n;
+        for (int i = b * BLOCK; i < hi; i++) {
+            double *v = s->v + 3 * (size_t)i;
+            if (s->fixed[i]) {
+                v[0] = v[1] = v[2] = 0;
+                continue;
+            }
+            double im = 1.0 / s->mass[i];
+            for (int d = 0; d < 3; d++) {
+                v[d] = gam * v[d] + s->f[3 * (size_t)i + d] * im;
+                pw += s->f[3 * (size_t)i + d] * v[d];
+            }
         }
-        double im = 1.0 / s->mass[i];
+        part[b] = pw;
+    }
+    const int uphill = block_sum(part, nb) < 0;
+#pragma omp parallel for schedule(static)
+    for (int i = 0; i < n; i++) {
         for (int d = 0; d < 3; d++) {
-            v[d] = gam * v[d] + s->f[3 * (size_t)i + d] * im;
-            power += s->f[3 * (size_t)i + d] * v[d];
+            size_t k = 3 * (size_t)i + d;
+            if (uphill && !s->fixed[i]) s->v[k] = s->f[k] / s->mass[i];
+            s->x2[k] = s->x[k] + s->v[k];
         }
     }
-    if (power < 0)
-        for (int i = 0; i < n; i++) {
-            if (s->fixed[i]) continue;
-            for (int d = 0; d < 3; d++)
-                s->v[3 * (size_t)i + d] = s->f[3 * (size_t)i + d] / s->mass[i];
-        }
-    for (size_t i = 0; i < n3; i++) s->x2[i] = s->x[i] + s->v[i];
-    double U1 = forces_at(s, s->x2, s->f2, un);
-    double moved = 0;
-    if (U1 + kinetic(s, s->v) > E0) {
+    double U1 = forces_at(s, s->x2, s->f2, part);
+    if (U1 + kinetic(s, s->v, part) > E0) {
         /* reject: drop the momentum, gradient steps halved until downhill */
-        memset(s->v, 0, n3 * sizeof(double));
+        memset(s->v, 0, 3 * (size_t)n * sizeof(double));
         double a = 1.0;
         for (int tries = 0; tries < 30; tries++, a *= 0.5) {
+#pragma omp parallel for schedule(static)
             for (int i = 0; i < n; i++)
                 for (int d = 0; d < 3; d++) {
                     size_t k = 3 * (size_t)i + d;
                     s->x2[k] = s->x[k] + (s->fixed[i] ? 0 : a * s->f[k] / s->mass[i]);
                 }
-            U1 = forces_at(s, s->x2, s->f2, un);
+            U1 = forces_at(s, s->x2, s->f2, part);
             if (U1 <= s->U) break;
         }
         if (U1 > s->U) /* no descent at all (rounding level): stay */
             return residual(s, s->f) / mean_rest(s);
     }
-    (void)moved;
     double *t = s->x;
     s->x = s->x2;
     s->x2 = t;

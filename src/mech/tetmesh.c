@@ -5,9 +5,10 @@
  * alternative for a voxel domain: a lattice of cubes (edge about the requested
  * size, fitted so the domain's bounding box is spanned exactly), each cube
  * kept when the voxel at its centre is tissue and cut into the six Kuhn tets
- * around its main diagonal. The Kuhn split uses the same diagonal direction in
- * every cube, so faces match across cubes (a conforming mesh) without any
- * search, every tet has the same volume edge^3 / 6 (the max-volume constraint
+ * around a main diagonal, mirrored cube by cube (odd cube coordinates flip
+ * the axis) so the lattice is as symmetric as the box. Neighbouring cubes
+ * agree on their shared face's diagonal, so faces match (a conforming mesh)
+ * without any search, every tet has the same volume edge^3 / 6 (the max-volume constraint
  * holds with equality) and no tet is ever sliver-shaped. What it gives up: the
  * boundary is a staircase at the lattice resolution, coarser than the grid's;
  * users who need a smooth boundary bring a TetGen or Gmsh mesh (read here) or
@@ -182,7 +183,12 @@ ss_tetmesh *ss_tetmesh_lattice(const uint8_t *inside, int nx, int ny, int nz, do
                 m->x[3 * id + 1] = org[1] + b * h[1];
                 m->x[3 * id + 2] = org[2] + c * h[2];
             }
-    /* Kuhn split: one tet per axis permutation, walking 000 -> 111. */
+    /* Kuhn split: one tet per axis permutation, walking 000 -> 111 in the
+     * cube's local frame; the frame is mirrored along every axis whose cube
+     * coordinate is odd, so the diagonals alternate and the lattice has the
+     * mirror symmetries of the box (a plain Kuhn lattice is chiral: contracted
+     * along x it shears). Neighbours share a face's mirror state, so faces
+     * still match. */
     static const int perm[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2},
                                    {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
     size_t t = 0;
@@ -190,13 +196,16 @@ ss_tetmesh *ss_tetmesh_lattice(const uint8_t *inside, int nx, int ny, int nz, do
         for (int b = 0; b < n[1]; b++)
             for (int a = 0; a < n[0]; a++) {
                 if (!keep[((size_t)c * n[1] + b) * n[0] + a]) continue;
+                const int base[3] = {a, b, c}, flip[3] = {a & 1, b & 1, c & 1};
                 for (int p = 0; p < 6; p++) {
-                    int cur[3] = {a, b, c};
+                    int loc[3] = {0, 0, 0};
                     int32_t *q = m->tet + 4 * t++;
-                    q[0] = map[NODE(cur[0], cur[1], cur[2])];
-                    for (int s = 0; s < 3; s++) {
-                        cur[perm[p][s]]++;
-                        q[s + 1] = map[NODE(cur[0], cur[1], cur[2])];
+                    for (int s = 0; s < 4; s++) {
+                        if (s > 0) loc[perm[p][s - 1]] = 1;
+                        int g[3];
+                        for (int d = 0; d < 3; d++)
+                            g[d] = base[d] + (flip[d] ? 1 - loc[d] : loc[d]);
+                        q[s] = map[NODE(g[0], g[1], g[2])];
                     }
                 }
             }
@@ -230,6 +239,7 @@ static const char *next_line(lines *L) {
     while (L->p) {
         int too_long = 0;
         L->p = ss_text_next_line(L->p, L->buf, sizeof L->buf, &too_long);
+        if (!L->p) break;
         L->line++;
         char *h = strchr(L->buf, '#');
         if (h) *h = 0;

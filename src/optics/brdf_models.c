@@ -1,15 +1,22 @@
 /* Render BRDF models for ModelMatch (seed 003 §6.1): Ashikhmin-Shirley (2000,
  * isotropic, the model behind the seed's iRay material) and the glTF 2.0
  * metallic-roughness model with metallic = 0 (GGX with height-correlated
- * Smith visibility and Schlick Fresnel, plus Lambert weighted by the
- * reciprocal Fresnel transmission (1-F(cos_i))(1-F(cos_r)) so that the
- * directional albedo stays <= 1; glTF's 1-F(h.k) weight exceeds 1 at grazing). Both are written as
+ * Smith visibility and Schlick Fresnel, plus Lambert coupled to the specular
+ * lobe as in Kelemen & Szirmay-Kalos 2001: base/pi (1 - E(cos_i))
+ * (1 - E(cos_r)) / (1 - E_avg), E the directional albedo of the specular
+ * lobe and E_avg its cosine-weighted hemispherical mean, so that the
+ * directional albedo is E + base (1 - E) <= 1 and the diffuse part is nearly
+ * Lambertian where the lobe is weak; glTF's 1-F(h.k) weight exceeds 1 at
+ * grazing). E is tabulated once per process (pthread_once) over cos and
+ * roughness by stratified visible-normal quadrature and interpolated
+ * bilinearly; it is linear in F0 (Schlick), E = F0 A + B. Both are written as
  * f_c = base_c * diffuse + specular so the fitter can solve the colour in closed form; the
  * direction-only parts are precomputed in ss_render_geom. Also: bin-averaged sampling in the
  * ss_brdf_sampled layout and directional albedo by quadrature. */
 #include "skinsim/optics_fit.h"
 
 #include <math.h>
+#include <pthread.h>
 #include <stdlib.h>
 
 #ifndef M_PI
@@ -49,6 +56,104 @@ void ss_render_geom_init(double theta_i, double theta_r, double dphi, ss_render_
     g->as_diffuse = 28.0 / (23.0 * M_PI) * (1.0 - a * a * a * a * a) * (1.0 - b * b * b * b * b);
 }
 
+/* ---- specular-lobe albedo table (GGX, height-correlated Smith) ------------- */
+#define ES_NMU 48
+#define ES_NR 40
+#define ES_NS 32
+static double es_A[ES_NR][ES_NMU], es_B[ES_NR][ES_NMU], es_Aavg[ES_NR], es_Bavg[ES_NR];
+static pthread_once_t es_once = PTHREAD_ONCE_INIT;
+
+static double es_lambda(double a2, double c) {
+    double t2 = (1.0 - c * c) / (c * c);
+    return 0.5 * (-1.0 + sqrt(1.0 + a2 * t2));
+}
+
+static double es_rough(int k) {
+    return SS_RENDER_ROUGHNESS_MIN + (1.0 - SS_RENDER_ROUGHNESS_MIN) * k / (ES_NR - 1);
+}
+static double es_mu(int j) { return 0.005 + 0.995 * j / (ES_NMU - 1); }
+
+/* E(mu) = E_h~VNDF[F(i.h) G2/G1(i)] with the reflected direction above the
+ * horizon; stratified midpoints of the spherical-cap sampler (Dupuy & Benyoub
+ * 2023), split into the F0 and (1-h.k)^5 parts of Schlick's F. */
+static void es_init(void) {
+    for (int k = 0; k < ES_NR; k++) {
+        double al = es_rough(k) * es_rough(k), a2 = al * al;
+        for (int j = 0; j < ES_NMU; j++) {
+            double mu = es_mu(j), si = sqrt(1.0 - mu * mu);
+            double wi[3] = {si, 0.0, mu};
+            double vx = al * wi[0], vz = wi[2], vn = sqrt(vx * vx + vz * vz);
+            vx /= vn;
+            vz /= vn;
+            double li = es_lambda(a2, mu), g1 = 1.0 / (1.0 + li), A = 0, B = 0;
+            for (int p = 0; p < ES_NS; p++)
+                for (int q = 0; q < ES_NS; q++) {
+                    double u1 = (p + 0.5) / ES_NS, u2 = (q + 0.5) / ES_NS;
+                    double phi = 2.0 * M_PI * u1, z = (1.0 - u2) * (1.0 + vz) - vz;
+                    double st = sqrt(fmax(0.0, 1.0 - z * z));
+                    double hx = al * (st * cos(phi) + vx), hy = al * st * sin(phi), hz = z + vz;
+                    double hn = sqrt(hx * hx + hy * hy + hz * hz);
+                    hx /= hn;
+                    hy /= hn;
+                    hz /= hn;
+                    double ih = wi[0] * hx + wi[2] * hz;
+                    double oz = 2.0 * ih * hz - wi[2];
+                    if (oz <= 1e-9) continue;
+                    double g2 = 1.0 / (1.0 + li + es_lambda(a2, fmin(1.0, oz)));
+                    double m = 1.0 - fmin(1.0, fmax(0.0, ih)), s5 = m * m * m * m * m;
+                    double w = g2 / g1;
+                    A += (1.0 - s5) * w;
+                    B += s5 * w;
+                }
+            es_A[k][j] = A / (ES_NS * ES_NS);
+            es_B[k][j] = B / (ES_NS * ES_NS);
+        }
+        /* cosine-weighted mean 2 int E mu dmu (trapezoid; E at mu < 0.005 taken as at 0.005) */
+        double sa = 0, sb = 0;
+        for (int j = 0; j + 1 < ES_NMU; j++) {
+            double m0 = es_mu(j), m1 = es_mu(j + 1), h = m1 - m0;
+            sa += 0.5 * h * (es_A[k][j] * m0 + es_A[k][j + 1] * m1);
+            sb += 0.5 * h * (es_B[k][j] * m0 + es_B[k][j + 1] * m1);
+        }
+        double m0 = es_mu(0);
+        sa += es_A[k][0] * 0.5 * m0 * m0;
+        sb += es_B[k][0] * 0.5 * m0 * m0;
+        es_Aavg[k] = 2.0 * sa;
+        es_Bavg[k] = 2.0 * sb;
+    }
+}
+
+static void es_coords(double rough, int *k, double *fk) {
+    double x = (rough - SS_RENDER_ROUGHNESS_MIN) / (1.0 - SS_RENDER_ROUGHNESS_MIN) * (ES_NR - 1);
+    if (x < 0) x = 0;
+    if (x > ES_NR - 1) x = ES_NR - 1;
+    *k = (int)x;
+    if (*k > ES_NR - 2) *k = ES_NR - 2;
+    *fk = x - *k;
+}
+
+static double es_eval(double f0, int k, double fk, double mu) {
+    double x = (mu - 0.005) / 0.995 * (ES_NMU - 1);
+    if (x < 0) x = 0;
+    if (x > ES_NMU - 1) x = ES_NMU - 1;
+    int j = (int)x;
+    if (j > ES_NMU - 2) j = ES_NMU - 2;
+    double fj = x - j;
+    double a = (1 - fk) * ((1 - fj) * es_A[k][j] + fj * es_A[k][j + 1]) +
+               fk * ((1 - fj) * es_A[k + 1][j] + fj * es_A[k + 1][j + 1]);
+    double b = (1 - fk) * ((1 - fj) * es_B[k][j] + fj * es_B[k][j + 1]) +
+               fk * ((1 - fj) * es_B[k + 1][j] + fj * es_B[k + 1][j + 1]);
+    return f0 * a + b;
+}
+
+double ss_render_ggx_spec_albedo(double specular, double roughness, double cos_theta) {
+    pthread_once(&es_once, es_init);
+    int k;
+    double fk;
+    es_coords(roughness, &k, &fk);
+    return es_eval(SS_RENDER_F0_PER_SPECULAR * specular, k, fk, cos_theta);
+}
+
 void ss_render_terms_geom(ss_render_model m, double specular, double roughness,
                           const ss_render_geom *g, double *diffuse, double *spec) {
     if (!g->valid) {
@@ -65,8 +170,14 @@ void ss_render_terms_geom(ss_render_model m, double specular, double roughness,
         double ci = g->cos_i, cr = g->cos_r;
         double v =
             0.5 / (ci * sqrt(cr * cr * (1.0 - a2) + a2) + cr * sqrt(ci * ci * (1.0 - a2) + a2));
-        double ti = (1.0 - f0) * (1.0 - g->schlick5_i), tr = (1.0 - f0) * (1.0 - g->schlick5_r);
-        *diffuse = ti * tr / M_PI;
+        pthread_once(&es_once, es_init);
+        int k;
+        double fk;
+        es_coords(roughness, &k, &fk);
+        double ei = es_eval(f0, k, fk, ci), er = es_eval(f0, k, fk, cr);
+        double eavg = f0 * ((1 - fk) * es_Aavg[k] + fk * es_Aavg[k + 1]) +
+                      ((1 - fk) * es_Bavg[k] + fk * es_Bavg[k + 1]);
+        *diffuse = (1.0 - ei) * (1.0 - er) / (M_PI * (1.0 - eavg));
         *spec = fres * d * v;
     } else {
         /* Ashikhmin-Shirley with n_u = n_v = n; n from the Beckmann-equivalent

@@ -94,6 +94,7 @@ typedef struct mc_ctx {
     double alpha; /* Trowbridge-Reitz (GGX) roughness sigma; 0 = smooth */
     int rough, stochastic, paths;
     ss_mc_tally_spec spec;
+    double inv_dr, inv_dz; /* 1 / spec.rad_dr, 1 / spec.dz (0 if unused) */
 } mc_ctx;
 
 /* Unpolarised Fresnel reflectance from n1 into n2 at incidence cosine ci (>0);
@@ -282,6 +283,7 @@ typedef struct mc_acc {
     double specular, diffuse, diffuse2, transmit, transmit2, absorbed, roulette;
     double abs_layer[SS_OPTICS_MAX_LAYERS];
     double *brdf, *rd_r, *a_z, *rd_a, *tt_r, *tt_a;
+    double *a_rz, *rd_ra, *tt_ra; /* MCML 2-D arrays [ir][iz], [ir][ia] */
 } mc_acc;
 
 /* One path record of the absorption-free tracer. */
@@ -331,15 +333,26 @@ static inline int brdf_bin(const mc_ctx *c, double ux, double uy, double cos_out
 
 static inline int radial_bin(const mc_ctx *c, double x, double y, int n, int overflow_last) {
     if (n <= 0) return -1;
-    int ir = (int)(sqrt(x * x + y * y) / c->spec.rad_dr);
-    if (ir >= n) return overflow_last ? n - 1 : -1;
-    return ir;
+    double q = sqrt(x * x + y * y) * c->inv_dr;
+    if (!(q < (double)n)) return overflow_last ? n - 1 : -1;
+    return (int)q;
 }
 
 static inline int angle_bin(int na, double cos_out) {
     double th = acos(fmin(1.0, fmax(0.0, cos_out)));
     int ia = (int)(th * (2.0 * na / M_PI));
     return ia >= na ? na - 1 : ia;
+}
+
+/* MCML absorption tallies A(z) and A(r, z), overflow in the last bins. */
+static inline void mcml_absorb(const mc_ctx *c, mc_acc *a, double x, double y, double z,
+                               double dw) {
+    double q = z * c->inv_dz;
+    int iz = q < (double)c->spec.nz ? (int)q : c->spec.nz - 1;
+    if (iz < 0) iz = 0;
+    int ir = radial_bin(c, x, y, c->spec.rad_n, 1);
+    a->a_z[iz] += dw;
+    a->a_rz[(size_t)ir * c->spec.nz + iz] += dw;
 }
 
 /* Traces one photon. */
@@ -495,8 +508,10 @@ static void run_photon(const mc_ctx *c, uint64_t idx, mc_acc *a, path_buf *pb) {
                 }
                 if (mcml) {
                     int ir = radial_bin(c, x, y, c->spec.rad_n, 1);
-                    if (ir >= 0) a->tt_r[ir] += w;
-                    if (c->spec.na > 0) a->tt_a[angle_bin(c->spec.na, ct)] += w;
+                    int ia = angle_bin(c->spec.na, ct);
+                    a->tt_r[ir] += w;
+                    a->tt_a[ia] += w;
+                    a->tt_ra[(size_t)ir * c->spec.na + ia] += w;
                 }
                 (void)tx;
                 (void)ty;
@@ -565,7 +580,12 @@ static void run_photon(const mc_ctx *c, uint64_t idx, mc_acc *a, path_buf *pb) {
                         int ir = radial_bin(c, x, y, c->spec.rad_n, mcml);
                         if (ir >= 0) a->rd_r[ir] += w;
                     }
-                    if (mcml && c->spec.na > 0) a->rd_a[angle_bin(c->spec.na, -o[2])] += w;
+                    if (mcml) {
+                        int ir = radial_bin(c, x, y, c->spec.rad_n, 1);
+                        int ia = angle_bin(c->spec.na, -o[2]);
+                        a->rd_a[ia] += w;
+                        a->rd_ra[(size_t)ir * c->spec.na + ia] += w;
+                    }
                 }
                 goto done;
             }
@@ -578,10 +598,7 @@ static void run_photon(const mc_ctx *c, uint64_t idx, mc_acc *a, path_buf *pb) {
                 if (prng_u(&r) < L->absfrac) {
                     a->abs_layer[layer] += w;
                     a->absorbed += w;
-                    if (mcml && c->spec.nz > 0) {
-                        int iz = (int)(z / c->spec.dz);
-                        a->a_z[iz >= c->spec.nz ? c->spec.nz - 1 : iz] += w;
-                    }
+                    if (mcml) mcml_absorb(c, a, x, y, z, w);
                     goto done;
                 }
             } else {
@@ -589,10 +606,7 @@ static void run_photon(const mc_ctx *c, uint64_t idx, mc_acc *a, path_buf *pb) {
                 w -= dw;
                 a->abs_layer[layer] += dw;
                 a->absorbed += dw;
-                if (mcml && c->spec.nz > 0) {
-                    int iz = (int)(z / c->spec.dz);
-                    a->a_z[iz >= c->spec.nz ? c->spec.nz - 1 : iz] += dw;
-                }
+                if (mcml) mcml_absorb(c, a, x, y, z, dw);
             }
         }
 
@@ -708,13 +722,17 @@ static ss_status ctx_init(mc_ctx *c, const ss_optics_slab *s, const ss_mc_option
     c->stochastic = o->stochastic_absorb != 0;
     c->paths = paths;
     c->spec = *spec;
+    c->inv_dr = spec->rad_dr > 0.0 ? 1.0 / spec->rad_dr : 0.0;
+    c->inv_dz = spec->dz > 0.0 ? 1.0 / spec->dz : 0.0;
     if (paths) c->stochastic = 0;
     return SS_OK;
 }
 
 static size_t acc_arrays_size(const ss_mc_tally_spec *sp) {
     size_t n = (size_t)sp->brdf_nt * (size_t)sp->brdf_np + (size_t)sp->rad_n;
-    if (sp->mcml) n += (size_t)sp->nz + 2u * (size_t)sp->na + (size_t)sp->rad_n;
+    if (sp->mcml)
+        n += (size_t)sp->nz + 2u * (size_t)sp->na + (size_t)sp->rad_n +
+             (size_t)sp->rad_n * ((size_t)sp->nz + 2u * (size_t)sp->na);
     return n;
 }
 
@@ -738,13 +756,25 @@ static void acc_bind(mc_acc *a, const ss_mc_tally_spec *sp, double *mem) {
         p += sp->na;
         a->tt_r = p;
         p += sp->rad_n;
+        a->a_rz = p;
+        p += (size_t)sp->rad_n * (size_t)sp->nz;
+        a->rd_ra = p;
+        p += (size_t)sp->rad_n * (size_t)sp->na;
+        a->tt_ra = p;
+        p += (size_t)sp->rad_n * (size_t)sp->na;
     }
 }
 
-static uint64_t nblocks_for(uint64_t photons) {
+/* Number of photon blocks: a function of the photon count and the tally size
+ * only (never of the thread count); large tallies (MCML 2-D grids) get fewer
+ * blocks so that the per-block copies stay below about 256 MB. */
+static uint64_t nblocks_for(uint64_t photons, size_t tally_doubles) {
     uint64_t nb = photons / 2048;
     if (nb < 1) nb = 1;
     if (nb > 256) nb = 256;
+    uint64_t cap = tally_doubles ? (uint64_t)((32u << 20) / tally_doubles) : 256;
+    if (cap < 2) cap = 2;
+    if (nb > cap) nb = cap;
     return nb;
 }
 
@@ -757,7 +787,7 @@ typedef struct run_out {
 static ss_status run_blocks(const mc_ctx *c, uint64_t photons, run_out *out, ss_error *err) {
     const ss_mc_tally_spec *sp = &c->spec;
     size_t asz = acc_arrays_size(sp);
-    uint64_t nb = nblocks_for(photons);
+    uint64_t nb = nblocks_for(photons, asz);
     mc_acc *acc = calloc(nb, sizeof *acc);
     double *mem = asz ? calloc(nb * asz, sizeof *mem) : NULL;
     path_buf *pbs = c->paths ? calloc(nb, sizeof *pbs) : NULL;
@@ -851,6 +881,9 @@ ss_status ss_mc_run_tallies(const ss_optics_slab *slab, const ss_mc_options *opt
     t->rd_a = o.total.rd_a;
     t->tt_r = o.total.tt_r;
     t->tt_a = o.total.tt_a;
+    t->a_rz = o.total.a_rz;
+    t->rd_ra = o.total.rd_ra;
+    t->tt_ra = o.total.tt_ra;
     return SS_OK;
 }
 

@@ -5,7 +5,9 @@
  * produces MCML's ASCII layout and normalisations: RAT, A_l [-], A_z [1/cm],
  * Rd_r and Tt_r [1/cm^2] (annulus 2 pi (ir+0.5) dr^2), Rd_a and Tt_a [1/sr]
  * (2 pi sin((ia+0.5) da) da), values beyond the grid collected in the last
- * bin. The two-dimensional arrays A_rz, Rd_ra, Tt_ra are not written. */
+ * bin, and the two-dimensional arrays A_rz [1/cm^3] (volume 2 pi (ir+0.5)
+ * dr^2 dz), Rd_ra and Tt_ra [1/(cm^2 sr)] (4 pi^2 dr^2 sin(da/2) (ir+0.5)
+ * sin(2 (ia+0.5) da)) in MCML's order (r slowest), five values per line. */
 #define _POSIX_C_SOURCE 200809L
 #include <ctype.h>
 #include <errno.h>
@@ -205,6 +207,20 @@ static void sb_printf(sbuf *b, const char *fmt, ...) {
     }
 }
 
+/* A 2-D MCML array: MCML's header lines, values row-major (first index
+ * slowest) times scale[i][j] = 1 / (s1[i] s2[j]), "%12.4E " with a newline
+ * after every fifth value, then a newline (MCML 1.2's WriteA_rz / WriteRd_ra). */
+static void sb_array2(sbuf *b, const char *header, const double *raw, int n1, int n2,
+                      const double *s1, const double *s2) {
+    sb_printf(b, "%s", header);
+    for (int i = 0; i < n1; i++)
+        for (int j = 0; j < n2; j++) {
+            sb_printf(b, "%12.4E ", raw[(size_t)i * n2 + j] / (s1[i] * s2[j]));
+            if (((size_t)i * n2 + j + 1) % 5 == 0) sb_printf(b, "\n");
+        }
+    sb_printf(b, "\n");
+}
+
 static void sb_array(sbuf *b, const char *head, const double *v, int n) {
     sb_printf(b, "%s\n", head);
     for (int i = 0; i < n; i++) sb_printf(b, "%12.4E\n", v[i]);
@@ -242,7 +258,7 @@ ss_status ss_mci_simulate(const ss_mci_run *run, uint64_t seed, char **mco_text,
     sb_printf(&b, "A1 \t# Version number of the file format.\n\n"
                   "####\n# Data categories include: \n# InParm, RAT, \n"
                   "# A_l, A_z, Rd_r, Rd_a, Tt_r, Tt_a, \n"
-                  "# (A_rz, Rd_ra, Tt_ra are not written by skinsim)\n####\n\n");
+                  "# A_rz, Rd_ra, Tt_ra \n####\n\n");
     sb_printf(&b, "# User time: %10.2f sec = %8.2f hr.  Simulation time of this run.\n\n", secs,
               secs / 3600.0);
     sb_printf(&b, "InParm \t\t\t# Input parameters. cm is used.\n");
@@ -277,6 +293,37 @@ ss_status ss_mci_simulate(const ss_mci_run *run, uint64_t seed, char **mco_text,
     for (int i = 0; i < run->na; i++)
         tmp[i] = t.tt_a[i] / (2.0 * M_PI * sin((i + 0.5) * da) * da * N);
     sb_array(&b, "Tt_a #Tt[0], [1],..Tt[na-1]. [sr-1]", tmp, run->na);
+    /* 2-D arrays with MCML's scalings: A_rz / (2 pi (ir+0.5) dr^2 dz N),
+     * Rd_ra, Tt_ra / (4 pi^2 dr^2 sin(da/2) N (ir+0.5) sin(2 (ia+0.5) da)) */
+    double *sr = malloc(sizeof(double) * (size_t)run->nr * 2);
+    double *sz = malloc(sizeof(double) * (size_t)(run->nz + run->na));
+    if (sr && sz) {
+        double *sr2 = sr + run->nr, *sa = sz + run->nz;
+        for (int i = 0; i < run->nr; i++) {
+            sr[i] = 2.0 * M_PI * (i + 0.5) * dr * dr * run->dz_cm * N;
+            sr2[i] = 4.0 * M_PI * M_PI * dr * dr * sin(da / 2.0) * N * (i + 0.5);
+        }
+        for (int i = 0; i < run->nz; i++) sz[i] = 1.0;
+        for (int i = 0; i < run->na; i++) sa[i] = sin(2.0 * (i + 0.5) * da);
+        sb_array2(&b,
+                  "# A[r][z]. [1/cm3]\n# A[0][0], [0][1],..[0][nz-1]\n"
+                  "# A[1][0], [1][1],..[1][nz-1]\n# ...\n"
+                  "# A[nr-1][0], [nr-1][1],..[nr-1][nz-1]\nA_rz\n",
+                  t.a_rz, run->nr, run->nz, sr, sz);
+        sb_array2(&b,
+                  "# Rd[r][angle]. [1/(cm2sr)].\n# Rd[0][0], [0][1],..[0][na-1]\n"
+                  "# Rd[1][0], [1][1],..[1][na-1]\n# ...\n"
+                  "# Rd[nr-1][0], [nr-1][1],..[nr-1][na-1]\nRd_ra\n",
+                  t.rd_ra, run->nr, run->na, sr2, sa);
+        sb_array2(&b,
+                  "# Tt[r][angle]. [1/(cm2sr)].\n# Tt[0][0], [0][1],..[0][na-1]\n"
+                  "# Tt[1][0], [1][1],..[1][na-1]\n# ...\n"
+                  "# Tt[nr-1][0], [nr-1][1],..[nr-1][na-1]\nTt_ra\n",
+                  t.tt_ra, run->nr, run->na, sr2, sa);
+    } else
+        b.fail = 1;
+    free(sr);
+    free(sz);
     free(tmp);
     ss_mc_tallies_free(&t);
     if (b.fail) {

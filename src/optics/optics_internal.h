@@ -24,6 +24,7 @@ typedef struct ss_mc_tallies {
     double *brdf;                     /* brdf_nt*brdf_np */
     double *rd_r;                     /* rad_n */
     double *a_z, *rd_a, *tt_r, *tt_a; /* mcml only */
+    double *a_rz, *rd_ra, *tt_ra;     /* mcml only: [ir * nz + iz], [ir * na + ia] */
     double *mem;
 } ss_mc_tallies;
 

@@ -320,3 +320,58 @@ ss_status ss_optics_radial_profile_rgb(const ss_bio_params *bio, const ss_spectr
     ss_optics_data_free(&d);
     return st;
 }
+
+ss_status ss_optics_albedo_grid(const ss_bio_params *bio, const ss_spectrum_options *o,
+                                const double *M, int nmel, const double *B, int nbl, double *rgb,
+                                ss_error *err) {
+    if (!bio || !o || !M || !B || !rgb || nmel < 1 || nbl < 1)
+        return ss_error_set(err, SS_ERR_INPUT, "albedo grid: missing input or empty lists");
+    int nwl;
+    ss_status st = check_spec_opts(o, &nwl, err);
+    if (st) return st;
+    size_t ncell = (size_t)nmel * (size_t)nbl;
+    double *wl = calloc((size_t)nwl, sizeof *wl);
+    double *refl = calloc((size_t)nwl * ncell, sizeof *refl);
+    ss_optics_data *data = NULL;
+    if (!wl || !refl) {
+        free(wl);
+        free(refl);
+        return ss_error_set(err, SS_ERR_NOMEM, "albedo grid: out of memory");
+    }
+    st = ss_optics_data_open(&data, err);
+    ss_mc_options mo = o->mc;
+    mo.brdf_n_theta = mo.brdf_n_phi = mo.radial_bins = 0;
+    mo.radial_max_cm = 0.0;
+    mo.theta_i_rad = 0.0;
+    for (int k = 0; k < nwl && !st; k++) {
+        wl[k] = o->wl_min_nm + k * o->wl_step_nm;
+        ss_optics_slab geom;
+        ss_mc_paths *paths = NULL;
+        st = ss_optics_skin_slab_with(data, bio, wl[k], &geom, err);
+        if (!st) st = ss_mc_trace_paths(&geom, &mo, &paths, err);
+        for (int bi = 0; bi < nbl && !st; bi++)
+            for (int mi = 0; mi < nmel && !st; mi++) {
+                ss_bio_params b = *bio;
+                b.melanin = M[mi];
+                b.blood = B[bi];
+                ss_optics_slab s;
+                st = ss_optics_skin_slab_with(data, &b, wl[k], &s, err);
+                if (st) break;
+                double mua[SS_OPTICS_MAX_LAYERS];
+                for (int l = 0; l < s.nlayers; l++) mua[l] = s.layer[l].mua_per_cm;
+                ss_mc_result r;
+                st = ss_mc_paths_apply(paths, mua, &r, err);
+                if (st) break;
+                refl[((size_t)bi * nmel + mi) * nwl + k] = r.diffuse;
+                ss_mc_result_free(&r);
+            }
+        ss_mc_paths_free(paths);
+        if (o->progress) o->progress(o->progress_user, (double)(k + 1) / nwl);
+    }
+    for (size_t q = 0; q < ncell && !st; q++)
+        st = ss_spectrum_to_srgb_data(data, wl, refl + q * nwl, nwl, rgb + 3 * q, err);
+    ss_optics_data_close(data);
+    free(wl);
+    free(refl);
+    return st;
+}

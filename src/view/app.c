@@ -38,7 +38,7 @@ static const char *CMD = "view";
 
 typedef struct opts {
     const char *mesh, *load, *strokes, *screenshot, *script, *save_strokes, *window_shot;
-    int width, height, texture_size, bench_frames, generate, egl, json, quiet;
+    int width, height, texture_size, bench_frames, generate, egl, json, quiet, hide_strokes;
     double day, brush_mm, displace;
     uint64_t seed;
 } opts;
@@ -58,7 +58,8 @@ static void help(void) {
            "  --time DAYS          time on the slider (default 0)\n"
            "  --brush-mm R         brush radius on the surface in mm (default 4)\n"
            "  --displace X         height displacement scale (default 1 = true size)\n"
-           "  --seed S             random seed (default 1)\n\n"
+           "  --seed S             random seed (default 1)\n"
+           "  --hide-strokes       do not draw the painted strokes (H toggles)\n\n"
            "Batch (no window needed; exits when done):\n"
            "  --screenshot FILE.png  render one frame to FILE\n"
            "  --size WxH           frame size (default 1280x720)\n"
@@ -87,16 +88,14 @@ static int parse_size(const char *s, int *w, int *h, ss_error *err) {
 }
 
 static int parse(int argc, char **argv, opts *o, ss_error *err) {
-    static const struct option lo[] = {{"mesh", 1, 0, 'm'},         {"load", 1, 0, 'l'},
-                                       {"strokes", 1, 0, 's'},      {"screenshot", 1, 0, 'o'},
-                                       {"script", 1, 0, 'x'},       {"save-strokes", 1, 0, 'w'},
-                                       {"size", 1, 0, 'z'},         {"texture-size", 1, 0, 'n'},
-                                       {"bench-frames", 1, 0, 'b'}, {"generate", 0, 0, 'g'},
-                                       {"egl", 0, 0, 'e'},          {"json", 0, 0, 'J'},
-                                       {"quiet", 0, 0, 'q'},        {"time", 1, 0, 't'},
-                                       {"brush-mm", 1, 0, 'r'},     {"displace", 1, 0, 'd'},
-                                       {"seed", 1, 0, 'S'},         {"help", 0, 0, 'h'},
-                                       {"window-shot", 1, 0, 'W'},  {0, 0, 0, 0}};
+    static const struct option lo[] = {
+        {"mesh", 1, 0, 'm'},        {"load", 1, 0, 'l'},         {"strokes", 1, 0, 's'},
+        {"screenshot", 1, 0, 'o'},  {"script", 1, 0, 'x'},       {"save-strokes", 1, 0, 'w'},
+        {"size", 1, 0, 'z'},        {"texture-size", 1, 0, 'n'}, {"bench-frames", 1, 0, 'b'},
+        {"generate", 0, 0, 'g'},    {"egl", 0, 0, 'e'},          {"json", 0, 0, 'J'},
+        {"quiet", 0, 0, 'q'},       {"time", 1, 0, 't'},         {"brush-mm", 1, 0, 'r'},
+        {"displace", 1, 0, 'd'},    {"seed", 1, 0, 'S'},         {"help", 0, 0, 'h'},
+        {"window-shot", 1, 0, 'W'}, {"hide-strokes", 0, 0, 'H'}, {0, 0, 0, 0}};
     memset(o, 0, sizeof *o);
     o->width = 1280, o->height = 720, o->texture_size = 2048;
     o->brush_mm = 4, o->displace = 1, o->seed = 1;
@@ -127,6 +126,9 @@ static int parse(int argc, char **argv, opts *o, ss_error *err) {
             break;
         case 'W':
             o->window_shot = optarg;
+            break;
+        case 'H':
+            o->hide_strokes = 1;
             break;
         case 'z':
             st = parse_size(optarg, &o->width, &o->height, err);
@@ -346,6 +348,8 @@ typedef struct app {
         *play_btn, *gen_btn;
     int updating_scale;
     int quit;
+    /* batch outputs: where to write (staging paths of ss_outputs) */
+    const char *shot_path, *csv_path;
 } app;
 
 static void app_message(app *a, int is_error, const char *fmt, ...)
@@ -668,7 +672,12 @@ static void app_sync_gl(app *a) {
     if (!a->rend) return;
     if (a->layers_dirty) {
         ss_error err = {0};
-        if (view_renderer_set_layers(a->rend, &a->layers, &err)) app_message(a, 1, "%s", err.msg);
+        double t0 = ss_now();
+        if (view_renderer_set_layers(a->rend, &a->layers, &err))
+            app_message(a, 1, "%s", err.msg);
+        else if (!a->o.quiet)
+            fprintf(stderr, "skinsim view: %d layers of %d^2 uploaded in %.0f ms\n",
+                    a->layers.nlayers, a->layers.size, (ss_now() - t0) * 1e3);
         a->layers_dirty = 0;
     }
     if (a->strokes_dirty) {
@@ -688,6 +697,7 @@ static ss_status app_init(app *a, const opts *o, ss_error *err) {
     ss_status st = ss_mesh_load(mesh, &a->mesh, err);
     if (st) return st;
     a->can_paint = a->mesh.has_uvs;
+    a->hide_strokes = o->hide_strokes;
     if (a->can_paint) st = ss_paint_create(&a->mesh, o->brush_mm * 1e-3, &a->paint, err);
     if (st) return st;
     if (!a->mesh.has_uvs)
@@ -832,7 +842,7 @@ static int app_batch(app *a) {
             rgb ? view_renderer_offscreen(a->rend, &a->cam, &a->layers, a->day,
                                           (float)a->o.displace, !a->hide_strokes, rgb, &err)
                 : ss_error_set(&err, SS_ERR_NOMEM, "out of memory");
-        if (!st) st = write_screenshot(a->o.screenshot, rgb, a->cam.width, a->cam.height, &err);
+        if (!st) st = write_screenshot(a->shot_path, rgb, a->cam.width, a->cam.height, &err);
         free(rgb);
         if (st)
             rc = cli_fail(CMD, &err);
@@ -841,7 +851,7 @@ static int app_batch(app *a) {
     }
     if (!rc && a->o.save_strokes) {
         int dropped = 0;
-        if (ss_paint_save_csv(&a->paint, a->o.save_strokes, &dropped, &err))
+        if (ss_paint_save_csv(&a->paint, a->csv_path, &dropped, &err))
             rc = cli_fail(CMD, &err);
         else
             cJSON_AddStringToObject(sum, "strokes", a->o.save_strokes);
@@ -1253,17 +1263,6 @@ static int run_gtk(app *a, int batch) {
     return g.rc;
 }
 
-/* Checks an output path before any work (ss_outputs: empty, too long, a
- * folder, a device or pipe, a broken symlink): exit 2 naming it. */
-static int check_output_file(const char *label, const char *path) {
-    ss_error e = {0};
-    ss_outputs *outs = ss_outputs_create("view", &e);
-    if (!outs) return cli_fail(CMD, &e);
-    ss_status st = ss_outputs_add(outs, label, path, SS_OUTPUT_FILE, 0, &e);
-    ss_outputs_free(outs);
-    return st ? cli_fail(CMD, &e) : 0;
-}
-
 int main(int argc, char **argv) {
     /* Called as "skinsim view ..." through the skinsim command, or directly. */
     if (argc > 1 && !strcmp(argv[1], "view")) argc--, argv++;
@@ -1273,11 +1272,42 @@ int main(int argc, char **argv) {
     if (r < 0) return 0;
     if (r) return cli_fail(CMD, &err);
     int batch = o.screenshot || o.bench_frames > 0 || o.save_strokes;
-    if (o.screenshot && check_output_file("--screenshot", o.screenshot)) return 2;
-    if (o.save_strokes && check_output_file("--save-strokes", o.save_strokes)) return 2;
+    /* Batch outputs go through the project's output discipline: checked
+     * now, staged after the inputs are read, swapped in only on success. */
+    ss_outputs *outs = NULL;
+    int i_shot = -1, i_csv = -1;
+    ss_status st = SS_OK;
+    if (o.screenshot || o.save_strokes) {
+        outs = ss_outputs_create("view", &err);
+        if (!outs) return cli_fail(CMD, &err);
+        const char *ins[] = {o.mesh, o.strokes, o.script};
+        for (int i = 0; i < 3 && !st; i++)
+            if (ins[i]) st = ss_outputs_input(outs, ins[i], &err);
+        if (!st && o.screenshot) {
+            i_shot = ss_outputs_count(outs);
+            st = ss_outputs_add(outs, "--screenshot", o.screenshot, SS_OUTPUT_FILE,
+                                (double)o.width * o.height * 3, &err);
+        }
+        if (!st && o.save_strokes) {
+            i_csv = ss_outputs_count(outs);
+            st = ss_outputs_add(outs, "--save-strokes", o.save_strokes, SS_OUTPUT_FILE, 0, &err);
+        }
+        if (st) {
+            ss_outputs_free(outs);
+            return cli_fail(CMD, &err);
+        }
+    }
     app *a = calloc(1, sizeof *a);
-    if (!a) return 1;
-    ss_status st = app_init(a, &o, &err);
+    if (!a) {
+        ss_outputs_free(outs);
+        return 1;
+    }
+    st = app_init(a, &o, &err);
+    if (!st && outs) {
+        st = ss_outputs_begin(outs, &err);
+        if (i_shot >= 0) a->shot_path = ss_outputs_path(outs, i_shot);
+        if (i_csv >= 0) a->csv_path = ss_outputs_path(outs, i_csv);
+    }
     int rc;
     if (st) {
         rc = cli_fail(CMD, &err);
@@ -1293,6 +1323,12 @@ int main(int argc, char **argv) {
                         "with --egl for headless rendering)\n");
         rc = 1;
     }
+    if (outs && !st) {
+        ss_error e2 = {0};
+        if (ss_outputs_finish(outs, rc ? SS_ERR_RUNTIME : SS_OK, &e2) && !rc)
+            rc = cli_fail(CMD, &e2);
+    }
+    ss_outputs_free(outs);
     app_free(a);
     free(a);
     return rc;

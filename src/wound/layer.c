@@ -21,9 +21,11 @@
  * the red and < 1 % in the green, the dark red-brown of aged blood stains
  * (reflectance spectra in Bremmer et al. 2011); refractive index 1.45 (dried
  * protein).
- * Clot: whole blood (hb_factor 1) at the open bed's oxygenation, mus = 2000
- * /cm, g = 0.985 (mus' = 30 /cm; whole blood has mus 2000-2800 /cm with g
- * 0.98-0.99 in the red, Roggan et al. 1999, J. Biomed. Opt. 4: 36-46), n 1.40.
+ * Clot: whole blood (hb_factor 1) at the open bed's oxygenation with the
+ * reduced scattering of whole blood, mus' = 30 /cm (mus 2000-2800 /cm with g
+ * 0.98-0.99 in the red, Roggan et al. 1999, J. Biomed. Opt. 4: 36-46), here
+ * as mus = 300 /cm with g = 0.9 (the similarity relation: the same mus',
+ * seven times fewer scattering events to trace), n 1.40.
  *
  * Transport per texel would cost seconds per day; instead the layer's diffuse
  * reflectance R (over a black background, specular excluded like the table's
@@ -52,7 +54,7 @@ void ss_blood_layer_scab(double hb_factor, ss_blood_layer *l) {
 }
 
 void ss_blood_layer_clot(double oxygenation, ss_blood_layer *l) {
-    *l = (ss_blood_layer){1.0, oxygenation, 2000.0, 0.985, 1.40};
+    *l = (ss_blood_layer){1.0, oxygenation, 300.0, 0.9, 1.40};
 }
 
 /* Whole-blood absorption (1/cm) at an oxygenation and wavelength wl. */

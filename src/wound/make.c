@@ -16,6 +16,7 @@
 #include <string.h>
 
 #include "skinsim/abrasion.h"
+#include "skinsim/mech.h"
 #include "skinsim/wound.h"
 
 void ss_wound_make_config_default(ss_wound_make_config *c) {
@@ -36,6 +37,7 @@ typedef struct job {
     ss_heal_run *run;
     ss_wound_tissue *tissue;
     ss_wound_renderer *renderer;
+    ss_mech *mech; /* with --mechanics */
     double side_mm;
     double t_heal, t_render, t_write, t_setup, t_compare;
 } job;
@@ -44,6 +46,7 @@ static void job_free(job *j) {
     ss_mm_table_free(j->table);
     ss_image_free(j->skin);
     ss_wound_renderer_free(j->renderer);
+    ss_mech_free(j->mech);
     ss_wound_tissue_free(j->tissue);
     ss_heal_run_free(j->run);
 }
@@ -66,29 +69,9 @@ static ss_status check_days(const ss_wound_make_config *c, ss_error *err) {
 
 static ss_status read_skin(job *j, ss_error *err) {
     const ss_wound_make_config *c = j->c;
-    if (!c->skin_path) {
-        j->skin = ss_wound_default_skin(c->size, j->side_mm, c->seed, err);
-        return j->skin ? SS_OK : err->code;
-    }
-    ss_image *in = ss_exr_read(c->skin_path, err);
-    if (!in) return err->code;
-    ss_status st = SS_OK;
-    if (in->channels < SS_BIO_NCHANNELS) {
-        st = ss_error_set(err, SS_ERR_INPUT,
-                          "%s: a base skin needs at least %d channels (melanin, pheomelanin, "
-                          "blood, oxygenation, sc_cm, epidermis_cm, height_mm), it has %d",
-                          c->skin_path, SS_BIO_NCHANNELS, in->channels);
-    } else {
-        j->skin = ss_image_create(in->width, in->height, SS_BIO_NCHANNELS, err);
-        if (!j->skin) st = err->code;
-        size_t n = (size_t)in->width * (size_t)in->height;
-        for (size_t i = 0; !st && i < n; i++)
-            memcpy(j->skin->data + i * SS_BIO_NCHANNELS, in->data + i * (size_t)in->channels,
-                   SS_BIO_NCHANNELS * sizeof(float));
-        if (!st) st = ss_wound_skin_validate(j->skin, c->skin_path, err);
-    }
-    ss_image_free(in);
-    return st;
+    j->skin = c->skin_path ? ss_wound_skin_read(c->skin_path, err)
+                           : ss_skin_bio_default(c->size, j->side_mm / 10.0, c->seed, err);
+    return j->skin ? SS_OK : (err->code ? err->code : SS_ERR_INPUT);
 }
 
 static ss_status read_inputs(job *j, ss_error *err) {
@@ -105,6 +88,7 @@ static ss_status read_inputs(job *j, ss_error *err) {
     ss_heal_run_config hc = c->heal;
     hc.out_dir = NULL;
     hc.resume_dir = NULL;
+    hc.velocity = c->mechanics;
     double last = c->days[c->ndays - 1];
     hc.days = last > 0 ? last : 1;
     if ((st = ss_heal_run_create(&hc, &j->run, err))) return st;
@@ -122,8 +106,22 @@ static ss_status read_inputs(job *j, ss_error *err) {
                                 "--days: %g is not a whole number of steps of %g days", c->days[i],
                                 ss_heal_run_dt(j->run));
     }
-    if ((st = read_skin(j, err))) return st;
-    return ss_check_writable_dir(c->out_dir, err);
+    return read_skin(j, err);
+}
+
+/* The output folder and the inputs it must not overwrite (src/core/output.c). */
+static ss_status declare_outputs(const ss_wound_make_config *c, ss_outputs *outs, ss_error *err) {
+    const char *ins[] = {
+        c->heal.wound_stroke,      c->heal.wound_mask, c->heal.wound_mesh, c->heal.params_path,
+        c->heal.wound_depth_image, c->skin_path,       c->table_path,      c->recipe_path};
+    ss_status st = SS_OK;
+    for (size_t k = 0; k < sizeof ins / sizeof *ins && !st; k++)
+        if (ins[k]) st = ss_outputs_input(outs, ins[k], err);
+    /* per day: PNGs of about 9 bytes a texel before compression, EXRs 20 */
+    double texels = (double)c->size * (double)c->size;
+    double bytes = c->ndays * texels * (c->exr ? 29.0 : 9.0) + 4e6;
+    if (!st) st = ss_outputs_add(outs, "--out", c->out_dir, SS_OUTPUT_DIR, bytes, err);
+    return st;
 }
 
 /* ---- writing --------------------------------------------------------------------------- */
@@ -279,17 +277,31 @@ static ss_status run_days(job *j, const char *dir, cJSON *frames, ss_image **thu
     ss_status st = ss_wound_textures_create(c->size, &tex, err);
     ss_progress pr;
     ss_progress_begin(&pr, "wound", (double)ss_heal_run_steps_total(j->run), c->quiet);
-    double range = j->recipe.v[SS_WR_HEIGHT_RANGE_MM];
+    double range = j->recipe.v[SS_WR_HEIGHT_RANGE_MM], dt = ss_heal_run_dt(j->run);
+    /* the mechanics: one frame a day (and one at each output day) */
+    long long mech_every = llround(1.0 / dt), last_mech = 0;
+    if (mech_every < 1) mech_every = 1;
     for (int i = 0; !st && i < c->ndays; i++) {
-        long long target = llround(c->days[i] / ss_heal_run_dt(j->run));
+        long long target = llround(c->days[i] / dt);
         double t0 = ss_now();
         while (!st && ss_heal_run_step_index(j->run) < target) {
             st = ss_heal_run_step(j->run, err);
+            long long k = ss_heal_run_step_index(j->run);
+            if (!st && j->mech && (k - last_mech >= mech_every || k == target)) {
+                st = ss_mech_step(j->mech, ss_heal_run_grid(j->run), (k - last_mech) * dt, err);
+                last_mech = k;
+            }
             if (!st) ss_wound_tissue_observe(j->tissue, ss_heal_run_grid(j->run));
-            ss_progress_update(&pr, (double)ss_heal_run_step_index(j->run));
+            ss_progress_update(&pr, (double)k);
         }
         double t1 = ss_now();
-        if (!st) st = ss_wound_render(j->renderer, j->tissue, NULL, &tex, err);
+        ss_image *def = NULL;
+        if (!st && j->mech &&
+            !(def = ss_wound_deformation_from_grid(
+                  ss_heal_run_grid(j->run), ss_mech_grid_displacement(j->mech), c->size, err)))
+            st = err->code;
+        if (!st) st = ss_wound_render(j->renderer, j->tissue, def, &tex, err);
+        ss_image_free(def);
         double t2 = ss_now();
         char stem[128];
         snprintf(stem, sizeof stem, "frames/t%g", c->days[i]);
@@ -330,6 +342,13 @@ static ss_status make(job *j, const char *dir, cJSON *sum, ss_error *err) {
         j->tissue = ss_wound_tissue_create(ss_heal_run_grid(j->run), ss_heal_run_params(j->run),
                                            &j->recipe, err);
         if (!j->tissue) st = err->code;
+    }
+    if (!st && c->mechanics) {
+        ss_mech_params mp;
+        ss_mech_params_default(&mp);
+        j->mech = ss_mech_create(ss_heal_run_grid(j->run), ss_heal_run_params(j->run), &mp, NULL,
+                                 NULL, 0, err);
+        if (!j->mech) st = err->code ? err->code : SS_ERR_RUNTIME;
     }
     /* the wound region of day 0, for the abrasion comparison */
     ss_image *mask0 = NULL;
@@ -377,7 +396,8 @@ static cJSON *summary_base(const job *j) {
     cJSON_AddNumberToObject(s, "seed", (double)c->seed);
     cJSON_AddNumberToObject(s, "height_range_mm", j->recipe.v[SS_WR_HEIGHT_RANGE_MM]);
     cJSON_AddStringToObject(s, "height_encoding", "0.5 + 0.5 * height_mm / height_range_mm");
-    cJSON_AddStringToObject(s, "base_skin", c->skin_path ? c->skin_path : "built-in");
+    cJSON_AddStringToObject(s, "base_skin", c->skin_path ? c->skin_path : "forearm (built-in)");
+    cJSON_AddBoolToObject(s, "mechanics", c->mechanics);
     char *rj = ss_wound_recipe_to_json(&j->recipe);
     cJSON *r = rj ? cJSON_Parse(rj) : NULL;
     free(rj);
@@ -391,16 +411,19 @@ ss_status ss_wound_make(const ss_wound_make_config *c, char **summary_json, ss_e
     job j = {0};
     j.c = c;
     double t0 = ss_now();
-    ss_status st = read_inputs(&j, err);
+    ss_outputs *outs = ss_outputs_create("wound", err);
+    ss_status st = outs ? declare_outputs(c, outs, err) : err->code;
+    if (!st) st = read_inputs(&j, err);
+    if (!st) st = ss_outputs_begin(outs, err);
     if (st) {
+        ss_outputs_free(outs);
         job_free(&j);
         return st;
     }
     /* everything is validated: from here on, failures are runtime errors */
     cJSON *sum = summary_base(&j);
-    char *staging = NULL;
-    st = ss_output_dir_begin(c->out_dir, &staging, err);
-    if (!st) st = make(&j, staging, sum, err);
+    const char *staging = ss_outputs_path(outs, 0);
+    st = make(&j, staging, sum, err);
     if (!st) {
         cJSON_AddNumberToObject(sum, "heal_s", j.t_heal);
         cJSON_AddNumberToObject(sum, "texture_s", j.t_render);
@@ -414,10 +437,10 @@ ss_status ss_wound_make(const ss_wound_make_config *c, char **summary_json, ss_e
                   : ss_error_set(err, SS_ERR_NOMEM, "out of memory");
         free(text);
     }
-    if (staging) st = ss_output_dir_end(c->out_dir, staging, st, err);
-    if (!st && summary_json) *summary_json = cJSON_PrintUnformatted(sum);
     if (st && err->code == SS_ERR_INPUT) st = err->code = SS_ERR_RUNTIME;
-    free(staging);
+    st = ss_outputs_finish(outs, st, err);
+    ss_outputs_free(outs);
+    if (!st && summary_json) *summary_json = cJSON_PrintUnformatted(sum);
     cJSON_Delete(sum);
     job_free(&j);
     return st;

@@ -17,19 +17,19 @@
  *
  * Design: the tissue maps are at grid resolution and sampled bilinearly; a
  * texel whose four source columns are all healthy (and undeformed) is copied
- * from the base skin's textures, so the skin away from the wound is the base
- * skin exactly and only the wound's texels cost a table lookup. The lookup
- * reads only the five fields a texture needs (GGX base colour, roughness) of
- * the public table, which is ~4x cheaper than the generic 18-field lookup and
- * agrees with it to rounding (tested). Gave up: sub-texel detail of the fields
- * (the grid is 0.5 mm; bilinear keeps edges soft, as healing edges are). */
+ * from the base skin's textures (`skinsim skin`'s render maps of the bio map),
+ * so the skin away from the wound is the base skin exactly and only the
+ * wound's texels cost a table lookup (skin.h's render lookup of the GGX fit).
+ * The skin's extra colour (hair) is laid over everything, except where the
+ * tissue was destroyed. Gave up: sub-texel detail of the fields (the grid is
+ * 0.5 mm; bilinear keeps edges soft, as healing edges are). */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "skinsim/texture.h"
-#include "skinsim/wound.h"
+#include "wound_internal.h"
 
 /* Floors of the open bed: no epidermis and no stratum corneum, held at the
  * table's smallest samples (the transport needs layers of non-zero
@@ -41,8 +41,10 @@
 struct ss_wound_renderer {
     ss_wound_render_options o;
     ss_image *skin; /* size x size x SS_BIO_NCHANNELS */
+    ss_skin_lut *lut;
     float mean[SS_BIO_NCHANNELS];
     ss_layer_table scab, clot;
+    ss_image *crust; /* value noise 0..1 at ~1.5 mm: the crust is uneven */
     ss_wound_textures base;
 };
 
@@ -75,97 +77,34 @@ void ss_wound_textures_free(ss_wound_textures *t) {
     memset(t, 0, sizeof *t);
 }
 
-/* ---- the table lookup of the five texture fields ------------------------------------- */
+/* ---- the table lookup (skinsim/skin.h's render lookup of the GGX fit) ------------- */
 
 typedef struct lookup5 {
     double rgb[3], roughness;
 } lookup5;
 
-static void mm_lookup5(const ss_mm_table *t, const double x[SS_MM_NAXES], lookup5 *out) {
-    int i0[SS_MM_NAXES];
-    double fr[SS_MM_NAXES];
-    size_t stride[SS_MM_NAXES];
-    size_t s = 1;
-    for (int a = SS_MM_NAXES - 1; a >= 0; a--) { /* axis 5 fastest */
-        stride[a] = s;
-        s *= (size_t)t->nsamples[a];
-    }
-    size_t base = 0;
-    for (int a = 0; a < SS_MM_NAXES; a++) {
-        int n = t->nsamples[a];
-        const double *v = t->axis[a];
-        i0[a] = 0;
-        fr[a] = 0.0;
-        if (n > 1) {
-            double xa = x[a];
-            if (!(xa > v[0])) xa = v[0];
-            if (xa > v[n - 1]) xa = v[n - 1];
-            int i = 0;
-            while (i < n - 2 && xa >= v[i + 1]) i++;
-            i0[a] = i;
-            fr[a] = (xa - v[i]) / (v[i + 1] - v[i]);
-        }
-        base += (size_t)i0[a] * stride[a];
-    }
-    double acc[5] = {0, 0, 0, 0, 0};
-    for (int corner = 0; corner < (1 << SS_MM_NAXES); corner++) {
-        double w = 1.0;
-        size_t off = base;
-        for (int a = 0; a < SS_MM_NAXES; a++) {
-            int up = (corner >> a) & 1;
-            if (up) {
-                if (t->nsamples[a] == 1 || fr[a] == 0.0) {
-                    w = 0.0;
-                    break;
-                }
-                w *= fr[a];
-                off += stride[a];
-            } else {
-                w *= 1.0 - fr[a];
-            }
-        }
-        if (w == 0.0) continue;
-        const double *e = t->entries + off * SS_MM_NFIELDS; /* GGX: rgb, specular, roughness */
-        acc[0] += w * e[0];
-        acc[1] += w * e[1];
-        acc[2] += w * e[2];
-        acc[4] += w * e[4];
-    }
-    out->rgb[0] = acc[0];
-    out->rgb[1] = acc[1];
-    out->rgb[2] = acc[2];
-    out->roughness = acc[4];
-}
-
 /* One texel's bio parameters -> base colour and roughness. */
-static void bio_to_render(const ss_mm_table *t, const float *b, lookup5 *out) {
-    double x[SS_MM_NAXES];
-    x[SS_MM_AXIS_MELANIN] = b[SS_BIO_MELANIN];
-    x[SS_MM_AXIS_PHEOMELANIN] = b[SS_BIO_PHEOMELANIN];
-    x[SS_MM_AXIS_BLOOD] = b[SS_BIO_BLOOD];
-    x[SS_MM_AXIS_OXYGENATION] = b[SS_BIO_OXYGENATION];
-    x[SS_MM_AXIS_SC] = b[SS_BIO_SC_CM];
-    x[SS_MM_AXIS_EPIDERMIS] = b[SS_BIO_EPIDERMIS_CM];
-    mm_lookup5(t, x, out);
+static void bio_to_render(const ss_skin_lut *lut, const float *b, lookup5 *out) {
+    float x[6] = {b[SS_BIO_MELANIN],     b[SS_BIO_PHEOMELANIN], b[SS_BIO_BLOOD],
+                  b[SS_BIO_OXYGENATION], b[SS_BIO_SC_CM],       b[SS_BIO_EPIDERMIS_CM]};
+    float r[5];
+    ss_skin_lut_lookup(lut, x, r);
+    for (int c = 0; c < 3; c++) out->rgb[c] = r[c] < 0 ? 0 : r[c] > 1 ? 1 : r[c];
+    out->roughness = r[4] < 0 ? 0 : r[4] > 1 ? 1 : r[4];
 }
 
 /* ---- create ----------------------------------------------------------------------------- */
 
+/* The base skin's textures are `skinsim skin`'s render maps of the bio map. */
 static ss_status render_base(ss_wound_renderer *r, ss_error *err) {
-    ss_status st = ss_wound_textures_create(r->o.size, &r->base, err);
+    ss_skin_maps m;
+    ss_status st = ss_skin_render_maps(r->skin, r->lut, r->o.side_mm / 10.0, 0, &m, err);
     if (st) return st;
-    const int n = r->o.size;
-#pragma omp parallel for schedule(static)
-    for (int y = 0; y < n; y++)
-        for (int x = 0; x < n; x++) {
-            size_t i = (size_t)y * (size_t)n + (size_t)x;
-            const float *b = r->skin->data + i * SS_BIO_NCHANNELS;
-            lookup5 l;
-            bio_to_render(r->o.table, b, &l);
-            for (int c = 0; c < 3; c++) r->base.base_color->data[i * 3 + c] = (float)l.rgb[c];
-            r->base.roughness->data[i] = (float)l.roughness;
-            r->base.height->data[i] = b[SS_BIO_HEIGHT_MM];
-        }
+    r->base.base_color = m.base_color;
+    r->base.roughness = m.roughness;
+    r->base.height = m.height_mm;
+    r->base.normal = m.normal;
+    ss_image_free(m.specular);
     return SS_OK;
 }
 
@@ -198,8 +137,10 @@ ss_status ss_wound_renderer_create(const ss_wound_render_options *o, ss_wound_re
     ss_blood_layer_clot(o->recipe.v[SS_WR_BED_OXYGENATION], &clot);
     if (!st) st = ss_layer_table_build(&scab, o->scab_photons, o->seed, &r->scab, err);
     if (!st) st = ss_layer_table_build(&clot, o->scab_photons, o->seed + 1000, &r->clot, err);
+    if (!st && !(r->lut = ss_skin_lut_create(o->table, err))) st = err->code;
+    if (!st && !(r->crust = ss_image_create(o->size, o->size, 1, err))) st = err->code;
+    if (!st) st = ss_wound__noise(o->size, o->side_mm, 1.5, 2, o->seed, 201, r->crust, err);
     if (!st) st = render_base(r, err);
-    if (!st) ss_height_to_normal(r->base.height, (float)(o->size / o->side_mm), r->base.normal);
     if (st) {
         ss_wound_renderer_free(r);
         return st;
@@ -211,6 +152,8 @@ ss_status ss_wound_renderer_create(const ss_wound_render_options *o, ss_wound_re
 void ss_wound_renderer_free(ss_wound_renderer *r) {
     if (!r) return;
     ss_image_free(r->skin);
+    ss_image_free(r->crust);
+    ss_skin_lut_free(r->lut);
     ss_wound_textures_free(&r->base);
     free(r);
 }
@@ -269,8 +212,8 @@ typedef struct texel_out {
     double rgb[3], roughness, height_mm;
 } texel_out;
 
-static void render_texel(const ss_wound_renderer *r, const float *skin, const texel_tissue *s,
-                         texel_out *o) {
+static void render_texel(const ss_wound_renderer *r, const float *skin, float crust,
+                         const texel_tissue *s, texel_out *o) {
     const double *v = r->o.recipe.v;
     double cover = ramp(s->e, v[SS_WR_EPITHELIUM_LO], v[SS_WR_EPITHELIUM_HI]), open = 1 - cover;
     double reg = ramp(s->plasma, v[SS_WR_REGION_LO], v[SS_WR_REGION_HI]);
@@ -302,21 +245,25 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const te
     b[SS_BIO_SC_CM] = (float)sc;
     b[SS_BIO_EPIDERMIS_CM] = (float)epi;
     lookup5 l;
-    bio_to_render(r->o.table, b, &l);
+    bio_to_render(r->lut, b, &l);
     /* dense mature collagen scatters more: lift the albedo towards white */
     double white = v[SS_WR_SCAR_WHITENING] * reg * scar * m_scar * cover;
     double skin_rgb[3];
     for (int c = 0; c < 3; c++) skin_rgb[c] = clamp01(l.rgb[c] + white * (1 - l.rgb[c]));
     /* the clot filling the open, avascular part of the bed (below the
      * crust), then the scab: blood layers over the skin */
-    double thick = s->scab * v[SS_WR_SCAB_SCALE], R[3], T[3], mid[3];
+    /* a crust is uneven: its thickness varies by +-30 % at ~1.5 mm */
+    double thick = s->scab * v[SS_WR_SCAB_SCALE] * (0.7 + 0.6 * crust), R[3], T[3], mid[3];
     double clot =
         open * reg * (s->depth - s->scab > 0 ? s->depth - s->scab : 0) * v[SS_WR_CLOT_SCALE];
     ss_layer_table_eval(&r->clot, clot, R, T);
     ss_layer_over(R, T, skin_rgb, mid);
     ss_layer_table_eval(&r->scab, thick, R, T);
     ss_layer_over(R, T, mid, o->rgb);
-    for (int c = 0; c < 3; c++) o->rgb[c] = clamp01(o->rgb[c]);
+    /* the extra colour (hair) over everything, gone where the tissue was destroyed */
+    double ea = k[SS_BIO_EXTRA_A] * (1 - reg);
+    for (int c = 0; c < 3; c++)
+        o->rgb[c] = clamp01(clamp01(o->rgb[c]) * (1 - ea) + k[SS_BIO_EXTRA_R + c] * ea);
     double scab_cover = 1 - exp(-thick / 0.05); /* a 0.05 mm crust is matte */
     double rough = l.roughness;
     rough = lerp(rough, v[SS_WR_WET_ROUGHNESS], open * reg);
@@ -370,7 +317,7 @@ ss_status ss_wound_render(ss_wound_renderer *r, const ss_wound_tissue *t,
             texel_tissue s;
             sample_tissue(t, mx, my, &s);
             texel_out o;
-            render_texel(r, r->skin->data + i * SS_BIO_NCHANNELS, &s, &o);
+            render_texel(r, r->skin->data + i * SS_BIO_NCHANNELS, r->crust->data[i], &s, &o);
             for (int c = 0; c < 3; c++) out->base_color->data[i * 3 + c] = (float)o.rgb[c];
             out->roughness->data[i] = (float)o.roughness;
             out->height->data[i] = (float)(o.height_mm + dz);

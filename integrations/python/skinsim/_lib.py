@@ -472,6 +472,12 @@ class ss_abrasion_settings(ctypes.Structure):
         ("reference_px", c_double),
         ("scab_height_mm", c_double),
         ("seed", c_uint64),
+        ("mechanics", c_int),
+        ("fibres", c_char_p),
+        ("kappa", c_double),
+        ("tet_size_mm", c_double),
+        ("sutures", c_char_p),
+        ("tet_mesh", c_char_p),
     ]
 
 
@@ -534,6 +540,9 @@ class ss_heal_stats(ctypes.Structure):
         ("wound_region_area_mm2", c_double),
         ("initial_area_mm2", c_double),
         ("field_mean", c_double * SS_HEAL_NFIELDS),
+        ("eschar_wound_mean", c_double),
+        ("scar_volume_mm3", c_double),
+        ("scar_max", c_double),
     ]
 
 

@@ -1,0 +1,127 @@
+/* Benchmark of the contraction mechanics (seed 001 Table 1: mechanics 0.079,
+ * 0.638 and 5.328 s per frame on one thread for 11725, 34185 and 103111 tets
+ * on the 80x62x79, 160x124x159 and 320x248x319 grids; the coupled bio + mech
+ * frame at 160x124x159 is 0.684 + 0.638 = 1.32 s).
+ * For each grid it builds the lattice mesh with the tet size that gives about
+ * the seed's tet count, then times mechanics frames (fields to the nodes,
+ * rest lengths, relaxation to the convergence criterion, velocities and strain
+ * to the grid) while the myofibroblast density in the 20 x 20 mm wound ramps
+ * up by 0.01 per frame from a relaxed state at 0.5 (the pace of the coupled
+ * default run, where n rises by about that much per 0.05-day step), so every
+ * frame has new contraction to relax. It prints
+ * s/frame, the mean sub-step count and, at 160x124x159, the coupled frame (one
+ * split heal step + one mechanics frame).
+ * Usage: bench_mech [--skip-large] [--frames N] [--threads "1 2"]
+ * Figures only; nothing is asserted. Targets: 34185 tets <= 50 ms/frame on 2
+ * cores; coupled frame >= 5x faster than 1.32 s. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <omp.h>
+
+#include "skinsim/mech.h"
+
+int main(int argc, char **argv) {
+    int skip_large = 0, frames = 10;
+    int threads[2] = {1, 2}, nthr = 2;
+    for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--skip-large"))
+            skip_large = 1;
+        else if (!strcmp(argv[i], "--frames") && i + 1 < argc)
+            frames = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--threads") && i + 1 < argc) {
+            nthr = sscanf(argv[++i], "%d %d", &threads[0], &threads[1]);
+            if (nthr < 1) nthr = 1;
+        } else {
+            fprintf(stderr, "usage: bench_mech [--skip-large] [--frames N] [--threads \"1 2\"]\n");
+            return 2;
+        }
+    }
+    if (frames < 1) frames = 1;
+    static const int dims[3][3] = {{80, 62, 79}, {160, 124, 159}, {320, 248, 319}};
+    static const int seed_tets[3] = {11725, 34185, 103111};
+    static const double seed_s[3] = {0.079, 0.638, 5.328};
+    ss_error err;
+    ss_heal_params *hp = ss_heal_params_preset("clean", &err);
+    printf("# mechanics frame benchmark. Seed Table 1: s/frame on 1 thread, Xeon E5 3.5 GHz. "
+           "Target: 34185 tets <= 0.050 s/frame on 2 cores; coupled bio+mech frame at "
+           "160x124x159 <= 1.32/5 = 0.264 s.\n");
+    printf("%-14s %8s %8s %3s %8s %10s %10s %10s %10s\n", "grid", "tets", "seedtets", "thr",
+           "stride", "s/frame", "substeps", "seed_s", "coupled_s");
+    for (int gi = 0; gi < 3; gi++) {
+        if (gi == 2 && skip_large) continue;
+        const int nx = dims[gi][0], ny = dims[gi][1], nz = dims[gi][2];
+        const double dx = 30.0 / nx, top = 0.8 * nz * dx;
+        /* tissue box: the grid's interior below the skin top */
+        double vol = (nx - 2) * dx * (ny - 2) * dx * (top - dx);
+        double h = cbrt(6.0 * vol / seed_tets[gi]);
+        for (int ti = 0; ti < nthr; ti++) {
+            omp_set_num_threads(threads[ti]);
+            ss_heal_grid *g = ss_heal_grid_create(nx, ny, nz, dx, &err);
+            uint8_t *w = g ? ss_heal_wound_box(g, top, 20.0, 20.0, 1.0, &err) : NULL;
+            if (!w || ss_heal_grid_init(g, top, 0.1, w, hp, &err) != SS_OK) {
+                fprintf(stderr, "%s\n", err.msg);
+                return 1;
+            }
+            free(w);
+            ss_mech_params p;
+            ss_mech_params_default(&p);
+            p.tet_size_mm = h;
+            ss_mech *m = ss_mech_create(g, hp, &p, NULL, NULL, 0, &err);
+            if (!m) {
+                fprintf(stderr, "%s\n", err.msg);
+                return 1;
+            }
+            size_t n = (size_t)nx * ny * nz;
+            double tm = 0;
+            long subs = 0;
+            for (int f = -1; f < frames; f++) { /* frame -1: untimed start-up to n = 0.5 */
+                float level = (float)(0.5 + 0.01 * (f + 1));
+                for (size_t i = 0; i < n; i++)
+                    if (g->cell[i] == SS_CELL_WOUND) g->field[SS_HEAL_FIBROBLAST][i] = level;
+                double t0 = ss_now();
+                if (ss_mech_step(m, g, 0.05, &err) != SS_OK) {
+                    fprintf(stderr, "%s\n", err.msg);
+                    return 1;
+                }
+                if (f < 0) continue;
+                tm += ss_now() - t0;
+                ss_mech_stats st;
+                ss_mech_stats_compute(m, &st);
+                subs += st.substeps;
+            }
+            double coupled = -1;
+            if (gi == 1) { /* one split heal step + one mechanics frame */
+                ss_heal_solver *sol = ss_heal_solver_create(g, hp, SS_HEAL_SPLIT, 0, &err);
+                if (!sol) {
+                    fprintf(stderr, "%s\n", err.msg);
+                    return 1;
+                }
+                int nc = 3;
+                double t0 = ss_now();
+                for (int k = 0; k < nc; k++)
+                    if (ss_heal_step(sol, g, &err) != SS_OK ||
+                        ss_mech_step(m, g, ss_heal_solver_dt(sol), &err) != SS_OK) {
+                        fprintf(stderr, "%s\n", err.msg);
+                        return 1;
+                    }
+                coupled = (ss_now() - t0) / nc;
+                ss_heal_solver_free(sol);
+            }
+            int stride;
+            ss_mech_kernel(m, &stride);
+            char gname[32];
+            snprintf(gname, sizeof gname, "%dx%dx%d", nx, ny, nz);
+            printf("%-14s %8d %8d %3d %8d %10.4f %10.1f %10.3f %10.4f\n", gname,
+                   ss_mech_mesh(m)->ntets, seed_tets[gi], threads[ti], stride, tm / frames,
+                   (double)subs / frames, seed_s[gi], coupled);
+            fflush(stdout);
+            ss_mech_free(m);
+            ss_heal_grid_free(g);
+        }
+    }
+    ss_heal_params_free(hp);
+    return 0;
+}

@@ -1,0 +1,118 @@
+#!/usr/bin/env bash
+# End-to-end: issue 7's heal reproductions (docs/reliability.md). --force over
+# a previous run is whole or not at all (kill -9, full disk); a killed new run
+# is never taken for finished nor run into again without --force, and resumes
+# exactly; a checkpoint of another run (scenario, grid) is exit 2 with nothing
+# of the run touched; two runs into one folder; disk estimates before work.
+# The full-disk part needs root (a small tmpfs) and is left out otherwise.
+set -u
+CLI="$(cd "$(dirname "$1")" && pwd)/$(basename "$1")"
+T=$(mktemp -d /tmp/skinsim-e2e-sheal-XXXXXX)   # outputs only
+W=$(mktemp -d /tmp/skinsim-e2e-sheal-w-XXXXXX) # the test's scratch files
+MNT=""
+cleanup() {
+  [ -n "$MNT" ] && umount "$MNT" 2>/dev/null
+  rm -rf "$T" "$W"
+}
+trap cleanup EXIT
+export SKINSIM_THREADS=1
+fail=0; pass=0
+ok()   { pass=$((pass+1)); }
+bad()  { echo "FAIL: $*"; fail=$((fail+1)); }
+check() { if eval "$1"; then ok; else bad "$2"; fi; }
+sums() { (cd "$1" && find . -type f | LC_ALL=C sort | xargs md5sum) 2>/dev/null; }
+expect2() {
+  local words="$1"; shift
+  timeout 60 "$CLI" "$@" >/dev/null 2>"$W/err.txt"
+  local rc=$?
+  if [ $rc -ne 2 ]; then bad "expected exit 2, got $rc: $* ($(cat "$W/err.txt"))"; return; fi
+  if ! grep -qi -- "$words" "$W/err.txt"; then bad "message lacks '$words': $(cat "$W/err.txt")"; return; fi
+  ok
+}
+# wait (up to 20 s) until the glob $1 matches
+await() { for _ in $(seq 1 2000); do compgen -G "$1" >/dev/null && return 0; sleep 0.01; done; return 1; }
+SMALL="--grid 20x20x6 --size-mm 10,10,3 --quiet"
+
+# ---- a previous run, replaced with --force: whole or not at all ------------
+"$CLI" heal $SMALL --days 1 --out "$T/h"
+check '[ -f "$T/h/.skinsim-complete" ] && [ -f "$T/h/run.json" ]' "first heal run"
+sums "$T/h" >"$W/h.sums"
+expect2 "previous run" heal $SMALL --days 1 --out "$T/h"
+"$CLI" heal $SMALL --days 40 --snapshot-every 0.5 --force --out "$T/h" & pid=$!
+await "$T/h.skinsim-staging.*/fields/fields_0003.vti" || bad "the --force run never wrote"
+kill -9 $pid 2>/dev/null; wait $pid 2>/dev/null
+check '[ "$(sums "$T/h")" = "$(cat "$W/h.sums")" ]' "kill -9 of heal --force changed the previous run"
+"$CLI" heal $SMALL --days 2 --force --out "$T/h"
+rc=$?
+check '[ $rc -eq 0 ] && [ "$(ls -A "$T")" = h ]' "heal --force after a killed one: rc $rc, left $(ls -A "$T")"
+check 'grep -q "\"days\":	2" "$T/h/summary.json" && [ ! -e "$T/h/fields/fields_0003.vti" ]' "the replaced run is not whole"
+
+# ---- a killed new run: unfinished, refused without --force, resumed exactly ----
+"$CLI" heal $SMALL --days 3 --checkpoint-every 0.5 --out "$T/u" & pid=$!
+await "$T/u/checkpoints/ckpt_*.sshc" || bad "the run never checkpointed"
+kill -9 $pid 2>/dev/null; wait $pid 2>/dev/null
+if [ -f "$T/u/.skinsim-complete" ]; then
+  echo "note: the run finished before the kill"
+else
+  check '[ -f "$T/u/.skinsim-unfinished" ] && [ ! -e "$T/u/summary.json" ]' "a killed run does not look unfinished"
+  expect2 "unfinished run" heal $SMALL --days 3 --out "$T/u"
+fi
+"$CLI" heal --resume "$T/u" --quiet
+rc=$?
+check '[ $rc -eq 0 ] && [ -f "$T/u/.skinsim-complete" ] && [ ! -e "$T/u/.skinsim-unfinished" ]' "resume of the killed run: rc $rc"
+"$CLI" heal $SMALL --days 3 --checkpoint-every 0.5 --out "$T/ref"
+check 'cmp -s "$T/u/area.csv" "$T/ref/area.csv"' "resumed run differs from an uninterrupted one"
+
+# ---- resume refuses checkpoints of another run, touching nothing ----------------
+"$CLI" heal $SMALL --scenario keloid --days 4 --checkpoint-every 0.5 --out "$T/k"
+"$CLI" heal --grid 24x24x6 --size-mm 12,12,3 --quiet --days 2 --checkpoint-every 0.5 --out "$T/g"
+newest=$(ls "$T/k/checkpoints" | tail -1)
+cp "$T/k/checkpoints/$newest" "$T/ref/checkpoints/"
+sums "$T/ref" >"$W/ref.sums"
+expect2 "another run" heal --resume "$T/ref" --days 5
+check '[ "$(sums "$T/ref")" = "$(cat "$W/ref.sums")" ]' "a foreign (keloid) checkpoint: the run was touched"
+rm "$T/ref/checkpoints/$newest"
+cp "$T/g/checkpoints/$(ls "$T/g/checkpoints" | head -1)" "$T/ref/checkpoints/ckpt_000000000001.sshc"
+sums "$T/ref" >"$W/ref.sums"
+expect2 "another run" heal --resume "$T/ref" --days 5
+check '[ "$(sums "$T/ref")" = "$(cat "$W/ref.sums")" ]' "a foreign (grid) checkpoint: the run was touched"
+rm "$T/ref/checkpoints/ckpt_000000000001.sshc"
+"$CLI" heal --resume "$T/ref" --days 4 --quiet
+check '[ $? -eq 0 ] && grep -q "\"scenario\":	\"clean\"" "$T/ref/summary.json"' "resume with its own checkpoints"
+
+# ---- two runs into one new folder at once ---------------------------------------
+"$CLI" heal $SMALL --days 40 --out "$T/two" & pid=$!
+await "$T/two.skinsim-lock" || bad "no lock file"
+expect2 "process $pid" heal $SMALL --days 1 --out "$T/two"
+kill -9 $pid 2>/dev/null; wait $pid 2>/dev/null
+
+# ---- bad outputs and disk estimates: exit 2 before any work ----------------------
+expect2 "empty" heal --days 1 --out ""
+mkfifo "$T/pipe"
+expect2 "named pipe" heal --days 1 --out "$T/pipe"
+expect2 "of disk" heal --days 1000000 --out "$T/big"
+check '[ ! -e "$T/big" ] && [ -p "$T/pipe" ]' "refused heal runs left output"
+
+# ---- full disk (root: a small tmpfs) ------------------------------------------------
+if [ "$(id -u)" = 0 ] && mkdir -p "$T/disk" && mount -t tmpfs -o size=8m tmpfs "$T/disk" 2>/dev/null; then
+  MNT="$T/disk"
+  "$CLI" heal $SMALL --days 1 --out "$T/disk/h"
+  sums "$T/disk/h" >"$W/disk.sums"
+  expect2 "free" heal $SMALL --days 200 --snapshot-every 0.1 --force --out "$T/disk/h"
+  check '[ "$(sums "$T/disk/h")" = "$(cat "$W/disk.sums")" ]' "full disk (estimate) touched the previous run"
+  # the estimate fits, the disk fills during the run (another writer)
+  "$CLI" heal $SMALL --days 8 --force --out "$T/disk/h" 2>"$W/err.txt" & pid=$!
+  await "$T/disk/h.skinsim-staging.*/fields/fields_0001.vti"
+  head -c 20000000 /dev/zero >"$T/disk/filler" 2>/dev/null
+  wait $pid; rc=$?
+  echo "heal --force on a disk filling up: exit $rc ($(head -c 200 "$W/err.txt"))"
+  if [ $rc -ne 0 ]; then
+    check '[ $rc -eq 1 ] && [ "$(sums "$T/disk/h")" = "$(cat "$W/disk.sums")" ]' "full disk mid-run: the previous run changed"
+    check '[ "$(ls -A "$T/disk" | tr "\n" " ")" = "filler h " ]' "full disk mid-run left: $(ls -A "$T/disk")"
+  else
+    check '[ -f "$T/disk/h/.skinsim-complete" ]' "full disk: exit 0 but not whole"
+  fi
+fi
+
+echo "e2e_safety_heal: $pass checks passed, $fail failed"
+[ $fail -eq 0 ]
