@@ -472,12 +472,6 @@ class ss_abrasion_settings(ctypes.Structure):
         ("reference_px", c_double),
         ("scab_height_mm", c_double),
         ("seed", c_uint64),
-        ("mechanics", c_int),
-        ("fibres", c_char_p),
-        ("kappa", c_double),
-        ("tet_size_mm", c_double),
-        ("sutures", c_char_p),
-        ("tet_mesh", c_char_p),
     ]
 
 
@@ -588,11 +582,16 @@ class ss_heal_run_config(ctypes.Structure):
         ("snapshot_every", c_double),
         ("area_every", c_double),
         ("checkpoint_every", c_double),
-        ("velocity", c_int),
         ("out_dir", c_char_p),
         ("force", c_int),
         ("resume_dir", c_char_p),
         ("seed", c_uint64),
+        ("mechanics", c_int),
+        ("fibres", c_char_p),
+        ("kappa", c_double),
+        ("tet_size_mm", c_double),
+        ("sutures", c_char_p),
+        ("tet_mesh", c_char_p),
     ]
 
 
@@ -712,7 +711,7 @@ if hasattr(lib, "ss_skin_generate"):
 
 # ---- wound ------------------------------------------------------------------------
 
-SS_WR_NKEYS = 28
+SS_WR_NKEYS = 29
 
 
 class ss_wound_recipe(ctypes.Structure):

@@ -28,7 +28,7 @@ MAPS = ("base_color", "roughness", "height_mm", "normal")
 class Textures:
     """Textures of a heal.Run's wound. skin: base skin as bio-parameter maps
     (h, w, >= 7 channels in skinsim.skin.BIO_CHANNELS order, e.g.
-    skin.textures()["bio"]), default the built-in light skin; table: an
+    skin.textures()["bio"]), default the built-in forearm skin (ss_wound_default_skin); table: an
     optics.Table or path; recipe: a recipe JSON path (docs/wound.md)."""
 
     def __init__(self, run, size=512, skin=None, table=None, recipe=None, seed=1,
@@ -58,11 +58,12 @@ class Textures:
             skin_hdr = sk
         else:
             a = L.as_image_input(skin, "skin")
-            if a.ndim != 3 or a.shape[2] < 7:
-                raise L.InputError("skin: bio maps need at least 7 channels (melanin, "
+            if a.ndim != 3 or a.shape[2] != L.SS_BIO_NCHANNELS:
+                raise L.InputError("skin: a bio map needs the %d channels of skin.h (melanin, "
                                    "pheomelanin, blood, oxygenation, sc_cm, epidermis_cm, "
-                                   "height_mm), got shape %s" % (a.shape,), L.SS_ERR_INPUT)
-            a = np.ascontiguousarray(a[..., :7])
+                                   "height_mm, extra RGBA), got shape %s"
+                                   % (L.SS_BIO_NCHANNELS, a.shape), L.SS_ERR_INPUT)
+            a = np.ascontiguousarray(a)
             hdr = L.image_header(a)
             L.check(L.lib.ss_wound_skin_validate, ctypes.byref(hdr), b"skin")
             self._skin = (a, hdr)
