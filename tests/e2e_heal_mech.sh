@@ -53,7 +53,10 @@ for f in fields/fields_0002.vti fields/mesh_0002.vtu area.csv; do
 done
 
 # --- the explicit scheme: the grid velocity is capped at its CFL limit
-"$CLI" heal $SMALL --scheme explicit --days 0.3 --threads 2 --out "$T/x" || fail "explicit run failed"
+# (left out of sanitizer runs, SKINSIM_TEST_QUICK, for time)
+if [ -z "${SKINSIM_TEST_QUICK:-}" ]; then
+    "$CLI" heal $SMALL --scheme explicit --days 0.3 --threads 2 --out "$T/x" || fail "explicit run failed"
+fi
 
 # --- sutures: one stitch across the wound, taken out at day 0.5
 printf 'x1,y1,z1,x2,y2,z2,remove_day\n6,10,3,14,10,3,0.5\n' >"$T/s.csv"

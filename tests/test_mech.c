@@ -515,7 +515,7 @@ static void test_sutures(void **state) {
     ss_error err;
     int n = 0;
     snprintf(path, sizeof path, "%s/s.csv", dir);
-    write_text(path, "x1,y1,z1,x2,y2,z2,remove_day\n# a stitch\n4,5,5,8,5,5,2\n");
+    write_text(path, "# stitches\nx1,y1,z1,x2,y2,z2,remove_day\n# a stitch\n4,5,5,8,5,5,2\n");
     ss_mech_suture *s = ss_mech_sutures_read(path, &n, &err);
     assert_non_null(s);
     assert_int_equal(n, 1);

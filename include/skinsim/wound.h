@@ -58,6 +58,7 @@ enum {
     SS_WR_SCAR_ROUGHNESS,         /* 1: roughness of the mature scar (shiny) */
     SS_WR_DEPTH_SCALE,            /* 1: multiplier of the displacement depth */
     SS_WR_KELOID_SCALE,           /* 1: raise per mm of collagen above the keloid threshold */
+    SS_WR_KELOID_MAX_MM,          /* mm: the raise saturates towards this height */
     SS_WR_HEIGHT_RANGE_MM,        /* mm: height map 0..1 spans -range..+range */
     SS_WR_NKEYS
 };
@@ -91,7 +92,7 @@ typedef struct ss_wound_tissue {
     float *plasma;      /* topmost tissue cell: the wound region (§4.1.8) */
     float *scab_mm;     /* eschar integrated over the column, density x mm */
     float *scar;        /* scar (collagen) density, column maximum */
-    float *keloid_mm;   /* collagen above rho_max integrated over the column, x mm */
+    float *keloid_mm;   /* swelling: sum of (rho / rho_max - 1) dx over cells above rho_max, mm */
     float *depth_mm;    /* §5.4: skin surface down to the capillary threshold */
     float *age_days;    /* time since the column's epithelium closed (0 = open;
                            intact skin: SS_WOUND_AGE_INTACT) */

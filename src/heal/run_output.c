@@ -170,6 +170,12 @@ static double estimate_bytes(const ss_heal_run *r) {
     double snaps = (r->snap_every ? (double)left / (double)r->snap_every : 0) + 2;
     double ckpt = r->ckpt_every ? 3 * (cells * (1 + 4.0 * (SS_HEAL_NFIELDS + 3)) + 65536) : 0;
     double rows = (double)left / (double)(r->area_every > 0 ? r->area_every : 1) + 2;
+    if (r->mech) { /* displacement in the .vti, the mesh .vtu (ASCII), the velocity view */
+        const ss_tetmesh *M = ss_mech_mesh(r->mech);
+        vti += cells * 12.0;
+        map += (double)M->nnodes * 120 + (double)M->ntets * 50 + 200e3;
+        ckpt += r->ckpt_every ? 3 * (double)ss_mech_state_size(r->mech) * 4 / 3 : 0;
+    }
     return snaps * (vti + map) + ckpt + rows * 24.0 * (4 + SS_HEAL_NFIELDS) + 500e3;
 }
 
@@ -199,7 +205,7 @@ ss_status ss_heal_run__outputs_open(ss_heal_run *r, ss_error *err) {
     r->outs = ss_outputs_create("heal", err);
     if (!r->outs) return SS_ERR_NOMEM;
     const char *ins[] = {c->params_path, c->wound_mask, c->wound_stroke, c->wound_mesh,
-                         c->wound_depth_image};
+                         c->wound_depth_image, c->sutures, c->tet_mesh};
     ss_status s = SS_OK;
     for (size_t k = 0; k < sizeof ins / sizeof *ins && !s; k++)
         s = ss_outputs_input(r->outs, ins[k], err);

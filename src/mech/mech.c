@@ -581,7 +581,7 @@ ss_status ss_mech_state_apply(ss_mech *m, ss_heal_grid *g, ss_error *err) {
 ss_mech_suture *ss_mech_sutures_read(const char *path, int *count, ss_error *err) {
     char *text = ss_read_file(path, NULL, err);
     if (!text) return NULL;
-    int cap = 16, n = 0, line = 0;
+    int cap = 16, n = 0, line = 0, header = 0;
     ss_mech_suture *s = malloc((size_t)cap * sizeof *s);
     const char *p = text;
     char buf[1024];
@@ -611,7 +611,11 @@ ss_mech_suture *ss_mech_sutures_read(const char *path, int *count, ss_error *err
             }
             k++;
         }
-        if (bad == 2 && n == 0 && line == 1) continue; /* a header line */
+        if (bad == 2 && n == 0 && !header) { /* a header line (first non-comment line) */
+            header = 1;
+            continue;
+        }
+        header = 1;
         if (bad || too_long || (k != 6 && k != 7)) {
             ss_error_set(err, SS_ERR_INPUT,
                          "%s:%d: expected 'x1,y1,z1,x2,y2,z2[,remove_day]' in mm and days", path,

@@ -344,9 +344,14 @@ static ss_status load_timeline_dir(const char *dir, const char *json_path, view_
     const cJSON *frames = cJSON_GetObjectItemCaseSensitive(root, "frames");
     const cJSON *end = cJSON_GetObjectItemCaseSensitive(root, "end_day");
     ss_status st = SS_OK;
-    if (!cJSON_IsArray(keys) || cJSON_GetArraySize(keys) < 1)
+    /* `skinsim abrasion`: keys (+ maturation frames); `skinsim wound`: no
+     * keys, every frame is a stop (a healing texture sequence). */
+    int seq = cJSON_IsArray(keys) && cJSON_GetArraySize(keys) == 0 && cJSON_IsArray(frames) &&
+              cJSON_GetArraySize(frames) > 0;
+    if (!seq && (!cJSON_IsArray(keys) || cJSON_GetArraySize(keys) < 1))
         st = ss_error_set(err, SS_ERR_INPUT,
-                          "%s: no \"keys\" array (not a skinsim abrasion folder?)", json_path);
+                          "%s: no \"keys\" or \"frames\" (not a skinsim abrasion or wound folder?)",
+                          json_path);
     /* Candidate stops: keys, then maturation frames after the last key. */
     typedef struct cand {
         double day;
@@ -383,15 +388,15 @@ static ss_status load_timeline_dir(const char *dir, const char *json_path, view_
         const cJSON *f = cJSON_GetArrayItem(frames, i);
         const cJSON *day = cJSON_GetObjectItemCaseSensitive(f, "day");
         const char *phase = json_str(f, "phase");
-        if (!phase || strcmp(phase, "maturation") || !cJSON_IsNumber(day) ||
-            !(day->valuedouble > last_key_day))
+        if (!cJSON_IsNumber(day) || !isfinite(day->valuedouble) || day->valuedouble < 0 ||
+            (!seq && (!phase || strcmp(phase, "maturation") || !(day->valuedouble > last_key_day))))
             continue;
         char where[64];
         snprintf(where, sizeof where, "frame %d", i);
         if (files_to_paths(dir, cJSON_GetObjectItemCaseSensitive(f, "files"), where, &cs[nc].paths,
                            err) == SS_OK) {
             cs[nc].day = day->valuedouble;
-            snprintf(cs[nc].name, sizeof cs[nc].name, "maturation");
+            snprintf(cs[nc].name, sizeof cs[nc].name, "%s", seq ? "healing" : "maturation");
             nc++;
         }
     }
@@ -403,6 +408,8 @@ static ss_status load_timeline_dir(const char *dir, const char *json_path, view_
             cs[j - 1] = t;
         }
     if (nc > VIEW_MAX_STOPS) nc = VIEW_MAX_STOPS;
+    if (!st && nc == 0)
+        st = ss_error_set(err, SS_ERR_INPUT, "%s: no frame with texture files", json_path);
     /* Unique layers by colour file. */
     int *layer_of = calloc((size_t)(nc + 1), sizeof *layer_of);
     int nl = 0;
@@ -429,7 +436,14 @@ static ss_status load_timeline_dir(const char *dir, const char *json_path, view_
                                                                    : out->stop_day[out->nstops - 1];
         if (out->end_day < out->stop_day[out->nstops - 1])
             out->end_day = out->stop_day[out->nstops - 1];
-        snprintf(out->source, sizeof out->source, "%s (%d keys, %d layers)", dir, nk, nl);
+        /* wound: height 0..1 spans -range..+range mm */
+        const cJSON *hr = cJSON_GetObjectItemCaseSensitive(root, "height_range_mm");
+        if (cJSON_IsNumber(hr) && hr->valuedouble > 0 && isfinite(hr->valuedouble))
+            out->height_mm = 2 * hr->valuedouble;
+        if (seq)
+            snprintf(out->source, sizeof out->source, "%s (healing sequence, %d days)", dir, nc);
+        else
+            snprintf(out->source, sizeof out->source, "%s (%d keys, %d layers)", dir, nk, nl);
     } else {
         view_layers_free(out);
     }
@@ -476,13 +490,14 @@ static ss_status load_single_set(const char *dir, view_layers *out, ss_error *er
         const char *name;
         char *dst;
     } opt[] = {{"reflection", p.refl},
-               {"specular", p.refl},
                {"roughness", p.rough},
+               {"specular", p.refl}, /* only without roughness (skinsim skin writes both) */
                {"height", p.height},
                {"normal", p.normal}};
     for (size_t i = 0; i < sizeof opt / sizeof *opt; i++) {
         char t[4096];
         snprintf(t, sizeof t, "%s/%s%s.png", dir, prefix, opt[i].name);
+        if (opt[i].dst == p.refl && p.rough[0]) continue;
         if (!opt[i].dst[0] && file_exists(t)) snprintf(opt[i].dst, 4096, "%s", t);
     }
     memset(out, 0, sizeof *out);

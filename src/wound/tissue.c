@@ -122,7 +122,7 @@ void ss_wound_tissue_observe(ss_wound_tissue *t, const ss_heal_grid *g) {
                 f = f < 0 ? 0 : f > 1 ? 1 : f;
                 scab += f * f * (3 - 2 * f) * s[i] * dx;
                 if (rho[i] > scar) scar = rho[i];
-                if (rho[i] > t->rho_max) kel += (rho[i] - t->rho_max) * dx;
+                if (rho[i] > t->rho_max) kel += (rho[i] / t->rho_max - 1) * dx;
             }
             if (ztop < 0) { /* a column of air only */
                 t->epithelium[o] = 1, t->capillary[o] = 1, t->oxygen[o] = 1;

@@ -33,8 +33,8 @@ linearly in between. The "Healing simulation" source runs `skinsim wound`
 (seed 001's healing turned into textures) on a block of block_mm around the
 wound and places its timeline inside the UV square with a Mapping node,
 blended over the outer tenth of the block into `skinsim skin`'s textures;
-the block's own base skin is skinsim wound's built-in one (its --skin cannot
-read skinsim skin's 11-channel bio.exr yet).
+the block's base skin is the same procedural skin made at the block's scale
+(skinsim wound --skin).
 """
 
 bl_info = {
@@ -592,9 +592,12 @@ class SKINSIM_OT_build_material(bpy.types.Operator):
             if st.source == "HEAL":
                 days = parse_days(st.heal_days)
                 skin = run_skin(cli, st, os.path.join(out_dir, "skin"))
-                # the block's own skin is skinsim wound's built-in one: its --skin
-                # cannot read skinsim skin's 11-channel bio.exr yet
-                frames = run_wound(cli, st, days, os.path.join(out_dir, "wound"), None)
+                # the block's base skin: the same procedural skin at the block's
+                # scale (bio maps), so it matches the skin around the block
+                block_skin = run_skin(cli, st, os.path.join(out_dir, "skin_block"),
+                                      world_size_cm=st.block_mm / 10.0,
+                                      size=min(st.size, 1024))
+                frames = run_wound(cli, st, days, os.path.join(out_dir, "wound"), block_skin)
                 mat = build_heal_material(obj, frames, days, skin, st)
             elif st.source == "SKIN":
                 mat = build_skin_material(obj, run_skin(cli, st, os.path.join(out_dir, "skin")))

@@ -17,8 +17,12 @@ from . import _lib
 from ._lib import InputError, OutOfMemoryError, SkinsimError
 from . import optics, abrasion, heal  # noqa: E402
 
-try:  # libraries built before these modules have none
+# libraries built without these modules leave them out
+try:
     from . import skin  # noqa: F401
+except ImportError:
+    pass
+try:
     from . import wound  # noqa: F401
 except ImportError:
     pass

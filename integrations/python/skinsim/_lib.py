@@ -472,12 +472,6 @@ class ss_abrasion_settings(ctypes.Structure):
         ("reference_px", c_double),
         ("scab_height_mm", c_double),
         ("seed", c_uint64),
-        ("mechanics", c_int),
-        ("fibres", c_char_p),
-        ("kappa", c_double),
-        ("tet_size_mm", c_double),
-        ("sutures", c_char_p),
-        ("tet_mesh", c_char_p),
     ]
 
 
@@ -588,10 +582,17 @@ class ss_heal_run_config(ctypes.Structure):
         ("snapshot_every", c_double),
         ("area_every", c_double),
         ("checkpoint_every", c_double),
+        ("velocity", c_int),
         ("out_dir", c_char_p),
         ("force", c_int),
         ("resume_dir", c_char_p),
         ("seed", c_uint64),
+        ("mechanics", c_int),
+        ("fibres", c_char_p),
+        ("kappa", c_double),
+        ("tet_size_mm", c_double),
+        ("sutures", c_char_p),
+        ("tet_mesh", c_char_p),
     ]
 
 
@@ -687,7 +688,9 @@ class ss_skin_maps(ctypes.Structure):
     ]
 
 
-if hasattr(lib, "ss_skin_generate"):
+# a library built without this module (or with another version of its API)
+# leaves the module out instead of failing the import of the package
+try:
     P_SKINSET = POINTER(ss_skin_settings)
     _fn("ss_skin_settings_preset", c_int, P_SKINSET, c_char_p, c_int, P_ERR)
     _fn("ss_skin_forearm_counts", None, c_double, POINTER(ctypes.c_long))
@@ -708,6 +711,9 @@ if hasattr(lib, "ss_skin_generate"):
     _fn("ss_skin_render_maps", c_int, P_IMAGE, c_void_p, c_double, c_int, POINTER(ss_skin_maps),
         P_ERR)
     _fn("ss_skin_maps_free", None, POINTER(ss_skin_maps))
+    HAVE_SKIN = True
+except AttributeError:
+    HAVE_SKIN = False
 
 # ---- wound ------------------------------------------------------------------------
 
@@ -735,12 +741,15 @@ class ss_wound_textures(ctypes.Structure):
                 ("normal", P_IMAGE)]
 
 
-if hasattr(lib, "ss_wound_render"):
+# a library built without this module (or with another version of its API)
+# leaves the module out instead of failing the import of the package
+try:
     _fn("ss_heal_run_params", c_void_p, P_RUN)
     _fn("ss_wound_recipe_default", None, POINTER(ss_wound_recipe))
     _fn("ss_wound_recipe_key", c_char_p, c_int)
     _fn("ss_wound_recipe_load", c_int, c_char_p, POINTER(ss_wound_recipe), P_ERR)
-    _fn("ss_wound_default_skin", P_IMAGE, c_int, c_double, c_uint64, P_ERR)
+    _fn("ss_skin_bio_default", P_IMAGE, c_int, c_double, c_uint64, P_ERR)
+    _fn("ss_wound_skin_read", P_IMAGE, c_char_p, P_ERR)
     _fn("ss_wound_skin_validate", c_int, P_IMAGE, c_char_p, P_ERR)
     _fn("ss_wound_render_options_default", None, POINTER(ss_wound_render_options))
     _fn("ss_wound_renderer_create", c_int, POINTER(ss_wound_render_options), POINTER(c_void_p),
@@ -750,3 +759,6 @@ if hasattr(lib, "ss_wound_render"):
     _fn("ss_wound_tissue_observe", None, c_void_p, P_GRID)
     _fn("ss_wound_tissue_free", None, c_void_p)
     _fn("ss_wound_render", c_int, c_void_p, c_void_p, P_IMAGE, POINTER(ss_wound_textures), P_ERR)
+    HAVE_WOUND = True
+except AttributeError:
+    HAVE_WOUND = False

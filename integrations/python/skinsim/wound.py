@@ -19,16 +19,17 @@ import numpy as np
 from . import _lib as L
 from . import heal, optics
 
-if not hasattr(L.lib, "ss_wound_render"):
+if not L.HAVE_WOUND:
     raise ImportError("skinsim.wound: the loaded library %s has no wound module" % L.library_path)
 
 MAPS = ("base_color", "roughness", "height_mm", "normal")
 
 
 class Textures:
-    """Textures of a heal.Run's wound. skin: base skin as bio-parameter maps
-    (h, w, >= 7 channels in skinsim.skin.BIO_CHANNELS order, e.g.
-    skin.textures()["bio"]), default the built-in light skin; table: an
+    """Textures of a heal.Run's wound. skin: the base skin as a bio map
+    (h, w, 11) in skinsim.skin.BIO_CHANNELS order (e.g.
+    skin.textures()["bio"]) or a path to `skinsim skin`'s output folder or
+    bio.exr; default the built-in forearm skin at the block's size; table: an
     optics.Table or path; recipe: a recipe JSON path (docs/wound.md)."""
 
     def __init__(self, run, size=512, skin=None, table=None, recipe=None, seed=1,
@@ -53,16 +54,21 @@ class Textures:
         h = L.Handle()
         h.own(lambda _: None, run._h)  # the tissue reads the run's grid: keep it alive
         if skin is None:
-            sk = L.check_ptr(L.lib.ss_wound_default_skin, self.size, self.side_mm, int(seed))
+            sk = L.check_ptr(L.lib.ss_skin_bio_default, self.size, self.side_mm / 10.0,
+                             int(seed))
+            h.own(L.lib.ss_image_free, sk)
+            skin_hdr = sk
+        elif isinstance(skin, (str, bytes, os.PathLike)):
+            sk = L.check_ptr(L.lib.ss_wound_skin_read, os.fsencode(os.fspath(skin)))
             h.own(L.lib.ss_image_free, sk)
             skin_hdr = sk
         else:
             a = L.as_image_input(skin, "skin")
-            if a.ndim != 3 or a.shape[2] < 7:
-                raise L.InputError("skin: bio maps need at least 7 channels (melanin, "
-                                   "pheomelanin, blood, oxygenation, sc_cm, epidermis_cm, "
-                                   "height_mm), got shape %s" % (a.shape,), L.SS_ERR_INPUT)
-            a = np.ascontiguousarray(a[..., :7])
+            if a.ndim != 3 or a.shape[2] != L.SS_BIO_NCHANNELS:
+                raise L.InputError("skin: a bio map has %d channels (%s), got shape %s"
+                                   % (L.SS_BIO_NCHANNELS, "melanin, pheomelanin, blood, "
+                                      "oxygenation, sc_cm, epidermis_cm, height_mm, extra RGBA",
+                                      a.shape), L.SS_ERR_INPUT)
             hdr = L.image_header(a)
             L.check(L.lib.ss_wound_skin_validate, ctypes.byref(hdr), b"skin")
             self._skin = (a, hdr)
