@@ -459,12 +459,6 @@ class ss_abrasion_settings(ctypes.Structure):
         ("reference_px", c_double),
         ("scab_height_mm", c_double),
         ("seed", c_uint64),
-        ("mechanics", c_int),
-        ("fibres", c_char_p),
-        ("kappa", c_double),
-        ("tet_size_mm", c_double),
-        ("sutures", c_char_p),
-        ("tet_mesh", c_char_p),
     ]
 
 
@@ -579,6 +573,12 @@ class ss_heal_run_config(ctypes.Structure):
         ("force", c_int),
         ("resume_dir", c_char_p),
         ("seed", c_uint64),
+        ("mechanics", c_int),
+        ("fibres", c_char_p),
+        ("kappa", c_double),
+        ("tet_size_mm", c_double),
+        ("sutures", c_char_p),
+        ("tet_mesh", c_char_p),
     ]
 
 
