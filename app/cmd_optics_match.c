@@ -24,6 +24,8 @@ static void match_help(FILE *f) {
                "  --table FILE      ModelMatch table (data/modelmatch_default.sstab)\n"
                "  --photons N       packets per wavelength in the transport stage (20000)\n"
                "  --seed N          random seed (1)\n"
+               "  --threads N       threads (default: $SKINSIM_THREADS or all cores); the\n"
+               "                    answer is the same for any count\n"
                "  --table-only      skip the transport stage\n"
                "  --json            print JSON\n"
                "  --quiet           accepted for symmetry (no progress output)\n");
@@ -55,7 +57,7 @@ static void print_bio_json(const ss_bio_params *b) {
 int cmd_optics_match(int argc, char **argv) {
     const char *cmd = "optics match";
     double target[3] = {0, 0, 0}, srgb[3] = {0, 0, 0};
-    int have_srgb = 0, have_lab = 0, json = 0, table_only = 0;
+    int have_srgb = 0, have_lab = 0, json = 0, table_only = 0, threads = 0;
     const char *table = NULL;
     char defpath[4096];
     ss_mm_match_options o;
@@ -69,7 +71,7 @@ int cmd_optics_match(int argc, char **argv) {
             return 0;
         }
         int val = !strcmp(a, "--srgb") || !strcmp(a, "--lab") || !strcmp(a, "--table") ||
-                  !strcmp(a, "--photons") || !strcmp(a, "--seed");
+                  !strcmp(a, "--photons") || !strcmp(a, "--seed") || !strcmp(a, "--threads");
         if (val && i + 1 >= argc) return cli_usage_error(cmd, "%s needs a value", a);
         int rc;
         if (!strcmp(a, "--srgb")) {
@@ -90,6 +92,10 @@ int cmd_optics_match(int argc, char **argv) {
         } else if (!strcmp(a, "--seed")) {
             if (cli_parse_u64("--seed", argv[++i], &o.spectrum.mc.seed, &e))
                 return cli_fail(cmd, &e);
+        } else if (!strcmp(a, "--threads")) {
+            int n;
+            if (ss_threads_parse("--threads", argv[++i], &n, &e)) return cli_fail(cmd, &e);
+            threads = n;
         } else if (!strcmp(a, "--table-only")) {
             table_only = 1;
         } else if (!strcmp(a, "--json")) {
@@ -100,6 +106,8 @@ int cmd_optics_match(int argc, char **argv) {
             return cli_usage_error(cmd, "unknown option '%s'", a);
     }
     if (have_srgb == have_lab) return cli_usage_error(cmd, "give exactly one of --srgb or --lab");
+    if (ss_threads_check_env(&e)) return cli_fail(cmd, &e);
+    ss_threads_set(threads);
     if (have_srgb) {
         double lin[3];
         for (int c = 0; c < 3; c++) lin[c] = ss_srgb_decode((float)(srgb[c] / 255.0));

@@ -26,7 +26,7 @@ static void help(void) {
            "Skin:\n"
            "  --preset NAME         forearm (default: counts per cm^2 of a forearm, 5 cm)\n"
            "                        or seed (the seed's 5000 cysts, 700 moles, 3000\n"
-           "                        freckles, 170000 follicles, 4000 wrinkles on 20 cm)\n"
+           "                        freckles, 170000 follicles, 1000 wrinkles on 20 cm)\n"
            "  --count TYPE=N        features of a type: cysts, moles, freckles, wrinkles,\n"
            "                        follicles (repeatable; N >= 0)\n"
            "  --field TYPE=FILE     greyscale probability field (PNG or EXR, any size,\n"
@@ -52,6 +52,9 @@ static void help(void) {
            "  --seed S              random seed (default 1); bit-identical for any threads\n"
            "  --gltf                also write skin.gltf: the material on a square of the\n"
            "                        world size\n"
+           "  --mesh FILE           with --gltf: the material on this mesh's UVs instead\n"
+           "                        (OBJ, glTF or GLB, e.g. data/meshes/generic-hand-left.glb;\n"
+           "                        --no-wrap suits UV islands)\n"
            "  --out DIR             output folder (default skin-out)\n"
            "  --threads N, --quiet, --json, --list-params, --help\n\n"
            "Writes DIR/base_color.png (sRGB), roughness.png, specular.png (GGX, linear\n"
@@ -205,7 +208,7 @@ static int parse(int argc, char **argv, opts *o, ss_error *err) {
             o->mesh = optarg;
             break;
         case 'j':
-            st = cli_parse_int("--threads", optarg, 1, 4096, &v, err);
+            st = cli_parse_int("--threads", optarg, 1, SS_THREADS_MAX, &v, err);
             o->threads = (int)v;
             break;
         case 'q':

@@ -44,6 +44,9 @@ static void help(void) {
            "  --table FILE.sstab     ModelMatch table (default data/modelmatch_default.sstab)\n"
            "  --exr                  also write every map as half-float EXR (height in mm)\n"
            "  --no-compare           skip compare_abrasion.png\n"
+           "  --mechanics            couple the contraction mechanics (seed 001 §4.2-4.3,\n"
+           "                         default parameters, one frame a day) and draw its\n"
+           "                         displacement (slower)\n"
            "\n"
            "Output\n"
            "  --out DIR              output directory (default wound-out)\n"
@@ -98,6 +101,10 @@ static int parse_args(int argc, char **argv, opts *o, ss_error *err) {
             c->compare = 0;
             continue;
         }
+        if (!strcmp(a, "--mechanics")) {
+            c->mechanics = 1;
+            continue;
+        }
         if (strncmp(a, "--", 2) != 0) {
             ss_error_set(err, SS_ERR_INPUT, "unexpected argument '%s'", a);
             return -1;
@@ -126,7 +133,7 @@ static int parse_args(int argc, char **argv, opts *o, ss_error *err) {
         } else if (!strcmp(a, "--out")) {
             c->out_dir = v;
         } else if (!strcmp(a, "--threads")) {
-            st = cli_parse_int(a, v, 0, 4096, &l, err);
+            st = cli_parse_int(a, v, 0, SS_THREADS_MAX, &l, err);
             o->threads = (int)l;
         } else if (!strcmp(a, "--seed")) {
             st = cli_parse_u64(a, v, &c->seed, err);

@@ -45,6 +45,13 @@ int main(int argc, char **argv) {
         fprintf(stderr, "%s\n", err.msg);
         return 1;
     }
+    double load = -1.0;
+    FILE *lf = fopen("/proc/loadavg", "r");
+    if (lf) {
+        if (fscanf(lf, "%lf", &load) != 1) load = -1.0;
+        fclose(lf);
+    }
+    printf("load average (1 min) at start: %.2f\n", load);
     printf("skin TexGen %dx%d, preset %s (world %g cm): %ld cysts, %ld moles, %ld freckles, "
            "%ld wrinkles, %ld follicles\n",
            size, size, preset, s.world_size_cm, s.count[SS_FEAT_CYST], s.count[SS_FEAT_MOLE],

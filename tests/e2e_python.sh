@@ -13,7 +13,8 @@ PY=/usr/bin/python3
 [ -x "$PY" ] || PY=$(command -v python3)
 "$PY" -c "import numpy" 2>/dev/null || { echo "SKIP: $PY has no numpy (apt-get install python3-numpy)"; exit 77; }
 [ -e "$BUILD/libskinsim.so.0" ] || { echo "FAIL: no $BUILD/libskinsim.so.0"; exit 1; }
-cc -std=c17 -I"$SRC/include" "$SRC/integrations/python/tests/abi_layout.c" -o "$T/abi_layout" || { echo "FAIL: abi_layout.c"; exit 1; }
+cc -std=c17 -I"$SRC/include" "$SRC/integrations/python/tests/abi_layout.c" -o "$T/abi_layout" \
+  || { echo "FAIL: abi_layout.c"; exit 1; }
 "$T/abi_layout" >"$T/layout.txt" || exit 1
 export SKINSIM_ABI_LAYOUT="$T/layout.txt" SKINSIM_LIB="$BUILD/libskinsim.so.0" SKINSIM_CLI="$CLI"
 export PYTHONPATH="$SRC/integrations/python" PYTHONDONTWRITEBYTECODE=1 SKINSIM_THREADS="${SKINSIM_THREADS:-2}"

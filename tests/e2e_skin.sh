@@ -126,6 +126,9 @@ expect2 "missing table" --table "$T/nope.sstab"
 printf 'not a table' >"$T/bad.sstab"
 expect2 "bad table" --table "$T/bad.sstab"
 expect2 "bad features csv" --features-in "$T/trunc.png"
+printf 'type,x,y,r,r2,h,m,p,w,x1,y1,x2,y2,x3,y3\nmoles,0.5,0.5,1e300,0,0,0,0,0,0,0,0,0,0,0\n' >"$T/big.csv"
+expect2 "huge radius in features csv" --features-in "$T/big.csv"
+check 'grep -q "big.csv:2" "$T/e"' "huge radius: file and line not named"
 expect2 "bad size" --size -4
 expect2 "bad convention" --normal-convention vulkan
 expect2 "bad preset" --preset elbow

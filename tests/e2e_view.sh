@@ -2,12 +2,14 @@
 # End-to-end: `skinsim view` as a user drives it, through GTK 4 on a display
 # (a private Xvfb when there is none) and through EGL surfaceless: the hand at
 # day 0 shows skin; the built-in wound at day 1 is redder than the skin
-# around it (generated in the viewer and loaded from `skinsim abrasion`); a
+# around it (generated in the viewer and loaded from `skinsim abrasion`, a
+# single texture set or a `skinsim wound` sequence); a
 # scripted paint session writes strokes that stay in the UV island under the
 # cursor (split at seams) and whose hulls cover the picks, which `skinsim
 # abrasion` reads; paint + Generate + slider puts a wound where the paint
 # was; --bench-frames prints its figures; bad input exits 2 naming the input
-# and writes nothing. Skips (77) only when skinsim-view was not built or no
+# and writes nothing; the window and EGL paths render the same frame, and
+# Generate equals `skinsim abrasion`. Skips (77) only when skinsim-view was not built or no
 # display and no EGL can be made. Checks use tests/view_check.py (python3).
 set -u
 CLI=$1
@@ -54,6 +56,7 @@ check '[ $? -eq 0 ] && $CHECK skin "$T/day0.png"' "day 0 is not skin"
 # The same frame through EGL surfaceless (no display involved).
 V --egl --screenshot "$T/day0_egl.png" --quiet
 check '[ $? -eq 0 ] && $CHECK skin "$T/day0_egl.png"' "EGL day 0 is not skin"
+[ $GTK -eq 1 ] && check 'cmp -s "$T/day0.png" "$T/day0_egl.png"' "the window and EGL paths render different frames"
 
 # 2. The built-in wound at day 1 is redder than the skin around it:
 #    generated in the viewer, and loaded from `skinsim abrasion`.
@@ -63,6 +66,11 @@ check '[ $? -eq 0 ] && $CHECK redder "$T/gen1.png" "$T/day0.png"' "generated wou
 V $G --load "$T/ab" --time 1 --screenshot "$T/load1.png" --json --quiet >"$T/load1.json"
 check '[ $? -eq 0 ] && $CHECK redder "$T/load1.png" "$T/day0.png"' "loaded wound at day 1 not redder"
 check 'python3 -c "import json,sys; d=json.load(open(sys.argv[1])); assert d[\"layers\"]>=7 and d[\"end_day\"]==30" "$T/load1.json"' "loaded stack: keys and maturation frames"
+# Generate in the viewer makes the same key textures as `skinsim abrasion`:
+# at day 5 (the scab key held) the two frames are the same bytes.
+V $G --generate --time 5 --screenshot "$T/gen5k.png" --quiet
+V $G --load "$T/ab" --time 5 --screenshot "$T/load5k.png" --quiet
+check 'cmp -s "$T/gen5k.png" "$T/load5k.png"' "Generate differs from skinsim abrasion at day 5"
 
 # A single texture set (`skinsim skin` names: base_color, roughness, normal,
 # height) loads as one layer.
@@ -73,6 +81,22 @@ cp "$T/ab/frames/t1_height.png" "$T/set/height.png"
 V $G --load "$T/set" --screenshot "$T/set1.png" --json --quiet >"$T/set1.json"
 check '[ $? -eq 0 ] && $CHECK redder "$T/set1.png" "$T/day0.png"' "single texture set not shown"
 check 'python3 -c "import json,sys; d=json.load(open(sys.argv[1])); assert d[\"layers\"]==1" "$T/set1.json"' "single set: one layer"
+
+# A healing sequence in the `skinsim wound` layout (no keys, frames with
+# base_color/roughness/height/normal, height_range_mm): every frame is a stop.
+mkdir -p "$T/seq/frames"
+for d in 1 30; do
+  cp "$T/ab/frames/t${d}_color.png" "$T/seq/frames/t${d}_base_color.png"
+  cp "$T/ab/frames/t${d}_normal.png" "$T/seq/frames/t${d}_normal.png"
+done
+cat >"$T/seq/timeline.json" <<'EOF'
+{"command":"wound","keys":[],"end_day":30,"height_range_mm":2,"frames":[
+ {"day":1,"phase":"simulated","files":{"base_color":"frames/t1_base_color.png","color":"frames/t1_base_color.png","normal":"frames/t1_normal.png"}},
+ {"day":30,"phase":"simulated","files":{"color":"frames/t30_base_color.png","normal":"frames/t30_normal.png"}}]}
+EOF
+V $G --load "$T/seq" --time 1 --screenshot "$T/seq1.png" --json --quiet >"$T/seq1.json"
+check '[ $? -eq 0 ] && $CHECK redder "$T/seq1.png" "$T/day0.png"' "healing sequence not shown"
+check 'python3 -c "import json,sys; d=json.load(open(sys.argv[1])); assert d[\"layers\"]==2 and d[\"end_day\"]==30" "$T/seq1.json"' "healing sequence: two layers to day 30"
 
 # 3. Paint across the hand from the side (seams in view) and save strokes.
 cat >"$T/paint.txt" <<'EOF'

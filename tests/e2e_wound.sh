@@ -2,7 +2,8 @@
 # End-to-end test of `skinsim wound`: a small run writes the frames of every
 # day (base colour, roughness, height, normal, metal-rough, glTF), the contact
 # sheet, compare_abrasion.png and timeline.json in the abrasion timeline
-# format; the same run on 1 and 2 threads gives the same bytes; bad inputs
+# format; the same run on 1 and 2 threads gives the same bytes; --mechanics
+# runs; bad inputs
 # (days, recipe, skin, table, heal options) exit 2 and write nothing.
 # usage: e2e_wound.sh <skinsim> <source dir>
 set -u
@@ -49,6 +50,13 @@ grep -q '"t3_base_color.png"' "$T/a/frames/t3.gltf" || fail "glTF does not refer
 for f in frames/t3_base_color.png frames/t3_height.png frames/t3_normal.png frames/t3_roughness.png contact_sheet.png; do
     cmp -s "$T/a/$f" "$T/b/$f" || fail "$f differs between 1 and 2 threads"
 done
+
+# --- with the contraction mechanics coupled
+"$CLI" wound --grid 24x24x8 --size 32 --quiet --days 0,2 --mechanics --no-compare --out "$T/m" ||
+    fail "--mechanics run failed"
+grep -q '"mechanics":[[:space:]]*true' "$T/m/timeline.json" || fail "timeline.json lacks mechanics"
+png_ok "$T/m/frames/t2_base_color.png"
+[ ! -e "$T/m/compare_abrasion.png" ] || fail "--no-compare wrote compare_abrasion.png"
 
 # --- bad inputs: exit 2, nothing written
 echo '{"recipe": {"no_such_key": {"value": 1, "unit": "1"}}}' >"$T/unknown.json"

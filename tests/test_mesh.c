@@ -435,11 +435,41 @@ static void test_ray_uv(void **state) {
                      SS_ERR_INPUT);
 }
 
+/* Coordinates near FLT_MAX: triangle centroids overflow to +-inf, the
+ * centroid extent to inf, and the bin of a triangle came out NaN before the
+ * conversion to int (found by fuzz_gltf; UBSan in make test-asan flags the
+ * conversion). Three triangles at x = +3e38, three at -3e38. */
+static void test_bvh_huge_coordinates(void **state) {
+    (void)state;
+    ss_error err;
+    const float M = 3.0e38f;
+    float pos[18 * 3];
+    uint32_t idx[18];
+    for (int t = 0; t < 6; t++)
+        for (int k = 0; k < 3; k++) {
+            float *p = &pos[3 * (3 * t + k)];
+            p[0] = t < 3 ? M : -M;
+            p[1] = (float)(t + k);
+            p[2] = (float)(k == 2);
+            idx[3 * t + k] = (uint32_t)(3 * t + k);
+        }
+    ss_mesh m;
+    assert_int_equal(ss_mesh_from_arrays(pos, NULL, NULL, 18, idx, 6, "huge", &m, &err), SS_OK);
+    ss_bvh *b = ss_bvh_build(&m, &err);
+    assert_non_null(b);
+    ss_bvh_free(b);
+    ss_mesh_free(&m);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_hand),     cmocka_unit_test(test_obj),
-        cmocka_unit_test(test_gltf),     cmocka_unit_test(test_bvh_hand),
-        cmocka_unit_test(test_bvh_soup), cmocka_unit_test(test_ray_uv),
+        cmocka_unit_test(test_hand),
+        cmocka_unit_test(test_obj),
+        cmocka_unit_test(test_gltf),
+        cmocka_unit_test(test_bvh_hand),
+        cmocka_unit_test(test_bvh_soup),
+        cmocka_unit_test(test_ray_uv),
+        cmocka_unit_test(test_bvh_huge_coordinates),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -429,6 +429,37 @@ static void test_lut_matches_table(void **state) {
     ss_mm_table_free(t);
 }
 
+/* Another table shape plugs in: single-sample axes and other sample counts,
+ * entries a known function of the node; the lookup equals the table's. */
+static void test_lut_other_table(void **state) {
+    (void)state;
+    ss_error err;
+    const int ns[SS_MM_NAXES] = {3, 1, 2, 1, 4, 2};
+    double lo[SS_MM_NAXES], hi[SS_MM_NAXES];
+    for (int a = 0; a < SS_MM_NAXES; a++) ss_mm_axis_default_range(a, &lo[a], &hi[a]);
+    ss_mm_table *t = ss_mm_table_create(ns, lo, hi, &err);
+    assert_non_null(t);
+    for (size_t e = 0; e < t->nentries; e++)
+        for (int f = 0; f < SS_MM_NFIELDS; f++)
+            t->entries[e * SS_MM_NFIELDS + f] = sin(0.7 * (double)e + f) * 0.5 + 0.5;
+    ss_skin_lut *lut = ss_skin_lut_create(t, &err);
+    assert_non_null(lut);
+    for (int k = 0; k < 500; k++) {
+        double x[SS_MM_NAXES], ref[SS_MM_NFIELDS];
+        float xf[6], out[5];
+        for (int a = 0; a < SS_MM_NAXES; a++) {
+            double u = ss_rng_uniform(4, 2, (uint64_t)k * 8 + a) * 1.2 - 0.1;
+            xf[a] = (float)(lo[a] + u * (hi[a] - lo[a]));
+            x[a] = xf[a];
+        }
+        ss_mm_table_lookup(t, x, ref);
+        ss_skin_lut_lookup(lut, xf, out);
+        for (int f = 0; f < 5; f++) assert_float_equal(out[f], ref[f], 2e-6);
+    }
+    ss_skin_lut_free(lut);
+    ss_mm_table_free(t);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_profiles),
@@ -439,6 +470,7 @@ int main(void) {
         cmocka_unit_test(test_seamless_wrap),
         cmocka_unit_test(test_determinism_and_roundtrip),
         cmocka_unit_test(test_lut_matches_table),
+        cmocka_unit_test(test_lut_other_table),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -339,6 +339,25 @@ static void test_threads(void **state) {
     assert_memory_equal(a.roughness->data, b.roughness->data, n * sizeof(float));
     assert_memory_equal(a.height->data, b.height->data, n * sizeof(float));
     assert_memory_equal(a.normal->data, b.normal->data, n * 3 * sizeof(float));
+    /* the mechanics' displacement: zero is no displacement; a uniform lift
+     * of 0.1 mm raises the height everywhere and changes no colour */
+    ss_image *def = ss_image_create(TEX, TEX, 3, &err);
+    assert_non_null(def);
+    assert_int_equal(ss_wound_render(s.r, t, def, &b, &err), SS_OK);
+    assert_memory_equal(a.base_color->data, b.base_color->data, n * 3 * sizeof(float));
+    assert_memory_equal(a.height->data, b.height->data, n * sizeof(float));
+    for (size_t i = 0; i < n; i++) def->data[i * 3 + 2] = 0.1f;
+    assert_int_equal(ss_wound_render(s.r, t, def, &b, &err), SS_OK);
+    assert_memory_equal(a.base_color->data, b.base_color->data, n * 3 * sizeof(float));
+    for (size_t i = 0; i < n; i++)
+        assert_true(fabsf(b.height->data[i] - a.height->data[i] - 0.1f) < 1e-6f);
+    /* a sideways shift of the whole texture by 2 mm moves the wound with it */
+    for (size_t i = 0; i < n; i++) def->data[i * 3] = 2.0f, def->data[i * 3 + 2] = 0;
+    assert_int_equal(ss_wound_render(s.r, t, def, &b, &err), SS_OK);
+    int moved = 0;
+    for (size_t i = 0; i < n * 3; i++) moved |= a.base_color->data[i] != b.base_color->data[i];
+    assert_true(moved);
+    ss_image_free(def);
     ss_wound_textures_free(&a);
     ss_wound_textures_free(&b);
     ss_wound_tissue_free(t);

@@ -1,7 +1,8 @@
 /* skinsim core: errors, float images, PNG/EXR I/O, counter-based RNG, threads,
- * progress and atomic file writes. Every other module builds on these; none of
- * it exits or aborts: failures come back as an ss_status with a message that
- * names the input and what was wrong.
+ * progress, atomic file writes and the output discipline (ss_outputs). Every
+ * other module builds on these; none of it exits or aborts: failures come
+ * back as an ss_status with a message that names the input and what was
+ * wrong.
  *
  * What is stable: every type and function declared in include/skinsim/ is the
  * library's API (one header per module). The shared library's soname
@@ -134,12 +135,6 @@ char *ss_read_file(const char *path, size_t *len, ss_error *err);
 ss_status ss_mkdir_p(const char *path, ss_error *err);
 /* Checks that dir exists (or can be created) and a file can be created in it. */
 ss_status ss_check_writable_dir(const char *dir, ss_error *err);
-/* Older form of the folder discipline, kept for callers not yet on
- * ss_outputs: begin stages dir (new or existing) as "dir.skinsim-staging.*"
- * and *work is where to write; end swaps it in whole on SS_OK (with the
- * completion marker) or removes it. No lock and no checks: use ss_outputs. */
-ss_status ss_output_dir_begin(const char *dir, char **work, ss_error *err);
-ss_status ss_output_dir_end(const char *dir, const char *work, ss_status status, ss_error *err);
 /* rm -rf of a directory tree (used to clean up a failed staging directory). */
 void ss_remove_tree(const char *path);
 

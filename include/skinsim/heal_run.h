@@ -71,6 +71,9 @@ typedef struct ss_heal_run_config {
     double area_every;       /* days between area rows (default 0.01, at least one step) */
     double checkpoint_every; /* days between checkpoints; 0 = none; < 0 = default (none, or
                                 the checkpoint's interval on resume) */
+    int velocity;            /* 1: give the grid zero velocity arrays before the solver is
+                                made, so a coupled mechanics (skinsim/mech.h) can drive the
+                                convection of every field (fresh runs) */
 
     /* ---- files ---- */
     const char *out_dir;    /* run directory; NULL = in memory, no file written */

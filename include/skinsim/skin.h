@@ -163,7 +163,7 @@ typedef struct ss_skin_settings {
 } ss_skin_settings;
 /* Presets: "forearm" (default: counts per cm^2 of a forearm, world 5 cm) and
  * "seed" (the seed's counts 5000 cysts, 700 moles, 170000 follicles, 3000
- * freckles, 4000 wrinkles, on a 20 cm face-sized texture). */
+ * freckles, 1000 wrinkles, on a 20 cm face-sized texture). */
 ss_status ss_skin_settings_preset(ss_skin_settings *s, const char *preset, int size, ss_error *err);
 /* Counts from densities for the forearm preset at this world size. */
 void ss_skin_forearm_counts(double world_size_cm, long count[SS_FEAT_NTYPES]);

@@ -58,6 +58,7 @@ enum {
     SS_WR_SCAR_ROUGHNESS,         /* 1: roughness of the mature scar (shiny) */
     SS_WR_DEPTH_SCALE,            /* 1: multiplier of the displacement depth */
     SS_WR_KELOID_SCALE,           /* 1: raise per mm of collagen above the keloid threshold */
+    SS_WR_KELOID_MAX_MM,          /* mm: the raise saturates towards this height */
     SS_WR_HEIGHT_RANGE_MM,        /* mm: height map 0..1 spans -range..+range */
     SS_WR_NKEYS
 };
@@ -91,7 +92,7 @@ typedef struct ss_wound_tissue {
     float *plasma;      /* topmost tissue cell: the wound region (§4.1.8) */
     float *scab_mm;     /* eschar integrated over the column, density x mm */
     float *scar;        /* scar (collagen) density, column maximum */
-    float *keloid_mm;   /* collagen above rho_max integrated over the column, x mm */
+    float *keloid_mm;   /* swelling: sum of (rho / rho_max - 1) dx over cells above rho_max, mm */
     float *depth_mm;    /* §5.4: skin surface down to the capillary threshold */
     float *age_days;    /* time since the column's epithelium closed (0 = open;
                            intact skin: SS_WOUND_AGE_INTACT) */
@@ -178,12 +179,19 @@ ss_status ss_wound_renderer_create(const ss_wound_render_options *o, ss_wound_re
 void ss_wound_renderer_free(ss_wound_renderer *r);
 /* The base skin's own textures (what the skin looks like without a wound). */
 const ss_wound_textures *ss_wound_renderer_base(const ss_wound_renderer *r);
-/* Textures of the tissue t over the base skin; side_mm: the block's x and y
- * size (the texture covers it). deformation: NULL, or the mechanics' per-texel
- * displacement (3 channels, mm: x, y along the texture (x right, y up), z up),
- * which moves where the fields are sampled and adds to the height. */
+/* Textures of the tissue t over the base skin (the texture covers the heal
+ * block). deformation: NULL, or the mechanics' per-texel displacement of the
+ * material point (3 channels, mm: x, y along the texture (x right, y up), z
+ * up), which moves where the fields are sampled and adds to the height
+ * (ss_wound_deformation_from_grid makes it from the mechanics' grid arrays). */
 ss_status ss_wound_render(ss_wound_renderer *r, const ss_wound_tissue *t,
                           const ss_image *deformation, ss_wound_textures *out, ss_error *err);
+
+/* The per-texel deformation (size x size x 3, mm) from a displacement field on
+ * the heal grid (3 arrays of nx*ny*nz, mm, e.g. ss_mech_grid_displacement):
+ * each column's topmost tissue cell, bilinear between column centres. */
+ss_image *ss_wound_deformation_from_grid(const ss_heal_grid *g, float *const *disp, int size,
+                                         ss_error *err);
 
 /* ---- the whole job: `skinsim wound` --------------------------------------------------- */
 
@@ -198,9 +206,11 @@ typedef struct ss_wound_make_config {
     const char *table_path;  /* NULL = data/modelmatch_default.sstab */
     const char *recipe_path; /* NULL = defaults */
     const char *out_dir;
-    int exr;     /* also write every map as half-float EXR (height in mm) */
-    int compare; /* write compare_abrasion.png (default 1) */
-    int quiet;   /* no progress bar */
+    int exr;       /* also write every map as half-float EXR (height in mm) */
+    int compare;   /* write compare_abrasion.png (default 1) */
+    int mechanics; /* 1: couple the contraction mechanics (skinsim/mech.h, default
+                      parameters, one frame a day) and apply its displacement */
+    int quiet;     /* no progress bar */
     uint64_t seed;
 } ss_wound_make_config;
 void ss_wound_make_config_default(ss_wound_make_config *c);

@@ -316,8 +316,7 @@ static ss_image *read_pixels(exr_context_t ctx, const char *path, exr_io *io,
     return img;
 }
 
-static ss_image *exr_read_impl(const char *path, const char *const *want, int nwant,
-                               ss_error *err);
+static ss_image *exr_read_impl(const char *path, const char *const *want, int nwant, ss_error *err);
 ss_image *ss_exr_read(const char *path, ss_error *err) { return exr_read_impl(path, NULL, 0, err); }
 ss_image *ss_exr_read_channels(const char *path, const char *const *names, int n, ss_error *err) {
     if (!names || n < 1 || n > 64) {

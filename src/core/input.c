@@ -11,6 +11,7 @@
  * is the physical memory. */
 #define _GNU_SOURCE
 #include "skinsim/core.h"
+#include "core_internal.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -21,12 +22,13 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-static const char *file_kind(mode_t m) {
+const char *ss__file_kind(mode_t m) {
     if (S_ISDIR(m)) return "a folder";
     if (S_ISCHR(m)) return "a character device";
     if (S_ISBLK(m)) return "a block device";
     if (S_ISFIFO(m)) return "a named pipe";
     if (S_ISSOCK(m)) return "a socket";
+    if (S_ISLNK(m)) return "a symbolic link";
     return "not a regular file";
 }
 
@@ -42,7 +44,7 @@ int ss_input_open_fd(const char *path, size_t *size, ss_error *err) {
     }
     if (!S_ISREG(st.st_mode)) {
         ss_error_set(err, SS_ERR_INPUT, "%s: is %s, not a regular file", path,
-                     file_kind(st.st_mode));
+                     ss__file_kind(st.st_mode));
         return -1;
     }
     int fd = open(path, O_RDONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
@@ -52,7 +54,7 @@ int ss_input_open_fd(const char *path, size_t *size, ss_error *err) {
     }
     if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
         ss_error_set(err, SS_ERR_INPUT, "%s: is %s, not a regular file", path,
-                     file_kind(st.st_mode));
+                     ss__file_kind(st.st_mode));
         close(fd);
         return -1;
     }
@@ -128,10 +130,11 @@ double ss_memory_available_bytes(void) {
     if (getrlimit(RLIMIT_AS, &rl) == 0 && rl.rlim_cur != RLIM_INFINITY) {
         double used = proc_kb("/proc/self/status", "VmSize");
         double left = (double)rl.rlim_cur - (used > 0 ? used : 0);
-        if (best <= 0 || left < best) best = left > 0 ? left : 0;
+        /* nothing left is 1 byte, not 0 (which would mean "unknown") */
+        if (best <= 0 || left < best) best = left > 1 ? left : 1;
     }
     double cg = cgroup_left();
-    if (cg >= 0 && (best <= 0 || cg < best)) best = cg;
+    if (cg >= 0 && (best <= 0 || cg < best)) best = cg > 1 ? cg : 1;
     return best;
 }
 

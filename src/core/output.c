@@ -28,6 +28,7 @@
  * without this command's marker is refused rather than replaced. */
 #define _GNU_SOURCE /* renameat2, RENAME_EXCHANGE */
 #include "skinsim/core.h"
+#include "core_internal.h"
 
 #include <dirent.h>
 #include <errno.h>
@@ -112,16 +113,6 @@ static char *dirname_of(const char *p) {
     if (!sl) return strdup(".");
     if (sl == p) return strdup("/");
     return strndup(p, (size_t)(sl - p));
-}
-
-static const char *kind_name(mode_t m) {
-    if (S_ISCHR(m)) return "a character device";
-    if (S_ISBLK(m)) return "a block device";
-    if (S_ISFIFO(m)) return "a named pipe";
-    if (S_ISSOCK(m)) return "a socket";
-    if (S_ISDIR(m)) return "a folder";
-    if (S_ISLNK(m)) return "a symbolic link";
-    return "not a regular file";
 }
 
 static int path_within(const char *inner, const char *outer) {
@@ -365,11 +356,11 @@ static ss_status check_target(const ss_outputs *o, out_entry *e, ss_error *err) 
                 return OUTMSG(e,
                               "is %s; skinsim writes regular files and never replaces anything "
                               "else",
-                              kind_name(st.st_mode));
+                              ss__file_kind(st.st_mode));
         } else {
             if (!S_ISDIR(st.st_mode))
                 return OUTMSG(e, "exists and is %s, not a folder",
-                              S_ISREG(st.st_mode) ? "a file" : kind_name(st.st_mode));
+                              S_ISREG(st.st_mode) ? "a file" : ss__file_kind(st.st_mode));
             if (!strcmp(e->real, "/"))
                 return OUTMSG(e, "%s", "is the root folder; give a folder of its own");
             int ours = ss_output_dir_is_complete(e->real, o->owner) ||
@@ -963,49 +954,5 @@ ss_status ss_path_under(const char *base_dir, const char *name, int allow_outsid
     free(base);
     free(joined);
     free(real);
-    return s;
-}
-
-/* ---- the older folder calls, on top of the same pieces ------------------ */
-
-ss_status ss_output_dir_begin(const char *dir, char **work, ss_error *err) {
-    *work = NULL;
-    ss_outputs *o = ss_outputs_create(NULL, err);
-    if (!o) return SS_ERR_NOMEM;
-    ss_status s = ss_outputs_add(o, NULL, dir, SS_OUTPUT_DIR, 0, err);
-    out_entry *e = o->nout ? &o->out[0] : NULL;
-    if (s == SS_ERR_INPUT && e && ss_output_dir_is_complete(e->real, NULL)) {
-        ss_error_clear(err); /* any finished skinsim folder may be replaced here */
-        s = SS_OK;
-    }
-    if (!s) s = make_parents(e, err);
-    if (!s) s = make_staging(o, e, err);
-    if (!s) {
-        *work = e->staging;
-        e->staging = NULL;
-    }
-    ss_outputs_free(o);
-    return s;
-}
-
-ss_status ss_output_dir_end(const char *dir, const char *work, ss_status status, ss_error *err) {
-    if (!work || !strcmp(dir, work)) return status;
-    if (status) {
-        ss_remove_tree(work);
-        return status;
-    }
-    out_entry e = {0};
-    const char *why = "out of memory";
-    e.real = resolve(dir, &why);
-    e.write = (char *)work;
-    ss_status s = e.real ? ss_output_dir_mark_complete(work, "skinsim", err)
-                         : ss_error_set(err, SS_ERR_RUNTIME, "%s: %s", dir, why);
-    if (!s && swap_in(&e) != 0)
-        s = ss_error_set(err, SS_ERR_RUNTIME, "%s: cannot move output into place: %s", dir,
-                         strerror(errno));
-    if (!s && e.old) ss_remove_tree(e.old);
-    if (s) ss_remove_tree(work);
-    free(e.old);
-    free(e.real);
     return s;
 }

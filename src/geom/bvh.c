@@ -69,8 +69,10 @@ static void box_grow(float *lo, float *hi, const float *plo, const float *phi) {
 }
 
 static int bin_of(const build_ctx *c, int t, int axis, float lo, float scale) {
-    int b = (int)((c->cen[3 * t + axis] - lo) * scale);
-    return b < 0 ? 0 : b >= NBINS ? NBINS - 1 : b;
+    /* clamped before the conversion: coordinates near FLT_MAX overflow the
+     * centroid or the extent, and inf or NaN has no int (found by fuzz_gltf) */
+    float f = (c->cen[3 * t + axis] - lo) * scale;
+    return !(f >= 0) ? 0 : f >= NBINS ? NBINS - 1 : (int)f;
 }
 
 /* Chooses how to split tri[begin, end) whose bounds are lo..hi: returns the

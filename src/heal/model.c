@@ -32,9 +32,6 @@
 ss_heal_rd_work *ss_heal_rd__work_create_ex(const ss_heal_rd_system *sys, int need_buf,
                                             int need_mslot, ss_error *err);
 
-/* Most depth levels a layer weight table holds (deeper levels weigh 0). */
-#define MAXLEV 64
-
 typedef struct model_ctx {
     float lam11, lam31, lam12, lam22, beta2, lam33, lam32, inv_u3eq, rn, inv_K, lamnn;
     float Rs, lames, lamge, lamee, gamma1, lamnrho, lamrhop, lamkrho, lampp, inv_rhomax, rhomax;
@@ -45,11 +42,9 @@ typedef struct model_ctx {
     /* per column (y * nx + x): surface cell z (-1: none), gathered surface
      * epithelium and wound-bed capillary density */
     int *ztop;
-    float *ecol, *bed;
-    const uint8_t *ztop_of; /* the cell array ztop was computed from */
-    /* per depth level k below the surface cell: its fraction inside the scab layer */
-    float wscab[MAXLEV];
-    int nscab;
+    float *ecol, *bed, *ds, *wsum; /* ds, wsum: prepare's scratch */
+    const uint8_t *ztop_of;        /* the cell array ztop was computed from */
+    float scab_h;                  /* scab_mm / voxel: the scab layer in voxel levels */
 } model_ctx;
 
 struct ss_heal_solver {
@@ -91,6 +86,9 @@ static void heal_react(void *vctx, const ss_heal_rd_row *row) {
     const float dyn = m->static_region ? 0.0f : 1.0f;
     const float ibeta = 1.0f / m->beta2;
     const int z = row->z;
+    const float scab_h = m->scab_h, kscab = m->kscab, rclosed = m->rho_closed;
+    const float lamnrho = m->lamnrho, lamkrho = m->lamkrho, lamge = m->lamge, lamee = m->lamee;
+    const float lames = m->lames;
     float *restrict m0 = row->m[0], *restrict m1 = row->m[1];
     float *restrict p1 = pr[0], *restrict p2 = pr[1], *restrict p3 = pr[2], *restrict p4 = pr[3];
     float *restrict p5 = pr[4], *restrict p6 = pr[5], *restrict p7 = pr[6], *restrict p8 = pr[7];
@@ -103,9 +101,12 @@ static void heal_react(void *vctx, const ss_heal_rd_row *row) {
         const float om = (float)(p > pmin);
         const float ns = pos(1.0f - s);
         const float open3 = pos(1.0f - u3);
-        const int k = ZT[i] - z; /* depth level below the surface cell (0 = surface) */
-        const float surf = (float)(k == 0);
-        const float wsc = k >= 0 && k < MAXLEV ? m->wscab[k < 0 ? 0 : k] : 0.0f;
+        /* depth level below the surface cell (0 = surface, < 0: no surface) and
+         * the fraction of the level inside the top scab_mm (arithmetic, no
+         * table lookup, so the loop stays vectorised) */
+        const float kf = (float)(ZT[i] - z);
+        const float surf = (float)(kf == 0.0f);
+        const float wsc = (float)(kf >= 0.0f) * clampf(scab_h - kf, 0.0f, 1.0f);
         const float ecl = EC[i], necl = pos(1.0f - ecl);
         /* 4.1.1 oxygen: (1-s)(D1 lap u1 + lam31 u3) - lam11 u1 */
         p1[i] = ns * m->lam31 * u3;
@@ -126,16 +127,16 @@ static void heal_react(void *vctx, const ss_heal_rd_row *row) {
          * the top scab_mm of the wound region, e is the column's surface sheet */
         const float X = open3 * necl * Rs * wsc * om;
         p5[i] = X;
-        l5[i] = X + m->lames * ecl;
+        l5[i] = X + lames * ecl;
         /* 4.1.6 epithelium, on the surface only:
          * (1 - kscab s) Q(u3_bed)(De lap_xy e + lamge e) - lamee e */
-        const float me = surf * pos(1.0f - m->kscab * s) * qwin(BED[i], g1, ig1, ig2);
-        p6[i] = me * m->lamge * e;
-        l6[i] = surf * m->lamee;
+        const float me = surf * pos(1.0f - kscab * s) * qwin(BED[i], g1, ig1, ig2);
+        p6[i] = me * lamge * e;
+        l6[i] = surf * lamee;
         /* 4.1.7 scar, restricted to omega: (1-s) n ((1-u3)(1-e) lamnrho + lamkrho)
          * - lamrhop rho */
-        const float imm = pos(1.0f - m->rho_closed * u3); /* (1 - u3) at rho_open = 0 */
-        p7[i] = om * ns * nn * (imm * necl * m->lamnrho + m->lamkrho);
+        const float imm = pos(1.0f - rclosed * u3); /* (1 - u3) at rho_open = 0 */
+        p7[i] = om * ns * nn * (imm * necl * lamnrho + lamkrho);
         l7[i] = m->lamrhop;
         /* 4.1.8 plasma: Dp lap p + lampp p + C(rho)(1-p) */
         const float C = pos(rho - m->rhomax) * m->inv_rhomax;
@@ -145,19 +146,6 @@ static void heal_react(void *vctx, const ss_heal_rd_row *row) {
         m1[i] = me;
         (void)e;
     }
-}
-
-/* Level weights of a layer [0, thick_mm] below the surface cell: the
- * fraction of each voxel (edge h) inside it. */
-static int layer_weights(double thick_mm, double h, float *w) {
-    int n = 0;
-    for (int k = 0; k < MAXLEV; k++) {
-        double top = k * h, bot = (k + 1) * h;
-        double in = (bot < thick_mm ? bot : thick_mm) - top;
-        w[k] = in > 0 ? (float)(in / h) : 0.0f;
-        if (in > 0) n = k + 1;
-    }
-    return n;
 }
 
 static int is_tissue(uint8_t c) { return c != SS_CELL_AIR && c != SS_CELL_BOUND; }
@@ -180,44 +168,60 @@ static void find_surface(model_ctx *c) {
 }
 
 /* prepare hook: the surface epithelium and the bed's mean capillary density
- * of every column, from the current fields. */
+ * of every column, from the current fields. Walks each y slab z-row by z-row
+ * (contiguous in x) rather than column by column, so large grids stream
+ * through memory; per column the sums still run in z order (deterministic). */
 static void heal_prepare(void *vctx, float *const *u) {
     model_ctx *c = vctx;
     const int nx = c->nx, ny = c->ny;
     const size_t sz = (size_t)nx * (size_t)ny;
     const float *E = u[SS_HEAL_EPITHELIUM], *U3 = u[SS_HEAL_CAPILLARY], *S = u[SS_HEAL_ESCHAR];
-    const float h = c->h;
+    const float h = c->h, bedmm = c->bed_mm;
+    const int scab = c->scab;
 #pragma omp parallel for schedule(static) if (sz * (size_t)c->nz >= RD_PAR_MIN_CELLS)
-    for (int y = 0; y < ny; y++)
+    for (int y = 0; y < ny; y++) {
+        const size_t r0 = (size_t)y * (size_t)nx;
+        const int *zt = c->ztop + r0;
+        float *ec = c->ecol + r0, *bed = c->bed + r0, *ds = c->ds + r0, *ws = c->wsum + r0;
+        int zhi = -1;
         for (int x = 0; x < nx; x++) {
-            const size_t col = (size_t)y * nx + x;
-            const int zt = c->ztop[col];
-            if (zt < 0) {
-                c->ecol[col] = c->bed[col] = 0.0f;
-                continue;
+            ec[x] = zt[x] >= 0 ? E[(size_t)zt[x] * sz + r0 + x] : 0.0f;
+            ds[x] = bed[x] = ws[x] = 0.0f;
+            if (zt[x] > zhi) zhi = zt[x];
+        }
+        if (zhi < 1) continue;
+        /* the eschar thickness over each column: the depth integral of s (0
+         * without the scab switch, which is the only eschar source) */
+        float dmax = 0.0f;
+        if (scab) {
+            for (int z = zhi; z >= 1; z--) {
+                const float *Sr = S + (size_t)z * sz + r0;
+                for (int x = 0; x < nx; x++)
+                    if (zt[x] >= z) ds[x] += Sr[x] * h;
             }
-            const size_t top = (size_t)zt * sz + col;
-            c->ecol[col] = E[top];
-            /* the bed: the top bed_mm of viable tissue, below the column's
-             * eschar (its thickness: the depth integral of s) */
-            int kmax = 0;
-            float ds = 0.0f;
-            for (int k = 0; zt - k >= 1; k++) {
-                const size_t i = top - (size_t)k * sz;
-                if (!is_tissue(c->cell[i])) break;
-                ds += S[i] * h;
-                kmax = k + 1;
-            }
-            const float a = ds, b = ds + c->bed_mm;
-            float sum = 0.0f, wsum = 0.0f;
-            for (int k = 0; k < kmax; k++) {
+            for (int x = 0; x < nx; x++)
+                if (ds[x] > dmax) dmax = ds[x];
+        }
+        /* the bed: the top bed_mm of viable tissue below the eschar */
+        int zlo = zhi - (int)ceilf((dmax + bedmm) / h) - 1;
+        if (zlo < 1) zlo = 1;
+        for (int z = zhi; z >= zlo; z--) {
+            const float *Ur = U3 + (size_t)z * sz + r0;
+            for (int x = 0; x < nx; x++) {
+                const int k = zt[x] - z;
+                if (k < 0) continue;
+                const float a = ds[x], b = ds[x] + bedmm;
                 const float lo = k * h > a ? k * h : a, hi = (k + 1) * h < b ? (k + 1) * h : b;
                 if (hi <= lo) continue;
-                sum += (hi - lo) * U3[top - (size_t)k * sz];
-                wsum += hi - lo;
+                bed[x] += (hi - lo) * Ur[x];
+                ws[x] += hi - lo;
             }
-            c->bed[col] = wsum > 0 ? sum / wsum : U3[top - (size_t)(kmax - 1) * sz];
         }
+        for (int x = 0; x < nx; x++) {
+            if (zt[x] < 0) continue;
+            bed[x] = ws[x] > 0 ? bed[x] / ws[x] : U3[sz + r0 + x]; /* below the column: z = 1 */
+        }
+    }
 }
 
 static void ctx_init(model_ctx *c, const ss_heal_params *p, const ss_heal_grid *g) {
@@ -254,7 +258,7 @@ static void ctx_init(model_ctx *c, const ss_heal_params *p, const ss_heal_grid *
     c->rho_closed = (float)(1.0 - p->rho_open);
     c->bed_mm = (float)p->bed_mm;
     c->h = (float)g->dx_mm;
-    c->nscab = layer_weights(p->scab_mm, g->dx_mm, c->wscab);
+    c->scab_h = (float)(p->scab_mm / g->dx_mm);
 }
 
 /* Bound on the reaction rates (growth + loss, 1/day) for the explicit limit. */
@@ -384,7 +388,9 @@ ss_heal_solver *ss_heal_solver_create(const ss_heal_grid *g, const ss_heal_param
     s->ctx.ztop = malloc(ncol * sizeof(int));
     s->ctx.ecol = calloc(ncol, sizeof(float));
     s->ctx.bed = calloc(ncol, sizeof(float));
-    if (!s->ctx.ztop || !s->ctx.ecol || !s->ctx.bed) {
+    s->ctx.ds = calloc(ncol, sizeof(float));
+    s->ctx.wsum = calloc(ncol, sizeof(float));
+    if (!s->ctx.ztop || !s->ctx.ecol || !s->ctx.bed || !s->ctx.ds || !s->ctx.wsum) {
         ss_heal_solver_free(s);
         ss_error_set(err, SS_ERR_NOMEM, "heal solver: out of memory");
         return NULL;
@@ -426,6 +432,8 @@ void ss_heal_solver_free(ss_heal_solver *s) {
     free(s->ctx.ztop);
     free(s->ctx.ecol);
     free(s->ctx.bed);
+    free(s->ctx.ds);
+    free(s->ctx.wsum);
     free(s);
 }
 

@@ -99,10 +99,10 @@ ss_status ss_skin_features_parse_csv(const char *text, const char *name, ss_skin
                 st = ss_error_set(err, SS_ERR_INPUT,
                                   "%s:%zu: position %g outside the texture (0..1)", name, lineno,
                                   v[c]);
-            else if (c >= 2 && c <= 7 && v[c] < 0.0)
-                st = ss_error_set(err, SS_ERR_INPUT, "%s:%zu: column %d is negative (%g)", name,
-                                  lineno, c + 2, v[c]);
-            else if (c >= 8 && !(fabs(v[c]) <= 100.0))
+            else if (c >= 2 && c <= 7 && !(v[c] >= 0.0 && v[c] <= 1000.0))
+                st = ss_error_set(err, SS_ERR_INPUT, "%s:%zu: column %d (%g) is outside 0..1000",
+                                  name, lineno, c + 2, v[c]);
+            else if (c >= 8 && !(fabs(v[c]) <= 10.0))
                 st = ss_error_set(err, SS_ERR_INPUT, "%s:%zu: control point %g out of range", name,
                                   lineno, v[c]);
         }

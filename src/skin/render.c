@@ -98,8 +98,9 @@ static void lut_cache_init(lut_cache *c) {
     for (int i = 0; i < LUT_SLOTS; i++) c->base[i] = (size_t)-1;
 }
 
-static inline void lut_lookup(const ss_skin_lut *l, lut_cache *c, const float x[6],
-                              float out[LUT_F]) {
+/* The lookup with `nslots` cached cells (base[], cor[]; nslots a power of 2). */
+static inline void lut_lookup_slots(const ss_skin_lut *l, size_t *cbase, float (*ccor)[LUT_F][64],
+                                    int nslots, const float x[6], float out[LUT_F]) {
     size_t base = 0;
     float fr[SS_MM_NAXES];
     for (int a = 0; a < SS_MM_NAXES; a++) {
@@ -115,10 +116,11 @@ static inline void lut_lookup(const ss_skin_lut *l, lut_cache *c, const float x[
         fr[a] = (xa - v[i]) / (v[i + 1] - v[i]);
         base += (size_t)i * l->stride[a];
     }
-    const int slot = (int)(((uint64_t)base * 0x9E3779B97F4A7C15ull) >> 61);
-    float(*cor)[64] = c->cor[slot];
-    if (base != c->base[slot]) {
-        c->base[slot] = base;
+    const int slot =
+        nslots > 1 ? (int)(((uint64_t)base * 0x9E3779B97F4A7C15ull) >> 61) & (nslots - 1) : 0;
+    float(*cor)[64] = ccor[slot];
+    if (base != cbase[slot]) {
+        cbase[slot] = base;
         for (int k = 0; k < 64; k++) {
             const float *nd = l->node + (base + l->corner[k]) * LUT_F;
             for (int f = 0; f < LUT_F; f++) cor[f][k] = nd[f];
@@ -143,15 +145,20 @@ static inline void lut_lookup(const ss_skin_lut *l, lut_cache *c, const float x[
 #undef LERP_LEVEL
 }
 
+static inline void lut_lookup(const ss_skin_lut *l, lut_cache *c, const float x[6],
+                              float out[LUT_F]) {
+    lut_lookup_slots(l, c->base, c->cor, LUT_SLOTS, x, out);
+}
+
 void ss_skin_lut_lookup(const ss_skin_lut *l, const float x[6], float out[5]) {
-    lut_cache *c = malloc(sizeof *c);
-    if (!c) {
-        for (int f = 0; f < LUT_F; f++) out[f] = NAN;
-        return;
-    }
-    lut_cache_init(c);
-    lut_lookup(l, c, x, out);
-    free(c);
+    /* one slot on the stack: no allocation per call (callers that look up
+     * texel after texel, such as the wound renderer, call this) */
+    struct {
+        size_t base[1];
+        float cor[1][LUT_F][64];
+    } one;
+    one.base[0] = (size_t)-1;
+    lut_lookup_slots(l, one.base, one.cor, 1, x, out);
 }
 
 void ss_skin_bio_texel(const ss_image *bio, int x, int y, ss_bio_params *out) {

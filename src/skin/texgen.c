@@ -297,11 +297,27 @@ ss_image *ss_skin_bio_maps_timed(const ss_skin_settings *s, const ss_skin_fields
     if (st) return NULL;
     static const ss_skin_fields none;
     if (!fields) fields = &none;
-    for (size_t i = 0; i < l->n; i++)
-        if (l->f[i].type < 0 || l->f[i].type >= SS_FEAT_NTYPES) {
-            ss_error_set(err, SS_ERR_INPUT, "feature %zu: unknown type %d", i, l->f[i].type);
+    for (size_t i = 0; i < l->n; i++) {
+        const ss_skin_feature *f = &l->f[i];
+        if (f->type < 0 || f->type >= SS_FEAT_NTYPES) {
+            ss_error_set(err, SS_ERR_INPUT, "feature %zu: unknown type %d", i, f->type);
             return NULL;
         }
+        /* sizes up to 1 m and positions within 10 textures of this one keep
+         * every box computation finite */
+        int ok = fabs(f->x) <= 10.0 && fabs(f->y) <= 10.0;
+        const double len[5] = {f->r, f->r2, f->h, f->w, f->m + f->p};
+        for (int k = 0; k < 5; k++) ok &= len[k] >= 0.0 && len[k] <= 1000.0;
+        for (int k = 0; k < 4 && f->type == SS_FEAT_WRINKLE; k++)
+            ok &= fabs(f->curve.x[k]) <= 10.0 && fabs(f->curve.y[k]) <= 10.0;
+        if (!ok) {
+            ss_error_set(err, SS_ERR_INPUT,
+                         "feature %zu (%s): a size outside 0..1000 mm, a position outside "
+                         "-10..10 texture units, or not a number",
+                         i, ss_feature_type_name(f->type));
+            return NULL;
+        }
+    }
     if (l->n > 0xffffffffu) {
         ss_error_set(err, SS_ERR_INPUT, "too many features (%zu)", l->n);
         return NULL;

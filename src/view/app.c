@@ -38,7 +38,7 @@ static const char *CMD = "view";
 
 typedef struct opts {
     const char *mesh, *load, *strokes, *screenshot, *script, *save_strokes, *window_shot;
-    int width, height, texture_size, bench_frames, generate, egl, json, quiet;
+    int width, height, texture_size, bench_frames, generate, egl, json, quiet, hide_strokes;
     double day, brush_mm, displace;
     uint64_t seed;
 } opts;
@@ -48,8 +48,8 @@ static void help(void) {
            "Paint a wound on a body and scrub its healing (seed 000 §4.2): GTK 4 window\n"
            "with the mesh, paint mode, Generate and a time slider.\n\n"
            "  --mesh FILE          .glb/.gltf/.obj with UVs (default: the shipped hand)\n"
-           "  --load DIR           textures: a `skinsim abrasion --out DIR` folder (keys +\n"
-           "                       timeline.json) or a single set (`skinsim skin`:\n"
+           "  --load DIR           textures: a `skinsim abrasion` or `skinsim wound` folder\n"
+           "                       (timeline.json) or a single set (`skinsim skin`:\n"
            "                       base_color.png, roughness/specular, normal, height)\n"
            "  --strokes FILE.csv   painted strokes to start from (the abrasion CSV)\n"
            "  --generate           run Generate at start (painted strokes, else the\n"
@@ -58,7 +58,8 @@ static void help(void) {
            "  --time DAYS          time on the slider (default 0)\n"
            "  --brush-mm R         brush radius on the surface in mm (default 4)\n"
            "  --displace X         height displacement scale (default 1 = true size)\n"
-           "  --seed S             random seed (default 1)\n\n"
+           "  --seed S             random seed (default 1)\n"
+           "  --hide-strokes       do not draw the painted strokes (H toggles)\n\n"
            "Batch (no window needed; exits when done):\n"
            "  --screenshot FILE.png  render one frame to FILE\n"
            "  --size WxH           frame size (default 1280x720)\n"
@@ -87,16 +88,14 @@ static int parse_size(const char *s, int *w, int *h, ss_error *err) {
 }
 
 static int parse(int argc, char **argv, opts *o, ss_error *err) {
-    static const struct option lo[] = {{"mesh", 1, 0, 'm'},         {"load", 1, 0, 'l'},
-                                       {"strokes", 1, 0, 's'},      {"screenshot", 1, 0, 'o'},
-                                       {"script", 1, 0, 'x'},       {"save-strokes", 1, 0, 'w'},
-                                       {"size", 1, 0, 'z'},         {"texture-size", 1, 0, 'n'},
-                                       {"bench-frames", 1, 0, 'b'}, {"generate", 0, 0, 'g'},
-                                       {"egl", 0, 0, 'e'},          {"json", 0, 0, 'J'},
-                                       {"quiet", 0, 0, 'q'},        {"time", 1, 0, 't'},
-                                       {"brush-mm", 1, 0, 'r'},     {"displace", 1, 0, 'd'},
-                                       {"seed", 1, 0, 'S'},         {"help", 0, 0, 'h'},
-                                       {"window-shot", 1, 0, 'W'},  {0, 0, 0, 0}};
+    static const struct option lo[] = {
+        {"mesh", 1, 0, 'm'},        {"load", 1, 0, 'l'},         {"strokes", 1, 0, 's'},
+        {"screenshot", 1, 0, 'o'},  {"script", 1, 0, 'x'},       {"save-strokes", 1, 0, 'w'},
+        {"size", 1, 0, 'z'},        {"texture-size", 1, 0, 'n'}, {"bench-frames", 1, 0, 'b'},
+        {"generate", 0, 0, 'g'},    {"egl", 0, 0, 'e'},          {"json", 0, 0, 'J'},
+        {"quiet", 0, 0, 'q'},       {"time", 1, 0, 't'},         {"brush-mm", 1, 0, 'r'},
+        {"displace", 1, 0, 'd'},    {"seed", 1, 0, 'S'},         {"help", 0, 0, 'h'},
+        {"window-shot", 1, 0, 'W'}, {"hide-strokes", 0, 0, 'H'}, {0, 0, 0, 0}};
     memset(o, 0, sizeof *o);
     o->width = 1280, o->height = 720, o->texture_size = 2048;
     o->brush_mm = 4, o->displace = 1, o->seed = 1;
@@ -127,6 +126,9 @@ static int parse(int argc, char **argv, opts *o, ss_error *err) {
             break;
         case 'W':
             o->window_shot = optarg;
+            break;
+        case 'H':
+            o->hide_strokes = 1;
             break;
         case 'z':
             st = parse_size(optarg, &o->width, &o->height, err);
@@ -670,7 +672,12 @@ static void app_sync_gl(app *a) {
     if (!a->rend) return;
     if (a->layers_dirty) {
         ss_error err = {0};
-        if (view_renderer_set_layers(a->rend, &a->layers, &err)) app_message(a, 1, "%s", err.msg);
+        double t0 = ss_now();
+        if (view_renderer_set_layers(a->rend, &a->layers, &err))
+            app_message(a, 1, "%s", err.msg);
+        else if (!a->o.quiet)
+            fprintf(stderr, "skinsim view: %d layers of %d^2 uploaded in %.0f ms\n",
+                    a->layers.nlayers, a->layers.size, (ss_now() - t0) * 1e3);
         a->layers_dirty = 0;
     }
     if (a->strokes_dirty) {
@@ -690,6 +697,7 @@ static ss_status app_init(app *a, const opts *o, ss_error *err) {
     ss_status st = ss_mesh_load(mesh, &a->mesh, err);
     if (st) return st;
     a->can_paint = a->mesh.has_uvs;
+    a->hide_strokes = o->hide_strokes;
     if (a->can_paint) st = ss_paint_create(&a->mesh, o->brush_mm * 1e-3, &a->paint, err);
     if (st) return st;
     if (!a->mesh.has_uvs)

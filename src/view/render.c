@@ -402,7 +402,10 @@ void view_renderer_free(view_renderer *r) {
 
 const char *view_renderer_gl_info(view_renderer *r) { return r->info; }
 
-static GLuint make_array(GLenum internal, int size, int layers, const unsigned char *data) {
+/* A texture array with its mipmaps: the CPU-made chain when there is one
+ * (the GL thread then only copies), else glGenerateMipmap. */
+static GLuint make_array(GLenum internal, int size, int layers, const unsigned char *data,
+                         unsigned char *const *mips, int nlevels) {
     GLuint t;
     glGenTextures(1, &t);
     glBindTexture(GL_TEXTURE_2D_ARRAY, t);
@@ -412,7 +415,13 @@ static GLuint make_array(GLenum internal, int size, int layers, const unsigned c
     glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
     glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, (GLint)internal, size, size, layers, 0, GL_RGBA,
                  GL_UNSIGNED_BYTE, data);
-    glGenerateMipmap(GL_TEXTURE_2D_ARRAY);
+    if (nlevels == levels) {
+        for (int lv = 1; lv < levels; lv++)
+            glTexImage3D(GL_TEXTURE_2D_ARRAY, lv, (GLint)internal, size >> lv, size >> lv, layers,
+                         0, GL_RGBA, GL_UNSIGNED_BYTE, mips[lv]);
+    } else {
+        glGenerateMipmap(GL_TEXTURE_2D_ARRAY);
+    }
     glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_NEAREST);
     glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
     glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
@@ -432,8 +441,8 @@ ss_status view_renderer_set_layers(view_renderer *r, const view_layers *l, ss_er
     if (r->tex_nh) glDeleteTextures(1, &r->tex_nh);
     while (glGetError() != GL_NO_ERROR) {
     }
-    r->tex_cr = make_array(GL_SRGB8_ALPHA8, l->size, l->nlayers, l->cr);
-    r->tex_nh = make_array(GL_RGBA8, l->size, l->nlayers, l->nh);
+    r->tex_cr = make_array(GL_SRGB8_ALPHA8, l->size, l->nlayers, l->cr, l->cr_mip, l->nlevels);
+    r->tex_nh = make_array(GL_RGBA8, l->size, l->nlayers, l->nh, l->nh_mip, l->nlevels);
     r->tex_layers = l->nlayers;
     GLenum e = glGetError();
     if (e == GL_OUT_OF_MEMORY)

@@ -27,16 +27,24 @@
 typedef struct view_layers {
     int size, nlayers;
     unsigned char *cr, *nh; /* nlayers * size * size * 4 each */
+    /* Mipmap levels 1..nlevels-1 (level l: size >> l, all layers), made on
+     * the CPU by view_layers_build_mips so the GL thread only copies. */
+    int nlevels;
+    unsigned char *cr_mip[16], *nh_mip[16];
     int nstops;
     double stop_day[VIEW_MAX_STOPS];
     int stop_layer[VIEW_MAX_STOPS];
     char stop_name[VIEW_MAX_STOPS][24];
     double end_day;
-    double height_mm; /* height 1 - height 0 in millimetres */
+    double height_mm;  /* height 1 - height 0 in millimetres */
     char source[4200]; /* what the layers were made from, for the title */
 } view_layers;
 
 void view_layers_free(view_layers *l);
+/* Box-filtered mipmap chain down to 1x1 (colour averaged in linear light,
+ * the other channels as stored). Parallel; returns SS_ERR_NOMEM on failure
+ * (the renderer then lets OpenGL make the levels). */
+ss_status view_layers_build_mips(view_layers *l, ss_error *err);
 /* Where a day falls: layers a and b and the weight of b. */
 void view_layers_locate(const view_layers *l, double day, int *a, int *b, float *w, int *stop);
 /* One layer from the procedural healthy skin (what the hand shows before

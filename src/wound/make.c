@@ -16,6 +16,7 @@
 #include <string.h>
 
 #include "skinsim/abrasion.h"
+#include "skinsim/mech.h"
 #include "skinsim/wound.h"
 
 void ss_wound_make_config_default(ss_wound_make_config *c) {
@@ -36,6 +37,7 @@ typedef struct job {
     ss_heal_run *run;
     ss_wound_tissue *tissue;
     ss_wound_renderer *renderer;
+    ss_mech *mech; /* with --mechanics */
     double side_mm;
     double t_heal, t_render, t_write, t_setup, t_compare;
 } job;
@@ -44,6 +46,7 @@ static void job_free(job *j) {
     ss_mm_table_free(j->table);
     ss_image_free(j->skin);
     ss_wound_renderer_free(j->renderer);
+    ss_mech_free(j->mech);
     ss_wound_tissue_free(j->tissue);
     ss_heal_run_free(j->run);
 }
@@ -85,6 +88,7 @@ static ss_status read_inputs(job *j, ss_error *err) {
     ss_heal_run_config hc = c->heal;
     hc.out_dir = NULL;
     hc.resume_dir = NULL;
+    hc.velocity = c->mechanics;
     double last = c->days[c->ndays - 1];
     hc.days = last > 0 ? last : 1;
     if ((st = ss_heal_run_create(&hc, &j->run, err))) return st;
@@ -273,17 +277,31 @@ static ss_status run_days(job *j, const char *dir, cJSON *frames, ss_image **thu
     ss_status st = ss_wound_textures_create(c->size, &tex, err);
     ss_progress pr;
     ss_progress_begin(&pr, "wound", (double)ss_heal_run_steps_total(j->run), c->quiet);
-    double range = j->recipe.v[SS_WR_HEIGHT_RANGE_MM];
+    double range = j->recipe.v[SS_WR_HEIGHT_RANGE_MM], dt = ss_heal_run_dt(j->run);
+    /* the mechanics: one frame a day (and one at each output day) */
+    long long mech_every = llround(1.0 / dt), last_mech = 0;
+    if (mech_every < 1) mech_every = 1;
     for (int i = 0; !st && i < c->ndays; i++) {
-        long long target = llround(c->days[i] / ss_heal_run_dt(j->run));
+        long long target = llround(c->days[i] / dt);
         double t0 = ss_now();
         while (!st && ss_heal_run_step_index(j->run) < target) {
             st = ss_heal_run_step(j->run, err);
+            long long k = ss_heal_run_step_index(j->run);
+            if (!st && j->mech && (k - last_mech >= mech_every || k == target)) {
+                st = ss_mech_step(j->mech, ss_heal_run_grid(j->run), (k - last_mech) * dt, err);
+                last_mech = k;
+            }
             if (!st) ss_wound_tissue_observe(j->tissue, ss_heal_run_grid(j->run));
-            ss_progress_update(&pr, (double)ss_heal_run_step_index(j->run));
+            ss_progress_update(&pr, (double)k);
         }
         double t1 = ss_now();
-        if (!st) st = ss_wound_render(j->renderer, j->tissue, NULL, &tex, err);
+        ss_image *def = NULL;
+        if (!st && j->mech &&
+            !(def = ss_wound_deformation_from_grid(
+                  ss_heal_run_grid(j->run), ss_mech_grid_displacement(j->mech), c->size, err)))
+            st = err->code;
+        if (!st) st = ss_wound_render(j->renderer, j->tissue, def, &tex, err);
+        ss_image_free(def);
         double t2 = ss_now();
         char stem[128];
         snprintf(stem, sizeof stem, "frames/t%g", c->days[i]);
@@ -324,6 +342,13 @@ static ss_status make(job *j, const char *dir, cJSON *sum, ss_error *err) {
         j->tissue = ss_wound_tissue_create(ss_heal_run_grid(j->run), ss_heal_run_params(j->run),
                                            &j->recipe, err);
         if (!j->tissue) st = err->code;
+    }
+    if (!st && c->mechanics) {
+        ss_mech_params mp;
+        ss_mech_params_default(&mp);
+        j->mech = ss_mech_create(ss_heal_run_grid(j->run), ss_heal_run_params(j->run), &mp, NULL,
+                                 NULL, 0, err);
+        if (!j->mech) st = err->code ? err->code : SS_ERR_RUNTIME;
     }
     /* the wound region of day 0, for the abrasion comparison */
     ss_image *mask0 = NULL;
@@ -372,6 +397,7 @@ static cJSON *summary_base(const job *j) {
     cJSON_AddNumberToObject(s, "height_range_mm", j->recipe.v[SS_WR_HEIGHT_RANGE_MM]);
     cJSON_AddStringToObject(s, "height_encoding", "0.5 + 0.5 * height_mm / height_range_mm");
     cJSON_AddStringToObject(s, "base_skin", c->skin_path ? c->skin_path : "forearm (built-in)");
+    cJSON_AddBoolToObject(s, "mechanics", c->mechanics);
     char *rj = ss_wound_recipe_to_json(&j->recipe);
     cJSON *r = rj ? cJSON_Parse(rj) : NULL;
     free(rj);

@@ -270,8 +270,11 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, float cr
     rough = lerp(rough, v[SS_WR_SCAR_ROUGHNESS], reg * cover * m_epi * scar);
     rough = lerp(rough, v[SS_WR_SCAB_ROUGHNESS], scab_cover);
     o->roughness = clamp01(rough);
-    o->height_mm = k[SS_BIO_HEIGHT_MM] - v[SS_WR_DEPTH_SCALE] * s->depth + thick +
-                   v[SS_WR_KELOID_SCALE] * s->keloid;
+    /* the keloid's swelling saturates at a few mm (Vancouver Scar Scale heights:
+     * < 2, 2-5, > 5 mm) */
+    double kmax = v[SS_WR_KELOID_MAX_MM];
+    double keloid = kmax * (1 - exp(-v[SS_WR_KELOID_SCALE] * s->keloid / kmax));
+    o->height_mm = k[SS_BIO_HEIGHT_MM] - v[SS_WR_DEPTH_SCALE] * s->depth + thick + keloid;
 }
 
 ss_status ss_wound_render(ss_wound_renderer *r, const ss_wound_tissue *t,

@@ -122,7 +122,7 @@ void ss_wound_tissue_observe(ss_wound_tissue *t, const ss_heal_grid *g) {
                 f = f < 0 ? 0 : f > 1 ? 1 : f;
                 scab += f * f * (3 - 2 * f) * s[i] * dx;
                 if (rho[i] > scar) scar = rho[i];
-                if (rho[i] > t->rho_max) kel += (rho[i] - t->rho_max) * dx;
+                if (rho[i] > t->rho_max) kel += (rho[i] / t->rho_max - 1) * dx;
             }
             if (ztop < 0) { /* a column of air only */
                 t->epithelium[o] = 1, t->capillary[o] = 1, t->oxygen[o] = 1;
@@ -151,4 +151,48 @@ void ss_wound_tissue_observe(ss_wound_tissue *t, const ss_heal_grid *g) {
                                               : (float)(day - cd);
         }
     }
+}
+
+ss_image *ss_wound_deformation_from_grid(const ss_heal_grid *g, float *const *disp, int size,
+                                         ss_error *err) {
+    const int nx = g->nx, ny = g->ny;
+    /* the surface displacement per column, image orientation (row 0 = grid y ny-1) */
+    float *col = malloc((size_t)nx * (size_t)ny * 3 * sizeof *col);
+    ss_image *out = col ? ss_image_create(size, size, 3, err) : NULL;
+    if (!out) {
+        free(col);
+        if (!err->code) ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+        return NULL;
+    }
+    for (int y = 0; y < ny; y++)
+        for (int x = 0; x < nx; x++) {
+            float *c = col + ((size_t)(ny - 1 - y) * (size_t)nx + (size_t)x) * 3;
+            c[0] = c[1] = c[2] = 0;
+            for (int z = g->nz - 1; z >= 0; z--) {
+                size_t i = ss_heal_idx(g, x, y, z);
+                if (!is_tissue(g, i, z)) continue;
+                for (int k = 0; k < 3; k++) c[k] = disp[k] ? disp[k][i] : 0;
+                break;
+            }
+        }
+#pragma omp parallel for schedule(static)
+    for (int ty = 0; ty < size; ty++)
+        for (int tx = 0; tx < size; tx++) {
+            double mx = (tx + 0.5) / size * nx - 0.5, my = (ty + 0.5) / size * ny - 0.5;
+            mx = mx < 0 ? 0 : mx > nx - 1 ? nx - 1 : mx;
+            my = my < 0 ? 0 : my > ny - 1 ? ny - 1 : my;
+            int x0 = (int)mx, y0 = (int)my, x1 = x0 + 1 < nx ? x0 + 1 : x0,
+                y1 = y0 + 1 < ny ? y0 + 1 : y0;
+            double fx = mx - x0, fy = my - y0;
+            for (int k = 0; k < 3; k++) {
+                double a = col[((size_t)y0 * nx + x0) * 3 + k],
+                       b = col[((size_t)y0 * nx + x1) * 3 + k],
+                       c = col[((size_t)y1 * nx + x0) * 3 + k],
+                       d = col[((size_t)y1 * nx + x1) * 3 + k];
+                out->data[((size_t)ty * size + tx) * 3 + k] =
+                    (float)((1 - fy) * ((1 - fx) * a + fx * b) + fy * ((1 - fx) * c + fx * d));
+            }
+        }
+    free(col);
+    return out;
 }

@@ -95,6 +95,16 @@ int main(int argc, char **argv) {
     ss_error err;
     char *p, path[4096];
 
+    /* ---- skin features.csv ---- */
+    seed_text("skin_features", "each",
+              "type,x,y,r,r2,h,m,p,w,x1,y1,x2,y2,x3,y3\n"
+              "cysts,0.5,0.5,0.2,0,0.1,0,0,0,0,0,0,0,0,0\n"
+              "moles,0.1,0.9,1,0,0.5,0.2,0,0,0,0,0,0,0,0\n"
+              "freckles,0.99,0.01,0.8,0,0,0.1,0.01,0,0,0,0,0,0,0\n"
+              "wrinkles,0.2,0.2,0,0,0.05,0,0,0.3,0.3,0.25,0.4,0.3,0.5,0.2\n"
+              "follicles,0.7,0.3,0.04,0.1,0,0,0,0,0,0,0,0,0,0\n");
+    seed_text("skin_features", "bad", "type,x,y,r,r2,h,m,p,w,x1,y1,x2,y2,x3,y3\nwarts,1,2\n");
+
     /* ---- stroke CSV ---- */
     seed_text("stroke_csv", "two",
               "u,v,stroke\n0.1,0.1,0\n0.4,0.1,0\n0.3,0.4,0\n0.6,0.6,1\n"

@@ -29,9 +29,12 @@ the wound" gives that skin's colour to the abrasion as its healthy skin.
 
 Gave up: the maturation phase (after the scab falls off) is re-rendered by
 skinsim at every time; here it is sampled at the listed days and blended
-linearly in between. The simulated healing (`skinsim wound`) is not wired
-yet: its textures cover a heal block of a few cm, which would need placing
-inside the UV square.
+linearly in between. The "Healing simulation" source runs `skinsim wound`
+(seed 001's healing turned into textures) on a block of block_mm around the
+wound and places its timeline inside the UV square with a Mapping node,
+blended over the outer tenth of the block into `skinsim skin`'s textures;
+the block's base skin is the same procedural skin made at the block's scale
+(skinsim wound --skin).
 """
 
 bl_info = {
@@ -53,6 +56,7 @@ import tempfile
 import bpy
 
 DEFAULT_DAYS = "0,0.007,0.02,0.5,1,3,10,10.01,15,20,30"
+DEFAULT_HEAL_DAYS = "0,1,2,3,5,7,10,14,21"
 MAPS = ("color", "reflection", "height", "normal")
 
 
@@ -76,6 +80,8 @@ class SkinsimSettings(bpy.types.PropertyGroup):
     source: bpy.props.EnumProperty(
         name="Source",
         items=[("ABRASION", "Abrasion timeline", "skinsim abrasion: a wound healing over days"),
+               ("HEAL", "Healing simulation", "skinsim wound: the simulated healing (seed 001) "
+                "as textures in a block around the wound, over procedural skin"),
                ("SKIN", "Skin textures", "skinsim skin: procedural skin (moles, freckles, "
                 "follicles, wrinkles), no timeline")],
         default="ABRASION")
@@ -98,6 +104,12 @@ class SkinsimSettings(bpy.types.PropertyGroup):
         description="Side of the whole UV square on the body, in cm (noise and edge scale)")
     days: bpy.props.StringProperty(name="Days", default=DEFAULT_DAYS,
                                    description="Days since injury to sample, comma separated")
+    heal_days: bpy.props.StringProperty(
+        name="Healing days", default=DEFAULT_HEAL_DAYS,
+        description="Days to simulate and show (whole steps of 0.05 days), comma separated")
+    block_mm: bpy.props.FloatProperty(
+        name="Block (mm)", min=4.0, max=200.0, default=40.0,
+        description="Side of the simulated skin block around the wound, in mm")
     start_frame: bpy.props.IntProperty(name="Start frame", default=1)
     frames_per_day: bpy.props.FloatProperty(name="Frames per day", min=0.001, default=4.0)
     seed: bpy.props.IntProperty(name="Seed", min=0, default=1)
@@ -169,13 +181,46 @@ def _run(cmd, cli):
         raise RuntimeError(msg[-1] if msg else "skinsim exited with code %d" % p.returncode)
 
 
-def run_skin(cli, settings, out_dir):
-    """Runs `skinsim skin` over the whole UV square; returns its folder."""
+def run_skin(cli, settings, out_dir, world_size_cm=None, size=None):
+    """Runs `skinsim skin` (default: over the whole UV square); returns its folder."""
     os.makedirs(os.path.dirname(os.path.abspath(out_dir)) or ".", exist_ok=True)
-    _run([cli, "skin", "--size", str(settings.size), "--world-size-cm",
-          repr(settings.world_size_cm), "--seed", str(settings.seed), "--quiet", "--out",
-          out_dir], cli)
+    _run([cli, "skin", "--size", str(size or settings.size), "--world-size-cm",
+          repr(world_size_cm or settings.world_size_cm), "--seed", str(settings.seed),
+          "--quiet", "--out", out_dir], cli)
     return out_dir
+
+
+def block_uv(settings):
+    """Side of the healing block in UV units and its lower-left UV corner."""
+    side = settings.block_mm / (10.0 * settings.world_size_cm)
+    return side, (settings.wound_u - side / 2, settings.wound_v - side / 2)
+
+
+def run_wound(cli, settings, days, out_dir, skin_bio):
+    """Runs `skinsim wound` on a block of block_mm around the wound (the
+    circle, or the strokes CSV in the block's own 0..1 coordinates); returns
+    the frames folder."""
+    side, _ = block_uv(settings)
+    os.makedirs(os.path.dirname(os.path.abspath(out_dir)) or ".", exist_ok=True)
+    with tempfile.TemporaryDirectory() as tmp:
+        if settings.stroke_csv:
+            stroke = bpy.path.abspath(settings.stroke_csv)
+        else:
+            r = settings.wound_radius / side
+            if not 0 < r < 0.45:
+                raise RuntimeError("Radius: the wound (%.1f mm across) must fit the block of "
+                                   "%g mm with a margin" % (2 * settings.wound_radius *
+                                                            settings.world_size_cm * 10,
+                                                            settings.block_mm))
+            stroke = os.path.join(tmp, "wound.csv")
+            with open(stroke, "w") as f:
+                f.write(circle_strokes(0.5, 0.5, r))
+        b = "%g" % settings.block_mm
+        _run([cli, "wound", "--stroke", stroke, "--size-mm", "%s,%s,4" % (b, b),
+              "--size", str(min(settings.size, 1024)), "--days",
+              ",".join("%g" % d for d in days), "--seed", str(settings.seed), "--no-compare",
+              "--quiet", "--out", out_dir] + (["--skin", skin_bio] if skin_bio else []), cli)
+    return os.path.join(out_dir, "frames")
 
 
 def run_abrasion(cli, settings, days, out_dir, upper=None):
@@ -239,10 +284,8 @@ def _day_driver(target, data_path, material, expression):
     return fc
 
 
-def build_material(obj, frames_dir, days, settings, name=None):
-    """A material on obj showing the texture sets in frames_dir, blended
-    over the timeline. Returns the material."""
-    mat = bpy.data.materials.new(name or "skinsim_" + obj.name)
+def _new_material(obj, name):
+    mat = bpy.data.materials.new(name)
     mat.use_nodes = True
     nt = mat.node_tree
     nt.nodes.clear()
@@ -251,8 +294,11 @@ def build_material(obj, frames_dir, days, settings, name=None):
     bsdf = nt.nodes.new("ShaderNodeBsdfPrincipled")
     bsdf.location = (600, 0)
     nt.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
+    return mat, nt, bsdf, out
 
-    # the time property, keyed linearly on the timeline
+
+def _key_days(mat, days, settings):
+    """The time property, keyed linearly on the timeline."""
     f0 = settings.start_frame + days[0] * settings.frames_per_day
     f1 = settings.start_frame + days[-1] * settings.frames_per_day
     mat["skinsim_day"] = float(days[0])
@@ -263,10 +309,12 @@ def build_material(obj, frames_dir, days, settings, name=None):
         for kp in fc.keyframe_points:
             kp.interpolation = "LINEAR"
 
+
+def _timeline_chains(nt, mat, frames_dir, days, maps, srgb_map, vector, extension="REPEAT"):
+    """Per map, the images of every day blended by Mix nodes whose factors
+    the material's skinsim_day drives; returns {map: output socket}."""
     chains = {}
-    uv = nt.nodes.new("ShaderNodeTexCoord")
-    uv.location = (-1400, 0)
-    for row, m in enumerate(MAPS):
+    for row, m in enumerate(maps):
         y = 600 - row * 420
         prev = None
         for k, d in enumerate(days):
@@ -275,11 +323,12 @@ def build_material(obj, frames_dir, days, settings, name=None):
                 raise RuntimeError("%s: missing (skinsim did not write it)" % path)
             tex = nt.nodes.new("ShaderNodeTexImage")
             tex.label = "%s day %g" % (m, d)
-            tex.image = _load_image(path, non_color=(m != "color"))
+            tex.image = _load_image(path, non_color=(m != srgb_map))
             tex.interpolation = "Linear"
+            tex.extension = extension
             tex.location = (-1200 + 60 * k, y - 30 * k)
             tex.hide = True
-            nt.links.new(uv.outputs["UV"], tex.inputs["Vector"])
+            nt.links.new(vector, tex.inputs["Vector"])
             if prev is None:
                 prev = tex.outputs["Color"]
                 continue
@@ -295,6 +344,36 @@ def build_material(obj, frames_dir, days, settings, name=None):
                         "clamp((day - %r) / %r, 0.0, 1.0)" % (a, d - a))
             prev = mix.outputs["Color"]
         chains[m] = prev
+    return chains
+
+
+def _normal_map(nt, obj, color_socket, bsdf):
+    """Tangent-space normal map (OpenGL +Y up: Blender's convention)."""
+    nmap = nt.nodes.new("ShaderNodeNormalMap")
+    nmap.space = "TANGENT"
+    if obj.data.uv_layers.active:
+        nmap.uv_map = obj.data.uv_layers.active.name
+    nmap.location = (250, -300)
+    nt.links.new(color_socket, nmap.inputs["Color"])
+    nt.links.new(nmap.outputs["Normal"], _input(bsdf, "Normal"))
+    return nmap
+
+
+def _assign(obj, mat):
+    obj.data.materials.clear()
+    obj.data.materials.append(mat)
+    for p in obj.data.polygons:
+        p.material_index = 0
+
+
+def build_material(obj, frames_dir, days, settings, name=None):
+    """A material on obj showing the abrasion texture sets in frames_dir,
+    blended over the timeline. Returns the material."""
+    mat, nt, bsdf, out = _new_material(obj, name or "skinsim_" + obj.name)
+    _key_days(mat, days, settings)
+    uv = nt.nodes.new("ShaderNodeTexCoord")
+    uv.location = (-1400, 0)
+    chains = _timeline_chains(nt, mat, frames_dir, days, MAPS, "color", uv.outputs["UV"])
 
     nt.links.new(chains["color"], _input(bsdf, "Base Color"))
     # reflection map -> specular; roughness = 1 - 0.8 x reflection
@@ -310,14 +389,7 @@ def build_material(obj, frames_dir, days, settings, name=None):
     rough.location = (250, 150)
     nt.links.new(refl.outputs[0], rough.inputs[0])
     nt.links.new(rough.outputs["Value"], _input(bsdf, "Roughness"))
-    # normal map (tangent space, OpenGL +Y up: Blender's convention)
-    nmap = nt.nodes.new("ShaderNodeNormalMap")
-    nmap.space = "TANGENT"
-    if obj.data.uv_layers.active:
-        nmap.uv_map = obj.data.uv_layers.active.name
-    nmap.location = (250, -300)
-    nt.links.new(chains["normal"], nmap.inputs["Color"])
-    nt.links.new(nmap.outputs["Normal"], _input(bsdf, "Normal"))
+    _normal_map(nt, obj, chains["normal"], bsdf)
     # height: 0.5 = skin surface, 0..1 spans -0.5..+0.5 mm (skinsim abrasion --help)
     hsep = _separate(nt)
     hsep.location = (250, -600)
@@ -336,6 +408,109 @@ def build_material(obj, frames_dir, days, settings, name=None):
     for p in obj.data.polygons:
         p.material_index = 0
     return mat
+
+
+def _math(nt, op, a, b=None, c=None, clamp=False, loc=(0, 0)):
+    """A Math node; a, b, c: sockets or numbers."""
+    n = nt.nodes.new("ShaderNodeMath")
+    n.operation = op
+    n.use_clamp = clamp
+    n.location = loc
+    for i, v in enumerate((a, b, c)):
+        if v is None:
+            continue
+        if isinstance(v, (int, float)):
+            n.inputs[i].default_value = v
+        else:
+            nt.links.new(v, n.inputs[i])
+    return n.outputs[0]
+
+
+def _mix(nt, fac, a, b, loc=(0, 0)):
+    n = nt.nodes.new("ShaderNodeMixRGB")
+    n.blend_type = "MIX"
+    n.location = loc
+    nt.links.new(fac, n.inputs["Fac"])
+    for sock, v in ((n.inputs["Color1"], a), (n.inputs["Color2"], b)):
+        if isinstance(v, (int, float)):
+            sock.default_value = (v, v, v, 1.0)
+        else:
+            nt.links.new(v, sock)
+    return n.outputs["Color"]
+
+
+def build_heal_material(obj, frames_dir, days, skin_dir, settings, name=None):
+    """The simulated healing (skinsim wound's frames, a block around the
+    wound) over skinsim skin's textures (the whole UV square), blended at
+    the block's edge, the block's maps blended over the timeline."""
+    import json
+
+    with open(os.path.join(skin_dir, "skin.json")) as f:
+        info = json.load(f)
+    lo, hi = info.get("height_min_mm", 0.0), info.get("height_max_mm", 0.0)
+    mat, nt, bsdf, out = _new_material(obj, name or "skinsim_heal_" + obj.name)
+    _key_days(mat, days, settings)
+    uv = nt.nodes.new("ShaderNodeTexCoord")
+    uv.location = (-1900, 0)
+    # block coordinates: (uv - corner) / side
+    side, (u0, v0) = block_uv(settings)
+    mapping = nt.nodes.new("ShaderNodeMapping")
+    mapping.vector_type = "POINT"
+    mapping.location = (-1700, 0)
+    mapping.inputs["Scale"].default_value = (1 / side, 1 / side, 1)
+    mapping.inputs["Location"].default_value = (-u0 / side, -v0 / side, 0)
+    nt.links.new(uv.outputs["UV"], mapping.inputs["Vector"])
+    wound = _timeline_chains(nt, mat, frames_dir, days,
+                             ("base_color", "roughness", "height", "normal"), "base_color",
+                             mapping.outputs["Vector"], extension="CLIP")
+    # the block's weight: 1 inside, falling to 0 over the outer tenth of the block
+    sep = nt.nodes.new("ShaderNodeSeparateXYZ")
+    sep.location = (-1500, -1800)
+    nt.links.new(mapping.outputs["Vector"], sep.inputs["Vector"])
+    x, y = sep.outputs["X"], sep.outputs["Y"]
+    edge = _math(nt, "MINIMUM", _math(nt, "MINIMUM", x, _math(nt, "SUBTRACT", 1.0, x)),
+                 _math(nt, "MINIMUM", y, _math(nt, "SUBTRACT", 1.0, y)))
+    weight = _math(nt, "DIVIDE", edge, 0.1, clamp=True)
+
+    def skin_tex(fname, non_color, loc):
+        n = nt.nodes.new("ShaderNodeTexImage")
+        n.image = _load_image(os.path.join(skin_dir, fname), non_color)
+        n.label = "skin " + fname
+        n.location = loc
+        n.hide = True
+        nt.links.new(uv.outputs["UV"], n.inputs["Vector"])
+        return n.outputs["Color"]
+
+    nt.links.new(_mix(nt, weight, skin_tex("base_color.png", False, (-600, 900)),
+                      wound["base_color"]), _input(bsdf, "Base Color"))
+    nt.links.new(_mix(nt, weight, skin_tex("roughness.png", True, (-600, 500)),
+                      wound["roughness"]), _input(bsdf, "Roughness"))
+    # the wound textures have no specular map: the dielectric default 0.5 there
+    nt.links.new(_mix(nt, weight, skin_tex("specular.png", True, (-600, 100)), 0.5),
+                 _input(bsdf, "Specular", "Specular IOR Level"))
+    _normal_map(nt, obj, _mix(nt, weight, skin_tex("normal.png", True, (-600, -300)),
+                              wound["normal"]), bsdf)
+    # height in mm: skin lo..hi (skin.json); wound 0.5 = surface, 0..1 = -2..+2 mm
+    # (skinsim wound's default recipe height_range)
+    hs = _math(nt, "MULTIPLY_ADD", _separate_first(nt, skin_tex("height.png", True, (-600, -700))),
+               hi - lo, lo)
+    hw = _math(nt, "MULTIPLY_ADD", _separate_first(nt, wound["height"]), 4.0, -2.0)
+    h = _math(nt, "ADD", _math(nt, "MULTIPLY", hs, _math(nt, "SUBTRACT", 1.0, weight)),
+              _math(nt, "MULTIPLY", hw, weight))
+    disp = nt.nodes.new("ShaderNodeDisplacement")
+    disp.location = (600, -500)
+    disp.inputs["Midlevel"].default_value = 0.0
+    disp.inputs["Scale"].default_value = 0.001  # mm -> m
+    nt.links.new(h, disp.inputs["Height"])
+    nt.links.new(disp.outputs["Displacement"], out.inputs["Displacement"])
+    _assign(obj, mat)
+    return mat
+
+
+def _separate_first(nt, color_socket):
+    n = _separate(nt)
+    nt.links.new(color_socket, n.inputs[0])
+    return n.outputs[0]
 
 
 def build_skin_material(obj, skin_dir, name=None):
@@ -414,16 +589,27 @@ class SKINSIM_OT_build_material(bpy.types.Operator):
                         tempfile.mkdtemp(prefix="skinsim_"))
                 out_dir = os.path.join(base, "skinsim_" + bpy.path.clean_name(obj.name))
             cli = find_cli(context)
-            if st.source == "SKIN":
+            if st.source == "HEAL":
+                days = parse_days(st.heal_days)
+                skin = run_skin(cli, st, os.path.join(out_dir, "skin"))
+                # the block's base skin: the same procedural skin at the block's
+                # scale (bio maps), so it matches the skin around the block
+                block_skin = run_skin(cli, st, os.path.join(out_dir, "skin_block"),
+                                      world_size_cm=st.block_mm / 10.0,
+                                      size=min(st.size, 1024))
+                frames = run_wound(cli, st, days, os.path.join(out_dir, "wound"), block_skin)
+                mat = build_heal_material(obj, frames, days, skin, st)
+            elif st.source == "SKIN":
                 mat = build_skin_material(obj, run_skin(cli, st, os.path.join(out_dir, "skin")))
                 self.report({"INFO"}, "skinsim: material %s (skin textures)" % mat.name)
                 return {"FINISHED"}
-            upper = None
-            if st.skin_under_abrasion:
-                upper = os.path.join(run_skin(cli, st, os.path.join(out_dir, "skin")),
-                                     "base_color.png")
-            frames = run_abrasion(cli, st, days, os.path.join(out_dir, "abrasion"), upper)
-            mat = build_material(obj, frames, days, st)
+            else:
+                upper = None
+                if st.skin_under_abrasion:
+                    upper = os.path.join(run_skin(cli, st, os.path.join(out_dir, "skin")),
+                                         "base_color.png")
+                frames = run_abrasion(cli, st, days, os.path.join(out_dir, "abrasion"), upper)
+                mat = build_material(obj, frames, days, st)
         except (RuntimeError, ValueError) as e:
             st.last_error = str(e)
             msg = str(e)
@@ -448,8 +634,8 @@ class SKINSIM_PT_panel(bpy.types.Panel):
         st = context.scene.skinsim
         col = self.layout.column()
         for p in ("source", "skin_under_abrasion", "wound_u", "wound_v", "wound_radius",
-                  "stroke_csv", "size", "world_size_cm", "days", "start_frame",
-                  "frames_per_day", "seed", "out_dir"):
+                  "stroke_csv", "size", "world_size_cm", "days", "heal_days", "block_mm",
+                  "start_frame", "frames_per_day", "seed", "out_dir"):
             col.prop(st, p)
         col.operator(SKINSIM_OT_build_material.bl_idname)
         if st.last_error:

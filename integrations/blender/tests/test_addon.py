@@ -8,9 +8,12 @@ material (abrasion timeline, days 0, 3, 20 at one frame per day), checks its
 nodes, colour spaces, keyframes and drivers, renders frames 1 (day 0), 4 (day 3)
 and 21 (day 20) with Cycles on the CPU, and checks that the later renders
 differ from the first where the wound is and nowhere else; then builds the
-static skin-texture material and an abrasion over procedural skin. Writes
+static skin-texture material, an abrasion over procedural skin, and the
+simulated healing (skinsim wound in a 20 mm block) whose frames 1 and 11
+differ on the wound and nowhere outside the block. Writes
 OUT/frame_NNN.png and OUT/compare.png (the three frames, the difference of
-the first and last, the skin material, and day 3 over that skin) to look at."""
+the first and last, the skin material, and day 3 over that skin; below, the
+simulated healing at frames 1, 4, 11 and its difference) to look at."""
 import math
 import os
 import sys
@@ -246,10 +249,43 @@ on_skin = np.array(im.pixels[:], dtype=np.float32).reshape(im.size[1], im.size[0
 check(np.abs(on_skin - plain)[..., :3].mean() > 0.01, "the abrasion's healthy skin is skinsim skin's")
 scab_on_skin = render(4)
 
-# a picture to look at: frames 1 | 4 | 21 | difference 1-21 (x4) | skin textures | day 3 on them
+# ---- the simulated healing (skinsim wound) in a block around the wound ----
+st.skin_under_abrasion = False
+st.source = "HEAL"
+st.heal_days = "0,3,10"
+st.block_mm = 20.0
+st.wound_radius = 0.03
+st.out_dir = os.path.join(OUT, "textures_heal")
+check(bpy.ops.skinsim.build_material() == {"FINISHED"}, "healing source: build_material finished")
+hmat = obj.active_material
+check(hmat.name.startswith("skinsim_heal_"), "the mesh wears the healing material")
+himgs = [n.image for n in hmat.node_tree.nodes if n.bl_idname == "ShaderNodeTexImage"]
+check(sum("wound" in im.filepath for im in himgs) == 12, "4 wound maps x 3 days")
+check(len(hmat.node_tree.animation_data.drivers) == 8, "wound blends driven by the day")
+side = st.block_mm / (10 * st.world_size_cm)
+block_pts = [w for uvs, w in faces
+             if all(abs(u - st.wound_u) < side / 2 + 0.01 and abs(v - st.wound_v) < side / 2 + 0.01
+                    for u, v in uvs[-1:])]
+heal_core = [w for uvs, w in faces
+             if math.hypot(uvs[-1][0] - st.wound_u, uvs[-1][1] - st.wound_v) < 0.02]
+h1, h4, h11 = render(1), render(4), render(11)
+hcore = pixel_distance(heal_core)
+haway = pixel_distance(block_pts) > 20
+hdiff = np.abs(h1 - h11).mean(axis=2)
+print("healing: |frame 11 - frame 1| on the wound %.4f, away from the block max %.5f (%d%%)"
+      % (hdiff[hcore <= 3].mean(), hdiff[haway].max(), 100 * haway.mean()))
+check(hdiff[hcore <= 3].mean() > 0.03, "the simulated wound heals between frames 1 and 11")
+check(haway.mean() > 0.15 and hdiff[haway].max() < 0.01,
+      "the healing changes nothing outside its block")
+
+# a picture to look at: frames 1 | 4 | 21 | difference 1-21 (x4) | skin textures | day 3 on
+# them; below, the simulated healing: frames 1 | 4 | 11 | difference 1-11 (x4)
 diff = np.abs(a - c).mean(axis=2)
-sheet = np.concatenate([a, b, c, np.repeat(np.clip(diff * 4, 0, 1)[..., None], 3, axis=2),
-                        skin_render, scab_on_skin], axis=1)
+grey = lambda d: np.repeat(np.clip(d * 4, 0, 1)[..., None], 3, axis=2)  # noqa: E731
+blank = np.zeros_like(a)
+sheet = np.concatenate([
+    np.concatenate([a, b, c, grey(diff), skin_render, scab_on_skin], axis=1),
+    np.concatenate([h1, h4, h11, grey(hdiff), blank, blank], axis=1)], axis=0)
 img = bpy.data.images.new("compare", sheet.shape[1], sheet.shape[0])
 rgba = np.concatenate([sheet, np.ones(sheet.shape[:2] + (1,), np.float32)], axis=2)[::-1]
 img.pixels[:] = rgba.ravel()

@@ -7,6 +7,7 @@ how the library is found and how arrays cross without copies). Modules:
     skinsim.abrasion  the abrasion-healing texture timeline (seed 000)
     skinsim.heal      the wound-healing simulation (seed 001): run, step, fields, area curve
     skinsim.skin      procedural skin textures (seed 003 §4.8): bio maps and render maps
+    skinsim.wound     a heal run's wound as render textures over a base skin (seeds joined)
 
 Errors raise skinsim.SkinsimError (InputError for bad input, also a
 ValueError) with the library's own message.
@@ -16,8 +17,13 @@ from . import _lib
 from ._lib import InputError, OutOfMemoryError, SkinsimError
 from . import optics, abrasion, heal  # noqa: E402
 
-try:  # libraries built before the skin module have none
+# libraries built without these modules leave them out
+try:
     from . import skin  # noqa: F401
+except ImportError:
+    pass
+try:
+    from . import wound  # noqa: F401
 except ImportError:
     pass
 

@@ -181,6 +181,19 @@ def image_header(arr):
     return img
 
 
+def set_out_image(struct, field, arr, shape, what, keep):
+    """Points struct.field (an ss_image *) at the caller's output array arr,
+    which must be C-contiguous float32 of the given shape; keep collects the
+    headers, which must live until the call that writes through them."""
+    if (not isinstance(arr, np.ndarray) or arr.shape != tuple(shape)
+            or arr.dtype != np.float32 or not arr.flags.c_contiguous):
+        raise InputError("%s must be C-contiguous float32 of shape %s" % (what, tuple(shape)),
+                         SS_ERR_INPUT)
+    h = image_header(arr)
+    keep.append(h)
+    setattr(struct, field, ctypes.pointer(h))
+
+
 def as_image_input(arr, name, channels=None):
     """Validates and converts an image argument to C-contiguous float32
     (copied only when its dtype or layout requires it)."""
@@ -569,6 +582,7 @@ class ss_heal_run_config(ctypes.Structure):
         ("snapshot_every", c_double),
         ("area_every", c_double),
         ("checkpoint_every", c_double),
+        ("velocity", c_int),
         ("out_dir", c_char_p),
         ("force", c_int),
         ("resume_dir", c_char_p),
@@ -674,7 +688,9 @@ class ss_skin_maps(ctypes.Structure):
     ]
 
 
-if hasattr(lib, "ss_skin_generate"):
+# a library built without this module (or with another version of its API)
+# leaves the module out instead of failing the import of the package
+try:
     P_SKINSET = POINTER(ss_skin_settings)
     _fn("ss_skin_settings_preset", c_int, P_SKINSET, c_char_p, c_int, P_ERR)
     _fn("ss_skin_forearm_counts", None, c_double, POINTER(ctypes.c_long))
@@ -695,3 +711,54 @@ if hasattr(lib, "ss_skin_generate"):
     _fn("ss_skin_render_maps", c_int, P_IMAGE, c_void_p, c_double, c_int, POINTER(ss_skin_maps),
         P_ERR)
     _fn("ss_skin_maps_free", None, POINTER(ss_skin_maps))
+    HAVE_SKIN = True
+except AttributeError:
+    HAVE_SKIN = False
+
+# ---- wound ------------------------------------------------------------------------
+
+SS_WR_NKEYS = 28
+
+
+class ss_wound_recipe(ctypes.Structure):
+    _fields_ = [("v", c_double * SS_WR_NKEYS)]
+
+
+class ss_wound_render_options(ctypes.Structure):
+    _fields_ = [
+        ("size", c_int),
+        ("side_mm", c_double),
+        ("skin", P_IMAGE),
+        ("table", P_TABLE),
+        ("recipe", ss_wound_recipe),
+        ("scab_photons", c_uint64),
+        ("seed", c_uint64),
+    ]
+
+
+class ss_wound_textures(ctypes.Structure):
+    _fields_ = [("base_color", P_IMAGE), ("roughness", P_IMAGE), ("height", P_IMAGE),
+                ("normal", P_IMAGE)]
+
+
+# a library built without this module (or with another version of its API)
+# leaves the module out instead of failing the import of the package
+try:
+    _fn("ss_heal_run_params", c_void_p, P_RUN)
+    _fn("ss_wound_recipe_default", None, POINTER(ss_wound_recipe))
+    _fn("ss_wound_recipe_key", c_char_p, c_int)
+    _fn("ss_wound_recipe_load", c_int, c_char_p, POINTER(ss_wound_recipe), P_ERR)
+    _fn("ss_skin_bio_default", P_IMAGE, c_int, c_double, c_uint64, P_ERR)
+    _fn("ss_wound_skin_read", P_IMAGE, c_char_p, P_ERR)
+    _fn("ss_wound_skin_validate", c_int, P_IMAGE, c_char_p, P_ERR)
+    _fn("ss_wound_render_options_default", None, POINTER(ss_wound_render_options))
+    _fn("ss_wound_renderer_create", c_int, POINTER(ss_wound_render_options), POINTER(c_void_p),
+        P_ERR)
+    _fn("ss_wound_renderer_free", None, c_void_p)
+    _fn("ss_wound_tissue_create", c_void_p, P_GRID, c_void_p, POINTER(ss_wound_recipe), P_ERR)
+    _fn("ss_wound_tissue_observe", None, c_void_p, P_GRID)
+    _fn("ss_wound_tissue_free", None, c_void_p)
+    _fn("ss_wound_render", c_int, c_void_p, c_void_p, P_IMAGE, POINTER(ss_wound_textures), P_ERR)
+    HAVE_WOUND = True
+except AttributeError:
+    HAVE_WOUND = False

@@ -220,12 +220,7 @@ class Abrasion:
                 raise L.InputError("frame: unknown map %r (maps: %s)" % (m, ", ".join(MAPS)),
                                    L.SS_ERR_INPUT)
             want = (self.size, self.size) + ((3,) if _CHANNELS[m] == 3 else ())
-            if arr.shape != want or arr.dtype != np.float32 or not arr.flags.c_contiguous:
-                raise L.InputError("frame: out[%r] must be C-contiguous float32 of shape %s"
-                                   % (m, want), L.SS_ERR_INPUT)
-            h = L.image_header(arr)
-            hdrs.append(h)
-            setattr(ts, m, ctypes.pointer(h))
+            L.set_out_image(ts, m, arr, want, "frame: out[%r]" % m, hdrs)
         if "color" not in out:
             raise L.InputError("frame: the colour map is always rendered; include 'color'",
                                L.SS_ERR_INPUT)

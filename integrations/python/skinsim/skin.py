@@ -20,7 +20,7 @@ import numpy as np
 from . import _lib as L
 from . import optics
 
-if not hasattr(L.lib, "ss_skin_generate"):
+if not L.HAVE_SKIN:
     raise ImportError("skinsim.skin: the loaded library %s has no skin module" % L.library_path)
 
 FEATURE_TYPES = [L.lib.ss_feature_type_name(i).decode() for i in range(L.SS_FEAT_NTYPES)]

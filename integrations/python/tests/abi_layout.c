@@ -16,11 +16,18 @@
 #include "skinsim/optics.h"
 #include "skinsim/optics_fit.h"
 #include "skinsim/skin.h"
+#include "skinsim/wound.h"
 
 #define S(t) printf("struct %s %zu\n", #t, sizeof(t))
 #define F(t, f) printf("field %s %s %zu\n", #t, #f, offsetof(t, f))
 
 int main(void) {
+    S(ss_wound_recipe);
+    S(ss_wound_render_options), F(ss_wound_render_options, side_mm),
+        F(ss_wound_render_options, skin), F(ss_wound_render_options, table),
+        F(ss_wound_render_options, recipe), F(ss_wound_render_options, scab_photons),
+        F(ss_wound_render_options, seed);
+    S(ss_wound_textures), F(ss_wound_textures, height), F(ss_wound_textures, normal);
     S(ss_error), F(ss_error, code), F(ss_error, msg);
     S(ss_image), F(ss_image, width), F(ss_image, channels), F(ss_image, data);
     S(ss_bio_params), F(ss_bio_params, melanin), F(ss_bio_params, betacarotene_g_per_l);
@@ -68,9 +75,11 @@ int main(void) {
         F(ss_heal_run_config, concave_k), F(ss_heal_run_config, wound_footprint),
         F(ss_heal_run_config, wound_depth_image), F(ss_heal_run_config, days),
         F(ss_heal_run_config, scheme), F(ss_heal_run_config, dt_days),
-        F(ss_heal_run_config, checkpoint_every), F(ss_heal_run_config, out_dir),
-        F(ss_heal_run_config, force), F(ss_heal_run_config, resume_dir),
-        F(ss_heal_run_config, seed);
+        F(ss_heal_run_config, checkpoint_every), F(ss_heal_run_config, velocity),
+        F(ss_heal_run_config, out_dir), F(ss_heal_run_config, force),
+        F(ss_heal_run_config, resume_dir), F(ss_heal_run_config, seed),
+        F(ss_heal_run_config, mechanics), F(ss_heal_run_config, kappa),
+        F(ss_heal_run_config, tet_mesh);
     S(ss_skin_dist);
     S(ss_skin_settings), F(ss_skin_settings, world_size_cm), F(ss_skin_settings, seed),
         F(ss_skin_settings, wrap), F(ss_skin_settings, sampler), F(ss_skin_settings, count),
