@@ -44,9 +44,8 @@ static void help(void) {
            "  --table FILE.sstab     ModelMatch table (default data/modelmatch_default.sstab)\n"
            "  --exr                  also write every map as half-float EXR (height in mm)\n"
            "  --no-compare           skip compare_abrasion.png\n"
-           "  --mechanics            couple the contraction mechanics (seed 001 §4.2-4.3,\n"
-           "                         default parameters, one frame a day) and draw its\n"
-           "                         displacement (slower)\n"
+           "  --mechanics            couple the contraction mechanics (seed 001 §4.2-5.3, as\n"
+           "                         skinsim heal --mechanics) and draw its displacement\n"
            "\n"
            "Output\n"
            "  --out DIR              output directory (default wound-out)\n"
@@ -99,10 +98,6 @@ static int parse_args(int argc, char **argv, opts *o, ss_error *err) {
         }
         if (!strcmp(a, "--no-compare")) {
             c->compare = 0;
-            continue;
-        }
-        if (!strcmp(a, "--mechanics")) {
-            c->mechanics = 1;
             continue;
         }
         if (strncmp(a, "--", 2) != 0) {

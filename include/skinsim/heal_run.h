@@ -71,9 +71,6 @@ typedef struct ss_heal_run_config {
     double area_every;       /* days between area rows (default 0.01, at least one step) */
     double checkpoint_every; /* days between checkpoints; 0 = none; < 0 = default (none, or
                                 the checkpoint's interval on resume) */
-    int velocity;            /* 1: give the grid zero velocity arrays before the solver is
-                                made, so a coupled mechanics (skinsim/mech.h) can drive the
-                                convection of every field (fresh runs) */
 
     /* ---- files ---- */
     const char *out_dir;    /* run directory; NULL = in memory, no file written */
@@ -85,12 +82,12 @@ typedef struct ss_heal_run_config {
     uint64_t seed;          /* recorded in summary.json (the solver draws no random numbers) */
 
     /* ---- contraction mechanics (seed 001 §4.2-5.3, docs/mech.md; fresh runs) ---- */
-    int mechanics;         /* 1: mass-spring contraction drives the convection (default 0) */
-    const char *fibres;    /* "X,Y,Z[:X,Y,Z]" fibre families; NULL = params file or default */
-    double kappa;          /* fibre dispersion 0..1/3; < 0 = params file or default */
-    double tet_size_mm;    /* lattice tet edge; 0 = params file or default */
-    const char *sutures;   /* stitches CSV "x1,y1,z1,x2,y2,z2[,remove_day]" (mm); NULL = none */
-    const char *tet_mesh;  /* TetGen .node/.ele or Gmsh .msh instead of the lattice; NULL */
+    int mechanics;        /* 1: mass-spring contraction drives the convection (default 0) */
+    const char *fibres;   /* "X,Y,Z[:X,Y,Z]" fibre families; NULL = params file or default */
+    double kappa;         /* fibre dispersion 0..1/3; < 0 = params file or default */
+    double tet_size_mm;   /* lattice tet edge; 0 = params file or default */
+    const char *sutures;  /* stitches CSV "x1,y1,z1,x2,y2,z2[,remove_day]" (mm); NULL = none */
+    const char *tet_mesh; /* TetGen .node/.ele or Gmsh .msh instead of the lattice; NULL */
 } ss_heal_run_config;
 
 /* The defaults listed above (every other field 0 / NULL). */

@@ -119,6 +119,9 @@ void ss_wound_tissue_free(ss_wound_tissue *t);
 /* Checks a bio map: channel count, finite values, fractions and the extra
  * colour in 0..1, thicknesses > 0 (SS_ERR_INPUT naming `name` and the texel). */
 ss_status ss_wound_skin_validate(const ss_image *bio, const char *name, ss_error *err);
+/* The default base skin: ss_skin_bio_default (forearm preset) over a square
+ * of side_mm, size x size texels. */
+ss_image *ss_wound_default_skin(int size, double side_mm, uint64_t seed, ss_error *err);
 /* Reads DIR/bio.exr (or the .exr file itself) by channel name. */
 ss_image *ss_wound_skin_read(const char *path, ss_error *err);
 
@@ -208,8 +211,7 @@ typedef struct ss_wound_make_config {
     const char *out_dir;
     int exr;       /* also write every map as half-float EXR (height in mm) */
     int compare;   /* write compare_abrasion.png (default 1) */
-    int mechanics; /* 1: couple the contraction mechanics (skinsim/mech.h, default
-                      parameters, one frame a day) and apply its displacement */
+    int mechanics; /* 1: the heal run's coupled contraction mechanics, drawn as displacement */
     int quiet;     /* no progress bar */
     uint64_t seed;
 } ss_wound_make_config;

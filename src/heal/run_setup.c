@@ -340,11 +340,6 @@ ss_status ss_heal_run__setup_fresh(ss_heal_run *r, ss_error *err) {
     if (!st) st = ss_heal_grid_init(r->g, gm.top, c->epidermis_mm, w3, r->p, err);
     free(w3);
     if (!st) st = ss_heal_run__mech_setup_fresh(r, err); /* before the solver: velocity */
-    for (int d = 0; !st && c->velocity && d < 3; d++) {
-        size_t n = (size_t)gm.n[0] * (size_t)gm.n[1] * (size_t)gm.n[2];
-        if (!r->g->velocity[d] && !(r->g->velocity[d] = calloc(n, sizeof(float))))
-            st = ss_error_set(err, SS_ERR_NOMEM, "out of memory (velocity)");
-    }
     if (!st) st = setup_solver(r, err);
     return st;
 }

@@ -37,7 +37,6 @@ typedef struct job {
     ss_heal_run *run;
     ss_wound_tissue *tissue;
     ss_wound_renderer *renderer;
-    ss_mech *mech; /* with --mechanics */
     double side_mm;
     double t_heal, t_render, t_write, t_setup, t_compare;
 } job;
@@ -46,7 +45,6 @@ static void job_free(job *j) {
     ss_mm_table_free(j->table);
     ss_image_free(j->skin);
     ss_wound_renderer_free(j->renderer);
-    ss_mech_free(j->mech);
     ss_wound_tissue_free(j->tissue);
     ss_heal_run_free(j->run);
 }
@@ -70,7 +68,7 @@ static ss_status check_days(const ss_wound_make_config *c, ss_error *err) {
 static ss_status read_skin(job *j, ss_error *err) {
     const ss_wound_make_config *c = j->c;
     j->skin = c->skin_path ? ss_wound_skin_read(c->skin_path, err)
-                           : ss_skin_bio_default(c->size, j->side_mm / 10.0, c->seed, err);
+                           : ss_wound_default_skin(c->size, j->side_mm, c->seed, err);
     return j->skin ? SS_OK : (err->code ? err->code : SS_ERR_INPUT);
 }
 
@@ -88,7 +86,7 @@ static ss_status read_inputs(job *j, ss_error *err) {
     ss_heal_run_config hc = c->heal;
     hc.out_dir = NULL;
     hc.resume_dir = NULL;
-    hc.velocity = c->mechanics;
+    hc.mechanics = c->mechanics || c->heal.mechanics; /* the run's own coupled mechanics */
     double last = c->days[c->ndays - 1];
     hc.days = last > 0 ? last : 1;
     if ((st = ss_heal_run_create(&hc, &j->run, err))) return st;
@@ -278,27 +276,21 @@ static ss_status run_days(job *j, const char *dir, cJSON *frames, ss_image **thu
     ss_progress pr;
     ss_progress_begin(&pr, "wound", (double)ss_heal_run_steps_total(j->run), c->quiet);
     double range = j->recipe.v[SS_WR_HEIGHT_RANGE_MM], dt = ss_heal_run_dt(j->run);
-    /* the mechanics: one frame a day (and one at each output day) */
-    long long mech_every = llround(1.0 / dt), last_mech = 0;
-    if (mech_every < 1) mech_every = 1;
     for (int i = 0; !st && i < c->ndays; i++) {
         long long target = llround(c->days[i] / dt);
         double t0 = ss_now();
         while (!st && ss_heal_run_step_index(j->run) < target) {
             st = ss_heal_run_step(j->run, err);
             long long k = ss_heal_run_step_index(j->run);
-            if (!st && j->mech && (k - last_mech >= mech_every || k == target)) {
-                st = ss_mech_step(j->mech, ss_heal_run_grid(j->run), (k - last_mech) * dt, err);
-                last_mech = k;
-            }
             if (!st) ss_wound_tissue_observe(j->tissue, ss_heal_run_grid(j->run));
             ss_progress_update(&pr, (double)k);
         }
         double t1 = ss_now();
         ss_image *def = NULL;
-        if (!st && j->mech &&
-            !(def = ss_wound_deformation_from_grid(
-                  ss_heal_run_grid(j->run), ss_mech_grid_displacement(j->mech), c->size, err)))
+        ss_mech *mech = ss_heal_run_mech(j->run);
+        if (!st && mech &&
+            !(def = ss_wound_deformation_from_grid(ss_heal_run_grid(j->run),
+                                                   ss_mech_grid_displacement(mech), c->size, err)))
             st = err->code;
         if (!st) st = ss_wound_render(j->renderer, j->tissue, def, &tex, err);
         ss_image_free(def);
@@ -342,13 +334,6 @@ static ss_status make(job *j, const char *dir, cJSON *sum, ss_error *err) {
         j->tissue = ss_wound_tissue_create(ss_heal_run_grid(j->run), ss_heal_run_params(j->run),
                                            &j->recipe, err);
         if (!j->tissue) st = err->code;
-    }
-    if (!st && c->mechanics) {
-        ss_mech_params mp;
-        ss_mech_params_default(&mp);
-        j->mech = ss_mech_create(ss_heal_run_grid(j->run), ss_heal_run_params(j->run), &mp, NULL,
-                                 NULL, 0, err);
-        if (!j->mech) st = err->code ? err->code : SS_ERR_RUNTIME;
     }
     /* the wound region of day 0, for the abrasion comparison */
     ss_image *mask0 = NULL;
@@ -397,7 +382,7 @@ static cJSON *summary_base(const job *j) {
     cJSON_AddNumberToObject(s, "height_range_mm", j->recipe.v[SS_WR_HEIGHT_RANGE_MM]);
     cJSON_AddStringToObject(s, "height_encoding", "0.5 + 0.5 * height_mm / height_range_mm");
     cJSON_AddStringToObject(s, "base_skin", c->skin_path ? c->skin_path : "forearm (built-in)");
-    cJSON_AddBoolToObject(s, "mechanics", c->mechanics);
+    cJSON_AddBoolToObject(s, "mechanics", c->mechanics || c->heal.mechanics);
     char *rj = ss_wound_recipe_to_json(&j->recipe);
     cJSON *r = rj ? cJSON_Parse(rj) : NULL;
     free(rj);

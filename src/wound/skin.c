@@ -64,3 +64,11 @@ ss_image *ss_wound_skin_read(const char *path, ss_error *err) {
     }
     return bio;
 }
+
+ss_image *ss_wound_default_skin(int size, double side_mm, uint64_t seed, ss_error *err) {
+    if (!(side_mm > 0)) {
+        ss_error_set(err, SS_ERR_INPUT, "default skin: side %g mm must be > 0", side_mm);
+        return NULL;
+    }
+    return ss_skin_bio_default(size, side_mm / 10.0, seed, err);
+}

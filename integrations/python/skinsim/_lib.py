@@ -582,7 +582,6 @@ class ss_heal_run_config(ctypes.Structure):
         ("snapshot_every", c_double),
         ("area_every", c_double),
         ("checkpoint_every", c_double),
-        ("velocity", c_int),
         ("out_dir", c_char_p),
         ("force", c_int),
         ("resume_dir", c_char_p),
@@ -717,7 +716,7 @@ except AttributeError:
 
 # ---- wound ------------------------------------------------------------------------
 
-SS_WR_NKEYS = 28
+SS_WR_NKEYS = 29
 
 
 class ss_wound_recipe(ctypes.Structure):

@@ -75,7 +75,7 @@ int main(void) {
         F(ss_heal_run_config, concave_k), F(ss_heal_run_config, wound_footprint),
         F(ss_heal_run_config, wound_depth_image), F(ss_heal_run_config, days),
         F(ss_heal_run_config, scheme), F(ss_heal_run_config, dt_days),
-        F(ss_heal_run_config, checkpoint_every), F(ss_heal_run_config, velocity),
+        F(ss_heal_run_config, checkpoint_every),
         F(ss_heal_run_config, out_dir), F(ss_heal_run_config, force),
         F(ss_heal_run_config, resume_dir), F(ss_heal_run_config, seed),
         F(ss_heal_run_config, mechanics), F(ss_heal_run_config, kappa),
