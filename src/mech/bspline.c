@@ -125,8 +125,14 @@ static long node_cell(const ss_mech_transfer *t, int a, int b, int c, const uint
     return (long)id;
 }
 
-void ss_mech_g2p(const ss_mech_transfer *t, const float *field, const uint8_t *mask,
-                 const double *pts, int np, double *out) {
+/* The value at one sub-lattice node, or 0 with *ok = 0 when the node has none. */
+typedef double (*node_value_fn)(const ss_mech_transfer *t, const void *ctx, int a, int b, int c,
+                                int *ok);
+
+/* G2P for every point: the B-spline-weighted mean over the nodes that have a
+ * value (the weights renormalised over them). */
+static void gather(const ss_mech_transfer *t, node_value_fn value, const void *ctx,
+                   const double *pts, int np, double *out) {
 #pragma omp parallel for schedule(static)
     for (int p = 0; p < np; p++) {
         double wx[4], wy[4], wz[4];
@@ -141,15 +147,34 @@ void ss_mech_g2p(const ss_mech_transfer *t, const float *field, const uint8_t *m
                 for (int a = 0; a < 4; a++) {
                     double w = wx[a] * wy[b] * wz[c];
                     if (w == 0) continue;
-                    long id = node_cell(t, ax + a, ay + b, az + c, mask);
-                    if (id < 0) continue;
+                    int ok;
+                    double v = value(t, ctx, ax + a, ay + b, az + c, &ok);
+                    if (!ok) continue;
                     sw += w;
-                    sv += w * field[id];
+                    sv += w * v;
                 }
             }
         }
         out[p] = sw > 1e-12 ? sv / sw : 0.0;
     }
+}
+
+typedef struct grid_src {
+    const float *field;
+    const uint8_t *mask;
+} grid_src;
+
+static double grid_value(const ss_mech_transfer *t, const void *ctx, int a, int b, int c, int *ok) {
+    const grid_src *g = ctx;
+    long id = node_cell(t, a, b, c, g->mask);
+    *ok = id >= 0;
+    return id >= 0 ? g->field[id] : 0.0;
+}
+
+void ss_mech_g2p(const ss_mech_transfer *t, const float *field, const uint8_t *mask,
+                 const double *pts, int np, double *out) {
+    grid_src g = {field, mask};
+    gather(t, grid_value, &g, pts, np, out);
 }
 
 /* Trilinear from sub-lattice arrays vals[q] (with validity) to the grid cells
@@ -317,31 +342,22 @@ void ss_mech_sub_divergence(const ss_mech_transfer *t, double *const *u, const u
             }
 }
 
+typedef struct sub_src {
+    const double *sub;
+    const uint8_t *valid;
+} sub_src;
+
+static double sub_value(const ss_mech_transfer *t, const void *ctx, int a, int b, int c, int *ok) {
+    const sub_src *q = ctx;
+    size_t n = sub_idx(t, a, b, c);
+    *ok = q->valid[n] != 0;
+    return *ok ? q->sub[n] : 0.0;
+}
+
 void ss_mech_g2p_sub(const ss_mech_transfer *t, const double *sub, const uint8_t *valid,
                      const double *pts, int np, double *out) {
-#pragma omp parallel for schedule(static)
-    for (int p = 0; p < np; p++) {
-        double wx[4], wy[4], wz[4];
-        int ax = weights1(t, pts[3 * p], t->mx, wx);
-        int ay = weights1(t, pts[3 * p + 1], t->my, wy);
-        int az = weights1(t, pts[3 * p + 2], t->mz, wz);
-        double sw = 0, sv = 0;
-        for (int c = 0; c < 4; c++) {
-            if (wz[c] == 0) continue;
-            for (int b = 0; b < 4; b++) {
-                if (wy[b] == 0) continue;
-                for (int a = 0; a < 4; a++) {
-                    double w = wx[a] * wy[b] * wz[c];
-                    if (w == 0) continue;
-                    size_t n = sub_idx(t, ax + a, ay + b, az + c);
-                    if (!valid[n]) continue;
-                    sw += w;
-                    sv += w * sub[n];
-                }
-            }
-        }
-        out[p] = sw > 1e-12 ? sv / sw : 0.0;
-    }
+    sub_src q = {sub, valid};
+    gather(t, sub_value, &q, pts, np, out);
 }
 
 void ss_mech_divergence(ss_mech_transfer *t, float *const u[3], const uint8_t *mask, float *out) {
