@@ -33,8 +33,8 @@ typedef struct ss_tetmesh {
  * of edge about tet_size_mm (fitted to the domain's bounding box so it is
  * spanned exactly), a cube kept when the voxel at its centre is inside, each
  * cube cut into the 6 tets of the Kuhn (Freudenthal) split around a main
- * diagonal, mirrored in cubes with odd coordinates (symmetric, conforming). Every tet has volume <= edge^3 / 6:
- * this is the maximum-volume constraint of §5.2. */
+ * diagonal, mirrored in cubes with odd coordinates (symmetric, conforming). Every tet has volume <=
+ * edge^3 / 6: this is the maximum-volume constraint of §5.2. */
 ss_tetmesh *ss_tetmesh_lattice(const uint8_t *inside, int nx, int ny, int nz, double dx_mm,
                                double tet_size_mm, ss_error *err);
 /* TetGen .node + .ele (1- or 0-based, attributes and boundary markers

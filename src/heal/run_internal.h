@@ -41,10 +41,10 @@ struct ss_heal_run {
     int nsutures;
     double *outline; /* per area row: the deformed initial outline's area, mm^2 */
     int capoutline;
-    int closed;            /* 95 % closure reached; close_* hold the state then */
+    int closed; /* 95 % closure reached; close_* hold the state then */
     double close_day;
     ss_mech_stats close_st;
-    cJSON *mech_aux;       /* the checkpoint's "mechanics" object while resuming */
+    cJSON *mech_aux; /* the checkpoint's "mechanics" object while resuming */
 };
 
 /* run.c */
@@ -82,7 +82,7 @@ ss_status ss_heal_run__mech_setup_fresh(ss_heal_run *r, ss_error *err);
 ss_status ss_heal_run__mech_setup_resume(ss_heal_run *r, const char *dir, ss_error *err);
 ss_status ss_heal_run__mech_row(ss_heal_run *r, ss_error *err); /* after a row was added */
 ss_status ss_heal_run__mech_snapshot(ss_heal_run *r, int idx, ss_error *err);
-void ss_heal_run__mech_aux(const ss_heal_run *r, cJSON *aux);     /* into checkpoint metadata */
+void ss_heal_run__mech_aux(const ss_heal_run *r, cJSON *aux); /* into checkpoint metadata */
 void ss_heal_run__mech_summary(const ss_heal_run *r, cJSON *summary);
 /* Extra area.csv columns: *names (static) and values n x ncols (malloc'd); 0 when off. */
 int ss_heal_run__mech_columns(const ss_heal_run *r, const char *const **names, double **vals);

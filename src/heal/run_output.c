@@ -204,8 +204,8 @@ ss_status ss_heal_run__outputs_open(ss_heal_run *r, ss_error *err) {
     }
     r->outs = ss_outputs_create("heal", err);
     if (!r->outs) return SS_ERR_NOMEM;
-    const char *ins[] = {c->params_path, c->wound_mask, c->wound_stroke, c->wound_mesh,
-                         c->wound_depth_image, c->sutures, c->tet_mesh};
+    const char *ins[] = {c->params_path,       c->wound_mask, c->wound_stroke, c->wound_mesh,
+                         c->wound_depth_image, c->sutures,    c->tet_mesh};
     ss_status s = SS_OK;
     for (size_t k = 0; k < sizeof ins / sizeof *ins && !s; k++)
         s = ss_outputs_input(r->outs, ins[k], err);

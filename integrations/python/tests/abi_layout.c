@@ -75,10 +75,9 @@ int main(void) {
         F(ss_heal_run_config, concave_k), F(ss_heal_run_config, wound_footprint),
         F(ss_heal_run_config, wound_depth_image), F(ss_heal_run_config, days),
         F(ss_heal_run_config, scheme), F(ss_heal_run_config, dt_days),
-        F(ss_heal_run_config, checkpoint_every),
-        F(ss_heal_run_config, out_dir), F(ss_heal_run_config, force),
-        F(ss_heal_run_config, resume_dir), F(ss_heal_run_config, seed),
-        F(ss_heal_run_config, mechanics), F(ss_heal_run_config, kappa),
+        F(ss_heal_run_config, checkpoint_every), F(ss_heal_run_config, out_dir),
+        F(ss_heal_run_config, force), F(ss_heal_run_config, resume_dir),
+        F(ss_heal_run_config, seed), F(ss_heal_run_config, mechanics), F(ss_heal_run_config, kappa),
         F(ss_heal_run_config, tet_mesh);
     S(ss_skin_dist);
     S(ss_skin_settings), F(ss_skin_settings, world_size_cm), F(ss_skin_settings, seed),
