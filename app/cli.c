@@ -109,3 +109,16 @@ ss_status cli_parse_double_list(const char *opt, const char *s, double lo, doubl
     *count = k;
     return SS_OK;
 }
+
+const char *cli_option_value(int argc, char **argv, int *i, ss_error *err) {
+    const char *a = argv[*i];
+    if (strncmp(a, "--", 2) != 0) {
+        ss_error_set(err, SS_ERR_INPUT, "unexpected argument '%s'", a);
+        return NULL;
+    }
+    if (*i + 1 >= argc) {
+        ss_error_set(err, SS_ERR_INPUT, "%s needs a value", a);
+        return NULL;
+    }
+    return argv[++*i];
+}

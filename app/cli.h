@@ -27,6 +27,10 @@ int cmd_optics_match(int argc, char **argv);
 
 /* Prints "skinsim <cmd>: <msg>" on stderr and returns the exit code for err. */
 int cli_fail(const char *cmd, const ss_error *err);
+/* For hand-rolled option loops: argv[*i] must be an option ("--name") and be
+ * followed by its value, which is returned (and *i advanced past it); NULL
+ * with err set otherwise. */
+const char *cli_option_value(int argc, char **argv, int *i, ss_error *err);
 /* Prints a usage error (exit code 2) with a hint to --help. */
 int cli_usage_error(const char *cmd, const char *fmt, ...)
 #if defined(__GNUC__)

@@ -149,15 +149,8 @@ static int parse_args(int argc, char **argv, opts *o, ss_error *err) {
             flag = 0;
         }
         if (flag) continue;
-        if (strncmp(a, "--", 2) != 0) {
-            ss_error_set(err, SS_ERR_INPUT, "unexpected argument '%s'", a);
-            return -1;
-        }
-        if (i + 1 >= argc) {
-            ss_error_set(err, SS_ERR_INPUT, "%s needs a value", a);
-            return -1;
-        }
-        const char *v = argv[++i];
+        const char *v = cli_option_value(argc, argv, &i, err);
+        if (!v) return -1;
         ss_status st = SS_OK;
         long l;
         int resume_ok = 0;

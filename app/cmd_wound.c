@@ -100,15 +100,8 @@ static int parse_args(int argc, char **argv, opts *o, ss_error *err) {
             c->compare = 0;
             continue;
         }
-        if (strncmp(a, "--", 2) != 0) {
-            ss_error_set(err, SS_ERR_INPUT, "unexpected argument '%s'", a);
-            return -1;
-        }
-        if (i + 1 >= argc) {
-            ss_error_set(err, SS_ERR_INPUT, "%s needs a value", a);
-            return -1;
-        }
-        const char *v = argv[++i];
+        const char *v = cli_option_value(argc, argv, &i, err);
+        if (!v) return -1;
         int pr = heal_parse_problem_option(a, v, &c->heal, err);
         if (pr < 0) return -1;
         if (pr > 0) continue;
