@@ -35,7 +35,7 @@ ss_heal_rd_work *ss_heal_rd__work_create_ex(const ss_heal_rd_system *sys, int ne
 typedef struct model_ctx {
     float lam11, lam31, lam12, lam22, beta2, lam33, lam32, inv_u3eq, rn, inv_K, lamnn;
     float Rs, lames, lamge, lamee, gamma1, lamnrho, lamrhop, lamkrho, lampp, inv_rhomax, rhomax;
-    float kscab, bed_mm, h, rho_closed;
+    float kscab, bed_mm, h, rho_closed, inv_rhosat;
     int scab, static_region;
     const uint8_t *cell;
     int nx, ny, nz;
@@ -97,7 +97,7 @@ react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep) {
     const int z = row->z;
     const float scab_h = m->scab_h, kscab = m->kscab, rclosed = m->rho_closed;
     const float lamnrho = m->lamnrho, lamkrho = m->lamkrho, lamge = m->lamge, lamee = m->lamee;
-    const float lames = m->lames;
+    const float lames = m->lames, irsat = m->inv_rhosat;
     float *restrict m0 = row->m[0], *restrict m1 = row->m[1];
     float *restrict p1 = pr[0], *restrict p2 = pr[1], *restrict p3 = pr[2], *restrict p4 = pr[3];
     float *restrict p5 = pr[4], *restrict p6 = pr[5], *restrict p7 = pr[6], *restrict p8 = pr[7];
@@ -142,10 +142,11 @@ react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep) {
         const float me = deep ? 0.0f : surf * pos(1.0f - kscab * s) * qwin(BED[i], g1, ig1, ig2);
         p6[i] = deep ? 0.0f : me * lamge * e;
         l6[i] = deep ? 0.0f : surf * lamee;
-        /* 4.1.7 scar, restricted to omega: (1-s) n ((1-u3)(1-e) lamnrho + lamkrho)
+        /* 4.1.7 scar, restricted to omega:
+         * (1-s) n ((1-u3)(1-e) lamnrho + lamkrho (1 - rho/rho_sat)+)
          * - lamrhop rho */
         const float imm = pos(1.0f - rclosed * u3); /* (1 - u3) at rho_open = 0 */
-        p7[i] = om * ns * nn * (imm * necl * lamnrho + lamkrho);
+        p7[i] = om * ns * nn * (imm * necl * lamnrho + lamkrho * pos(1.0f - rho * irsat));
         l7[i] = m->lamrhop;
         /* 4.1.8 plasma: Dp lap p + lampp p + C(rho)(1-p) */
         const float C = pos(rho - m->rhomax) * m->inv_rhomax;
@@ -288,6 +289,7 @@ static void ctx_init(model_ctx *c, const ss_heal_params *p, const ss_heal_grid *
     c->ny = g->ny;
     c->nz = g->nz;
     c->kscab = (float)p->kscab;
+    c->inv_rhosat = (float)(1.0 / p->rho_sat);
     c->rho_closed = (float)(1.0 - p->rho_open);
     c->bed_mm = (float)p->bed_mm;
     c->h = (float)g->dx_mm;
@@ -363,9 +365,10 @@ static void sys_init(ss_heal_rd_system *s, model_ctx *c, const ss_heal_grid *g,
 static ss_status check_params(const ss_heal_params *p, ss_error *err) {
     if (!(p->lam11 > 0) || !(p->u3_eq > 0) || !(p->K > 0) || !(p->rho_max > 0) ||
         !(p->u1_beta2 > 0) || !(p->gamma1 > 0 && p->gamma1 < 1) || !(p->bed_mm > 0) ||
-        !(p->scab_mm >= 0))
+        !(p->scab_mm >= 0) || !(p->rho_sat > 0))
         return ss_error_set(err, SS_ERR_INPUT,
-                            "heal params: lam11, u3_eq, K, rho_max, u1_beta2, bed_mm must be > 0, "
+                            "heal params: lam11, u3_eq, K, rho_max, u1_beta2, bed_mm, rho_sat must "
+                            "be > 0, "
                             "scab_mm >= 0 and gamma1 in (0, 1)");
     return SS_OK;
 }
