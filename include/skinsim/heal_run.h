@@ -171,6 +171,35 @@ const char *ss_heal_run_note(const ss_heal_run *r);
 /* The contraction mechanics of the run (skinsim/mech.h), NULL when off. */
 struct ss_mech *ss_heal_run_mech(ss_heal_run *r);
 
+/* ---- a finished run folder, read back (`skinsim wound --heal DIR`) ----------------
+ * What `skinsim heal --out DIR` wrote: run.json (its "format" is
+ * SS_HEAL_RUN_FORMAT; a folder of another format is refused, since what the
+ * files hold and mean may differ), summary.json (scenario, grid, parameters,
+ * step), fields/fields.pvd and the snapshots fields/fields_NNNN.vti it lists.
+ * Read-only: nothing in DIR is changed. */
+#define SS_HEAL_RUN_FORMAT 1
+typedef struct ss_heal_saved_run ss_heal_saved_run;
+/* Checks DIR: a run being written or stopped before its end
+ * (.skinsim-unfinished, or no completion marker), a folder of another format
+ * or another command, missing or malformed run.json, summary.json or
+ * fields.pvd -> SS_ERR_INPUT naming DIR and what is wrong. Reads no snapshot. */
+ss_status ss_heal_saved_run_open(const char *dir, ss_heal_saved_run **out, ss_error *err);
+void ss_heal_saved_run_free(ss_heal_saved_run *s);
+const char *ss_heal_saved_run_scenario(const ss_heal_saved_run *s);
+const ss_heal_params *ss_heal_saved_run_params(const ss_heal_saved_run *s);
+double ss_heal_saved_run_dt(const ss_heal_saved_run *s);      /* step, days */
+double ss_heal_saved_run_end_day(const ss_heal_saved_run *s); /* the last snapshot's day */
+int ss_heal_saved_run_snapshot_count(const ss_heal_saved_run *s);
+double ss_heal_saved_run_snapshot_day(const ss_heal_saved_run *s, int i);
+/* The snapshot whose day is `day` (within a thousandth of a step), -1 if none. */
+int ss_heal_saved_run_find(const ss_heal_saved_run *s, double day);
+/* Reads snapshot i (0-based, in time order) as a new grid with the run's
+ * skin_top_mm; displacement as ss_heal_vti_read (NULL when the run had no
+ * mechanics). A damaged snapshot, or one whose grid or day disagrees with
+ * summary.json and fields.pvd -> SS_ERR_INPUT naming the file. */
+ss_heal_grid *ss_heal_saved_run_load(const ss_heal_saved_run *s, int i, float **displacement,
+                                     ss_error *err);
+
 #ifdef __cplusplus
 }
 #endif

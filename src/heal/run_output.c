@@ -302,6 +302,8 @@ ss_status ss_heal_run__write_identity(const ss_heal_run *r, ss_error *err) {
     cJSON *j = cJSON_CreateObject();
     if (!j) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     cJSON_AddStringToObject(j, "command", "heal");
+    cJSON_AddNumberToObject(j, "format", SS_HEAL_RUN_FORMAT);
+    cJSON_AddStringToObject(j, "skinsim_version", ss_version());
     cJSON_AddStringToObject(j, "run_id", id.run_id);
     cJSON_AddStringToObject(j, "scenario", id.scenario);
     cJSON_AddItemToObject(j, "grid", cJSON_CreateIntArray(id.n, 3));
