@@ -88,6 +88,16 @@ typedef struct ss_heal_run_config {
     double tet_size_mm;   /* lattice tet edge; 0 = params file or default */
     const char *sutures;  /* stitches CSV "x1,y1,z1,x2,y2,z2[,remove_day]" (mm); NULL = none */
     const char *tet_mesh; /* TetGen .node/.ele or Gmsh .msh instead of the lattice; NULL */
+
+    /* ---- real geometry (seed 001 §5.1, §5.4; skinsim/shell.h; fresh runs) ---- */
+    const char *skin_mesh;    /* closed OBJ/glTF/GLB body surface; the grid is a patch of its
+                                 skin around the wound (then wound_uv or wound_mesh, in the
+                                 mesh's units, gives the wound); NULL = the flat block */
+    const char *wound_uv;     /* with skin_mesh: strokes CSV (u,v[,stroke]) in the mesh's UV
+                                 space, cut wound_depth_mm deep */
+    double skin_thickness_mm; /* with skin_mesh: skin shell under the surface; 0 = 3 mm */
+    double voxel_mm;          /* with skin_mesh: voxel edge; 0 = 0.5 mm */
+    double mesh_units_mm;     /* with skin_mesh: one mesh unit in mm; 0 = glTF 1000, OBJ 1 */
 } ss_heal_run_config;
 
 /* The defaults listed above (every other field 0 / NULL). */

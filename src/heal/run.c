@@ -44,6 +44,7 @@ void ss_heal_run_free(ss_heal_run *r) {
     ss_outputs_free(r->outs); /* rolls back outputs not finished */
     cJSON_Delete(r->wound);
     ss_heal_run__mech_free(r);
+    ss_heal_run__shell_free(r);
     free(r);
 }
 
