@@ -97,6 +97,15 @@ typedef struct ss_heal_run_config {
                          changes by more than adapt_tol / 2 in any cell in a step, and a
                          step that changes one by more than adapt_tol is retried with half
                          the m (docs/heal-model.md §4); `skinsim heal` uses 0.01 */
+    /* ---- real geometry (seed 001 §5.1, §5.4; skinsim/shell.h; fresh runs) ---- */
+    const char *skin_mesh;    /* closed OBJ/glTF/GLB body surface; the grid is a patch of its
+                                 skin around the wound (then wound_uv or wound_mesh, in the
+                                 mesh's units, gives the wound); NULL = the flat block */
+    const char *wound_uv;     /* with skin_mesh: strokes CSV (u,v[,stroke]) in the mesh's UV
+                                 space, cut wound_depth_mm deep */
+    double skin_thickness_mm; /* with skin_mesh: skin shell under the surface; 0 = 3 mm */
+    double voxel_mm;          /* with skin_mesh: voxel edge; 0 = 0.5 mm */
+    double mesh_units_mm;     /* with skin_mesh: one mesh unit in mm; 0 = glTF 1000, OBJ 1 */
 } ss_heal_run_config;
 
 /* The defaults listed above (every other field 0 / NULL). */
