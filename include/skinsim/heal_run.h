@@ -97,6 +97,15 @@ typedef struct ss_heal_run_config {
                          changes by more than adapt_tol / 2 in any cell in a step, and a
                          step that changes one by more than adapt_tol is retried with half
                          the m (docs/heal-model.md §4); `skinsim heal` uses 0.01 */
+    /* ---- real geometry (seed 001 §5.1, §5.4; skinsim/shell.h; fresh runs) ---- */
+    const char *skin_mesh;    /* closed OBJ/glTF/GLB body surface; the grid is a patch of its
+                                 skin around the wound (then wound_uv or wound_mesh, in the
+                                 mesh's units, gives the wound); NULL = the flat block */
+    const char *wound_uv;     /* with skin_mesh: strokes CSV (u,v[,stroke]) in the mesh's UV
+                                 space, cut wound_depth_mm deep */
+    double skin_thickness_mm; /* with skin_mesh: skin shell under the surface; 0 = 3 mm */
+    double voxel_mm;          /* with skin_mesh: voxel edge; 0 = 0.5 mm */
+    double mesh_units_mm;     /* with skin_mesh: one mesh unit in mm; 0 = glTF 1000, OBJ 1 */
 } ss_heal_run_config;
 
 /* The defaults listed above (every other field 0 / NULL). */
@@ -170,6 +179,35 @@ long long ss_heal_run_resumed_from(const ss_heal_run *r);
 const char *ss_heal_run_note(const ss_heal_run *r);
 /* The contraction mechanics of the run (skinsim/mech.h), NULL when off. */
 struct ss_mech *ss_heal_run_mech(ss_heal_run *r);
+
+/* ---- a finished run folder, read back (`skinsim wound --heal DIR`) ----------------
+ * What `skinsim heal --out DIR` wrote: run.json (its "format" is
+ * SS_HEAL_RUN_FORMAT; a folder of another format is refused, since what the
+ * files hold and mean may differ), summary.json (scenario, grid, parameters,
+ * step), fields/fields.pvd and the snapshots fields/fields_NNNN.vti it lists.
+ * Read-only: nothing in DIR is changed. */
+#define SS_HEAL_RUN_FORMAT 1
+typedef struct ss_heal_saved_run ss_heal_saved_run;
+/* Checks DIR: a run being written or stopped before its end
+ * (.skinsim-unfinished, or no completion marker), a folder of another format
+ * or another command, missing or malformed run.json, summary.json or
+ * fields.pvd -> SS_ERR_INPUT naming DIR and what is wrong. Reads no snapshot. */
+ss_status ss_heal_saved_run_open(const char *dir, ss_heal_saved_run **out, ss_error *err);
+void ss_heal_saved_run_free(ss_heal_saved_run *s);
+const char *ss_heal_saved_run_scenario(const ss_heal_saved_run *s);
+const ss_heal_params *ss_heal_saved_run_params(const ss_heal_saved_run *s);
+double ss_heal_saved_run_dt(const ss_heal_saved_run *s);      /* step, days */
+double ss_heal_saved_run_end_day(const ss_heal_saved_run *s); /* the last snapshot's day */
+int ss_heal_saved_run_snapshot_count(const ss_heal_saved_run *s);
+double ss_heal_saved_run_snapshot_day(const ss_heal_saved_run *s, int i);
+/* The snapshot whose day is `day` (within a thousandth of a step), -1 if none. */
+int ss_heal_saved_run_find(const ss_heal_saved_run *s, double day);
+/* Reads snapshot i (0-based, in time order) as a new grid with the run's
+ * skin_top_mm; displacement as ss_heal_vti_read (NULL when the run had no
+ * mechanics). A damaged snapshot, or one whose grid or day disagrees with
+ * summary.json and fields.pvd -> SS_ERR_INPUT naming the file. */
+ss_heal_grid *ss_heal_saved_run_load(const ss_heal_saved_run *s, int i, float **displacement,
+                                     ss_error *err);
 
 #ifdef __cplusplus
 }

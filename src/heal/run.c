@@ -45,6 +45,7 @@ void ss_heal_run_free(ss_heal_run *r) {
     cJSON_Delete(r->wound);
     ss_heal_run__mech_free(r);
     for (int f = 0; f < SS_HEAL_NFIELDS; f++) free(r->backup[f]);
+    ss_heal_run__shell_free(r);
     free(r);
 }
 

@@ -67,6 +67,7 @@ char *ss_heal_run__aux_json(const ss_heal_run *r, double wall) {
         cJSON_AddItemToArray(sn, e);
     }
     ss_heal_run__mech_aux(r, j);
+    ss_heal_run__shell_aux(r, j);
     char *s = cJSON_PrintUnformatted(j);
     cJSON_Delete(j);
     return s;
@@ -153,6 +154,9 @@ ss_status ss_heal_run__aux_restore(ss_heal_run *r, const char *aux, const char *
     if (w) r->wound = cJSON_Duplicate(w, 1);
     cJSON *mo = cJSON_GetObjectItem(j, "mechanics");
     if (mo && !(r->mech_aux = cJSON_Duplicate(mo, 1)))
+        st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    cJSON *so = cJSON_GetObjectItem(j, "shell");
+    if (so && !(r->shell_aux = cJSON_Duplicate(so, 1)))
         st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     if (!st) st = restore_rows(r, area, dir, err);
     if (!st) st = restore_snaps(r, snaps, dir, err);
@@ -302,6 +306,8 @@ ss_status ss_heal_run__write_identity(const ss_heal_run *r, ss_error *err) {
     cJSON *j = cJSON_CreateObject();
     if (!j) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     cJSON_AddStringToObject(j, "command", "heal");
+    cJSON_AddNumberToObject(j, "format", SS_HEAL_RUN_FORMAT);
+    cJSON_AddStringToObject(j, "skinsim_version", ss_version());
     cJSON_AddStringToObject(j, "run_id", id.run_id);
     cJSON_AddStringToObject(j, "scenario", id.scenario);
     cJSON_AddItemToObject(j, "grid", cJSON_CreateIntArray(id.n, 3));
@@ -441,6 +447,7 @@ ss_status ss_heal_run__snapshot(ss_heal_run *r, ss_error *err) {
         st = ss_heal_vti_write(path, r->g, err);
     }
     if (!st) st = ss_heal_run__mech_snapshot(r, idx, err);
+    if (!st) st = ss_heal_run__shell_snapshot(r, idx, err);
     if (!st) st = ss_heal_run__add_snap(r, r->g->t_days, rel, err);
     if (st) return st;
     snprintf(path, sizeof path, "%s/fields/fields.pvd", r->out_dir);
@@ -532,6 +539,7 @@ cJSON *ss_heal_run__summary(const ss_heal_run *r, double wall) {
     cJSON *pj = cJSON_Parse(r->params_json);
     cJSON_AddItemToObject(j, "params", pj ? pj : cJSON_CreateString(r->params_json));
     ss_heal_run__mech_summary(r, j);
+    ss_heal_run__shell_summary(r, j);
     return j;
 }
 

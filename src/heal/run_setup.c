@@ -328,6 +328,14 @@ ss_status ss_heal_run__setup_fresh(ss_heal_run *r, ss_error *err) {
     const ss_heal_run_config *c = &r->c;
     ss_status st = check_config(c, err);
     if (!st) st = setup_params(r, err);
+    if (!st && ss_heal_run__shell_wanted(c)) { /* a patch of skin on a mesh */
+        r->days = c->days != 0 ? c->days : SS_HEAL_RUN_DEFAULT_DAYS;
+        r->scheme = c->scheme;
+        st = ss_heal_run__shell_setup_fresh(r, err);
+        if (!st) st = ss_heal_run__mech_setup_fresh(r, err);
+        if (!st) st = setup_solver(r, err);
+        return st;
+    }
     geometry gm;
     if (!st) st = setup_geometry(c, &gm, err);
     if (!st) st = check_wound_options(c, &gm, err);
@@ -381,6 +389,7 @@ ss_status ss_heal_run__setup_resume(ss_heal_run *r, ss_error *err) {
     r->p = ss_heal_params_parse(r->params_json, "checkpoint parameters", r->scenario, err);
     if (!r->p) return err->code ? err->code : SS_ERR_INPUT;
     st = ss_heal_run__mech_setup_resume(r, dir, err);
+    if (!st) st = ss_heal_run__shell_setup_resume(r, err);
     if (st) return st;
     r->s = ss_heal_solver_create(r->g, r->p, r->scheme, r->dt, err);
     if (!r->s) return err->code ? err->code : SS_ERR_INPUT;
