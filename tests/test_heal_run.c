@@ -34,6 +34,18 @@ static void assert_fields_equal(const ss_heal_grid *a, const ss_heal_grid *b) {
         assert_memory_equal(a->field[f], b->field[f], n * sizeof(float));
 }
 
+/* Resumes the run in dir (from its newest checkpoint) up to `days`. */
+static ss_heal_run *resume_run(const char *dir, double days) {
+    ss_error err;
+    ss_heal_run_config rc;
+    ss_heal_run_config_default(&rc);
+    rc.resume_dir = dir;
+    rc.days = days;
+    ss_heal_run *r = NULL;
+    assert_int_equal(ss_heal_run_create(&rc, &r, &err), SS_OK);
+    return r;
+}
+
 /* The run's state after advance_to equals the solver stepped by hand. */
 static void test_run_matches_solver(void **state) {
     (void)state;
@@ -107,11 +119,7 @@ static void test_run_resume(void **state) {
     assert_int_equal(ss_heal_run_snapshot_count(r), 2); /* day 0 and the end */
     ss_heal_run_free(r);                                /* killed before finish */
 
-    ss_heal_run_config rc;
-    ss_heal_run_config_default(&rc);
-    rc.resume_dir = out;
-    rc.days = 1;
-    assert_int_equal(ss_heal_run_create(&rc, &r, &err), SS_OK);
+    r = resume_run(out, 1);
     assert_int_equal(ss_heal_run_resumed_from(r), 10);
     assert_string_equal(ss_heal_run_scenario(r), "scab");
     while (!ss_heal_run_done(r)) assert_int_equal(ss_heal_run_step(r, &err), SS_OK);
@@ -215,11 +223,7 @@ static void test_run_adaptive(void **state) {
     run_to_end(a);
     long long m21 = ss_heal_run_step_multiple(a);
     ss_heal_run_free(a); /* killed before finish */
-    ss_heal_run_config rc;
-    ss_heal_run_config_default(&rc);
-    rc.resume_dir = out;
-    rc.days = 40;
-    assert_int_equal(ss_heal_run_create(&rc, &a, &err), SS_OK);
+    a = resume_run(out, 40);
     assert_int_equal(ss_heal_run_step_multiple(a), m21);
     run_to_end(a);
     c.days = 40;
