@@ -92,6 +92,11 @@ static void help(void) {
            "  --scheme S             explicit | split (default split: implicit diffusion)\n"
            "  --dt DAYS              time step (default: automatic, see the solver's\n"
            "                         stability limit; too large is an error)\n"
+           "  --adapt-tol X          split scheme with the automatic step: adaptive steps\n"
+           "                         of up to 2 days; a step may change no species by more\n"
+           "                         than X in any cell (fields normalised to healthy = 1),\n"
+           "                         else it is retried shorter (default 0.01; 0 = fixed\n"
+           "                         steps; docs/heal-model.md)\n"
            "  --snapshot-every DAYS  VTK + surface maps interval (default 1; 0 = first\n"
            "                         and last only)\n"
            "  --area-every DAYS      area.csv row interval (default 0.01, at least 1 step)\n"
@@ -135,7 +140,7 @@ static void help(void) {
 /* The run's settings plus what only the command line has. */
 typedef struct opts {
     ss_heal_run_config c;
-    int threads, quiet, json, have_days;
+    int threads, quiet, json, have_days, have_adapt;
     int nonresume_opts; /* options that a --resume run cannot take */
 } opts;
 
@@ -195,6 +200,9 @@ static int parse_args(int argc, char **argv, opts *o, ss_error *err) {
             resume_ok = 1;
         } else if (!strcmp(a, "--seed")) {
             st = cli_parse_u64(a, v, &c->seed, err);
+        } else if (!strcmp(a, "--adapt-tol")) {
+            st = cli_parse_double(a, v, 0, 1, &c->adapt_tol, err);
+            o->have_adapt = 1;
         } else {
             ss_error_set(err, SS_ERR_INPUT, "unknown option '%s'", a);
             return -1;
@@ -202,6 +210,10 @@ static int parse_args(int argc, char **argv, opts *o, ss_error *err) {
         if (st) return -1;
         if (!resume_ok) o->nonresume_opts++;
     }
+    /* adaptive steps by default where they apply: split scheme, the automatic
+     * step, no mechanics (--dt fixes the step; --adapt-tol 0 too) */
+    if (!o->have_adapt && c->scheme == SS_HEAL_SPLIT && c->dt_days == 0 && !c->mechanics)
+        c->adapt_tol = SS_HEAL_RUN_DEFAULT_ADAPT_TOL;
     return 0;
 }
 

@@ -46,6 +46,10 @@ struct ss_heal_run {
     double close_day;
     ss_mech_stats close_st;
     cJSON *mech_aux; /* the checkpoint's "mechanics" object while resuming */
+    /* adaptive steps (run.c): a step is mult x dt; adapt_tol 0 = fixed */
+    double adapt_tol;
+    long long mult, mult_max, retried, taken;
+    float *backup[SS_HEAL_NFIELDS]; /* the fields before the step (change bound, retry) */
     /* real geometry (run_shell.c); shell NULL on the flat block */
     struct ss_shell_patch *shell;
     ss_mesh skin;
@@ -59,6 +63,8 @@ struct ss_heal_run {
 
 /* run.c */
 ss_status ss_heal_run__add_row(ss_heal_run *r, ss_error *err);
+/* mult = 1 and mult_max from dt (adaptive steps; adapt_tol already set). */
+void ss_heal_run__adapt_init(ss_heal_run *r);
 ss_status ss_heal_run__add_snap(ss_heal_run *r, double t, const char *file, ss_error *err);
 
 /* run_setup.c: fill r from r->c (no file is written) */
