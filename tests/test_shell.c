@@ -176,6 +176,7 @@ static void test_uv_patch(void **state) {
     assert_null(ss_shell_patch_from_uv(&m, "cube.obj", csv, &o, &err));
     assert_non_null(strstr(err.msg, "two UV islands"));
     ss_mesh_free(&m);
+    tu_rmtree(dir);
     free(dir);
 }
 
