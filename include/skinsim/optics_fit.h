@@ -236,7 +236,15 @@ typedef struct ss_mm_match_options {
                                      thicknesses (0.02) */
     int base_set;                 /* 1: take the non-axis parameters from base */
     ss_bio_params base;
+    int geometry; /* colour compared with the target: SS_MM_GEOMETRY_SCI (default) or _SCE */
 } ss_mm_match_options;
+/* Measurement geometry of the target colour. SCI (CIE d:8, specular component
+ * included - skin colorimeters and spectrophotometers, a photo under diffuse
+ * light): the albedo plus the rough surface's reflectance at normal incidence
+ * (by reciprocity the light a diffusely lit surface reflects towards the
+ * viewer). SCE: the albedo alone (surface reflection excluded entirely). */
+#define SS_MM_GEOMETRY_SCI 0
+#define SS_MM_GEOMETRY_SCE 1
 void ss_mm_match_options_default(ss_mm_match_options *o);
 typedef struct ss_mm_match_result {
     ss_bio_params bio;       /* the answer (transport-refined if refined) */
@@ -246,9 +254,12 @@ typedef struct ss_mm_match_result {
     int refined;             /* 1 if the transport stage ran */
     ss_bio_params table_bio; /* the table stage's answer, its interpolated albedo, Lab, dE00 */
     double table_albedo_rgb[3], table_lab[3], table_delta_e00;
+    double surface; /* surface reflectance added to the albedo before comparing (SCI; 0 for SCE);
+                       lab and table_lab are of albedo + surface */
 } ss_mm_match_result;
-/* The biological parameters (within the table's axis ranges) whose albedo is
- * closest in CIEDE2000 to target_lab (D65 CIELAB): table search, then
+/* The biological parameters (within the table's axis ranges) whose colour
+ * (albedo, plus the surface reflectance for SCI) is closest in CIEDE2000 to
+ * target_lab (D65 CIELAB): table search, then
  * transport refinement (design in match.c). Deterministic. */
 ss_status ss_mm_match(const ss_mm_table *t, const double target_lab[3],
                       const ss_mm_match_options *o, ss_mm_match_result *out, ss_error *err);
