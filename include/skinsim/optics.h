@@ -182,6 +182,12 @@ ss_status ss_optics_brdf_sample(const ss_bio_params *bio, const ss_spectrum_opti
                                 int n_theta_i, int n_theta_r, int n_phi, ss_brdf_sampled *out,
                                 ss_error *err);
 void ss_brdf_sampled_free(ss_brdf_sampled *b);
+/* The surface-reflected part of the skin BRDF alone (air over the stratum
+ * corneum's index, rough as o->mc.roughness_sigma; nothing returns from
+ * below), the same bins as ss_optics_brdf_sample; grey (equal channels: the
+ * indices do not depend on wavelength). o->mc.photons per incidence bin. */
+ss_status ss_optics_surface_brdf_sample(const ss_spectrum_options *o, int n_theta_i, int n_theta_r,
+                                        int n_phi, ss_brdf_sampled *out, ss_error *err);
 /* Radial diffuse reflectance profile Rd(r) per linear-sRGB channel (seed
  * §4.7.1): the spectral Rd(r, lambda) of each radial bin is converted with the
  * CIE observer and D65 like an albedo. Bins of width max_cm/bins from r = 0;

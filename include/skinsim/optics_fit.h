@@ -113,7 +113,18 @@ typedef struct ss_fit_options {
     int weighting;        /* an ss_fit_weighting (default SS_FIT_SOLID_ANGLE) */
     double max_theta_rad; /* bins whose theta_i or theta_r centre lies above this get
                              weight 0 (default pi/2: all bins) */
+    int base_mode;        /* an ss_fit_base_mode (default SS_FIT_BASE_FREE) */
+    double albedo_rgb[3]; /* SS_FIT_BASE_ALBEDO: the skin's diffuse albedo at normal incidence */
+    const struct ss_brdf_sampled *surface; /* SS_FIT_BASE_ALBEDO, optional: the surface-reflected
+                                              part of the BRDF alone (same bins); the lobe is
+                                              fitted to it */
 } ss_fit_options;
+/* How the base colour is found. FREE: in closed form with the lobe, minimising
+ * the seed's distance over the whole BRDF. ALBEDO: the base colour whose
+ * diffuse term reflects albedo_rgb at normal incidence (the render model then
+ * has the skin's albedo), and only the lobe (specular, roughness) is fitted:
+ * to `surface` when given, else to the whole BRDF. */
+enum { SS_FIT_BASE_FREE = 0, SS_FIT_BASE_ALBEDO = 1 };
 void ss_fit_options_default(ss_fit_options *o);
 
 typedef struct ss_fit_result {
