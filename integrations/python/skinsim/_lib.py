@@ -329,6 +329,9 @@ class ss_fit_options(ctypes.Structure):
         ("tol", c_double),
         ("weighting", c_int),
         ("max_theta_rad", c_double),
+        ("base_mode", c_int),
+        ("albedo_rgb", c_double * 3),
+        ("surface", POINTER(ss_brdf_sampled)),
     ]
 
 
