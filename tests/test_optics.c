@@ -481,6 +481,42 @@ static void test_inner_loop_samplers(void **state) {
     free(s);
 }
 
+/* Seed §4.7.1's subsurface distance D (radial_distance = SS_RADIAL_PATH): the
+ * horizontal path length summed over segments is at least the net distance of
+ * every packet, and the random streams do not change, so the same packets
+ * leave: the diffuse reflectance is identical and the cumulative Rd within
+ * every radius is never larger with D than with the net distance; an
+ * unknown mode is an input error. */
+static void test_radial_path_distance(void **state) {
+    (void)state;
+    ss_error err;
+    ss_optics_slab s = one_layer(1.4, 0.5, 100.0, 0.8, 0.2);
+    ss_mc_options o;
+    ss_mc_options_default(&o);
+    o.photons = nph(40000);
+    o.radial_bins = 40;
+    o.radial_max_cm = 2.0;
+    ss_mc_result net, path;
+    assert_int_equal(ss_mc_run(&s, &o, &net, &err), SS_OK);
+    o.radial_distance = SS_RADIAL_PATH;
+    assert_int_equal(ss_mc_run(&s, &o, &path, &err), SS_OK);
+    assert_true(net.diffuse == path.diffuse);
+    double cn = 0, cp = 0, mn = 0, mp = 0;
+    for (int k = 0; k < o.radial_bins; k++) {
+        double r0 = k * 0.05, r1 = r0 + 0.05, area = M_PI * (r1 * r1 - r0 * r0);
+        cn += net.radial[k] * area;
+        cp += path.radial[k] * area;
+        mn += net.radial[k] * area * 0.5 * (r0 + r1);
+        mp += path.radial[k] * area * 0.5 * (r0 + r1);
+        assert_true(cp <= cn * (1.0 + 1e-12));
+    }
+    assert_true(mp / cp > 1.2 * (mn / cn)); /* paths meander: D clearly exceeds r */
+    ss_mc_result_free(&net);
+    ss_mc_result_free(&path);
+    o.radial_distance = 7;
+    assert_int_equal(ss_mc_run(&s, &o, &net, &err), SS_ERR_INPUT);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_van_de_hulst),
@@ -493,6 +529,7 @@ int main(void) {
         cmocka_unit_test(test_paths_vs_run),
         cmocka_unit_test(test_bad_parameters),
         cmocka_unit_test(test_inner_loop_samplers),
+        cmocka_unit_test(test_radial_path_distance),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -87,7 +87,14 @@ typedef struct ss_mc_options {
     int brdf_n_theta, brdf_n_phi; /* if > 0, fill result.brdf_exit (theta_r x dphi bins) */
     int radial_bins;
     double radial_max_cm; /* if > 0, fill result.radial (Rd(r)) */
+    int radial_distance;  /* SS_RADIAL_NET (default) or SS_RADIAL_PATH */
 } ss_mc_options;
+/* The distance Rd(r) is binned by: NET, the distance from the entry point to
+ * the exit point (the diffusion profile renderers use); PATH, seed 003
+ * §4.7.1's D, the length of the path's horizontal projection summed over
+ * every segment (D >= net distance for every packet). MCML runs use NET. */
+#define SS_RADIAL_NET 0
+#define SS_RADIAL_PATH 1
 void ss_mc_options_default(ss_mc_options *o);
 typedef struct ss_mc_result {
     double specular, diffuse, transmit, absorbed; /* fractions of incident */

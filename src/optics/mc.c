@@ -213,6 +213,7 @@ typedef struct mc_ctx {
     double sin_ti, cos_ti;
     double alpha; /* Trowbridge-Reitz (GGX) roughness sigma; 0 = smooth */
     int rough, stochastic, paths;
+    int path_dist; /* bin Rd(r) by the summed horizontal path (seed's D) */
     ss_mc_tally_spec spec;
     double inv_dr, inv_dz; /* 1 / spec.rad_dr, 1 / spec.dz (0 if unused) */
     zig_exp zig;           /* exponential sampler tables */
@@ -513,7 +514,8 @@ static void run_photon(const mc_ctx *c, uint64_t idx, mc_acc *a, path_buf *pb) {
         d[2] = o[2];
     }
     int layer = 0;
-    double dsum = 0.0; /* this photon's diffuse reflectance */
+    double hpath = 0.0; /* horizontal path length (seed §4.7.1 D), if path_dist */
+    double dsum = 0.0;  /* this photon's diffuse reflectance */
     double tsum = 0.0;
 
     for (;;) {
@@ -535,6 +537,7 @@ static void run_photon(const mc_ctx *c, uint64_t idx, mc_acc *a, path_buf *pb) {
                 y += s * d[1];
                 z += s * d[2];
                 if (c->paths) plen[layer] += s;
+                if (c->path_dist) hpath += s * sqrt(d[0] * d[0] + d[1] * d[1]);
                 break;
             }
             if (db == HUGE_VAL) { /* clear layer, horizontal: cannot move */
@@ -546,6 +549,7 @@ static void run_photon(const mc_ctx *c, uint64_t idx, mc_acc *a, path_buf *pb) {
             x += db * d[0];
             y += db * d[1];
             if (c->paths) plen[layer] += db;
+            if (c->path_dist) hpath += db * sqrt(d[0] * d[0] + d[1] * d[1]);
             tau -= db * L->mut;
             if (tau < 0.0) tau = 0.0;
             if (uz > 0.0) {
@@ -676,7 +680,9 @@ static void run_photon(const mc_ctx *c, uint64_t idx, mc_acc *a, path_buf *pb) {
                     memset(&pr, 0, sizeof pr);
                     for (int l = 0; l < c->nl; l++) pr.len[l] = (float)plen[l];
                     pr.brdf_bin = (int16_t)brdf_bin(c, o[0], o[1], -o[2]);
-                    pr.rad_bin = (int16_t)radial_bin(c, x, y, c->spec.rad_n, 0);
+                    pr.rad_bin =
+                        (int16_t)(c->path_dist ? radial_bin(c, hpath, 0.0, c->spec.rad_n, 0)
+                                               : radial_bin(c, x, y, c->spec.rad_n, 0));
                     pr.bounces = (uint16_t)(bounces > 65535 ? 65535 : bounces);
                     pr.up = 1;
                     pr.w0 = (float)w;
@@ -684,7 +690,8 @@ static void run_photon(const mc_ctx *c, uint64_t idx, mc_acc *a, path_buf *pb) {
                 } else {
                     if (a->brdf) a->brdf[brdf_bin(c, o[0], o[1], -o[2])] += w;
                     if (a->rd_r) {
-                        int ir = radial_bin(c, x, y, c->spec.rad_n, mcml);
+                        int ir = c->path_dist ? radial_bin(c, hpath, 0.0, c->spec.rad_n, mcml)
+                                              : radial_bin(c, x, y, c->spec.rad_n, mcml);
                         if (ir >= 0) a->rd_r[ir] += w;
                     }
                     if (mcml) {
@@ -783,6 +790,10 @@ static ss_status ctx_init(mc_ctx *c, const ss_optics_slab *s, const ss_mc_option
         return ss_error_set(err, SS_ERR_INPUT,
                             "theta_i_rad: incidence angle %g rad is outside [0, pi/2)",
                             o->theta_i_rad);
+    if (o->radial_distance != SS_RADIAL_NET && o->radial_distance != SS_RADIAL_PATH)
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "radial_distance: %d is neither net (0) nor path (1)",
+                            o->radial_distance);
     if (!(o->roughness_sigma >= 0.0 && o->roughness_sigma <= 10.0))
         return ss_error_set(err, SS_ERR_INPUT,
                             "roughness_sigma: %g is outside [0, 10] (0 = smooth)",
@@ -831,6 +842,7 @@ static ss_status ctx_init(mc_ctx *c, const ss_optics_slab *s, const ss_mc_option
     c->alpha = o->roughness_sigma;
     c->stochastic = o->stochastic_absorb != 0;
     c->paths = paths;
+    c->path_dist = o->radial_distance == SS_RADIAL_PATH && !spec->mcml && spec->rad_n > 0;
     c->spec = *spec;
     c->inv_dr = spec->rad_dr > 0.0 ? 1.0 / spec->rad_dr : 0.0;
     c->inv_dz = spec->dz > 0.0 ? 1.0 / spec->dz : 0.0;

@@ -282,6 +282,7 @@ class ss_mc_options(ctypes.Structure):
         ("brdf_n_phi", c_int),
         ("radial_bins", c_int),
         ("radial_max_cm", c_double),
+        ("radial_distance", c_int),
     ]
 
 

@@ -34,7 +34,7 @@ int main(void) {
     S(ss_mc_options), F(ss_mc_options, photons), F(ss_mc_options, seed),
         F(ss_mc_options, theta_i_rad), F(ss_mc_options, roughness_sigma),
         F(ss_mc_options, stochastic_absorb), F(ss_mc_options, radial_bins),
-        F(ss_mc_options, radial_max_cm);
+        F(ss_mc_options, radial_max_cm), F(ss_mc_options, radial_distance);
     S(ss_spectrum_options), F(ss_spectrum_options, wl_step_nm), F(ss_spectrum_options, mc),
         F(ss_spectrum_options, progress), F(ss_spectrum_options, progress_user);
     S(ss_reflectance_spectrum), F(ss_reflectance_spectrum, wavelength_nm),
