@@ -60,6 +60,23 @@ enum {
     SS_WR_KELOID_SCALE,           /* 1: raise per mm of collagen above the keloid threshold */
     SS_WR_KELOID_MAX_MM,          /* mm: the raise saturates towards this height */
     SS_WR_HEIGHT_RANGE_MM,        /* mm: height map 0..1 spans -range..+range */
+    /* the crust's structure (docs/wound.md: mottled, thicker in the middle, cracked at
+     * the edges) */
+    SS_WR_SCAB_MOTTLE,    /* 1: relative thickness variation of the crust (value noise) */
+    SS_WR_SCAB_SEROUS,    /* 1: largest share of serous (haemoglobin-poor) crust in the
+                             mottling */
+    SS_WR_SCAB_SEROUS_HB, /* 1: haemoglobin of serous crust, multiple of whole blood's */
+    SS_WR_SCAB_DOME_MM,   /* mm: distance from the crust's edge to its full thickness */
+    SS_WR_SCAB_EDGE,      /* 1: crust thickness at its edge, fraction of the full */
+    SS_WR_CRACK_WIDTH,    /* 1: width of the crack lines (noise units, 0 = none) */
+    SS_WR_CRACK_REACH_MM, /* mm: how far from the crust's edge it cracks */
+    /* the keloid's look: raised, shiny, red to purple-brown */
+    SS_WR_KELOID_LOOK_MM,     /* mm: keloid swelling at which its look is 63 % there */
+    SS_WR_KELOID_BLOOD,       /* 1: blood volume fraction of keloid tissue */
+    SS_WR_KELOID_OXYGENATION, /* 1: blood oxygenation in keloid tissue */
+    SS_WR_KELOID_MELANIN,     /* 1: melanin of keloid epidermis, multiple of the skin's */
+    SS_WR_KELOID_ROUGHNESS,   /* 1: roughness of the keloid's stretched surface (shiny) */
+    SS_WR_SCAB_BILIRUBIN,     /* g/L: serum pigment (bilirubin, carotenoids) of the dried crust */
     SS_WR_NKEYS
 };
 
@@ -109,6 +126,12 @@ ss_wound_tissue *ss_wound_tissue_create(const ss_heal_grid *g, const ss_heal_par
  * Call it after every step for exact closure days (it costs a pass over the
  * grid's columns), or at least at every day to be rendered. */
 void ss_wound_tissue_observe(ss_wound_tissue *t, const ss_heal_grid *g);
+/* The same, with each column's closure day taken from closed_day (nx*ny in
+ * grid order, skinsim/heal_io.h's encoding: ss_heal_run_closure, or a saved
+ * snapshot's) instead of tracked, so observing the render days alone is
+ * exact. */
+void ss_wound_tissue_observe_closure(ss_wound_tissue *t, const ss_heal_grid *g,
+                                     const double *closed_day);
 void ss_wound_tissue_free(ss_wound_tissue *t);
 
 /* ---- base skin: bio-parameter maps -------------------------------------------------
@@ -131,6 +154,7 @@ ss_image *ss_wound_skin_read(const char *path, ss_error *err);
 typedef struct ss_blood_layer {
     double hb_factor, oxygenation;
     double mus_per_cm, g, n;
+    double bilirubin_g_per_l; /* yellow serum pigment in the layer (docs/wound.md), g/L */
 } ss_blood_layer;
 /* The scab (dried blood, docs/wound.md) and fresh clotted blood. */
 void ss_blood_layer_scab(double hb_factor, ss_blood_layer *l);

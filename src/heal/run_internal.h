@@ -45,6 +45,7 @@ struct ss_heal_run {
     double close_day;
     ss_mech_stats close_st;
     cJSON *mech_aux; /* the checkpoint's "mechanics" object while resuming */
+    double *closed_day; /* closure day per column (ss_heal_closure_update), nx*ny */
 };
 
 /* run.c */

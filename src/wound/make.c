@@ -17,7 +17,13 @@
 
 #include "skinsim/abrasion.h"
 #include "skinsim/mech.h"
+#include "skinsim/texture.h"
 #include "skinsim/wound.h"
+#include "wound_internal.h"
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
 
 void ss_wound_make_config_default(ss_wound_make_config *c) {
     memset(c, 0, sizeof *c);
@@ -38,6 +44,7 @@ typedef struct job {
     ss_heal_saved_run *saved; /* read back from --heal DIR */
     ss_heal_grid *grid0;      /* --heal: the first snapshot (day 0) */
     float *disp0;             /* --heal: its displacement (NULL without mechanics) */
+    double *closed0;          /* --heal: its closure days */
     ss_wound_tissue *tissue;
     ss_wound_renderer *renderer;
     double side_mm;
@@ -53,6 +60,7 @@ static void job_free(job *j) {
     ss_heal_saved_run_free(j->saved);
     ss_heal_grid_free(j->grid0);
     free(j->disp0);
+    free(j->closed0);
 }
 
 static const char *job_scenario(const job *j) {
@@ -89,6 +97,50 @@ static ss_status read_skin(job *j, ss_error *err) {
     j->skin = c->skin_path ? ss_wound_skin_read(c->skin_path, err)
                            : ss_wound_default_skin(c->size, j->side_mm, c->seed, err);
     return j->skin ? SS_OK : (err->code ? err->code : SS_ERR_INPUT);
+}
+
+/* The built-in wound of `skinsim wound` when none is given: an irregular
+ * abrasion instead of heal's schematic square. An ellipse of 0.74 x 0.5 of the
+ * block (22 x 15 mm on the default 30 mm block), turned by 15 degrees, its
+ * outline moved by value noise (seed 000 §3.2, about a third of the block per
+ * period), then frayed along the scrape by seed 000's shape erosion (Alg. 3.1,
+ * horizontal min filter of random widths up to 9 of 256 pixels): ragged
+ * margins and streaks, as a scrape leaves them. A footprint over the whole
+ * block (ss_heal_run_config.wound_footprint), deterministic per seed. */
+#define FOOT_PX 256
+static ss_image *default_footprint(uint64_t seed, ss_error *err) {
+    ss_image *noise = ss_image_create(FOOT_PX, FOOT_PX, 1, err);
+    ss_image *mask = noise ? ss_image_create(FOOT_PX, FOOT_PX, 1, err) : NULL;
+    int *widths = mask ? malloc(sizeof *widths * FOOT_PX * FOOT_PX) : NULL;
+    ss_status st = !noise || !mask ? err->code
+                   : !widths       ? ss_error_set(err, SS_ERR_NOMEM, "out of memory")
+                                   : SS_OK;
+    if (!st) st = ss_wound__noise(FOOT_PX, FOOT_PX, FOOT_PX / 3.0, 3, seed, 301, noise, err);
+    if (!st) {
+        const double a = 0.37, b = 0.25, ang = 15 * M_PI / 180, ca = cos(ang), sa = sin(ang);
+        for (int y = 0; y < FOOT_PX; y++)
+            for (int x = 0; x < FOOT_PX; x++) {
+                double u = (x + 0.5) / FOOT_PX - 0.5, v = (y + 0.5) / FOOT_PX - 0.5;
+                double xr = ca * u + sa * v, yr = -sa * u + ca * v;
+                double e = (xr / a) * (xr / a) + (yr / b) * (yr / b);
+                size_t i = (size_t)y * FOOT_PX + (size_t)x;
+                mask->data[i] = 1 - e + 0.6 * (noise->data[i] - 0.5) > 0 ? 1.f : 0.f;
+            }
+        ss_erosion_widths(FOOT_PX, FOOT_PX, 0, 9, seed, 302, widths);
+        ss_erode(mask, widths, noise);
+    }
+    free(widths);
+    ss_image_free(mask);
+    if (st) {
+        ss_image_free(noise);
+        return NULL;
+    }
+    return noise;
+}
+
+static int heal_has_wound(const ss_heal_run_config *h) {
+    return h->wound_mask || h->wound_stroke || h->wound_mesh || h->wound_footprint ||
+           h->wound_depth_image;
 }
 
 /* --heal DIR: a finished heal run instead of a simulation. The healing
@@ -130,7 +182,7 @@ static ss_status open_saved(job *j, ss_error *err) {
     if (ss_heal_saved_run_snapshot_day(s, 0) > 1e-3 * ss_heal_saved_run_dt(s))
         return ss_error_set(err, SS_ERR_INPUT, "--heal %s: its first snapshot is not day 0",
                             c->heal_dir);
-    if (!(j->grid0 = ss_heal_saved_run_load(s, 0, &j->disp0, err))) return err->code;
+    if (!(j->grid0 = ss_heal_saved_run_load(s, 0, &j->disp0, &j->closed0, err))) return err->code;
     if ((c->mechanics || c->heal.mechanics) && !j->disp0)
         return ss_error_set(err, SS_ERR_INPUT,
                             "--mechanics: --heal %s was run without --mechanics (its snapshots "
@@ -158,7 +210,11 @@ static ss_status read_inputs(job *j, ss_error *err) {
         hc.mechanics = c->mechanics || c->heal.mechanics; /* the run's own coupled mechanics */
         double last = c->days[c->ndays - 1];
         hc.days = last > 0 ? last : 1;
+        ss_image *foot = NULL;
+        if (!heal_has_wound(&hc) && !(hc.wound_footprint = foot = default_footprint(c->seed, err)))
+            return err->code;
         st = ss_heal_run_create(&hc, &j->run, err);
+        ss_image_free(foot);
     }
     if (st) return st;
     const ss_heal_grid *g = job_grid(j);
@@ -345,12 +401,11 @@ static ss_status write_compare(job *j, const char *dir, const ss_image *mask0,
 
 /* ---- the run ----------------------------------------------------------------------------- */
 
-/* Brings the tissue to `day`: steps the heal run, observing every step, or
- * reads the saved run's snapshots up to that day, observing each (closure
- * days are then known at snapshot resolution). *def receives the day's
+/* Brings the tissue to `day`: steps the heal run there, or reads the saved
+ * run's snapshot of that day, and observes it with the run's own closure
+ * days (kept every step, so both are exact). *def receives the day's
  * per-texel deformation when the run has mechanics. */
-static ss_status advance(job *j, double day, int *next_snap, ss_progress *pr, ss_image **def,
-                         ss_error *err) {
+static ss_status advance(job *j, double day, ss_progress *pr, ss_image **def, ss_error *err) {
     const ss_wound_make_config *c = j->c;
     ss_status st = SS_OK;
     *def = NULL;
@@ -358,37 +413,35 @@ static ss_status advance(job *j, double day, int *next_snap, ss_progress *pr, ss
         long long target = llround(day / ss_heal_run_dt(j->run));
         while (!st && ss_heal_run_step_index(j->run) < target) {
             st = ss_heal_run_step(j->run, err);
-            if (!st) ss_wound_tissue_observe(j->tissue, ss_heal_run_grid(j->run));
             ss_progress_update(pr, (double)ss_heal_run_step_index(j->run));
         }
+        if (st) return st;
+        ss_wound_tissue_observe_closure(j->tissue, ss_heal_run_grid(j->run),
+                                        ss_heal_run_closure(j->run));
         ss_mech *mech = ss_heal_run_mech(j->run);
-        if (!st && mech &&
-            !(*def = ss_wound_deformation_from_grid(ss_heal_run_grid(j->run),
-                                                    ss_mech_grid_displacement(mech), c->size, err)))
+        if (mech && !(*def = ss_wound_deformation_from_grid(
+                          ss_heal_run_grid(j->run), ss_mech_grid_displacement(mech), c->size, err)))
             st = err->code;
         return st;
     }
-    int last = ss_heal_saved_run_find(j->saved, day);
-    ss_heal_grid *g = NULL;
-    float *disp = NULL;
-    if (*next_snap == 0) { /* day 0: read while checking the inputs */
-        ss_wound_tissue_observe(j->tissue, j->grid0);
-        *next_snap = 1;
-        if (last == 0) g = j->grid0, disp = j->disp0;
-    }
-    for (; !st && *next_snap <= last; (*next_snap)++) {
-        if (g != j->grid0) ss_heal_grid_free(g), free(disp);
-        g = ss_heal_saved_run_load(j->saved, *next_snap, &disp, err);
-        if (!g) st = err->code ? err->code : SS_ERR_RUNTIME;
-        if (!st) ss_wound_tissue_observe(j->tissue, g);
-        ss_progress_update(pr, (double)*next_snap);
-    }
-    if (!st && g && disp) {
+    int i = ss_heal_saved_run_find(j->saved, day);
+    ss_heal_grid *g = j->grid0;
+    float *disp = j->disp0;
+    double *closed = j->closed0;
+    if (i > 0 && !(g = ss_heal_saved_run_load(j->saved, i, &disp, &closed, err)))
+        return err->code ? err->code : SS_ERR_RUNTIME;
+    ss_wound_tissue_observe_closure(j->tissue, g, closed);
+    ss_progress_update(pr, (double)i);
+    if (disp) {
         size_t n = (size_t)g->nx * (size_t)g->ny * (size_t)g->nz;
         float *const comp[3] = {disp, disp + n, disp + 2 * n};
         if (!(*def = ss_wound_deformation_from_grid(g, comp, c->size, err))) st = err->code;
     }
-    if (g != j->grid0) ss_heal_grid_free(g), free(disp);
+    if (g != j->grid0) {
+        ss_heal_grid_free(g);
+        free(disp);
+        free(closed);
+    }
     return st;
 }
 
@@ -402,11 +455,10 @@ static ss_status run_days(job *j, const char *dir, cJSON *frames, ss_image **thu
                           : (double)ss_heal_saved_run_find(j->saved, c->days[c->ndays - 1]);
     ss_progress_begin(&pr, "wound", total, c->quiet);
     double range = j->recipe.v[SS_WR_HEIGHT_RANGE_MM];
-    int next_snap = 0;
     for (int i = 0; !st && i < c->ndays; i++) {
         double t0 = ss_now();
         ss_image *def = NULL;
-        st = advance(j, c->days[i], &next_snap, &pr, &def, err);
+        st = advance(j, c->days[i], &pr, &def, err);
         double t1 = ss_now();
         if (!st) st = ss_wound_render(j->renderer, j->tissue, def, &tex, err);
         ss_image_free(def);
@@ -488,7 +540,11 @@ static cJSON *summary_base(const job *j) {
     cJSON *s = cJSON_CreateObject();
     cJSON_AddStringToObject(s, "command", "wound");
     cJSON_AddStringToObject(s, "scenario", job_scenario(j));
-    if (c->heal_dir) cJSON_AddStringToObject(s, "heal_dir", c->heal_dir);
+    if (c->heal_dir)
+        cJSON_AddStringToObject(s, "heal_dir", c->heal_dir);
+    else if (!heal_has_wound(&c->heal))
+        cJSON_AddStringToObject(s, "wound",
+                                "built-in irregular abrasion (0.74 x 0.5 of the block)");
     cJSON_AddArrayToObject(s,
                            "keys"); /* abrasion's key positions: none, every frame is simulated */
     cJSON_AddNumberToObject(s, "end_day", c->days[c->ndays - 1]);
