@@ -157,7 +157,7 @@ ss_status ss_wound_renderer_create(const ss_wound_render_options *o, ss_wound_re
     for (int k = 0; k < 2 && !st; k++) {
         if (!(r->warp[k] = ss_image_create(o->size, o->size, 1, err))) st = err->code;
         if (!st)
-            st = ss_wound__noise(o->size, o->side_mm, 1.2, 2, o->seed, 204 + (uint64_t)k,
+            st = ss_wound__noise(o->size, o->side_mm, 0.6, 2, o->seed, 204 + (uint64_t)k,
                                  r->warp[k], err);
     }
     if (!st) st = render_base(r, err);
