@@ -34,6 +34,8 @@ extern "C" {
 
 /* Simulated time when config.days is 0 on a fresh run. */
 #define SS_HEAL_RUN_DEFAULT_DAYS 10.0
+/* adapt_tol of `skinsim heal` with the split scheme and the automatic step. */
+#define SS_HEAL_RUN_DEFAULT_ADAPT_TOL 0.01
 
 typedef struct ss_heal_run_config {
     /* ---- model (fresh runs) ---- */
@@ -88,6 +90,22 @@ typedef struct ss_heal_run_config {
     double tet_size_mm;   /* lattice tet edge; 0 = params file or default */
     const char *sutures;  /* stitches CSV "x1,y1,z1,x2,y2,z2[,remove_day]" (mm); NULL = none */
     const char *tet_mesh; /* TetGen .node/.ele or Gmsh .msh instead of the lattice; NULL */
+
+    /* ---- adaptive steps (split scheme without mechanics; fresh runs) ---- */
+    double adapt_tol; /* 0 = fixed steps of dt (default). > 0: a step is m x dt (m = 1..
+                         SS_HEAL_SPLIT_LATE_MAX_DT_DAYS / dt), m doubled while no species
+                         changes by more than adapt_tol / 2 in any cell in a step, and a
+                         step that changes one by more than adapt_tol is retried with half
+                         the m (docs/heal-model.md §4); `skinsim heal` uses 0.01 */
+    /* ---- real geometry (seed 001 §5.1, §5.4; skinsim/shell.h; fresh runs) ---- */
+    const char *skin_mesh;    /* closed OBJ/glTF/GLB body surface; the grid is a patch of its
+                                 skin around the wound (then wound_uv or wound_mesh, in the
+                                 mesh's units, gives the wound); NULL = the flat block */
+    const char *wound_uv;     /* with skin_mesh: strokes CSV (u,v[,stroke]) in the mesh's UV
+                                 space, cut wound_depth_mm deep */
+    double skin_thickness_mm; /* with skin_mesh: skin shell under the surface; 0 = 3 mm */
+    double voxel_mm;          /* with skin_mesh: voxel edge; 0 = 0.5 mm */
+    double mesh_units_mm;     /* with skin_mesh: one mesh unit in mm; 0 = glTF 1000, OBJ 1 */
 } ss_heal_run_config;
 
 /* The defaults listed above (every other field 0 / NULL). */
@@ -113,7 +131,10 @@ void ss_heal_run_free(ss_heal_run *r);
 ss_status ss_heal_run_start(ss_heal_run *r, ss_error *err);
 /* One solver step and its bookkeeping: an area row every area_every (and at
  * the end), with out_dir a snapshot every snapshot_every (and at the end) and a
- * checkpoint every checkpoint_every (newest two kept). The first call that
+ * checkpoint every checkpoint_every (newest two kept). With adapt_tol the step
+ * may span several steps of dt (step indices count steps of dt); it never
+ * jumps over a snapshot, a checkpoint or the end, and area rows come at least
+ * every area_every and after every step. The first call that
  * writes files first removes a previous run's outputs (force) and writes the
  * day-0 snapshot of a fresh run. Stepping past the end -> SS_ERR_INPUT. */
 ss_status ss_heal_run_step(ss_heal_run *r, ss_error *err);
@@ -140,8 +161,11 @@ ss_heal_grid *ss_heal_run_grid(ss_heal_run *r);
 const ss_heal_params *ss_heal_run_params(const ss_heal_run *r);
 const char *ss_heal_run_scenario(const ss_heal_run *r);
 ss_heal_scheme ss_heal_run_scheme(const ss_heal_run *r);
-double ss_heal_run_day(const ss_heal_run *r);     /* current time, days */
-double ss_heal_run_dt(const ss_heal_run *r);      /* step, days */
+double ss_heal_run_day(const ss_heal_run *r); /* current time, days */
+double ss_heal_run_dt(const ss_heal_run *r);  /* step, days (the base step with adapt_tol) */
+/* Adaptive steps: current multiple m of dt, and the steps retried so far. */
+long long ss_heal_run_step_multiple(const ss_heal_run *r);
+long long ss_heal_run_steps_retried(const ss_heal_run *r);
 double ss_heal_run_end_day(const ss_heal_run *r); /* steps_total x dt */
 long long ss_heal_run_step_index(const ss_heal_run *r);
 long long ss_heal_run_steps_total(const ss_heal_run *r);
@@ -157,6 +181,12 @@ const char *ss_heal_run_note(const ss_heal_run *r);
  * ss_heal_closure_update, updated every step; nx*ny, grid order). Saved in
  * the snapshots and checkpoints. */
 const double *ss_heal_run_closure(const ss_heal_run *r);
+/* On a real body (skin_mesh): the patch the grid is laid on and the skin
+ * mesh (skinsim/shell.h, skinsim/mesh.h); NULL on the flat block. */
+struct ss_shell_patch;
+struct ss_mesh;
+const struct ss_shell_patch *ss_heal_run_shell(const ss_heal_run *r);
+const struct ss_mesh *ss_heal_run_skin_mesh(const ss_heal_run *r);
 /* The contraction mechanics of the run (skinsim/mech.h), NULL when off. */
 struct ss_mech *ss_heal_run_mech(ss_heal_run *r);
 

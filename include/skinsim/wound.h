@@ -214,6 +214,25 @@ const ss_wound_textures *ss_wound_renderer_base(const ss_wound_renderer *r);
 ss_status ss_wound_render(ss_wound_renderer *r, const ss_wound_tissue *t,
                           const ss_image *deformation, ss_wound_textures *out, ss_error *err);
 
+/* ---- textures in a mesh's UV space (a heal run on a real body) -------------------- */
+struct ss_shell_patch;
+struct ss_mesh;
+/* Per texel of a size x size texture over the mesh's UV layout (u right, v
+ * down): the tissue-map coordinates (x, y in columns, the ss_wound_tissue
+ * orientation) of the patch column under the skin point the texel shows, or
+ * NaN where the texel shows no point of the patch's skin (no UV triangle,
+ * outside the patch, or another sheet of skin). *mm_per_uv: the mesh's mean
+ * scale (sqrt of 3D area / UV area), the texture's world size. A mesh without
+ * UVs -> SS_ERR_INPUT. (src/wound/uvmap.c) */
+ss_image *ss_wound_uv_columns(const struct ss_shell_patch *p, const struct ss_mesh *m, int size,
+                              double *mm_per_uv, ss_error *err);
+/* Makes the renderer sample the tissue at `columns` (size x size x 2, as
+ * ss_wound_uv_columns gives; copied) instead of over a flat block; NaN texels
+ * are the base skin. NULL returns to the flat block. A deformation is not
+ * drawn on such a map (ss_wound_render refuses one). */
+ss_status ss_wound_renderer_set_columns(ss_wound_renderer *r, const ss_image *columns,
+                                        ss_error *err);
+
 /* The per-texel deformation (size x size x 3, mm) from a displacement field on
  * the heal grid (3 arrays of nx*ny*nz, mm, e.g. ss_mech_grid_displacement):
  * each column's topmost tissue cell, bilinear between column centres. */

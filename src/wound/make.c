@@ -17,6 +17,8 @@
 
 #include "skinsim/abrasion.h"
 #include "skinsim/mech.h"
+#include "skinsim/mesh.h"
+#include "skinsim/shell.h"
 #include "skinsim/texture.h"
 #include "skinsim/wound.h"
 #include "wound_internal.h"
@@ -49,6 +51,8 @@ typedef struct job {
     ss_wound_renderer *renderer;
     double side_mm;
     double t_heal, t_render, t_write, t_setup, t_compare;
+    const ss_mesh *mesh; /* on a real body (--mesh): the skin mesh, textures in its UVs */
+    ss_image *columns;   /* then: the tissue column under every texel */
 } job;
 
 static void job_free(job *j) {
@@ -59,6 +63,7 @@ static void job_free(job *j) {
     ss_heal_run_free(j->run);
     ss_heal_saved_run_free(j->saved);
     ss_heal_grid_free(j->grid0);
+    ss_image_free(j->columns);
     free(j->disp0);
     free(j->closed0);
 }
@@ -140,7 +145,7 @@ static ss_image *default_footprint(uint64_t seed, ss_error *err) {
 
 static int heal_has_wound(const ss_heal_run_config *h) {
     return h->wound_mask || h->wound_stroke || h->wound_mesh || h->wound_footprint ||
-           h->wound_depth_image;
+           h->wound_depth_image || h->skin_mesh || h->wound_uv;
 }
 
 /* --heal DIR: a finished heal run instead of a simulation. The healing
@@ -219,7 +224,16 @@ static ss_status read_inputs(job *j, ss_error *err) {
     if (st) return st;
     const ss_heal_grid *g = job_grid(j);
     j->side_mm = g->nx * g->dx_mm;
-    if (fabs(g->ny * g->dx_mm - j->side_mm) > 1e-9 * j->side_mm)
+    const ss_shell_patch *patch = j->run ? ss_heal_run_shell(j->run) : NULL;
+    if (patch) { /* on a real body: the textures cover the mesh's UV layout */
+        if (c->mechanics || c->heal.mechanics)
+            return ss_error_set(err, SS_ERR_INPUT,
+                                "--mechanics: not drawn on a --mesh's UV layout (yet); leave it "
+                                "out, or heal a flat block");
+        j->mesh = ss_heal_run_skin_mesh(j->run);
+        if (!(j->columns = ss_wound_uv_columns(patch, j->mesh, c->size, &j->side_mm, err)))
+            return err->code;
+    } else if (fabs(g->ny * g->dx_mm - j->side_mm) > 1e-9 * j->side_mm)
         return ss_error_set(err, SS_ERR_INPUT,
                             "the heal block is %g x %g mm; the texture needs a square block "
                             "(--size-mm X,X,Z)",
@@ -244,7 +258,9 @@ static ss_status declare_outputs(const ss_wound_make_config *c, ss_outputs *outs
                          c->skin_path,
                          c->table_path,
                          c->recipe_path,
-                         c->heal_dir};
+                         c->heal_dir,
+                         c->heal.skin_mesh,
+                         c->heal.wound_uv};
     ss_status st = SS_OK;
     for (size_t k = 0; k < sizeof ins / sizeof *ins && !st; k++)
         if (ins[k]) st = ss_outputs_input(outs, ins[k], err);
@@ -299,7 +315,7 @@ static ss_status write_frame(const char *dir, const char *stem, const ss_wound_t
 
 /* glTF metallic-roughness: G = roughness, B = metallic 0, R unused (1). */
 static ss_status write_gltf(const char *dir, const char *stem, const ss_wound_textures *t,
-                            double side_mm, cJSON *files, ss_error *err) {
+                            double side_mm, const ss_mesh *mesh, cJSON *files, ss_error *err) {
     int w = t->roughness->width, h = t->roughness->height;
     ss_image *mr = ss_image_create(w, h, 3, err);
     if (!mr) return err->code;
@@ -321,7 +337,8 @@ static ss_status write_gltf(const char *dir, const char *stem, const ss_wound_te
     snprintf(nrm, sizeof nrm, "%s_normal.png", base);
     snprintf(rel, sizeof rel, "%s.gltf", stem);
     snprintf(path, sizeof path, "%s/%s", dir, rel);
-    st = ss_gltf_write_textured_square(path, side_mm / 1000.0, base, col, mrn, nrm, err);
+    st = mesh ? ss_gltf_write_textured_mesh(path, mesh, base, col, mrn, nrm, err)
+              : ss_gltf_write_textured_square(path, side_mm / 1000.0, base, col, mrn, nrm, err);
     if (!st) cJSON_AddStringToObject(files, "gltf", rel);
     return st;
 }
@@ -346,9 +363,10 @@ static ss_status write_compare(job *j, const char *dir, const ss_image *mask0,
     int size = c->size < 256 ? c->size : 256, n = c->ndays; /* the sheet's tile size */
     ss_wound_shape *shape = NULL;
     ss_status st;
-    if (c->heal.wound_stroke) {
+    const char *strokes = c->heal.wound_stroke ? c->heal.wound_stroke : c->heal.wound_uv;
+    if (strokes) { /* a flat block's strokes, or a mesh's UV strokes */
         ss_stroke_set ss;
-        st = ss_stroke_csv_read(c->heal.wound_stroke, &ss, err);
+        st = ss_stroke_csv_read(strokes, &ss, err);
         if (!st)
             st = ss_wound_shape_from_strokes(
                 &ss, c->heal.concave_k ? SS_HULL_CONCAVE : SS_HULL_CONVEX,
@@ -471,7 +489,7 @@ static ss_status run_days(job *j, const char *dir, cJSON *frames, ss_image **thu
         cJSON_AddStringToObject(f, "phase", "simulated");
         cJSON *files = cJSON_AddObjectToObject(f, "files");
         if (!st) st = write_frame(dir, stem, &tex, range, c->exr, files, err);
-        if (!st) st = write_gltf(dir, stem, &tex, j->side_mm, files, err);
+        if (!st) st = write_gltf(dir, stem, &tex, j->side_mm, j->mesh, files, err);
         int ts = c->size < 512 ? c->size : 512;
         if (!st && !(thumbs[i] = ss_image_resize(tex.base_color, ts, ts, err))) st = err->code;
         j->t_heal += t1 - t0;
@@ -502,11 +520,26 @@ static ss_status make(job *j, const char *dir, cJSON *sum, ss_error *err) {
         j->tissue = ss_wound_tissue_create(job_grid(j), job_params(j), &j->recipe, err);
         if (!j->tissue) st = err->code;
     }
-    /* the wound region of day 0, for the abrasion comparison */
+    if (!st && j->columns) st = ss_wound_renderer_set_columns(j->renderer, j->columns, err);
+    /* the wound region of day 0, for the abrasion comparison (over the block,
+     * or over the UV layout through the column map) */
     ss_image *mask0 = NULL;
-    if (!st && !(mask0 = ss_image_create(j->tissue->nx, j->tissue->ny, 1, err))) st = err->code;
-    for (size_t i = 0; !st && i < (size_t)j->tissue->nx * (size_t)j->tissue->ny; i++)
-        mask0->data[i] = j->tissue->plasma[i] > 0.5f ? 1.f : 0.f;
+    const ss_wound_tissue *t = j->tissue;
+    if (!st && j->columns) {
+        if (!(mask0 = ss_image_create(c->size, c->size, 1, err))) st = err->code;
+        for (size_t i = 0; !st && i < (size_t)c->size * (size_t)c->size; i++) {
+            const float *cm = j->columns->data + 2 * i;
+            long x = cm[0] == cm[0] ? lround(cm[0]) : -1, y = cm[0] == cm[0] ? lround(cm[1]) : -1;
+            mask0->data[i] = x >= 0 && y >= 0 && x < t->nx && y < t->ny &&
+                                     t->plasma[(size_t)y * (size_t)t->nx + (size_t)x] > 0.5f
+                                 ? 1.f
+                                 : 0.f;
+        }
+    } else if (!st && !(mask0 = ss_image_create(t->nx, t->ny, 1, err))) {
+        st = err->code;
+    }
+    for (size_t i = 0; !st && !j->columns && i < (size_t)t->nx * (size_t)t->ny; i++)
+        mask0->data[i] = t->plasma[i] > 0.5f ? 1.f : 0.f;
     char path[4600];
     snprintf(path, sizeof path, "%s/frames", dir);
     if (!st) st = ss_mkdir_p(path, err);
@@ -554,6 +587,11 @@ static cJSON *summary_base(const job *j) {
     cJSON_AddNumberToObject(s, "height_range_mm", j->recipe.v[SS_WR_HEIGHT_RANGE_MM]);
     cJSON_AddStringToObject(s, "height_encoding", "0.5 + 0.5 * height_mm / height_range_mm");
     cJSON_AddStringToObject(s, "base_skin", c->skin_path ? c->skin_path : "forearm (built-in)");
+    if (j->mesh) {
+        cJSON_AddStringToObject(s, "skin_mesh", c->heal.skin_mesh);
+        cJSON_AddStringToObject(s, "texture_space", "the mesh's UV layout");
+        cJSON_AddNumberToObject(s, "mm_per_uv", j->side_mm);
+    }
     cJSON_AddBoolToObject(s, "mechanics",
                           j->run ? c->mechanics || c->heal.mechanics : j->disp0 != NULL);
     char *rj = ss_wound_recipe_to_json(&j->recipe);

@@ -53,6 +53,7 @@ struct ss_wound_renderer {
     ss_image *warp[2]; /* value noise at ~1.2 mm: jitter of where the tissue maps are
                           sampled, so margins are ragged, not stepped with the voxels */
     ss_wound_textures base;
+    ss_image *columns; /* NULL: the flat block; else tissue-map coordinates per texel */
 };
 
 void ss_wound_render_options_default(ss_wound_render_options *o) {
@@ -173,6 +174,7 @@ void ss_wound_renderer_free(ss_wound_renderer *r) {
     if (!r) return;
     ss_image_free(r->skin);
     ss_image_free(r->crust);
+    ss_image_free(r->columns);
     ss_image_free(r->mottle);
     ss_image_free(r->crack);
     ss_image_free(r->warp[0]);
@@ -183,6 +185,19 @@ void ss_wound_renderer_free(ss_wound_renderer *r) {
 }
 
 const ss_wound_textures *ss_wound_renderer_base(const ss_wound_renderer *r) { return &r->base; }
+
+ss_status ss_wound_renderer_set_columns(ss_wound_renderer *r, const ss_image *columns,
+                                        ss_error *err) {
+    int n = r->o.size;
+    if (columns && (columns->width != n || columns->height != n || columns->channels != 2))
+        return ss_error_set(err, SS_ERR_INPUT, "wound renderer: the column map must be %dx%d x 2",
+                            n, n);
+    ss_image *c = columns ? ss_image_clone(columns, err) : NULL;
+    if (columns && !c) return err->code ? err->code : SS_ERR_NOMEM;
+    ss_image_free(r->columns);
+    r->columns = c;
+    return SS_OK;
+}
 
 /* ---- render ------------------------------------------------------------------------------ */
 
@@ -355,6 +370,9 @@ ss_status ss_wound_render(ss_wound_renderer *r, const ss_wound_tissue *t,
     if (deformation &&
         (deformation->width != n || deformation->height != n || deformation->channels != 3))
         return ss_error_set(err, SS_ERR_INPUT, "wound render: deformation must be %dx%d x 3", n, n);
+    if (deformation && r->columns)
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "wound render: no deformation on a mesh's UV layout (yet)");
     /* per column: healthy (identity mapping) */
     size_t ncol = (size_t)t->nx * (size_t)t->ny;
     uint8_t *healthy = malloc(ncol);
@@ -377,15 +395,24 @@ ss_status ss_wound_render(ss_wound_renderer *r, const ss_wound_tissue *t,
                 vv -= d[1] / side_y;
                 dz = d[2];
             }
+            double mx = u * t->nx - 0.5, my = vv * t->ny - 0.5;
+            int off = 0; /* on a mesh: the texel shows no skin of the patch */
+            if (r->columns) {
+                const float *cm = r->columns->data + i * 2;
+                off = !(cm[0] == cm[0]);
+                mx = cm[0], my = cm[1];
+            }
             /* +-WARP_COLUMNS of a column, so a margin follows no voxel staircase */
-            double mx = u * t->nx - 0.5 + WARP_COLUMNS * (2.0 * r->warp[0]->data[i] - 1),
-                   my = vv * t->ny - 0.5 + WARP_COLUMNS * (2.0 * r->warp[1]->data[i] - 1);
+            mx += WARP_COLUMNS * (2.0 * r->warp[0]->data[i] - 1);
+            my += WARP_COLUMNS * (2.0 * r->warp[1]->data[i] - 1);
+            if (off) mx = my = 0;
             double cx = mx < 0 ? 0 : mx > t->nx - 1 ? t->nx - 1 : mx;
             double cy = my < 0 ? 0 : my > t->ny - 1 ? t->ny - 1 : my;
             int x0 = (int)cx, y0 = (int)cy;
             int x1 = x0 + 1 < t->nx ? x0 + 1 : x0, y1 = y0 + 1 < t->ny ? y0 + 1 : y0;
-            int base = healthy[(size_t)y0 * t->nx + x0] && healthy[(size_t)y0 * t->nx + x1] &&
-                       healthy[(size_t)y1 * t->nx + x0] && healthy[(size_t)y1 * t->nx + x1];
+            int base =
+                off || (healthy[(size_t)y0 * t->nx + x0] && healthy[(size_t)y0 * t->nx + x1] &&
+                        healthy[(size_t)y1 * t->nx + x0] && healthy[(size_t)y1 * t->nx + x1]);
             if (base) {
                 for (int c = 0; c < 3; c++)
                     out->base_color->data[i * 3 + c] = r->base.base_color->data[i * 3 + c];
