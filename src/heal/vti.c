@@ -53,6 +53,22 @@ static void put_vec3(FILE *f, float *const v[3], size_t n) {
 ss_status ss_heal_vti_write_vectors(const char *path, const ss_heal_grid *g, int nvec,
                                     const char *const *names, float *const (*vecs)[3],
                                     ss_error *err) {
+    return ss_heal_vti_write_all(path, g, nvec, names, vecs, NULL, err);
+}
+
+static void put_f64le(FILE *f, const double *a, size_t n) {
+    for (size_t i = 0; i < n; i++) {
+        uint64_t v;
+        unsigned char b[8];
+        memcpy(&v, &a[i], 8);
+        for (int k = 0; k < 8; k++) b[k] = (unsigned char)(v >> (8 * k));
+        fwrite(b, 1, 8, f);
+    }
+}
+
+ss_status ss_heal_vti_write_all(const char *path, const ss_heal_grid *g, int nvec,
+                                const char *const *names, float *const (*vecs)[3],
+                                const double *closed_day, ss_error *err) {
     if (!g || !g->cell) return ss_error_set(err, SS_ERR_INPUT, "%s: no grid", path);
     int vel = g->velocity[0] && g->velocity[1] && g->velocity[2];
     size_t n = (size_t)g->nx * (size_t)g->ny * (size_t)g->nz;
@@ -70,9 +86,19 @@ ss_status ss_heal_vti_write_vectors(const char *path, const ss_heal_grid *g, int
     fprintf(f,
             "    <FieldData>\n"
             "      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" "
-            "format=\"ascii\">%.17g</DataArray>\n"
-            "    </FieldData>\n",
+            "format=\"ascii\">%.17g</DataArray>\n",
             g->t_days);
+    /* the closure days go after every cell array in the appended data */
+    size_t ncol = (size_t)g->nx * (size_t)g->ny;
+    uint64_t coff = 8 + n + SS_HEAL_NFIELDS * (8 + 4 * (uint64_t)n) +
+                    (uint64_t)((g->velocity[0] && g->velocity[1] && g->velocity[2]) + nvec) *
+                        (8 + 12 * (uint64_t)n);
+    if (closed_day)
+        fprintf(f,
+                "      <DataArray type=\"Float64\" Name=\"closed_day\" NumberOfTuples=\"%zu\" "
+                "format=\"appended\" offset=\"%llu\"/>\n",
+                ncol, (unsigned long long)coff);
+    fprintf(f, "    </FieldData>\n");
     fprintf(f, "    <Piece Extent=\"0 %d 0 %d 0 %d\">\n", g->nx, g->ny, g->nz);
     fprintf(f, "      <CellData Scalars=\"cell_state\">\n");
     uint64_t off = 0;
@@ -112,6 +138,10 @@ ss_status ss_heal_vti_write_vectors(const char *path, const ss_heal_grid *g, int
     }
     if (vel) put_vec3(f, g->velocity, n);
     for (int v = 0; v < nvec; v++) put_vec3(f, vecs[v], n);
+    if (closed_day) {
+        put_u64le(f, (uint64_t)(8 * ncol));
+        put_f64le(f, closed_day, ncol);
+    }
     fprintf(f, "\n  </AppendedData>\n</VTKFile>\n");
     if (ferror(f)) {
         ss_atomic_abort(&af);
@@ -206,8 +236,11 @@ static const unsigned char *vti_block(const unsigned char *data, size_t avail, u
     return data + off + 8;
 }
 
-ss_heal_grid *ss_heal_vti_read(const char *path, float **displacement, ss_error *err) {
+ss_heal_grid *ss_heal_vti_read(const char *path, float **displacement, double **closed_day,
+                               ss_error *err) {
     if (displacement) *displacement = NULL;
+    if (closed_day) *closed_day = NULL;
+    double *closed = NULL;
     size_t len = 0;
     char *text = ss_read_file(path, &len, err);
     if (!text) return NULL;
@@ -252,6 +285,21 @@ ss_heal_grid *ss_heal_vti_read(const char *path, float **displacement, ss_error 
         size_t nl = q ? (size_t)(q - nm) : 0;
         unsigned long long off = strtoull(of, NULL, 10);
         int comps = nc ? atoi(nc) : 1;
+        if (nl == 10 && !strncmp(nm, "closed_day", 10)) {
+            size_t ncol = (size_t)n[0] * (size_t)n[1];
+            const unsigned char *b = strncmp(ty ? ty : "", "Float64\"", 8)
+                                         ? NULL
+                                         : vti_block(data, avail, off, 8 * (uint64_t)ncol);
+            if (!b)
+                why = "the closed_day array is malformed";
+            else if (closed_day && !(closed = malloc(ncol * sizeof *closed)))
+                why = "out of memory";
+            for (size_t i = 0; closed && !why && i < ncol; i++) {
+                uint64_t v = get_u64le(b + 8 * i);
+                memcpy(&closed[i], &v, 8);
+            }
+            continue;
+        }
         if (nl == 10 && !strncmp(nm, "cell_state", 10)) {
             const unsigned char *b =
                 strncmp(ty ? ty : "", "UInt8\"", 6) ? NULL : vti_block(data, avail, off, ncell);
@@ -295,9 +343,11 @@ ss_heal_grid *ss_heal_vti_read(const char *path, float **displacement, ss_error 
         ss_error_set(err, SS_ERR_INPUT, "%s: %s", path, why);
         ss_heal_grid_free(g);
         free(disp);
+        free(closed);
         return NULL;
     }
     g->t_days = t;
     if (displacement) *displacement = disp;
+    if (closed_day) *closed_day = closed;
     return g;
 }
