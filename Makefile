@@ -5,7 +5,9 @@ ASAN     ?= build-asan
 JOBS     ?= $(shell nproc)
 DEPS      = build-essential cmake pkg-config libpng-dev libopenexr-dev zlib1g-dev \
             libcjson-dev libcmocka-dev libcairo2-dev fonts-dejavu-core python3 \
-            python3-numpy $(VIEW_DEPS)
+            python3-numpy $(VIEW_DEPS) $(MPI_DEPS)
+# MPI for the distributed healing solver and optics table (docs/scaling.md)
+MPI_DEPS  = libopenmpi-dev openmpi-bin
 # The viewer (skinsim view): GTK 4, libepoxy, Mesa's software OpenGL/EGL, and
 # Xvfb so its tests have a display on a machine without one.
 VIEW_DEPS = libgtk-4-dev libepoxy-dev libgl1-mesa-dri libegl-mesa0 xvfb

@@ -133,6 +133,22 @@ ss_status ss_heal_run_write_snapshot(ss_heal_run *r, ss_error *err);
  * newest two kept) from which ss_heal_run_create resumes; needs out_dir. */
 ss_status ss_heal_run_write_checkpoint(ss_heal_run *r, ss_error *err);
 
+/* ---- an external solver (the MPI driver, src/dist) ---- */
+/* With hooks set, the run calls step instead of ss_heal_step (it must advance
+ * g->t_days and g->step; g's fields may then be stale), stats instead of
+ * ss_heal_stats_compute for every area row, and sync before anything reads
+ * g's fields (snapshots, checkpoints) so it can bring them up to date. NULL
+ * members keep the run's own behaviour. Not with the contraction mechanics. */
+typedef struct ss_heal_run_hooks {
+    void *ctx;
+    ss_status (*step)(void *ctx, ss_heal_grid *g, ss_error *err);
+    void (*stats)(void *ctx, const ss_heal_grid *g, ss_heal_stats *st);
+    ss_status (*sync)(void *ctx, ss_heal_grid *g, ss_error *err);
+} ss_heal_run_hooks;
+/* Sets (h) or clears (NULL) the hooks; SS_ERR_INPUT when the run has the
+ * contraction mechanics (naming --mechanics). */
+ss_status ss_heal_run_set_hooks(ss_heal_run *r, const ss_heal_run_hooks *h, ss_error *err);
+
 /* ---- state ---- */
 /* The grid holds all the state (fields, cells, t_days, step). A caller may
  * change fields or velocities between steps (the mechanics does). */

@@ -341,8 +341,30 @@ double ss_heal_stable_dt(const ss_heal_grid *g, const ss_heal_params *p, ss_heal
     return ss_heal_rd_explicit_dt(&sys);
 }
 
+static ss_heal_solver *solver_create(const ss_heal_grid *g, const int *goff, const int *gdim,
+                                     const ss_heal_params *p, ss_heal_scheme scheme, double dt,
+                                     ss_error *err);
+
 ss_heal_solver *ss_heal_solver_create(const ss_heal_grid *g, const ss_heal_params *p,
                                       ss_heal_scheme scheme, double dt, ss_error *err) {
+    return solver_create(g, NULL, NULL, p, scheme, dt, err);
+}
+
+ss_heal_solver *ss_heal_solver_create_sub(const ss_heal_grid *g, const int goff[3],
+                                          const int gdim[3], const ss_heal_params *p,
+                                          ss_heal_scheme scheme, double dt, ss_error *err) {
+    if (!g || !goff || !gdim || goff[2] != 0 || gdim[2] != g->nz || gdim[0] < g->nx - 2 ||
+        gdim[1] < g->ny - 2) {
+        ss_error_set(err, SS_ERR_INPUT,
+                     "heal solver: a sub-box must span the whole grid in z and lie inside it");
+        return NULL;
+    }
+    return solver_create(g, goff, gdim, p, scheme, dt, err);
+}
+
+static ss_heal_solver *solver_create(const ss_heal_grid *g, const int *goff, const int *gdim,
+                                     const ss_heal_params *p, ss_heal_scheme scheme, double dt,
+                                     ss_error *err) {
     if (!g || !p) {
         ss_error_set(err, SS_ERR_INPUT, "heal solver: no grid or parameters");
         return NULL;
@@ -397,6 +419,10 @@ ss_heal_solver *ss_heal_solver_create(const ss_heal_grid *g, const ss_heal_param
     }
     find_surface(&s->ctx);
     sys_init(&s->sys, &s->ctx, g, &s->p);
+    for (int d = 0; goff && d < 3; d++) {
+        s->sys.goff[d] = goff[d];
+        s->sys.gdim[d] = gdim[d];
+    }
     double r = s->sys.rate_max;
     /* reaction substeps of at most 0.1 / rate_max (both halves together) */
     s->nsub = (int)ceil(dt * r / 0.1);

@@ -57,7 +57,10 @@ ss_status ss_heal_run__add_row(ss_heal_run *r, ss_error *err) {
     }
     ss_heal_area_row *row = &r->rows[r->nrows++];
     row->t_days = r->g->t_days;
-    ss_heal_stats_compute(r->g, &row->st);
+    if (r->hooks.stats)
+        r->hooks.stats(r->hooks.ctx, r->g, &row->st);
+    else
+        ss_heal_stats_compute(r->g, &row->st);
     return ss_heal_run__mech_row(r, err);
 }
 
@@ -152,6 +155,7 @@ ss_status ss_heal_run_write_checkpoint(ss_heal_run *r, ss_error *err) {
     if (!r->out_dir) return ss_error_set(err, SS_ERR_INPUT, "heal run: no output directory");
     ss_status st0 = start_output(r, err);
     if (st0) return st0;
+    if ((st0 = ss_heal_run__sync(r, err))) return st0;
     char *aux = ss_heal_run__aux_json(r, r->wall_prev + ss_now() - r->t0);
     if (!aux) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     ss_status st = ss_heal_checkpoint_save(r->out_dir, r->g, r->scenario, r->params_json,
@@ -190,7 +194,8 @@ ss_status ss_heal_run_step(ss_heal_run *r, ss_error *err) {
         return ss_error_set(err, SS_ERR_INPUT, "heal run: already at its end (day %g)",
                             ss_heal_run_end_day(r));
     ss_status st = start_output(r, err);
-    if (!st) st = ss_heal_step(r->s, r->g, err);
+    if (!st)
+        st = r->hooks.step ? r->hooks.step(r->hooks.ctx, r->g, err) : ss_heal_step(r->s, r->g, err);
     if (!st && r->mech && !(st = ss_mech_step(r->mech, r->g, r->dt, err))) cap_velocity(r);
     if (st) return st;
     long long k = (long long)r->g->step;
@@ -239,6 +244,22 @@ ss_status ss_heal_run_finish(ss_heal_run *r, char **summary_json, ss_error *err)
     }
     cJSON_Delete(summary);
     return st;
+}
+
+ss_status ss_heal_run_set_hooks(ss_heal_run *r, const ss_heal_run_hooks *h, ss_error *err) {
+    if (h && r->mech)
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "--mechanics: the contraction mechanics needs the whole grid in one "
+                            "process; it cannot run with an external (distributed) solver");
+    if (h)
+        r->hooks = *h;
+    else
+        memset(&r->hooks, 0, sizeof r->hooks);
+    return SS_OK;
+}
+
+ss_status ss_heal_run__sync(ss_heal_run *r, ss_error *err) {
+    return r->hooks.sync ? r->hooks.sync(r->hooks.ctx, r->g, err) : SS_OK;
 }
 
 /* ---- accessors ------------------------------------------------------------------ */

@@ -45,7 +45,10 @@ struct ss_heal_run {
     double close_day;
     ss_mech_stats close_st;
     cJSON *mech_aux; /* the checkpoint's "mechanics" object while resuming */
+    ss_heal_run_hooks hooks; /* an external solver (src/dist); members NULL = none */
 };
+/* Brings r->g's fields up to date when an external solver steps it. */
+ss_status ss_heal_run__sync(ss_heal_run *r, ss_error *err);
 
 /* run.c */
 ss_status ss_heal_run__add_row(ss_heal_run *r, ss_error *err);

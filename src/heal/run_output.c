@@ -406,6 +406,8 @@ static ss_status write_surface_maps(ss_heal_run *r, int idx, ss_error *err) {
 
 ss_status ss_heal_run__snapshot(ss_heal_run *r, ss_error *err) {
     if (!r->out_dir) return ss_error_set(err, SS_ERR_INPUT, "heal run: no output directory");
+    ss_status st0 = ss_heal_run__sync(r, err);
+    if (st0) return st0;
     char rel[64], path[4400];
     int idx = r->nsnap;
     /* a resumed run may redo snapshots the killed run wrote after its checkpoint */
