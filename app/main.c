@@ -74,7 +74,11 @@ static int dispatch(int argc, char **argv) {
         return 0;
     }
     if (!strcmp(cmd, "--version") || !strcmp(cmd, "-V")) {
+#ifdef SKINSIM_HAVE_MPI
+        printf("skinsim %s (with MPI)\n", SKINSIM_VERSION);
+#else
         printf("skinsim %s\n", SKINSIM_VERSION);
+#endif
         return 0;
     }
     /* SKINSIM_THREADS is checked like --threads, once for every command */

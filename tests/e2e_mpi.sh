@@ -1,0 +1,86 @@
+#!/usr/bin/env bash
+# End-to-end test of skinsim on MPI (docs/scaling.md): `skinsim heal` on 1, 2,
+# 3 and 4 ranks (mpirun --oversubscribe on this 2-core machine) writes the same
+# bytes as the single-process run: area.csv, every VTK snapshot, fields.pvd,
+# run.json, the surface maps and summary.json (less its wall time and thread
+# count), on a grid that divides by the rank counts and one that does not; a
+# run checkpointed on 4 ranks resumes on 3 to the uninterrupted single-process
+# result; bad input (too many ranks for the grid, the split scheme, the
+# mechanics, a missing or damaged checkpoint) exits 2 on every rank with
+# nothing written. Skips (77) without mpirun or without an MPI build.
+# usage: e2e_mpi.sh <skinsim> <source dir>
+set -u
+CLI=$1
+command -v mpirun >/dev/null || { echo "skip: no mpirun"; exit 77; }
+"$CLI" --version | grep -q "with MPI" || { echo "skip: skinsim built without MPI"; exit 77; }
+T=$(mktemp -d /tmp/skinsim-e2e-mpi-XXXXXX)
+trap 'rm -rf "$T"' EXIT
+fail() { echo "FAIL: $*" >&2; exit 1; }
+# these machines run as root (DESIGN.md: OpenMPI refuses root without these)
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+# OpenMPI keeps allocations until exit: leak reports under ASan are its own
+export ASAN_OPTIONS="${ASAN_OPTIONS:-}:detect_leaks=0"
+MPIRUN="mpirun --oversubscribe --allow-run-as-root --mca btl self,vader"
+run_np() { local n=$1; shift; $MPIRUN -np "$n" "$CLI" "$@"; }
+
+# compares every output of run dir $1 with $2
+same_run() {
+    for f in area.csv run.json fields/fields.pvd; do
+        cmp -s "$1/$f" "$2/$f" || fail "$2/$f differs from the single-process run"
+    done
+    for f in "$1"/fields/*.vti "$1"/surface/*.png; do
+        cmp -s "$f" "$2/${f#$1/}" || fail "$2/${f#$1/} differs from the single-process run"
+    done
+    [ "$(ls "$1/fields" | wc -l)" = "$(ls "$2/fields" | wc -l)" ] || fail "$2: snapshot count"
+    diff <(grep -v -e wall_time_s -e '"threads"' "$1/summary.json") \
+        <(grep -v -e wall_time_s -e '"threads"' "$2/summary.json") >/dev/null ||
+        fail "$2/summary.json differs from the single-process run"
+}
+
+for grid in 24x20x8 23x17x9; do
+    OPTS="--scheme explicit --grid $grid --scenario scab --days 0.6 --snapshot-every 0.3 --area-every 0.05 --quiet --threads 1"
+    "$CLI" heal $OPTS --out "$T/s$grid" || fail "single-process run ($grid)"
+    for n in 1 2 3 4; do
+        run_np $n heal $OPTS --out "$T/m$n-$grid" || fail "run on $n ranks ($grid)"
+        same_run "$T/s$grid" "$T/m$n-$grid"
+    done
+    echo "ok: heal $grid bit-identical on 1, 2, 3, 4 ranks"
+done
+
+# --- checkpoint on 4 ranks, resume on 3: the uninterrupted single-process result
+OPTS="--scheme explicit --grid 23x17x9 --scenario scab --snapshot-every 0.3 --area-every 0.05 --quiet --threads 1"
+"$CLI" heal $OPTS --days 0.9 --out "$T/full" || fail "single-process 0.9-day run"
+run_np 4 heal $OPTS --days 0.6 --checkpoint-every 0.3 --out "$T/cut" || fail "4-rank run with checkpoints"
+ls "$T"/cut/checkpoints/*.sshc >/dev/null 2>&1 || fail "no checkpoint written on 4 ranks"
+run_np 3 heal --resume "$T/cut" --days 0.9 --quiet || fail "resume on 3 ranks"
+cmp -s "$T/full/area.csv" "$T/cut/area.csv" || fail "resumed (4 -> 3 ranks) area.csv differs"
+# (the cut run's own last snapshot shifts the numbering: compare the newest of each)
+cmp -s "$(ls "$T"/full/fields/*.vti | tail -1)" "$(ls "$T"/cut/fields/*.vti | tail -1)" ||
+    fail "resumed (4 -> 3 ranks) final fields differ"
+echo "ok: checkpoint on 4 ranks resumes on 3 bit-identically"
+
+# --- bad input: exit 2 on every rank, a message naming the input, nothing written
+bad() { # name, expected message part, ranks, args...
+    local name=$1 msg=$2 n=$3; shift 3
+    run_np "$n" "$@" >"$T/$name.out" 2>"$T/$name.err"
+    local rc=$?
+    [ $rc -eq 2 ] || { cat "$T/$name.err"; fail "$name: exit $rc, expected 2"; }
+    grep -q -- "$msg" "$T/$name.err" || { cat "$T/$name.err"; fail "$name: no message naming $msg"; }
+}
+bad ranks "too many" 5 heal --scheme explicit --grid 4x40x8 --days 0.1 --out "$T/bad1"
+[ -e "$T/bad1" ] && fail "too many ranks: output written"
+bad split "--scheme split" 2 heal --grid 24x20x8 --days 0.1 --out "$T/bad2"
+[ -e "$T/bad2" ] && fail "split on 2 ranks: output written"
+bad mech "--mechanics" 2 heal --scheme explicit --mechanics --grid 24x20x8 --days 0.1 --out "$T/bad3"
+[ -e "$T/bad3" ] && fail "mechanics on 2 ranks: output written"
+bad missing "resume" 3 heal --resume "$T/nowhere" --quiet
+cp -r "$T/cut" "$T/dmg"
+for f in "$T"/dmg/checkpoints/*.sshc; do printf 'garbage' >"$f"; done
+before=$(cd "$T/dmg" && find . -type f -exec md5sum {} + | sort | md5sum)
+bad damaged "checkpoint" 2 heal --resume "$T/dmg" --days 1.2 --quiet
+after=$(cd "$T/dmg" && find . -type f -exec md5sum {} + | sort | md5sum)
+[ "$before" = "$after" ] || fail "a refused resume changed the run directory"
+bad other "does not run on" 2 skin --size 64 --out "$T/bad4"
+[ -e "$T/bad4" ] && fail "skin on 2 ranks: output written"
+echo "ok: bad input exits 2 on every rank, nothing written"
+echo "e2e_mpi: all passed"
