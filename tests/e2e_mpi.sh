@@ -7,7 +7,8 @@
 # run checkpointed on 4 ranks resumes on 3 to the uninterrupted single-process
 # result; bad input (too many ranks for the grid, the split scheme, the
 # mechanics, a missing or damaged checkpoint) exits 2 on every rank with
-# nothing written. Skips (77) without mpirun or without an MPI build.
+# nothing written; `optics table` on 2, 3 and 4 ranks writes the bytes of the
+# single-process table. Skips (77) without mpirun or without an MPI build.
 # usage: e2e_mpi.sh <skinsim> <source dir>
 set -u
 CLI=$1
@@ -59,6 +60,15 @@ cmp -s "$(ls "$T"/full/fields/*.vti | tail -1)" "$(ls "$T"/cut/fields/*.vti | ta
     fail "resumed (4 -> 3 ranks) final fields differ"
 echo "ok: checkpoint on 4 ranks resumes on 3 bit-identically"
 
+# --- the ModelMatch table: geometries shared out by rank 0, the same bytes
+TAB="--samples 2 --photons 400 --wl-min 450 --wl-max 650 --wl-step 100 --theta-i 2 --theta-r 3 --phi 3 --quiet --threads 1"
+"$CLI" optics table $TAB --out "$T/t1.sstab" || fail "single-process table"
+for n in 2 3 4; do
+    run_np $n optics table $TAB --out "$T/t$n.sstab" || fail "table on $n ranks"
+    cmp -s "$T/t1.sstab" "$T/t$n.sstab" || fail "table on $n ranks differs from the single-process one"
+done
+echo "ok: optics table bit-identical on 2, 3, 4 ranks"
+
 # --- bad input: exit 2 on every rank, a message naming the input, nothing written
 bad() { # name, expected message part, ranks, args...
     local name=$1 msg=$2 n=$3; shift 3
@@ -82,5 +92,9 @@ after=$(cd "$T/dmg" && find . -type f -exec md5sum {} + | sort | md5sum)
 [ "$before" = "$after" ] || fail "a refused resume changed the run directory"
 bad other "does not run on" 2 skin --size 64 --out "$T/bad4"
 [ -e "$T/bad4" ] && fail "skin on 2 ranks: output written"
+mkdir -p "$T/adir"
+bad tabdir "--out" 3 optics table $TAB --out "$T/adir"
+bad tabsamples "--samples" 2 optics table --samples 0 --out "$T/t0.sstab"
+[ -e "$T/t0.sstab" ] && fail "bad table: output written"
 echo "ok: bad input exits 2 on every rank, nothing written"
 echo "e2e_mpi: all passed"

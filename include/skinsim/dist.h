@@ -14,6 +14,7 @@
 
 #include "skinsim/core.h"
 #include "skinsim/heal_run.h"
+#include "skinsim/optics_fit.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -58,6 +59,16 @@ typedef struct ss_dist_heal_timing {
 } ss_dist_heal_timing;
 void ss_dist_heal_timing_get(const ss_dist_heal *d, ss_dist_heal_timing *t);
 void ss_dist_heal_free(ss_dist_heal *d);
+
+/* ---- the ModelMatch table on MPI ---- */
+/* Collective. Every rank passes its table (same axes: from the same command
+ * line) and options; rank 0 passes root_st, the status of its own checks
+ * (the output file), the others SS_OK. Rank 0 hands out geometries to the
+ * other ranks as they finish (ss_mm_table_build_geometry) and collects their
+ * entries: on rank 0, t then has the bytes of ss_mm_table_build for the same
+ * seed. One rank: ss_mm_table_build. Every rank returns rank 0's status. */
+ss_status ss_dist_mm_table_build(ss_mm_table *t, const ss_mm_build_options *o, ss_status root_st,
+                                 ss_error *err);
 
 #ifdef __cplusplus
 }
