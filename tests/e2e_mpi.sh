@@ -5,7 +5,7 @@
 # run.json, the surface maps and summary.json (less its wall time and thread
 # count), on a grid that divides by the rank counts and one that does not; a
 # run checkpointed on 4 ranks resumes on 3 to the uninterrupted single-process
-# result; bad input (too many ranks for the grid, the split scheme, the
+# result; bad input (too many ranks for the grid with either scheme, the
 # mechanics, a missing or damaged checkpoint) exits 2 on every rank with
 # nothing written; `optics table` on 2, 3 and 4 ranks writes the bytes of the
 # single-process table. Skips (77) without mpirun or without an MPI build.
@@ -48,6 +48,15 @@ for grid in 24x20x8 23x17x9; do
     echo "ok: heal $grid bit-identical on 1, 2, 3, 4 ranks"
 done
 
+# --- the split scheme (the default): y sweeps on x slabs, reached by transposes
+OPTS="--grid 23x17x9 --scenario scab --days 1 --snapshot-every 0.5 --area-every 0.05 --quiet --threads 1"
+"$CLI" heal $OPTS --out "$T/split" || fail "single-process split run"
+for n in 2 3 4; do
+    run_np $n heal $OPTS --out "$T/split$n" || fail "split run on $n ranks"
+    same_run "$T/split" "$T/split$n"
+done
+echo "ok: heal --scheme split bit-identical on 2, 3, 4 ranks"
+
 # --- checkpoint on 4 ranks, resume on 3: the uninterrupted single-process result
 OPTS="--scheme explicit --grid 23x17x9 --scenario scab --snapshot-every 0.3 --area-every 0.05 --quiet --threads 1"
 "$CLI" heal $OPTS --days 0.9 --out "$T/full" || fail "single-process 0.9-day run"
@@ -79,8 +88,8 @@ bad() { # name, expected message part, ranks, args...
 }
 bad ranks "too many" 5 heal --scheme explicit --grid 4x40x8 --days 0.1 --out "$T/bad1"
 [ -e "$T/bad1" ] && fail "too many ranks: output written"
-bad split "--scheme split" 2 heal --grid 24x20x8 --days 0.1 --out "$T/bad2"
-[ -e "$T/bad2" ] && fail "split on 2 ranks: output written"
+bad split "--scheme split" 5 heal --grid 40x4x8 --days 0.1 --out "$T/bad2"
+[ -e "$T/bad2" ] && fail "split on too many ranks: output written"
 bad mech "--mechanics" 2 heal --scheme explicit --mechanics --grid 24x20x8 --days 0.1 --out "$T/bad3"
 [ -e "$T/bad3" ] && fail "mechanics on 2 ranks: output written"
 bad missing "resume" 3 heal --resume "$T/nowhere" --quiet

@@ -219,6 +219,17 @@ ss_status ss_heal_solver_set_dt(ss_heal_solver *s, double dt_days, ss_error *err
  * t_days, step); the solver holds only params, dt and scratch memory. */
 ss_status ss_heal_step(ss_heal_solver *s, ss_heal_grid *g, ss_error *err);
 void ss_heal_solver_free(ss_heal_solver *s);
+/* The split step in three phases (the MPI driver, src/dist, runs the y sweep
+ * on another decomposition): 0 = first reaction half and the x sweep, 1 = the
+ * y sweep, 2 = the z sweep and the second reaction half, then t_days += dt and
+ * step++. Phases 0, 1, 2 in turn are ss_heal_step exactly. SS_ERR_INPUT for
+ * the explicit scheme or a velocity field. */
+ss_status ss_heal_step_phase(ss_heal_solver *s, ss_heal_grid *g, int phase, ss_error *err);
+/* The split scheme's frozen diffusion multipliers of slot k (one float per
+ * cell of the solver's grid; set by phase 0, read by phases 1 and 2); NULL
+ * for the explicit scheme or a slot out of range. */
+float *ss_heal_solver_multipliers(ss_heal_solver *s, int slot);
+int ss_heal_solver_nslots(const ss_heal_solver *s);
 
 /* ---- diagnostics ---------------------------------------------------------------- */
 

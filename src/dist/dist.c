@@ -34,6 +34,7 @@ void ss_dist_finalize(void) {
 }
 
 int ss_dist_rank(void) { return g_rank; }
+int ss_dist_active(void) { return g_inited; }
 int ss_dist_size(void) { return g_size; }
 
 int ss_dist_exit_code(ss_status st) {

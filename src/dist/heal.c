@@ -48,8 +48,16 @@ struct ss_dist_heal {
     ss_heal_solver *s;
     float *sbuf[NFACES], *rbuf[NFACES];
     int fcount[NFACES]; /* floats per face message */
-    ss_heal_run *run;   /* rank 0 */
-    int dirty;          /* rank 0: the run's whole grid is behind the boxes */
+    /* split scheme: the boxes above are y slabs (dims 1 x P x 1); the y sweep
+     * runs on x slabs (gB, sB), reached by two transposes per step */
+    int split, nslots;
+    ss_heal_grid *gB;
+    ss_heal_solver *sB;
+    float *tsend, *trecv;
+    int *scnt, *sdsp, *rcnt, *rdsp;
+    double tbytes;    /* transpose bytes this rank sends per step */
+    ss_heal_run *run; /* rank 0 */
+    int dirty;        /* rank 0: the run's whole grid is behind the boxes */
     double t_compute, t_halo, t_stats, t_gather;
     long long steps;
     ss_dist_heal_timing tmax; /* rank 0, after end */
@@ -165,9 +173,139 @@ static void halo_exchange(ss_dist_heal *d) {
         if (d->nbr[f] != MPI_PROC_NULL) face_io(d->g, f, 1, d->rbuf[f]);
 }
 
+/* ---- the split scheme's transposes ---------------------------------------------- */
+
+/* x slab of rank j (the y sweep's decomposition) */
+static void xslab(const ss_dist_heal *d, int j, int *lo, int *n) {
+    *lo = part_lo(d->su.G[0], d->size, j);
+    *n = part_lo(d->su.G[0], d->size, j + 1) - *lo;
+}
+static void yslab(const ss_dist_heal *d, int j, int *lo, int *n) {
+    *lo = part_lo(d->su.G[1], d->size, j);
+    *n = part_lo(d->su.G[1], d->size, j + 1) - *lo;
+}
+
+/* the quantities moved: fields, then (A -> B only) the frozen multipliers */
+static float *quantity(ss_heal_grid *g, ss_heal_solver *s, int q) {
+    return q < SS_HEAL_NFIELDS ? g->field[q] : ss_heal_solver_multipliers(s, q - SS_HEAL_NFIELDS);
+}
+
+/* A (y slab, owned rows) -> B (x slab, all rows): every field and multiplier */
+static void transpose_ab(ss_dist_heal *d) {
+    const int nz = d->su.G[2], nq = SS_HEAL_NFIELDS + d->nslots, me = d->rank;
+    int ylo, yn, xlo, xn;
+    yslab(d, me, &ylo, &yn);
+    size_t k = 0;
+    for (int j = 0; j < d->size; j++) {
+        xslab(d, j, &xlo, &xn);
+        d->sdsp[j] = (int)k;
+        for (int q = 0; q < nq; q++) {
+            const float *u = quantity(d->g, d->s, q);
+            for (int z = 0; z < nz; z++)
+                for (int y = 0; y < yn; y++) {
+                    memcpy(d->tsend + k, u + ss_heal_idx(d->g, xlo + 1, y + 1, z),
+                           (size_t)xn * sizeof(float));
+                    k += (size_t)xn;
+                }
+        }
+        d->scnt[j] = (int)k - d->sdsp[j];
+    }
+    xslab(d, me, &xlo, &xn);
+    k = 0;
+    for (int j = 0; j < d->size; j++) {
+        int jlo, jn;
+        yslab(d, j, &jlo, &jn);
+        d->rdsp[j] = (int)k;
+        d->rcnt[j] = nq * nz * jn * xn;
+        k += (size_t)d->rcnt[j];
+    }
+    MPI_Alltoallv(d->tsend, d->scnt, d->sdsp, MPI_FLOAT, d->trecv, d->rcnt, d->rdsp, MPI_FLOAT,
+                  d->cart);
+    k = 0;
+    for (int j = 0; j < d->size; j++) {
+        int jlo, jn;
+        yslab(d, j, &jlo, &jn);
+        for (int q = 0; q < nq; q++) {
+            float *u = quantity(d->gB, d->sB, q);
+            for (int z = 0; z < nz; z++)
+                for (int y = 0; y < jn; y++) {
+                    memcpy(u + ss_heal_idx(d->gB, 1, jlo + y + 1, z), d->trecv + k,
+                           (size_t)xn * sizeof(float));
+                    k += (size_t)xn;
+                }
+        }
+    }
+}
+
+/* B (x slab) -> A (y slab): the fields after the y sweep */
+static void transpose_ba(ss_dist_heal *d) {
+    const int nz = d->su.G[2], nq = SS_HEAL_NFIELDS, me = d->rank;
+    int xlo, xn, ylo, yn;
+    xslab(d, me, &xlo, &xn);
+    size_t k = 0;
+    for (int j = 0; j < d->size; j++) {
+        int jlo, jn;
+        yslab(d, j, &jlo, &jn);
+        d->sdsp[j] = (int)k;
+        for (int q = 0; q < nq; q++)
+            for (int z = 0; z < nz; z++)
+                for (int y = 0; y < jn; y++) {
+                    memcpy(d->tsend + k, d->gB->field[q] + ss_heal_idx(d->gB, 1, jlo + y + 1, z),
+                           (size_t)xn * sizeof(float));
+                    k += (size_t)xn;
+                }
+        d->scnt[j] = (int)k - d->sdsp[j];
+    }
+    yslab(d, me, &ylo, &yn);
+    k = 0;
+    for (int j = 0; j < d->size; j++) {
+        int jlo, jn;
+        xslab(d, j, &jlo, &jn);
+        d->rdsp[j] = (int)k;
+        d->rcnt[j] = nq * nz * yn * jn;
+        k += (size_t)d->rcnt[j];
+    }
+    MPI_Alltoallv(d->tsend, d->scnt, d->sdsp, MPI_FLOAT, d->trecv, d->rcnt, d->rdsp, MPI_FLOAT,
+                  d->cart);
+    k = 0;
+    for (int j = 0; j < d->size; j++) {
+        int jlo, jn;
+        xslab(d, j, &jlo, &jn);
+        for (int q = 0; q < nq; q++)
+            for (int z = 0; z < nz; z++)
+                for (int y = 0; y < yn; y++) {
+                    memcpy(d->g->field[q] + ss_heal_idx(d->g, jlo + 1, y + 1, z), d->trecv + k,
+                           (size_t)jn * sizeof(float));
+                    k += (size_t)jn;
+                }
+    }
+}
+
+/* One split step: x sweep on the y slabs, y sweep on the x slabs, z sweep back
+ * on the y slabs (columns and x lines are whole on a y slab, y lines on an x
+ * slab: every line is solved whole, as in one process). */
+static ss_status split_step(ss_dist_heal *d, ss_error *err) {
+    double t0 = MPI_Wtime();
+    ss_status st = ss_heal_step_phase(d->s, d->g, 0, err);
+    double t1 = MPI_Wtime();
+    transpose_ab(d);
+    double t2 = MPI_Wtime();
+    if (!st) st = ss_heal_step_phase(d->sB, d->gB, 1, err);
+    double t3 = MPI_Wtime();
+    transpose_ba(d);
+    double t4 = MPI_Wtime();
+    if (!st) st = ss_heal_step_phase(d->s, d->g, 2, err);
+    double t5 = MPI_Wtime();
+    d->t_compute += (t1 - t0) + (t3 - t2) + (t5 - t4);
+    d->t_halo += (t2 - t1) + (t4 - t3);
+    d->steps++;
+    return st;
+}
+
 /* ---- the commands ------------------------------------------------------------- */
 
 static ss_status do_step(ss_dist_heal *d, ss_error *err) {
+    if (d->split) return split_step(d, err);
     double t0 = MPI_Wtime();
     ss_status st = ss_heal_step(d->s, d->g, err);
     double t1 = MPI_Wtime();
@@ -277,6 +415,71 @@ static ss_status hook_sync(void *ctx, ss_heal_grid *G, ss_error *err) {
 
 /* ---- set-up ----------------------------------------------------------------------- */
 
+/* The split scheme's x slab of every rank (cells and fields from rank 0's
+ * whole grid, like the y slabs) and the transpose buffers. */
+static ss_status split_setup(ss_dist_heal *d, ss_heal_run *r, ss_error *err) {
+    const int nz = d->su.G[2];
+    int xlo, xn;
+    xslab(d, d->rank, &xlo, &xn);
+    d->nslots = ss_heal_solver_nslots(d->s);
+    d->gB = ss_heal_grid_create(xn + 2, d->su.G[1] + 2, nz, d->su.dx_mm, err);
+    if (!d->gB) return err->code ? err->code : SS_ERR_NOMEM;
+    d->gB->skin_top_mm = d->su.skin_top_mm;
+    const size_t nb = (size_t)d->gB->nx * d->gB->ny * nz;
+    if (d->rank == 0) {
+        const ss_heal_grid *G = ss_heal_run_grid(r);
+        for (int q = d->size - 1; q >= 0; q--) {
+            int lo[2] = {0, 0}, n[2];
+            xslab(d, q, &lo[0], &n[0]);
+            n[1] = d->su.G[1];
+            size_t nq = (size_t)(n[0] + 2) * (n[1] + 2) * nz;
+            uint8_t *cells = q == 0 ? d->gB->cell : malloc(nq);
+            float *fields = malloc(nq * SS_HEAL_NFIELDS * sizeof(float));
+            if (!cells || !fields) MPI_Abort(d->cart, 3);
+            pack_box(G, lo, n, cells, fields);
+            if (q == 0) {
+                for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+                    memcpy(d->gB->field[f], fields + f * nq, nq * sizeof(float));
+            } else {
+                MPI_Send(cells, (int)nq, MPI_BYTE, q, 12, d->cart);
+                MPI_Send(fields, (int)(nq * SS_HEAL_NFIELDS), MPI_FLOAT, q, 13, d->cart);
+                free(cells);
+            }
+            free(fields);
+        }
+    } else {
+        float *fields = malloc(nb * SS_HEAL_NFIELDS * sizeof(float));
+        if (!fields) MPI_Abort(d->cart, 3);
+        MPI_Recv(d->gB->cell, (int)nb, MPI_BYTE, 0, 12, d->cart, MPI_STATUS_IGNORE);
+        MPI_Recv(fields, (int)(nb * SS_HEAL_NFIELDS), MPI_FLOAT, 0, 13, d->cart, MPI_STATUS_IGNORE);
+        for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+            memcpy(d->gB->field[f], fields + f * nb, nb * sizeof(float));
+        free(fields);
+    }
+    int goff[3] = {xlo - 1, -1, 0};
+    d->sB = ss_heal_solver_create_sub(d->gB, goff, d->su.G, &d->su.p, SS_HEAL_SPLIT, d->su.dt, err);
+    if (!d->sB) return err->code ? err->code : SS_ERR_RUNTIME;
+    /* the largest message set: A's owned rows or B's owned columns, all quantities */
+    int ylo, yn;
+    yslab(d, d->rank, &ylo, &yn);
+    size_t na = (size_t)d->su.G[0] * yn * nz, nbo = (size_t)xn * d->su.G[1] * nz;
+    size_t cap = (na > nbo ? na : nbo) * (size_t)(SS_HEAL_NFIELDS + d->nslots);
+    d->tsend = malloc(cap * sizeof(float));
+    d->trecv = malloc(cap * sizeof(float));
+    d->scnt = malloc((size_t)d->size * 4 * sizeof(int));
+    if (!d->tsend || !d->trecv || !d->scnt) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    d->sdsp = d->scnt + d->size;
+    d->rcnt = d->sdsp + d->size;
+    d->rdsp = d->rcnt + d->size;
+    /* bytes sent to other ranks per step: both transposes, less what stays here */
+    int xo, xno;
+    xslab(d, d->rank, &xo, &xno);
+    d->tbytes = 4.0 * nz *
+                ((double)(d->su.G[0] - xno) * yn * (SS_HEAL_NFIELDS + d->nslots) +
+                 (double)xno * (d->su.G[1] - yn) * SS_HEAL_NFIELDS);
+    return SS_OK;
+}
+
 /* Rank 0: what the distributed solver cannot do, as an input error. */
 static ss_status check_root(ss_heal_run *r, int size, int dims[3], ss_error *err) {
     const ss_heal_grid *G = ss_heal_run_grid(r);
@@ -286,11 +489,18 @@ static ss_status check_root(ss_heal_run *r, int size, int dims[3], ss_error *err
                             "needs the whole grid in one process (run it without mpirun, or "
                             "with -np 1)",
                             size);
-    if (size > 1 && ss_heal_run_scheme(r) != SS_HEAL_EXPLICIT)
-        return ss_error_set(err, SS_ERR_INPUT,
-                            "--scheme split cannot run on %d MPI ranks: its implicit line solves "
-                            "are not distributed; use --scheme explicit (or -np 1)",
-                            size);
+    if (ss_heal_run_scheme(r) != SS_HEAL_EXPLICIT) {
+        /* y slabs, and x slabs for the y sweep: every line solve stays whole */
+        dims[0] = dims[2] = 1;
+        dims[1] = size;
+        if (size > G->nx || size > G->ny)
+            return ss_error_set(err, SS_ERR_INPUT,
+                                "%d MPI ranks are too many for the %dx%dx%d grid with --scheme "
+                                "split (slabs in y and in x, one column each at least); use at "
+                                "most %d ranks, a larger --grid or --scheme explicit",
+                                size, G->nx, G->ny, G->nz, G->nx < G->ny ? G->nx : G->ny);
+        return SS_OK;
+    }
     dims[0] = dims[1] = 0;
     dims[2] = 1; /* columns stay whole */
     if (MPI_Dims_create(size, 3, dims) != MPI_SUCCESS)
@@ -424,6 +634,13 @@ ss_status ss_dist_heal_create(ss_heal_run *r, ss_status root_st, ss_dist_heal **
         ss_dist_heal_free(d);
         return st;
     }
+    d->split = su.scheme == SS_HEAL_SPLIT;
+    if (d->split) st = split_setup(d, r, err);
+    if ((st = agree(d->cart, st))) {
+        if (d->rank != 0) ss_error_set(err, st, "a rank could not set up its x slab");
+        ss_dist_heal_free(d);
+        return st;
+    }
     if (d->rank == 0) {
         ss_heal_run_hooks h = {d, hook_step, hook_stats, hook_sync};
         ss_heal_run_set_hooks(r, &h, err);
@@ -437,7 +654,7 @@ static void reduce_timing(ss_dist_heal *d) {
     size_t fb = 0;
     for (int f = 0; f < NFACES; f++)
         if (d->nbr[f] != MPI_PROC_NULL) fb += (size_t)d->fcount[f] * sizeof(float);
-    t[4] = (double)fb;
+    t[4] = d->split ? d->tbytes : (double)fb;
     MPI_Reduce(t, m, 5, MPI_DOUBLE, MPI_MAX, 0, d->cart);
     if (d->rank == 0) {
         d->tmax.compute_s = m[0];
@@ -491,6 +708,11 @@ void ss_dist_heal_free(ss_dist_heal *d) {
     }
     ss_heal_solver_free(d->s);
     ss_heal_grid_free(d->g);
+    ss_heal_solver_free(d->sB);
+    ss_heal_grid_free(d->gB);
+    free(d->tsend);
+    free(d->trecv);
+    free(d->scnt);
     if (d->cart != MPI_COMM_NULL && d->cart) MPI_Comm_free(&d->cart);
     free(d);
 }

@@ -463,6 +463,32 @@ void ss_heal_solver_free(ss_heal_solver *s) {
     free(s);
 }
 
+ss_status ss_heal_step_phase(ss_heal_solver *s, ss_heal_grid *g, int phase, ss_error *err) {
+    if (!s || !g || s->scheme != SS_HEAL_SPLIT || phase < 0 || phase > 2 || g->velocity[0] ||
+        g->velocity[1] || g->velocity[2])
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "heal step phase: the split scheme without velocity, phase 0..2");
+    if (g->nx != s->nx || g->ny != s->ny || g->nz != s->nz)
+        return ss_error_set(err, SS_ERR_INPUT, "heal step phase: grid does not match the solver");
+    s->ctx.cell = g->cell;
+    s->sys.cls = g->cell;
+    if (s->ctx.ztop_of != g->cell) find_surface(&s->ctx);
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++) s->sys.u[f] = g->field[f];
+    ss_heal_rd__step_split_phase(&s->sys, s->w, s->dt, s->nsub, phase);
+    if (phase == 2) {
+        g->t_days += s->dt;
+        g->step++;
+    }
+    return SS_OK;
+}
+
+float *ss_heal_solver_multipliers(ss_heal_solver *s, int slot) {
+    if (!s || !s->w || !s->w->have_mslot || slot < 0 || slot >= s->sys.nslots) return NULL;
+    return s->w->mslot[slot];
+}
+
+int ss_heal_solver_nslots(const ss_heal_solver *s) { return s ? s->sys.nslots : 0; }
+
 ss_status ss_heal_step(ss_heal_solver *s, ss_heal_grid *g, ss_error *err) {
     if (!s || !g) return ss_error_set(err, SS_ERR_INPUT, "heal step: no solver or grid");
     if (g->nx != s->nx || g->ny != s->ny || g->nz != s->nz)
