@@ -336,10 +336,9 @@ int cmd_heal(int argc, char **argv) {
     }
     ss_threads_set(o.threads);
 #ifdef SKINSIM_HAVE_MPI
-    /* one rank under mpirun takes the distributed path too when it can (the
-     * explicit scheme of a fresh run), so its times are reported alike */
-    if (ss_dist_size() > 1 ||
-        (ss_dist_active() && o.c.scheme == SS_HEAL_EXPLICIT && !o.c.resume_dir && !o.c.mechanics))
+    /* one rank under mpirun takes the distributed path too when it can (a
+     * fresh run without mechanics), so its times are reported alike */
+    if (ss_dist_size() > 1 || (ss_dist_active() && !o.c.resume_dir && !o.c.mechanics))
         return heal_mpi(&o, &err);
 #endif
 

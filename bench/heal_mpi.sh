@@ -1,23 +1,26 @@
 #!/bin/sh
 # The healing solver on MPI (docs/scaling.md): strong scaling on the seed's
 # 160x124x159 grid over 1, 2 and 4 ranks, weak scaling with an 80x62x159 block
-# per rank, explicit scheme, each rank on THREADS OpenMP threads (default 1).
+# per rank, SCHEME explicit (default; halo exchange) or split (transposes), each
+# rank on THREADS OpenMP threads (default 1).
 # Prints one Markdown row per run with the slowest rank's kernel time and halo
 # exchange time per step, separated, and the halo bytes each rank sends per
 # step. Runs each case REPEAT times (default 3) and keeps the best.
-# Usage: bench/heal_mpi.sh [BUILD_DIR] [STEPS] [REPEAT] [THREADS]
+# Usage: bench/heal_mpi.sh [BUILD_DIR] [STEPS] [REPEAT] [THREADS] [SCHEME]
 # mpirun runs as root here only with --allow-run-as-root (DESIGN.md).
 set -eu
 B=${1:-build}/skinsim
 steps=${2:-20}
 repeat=${3:-3}
 threads=${4:-1}
+scheme=${5:-explicit}
 [ -x "$B" ] || { echo "heal_mpi.sh: $B not built (make build)" >&2; exit 2; }
 "$B" --version | grep -q "with MPI" || { echo "heal_mpi.sh: $B built without MPI" >&2; exit 2; }
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 dt=0.0155 # the explicit limit of the 0.5 mm grid is 0.0172 days
+[ "$scheme" = split ] && dt=0.05
 days=$(python3 -c "print($steps * $dt)")
 
 # one run: prints "compute_per_step halo_per_step stats_s gather_s bytes" (best of repeat)
@@ -25,7 +28,7 @@ run() { # np grid
     best=""
     for i in $(seq "$repeat"); do
         rm -rf "$tmp/out"
-        mpirun --oversubscribe --allow-run-as-root -np "$1" "$B" heal --scheme explicit \
+        mpirun --oversubscribe --allow-run-as-root -np "$1" "$B" heal --scheme "$scheme" \
             --grid "$2" --dt $dt --days "$days" --snapshot-every 0 --area-every 1000 \
             --threads "$threads" --out "$tmp/out" 2>"$tmp/err" >/dev/null ||
             { cat "$tmp/err" >&2; exit 1; }
@@ -54,7 +57,8 @@ row() { # kind np grid base_step
 }
 
 echo "load before: $(uptime)"
-echo "| scaling | ranks | grid | kernel s/step | halo s/step | step s | species-cell updates/s | efficiency | halo bytes/rank/step |"
+echo "scheme $scheme, $steps steps, $threads thread(s) per rank, best of $repeat"
+echo "| scaling | ranks | grid | kernel s/step | halo s/step | step s | species-cell updates/s | efficiency | halo (transpose) bytes/rank/step |"
 echo "|---|---|---|---|---|---|---|---|---|"
 base=$(run 1 160x124x159 | awk '{print $1 + $2}')
 row strong 1 160x124x159 "$base"
