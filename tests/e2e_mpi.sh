@@ -32,7 +32,9 @@ same_run() {
     for f in "$1"/fields/*.vti "$1"/surface/*.png; do
         cmp -s "$f" "$2/${f#$1/}" || fail "$2/${f#$1/} differs from the single-process run"
     done
-    [ "$(ls "$1/fields" | wc -l)" = "$(ls "$2/fields" | wc -l)" ] || fail "$2: snapshot count"
+    # (more than one rank also writes per-rank pieces: fields_NNNN_pRRRR.vti + .pvti)
+    [ "$(ls "$1"/fields/fields_????.vti | wc -l)" = "$(ls "$2"/fields/fields_????.vti | wc -l)" ] ||
+        fail "$2: snapshot count"
     diff <(grep -v -e wall_time_s -e '"threads"' "$1/summary.json") \
         <(grep -v -e wall_time_s -e '"threads"' "$2/summary.json") >/dev/null ||
         fail "$2/summary.json differs from the single-process run"
@@ -47,6 +49,48 @@ for grid in 24x20x8 23x17x9; do
     done
     echo "ok: heal $grid bit-identical on 1, 2, 3, 4 ranks"
 done
+
+# --- per-rank pieces: fields_NNNN.pvti joins one .vti per rank, which together
+# hold exactly the gathered snapshot
+python3 - "$T/m4-23x17x9/fields" <<'PY' || fail "the .pvti pieces do not make up the gathered snapshot"
+import re, struct, sys
+def read(path):  # extent, [(itemsize, bytes)] of the appended arrays
+    b = open(path, 'rb').read()
+    head, raw = b.split(b'<AppendedData encoding="raw">', 1)
+    raw = raw[raw.index(b'_') + 1:]
+    ext = [int(v) for v in re.search(rb'<Piece Extent="([^"]+)"', head).group(1).split()]
+    arrays, pos = [], 0
+    for typ in re.findall(rb'<DataArray type="(\w+)" Name="\w+" format="appended"', head):
+        n = struct.unpack('<Q', raw[pos:pos + 8])[0]
+        arrays.append((1 if typ == b'UInt8' else 4, raw[pos + 8:pos + 8 + n]))
+        pos += 8 + n
+    return ext, arrays
+d = sys.argv[1]
+wext, whole = read(d + '/fields_0001.vti')
+NX, NY, NZ = wext[1], wext[3], wext[5]
+pv = open(d + '/fields_0001.pvti').read()
+pieces = re.findall(r'<Piece Extent="([^"]+)" Source="([^"]+)"', pv)
+assert len(pieces) == 4, pieces
+cover = {}
+for ext_s, src in pieces:
+    ext, arrs = read(d + '/' + src)
+    assert [int(v) for v in ext_s.split()] == ext, (ext_s, ext)
+    x0, x1, y0, y1, z0, z1 = ext
+    w = x1 - x0
+    for (isz, a), (_, full) in zip(arrs, whole):
+        k = 0
+        for z in range(z0, z1):
+            for y in range(y0, y1):
+                o = ((z * NY + y) * NX + x0) * isz
+                assert a[k:k + w * isz] == full[o:o + w * isz], (src, z, y)
+                k += w * isz
+    for z in range(z0, z1):
+        for y in range(y0, y1):
+            for x in range(x0, x1):
+                cover[(x, y, z)] = cover.get((x, y, z), 0) + 1
+assert len(cover) == NX * NY * NZ and set(cover.values()) == {1}, "pieces overlap or leave gaps"
+PY
+echo "ok: per-rank .vti pieces + .pvti equal the gathered snapshot"
 
 # --- the split scheme (the default): y sweeps on x slabs, reached by transposes
 OPTS="--grid 23x17x9 --scenario scab --days 1 --snapshot-every 0.5 --area-every 0.05 --quiet --threads 1"
@@ -65,7 +109,7 @@ ls "$T"/cut/checkpoints/*.sshc >/dev/null 2>&1 || fail "no checkpoint written on
 run_np 3 heal --resume "$T/cut" --days 0.9 --quiet || fail "resume on 3 ranks"
 cmp -s "$T/full/area.csv" "$T/cut/area.csv" || fail "resumed (4 -> 3 ranks) area.csv differs"
 # (the cut run's own last snapshot shifts the numbering: compare the newest of each)
-cmp -s "$(ls "$T"/full/fields/*.vti | tail -1)" "$(ls "$T"/cut/fields/*.vti | tail -1)" ||
+cmp -s "$(ls "$T"/full/fields/fields_????.vti | tail -1)" "$(ls "$T"/cut/fields/fields_????.vti | tail -1)" ||
     fail "resumed (4 -> 3 ranks) final fields differ"
 echo "ok: checkpoint on 4 ranks resumes on 3 bit-identically"
 

@@ -74,6 +74,17 @@ ss_status ss_heal_vti_write_vectors(const char *path, const ss_heal_grid *g, int
                                     const char *const *names, float *const (*vecs)[3],
                                     ss_error *err);
 
+/* A piece of a parallel image (the MPI driver's per-rank pieces): piece is
+ * the box, its cell (0,0,0) at whole-grid index off; Extent off..off+size,
+ * WholeExtent 0..whole. Cells and fields only. */
+ss_status ss_heal_vti_write_piece(const char *path, const ss_heal_grid *piece, const int off[3],
+                                  const int whole[3], ss_error *err);
+/* The .pvti that joins npieces such pieces: ext[i] = x0 x1 y0 y1 z0 z1 (point
+ * extents), files[i] relative to the .pvti. ParaView opens it as one image. */
+ss_status ss_heal_pvti_write(const char *path, const int whole[3], double dx_mm, double t_days,
+                             int npieces, const int (*ext)[6], const char *const *files,
+                             ss_error *err);
+
 /* ParaView collection: `n` datasets with their times (days) and file names
  * relative to the .pvd. Written atomically. */
 ss_status ss_heal_pvd_write(const char *path, int n, const double *t_days, const char *const *files,

@@ -136,14 +136,19 @@ ss_status ss_heal_run_write_checkpoint(ss_heal_run *r, ss_error *err);
 /* ---- an external solver (the MPI driver, src/dist) ---- */
 /* With hooks set, the run calls step instead of ss_heal_step (it must advance
  * g->t_days and g->step; g's fields may then be stale), stats instead of
- * ss_heal_stats_compute for every area row, and sync before anything reads
- * g's fields (snapshots, checkpoints) so it can bring them up to date. NULL
+ * ss_heal_stats_compute for every area row, sync before anything reads g's
+ * fields (snapshots, checkpoints) so it can bring them up to date, and
+ * snapshot after each snapshot's .vti. NULL
  * members keep the run's own behaviour. Not with the contraction mechanics. */
 typedef struct ss_heal_run_hooks {
     void *ctx;
     ss_status (*step)(void *ctx, ss_heal_grid *g, ss_error *err);
     void (*stats)(void *ctx, const ss_heal_grid *g, ss_heal_stats *st);
     ss_status (*sync)(void *ctx, ss_heal_grid *g, ss_error *err);
+    /* after snapshot `index` was written into the folder fields_dir (more
+     * files for it, e.g. per-rank pieces) */
+    ss_status (*snapshot)(void *ctx, const ss_heal_grid *g, const char *fields_dir, int index,
+                          ss_error *err);
 } ss_heal_run_hooks;
 /* Sets (h) or clears (NULL) the hooks; SS_ERR_INPUT when the run has the
  * contraction mechanics (naming --mechanics). */

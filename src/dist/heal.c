@@ -25,7 +25,7 @@
 
 #include "skinsim/dist.h"
 
-enum { CMD_STEP = 1, CMD_STATS, CMD_SYNC, CMD_END };
+enum { CMD_STEP = 1, CMD_STATS, CMD_SYNC, CMD_PIECES, CMD_END };
 enum { FACE_XM, FACE_XP, FACE_YM, FACE_YP, NFACES };
 
 /* What rank 0 tells every rank about the run before the boxes are sent. */
@@ -57,6 +57,7 @@ struct ss_dist_heal {
     int *scnt, *sdsp, *rcnt, *rdsp;
     double tbytes;    /* transpose bytes this rank sends per step */
     ss_heal_run *run; /* rank 0 */
+    const char *pdir; /* rank 0: the fields folder of the snapshot being written */
     int dirty;        /* rank 0: the run's whole grid is behind the boxes */
     double t_compute, t_halo, t_stats, t_gather;
     long long steps;
@@ -382,6 +383,79 @@ static ss_status do_gather(ss_dist_heal *d, ss_error *err) {
     return st;
 }
 
+/* Every rank writes its owned box as fields_dir/fields_NNNN_pRRRR.vti and
+ * rank 0 the fields_NNNN.pvti that joins them (ParaView opens it as one
+ * image): the per-rank output that needs no gather. */
+static ss_status do_pieces(ss_dist_heal *d, int index, ss_error *err) {
+    double t0 = MPI_Wtime();
+    int len = 0;
+    char dir[4096] = "";
+    if (d->rank == 0) len = (int)strlen(d->pdir) + 1;
+    MPI_Bcast(&len, 1, MPI_INT, 0, d->cart);
+    if (len > (int)sizeof dir) len = (int)sizeof dir;
+    if (d->rank == 0) memcpy(dir, d->pdir, (size_t)len);
+    MPI_Bcast(dir, len, MPI_CHAR, 0, d->cart);
+    dir[sizeof dir - 1] = 0;
+    const int nz = d->su.G[2];
+    char path[4400];
+    snprintf(path, sizeof path, "%s/fields_%04d_p%04d.vti", dir, index, d->rank);
+    ss_error e;
+    ss_error_clear(&e);
+    /* the owned box as a grid of its own (allocated at least 3 wide, as grids are) */
+    ss_heal_grid *p = ss_heal_grid_create(d->n[0] < 3 ? 3 : d->n[0], d->n[1] < 3 ? 3 : d->n[1], nz,
+                                          d->su.dx_mm, &e);
+    ss_status st = p ? SS_OK : (e.code ? e.code : SS_ERR_NOMEM);
+    if (p) {
+        p->nx = d->n[0];
+        p->ny = d->n[1];
+        p->t_days = d->g->t_days;
+        for (int z = 0; z < nz; z++)
+            for (int y = 0; y < d->n[1]; y++) {
+                const size_t src = ss_heal_idx(d->g, 1, y + 1, z), dst = ss_heal_idx(p, 0, y, z);
+                memcpy(p->cell + dst, d->g->cell + src, (size_t)d->n[0]);
+                for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+                    memcpy(p->field[f] + dst, d->g->field[f] + src,
+                           (size_t)d->n[0] * sizeof(float));
+            }
+        const int off[3] = {d->lo[0], d->lo[1], 0};
+        st = ss_heal_vti_write_piece(path, p, off, d->su.G, &e);
+        ss_heal_grid_free(p);
+    }
+    int v = (int)st, vmax = 0;
+    MPI_Allreduce(&v, &vmax, 1, MPI_INT, MPI_MAX, d->cart);
+    if (d->rank == 0 && vmax) {
+        if (st)
+            *err = e;
+        else
+            ss_error_set(err, SS_ERR_RUNTIME, "%s: a rank could not write its piece", dir);
+    } else if (d->rank == 0) {
+        int(*ext)[6] = malloc((size_t)d->size * sizeof *ext);
+        char **files = malloc((size_t)d->size * sizeof *files);
+        char *names = malloc((size_t)d->size * 32);
+        if (!ext || !files || !names) {
+            vmax = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+        } else {
+            for (int q = 0; q < d->size; q++) {
+                int coords[3], lo[2], n[2];
+                MPI_Cart_coords(d->cart, q, 3, coords);
+                box_of(d, coords, lo, n);
+                const int e6[6] = {lo[0], lo[0] + n[0], lo[1], lo[1] + n[1], 0, nz};
+                memcpy(ext[q], e6, sizeof e6);
+                files[q] = names + (size_t)q * 32;
+                snprintf(files[q], 32, "fields_%04d_p%04d.vti", index, q);
+            }
+            snprintf(path, sizeof path, "%s/fields_%04d.pvti", dir, index);
+            vmax = ss_heal_pvti_write(path, d->su.G, d->su.dx_mm, d->g->t_days, d->size,
+                                      (const int(*)[6])ext, (const char *const *)files, err);
+        }
+        free(ext);
+        free(files);
+        free(names);
+    }
+    d->t_gather += MPI_Wtime() - t0;
+    return (ss_status)vmax;
+}
+
 static void send_cmd(ss_dist_heal *d, int cmd, int arg) {
     int m[2] = {cmd, arg};
     MPI_Bcast(m, 2, MPI_INT, 0, d->cart);
@@ -411,6 +485,16 @@ static ss_status hook_sync(void *ctx, ss_heal_grid *G, ss_error *err) {
     if (!d->dirty) return SS_OK;
     send_cmd(d, CMD_SYNC, 0);
     return do_gather(d, err);
+}
+
+static ss_status hook_snapshot(void *ctx, const ss_heal_grid *G, const char *fields_dir, int index,
+                               ss_error *err) {
+    ss_dist_heal *d = ctx;
+    (void)G;
+    if (d->size < 2) return SS_OK; /* one rank: the .vti is the piece */
+    d->pdir = fields_dir;
+    send_cmd(d, CMD_PIECES, index);
+    return do_pieces(d, index, err);
 }
 
 /* ---- set-up ----------------------------------------------------------------------- */
@@ -634,7 +718,7 @@ ss_status ss_dist_heal_create(ss_heal_run *r, ss_status root_st, ss_dist_heal **
         ss_dist_heal_free(d);
         return st;
     }
-    d->split = su.scheme == SS_HEAL_SPLIT;
+    d->split = su.scheme == SS_HEAL_SPLIT && size > 1; /* one rank: the plain step */
     if (d->split) st = split_setup(d, r, err);
     if ((st = agree(d->cart, st))) {
         if (d->rank != 0) ss_error_set(err, st, "a rank could not set up its x slab");
@@ -642,7 +726,7 @@ ss_status ss_dist_heal_create(ss_heal_run *r, ss_status root_st, ss_dist_heal **
         return st;
     }
     if (d->rank == 0) {
-        ss_heal_run_hooks h = {d, hook_step, hook_stats, hook_sync};
+        ss_heal_run_hooks h = {d, hook_step, hook_stats, hook_sync, hook_snapshot};
         ss_heal_run_set_hooks(r, &h, err);
     }
     *out = d;
@@ -682,6 +766,9 @@ ss_status ss_dist_heal_serve(ss_dist_heal *d, ss_error *err) {
         }
         case CMD_SYNC:
             do_gather(d, err);
+            break;
+        case CMD_PIECES:
+            do_pieces(d, m[1], err);
             break;
         default: /* CMD_END */
             reduce_timing(d);

@@ -424,6 +424,10 @@ ss_status ss_heal_run__snapshot(ss_heal_run *r, ss_error *err) {
         st = ss_heal_vti_write(path, r->g, err);
     }
     if (!st) st = ss_heal_run__mech_snapshot(r, idx, err);
+    if (!st && r->hooks.snapshot) { /* e.g. the MPI driver's per-rank pieces */
+        snprintf(path, sizeof path, "%s/fields", r->out_dir);
+        st = r->hooks.snapshot(r->hooks.ctx, r->g, path, idx, err);
+    }
     if (!st) st = ss_heal_run__add_snap(r, r->g->t_days, rel, err);
     if (st) return st;
     snprintf(path, sizeof path, "%s/fields/fields.pvd", r->out_dir);
