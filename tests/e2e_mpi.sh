@@ -40,19 +40,25 @@ same_run() {
         fail "$2/summary.json differs from the single-process run"
 }
 
-for grid in 24x20x8 23x17x9; do
-    OPTS="--scheme explicit --grid $grid --scenario scab --days 0.6 --snapshot-every 0.3 --area-every 0.05 --quiet --threads 1"
-    "$CLI" heal $OPTS --out "$T/s$grid" || fail "single-process run ($grid)"
+# runs heal with options $2.. without mpirun into $T/$1, then on 1-4 ranks into
+# $T/$1-N, and compares every output
+equal_on_ranks() {
+    local name=$1; shift
+    "$CLI" heal "$@" --out "$T/$name" || fail "single-process run ($name)"
     for n in 1 2 3 4; do
-        run_np $n heal $OPTS --out "$T/m$n-$grid" || fail "run on $n ranks ($grid)"
-        same_run "$T/s$grid" "$T/m$n-$grid"
+        run_np $n heal "$@" --out "$T/$name-$n" || fail "run on $n ranks ($name)"
+        same_run "$T/$name" "$T/$name-$n"
     done
-    echo "ok: heal $grid bit-identical on 1, 2, 3, 4 ranks"
+    echo "ok: heal $name bit-identical on 1, 2, 3, 4 ranks"
+}
+for grid in 24x20x8 23x17x9; do
+    equal_on_ranks "explicit-$grid" --scheme explicit --grid $grid --scenario scab --days 0.6 \
+        --snapshot-every 0.3 --area-every 0.05 --quiet --threads 1
 done
 
 # --- per-rank pieces: fields_NNNN.pvti joins one .vti per rank, which together
 # hold exactly the gathered snapshot
-python3 - "$T/m4-23x17x9/fields" <<'PY' || fail "the .pvti pieces do not make up the gathered snapshot"
+python3 - "$T/explicit-23x17x9-4/fields" <<'PY' || fail "the .pvti pieces do not make up the gathered snapshot"
 import re, struct, sys
 def read(path):  # extent, [(itemsize, bytes)] of the appended arrays
     b = open(path, 'rb').read()
@@ -93,13 +99,8 @@ PY
 echo "ok: per-rank .vti pieces + .pvti equal the gathered snapshot"
 
 # --- the split scheme (the default): y sweeps on x slabs, reached by transposes
-OPTS="--grid 23x17x9 --scenario scab --days 1 --snapshot-every 0.5 --area-every 0.05 --quiet --threads 1"
-"$CLI" heal $OPTS --out "$T/split" || fail "single-process split run"
-for n in 1 2 3 4; do
-    run_np $n heal $OPTS --out "$T/split$n" || fail "split run on $n ranks"
-    same_run "$T/split" "$T/split$n"
-done
-echo "ok: heal --scheme split bit-identical on 1, 2, 3, 4 ranks"
+equal_on_ranks split-23x17x9 --grid 23x17x9 --scenario scab --days 1 --snapshot-every 0.5 \
+    --area-every 0.05 --quiet --threads 1
 
 # --- checkpoint on 4 ranks, resume on 3: the uninterrupted single-process result
 OPTS="--scheme explicit --grid 23x17x9 --scenario scab --snapshot-every 0.3 --area-every 0.05 --quiet --threads 1"

@@ -1,7 +1,7 @@
 /* skinsim dist: the MPI side of skinsim (built only when CMake finds MPI;
  * SKINSIM_HAVE_MPI is then defined for code linking skinsim_dist). The
- * healing solver on a 3-D Cartesian decomposition of the grid (seed 001 §4.1
- * on §5.1's grid, explicit scheme) and the ModelMatch table (seed 003 §5.2)
+ * healing solver on a Cartesian decomposition of the grid (seed 001 §4.1 on
+ * §5.1's grid, explicit and split schemes) and the ModelMatch table (seed 003 §4.8.6)
  * with entries shared out dynamically; both bit-identical to one process.
  * docs/scaling.md describes the decomposition, the protocol and the figures.
  *
@@ -38,9 +38,8 @@ int ss_dist_exit_code(ss_status st);
 typedef struct ss_dist_heal ss_dist_heal;
 /* Collective. Rank 0 passes its run (created, so every input is validated)
  * or NULL with root_st the status of its create; the other ranks pass NULL
- * and SS_OK. Rank 0 checks what the distributed solver needs (explicit
- * scheme on more than one rank, no mechanics, at least one column per rank
- * in x and y), decomposes the grid, hands every rank its box with a one-cell
+ * and SS_OK. Rank 0 checks what the distributed solver needs (no mechanics,
+ * at least one column per rank in x and y), decomposes the grid, hands every rank its box with a one-cell
  * halo and hooks the run (ss_heal_run_set_hooks) so its steps, area rows and
  * snapshot/checkpoint gathers run on all ranks. Every rank returns the same
  * status; messages on rank 0 name the input. */

@@ -233,6 +233,8 @@ ss_status ss_mm_table_build(ss_mm_table *t, const ss_mm_build_options *o, ss_err
  * Building every geometry, in any order or process, gives the bytes of
  * ss_mm_table_build. build_check validates the options and axes only. */
 int ss_mm_table_ngeometries(const ss_mm_table *t);
+/* Records how the table is made (photons, seed, angles, wavelengths) in t. */
+void ss_mm_table_record_options(ss_mm_table *t, const ss_mm_build_options *o);
 ss_status ss_mm_table_build_geometry(ss_mm_table *t, const ss_mm_build_options *o, int gi,
                                      ss_error *err);
 ss_status ss_mm_table_build_check(const ss_mm_table *t, const ss_mm_build_options *o,

@@ -1,24 +1,29 @@
 /* The healing solver of seed 001 §4.1 on MPI (docs/scaling.md). The grid is
- * cut by a Cartesian process grid (MPI_Dims_create + MPI_Cart_create over x,
- * y and z; z is kept whole, dims[2] = 1, because each column's epithelium
- * reads the wound bed below it); every rank steps its box plus a one-cell
- * halo with the library's own kernel in its sub-box form
- * (ss_heal_solver_create_sub), and after each step exchanges the faces of all
- * eight fields with its four neighbours (non-blocking sends and receives).
+ * cut by a Cartesian process grid (MPI_Cart_create over x, y and z; z is kept
+ * whole, dims[2] = 1, because each column's epithelium reads the wound bed
+ * below it). Explicit scheme: MPI_Dims_create splits x and y; every rank steps
+ * its box plus a one-cell halo with the library's own kernel in its sub-box
+ * form (ss_heal_solver_create_sub) and then exchanges the faces of all eight
+ * fields with its four neighbours (non-blocking sends and receives). Split
+ * scheme: the boxes are y slabs (x lines and z columns whole) and the y sweep
+ * runs on x slabs, reached by two MPI_Alltoallv transposes per step, so every
+ * Thomas line solve runs whole, as in one process (no halo needed).
  *
  * Rank 0 also holds the run object (skinsim/heal_run.h) with the whole grid:
  * it validates the input, writes every output with the single-process code
  * and drives the others through a command channel (one broadcast per step,
- * area row or gather). Its hooks replace the run's step (all ranks step),
- * its statistics (exact fixed-point partial sums reduced with integer
+ * area row, gather or snapshot). Its hooks replace the run's step (all ranks
+ * step), its statistics (exact fixed-point partial sums reduced with integer
  * additions, ss_heal_stats_acc) and its snapshot/checkpoint reads (the boxes
- * are gathered into the whole grid first). The kernel computes every cell
- * from the same neighbours in the same arithmetic as one process, so fields,
- * area.csv, snapshots and checkpoints are bit-identical for any rank count,
- * and a checkpoint (always of the whole grid) resumes on any rank count.
- * Gave up: rank 0 keeps the whole grid (set-up and outputs), so its memory
- * is that of a single-process run; the split scheme's line solves and the
- * mechanics are not distributed (an error names --scheme / --mechanics). */
+ * are gathered into the whole grid first); after each snapshot every rank
+ * also writes its box as a .vti piece, joined by a .pvti. The kernels compute
+ * every cell from the same neighbours in the same arithmetic as one process,
+ * so fields, area.csv, snapshots and checkpoints are bit-identical for any
+ * rank count, and a checkpoint (always of the whole grid) resumes on any
+ * rank count. Gave up: rank 0 keeps the whole grid (set-up, gathered outputs
+ * and checkpoints), so its memory is that of a single-process run; the halo
+ * exchange is not overlapped with the kernel; the mechanics stay
+ * single-process (an error names --mechanics). */
 #include <mpi.h>
 #include <stdlib.h>
 #include <string.h>
@@ -499,6 +504,50 @@ static ss_status hook_snapshot(void *ctx, const ss_heal_grid *G, const char *fie
 
 /* ---- set-up ----------------------------------------------------------------------- */
 
+/* Rank 0 sends every rank its box + halo of its whole grid (cells and
+ * fields) into g: the boxes of the process grid, or (xslabs) the split
+ * scheme's x slabs. */
+static void scatter(ss_dist_heal *d, ss_heal_run *r, ss_heal_grid *g, int xslabs) {
+    const int nz = d->su.G[2], tag = xslabs ? 12 : 10;
+    if (d->rank != 0) {
+        const size_t nl = (size_t)g->nx * g->ny * nz;
+        float *fields = malloc(nl * SS_HEAL_NFIELDS * sizeof(float));
+        if (!fields) MPI_Abort(d->cart, 3);
+        MPI_Recv(g->cell, (int)nl, MPI_BYTE, 0, tag, d->cart, MPI_STATUS_IGNORE);
+        MPI_Recv(fields, (int)(nl * SS_HEAL_NFIELDS), MPI_FLOAT, 0, tag + 1, d->cart,
+                 MPI_STATUS_IGNORE);
+        for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+            memcpy(g->field[f], fields + f * nl, nl * sizeof(float));
+        free(fields);
+        return;
+    }
+    const ss_heal_grid *G = ss_heal_run_grid(r);
+    for (int q = d->size - 1; q >= 0; q--) {
+        int lo[2] = {0, 0}, n[2] = {0, d->su.G[1]};
+        if (xslabs) {
+            xslab(d, q, &lo[0], &n[0]);
+        } else {
+            int coords[3];
+            MPI_Cart_coords(d->cart, q, 3, coords);
+            box_of(d, coords, lo, n);
+        }
+        size_t nq = (size_t)(n[0] + 2) * (n[1] + 2) * nz;
+        uint8_t *cells = q == 0 ? g->cell : malloc(nq);
+        float *fields = malloc(nq * SS_HEAL_NFIELDS * sizeof(float));
+        if (!cells || !fields) MPI_Abort(d->cart, 3);
+        pack_box(G, lo, n, cells, fields);
+        if (q == 0) {
+            for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+                memcpy(g->field[f], fields + f * nq, nq * sizeof(float));
+        } else {
+            MPI_Send(cells, (int)nq, MPI_BYTE, q, tag, d->cart);
+            MPI_Send(fields, (int)(nq * SS_HEAL_NFIELDS), MPI_FLOAT, q, tag + 1, d->cart);
+            free(cells);
+        }
+        free(fields);
+    }
+}
+
 /* The split scheme's x slab of every rank (cells and fields from rank 0's
  * whole grid, like the y slabs) and the transpose buffers. */
 static ss_status split_setup(ss_dist_heal *d, ss_heal_run *r, ss_error *err) {
@@ -509,37 +558,7 @@ static ss_status split_setup(ss_dist_heal *d, ss_heal_run *r, ss_error *err) {
     d->gB = ss_heal_grid_create(xn + 2, d->su.G[1] + 2, nz, d->su.dx_mm, err);
     if (!d->gB) return err->code ? err->code : SS_ERR_NOMEM;
     d->gB->skin_top_mm = d->su.skin_top_mm;
-    const size_t nb = (size_t)d->gB->nx * d->gB->ny * nz;
-    if (d->rank == 0) {
-        const ss_heal_grid *G = ss_heal_run_grid(r);
-        for (int q = d->size - 1; q >= 0; q--) {
-            int lo[2] = {0, 0}, n[2];
-            xslab(d, q, &lo[0], &n[0]);
-            n[1] = d->su.G[1];
-            size_t nq = (size_t)(n[0] + 2) * (n[1] + 2) * nz;
-            uint8_t *cells = q == 0 ? d->gB->cell : malloc(nq);
-            float *fields = malloc(nq * SS_HEAL_NFIELDS * sizeof(float));
-            if (!cells || !fields) MPI_Abort(d->cart, 3);
-            pack_box(G, lo, n, cells, fields);
-            if (q == 0) {
-                for (int f = 0; f < SS_HEAL_NFIELDS; f++)
-                    memcpy(d->gB->field[f], fields + f * nq, nq * sizeof(float));
-            } else {
-                MPI_Send(cells, (int)nq, MPI_BYTE, q, 12, d->cart);
-                MPI_Send(fields, (int)(nq * SS_HEAL_NFIELDS), MPI_FLOAT, q, 13, d->cart);
-                free(cells);
-            }
-            free(fields);
-        }
-    } else {
-        float *fields = malloc(nb * SS_HEAL_NFIELDS * sizeof(float));
-        if (!fields) MPI_Abort(d->cart, 3);
-        MPI_Recv(d->gB->cell, (int)nb, MPI_BYTE, 0, 12, d->cart, MPI_STATUS_IGNORE);
-        MPI_Recv(fields, (int)(nb * SS_HEAL_NFIELDS), MPI_FLOAT, 0, 13, d->cart, MPI_STATUS_IGNORE);
-        for (int f = 0; f < SS_HEAL_NFIELDS; f++)
-            memcpy(d->gB->field[f], fields + f * nb, nb * sizeof(float));
-        free(fields);
-    }
+    scatter(d, r, d->gB, 1);
     int goff[3] = {xlo - 1, -1, 0};
     d->sB = ss_heal_solver_create_sub(d->gB, goff, d->su.G, &d->su.p, SS_HEAL_SPLIT, d->su.dt, err);
     if (!d->sB) return err->code ? err->code : SS_ERR_RUNTIME;
@@ -677,38 +696,7 @@ ss_status ss_dist_heal_create(ss_heal_run *r, ss_status root_st, ss_dist_heal **
         return st;
     }
 
-    /* rank 0 sends every rank its box + halo (cells and fields) */
-    const size_t nl = (size_t)nxl * nyl * nz;
-    if (d->rank == 0) {
-        const ss_heal_grid *G = ss_heal_run_grid(r);
-        for (int q = d->size - 1; q >= 0; q--) {
-            int coords[3], lo[2], n[2];
-            MPI_Cart_coords(d->cart, q, 3, coords);
-            box_of(d, coords, lo, n);
-            size_t nq = (size_t)(n[0] + 2) * (n[1] + 2) * nz;
-            uint8_t *cells = q == 0 ? d->g->cell : malloc(nq);
-            float *fields = malloc(nq * SS_HEAL_NFIELDS * sizeof(float));
-            if (!cells || !fields) MPI_Abort(d->cart, 3);
-            pack_box(G, lo, n, cells, fields);
-            if (q == 0) {
-                for (int f = 0; f < SS_HEAL_NFIELDS; f++)
-                    memcpy(d->g->field[f], fields + f * nq, nq * sizeof(float));
-            } else {
-                MPI_Send(cells, (int)nq, MPI_BYTE, q, 10, d->cart);
-                MPI_Send(fields, (int)(nq * SS_HEAL_NFIELDS), MPI_FLOAT, q, 11, d->cart);
-                free(cells);
-            }
-            free(fields);
-        }
-    } else {
-        float *fields = malloc(nl * SS_HEAL_NFIELDS * sizeof(float));
-        if (!fields) MPI_Abort(d->cart, 3);
-        MPI_Recv(d->g->cell, (int)nl, MPI_BYTE, 0, 10, d->cart, MPI_STATUS_IGNORE);
-        MPI_Recv(fields, (int)(nl * SS_HEAL_NFIELDS), MPI_FLOAT, 0, 11, d->cart, MPI_STATUS_IGNORE);
-        for (int f = 0; f < SS_HEAL_NFIELDS; f++)
-            memcpy(d->g->field[f], fields + f * nl, nl * sizeof(float));
-        free(fields);
-    }
+    scatter(d, r, d->g, 0); /* every rank its box + halo */
     int goff[3] = {d->lo[0] - 1, d->lo[1] - 1, 0};
     d->s =
         ss_heal_solver_create_sub(d->g, goff, su.G, &su.p, (ss_heal_scheme)su.scheme, su.dt, err);

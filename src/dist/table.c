@@ -91,16 +91,7 @@ static ss_status master(ss_mm_table *t, const ss_mm_build_options *o, int size, 
         if (gi < 0) busy--;
     }
     ss_progress_end(&pr);
-    if (!st) { /* how it was made, as ss_mm_table_build records it */
-        t->photons = o->spectrum.mc.photons;
-        t->seed = o->spectrum.mc.seed;
-        t->n_theta_i = o->n_theta_i;
-        t->n_theta_r = o->n_theta_r;
-        t->n_phi = o->n_phi;
-        t->wl_min_nm = o->spectrum.wl_min_nm;
-        t->wl_max_nm = o->spectrum.wl_max_nm;
-        t->wl_step_nm = o->spectrum.wl_step_nm;
-    }
+    if (!st) ss_mm_table_record_options(t, o);
     return st;
 }
 

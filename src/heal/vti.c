@@ -34,6 +34,16 @@ static void put_f32le(FILE *f, const float *a, size_t n) {
     }
 }
 
+/* Swaps a written file in, or drops it after a write error. */
+static ss_status commit(ss_atomic_file *af, const char *path, ss_error *err) {
+    if (ferror(af->fp)) {
+        int e = errno;
+        ss_atomic_abort(af);
+        return ss_error_set(err, SS_ERR_RUNTIME, "%s: write failed: %s", path, strerror(e));
+    }
+    return ss_atomic_commit(af, err);
+}
+
 static void xml_attr(FILE *f, const char *s) {
     for (; *s; s++) {
         switch (*s) {
@@ -115,12 +125,7 @@ ss_status ss_heal_pvti_write(const char *path, const int whole[3], double dx_mm,
     }
     fprintf(f, "  </PImageData>\n</VTKFile>\n");
     (void)t_days;
-    if (ferror(f)) {
-        int e = errno;
-        ss_atomic_abort(&af);
-        return ss_error_set(err, SS_ERR_RUNTIME, "%s: write failed: %s", path, strerror(e));
-    }
-    return ss_atomic_commit(&af, err);
+    return commit(&af, path, err);
 }
 
 /* The grid g as the piece of a larger image whose cell (0,0,0) is at off and
@@ -210,10 +215,5 @@ ss_status ss_heal_pvd_write(const char *path, int n, const double *t_days, const
         fprintf(f, "\"/>\n");
     }
     fprintf(f, "  </Collection>\n</VTKFile>\n");
-    if (ferror(f)) {
-        int e = errno;
-        ss_atomic_abort(&af);
-        return ss_error_set(err, SS_ERR_RUNTIME, "%s: write failed: %s", path, strerror(e));
-    }
-    return ss_atomic_commit(&af, err);
+    return commit(&af, path, err);
 }

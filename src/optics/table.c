@@ -699,6 +699,17 @@ ss_status ss_mm_sample_fast(const ss_bio_params *bio, const ss_mm_build_options 
     return st;
 }
 
+void ss_mm_table_record_options(ss_mm_table *t, const ss_mm_build_options *o) {
+    t->photons = o->spectrum.mc.photons;
+    t->seed = o->spectrum.mc.seed;
+    t->n_theta_i = o->n_theta_i;
+    t->n_theta_r = o->n_theta_r;
+    t->n_phi = o->n_phi;
+    t->wl_min_nm = o->spectrum.wl_min_nm;
+    t->wl_max_nm = o->spectrum.wl_max_nm;
+    t->wl_step_nm = o->spectrum.wl_step_nm;
+}
+
 int ss_mm_table_ngeometries(const ss_mm_table *t) {
     return t->nsamples[SS_MM_AXIS_SC] * t->nsamples[SS_MM_AXIS_EPIDERMIS];
 }
@@ -829,16 +840,7 @@ static ss_status build_range(ss_mm_table *t, const ss_mm_build_options *o, int g
     }
     ss_progress_end(&prog);
     ss_optics_data_close(data);
-    if (!st) {
-        t->photons = o->spectrum.mc.photons;
-        t->seed = o->spectrum.mc.seed;
-        t->n_theta_i = o->n_theta_i;
-        t->n_theta_r = o->n_theta_r;
-        t->n_phi = o->n_phi;
-        t->wl_min_nm = o->spectrum.wl_min_nm;
-        t->wl_max_nm = o->spectrum.wl_max_nm;
-        t->wl_step_nm = o->spectrum.wl_step_nm;
-    }
+    if (!st) ss_mm_table_record_options(t, o);
     free_geo_out(&g);
     free(bios);
     free(wl);
