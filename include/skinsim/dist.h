@@ -30,9 +30,6 @@ void ss_dist_finalize(void);
 int ss_dist_rank(void);   /* 0 without MPI */
 int ss_dist_size(void);   /* 1 without MPI */
 int ss_dist_active(void); /* 1 when ss_dist_init initialised MPI (under mpirun) */
-/* The exit code every rank returns for a status decided on rank 0: 0, 2 for
- * SS_ERR_INPUT, else 1. Collective: rank 0's st wins. */
-int ss_dist_exit_code(ss_status st);
 
 /* ---- healing on MPI ---- */
 typedef struct ss_dist_heal ss_dist_heal;

@@ -36,9 +36,3 @@ void ss_dist_finalize(void) {
 int ss_dist_rank(void) { return g_rank; }
 int ss_dist_active(void) { return g_inited; }
 int ss_dist_size(void) { return g_size; }
-
-int ss_dist_exit_code(ss_status st) {
-    int v = (int)st;
-    if (g_inited && g_size > 1) MPI_Bcast(&v, 1, MPI_INT, 0, MPI_COMM_WORLD);
-    return v == SS_OK ? 0 : v == SS_ERR_INPUT ? 2 : 1;
-}
