@@ -62,6 +62,19 @@ static void help(void) {
            "  --wound-depth-image F  per-pixel depth: PNG grey 0..1 x --wound-depth-mm,\n"
            "                         or EXR in mm; alone it is also the footprint\n"
            "                         (depth > 0)\n"
+           "\n"
+           "Real geometry (seed 001 §5.1, §5.4; docs/mech.md): the grid is a patch of\n"
+           "skin around the wound on a closed body mesh\n"
+           "  --mesh FILE            closed OBJ/glTF/GLB surface; the skin is the shell\n"
+           "                         under it, found by ray tests\n"
+           "  --wound-uv CSV         strokes 'u,v[,stroke_id]' in the mesh's UV space,\n"
+           "                         cut --wound-depth-mm deep (with --mesh)\n"
+           "  --wound-mesh FILE      with --mesh: a closed wound mesh in the mesh's units\n"
+           "  --skin-thickness-mm T  skin shell thickness (default 3)\n"
+           "  --voxel-mm H           voxel edge of the patch (default 0.5)\n"
+           "  --mesh-units-mm U      one mesh unit in mm (default: glTF 1000, OBJ 1)\n"
+           "  writes surface/skin_NNNN.vtu (+ skin.pvd): the fields and the deformation\n"
+           "  on the undeformed mesh's vertices\n"
            "\n");
     printf("Contraction mechanics (seed 001 §4.2-5.3, docs/mech.md)\n"
            "  --mechanics            myofibroblasts contract the wound on a mass-spring\n"
@@ -82,6 +95,11 @@ static void help(void) {
            "  --scheme S             explicit | split (default split: implicit diffusion)\n"
            "  --dt DAYS              time step (default: automatic, see the solver's\n"
            "                         stability limit; too large is an error)\n"
+           "  --adapt-tol X          split scheme with the automatic step: adaptive steps\n"
+           "                         of up to 2 days; a step may change no species by more\n"
+           "                         than X in any cell (fields normalised to healthy = 1),\n"
+           "                         else it is retried shorter (default 0.01; 0 = fixed\n"
+           "                         steps; docs/heal-model.md)\n"
            "  --snapshot-every DAYS  VTK + surface maps interval (default 1; 0 = first\n"
            "                         and last only)\n"
            "  --area-every DAYS      area.csv row interval (default 0.01, at least 1 step)\n"
@@ -125,7 +143,7 @@ static void help(void) {
 /* The run's settings plus what only the command line has. */
 typedef struct opts {
     ss_heal_run_config c;
-    int threads, quiet, json, have_days;
+    int threads, quiet, json, have_days, have_adapt;
     int nonresume_opts; /* options that a --resume run cannot take */
 } opts;
 
@@ -185,6 +203,9 @@ static int parse_args(int argc, char **argv, opts *o, ss_error *err) {
             resume_ok = 1;
         } else if (!strcmp(a, "--seed")) {
             st = cli_parse_u64(a, v, &c->seed, err);
+        } else if (!strcmp(a, "--adapt-tol")) {
+            st = cli_parse_double(a, v, 0, 1, &c->adapt_tol, err);
+            o->have_adapt = 1;
         } else {
             ss_error_set(err, SS_ERR_INPUT, "unknown option '%s'", a);
             return -1;
@@ -192,6 +213,10 @@ static int parse_args(int argc, char **argv, opts *o, ss_error *err) {
         if (st) return -1;
         if (!resume_ok) o->nonresume_opts++;
     }
+    /* adaptive steps by default where they apply: split scheme, the automatic
+     * step, no mechanics (--dt fixes the step; --adapt-tol 0 too) */
+    if (!o->have_adapt && c->scheme == SS_HEAL_SPLIT && c->dt_days == 0 && !c->mechanics)
+        c->adapt_tol = SS_HEAL_RUN_DEFAULT_ADAPT_TOL;
     return 0;
 }
 

@@ -29,6 +29,9 @@ static void help(void) {
            "  block), --stroke CSV, --concave-k K, --wound-mask PNG, --wound-mesh OBJ,\n"
            "  --wound-depth-mm D, --wound-depth-image F, --skin-top-mm, --epidermis-mm,\n"
            "  --dt DAYS, --scheme explicit|split\n"
+           "  --heal DIR             instead: render a finished `skinsim heal --out DIR` run\n"
+           "                         (no heal options then; every day must be one of its\n"
+           "                         snapshot days, see its --snapshot-every)\n"
            "\n"
            "Textures\n"
            "  --days LIST            output days, increasing (default 0,1,3,7,14,28,90,365);\n"
@@ -109,6 +112,8 @@ static int parse_args(int argc, char **argv, opts *o, ss_error *err) {
         long l;
         if (!strcmp(a, "--days")) {
             days = v;
+        } else if (!strcmp(a, "--heal")) {
+            c->heal_dir = v;
         } else if (!strcmp(a, "--size")) {
             st = cli_parse_int(a, v, 16, 16384, &l, err);
             c->size = (int)l;

@@ -89,6 +89,16 @@ int heal_parse_problem_option(const char *a, const char *v, ss_heal_run_config *
         c->sutures = v;
     } else if (!strcmp(a, "--tet-mesh")) {
         c->tet_mesh = v;
+    } else if (!strcmp(a, "--mesh")) {
+        c->skin_mesh = v;
+    } else if (!strcmp(a, "--wound-uv")) {
+        c->wound_uv = v;
+    } else if (!strcmp(a, "--skin-thickness-mm")) {
+        st = cli_parse_double(a, v, 1e-6, 100, &c->skin_thickness_mm, err);
+    } else if (!strcmp(a, "--voxel-mm")) {
+        st = cli_parse_double(a, v, 0.05, 10, &c->voxel_mm, err);
+    } else if (!strcmp(a, "--mesh-units-mm")) {
+        st = cli_parse_double(a, v, 1e-9, 1e9, &c->mesh_units_mm, err);
     } else if (!strcmp(a, "--dt")) {
         st = cli_parse_double(a, v, 1e-12, 1e3, &c->dt_days, err);
     } else if (!strcmp(a, "--scheme")) {

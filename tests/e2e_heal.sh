@@ -138,6 +138,10 @@ bad_cases=(
     "--stroke $T/s.csv --wound-mesh $T/cube.obj"
     "--threads -3"
     "--no-such-option"
+    "--adapt-tol 2"
+    "--adapt-tol nan"
+    "--scheme explicit --adapt-tol 0.01"
+    "--mechanics --adapt-tol 0.01"
 )
 for args in "${bad_cases[@]}"; do
     "$CLI" heal $args --out "$T/bad" --quiet 2>"$T/err.txt"
@@ -146,6 +150,16 @@ for args in "${bad_cases[@]}"; do
     [ -s "$T/err.txt" ] || fail "'$args' printed no error message"
     [ ! -e "$T/bad" ] || fail "'$args' left $T/bad behind"
 done
+# --- adaptive steps (the default with the split scheme): a long run takes far
+# fewer solver steps than days / dt, and lands on every snapshot day
+"$CLI" heal --grid 24x20x8 --days 60 --snapshot-every 20 --quiet --out "$T/long" ||
+    fail "60-day adaptive run failed"
+n=$(python3 -c "import json; print(json.load(open('$T/long/summary.json'))['adaptive_steps']['solver_steps'])")
+[ "$n" -lt 400 ] || fail "60 days took $n solver steps (1200 fixed steps of 0.05 days)"
+[ "$(count "$T"/long/fields/*.vti)" -eq 4 ] || fail "expected 4 VTI snapshots (days 0, 20, 40, 60)"
+grep -q 'fields_0003.vti' "$T/long/fields/fields.pvd" || fail "fields.pvd lacks the day-60 snapshot"
+grep -q 'timestep="60"' "$T/long/fields/fields.pvd" || fail "the last snapshot is not at day 60"
+
 "$CLI" heal --resume "$T/nothing" --quiet 2>/dev/null
 [ $? -eq 2 ] || fail "--resume of a directory without checkpoints should exit 2"
 [ ! -e "$T/nothing" ] || fail "--resume created a directory"

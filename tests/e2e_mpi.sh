@@ -102,6 +102,14 @@ echo "ok: per-rank .vti pieces + .pvti equal the gathered snapshot"
 equal_on_ranks split-23x17x9 --grid 23x17x9 --scenario scab --days 1 --snapshot-every 0.5 \
     --area-every 0.05 --quiet --threads 1
 
+# --- adaptive steps (the split scheme's default) with rejected, undone steps
+OPTS="--grid 23x17x9 --scenario keloid --days 40 --snapshot-every 20 --adapt-tol 0.05 --quiet --threads 1"
+"$CLI" heal $OPTS --out "$T/adapt" || fail "single-process adaptive run"
+grep -q '"retried":[[:space:]]*[1-9]' "$T/adapt/summary.json" || fail "the adaptive case retries no step"
+run_np 3 heal $OPTS --out "$T/adapt-3" || fail "adaptive run on 3 ranks"
+same_run "$T/adapt" "$T/adapt-3"
+echo "ok: adaptive steps (with retries) bit-identical on 3 ranks"
+
 # --- checkpoint on 4 ranks, resume on 3: the uninterrupted single-process result
 OPTS="--scheme explicit --grid 23x17x9 --scenario scab --snapshot-every 0.3 --area-every 0.05 --quiet --threads 1"
 "$CLI" heal $OPTS --days 0.9 --out "$T/full" || fail "single-process 0.9-day run"

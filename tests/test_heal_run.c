@@ -145,6 +145,114 @@ static void test_run_resume(void **state) {
     free(dir);
 }
 
+static void run_to_end(ss_heal_run *r) {
+    ss_error err;
+    while (!ss_heal_run_done(r)) assert_int_equal(ss_heal_run_step(r, &err), SS_OK);
+}
+
+/* Adaptive steps (adapt_tol): far fewer solver steps over the slow phase,
+ * the fast phase (closure) as with fixed steps, the end state close to the
+ * fixed-step one; bit-identical across a checkpoint resume and for 1 and 2
+ * threads; advance_to lands on the requested day. */
+static void test_run_adaptive(void **state) {
+    (void)state;
+    ss_error err;
+    ss_heal_run_config c;
+    small_config(&c);
+    c.scenario = "clean";
+    c.days = 40;
+    ss_heal_run *f, *a;
+    assert_int_equal(ss_heal_run_create(&c, &f, &err), SS_OK);
+    c.adapt_tol = 0.01;
+    assert_int_equal(ss_heal_run_create(&c, &a, &err), SS_OK);
+    run_to_end(f);
+    run_to_end(a);
+    int nf, na;
+    const ss_heal_area_row *rf = ss_heal_run_area(f, &nf), *ra = ss_heal_run_area(a, &na);
+    /* an area row after every step: the solver steps taken */
+    print_message("adaptive: %d steps vs %d fixed, %lld retried, final m %lld\n", na - 1, nf - 1,
+                  ss_heal_run_steps_retried(a), ss_heal_run_step_multiple(a));
+    assert_true(na - 1 < (nf - 1) / 3);
+    assert_true(ss_heal_run_step_multiple(a) > 4);
+    double t95f = ss_heal_time_to_closure(rf, nf, 0.05),
+           t95a = ss_heal_time_to_closure(ra, na, 0.05);
+    assert_true(t95f > 0 && fabs(t95a - t95f) < 1e-9);
+    const ss_heal_grid *gf = ss_heal_run_grid(f), *ga = ss_heal_run_grid(a);
+    assert_int_equal(gf->step, ga->step);
+    assert_true(fabs(ga->t_days - 40.0) < 1e-9);
+    const size_t n = (size_t)gf->nx * gf->ny * gf->nz;
+    for (int k = 0; k < SS_HEAL_NFIELDS; k++) {
+        double dmax = 0;
+        for (size_t i = 0; i < n; i++) {
+            double d = fabs((double)gf->field[k][i] - ga->field[k][i]);
+            if (d > dmax) dmax = d;
+        }
+        print_message("  %s: largest difference to fixed steps %.2e\n", ss_heal_field_name(k),
+                      dmax);
+        assert_true(dmax < 0.01);
+    }
+    double vf = rf[nf - 1].st.scar_volume_mm3, va = ra[na - 1].st.scar_volume_mm3;
+    assert_true(fabs(va - vf) <= 0.005 * vf);
+    ss_heal_run_free(f);
+    ss_heal_run_free(a);
+
+    /* advance_to lands on a requested day inside a long step */
+    assert_int_equal(ss_heal_run_create(&c, &a, &err), SS_OK);
+    assert_int_equal(ss_heal_run_advance_to(a, 33.35, &err), SS_OK);
+    assert_int_equal(ss_heal_run_step_index(a), 667);
+    ss_heal_run_free(a);
+
+    /* resume from a checkpoint of an adaptive run: bit-identical */
+    char *dir = tu_tmpdir("heal-adapt");
+    char out[1024], ref[1024];
+    snprintf(out, sizeof out, "%s/run", dir);
+    snprintf(ref, sizeof ref, "%s/ref", dir);
+    c.snapshot_every = 0;
+    c.checkpoint_every = 7;
+    c.days = 21;
+    c.out_dir = out;
+    assert_int_equal(ss_heal_run_create(&c, &a, &err), SS_OK);
+    run_to_end(a);
+    long long m21 = ss_heal_run_step_multiple(a);
+    ss_heal_run_free(a); /* killed before finish */
+    ss_heal_run_config rc;
+    ss_heal_run_config_default(&rc);
+    rc.resume_dir = out;
+    rc.days = 40;
+    assert_int_equal(ss_heal_run_create(&rc, &a, &err), SS_OK);
+    assert_int_equal(ss_heal_run_step_multiple(a), m21);
+    run_to_end(a);
+    c.days = 40;
+    c.out_dir = ref;
+    assert_int_equal(ss_heal_run_create(&c, &f, &err), SS_OK);
+    run_to_end(f);
+    assert_fields_equal(ss_heal_run_grid(a), ss_heal_run_grid(f));
+    assert_true(ss_heal_run_grid(a)->t_days == ss_heal_run_grid(f)->t_days);
+    ss_heal_run_free(a);
+    ss_heal_run_free(f);
+    tu_rmtree(dir);
+    free(dir);
+
+    /* 1 and 2 threads on a grid large enough to run in parallel */
+    ss_heal_run_config tc;
+    ss_heal_run_config_default(&tc);
+    tc.grid[0] = tc.grid[1] = 40;
+    tc.grid[2] = 24;
+    tc.days = tu_quick() ? 14 : 24;
+    tc.adapt_tol = 0.01;
+    ss_heal_run *t1, *t2;
+    ss_threads_set(1);
+    assert_int_equal(ss_heal_run_create(&tc, &t1, &err), SS_OK);
+    run_to_end(t1);
+    ss_threads_set(2);
+    assert_int_equal(ss_heal_run_create(&tc, &t2, &err), SS_OK);
+    run_to_end(t2);
+    assert_true(ss_heal_run_step_multiple(t1) > 1);
+    assert_fields_equal(ss_heal_run_grid(t1), ss_heal_run_grid(t2));
+    ss_heal_run_free(t1);
+    ss_heal_run_free(t2);
+}
+
 /* A footprint image in memory equals the same mask read from a PNG. */
 static void test_run_footprint(void **state) {
     (void)state;
@@ -239,9 +347,8 @@ static void test_run_bad_config(void **state) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_run_matches_solver),
-        cmocka_unit_test(test_run_resume),
-        cmocka_unit_test(test_run_footprint),
+        cmocka_unit_test(test_run_matches_solver), cmocka_unit_test(test_run_resume),
+        cmocka_unit_test(test_run_adaptive),       cmocka_unit_test(test_run_footprint),
         cmocka_unit_test(test_run_bad_config),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -79,6 +79,7 @@ static void test_params(void **state) {
         {"{\"params\": {\"lam11\": {\"value\": -1, \"unit\": \"1/day\"}}}", "'lam11'"},
         {"{\"params\": {\"gamma1\": {\"value\": 1.5, \"unit\": \"1\"}}}", "'gamma1'"},
         {"{\"params\": {\"De\": 0.1}}", "'De'"},
+        {"{\"params\": {\"rho_sat\": {\"value\": 0, \"unit\": \"1\"}}}", "'rho_sat'"},
         {"{\"switches\": {\"scab\": 3}}", "'scab'"},
         {"{\"scenario\": \"burn\"}", "burn"},
         {"[1, 2]", "malformed"},
@@ -377,6 +378,13 @@ static void test_keloid(void **state) {
     assert_true(a.t95 > 0 && a.keloid_beyond_mm > a.keloid_beyond_t95 + 1.0);
     assert_true(fabs(a.keloid_area_mm2 - b.keloid_area_mm2) <= 0.1 * b.keloid_area_mm2);
     assert_true(fabs(a.keloid_beyond_mm - b.keloid_beyond_mm) <= 0.1 * b.keloid_beyond_mm);
+    /* the keloid's collagen saturates at the packing limit rho_sat instead of
+     * growing without bound (it reached ~10 at day 60 before the cap) */
+    ss_error err;
+    ss_heal_params *p = ss_heal_params_preset("keloid", &err);
+    assert_true(a.scar_max_peak > 1.6 && a.scar_max_peak <= p->rho_sat);
+    assert_true(b.scar_max_peak > 1.6 && b.scar_max_peak <= p->rho_sat);
+    ss_heal_params_free(p);
 }
 
 /* Grid convergence of the closure times (physical thicknesses, not voxel

@@ -463,6 +463,7 @@ static void test_free_block(void **state) {
     ss_mech_params p;
     ss_mech_params_default(&p);
     p.anchor = 0;
+    p.anchor_side = 0;
     p.kappa = 1.0 / 3.0; /* isotropic: the same strain in every direction */
     p.k1 = 0;            /* ground matrix only: the strain is sigma / (3 K_bulk) */
     p.K_m = 1;
@@ -534,6 +535,7 @@ static void test_sutures(void **state) {
     assert_int_equal(ss_heal_grid_init(g, 6.0, 0.1, NULL, hp, &err), SS_OK);
     ss_mech_params p;
     ss_mech_params_default(&p);
+    p.k_suture = 50; /* a tight stitch in intact skin */
     ss_mech_suture out = {{4, 5, 5}, {40, 5, 5}, INFINITY};
     assert_null(ss_mech_create(g, hp, &p, NULL, &out, 1, &err));
     assert_int_equal(err.code, SS_ERR_INPUT);

@@ -32,9 +32,11 @@ typedef struct result {
     double *pos;
     int nn;
     float vmax_grid;
+    int max_inverted; /* folded tets, the most in any frame */
 } result;
 
-static void run_case(const char *fibres, double kappa, double max_days, int threads, result *r) {
+static void run_case_sut(const char *fibres, double kappa, double max_days, int threads,
+                         const ss_mech_suture *sut, int nsut, result *r) {
     ss_error err;
     omp_set_num_threads(threads);
     ss_heal_params *hp = ss_heal_params_preset("clean", &err);
@@ -49,7 +51,7 @@ static void run_case(const char *fibres, double kappa, double max_days, int thre
     ss_mech_params_default(&p);
     if (fibres) assert_int_equal(ss_mech_params_set_fibres(&p, fibres, &err), SS_OK);
     if (kappa >= 0) p.kappa = kappa;
-    ss_mech *m = ss_mech_create(g, hp, &p, NULL, NULL, 0, &err);
+    ss_mech *m = ss_mech_create(g, hp, &p, NULL, sut, nsut, &err);
     assert_non_null(m);
     ss_heal_solver *sol = ss_heal_solver_create(g, hp, SS_HEAL_SPLIT, 0, &err);
     assert_non_null(sol);
@@ -57,9 +59,12 @@ static void run_case(const char *fibres, double kappa, double max_days, int thre
     ss_heal_stats_compute(g, &hs);
     r->area0 = hs.open_area_mm2;
     r->t_close = -1;
+    r->max_inverted = 0;
     while (g->t_days < max_days) {
         assert_int_equal(ss_heal_step(sol, g, &err), SS_OK);
         assert_int_equal(ss_mech_step(m, g, ss_heal_solver_dt(sol), &err), SS_OK);
+        int inv = ss_mech_inverted_tets(m);
+        if (inv > r->max_inverted) r->max_inverted = inv;
         ss_heal_stats_compute(g, &hs);
         if (hs.open_area_mm2 <= 0.05 * r->area0) { /* 95 % closure, as summary.json */
             r->t_close = g->t_days;
@@ -89,6 +94,10 @@ static void run_case(const char *fibres, double kappa, double max_days, int thre
     ss_mech_free(m);
     ss_heal_grid_free(g);
     ss_heal_params_free(hp);
+}
+
+static void run_case(const char *fibres, double kappa, double max_days, int threads, result *r) {
+    run_case_sut(fibres, kappa, max_days, threads, NULL, 0, r);
 }
 
 static void test_isotropic_symmetric(void **state) {
@@ -130,11 +139,41 @@ static void test_anisotropic(void **state) {
         double red = 1 - rx.st.outline_area_mm2 / rx.st.initial_outline_area_mm2;
         assert_true(red > 0.20 && red < 0.60);
     }
+    /* no tet folds in any frame */
+    assert_int_equal(rx.max_inverted, 0);
+    assert_int_equal(ry.max_inverted, 0);
     /* mirror images of each other */
     assert_float_equal(rx.st.extent_x_mm, ry.st.extent_y_mm, 1e-2 * rx.st.extent_x_mm);
     assert_float_equal(rx.st.extent_y_mm, ry.st.extent_x_mm, 1e-2 * rx.st.extent_y_mm);
     free(rx.pos);
     free(ry.pos);
+}
+
+/* The sutures example (five stitches across the wound, out at day 7): the
+ * stitches pull the edges in, more than the unsutured run, but no tet folds
+ * and the wound is not yanked shut within the first day. */
+static void test_sutured(void **state) {
+    (void)state;
+    ss_error err;
+    char path[4096];
+    snprintf(path, sizeof path, "%s/heal/sutures_example.csv", SKINSIM_DATA_DIR);
+    int n = 0;
+    ss_mech_suture *s = ss_mech_sutures_read(path, &n, &err);
+    assert_non_null(s);
+    result a, b;
+    double days = tu_quick() ? 0.5 : 1.0;
+    run_case_sut(NULL, -1, days, 1, s, n, &a);
+    run_case(NULL, -1, days, 1, &b);
+    double ca = 1 - a.st.outline_area_mm2 / a.st.initial_outline_area_mm2,
+           cb = 1 - b.st.outline_area_mm2 / b.st.initial_outline_area_mm2;
+    print_message("day %.1f: outline -%.1f %% sutured, -%.1f %% unsutured\n", days, 100 * ca,
+                  100 * cb);
+    assert_true(ca > cb);
+    assert_true(ca < 0.6);
+    assert_int_equal(a.max_inverted, 0);
+    free(s);
+    free(a.pos);
+    free(b.pos);
 }
 
 static void test_threads_identical(void **state) {
@@ -152,6 +191,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_isotropic_symmetric),
         cmocka_unit_test(test_anisotropic),
+        cmocka_unit_test(test_sutured),
         cmocka_unit_test(test_threads_identical),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

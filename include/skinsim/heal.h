@@ -94,6 +94,8 @@ typedef struct ss_heal_params {
     double bed_mm;  /* mm, depth of the wound bed whose mean u3 the epithelium reads */
     double scab_mm; /* mm, thickness of the exposed layer that dries into eschar */
     double kscab;   /* 1, fraction by which a full eschar slows the epithelial sheet under it */
+    double rho_sat; /* 1, packing limit of collagen (x normal dermis): keloid deposition
+                       saturates as (1 - rho/rho_sat) */
 } ss_heal_params;
 
 /* omega = [p > SS_HEAL_P_MIN] (plasma is normalised to 1 in the fresh clot). */

@@ -84,6 +84,14 @@ ss_status ss_heal_vti_write_piece(const char *path, const ss_heal_grid *piece, c
 ss_status ss_heal_pvti_write(const char *path, const int whole[3], double dx_mm, double t_days,
                              int npieces, const int (*ext)[6], const char *const *files,
                              ss_error *err);
+/* Reads a snapshot written by ss_heal_vti_write(_vectors) back into a new grid
+ * (cell states, every field, t_days; skin_top_mm and step are left 0: the
+ * file does not hold them). displacement: if not NULL, receives a malloc'd
+ * array of 3 x nx*ny*nz floats (the x components of every cell, then y, then
+ * z) when the file has a `displacement` array, else NULL. A file this writer
+ * did not make, a truncated one or a missing array -> SS_ERR_INPUT naming the
+ * file. */
+ss_heal_grid *ss_heal_vti_read(const char *path, float **displacement, ss_error *err);
 
 /* ParaView collection: `n` datasets with their times (days) and file names
  * relative to the .pvd. Written atomically. */

@@ -34,6 +34,8 @@ extern "C" {
 
 /* Simulated time when config.days is 0 on a fresh run. */
 #define SS_HEAL_RUN_DEFAULT_DAYS 10.0
+/* adapt_tol of `skinsim heal` with the split scheme and the automatic step. */
+#define SS_HEAL_RUN_DEFAULT_ADAPT_TOL 0.01
 
 typedef struct ss_heal_run_config {
     /* ---- model (fresh runs) ---- */
@@ -88,6 +90,22 @@ typedef struct ss_heal_run_config {
     double tet_size_mm;   /* lattice tet edge; 0 = params file or default */
     const char *sutures;  /* stitches CSV "x1,y1,z1,x2,y2,z2[,remove_day]" (mm); NULL = none */
     const char *tet_mesh; /* TetGen .node/.ele or Gmsh .msh instead of the lattice; NULL */
+
+    /* ---- adaptive steps (split scheme without mechanics; fresh runs) ---- */
+    double adapt_tol; /* 0 = fixed steps of dt (default). > 0: a step is m x dt (m = 1..
+                         SS_HEAL_SPLIT_LATE_MAX_DT_DAYS / dt), m doubled while no species
+                         changes by more than adapt_tol / 2 in any cell in a step, and a
+                         step that changes one by more than adapt_tol is retried with half
+                         the m (docs/heal-model.md §4); `skinsim heal` uses 0.01 */
+    /* ---- real geometry (seed 001 §5.1, §5.4; skinsim/shell.h; fresh runs) ---- */
+    const char *skin_mesh;    /* closed OBJ/glTF/GLB body surface; the grid is a patch of its
+                                 skin around the wound (then wound_uv or wound_mesh, in the
+                                 mesh's units, gives the wound); NULL = the flat block */
+    const char *wound_uv;     /* with skin_mesh: strokes CSV (u,v[,stroke]) in the mesh's UV
+                                 space, cut wound_depth_mm deep */
+    double skin_thickness_mm; /* with skin_mesh: skin shell under the surface; 0 = 3 mm */
+    double voxel_mm;          /* with skin_mesh: voxel edge; 0 = 0.5 mm */
+    double mesh_units_mm;     /* with skin_mesh: one mesh unit in mm; 0 = glTF 1000, OBJ 1 */
 } ss_heal_run_config;
 
 /* The defaults listed above (every other field 0 / NULL). */
@@ -113,7 +131,10 @@ void ss_heal_run_free(ss_heal_run *r);
 ss_status ss_heal_run_start(ss_heal_run *r, ss_error *err);
 /* One solver step and its bookkeeping: an area row every area_every (and at
  * the end), with out_dir a snapshot every snapshot_every (and at the end) and a
- * checkpoint every checkpoint_every (newest two kept). The first call that
+ * checkpoint every checkpoint_every (newest two kept). With adapt_tol the step
+ * may span several steps of dt (step indices count steps of dt); it never
+ * jumps over a snapshot, a checkpoint or the end, and area rows come at least
+ * every area_every and after every step. The first call that
  * writes files first removes a previous run's outputs (force) and writes the
  * day-0 snapshot of a fresh run. Stepping past the end -> SS_ERR_INPUT. */
 ss_status ss_heal_run_step(ss_heal_run *r, ss_error *err);
@@ -134,15 +155,23 @@ ss_status ss_heal_run_write_snapshot(ss_heal_run *r, ss_error *err);
 ss_status ss_heal_run_write_checkpoint(ss_heal_run *r, ss_error *err);
 
 /* ---- an external solver (the MPI driver, src/dist) ---- */
-/* With hooks set, the run calls step instead of ss_heal_step (it must advance
- * g->t_days and g->step; g's fields may then be stale), stats instead of
+/* With hooks set, the run calls step instead of ss_heal_step (g's fields may
+ * then be stale; an adaptive run's rejected step is taken back with undo), stats instead of
  * ss_heal_stats_compute for every area row, sync before anything reads g's
  * fields (snapshots, checkpoints) so it can bring them up to date, and
  * snapshot after each snapshot's .vti. NULL
  * members keep the run's own behaviour. Not with the contraction mechanics. */
 typedef struct ss_heal_run_hooks {
     void *ctx;
-    ss_status (*step)(void *ctx, ss_heal_grid *g, ss_error *err);
+    /* one step of dt_days (the run's step or, adaptive, a multiple of it):
+     * advances g->t_days by dt_days and g->step by one; with max_change not
+     * NULL keeps a copy of the fields first and returns the largest change of
+     * any species in any cell (the adaptive control) */
+    ss_status (*step)(void *ctx, ss_heal_grid *g, double dt_days, double *max_change,
+                      ss_error *err);
+    /* puts the fields back as they were before the last step (t_days and
+     * step are the run's to restore) */
+    void (*undo)(void *ctx, ss_heal_grid *g);
     void (*stats)(void *ctx, const ss_heal_grid *g, ss_heal_stats *st);
     ss_status (*sync)(void *ctx, ss_heal_grid *g, ss_error *err);
     /* after snapshot `index` was written into the folder fields_dir (more
@@ -161,8 +190,11 @@ ss_heal_grid *ss_heal_run_grid(ss_heal_run *r);
 const ss_heal_params *ss_heal_run_params(const ss_heal_run *r);
 const char *ss_heal_run_scenario(const ss_heal_run *r);
 ss_heal_scheme ss_heal_run_scheme(const ss_heal_run *r);
-double ss_heal_run_day(const ss_heal_run *r);     /* current time, days */
-double ss_heal_run_dt(const ss_heal_run *r);      /* step, days */
+double ss_heal_run_day(const ss_heal_run *r); /* current time, days */
+double ss_heal_run_dt(const ss_heal_run *r);  /* step, days (the base step with adapt_tol) */
+/* Adaptive steps: current multiple m of dt, and the steps retried so far. */
+long long ss_heal_run_step_multiple(const ss_heal_run *r);
+long long ss_heal_run_steps_retried(const ss_heal_run *r);
 double ss_heal_run_end_day(const ss_heal_run *r); /* steps_total x dt */
 long long ss_heal_run_step_index(const ss_heal_run *r);
 long long ss_heal_run_steps_total(const ss_heal_run *r);
@@ -176,6 +208,35 @@ long long ss_heal_run_resumed_from(const ss_heal_run *r);
 const char *ss_heal_run_note(const ss_heal_run *r);
 /* The contraction mechanics of the run (skinsim/mech.h), NULL when off. */
 struct ss_mech *ss_heal_run_mech(ss_heal_run *r);
+
+/* ---- a finished run folder, read back (`skinsim wound --heal DIR`) ----------------
+ * What `skinsim heal --out DIR` wrote: run.json (its "format" is
+ * SS_HEAL_RUN_FORMAT; a folder of another format is refused, since what the
+ * files hold and mean may differ), summary.json (scenario, grid, parameters,
+ * step), fields/fields.pvd and the snapshots fields/fields_NNNN.vti it lists.
+ * Read-only: nothing in DIR is changed. */
+#define SS_HEAL_RUN_FORMAT 1
+typedef struct ss_heal_saved_run ss_heal_saved_run;
+/* Checks DIR: a run being written or stopped before its end
+ * (.skinsim-unfinished, or no completion marker), a folder of another format
+ * or another command, missing or malformed run.json, summary.json or
+ * fields.pvd -> SS_ERR_INPUT naming DIR and what is wrong. Reads no snapshot. */
+ss_status ss_heal_saved_run_open(const char *dir, ss_heal_saved_run **out, ss_error *err);
+void ss_heal_saved_run_free(ss_heal_saved_run *s);
+const char *ss_heal_saved_run_scenario(const ss_heal_saved_run *s);
+const ss_heal_params *ss_heal_saved_run_params(const ss_heal_saved_run *s);
+double ss_heal_saved_run_dt(const ss_heal_saved_run *s);      /* step, days */
+double ss_heal_saved_run_end_day(const ss_heal_saved_run *s); /* the last snapshot's day */
+int ss_heal_saved_run_snapshot_count(const ss_heal_saved_run *s);
+double ss_heal_saved_run_snapshot_day(const ss_heal_saved_run *s, int i);
+/* The snapshot whose day is `day` (within a thousandth of a step), -1 if none. */
+int ss_heal_saved_run_find(const ss_heal_saved_run *s, double day);
+/* Reads snapshot i (0-based, in time order) as a new grid with the run's
+ * skin_top_mm; displacement as ss_heal_vti_read (NULL when the run had no
+ * mechanics). A damaged snapshot, or one whose grid or day disagrees with
+ * summary.json and fields.pvd -> SS_ERR_INPUT naming the file. */
+ss_heal_grid *ss_heal_saved_run_load(const ss_heal_saved_run *s, int i, float **displacement,
+                                     ss_error *err);
 
 #ifdef __cplusplus
 }

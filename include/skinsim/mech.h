@@ -77,7 +77,8 @@ typedef struct ss_mech_params {
     double ecm_floor;   /* 1, rho_ecm / rho_ecm_hat of fresh clot */
     /* mesh, boundary, solver */
     double tet_size_mm; /* lattice cube edge, mm */
-    double anchor;      /* kPa/mm, elastic foundation of the bottom and side faces */
+    double anchor;      /* kPa/mm, elastic foundation of the bottom faces (subcutis) */
+    double anchor_side; /* kPa/mm, far-field stiffness of the side faces (skin beyond) */
     double k_suture;    /* mN/mm, suture spring stiffness */
     double max_shorten; /* 1, largest relative rest-length change per spring */
     double tol;         /* 1, convergence: max residual displacement / edge length */
@@ -232,15 +233,20 @@ void ss_mech_free(ss_mech *m);
 ss_status ss_mech_step(ss_mech *m, ss_heal_grid *g, double dt_days, ss_error *err);
 
 typedef struct ss_mech_stats {
-    int substeps, converged; /* of the last frame */
+    int substeps, converged; /* of the last frame (all its load increments) */
+    int increments;          /* load increments of the last frame (1; more after a fold) */
     double max_speed_mm_day; /* largest particle speed of the last frame */
     double outline_area_mm2; /* initial wound outline, deformed, projected on x,y */
     double initial_outline_area_mm2;
     double extent_x_mm, extent_y_mm; /* of the deformed outline */
     double principal[2];             /* unit major axis of the deformed outline (x,y) */
     double aspect_major_minor;       /* sqrt of the covariance eigenvalue ratio */
+    int inverted_tets;               /* tets with non-positive volume now (folds) */
+    double side_max_disp_mm;         /* largest displacement of a side-face node */
 } ss_mech_stats;
 void ss_mech_stats_compute(const ss_mech *m, ss_mech_stats *st);
+/* Tets whose current signed volume is not positive (folded). */
+int ss_mech_inverted_tets(const ss_mech *m);
 
 /* Access for output and checkpoints. */
 const ss_tetmesh *ss_mech_mesh(const ss_mech *m);    /* reference mesh */

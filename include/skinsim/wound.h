@@ -201,6 +201,9 @@ ss_image *ss_wound_deformation_from_grid(const ss_heal_grid *g, float *const *di
 typedef struct ss_wound_make_config {
     ss_heal_run_config heal; /* the healing problem (out_dir, resume_dir and days are ignored:
                                 the run is in memory and ends at the last day) */
+    const char *heal_dir;    /* a finished `skinsim heal` run folder to render instead of
+                                simulating (heal must then be the defaults); the days must
+                                be its snapshot days (docs/wound.md) */
     const double *days;      /* output days, increasing, whole steps of the heal run */
     int ndays;
     int size;                /* texture side (default 1024) */

@@ -24,13 +24,14 @@
  * and checkpoints), so its memory is that of a single-process run; the halo
  * exchange is not overlapped with the kernel; the mechanics stay
  * single-process (an error names --mechanics). */
+#include <math.h>
 #include <mpi.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "skinsim/dist.h"
 
-enum { CMD_STEP = 1, CMD_STATS, CMD_SYNC, CMD_PIECES, CMD_END };
+enum { CMD_STEP = 1, CMD_UNDO, CMD_STATS, CMD_SYNC, CMD_PIECES, CMD_END };
 enum { FACE_XM, FACE_XP, FACE_YM, FACE_YP, NFACES };
 
 /* What rank 0 tells every rank about the run before the boxes are sent. */
@@ -60,10 +61,14 @@ struct ss_dist_heal {
     ss_heal_solver *sB;
     float *tsend, *trecv;
     int *scnt, *sdsp, *rcnt, *rdsp;
-    double tbytes;    /* transpose bytes this rank sends per step */
-    ss_heal_run *run; /* rank 0 */
-    const char *pdir; /* rank 0: the fields folder of the snapshot being written */
-    int dirty;        /* rank 0: the run's whole grid is behind the boxes */
+    double tbytes;                  /* transpose bytes this rank sends per step */
+    ss_heal_run *run;               /* rank 0 */
+    const char *pdir;               /* rank 0: the fields folder of the snapshot being written */
+    double next_dt;                 /* rank 0: the step being broadcast */
+    float *backup[SS_HEAL_NFIELDS]; /* adaptive steps: the fields before the step */
+    double saved_t;
+    uint64_t saved_step;
+    int dirty; /* rank 0: the run's whole grid is behind the boxes */
     double t_compute, t_halo, t_stats, t_gather;
     long long steps;
     ss_dist_heal_timing tmax; /* rank 0, after end */
@@ -310,7 +315,7 @@ static ss_status split_step(ss_dist_heal *d, ss_error *err) {
 
 /* ---- the commands ------------------------------------------------------------- */
 
-static ss_status do_step(ss_dist_heal *d, ss_error *err) {
+static ss_status plain_step(ss_dist_heal *d, ss_error *err) {
     if (d->split) return split_step(d, err);
     double t0 = MPI_Wtime();
     ss_status st = ss_heal_step(d->s, d->g, err);
@@ -320,6 +325,52 @@ static ss_status do_step(ss_dist_heal *d, ss_error *err) {
     d->t_halo += MPI_Wtime() - t1;
     d->steps++;
     return st;
+}
+
+/* One step of dt (rank 0 broadcasts it: the adaptive run's multiple of its
+ * step); with want_change the fields are kept first and the largest change of
+ * any species in any cell is returned (a max: the same for any split). */
+static ss_status do_step(ss_dist_heal *d, int want_change, double *change, ss_error *err) {
+    double dt = 0;
+    if (d->rank == 0) dt = d->next_dt;
+    MPI_Bcast(&dt, 1, MPI_DOUBLE, 0, d->cart);
+    ss_status st = SS_OK;
+    if (ss_heal_solver_dt(d->s) != dt) st = ss_heal_solver_set_dt(d->s, dt, err);
+    if (!st && d->sB && ss_heal_solver_dt(d->sB) != dt) st = ss_heal_solver_set_dt(d->sB, dt, err);
+    if (st) MPI_Abort(d->cart, 2); /* rank 0 checked the step: cannot differ here */
+    const size_t n = (size_t)d->g->nx * d->g->ny * d->g->nz;
+    if (want_change) {
+        for (int f = 0; f < SS_HEAL_NFIELDS; f++) {
+            if (!d->backup[f] && !(d->backup[f] = malloc(n * sizeof(float)))) MPI_Abort(d->cart, 3);
+            memcpy(d->backup[f], d->g->field[f], n * sizeof(float));
+        }
+        d->saved_t = d->g->t_days;
+        d->saved_step = d->g->step;
+    }
+    st = plain_step(d, err);
+    if (want_change) {
+        double m = 0.0, mall = 0.0;
+        for (int f = 0; f < SS_HEAL_NFIELDS; f++) {
+            const float *x = d->g->field[f], *y = d->backup[f];
+            float mf = 0.0f;
+            for (size_t i = 0; i < n; i++) {
+                const float c = fabsf(x[i] - y[i]);
+                mf = c > mf ? c : mf;
+            }
+            if (mf > m) m = mf;
+        }
+        MPI_Allreduce(&m, &mall, 1, MPI_DOUBLE, MPI_MAX, d->cart);
+        if (change) *change = mall;
+    }
+    return st;
+}
+
+static void do_undo(ss_dist_heal *d) {
+    const size_t n = (size_t)d->g->nx * d->g->ny * d->g->nz;
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+        if (d->backup[f]) memcpy(d->g->field[f], d->backup[f], n * sizeof(float));
+    d->g->t_days = d->saved_t;
+    d->g->step = d->saved_step;
 }
 
 static void do_stats(ss_dist_heal *d, ss_heal_stats *st) {
@@ -467,14 +518,23 @@ static void send_cmd(ss_dist_heal *d, int cmd, int arg) {
 }
 
 /* rank 0's hooks on its run */
-static ss_status hook_step(void *ctx, ss_heal_grid *G, ss_error *err) {
+static ss_status hook_step(void *ctx, ss_heal_grid *G, double dt, double *max_change,
+                           ss_error *err) {
     ss_dist_heal *d = ctx;
-    send_cmd(d, CMD_STEP, 0);
-    ss_status st = do_step(d, err);
+    send_cmd(d, CMD_STEP, max_change != NULL);
+    d->next_dt = dt;
+    ss_status st = do_step(d, max_change != NULL, max_change, err);
     G->t_days = d->g->t_days;
-    G->step = d->g->step;
+    G->step++;
     d->dirty = 1;
     return st;
+}
+
+static void hook_undo(void *ctx, ss_heal_grid *G) {
+    ss_dist_heal *d = ctx;
+    (void)G;
+    send_cmd(d, CMD_UNDO, 0);
+    do_undo(d);
 }
 
 static void hook_stats(void *ctx, const ss_heal_grid *G, ss_heal_stats *st) {
@@ -714,7 +774,7 @@ ss_status ss_dist_heal_create(ss_heal_run *r, ss_status root_st, ss_dist_heal **
         return st;
     }
     if (d->rank == 0) {
-        ss_heal_run_hooks h = {d, hook_step, hook_stats, hook_sync, hook_snapshot};
+        ss_heal_run_hooks h = {d, hook_step, hook_undo, hook_stats, hook_sync, hook_snapshot};
         ss_heal_run_set_hooks(r, &h, err);
     }
     *out = d;
@@ -745,7 +805,10 @@ ss_status ss_dist_heal_serve(ss_dist_heal *d, ss_error *err) {
         MPI_Bcast(m, 2, MPI_INT, 0, d->cart);
         switch (m[0]) {
         case CMD_STEP:
-            do_step(d, err);
+            do_step(d, m[1], NULL, err);
+            break;
+        case CMD_UNDO:
+            do_undo(d);
             break;
         case CMD_STATS: {
             ss_heal_stats st;
@@ -784,6 +847,7 @@ void ss_dist_heal_free(ss_dist_heal *d) {
     ss_heal_solver_free(d->s);
     ss_heal_grid_free(d->g);
     ss_heal_solver_free(d->sB);
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++) free(d->backup[f]);
     ss_heal_grid_free(d->gB);
     free(d->tsend);
     free(d->trecv);

@@ -54,8 +54,10 @@ void ss_heal_rd__build_masks(const ss_heal_rd_system *sys, ss_heal_rd_work *w) {
 #undef NBW
                 }
                 w->nb[c] = b;
+                w->upd_common[c] = (uint8_t)!wall;
                 for (int f = 0; f < sys->nfields; f++)
-                    w->upd[f][c] = (uint8_t)(!wall && !sys->fixed[f][k]);
+                    if (w->upd[f] != w->upd_common)
+                        w->upd[f][c] = (uint8_t)(!wall && !sys->fixed[f][k]);
             }
         }
     }
@@ -90,9 +92,14 @@ static ss_heal_rd_work *work_create(const ss_heal_rd_system *sys, int need_buf, 
     w->nslots = sys->nslots;
     w->ncell = (size_t)sys->nx * (size_t)sys->ny * (size_t)sys->nz;
     w->nb = malloc(w->ncell);
-    if (!w->nb) goto nomem;
+    w->upd_common = malloc(w->ncell);
+    if (!w->nb || !w->upd_common) goto nomem;
     for (int f = 0; f < sys->nfields; f++) {
-        w->upd[f] = malloc(w->ncell);
+        /* fields without a fixed class share one update mask (not a wall),
+         * so the step reads one byte per cell for them instead of one each */
+        int any_fixed = 0;
+        for (int k = 0; k < SS_HEAL_RD_MAXCLASS; k++) any_fixed |= sys->fixed[f][k] != 0;
+        w->upd[f] = any_fixed ? malloc(w->ncell) : w->upd_common;
         if (!w->upd[f]) goto nomem;
         if (need_buf) {
             w->buf[f] = malloc(w->ncell * sizeof(float));
@@ -112,7 +119,9 @@ static ss_heal_rd_work *work_create(const ss_heal_rd_system *sys, int need_buf, 
     w->nthreads = omp_get_max_threads();
     if (w->nthreads < 1) w->nthreads = 1;
     size_t nx = (size_t)sys->nx, big = (size_t)(sys->ny > sys->nz ? sys->ny : sys->nz);
-    size_t a = (size_t)(4 * sys->nfields + sys->nslots) * nx;
+    /* split: prod, loss, local u, multipliers; explicit: prod, loss,
+     * multipliers, ones, six face weights */
+    size_t a = (size_t)(4 * sys->nfields + sys->nslots + 8) * nx;
     size_t b = 2 * big * nx + 4 * nx;
     w->ones_off = a > b ? a : b;
     w->tscratch_len = w->ones_off + nx + 64;
@@ -145,9 +154,10 @@ void ss_heal_rd_work_free(ss_heal_rd_work *w) {
     if (!w) return;
     free(w->nb);
     for (int f = 0; f < SS_HEAL_RD_MAXF; f++) {
-        free(w->upd[f]);
+        if (w->upd[f] != w->upd_common) free(w->upd[f]);
         free(w->buf[f]);
     }
+    free(w->upd_common);
     for (int k = 0; k < SS_HEAL_RD_MAXSLOT; k++) free(w->mslot[k]);
     if (w->tscratch)
         for (int t = 0; t < w->nthreads; t++) free(w->tscratch[t]);
@@ -245,6 +255,9 @@ void ss_heal_rd_step_explicit(ss_heal_rd_system *sys, ss_heal_rd_work *w, double
         for (int k = 0; k < sys->nslots; k++) row.m[k] = scr + (size_t)(2 * nf + k) * (size_t)nx;
         float *ones = scr + (size_t)(2 * nf + sys->nslots) * (size_t)nx;
         for (int i = 0; i < nx; i++) ones[i] = 1.0f;
+        /* face weights of the row (1 = the face conducts), shared by the fields */
+        float *restrict wxm = ones + nx, *restrict wxp = wxm + nx, *restrict wym = wxp + nx;
+        float *restrict wyp = wym + nx, *restrict wzm = wyp + nx, *restrict wzp = wzm + nx;
 #pragma omp for collapse(2) schedule(static)
         for (int z = 0; z < nz; z++) {
             for (int y = 0; y < ny; y++) {
@@ -271,6 +284,16 @@ void ss_heal_rd_step_explicit(ss_heal_rd_system *sys, ss_heal_rd_work *w, double
                         for (int i = 0; i < n; i++) row.m[k][i] = 1.0f;
                 }
                 const uint8_t *restrict nbr = w->nb + base;
+#pragma omp simd
+                for (int x = 1; x <= n; x++) {
+                    const uint8_t b = nbr[x];
+                    wxm[x] = (float)(b & 1);
+                    wxp[x] = (float)((b >> 1) & 1);
+                    wym[x] = (float)((b >> 2) & 1);
+                    wyp[x] = (float)((b >> 3) & 1);
+                    wzm[x] = (float)((b >> 4) & 1);
+                    wzp[x] = (float)((b >> 5) & 1);
+                }
                 for (int f = 0; f < nf; f++) {
                     const float *restrict u = sys->u[f] + base;
                     float *restrict un = w->buf[f] + base;
@@ -280,24 +303,49 @@ void ss_heal_rd_step_explicit(ss_heal_rd_system *sys, ss_heal_rd_work *w, double
                     const float *restrict mk = sys->mslot[f] >= 0 ? row.m[sys->mslot[f]] : ones;
                     const float Dh = (float)(sys->D[f] * ih2);
                     const float lo = sys->lo[f], hi = sys->hi[f];
-                    /* lateral fields: the z faces do not conduct */
-                    const uint8_t bmask = sys->lateral[f] ? (uint8_t)0x0F : (uint8_t)0x3F;
                     un[0] = u[0];
                     un[nx - 1] = u[nx - 1];
+                    /* The three variants give the same values as the full
+                     * stencil: a face term that is 0 * (finite) only adds a
+                     * signed zero, which the clamp at lo = 0 removes. */
+                    if (!(Dh > 0.0f)) {
+                        /* no diffusion (scar, a static region) */
 #pragma omp simd
-                    for (int x = 1; x <= n; x++) {
-                        const uint8_t b = nbr[x] & bmask;
-                        const float uc = u[x];
-                        const float lap = (float)(b & 1) * (u[x - 1] - uc) +
-                                          (float)((b >> 1) & 1) * (u[x + 1] - uc) +
-                                          (float)((b >> 2) & 1) * (u[x - (long)sy] - uc) +
-                                          (float)((b >> 3) & 1) * (u[x + sy] - uc) +
-                                          (float)((b >> 4) & 1) * (u[x - (long)sz] - uc) +
-                                          (float)((b >> 5) & 1) * (u[x + sz] - uc);
-                        float v = uc + dtf * (mk[x - 1] * Dh * lap + pr[x - 1] - ls[x - 1] * uc);
-                        v = v > lo ? v : lo;
-                        v = v < hi ? v : hi;
-                        un[x] = upd[x] ? v : uc;
+                        for (int x = 1; x <= n; x++) {
+                            const float uc = u[x];
+                            float v = uc + dtf * (pr[x - 1] - ls[x - 1] * uc);
+                            v = v > lo ? v : lo;
+                            v = v < hi ? v : hi;
+                            un[x] = upd[x] ? v : uc;
+                        }
+                    } else if (sys->lateral[f]) {
+                        /* lateral fields: the z faces do not conduct */
+#pragma omp simd
+                        for (int x = 1; x <= n; x++) {
+                            const float uc = u[x];
+                            const float lap = wxm[x] * (u[x - 1] - uc) + wxp[x] * (u[x + 1] - uc) +
+                                              wym[x] * (u[x - (long)sy] - uc) +
+                                              wyp[x] * (u[x + sy] - uc);
+                            float v =
+                                uc + dtf * (mk[x - 1] * Dh * lap + pr[x - 1] - ls[x - 1] * uc);
+                            v = v > lo ? v : lo;
+                            v = v < hi ? v : hi;
+                            un[x] = upd[x] ? v : uc;
+                        }
+                    } else {
+#pragma omp simd
+                        for (int x = 1; x <= n; x++) {
+                            const float uc = u[x];
+                            const float lap =
+                                wxm[x] * (u[x - 1] - uc) + wxp[x] * (u[x + 1] - uc) +
+                                wym[x] * (u[x - (long)sy] - uc) + wyp[x] * (u[x + sy] - uc) +
+                                wzm[x] * (u[x - (long)sz] - uc) + wzp[x] * (u[x + sz] - uc);
+                            float v =
+                                uc + dtf * (mk[x - 1] * Dh * lap + pr[x - 1] - ls[x - 1] * uc);
+                            v = v > lo ? v : lo;
+                            v = v < hi ? v : hi;
+                            un[x] = upd[x] ? v : uc;
+                        }
                     }
                     if (has_vel) {
                         for (int x = 1; x <= n; x++) {

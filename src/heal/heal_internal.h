@@ -18,9 +18,10 @@ enum { NB_XM = 1, NB_XP = 2, NB_YM = 4, NB_YP = 8, NB_ZM = 16, NB_ZP = 32 };
 struct ss_heal_rd_work {
     int nx, ny, nz, nfields, nslots;
     size_t ncell;
-    uint8_t *nb;                      /* per cell neighbour bits */
-    uint8_t *upd[SS_HEAL_RD_MAXF];    /* per field: 1 = cell is updated (not wall/fixed) */
-    float *buf[SS_HEAL_RD_MAXF];      /* explicit: next values; split: convection scratch */
+    uint8_t *nb;                   /* per cell neighbour bits */
+    uint8_t *upd[SS_HEAL_RD_MAXF]; /* per field: 1 = cell is updated (not wall/fixed) */
+    uint8_t *upd_common;           /* 1 = not a wall; upd[f] of every field without fixed classes */
+    float *buf[SS_HEAL_RD_MAXF];   /* explicit: next values; split: convection scratch */
     float *mslot[SS_HEAL_RD_MAXSLOT]; /* split: frozen diffusion multipliers */
     int nthreads;                     /* per-thread scratch count */
     float **tscratch;                 /* per thread row/line scratch */

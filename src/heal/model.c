@@ -35,7 +35,7 @@ ss_heal_rd_work *ss_heal_rd__work_create_ex(const ss_heal_rd_system *sys, int ne
 typedef struct model_ctx {
     float lam11, lam31, lam12, lam22, beta2, lam33, lam32, inv_u3eq, rn, inv_K, lamnn;
     float Rs, lames, lamge, lamee, gamma1, lamnrho, lamrhop, lamkrho, lampp, inv_rhomax, rhomax;
-    float kscab, bed_mm, h, rho_closed;
+    float kscab, bed_mm, h, rho_closed, inv_rhosat;
     int scab, static_region;
     const uint8_t *cell;
     int nx, ny, nz;
@@ -45,6 +45,8 @@ typedef struct model_ctx {
     float *ecol, *bed, *ds, *wsum; /* ds, wsum: prepare's scratch */
     const uint8_t *ztop_of;        /* the cell array ztop was computed from */
     float scab_h;                  /* scab_mm / voxel: the scab layer in voxel levels */
+    int *zt_min, *zt_max;          /* per y: range of ztop over the row's columns */
+    int kdeep;                     /* levels below the surface where no surface/scab term acts */
 } model_ctx;
 
 struct ss_heal_solver {
@@ -65,8 +67,15 @@ static inline float qwin(float u3, float g1, float ig1, float ig2) {
     return pos(u3 < g1 ? qa : qb);
 }
 
-static void heal_react(void *vctx, const ss_heal_rd_row *row) {
-    const model_ctx *m = vctx;
+/* One row of the reaction. `deep` (a constant at each call, so the compiler
+ * emits two loops): no cell of the row is a surface cell or inside the scab
+ * layer, so the sheet and eschar-source terms are zero there and are not
+ * computed (the values written are the same as the full loop's). */
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+static inline void
+react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep) {
     const int n = row->n;
     const size_t col0 = (size_t)row->y * (size_t)m->nx + (size_t)row->x0;
     const int *restrict ZT = m->ztop + col0;
@@ -88,7 +97,7 @@ static void heal_react(void *vctx, const ss_heal_rd_row *row) {
     const int z = row->z;
     const float scab_h = m->scab_h, kscab = m->kscab, rclosed = m->rho_closed;
     const float lamnrho = m->lamnrho, lamkrho = m->lamkrho, lamge = m->lamge, lamee = m->lamee;
-    const float lames = m->lames;
+    const float lames = m->lames, irsat = m->inv_rhosat;
     float *restrict m0 = row->m[0], *restrict m1 = row->m[1];
     float *restrict p1 = pr[0], *restrict p2 = pr[1], *restrict p3 = pr[2], *restrict p4 = pr[3];
     float *restrict p5 = pr[4], *restrict p6 = pr[5], *restrict p7 = pr[6], *restrict p8 = pr[7];
@@ -104,9 +113,9 @@ static void heal_react(void *vctx, const ss_heal_rd_row *row) {
         /* depth level below the surface cell (0 = surface, < 0: no surface) and
          * the fraction of the level inside the top scab_mm (arithmetic, no
          * table lookup, so the loop stays vectorised) */
-        const float kf = (float)(ZT[i] - z);
-        const float surf = (float)(kf == 0.0f);
-        const float wsc = (float)(kf >= 0.0f) * clampf(scab_h - kf, 0.0f, 1.0f);
+        const float kf = deep ? 1.0f : (float)(ZT[i] - z);
+        const float surf = deep ? 0.0f : (float)(kf == 0.0f);
+        const float wsc = deep ? 0.0f : (float)(kf >= 0.0f) * clampf(scab_h - kf, 0.0f, 1.0f);
         const float ecl = EC[i], necl = pos(1.0f - ecl);
         /* 4.1.1 oxygen: (1-s)(D1 lap u1 + lam31 u3) - lam11 u1 */
         p1[i] = ns * m->lam31 * u3;
@@ -125,18 +134,19 @@ static void heal_react(void *vctx, const ss_heal_rd_row *row) {
         l4[i] = gn * m->inv_K + m->lamnn;
         /* 4.1.5 eschar: Ds lap s + (1-s)(1-u3)(1-e) R(omega) - lames e s; R acts in
          * the top scab_mm of the wound region, e is the column's surface sheet */
-        const float X = open3 * necl * Rs * wsc * om;
+        const float X = deep ? 0.0f : open3 * necl * Rs * wsc * om;
         p5[i] = X;
-        l5[i] = X + lames * ecl;
+        l5[i] = deep ? lames * ecl : X + lames * ecl;
         /* 4.1.6 epithelium, on the surface only:
          * (1 - kscab s) Q(u3_bed)(De lap_xy e + lamge e) - lamee e */
-        const float me = surf * pos(1.0f - kscab * s) * qwin(BED[i], g1, ig1, ig2);
-        p6[i] = me * lamge * e;
-        l6[i] = surf * lamee;
-        /* 4.1.7 scar, restricted to omega: (1-s) n ((1-u3)(1-e) lamnrho + lamkrho)
+        const float me = deep ? 0.0f : surf * pos(1.0f - kscab * s) * qwin(BED[i], g1, ig1, ig2);
+        p6[i] = deep ? 0.0f : me * lamge * e;
+        l6[i] = deep ? 0.0f : surf * lamee;
+        /* 4.1.7 scar, restricted to omega:
+         * (1-s) n ((1-u3)(1-e) lamnrho + lamkrho (1 - rho/rho_sat)+)
          * - lamrhop rho */
         const float imm = pos(1.0f - rclosed * u3); /* (1 - u3) at rho_open = 0 */
-        p7[i] = om * ns * nn * (imm * necl * lamnrho + lamkrho);
+        p7[i] = om * ns * nn * (imm * necl * lamnrho + lamkrho * pos(1.0f - rho * irsat));
         l7[i] = m->lamrhop;
         /* 4.1.8 plasma: Dp lap p + lampp p + C(rho)(1-p) */
         const float C = pos(rho - m->rhomax) * m->inv_rhomax;
@@ -146,6 +156,19 @@ static void heal_react(void *vctx, const ss_heal_rd_row *row) {
         m1[i] = me;
         (void)e;
     }
+}
+
+static void heal_react(void *vctx, const ss_heal_rd_row *row) {
+    const model_ctx *m = vctx;
+    const int z = row->z, y = row->y;
+    /* deep row: every column's surface is above z by at least one level and
+     * the scab layer (levels below the surface with wsc > 0: kf < scab_h), or
+     * below z (no surface in the column at this height) */
+    const int deep = z > m->zt_max[y] || m->zt_min[y] - z >= m->kdeep;
+    if (deep)
+        react_row(m, row, 1);
+    else
+        react_row(m, row, 0);
 }
 
 static int is_tissue(uint8_t c) { return c != SS_CELL_AIR && c != SS_CELL_BOUND; }
@@ -164,6 +187,17 @@ static void find_surface(model_ctx *c) {
                     }
             c->ztop[(size_t)y * nx + x] = zt;
         }
+    for (int y = 0; y < ny; y++) {
+        int lo = nz, hi = -1;
+        for (int x = 1; x < nx - 1; x++) {
+            const int zt = c->ztop[(size_t)y * nx + x];
+            if (zt < 0) continue;
+            lo = zt < lo ? zt : lo;
+            hi = zt > hi ? zt : hi;
+        }
+        c->zt_min[y] = lo;
+        c->zt_max[y] = hi;
+    }
     c->ztop_of = c->cell;
 }
 
@@ -255,10 +289,17 @@ static void ctx_init(model_ctx *c, const ss_heal_params *p, const ss_heal_grid *
     c->ny = g->ny;
     c->nz = g->nz;
     c->kscab = (float)p->kscab;
+    c->inv_rhosat = (float)(1.0 / p->rho_sat);
     c->rho_closed = (float)(1.0 - p->rho_open);
     c->bed_mm = (float)p->bed_mm;
     c->h = (float)g->dx_mm;
     c->scab_h = (float)(p->scab_mm / g->dx_mm);
+    /* wsc = 0 once kf >= scab_h; without the scab switch R = 0 everywhere */
+    c->kdeep = 1;
+    if (p->scab && p->Rs != 0.0) {
+        const double k = ceil((double)c->scab_h);
+        c->kdeep = k > 1.0 ? (k < 1e6 ? (int)k : 1000000) : 1;
+    }
 }
 
 /* Bound on the reaction rates (growth + loss, 1/day) for the explicit limit. */
@@ -324,9 +365,10 @@ static void sys_init(ss_heal_rd_system *s, model_ctx *c, const ss_heal_grid *g,
 static ss_status check_params(const ss_heal_params *p, ss_error *err) {
     if (!(p->lam11 > 0) || !(p->u3_eq > 0) || !(p->K > 0) || !(p->rho_max > 0) ||
         !(p->u1_beta2 > 0) || !(p->gamma1 > 0 && p->gamma1 < 1) || !(p->bed_mm > 0) ||
-        !(p->scab_mm >= 0))
+        !(p->scab_mm >= 0) || !(p->rho_sat > 0))
         return ss_error_set(err, SS_ERR_INPUT,
-                            "heal params: lam11, u3_eq, K, rho_max, u1_beta2, bed_mm must be > 0, "
+                            "heal params: lam11, u3_eq, K, rho_max, u1_beta2, bed_mm, rho_sat must "
+                            "be > 0, "
                             "scab_mm >= 0 and gamma1 in (0, 1)");
     return SS_OK;
 }
@@ -412,7 +454,10 @@ static ss_heal_solver *solver_create(const ss_heal_grid *g, const int *goff, con
     s->ctx.bed = calloc(ncol, sizeof(float));
     s->ctx.ds = calloc(ncol, sizeof(float));
     s->ctx.wsum = calloc(ncol, sizeof(float));
-    if (!s->ctx.ztop || !s->ctx.ecol || !s->ctx.bed || !s->ctx.ds || !s->ctx.wsum) {
+    s->ctx.zt_min = malloc((size_t)g->ny * sizeof(int));
+    s->ctx.zt_max = malloc((size_t)g->ny * sizeof(int));
+    if (!s->ctx.ztop || !s->ctx.ecol || !s->ctx.bed || !s->ctx.ds || !s->ctx.wsum ||
+        !s->ctx.zt_min || !s->ctx.zt_max) {
         ss_heal_solver_free(s);
         ss_error_set(err, SS_ERR_NOMEM, "heal solver: out of memory");
         return NULL;
@@ -460,6 +505,8 @@ void ss_heal_solver_free(ss_heal_solver *s) {
     free(s->ctx.bed);
     free(s->ctx.ds);
     free(s->ctx.wsum);
+    free(s->ctx.zt_min);
+    free(s->ctx.zt_max);
     free(s);
 }
 

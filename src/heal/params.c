@@ -117,6 +117,12 @@ static const pdef PDEFS[] = {
      "way beneath the eschar (Winter 1962; Hinman & Maibach 1963); a full eschar slows its "
      "migration and growth by this fraction. Calibrated: dry/moist time to 95 % closure ~2",
      0.65, 0.65, 0.65},
+    {"rho_sat", OFF(rho_sat), "1",
+     "packing limit of scar collagen, x normal dermis (docs/heal-model.md): collagen is 70-80 % "
+     "of the dermis' dry weight in a tissue that is ~2/3 water, i.e. ~0.3 of its volume; a "
+     "keloid's dense hyalinised bundles can at most fill ~0.9, so ~3 x; the keloid's autocrine "
+     "deposition (lamkrho) saturates as (1 - rho/rho_sat)",
+     3.0, 3.0, 3.0},
 };
 #define NPDEFS ((int)(sizeof PDEFS / sizeof PDEFS[0]))
 /* keys whose value may be negative */
@@ -190,7 +196,8 @@ static ss_status check_value(const char *what, const pdef *d, double v, ss_error
         return ss_error_set(err, SS_ERR_INPUT, "%s: parameter '%s' = %g must be a finite %s", what,
                             d->key, v, may_be_negative(d->key) ? "number" : "value >= 0");
     if ((!strcmp(d->key, "u3_eq") || !strcmp(d->key, "K") || !strcmp(d->key, "lam11") ||
-         !strcmp(d->key, "rho_max") || !strcmp(d->key, "u1_beta2") || !strcmp(d->key, "bed_mm")) &&
+         !strcmp(d->key, "rho_max") || !strcmp(d->key, "u1_beta2") || !strcmp(d->key, "bed_mm") ||
+         !strcmp(d->key, "rho_sat")) &&
         !(v > 0))
         return ss_error_set(err, SS_ERR_INPUT, "%s: parameter '%s' = %g must be > 0", what, d->key,
                             v);

@@ -44,6 +44,8 @@ void ss_heal_run_free(ss_heal_run *r) {
     ss_outputs_free(r->outs); /* rolls back outputs not finished */
     cJSON_Delete(r->wound);
     ss_heal_run__mech_free(r);
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++) free(r->backup[f]);
+    ss_heal_run__shell_free(r);
     free(r);
 }
 
@@ -189,24 +191,125 @@ static void cap_velocity(ss_heal_run *r) {
         for (size_t i = 0; i < n; i++) v[d][i] *= f;
 }
 
-ss_status ss_heal_run_step(ss_heal_run *r, ss_error *err) {
+/* ---- adaptive steps -----------------------------------------------------------------
+ * Error control (docs/heal-model.md §4): a step of m x dt is accepted when no
+ * species changes by more than adapt_tol in any cell (the fields are
+ * normalised, healthy = 1); otherwise it is undone and retried with m / 2.
+ * m doubles after a full-length step whose largest change stayed below
+ * adapt_tol / 2, up to mult_max (SS_HEAL_SPLIT_LATE_MAX_DT_DAYS). m = 1 (the
+ * fixed step) is always accepted, so the fast phases run exactly as with
+ * fixed steps as long as they change the fields by more than adapt_tol / 2 per
+ * step. The largest change is a max over cells (order-independent), m lives
+ * in the checkpoint: results stay bit-identical for any thread count and
+ * across a resume. */
+
+static long long min_ll(long long a, long long b) { return a < b ? a : b; }
+
+void ss_heal_run__adapt_init(ss_heal_run *r) {
+    r->mult = 1;
+    r->mult_max = 1;
+    if (r->adapt_tol > 0 && r->scheme == SS_HEAL_SPLIT && !r->mech && r->dt > 0) {
+        r->mult_max = (long long)floor(SS_HEAL_SPLIT_LATE_MAX_DT_DAYS / r->dt * (1.0 + 1e-12));
+        if (r->mult_max < 1) r->mult_max = 1;
+    }
+}
+
+/* The largest multiple from base step k that lands on every snapshot and
+ * checkpoint due and does not pass `limit`. */
+static long long landing(const ss_heal_run *r, long long k, long long limit) {
+    long long m = limit - k;
+    if (r->out_dir && r->snap_every) m = min_ll(m, r->snap_every - k % r->snap_every);
+    if (r->out_dir && r->ckpt_every) m = min_ll(m, r->ckpt_every - k % r->ckpt_every);
+    return m < 1 ? 1 : m;
+}
+
+static void fields_copy(float *const *dst, float *const *src, size_t n) {
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++) memcpy(dst[f], src[f], n * sizeof(float));
+}
+
+static double max_change(float *const *a, float *const *b, size_t n) {
+    double m = 0.0;
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++) {
+        const float *x = a[f], *y = b[f];
+        float mf = 0.0f;
+#pragma omp parallel for reduction(max : mf) schedule(static) if (n >= 32768)
+        for (size_t i = 0; i < n; i++) {
+            const float d = fabsf(x[i] - y[i]);
+            mf = d > mf ? d : mf;
+        }
+        if (mf > m) m = mf;
+    }
+    return m;
+}
+
+/* One accepted step of the solver towards base step `limit`: m x dt with
+ * the control above, or one step of dt without adapt_tol (or when the work
+ * copy could not be allocated). */
+static ss_status solver_step(ss_heal_run *r, long long limit, ss_error *err) {
+    ss_heal_grid *g = r->g;
+    const size_t n = (size_t)g->nx * (size_t)g->ny * (size_t)g->nz;
+    const int ext = r->hooks.step != NULL; /* an external solver keeps its own copy */
+    if (r->adapt_tol > 0 && !r->backup[0] && !ext)
+        for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+            if (!(r->backup[f] = malloc(n * sizeof(float))))
+                return ss_error_set(err, SS_ERR_NOMEM, "out of memory (adaptive step copy)");
+    if (!(r->adapt_tol > 0))
+        return ext ? r->hooks.step(r->hooks.ctx, g, r->dt, NULL, err) : ss_heal_step(r->s, g, err);
+    for (;;) {
+        const long long k = (long long)g->step;
+        const long long m = min_ll(r->mult, landing(r, k, limit));
+        const double t = g->t_days;
+        const uint64_t step = g->step;
+        ss_status st = SS_OK;
+        double d = 0.0;
+        if (ext) {
+            if ((st = r->hooks.step(r->hooks.ctx, g, (double)m * r->dt, &d, err))) return st;
+        } else {
+            if (ss_heal_solver_dt(r->s) != (double)m * r->dt)
+                st = ss_heal_solver_set_dt(r->s, (double)m * r->dt, err);
+            if (st) return st;
+            fields_copy(r->backup, g->field, n);
+            if ((st = ss_heal_step(r->s, g, err))) return st;
+            d = max_change(g->field, r->backup, n);
+        }
+        if (m > 1 && d > r->adapt_tol) { /* undo, retry shorter */
+            if (ext)
+                r->hooks.undo(r->hooks.ctx, g);
+            else
+                fields_copy(g->field, r->backup, n);
+            g->t_days = t;
+            g->step = step;
+            r->mult = m / 2 > 1 ? m / 2 : 1;
+            r->retried++;
+            continue;
+        }
+        g->step = step + (uint64_t)m; /* step indices count steps of dt */
+        r->taken++;
+        if (m == r->mult && d < 0.5 * r->adapt_tol) r->mult = min_ll(2 * r->mult, r->mult_max);
+        return SS_OK;
+    }
+}
+
+static ss_status run_step(ss_heal_run *r, long long limit, ss_error *err) {
     if (ss_heal_run_done(r))
         return ss_error_set(err, SS_ERR_INPUT, "heal run: already at its end (day %g)",
                             ss_heal_run_end_day(r));
     ss_status st = start_output(r, err);
-    if (!st)
-        st = r->hooks.step ? r->hooks.step(r->hooks.ctx, r->g, err) : ss_heal_step(r->s, r->g, err);
+    const long long k0 = (long long)r->g->step;
+    if (!st) st = solver_step(r, limit, err);
     if (!st && r->mech && !(st = ss_mech_step(r->mech, r->g, r->dt, err))) cap_velocity(r);
     if (st) return st;
     long long k = (long long)r->g->step;
     int last = k == r->nsteps;
-    if (k % r->area_every == 0 || last) st = ss_heal_run__add_row(r, err);
+    if (k / r->area_every != k0 / r->area_every || last) st = ss_heal_run__add_row(r, err);
     if (!st && r->out_dir && ((r->snap_every && k % r->snap_every == 0) || last))
         st = ss_heal_run__snapshot(r, err);
     if (!st && r->out_dir && r->ckpt_every && (k % r->ckpt_every == 0 || last))
         st = ss_heal_run_write_checkpoint(r, err);
     return fail_outputs(r, st, err);
 }
+
+ss_status ss_heal_run_step(ss_heal_run *r, ss_error *err) { return run_step(r, r->nsteps, err); }
 
 ss_status ss_heal_run_advance_to(ss_heal_run *r, double day, ss_error *err) {
     if (!(day >= 0) || !isfinite(day))
@@ -219,7 +322,7 @@ ss_status ss_heal_run_advance_to(ss_heal_run *r, double day, ss_error *err) {
         return ss_error_set(err, SS_ERR_INPUT, "heal run: day %g is after the run's end (day %g)",
                             day, ss_heal_run_end_day(r));
     ss_status st = SS_OK;
-    while (!st && (long long)r->g->step < k) st = ss_heal_run_step(r, err);
+    while (!st && (long long)r->g->step < k) st = run_step(r, k, err);
     return st;
 }
 
@@ -247,6 +350,8 @@ ss_status ss_heal_run_finish(ss_heal_run *r, char **summary_json, ss_error *err)
 }
 
 ss_status ss_heal_run_set_hooks(ss_heal_run *r, const ss_heal_run_hooks *h, ss_error *err) {
+    if (h && h->step && !h->undo)
+        return ss_error_set(err, SS_ERR_INPUT, "heal run: an external step needs an undo hook");
     if (h && r->mech)
         return ss_error_set(err, SS_ERR_INPUT,
                             "--mechanics: the contraction mechanics needs the whole grid in one "
@@ -272,6 +377,8 @@ double ss_heal_run_day(const ss_heal_run *r) { return r->g->t_days; }
 double ss_heal_run_dt(const ss_heal_run *r) { return r->dt; }
 double ss_heal_run_end_day(const ss_heal_run *r) { return (double)r->nsteps * r->dt; }
 long long ss_heal_run_step_index(const ss_heal_run *r) { return (long long)r->g->step; }
+long long ss_heal_run_step_multiple(const ss_heal_run *r) { return r->mult; }
+long long ss_heal_run_steps_retried(const ss_heal_run *r) { return r->retried; }
 long long ss_heal_run_steps_total(const ss_heal_run *r) { return r->nsteps; }
 int ss_heal_run_done(const ss_heal_run *r) { return (long long)r->g->step >= r->nsteps; }
 const ss_heal_area_row *ss_heal_run_area(const ss_heal_run *r, int *n) {

@@ -9,6 +9,7 @@
 
 #include "skinsim/heal_run.h"
 #include "skinsim/mech.h"
+#include "skinsim/mesh.h"
 
 struct ss_heal_run {
     ss_heal_run_config c; /* copy; string fields point at the caller's strings */
@@ -45,6 +46,19 @@ struct ss_heal_run {
     double close_day;
     ss_mech_stats close_st;
     cJSON *mech_aux; /* the checkpoint's "mechanics" object while resuming */
+    /* adaptive steps (run.c): a step is mult x dt; adapt_tol 0 = fixed */
+    double adapt_tol;
+    long long mult, mult_max, retried, taken;
+    float *backup[SS_HEAL_NFIELDS]; /* the fields before the step (change bound, retry) */
+    /* real geometry (run_shell.c); shell NULL on the flat block */
+    struct ss_shell_patch *shell;
+    ss_mesh skin;
+    char *skin_path, *wound_path; /* owned copies (a resume re-reads them) */
+    int wound_is_uv;
+    double shell_opts[6];   /* voxel, thickness, epidermis, depth, margin, units */
+    int shell_concave;
+    float *vfields;         /* per skin vertex, SS_SHELL_VERTEX_STRIDE floats */
+    cJSON *shell_aux;       /* the checkpoint's "shell" object while resuming */
     ss_heal_run_hooks hooks; /* an external solver (src/dist); members NULL = none */
 };
 /* Brings r->g's fields up to date when an external solver steps it. */
@@ -52,6 +66,8 @@ ss_status ss_heal_run__sync(ss_heal_run *r, ss_error *err);
 
 /* run.c */
 ss_status ss_heal_run__add_row(ss_heal_run *r, ss_error *err);
+/* mult = 1 and mult_max from dt (adaptive steps; adapt_tol already set). */
+void ss_heal_run__adapt_init(ss_heal_run *r);
 ss_status ss_heal_run__add_snap(ss_heal_run *r, double t, const char *file, ss_error *err);
 
 /* run_setup.c: fill r from r->c (no file is written) */
@@ -90,5 +106,15 @@ void ss_heal_run__mech_summary(const ss_heal_run *r, cJSON *summary);
 /* Extra area.csv columns: *names (static) and values n x ncols (malloc'd); 0 when off. */
 int ss_heal_run__mech_columns(const ss_heal_run *r, const char *const **names, double **vals);
 void ss_heal_run__mech_free(ss_heal_run *r);
+
+/* run_shell.c: a run on a skin mesh (skinsim/shell.h) */
+int ss_heal_run__shell_wanted(const ss_heal_run_config *c);
+/* Loads and checks the mesh and the wound, builds r->g on the patch. */
+ss_status ss_heal_run__shell_setup_fresh(ss_heal_run *r, ss_error *err);
+ss_status ss_heal_run__shell_setup_resume(ss_heal_run *r, ss_error *err);
+ss_status ss_heal_run__shell_snapshot(ss_heal_run *r, int idx, ss_error *err);
+void ss_heal_run__shell_aux(const ss_heal_run *r, cJSON *aux);
+void ss_heal_run__shell_summary(const ss_heal_run *r, cJSON *summary);
+void ss_heal_run__shell_free(ss_heal_run *r);
 
 #endif

@@ -41,6 +41,12 @@ char *ss_heal_run__aux_json(const ss_heal_run *r, double wall) {
     cJSON_AddNumberToObject(j, "checkpoint_every_steps", (double)r->ckpt_every);
     cJSON_AddNumberToObject(j, "seed", (double)r->c.seed);
     cJSON_AddNumberToObject(j, "wall_time_s", wall);
+    if (r->adapt_tol > 0) { /* the adaptive step's state: part of the run's state */
+        cJSON_AddNumberToObject(j, "adapt_tol", r->adapt_tol);
+        cJSON_AddNumberToObject(j, "adapt_mult", (double)r->mult);
+        cJSON_AddNumberToObject(j, "adapt_retried", (double)r->retried);
+        cJSON_AddNumberToObject(j, "adapt_taken", (double)r->taken);
+    }
     if (r->wound) cJSON_AddItemToObject(j, "wound", cJSON_Duplicate(r->wound, 1));
     cJSON *a = cJSON_AddArrayToObject(j, "area");
     for (int i = 0; i < r->nrows; i++) {
@@ -61,6 +67,7 @@ char *ss_heal_run__aux_json(const ss_heal_run *r, double wall) {
         cJSON_AddItemToArray(sn, e);
     }
     ss_heal_run__mech_aux(r, j);
+    ss_heal_run__shell_aux(r, j);
     char *s = cJSON_PrintUnformatted(j);
     cJSON_Delete(j);
     return s;
@@ -130,10 +137,26 @@ ss_status ss_heal_run__aux_restore(ss_heal_run *r, const char *aux, const char *
         st = ss_error_set(err, SS_ERR_INPUT, "%s: checkpoint intervals are invalid", dir);
     if (cJSON_IsNumber(seed)) r->c.seed = (uint64_t)seed->valuedouble;
     if (cJSON_IsNumber(wall)) r->wall_prev = wall->valuedouble;
+    const cJSON *at = cJSON_GetObjectItem(j, "adapt_tol"),
+                *am = cJSON_GetObjectItem(j, "adapt_mult"),
+                *ar = cJSON_GetObjectItem(j, "adapt_retried"),
+                *ak = cJSON_GetObjectItem(j, "adapt_taken");
+    if (cJSON_IsNumber(at)) {
+        r->adapt_tol = at->valuedouble;
+        r->mult = cJSON_IsNumber(am) ? (long long)am->valuedouble : 1;
+        r->retried = cJSON_IsNumber(ar) ? (long long)ar->valuedouble : 0;
+        r->taken = cJSON_IsNumber(ak) ? (long long)ak->valuedouble : 0;
+        if (!(r->adapt_tol > 0 && r->adapt_tol <= 1) || r->mult < 1)
+            st = ss_error_set(err, SS_ERR_INPUT, "%s: checkpoint adaptive-step state is invalid",
+                              dir);
+    }
     cJSON *w = cJSON_GetObjectItem(j, "wound");
     if (w) r->wound = cJSON_Duplicate(w, 1);
     cJSON *mo = cJSON_GetObjectItem(j, "mechanics");
     if (mo && !(r->mech_aux = cJSON_Duplicate(mo, 1)))
+        st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    cJSON *so = cJSON_GetObjectItem(j, "shell");
+    if (so && !(r->shell_aux = cJSON_Duplicate(so, 1)))
         st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     if (!st) st = restore_rows(r, area, dir, err);
     if (!st) st = restore_snaps(r, snaps, dir, err);
@@ -283,6 +306,8 @@ ss_status ss_heal_run__write_identity(const ss_heal_run *r, ss_error *err) {
     cJSON *j = cJSON_CreateObject();
     if (!j) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     cJSON_AddStringToObject(j, "command", "heal");
+    cJSON_AddNumberToObject(j, "format", SS_HEAL_RUN_FORMAT);
+    cJSON_AddStringToObject(j, "skinsim_version", ss_version());
     cJSON_AddStringToObject(j, "run_id", id.run_id);
     cJSON_AddStringToObject(j, "scenario", id.scenario);
     cJSON_AddItemToObject(j, "grid", cJSON_CreateIntArray(id.n, 3));
@@ -424,6 +449,7 @@ ss_status ss_heal_run__snapshot(ss_heal_run *r, ss_error *err) {
         st = ss_heal_vti_write(path, r->g, err);
     }
     if (!st) st = ss_heal_run__mech_snapshot(r, idx, err);
+    if (!st) st = ss_heal_run__shell_snapshot(r, idx, err);
     if (!st && r->hooks.snapshot) { /* e.g. the MPI driver's per-rank pieces */
         snprintf(path, sizeof path, "%s/fields", r->out_dir);
         st = r->hooks.snapshot(r->hooks.ctx, r->g, path, idx, err);
@@ -489,6 +515,13 @@ cJSON *ss_heal_run__summary(const ss_heal_run *r, double wall) {
     if (r->wound) cJSON_AddItemToObject(j, "wound", cJSON_Duplicate(r->wound, 1));
     cJSON_AddStringToObject(j, "scheme", r->scheme == SS_HEAL_EXPLICIT ? "explicit" : "split");
     cJSON_AddNumberToObject(j, "dt_days", r->dt);
+    if (r->adapt_tol > 0) {
+        cJSON *a = cJSON_AddObjectToObject(j, "adaptive_steps");
+        cJSON_AddNumberToObject(a, "tolerance", r->adapt_tol);
+        cJSON_AddNumberToObject(a, "solver_steps", (double)r->taken);
+        cJSON_AddNumberToObject(a, "retried", (double)r->retried);
+        cJSON_AddNumberToObject(a, "max_dt_days", (double)r->mult_max * r->dt);
+    }
     cJSON_AddNumberToObject(j, "days", r->g->t_days);
     cJSON_AddNumberToObject(j, "steps", (double)r->g->step);
     add_closure_time(j, "time_to_50pct_closure_days",
@@ -512,6 +545,7 @@ cJSON *ss_heal_run__summary(const ss_heal_run *r, double wall) {
     cJSON *pj = cJSON_Parse(r->params_json);
     cJSON_AddItemToObject(j, "params", pj ? pj : cJSON_CreateString(r->params_json));
     ss_heal_run__mech_summary(r, j);
+    ss_heal_run__shell_summary(r, j);
     return j;
 }
 

@@ -47,6 +47,14 @@ static ss_status check_config(const ss_heal_run_config *c, ss_error *err) {
                             (int)c->scheme);
     if (c->concave_k < 0 || (c->concave_k > 0 && c->concave_k < 3))
         return ss_error_set(err, SS_ERR_INPUT, "--concave-k: use 0 (convex) or >= 3");
+    if (!(c->adapt_tol >= 0 && c->adapt_tol <= 1))
+        return ss_error_set(err, SS_ERR_INPUT, "--adapt-tol %g: need a value in [0, 1]",
+                            c->adapt_tol);
+    if (c->adapt_tol > 0 && (c->scheme != SS_HEAL_SPLIT || c->mechanics))
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "--adapt-tol %g: adaptive steps need the split scheme without "
+                            "--mechanics (use --adapt-tol 0)",
+                            c->adapt_tol);
     return SS_OK;
 }
 
@@ -309,6 +317,8 @@ static ss_status setup_solver(ss_heal_run *r, ss_error *err) {
     r->area_every = llround(c->area_every / r->dt);
     if (r->area_every < 1) r->area_every = 1;
     r->ckpt_every = every_steps(c->checkpoint_every, r->dt);
+    r->adapt_tol = c->adapt_tol;
+    ss_heal_run__adapt_init(r);
     r->params_json = ss_heal_params_to_json(r->p);
     if (!r->params_json) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     return SS_OK;
@@ -318,6 +328,14 @@ ss_status ss_heal_run__setup_fresh(ss_heal_run *r, ss_error *err) {
     const ss_heal_run_config *c = &r->c;
     ss_status st = check_config(c, err);
     if (!st) st = setup_params(r, err);
+    if (!st && ss_heal_run__shell_wanted(c)) { /* a patch of skin on a mesh */
+        r->days = c->days != 0 ? c->days : SS_HEAL_RUN_DEFAULT_DAYS;
+        r->scheme = c->scheme;
+        st = ss_heal_run__shell_setup_fresh(r, err);
+        if (!st) st = ss_heal_run__mech_setup_fresh(r, err);
+        if (!st) st = setup_solver(r, err);
+        return st;
+    }
     geometry gm;
     if (!st) st = setup_geometry(c, &gm, err);
     if (!st) st = check_wound_options(c, &gm, err);
@@ -371,6 +389,7 @@ ss_status ss_heal_run__setup_resume(ss_heal_run *r, ss_error *err) {
     r->p = ss_heal_params_parse(r->params_json, "checkpoint parameters", r->scenario, err);
     if (!r->p) return err->code ? err->code : SS_ERR_INPUT;
     st = ss_heal_run__mech_setup_resume(r, dir, err);
+    if (!st) st = ss_heal_run__shell_setup_resume(r, err);
     if (st) return st;
     r->s = ss_heal_solver_create(r->g, r->p, r->scheme, r->dt, err);
     if (!r->s) return err->code ? err->code : SS_ERR_INPUT;
@@ -378,6 +397,9 @@ ss_status ss_heal_run__setup_resume(ss_heal_run *r, ss_error *err) {
         return ss_error_set(err, SS_ERR_INPUT, "%s: solver refused the checkpoint's dt %.17g", dir,
                             r->dt);
     if (c->checkpoint_every >= 0) r->ckpt_every = every_steps(c->checkpoint_every, r->dt);
+    long long mult = r->mult; /* from the checkpoint */
+    ss_heal_run__adapt_init(r);
+    if (mult >= 1 && mult <= r->mult_max) r->mult = mult;
     r->resumed_from = (long long)r->g->step;
     return SS_OK;
 }

@@ -7,6 +7,7 @@
 #include "skinsim/heal_io.h"
 
 #include <errno.h>
+#include <stdlib.h>
 #include <string.h>
 
 static int little_endian(void) {
@@ -216,4 +217,142 @@ ss_status ss_heal_pvd_write(const char *path, int n, const double *t_days, const
     }
     fprintf(f, "  </Collection>\n</VTKFile>\n");
     return commit(&af, path, err);
+}
+
+/* ---- reading back what ss_heal_vti_write_vectors wrote ----------------------------------
+ * Not a general VTK reader: the header is scanned for the attributes this
+ * writer puts there (WholeExtent, Spacing, TimeValue, each DataArray's Name,
+ * type, components and offset), the appended block sizes are checked against
+ * the extent, and anything else is an input error naming the file. */
+
+static const char *attr_in(const char *tag, const char *end, const char *name) {
+    size_t n = strlen(name);
+    for (const char *p = tag; p && p + n + 2 < end; p++) {
+        p = strstr(p, name);
+        if (!p || p + n + 2 >= end) return NULL;
+        if ((p == tag || p[-1] == ' ') && p[n] == '=' && p[n + 1] == '"') return p + n + 2;
+    }
+    return NULL;
+}
+
+static uint64_t get_u64le(const unsigned char *b) {
+    uint64_t v = 0;
+    for (int i = 7; i >= 0; i--) v = (v << 8) | b[i];
+    return v;
+}
+
+static void get_f32le(float *dst, const unsigned char *src, size_t n) {
+    if (little_endian()) {
+        memcpy(dst, src, 4 * n);
+        return;
+    }
+    for (size_t i = 0; i < n; i++) {
+        uint32_t v = (uint32_t)src[4 * i] | (uint32_t)src[4 * i + 1] << 8 |
+                     (uint32_t)src[4 * i + 2] << 16 | (uint32_t)src[4 * i + 3] << 24;
+        memcpy(&dst[i], &v, 4);
+    }
+}
+
+/* One appended array: its block at data + offset, of `bytes` bytes. */
+static const unsigned char *vti_block(const unsigned char *data, size_t avail, uint64_t off,
+                                      uint64_t bytes) {
+    if (off > avail || avail - off < 8) return NULL;
+    if (get_u64le(data + off) != bytes || avail - off - 8 < bytes) return NULL;
+    return data + off + 8;
+}
+
+ss_heal_grid *ss_heal_vti_read(const char *path, float **displacement, ss_error *err) {
+    if (displacement) *displacement = NULL;
+    size_t len = 0;
+    char *text = ss_read_file(path, &len, err);
+    if (!text) return NULL;
+    ss_heal_grid *g = NULL;
+    float *disp = NULL;
+    const char *why = NULL;
+    char *app = strstr(text, "<AppendedData encoding=\"raw\">");
+    char *us = app ? strchr(app, '_') : NULL;
+    int n[3] = {0, 0, 0}, e0[3];
+    double sp[3] = {0, 0, 0};
+    const char *we = strstr(text, "WholeExtent=\"");
+    const char *spc = strstr(text, "Spacing=\"");
+    const char *tv = strstr(text, "Name=\"TimeValue\"");
+    if (!app || !us || !we || !spc || !tv || we > app || spc > app || tv > app)
+        why = "not a skinsim heal snapshot (no extent, spacing, time or appended data)";
+    else if (sscanf(we + 13, "%d %d %d %d %d %d", &e0[0], &n[0], &e0[1], &n[1], &e0[2], &n[2]) !=
+                 6 ||
+             e0[0] || e0[1] || e0[2] || n[0] < 1 || n[1] < 1 || n[2] < 1)
+        why = "bad WholeExtent";
+    else if (sscanf(spc + 9, "%lg %lg %lg", &sp[0], &sp[1], &sp[2]) != 3 || !(sp[0] > 0) ||
+             sp[1] != sp[0] || sp[2] != sp[0])
+        why = "bad Spacing (the heal grid has cubic voxels)";
+    double t = 0;
+    const char *tvv = tv ? strchr(tv, '>') : NULL;
+    if (!why && (!tvv || sscanf(tvv + 1, "%lg", &t) != 1 || !(t >= 0))) why = "bad TimeValue";
+    if (!why && !(g = ss_heal_grid_create(n[0], n[1], n[2], sp[0], err))) {
+        free(text);
+        return NULL;
+    }
+    const unsigned char *data = (const unsigned char *)us + 1;
+    size_t avail = len - (size_t)(us + 1 - text);
+    size_t ncell = (size_t)n[0] * (size_t)n[1] * (size_t)n[2];
+    int have_cell = 0, have[SS_HEAL_NFIELDS] = {0};
+    /* each DataArray of the header */
+    for (char *da = text; !why && (da = strstr(da, "<DataArray")) && da < app; da++) {
+        const char *end = strchr(da, '>');
+        if (!end) break;
+        const char *nm = attr_in(da, end, "Name"), *of = attr_in(da, end, "offset"),
+                   *ty = attr_in(da, end, "type"), *nc = attr_in(da, end, "NumberOfComponents");
+        if (!nm || !of) continue; /* TimeValue (ascii) */
+        const char *q = strchr(nm, '"');
+        size_t nl = q ? (size_t)(q - nm) : 0;
+        unsigned long long off = strtoull(of, NULL, 10);
+        int comps = nc ? atoi(nc) : 1;
+        if (nl == 10 && !strncmp(nm, "cell_state", 10)) {
+            const unsigned char *b =
+                strncmp(ty ? ty : "", "UInt8\"", 6) ? NULL : vti_block(data, avail, off, ncell);
+            if (!b)
+                why = "cell_state array malformed";
+            else
+                memcpy(g->cell, b, ncell), have_cell = 1;
+            continue;
+        }
+        const unsigned char *b = strncmp(ty ? ty : "", "Float32\"", 8)
+                                     ? NULL
+                                     : vti_block(data, avail, off, 4 * (uint64_t)comps * ncell);
+        int k = 0;
+        while (k < SS_HEAL_NFIELDS &&
+               !(strlen(ss_heal_field_name(k)) == nl && !strncmp(nm, ss_heal_field_name(k), nl)))
+            k++;
+        if (k < SS_HEAL_NFIELDS) {
+            if (!b || comps != 1)
+                why = "a field array is malformed";
+            else
+                get_f32le(g->field[k], b, ncell), have[k] = 1;
+        } else if (nl == 12 && !strncmp(nm, "displacement", 12) && displacement) {
+            if (!b || comps != 3)
+                why = "the displacement array is malformed";
+            else if (!(disp = malloc(3 * ncell * sizeof *disp)))
+                why = "out of memory";
+            else { /* interleaved per cell in the file; x, y, z blocks in memory */
+                float v[3];
+                for (size_t i = 0; i < ncell; i++) {
+                    get_f32le(v, b + 12 * i, 3);
+                    for (int c = 0; c < 3; c++) disp[(size_t)c * ncell + i] = v[c];
+                }
+            }
+        }
+    }
+    for (int k = 0; !why && k < SS_HEAL_NFIELDS; k++)
+        if (!have[k]) why = "a field array is missing";
+    if (!why && !have_cell) why = "the cell_state array is missing";
+    free(text);
+    if (why) {
+        ss_error_set(err, SS_ERR_INPUT, "%s: %s", path, why);
+        ss_heal_grid_free(g);
+        free(disp);
+        return NULL;
+    }
+    g->t_days = t;
+    if (displacement) *displacement = disp;
+    return g;
 }

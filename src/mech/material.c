@@ -55,6 +55,7 @@ static const key keys[] = {
     K(ecm_floor, "1", 1e-3, 1),
     K(tet_size_mm, "mm", 1e-3, 1e3),
     K(anchor, "kPa/mm", 0, 1e6),
+    K(anchor_side, "kPa/mm", 0, 1e6),
     K(k_suture, "mN/mm", 0, 1e9),
     K(max_shorten, "1", 0, 0.9),
     K(tol, "1", 1e-9, 0.1),
@@ -78,10 +79,11 @@ void ss_mech_params_default(ss_mech_params *p) {
     p->kappa = 0.0;
     p->fibre[0][0] = 1.0;
     p->nfibres = 1;
-    p->ecm_floor = 0.2;
+    p->ecm_floor = 0.5;
     p->tet_size_mm = 1.0;
     p->anchor = 0.1;
-    p->k_suture = 50.0;
+    p->anchor_side = 2.0;
+    p->k_suture = 3.0;
     p->max_shorten = 0.5;
     p->tol = 1e-4;
     p->max_substeps = 400;

@@ -51,6 +51,7 @@ void ss_mech_free(ss_mech *m) {
     ss_mech_transfer_free(m->T);
     free(m->mask);
     free(m->wound0);
+    free(m->side);
     free(m->ecm);
     free(m->myo);
     for (int d = 0; d < 3; d++) free(m->usub[d]);
@@ -58,6 +59,8 @@ void ss_mech_free(ss_mech *m) {
     free(m->usub_valid);
     for (int d = 0; d < 3; d++) free(m->u[d]);
     free(m->kbase);
+    free(m->rest_old);
+    free(m->k_old);
     free(m->nmyo);
     free(m->nth);
     free(m->necm);
@@ -83,10 +86,20 @@ static int cmp_face(const void *a, const void *b) {
     return x < y ? -1 : x > y;
 }
 
-/* Boundary faces: top ones (outward normal z > 0.5) become the surface
- * triangles; the others carry the foundation. */
-static ss_status boundary(ss_mech *m, ss_error *err) {
+/* Boundary faces, by the grid cell just outside them: air above (outward
+ * normal z > 0.5) makes the top surface triangles, other faces on air (the
+ * risers of a stepped surface on a curved patch) are free too; faces on the
+ * lateral sides of the mesh's box carry the far field (anchor_side), the
+ * rest (bottom, inner bound of a shell) the subcutis (anchor). */
+static ss_status boundary(ss_mech *m, const ss_heal_grid *g, ss_error *err) {
     const ss_tetmesh *M = m->mesh;
+    double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+    for (int i = 0; i < M->nnodes; i++)
+        for (int d = 0; d < 2; d++) {
+            lo[d] = fmin(lo[d], M->x[3 * i + d]);
+            hi[d] = fmax(hi[d], M->x[3 * i + d]);
+        }
+    const double eps = 1e-6 * (1 + fmax(hi[0] - lo[0], hi[1] - lo[1]));
     if (M->nnodes >= (1 << 21))
         return ss_error_set(err, SS_ERR_INPUT, "mechanics: %d nodes is more than 2^21", M->nnodes);
     static const int F[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}}; /* outward */
@@ -127,7 +140,29 @@ static ss_status boundary(ss_mech *m, ss_error *err) {
         n[2] = u[0] * w[1] - u[1] * w[0];
         double area2 = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
         if (!(area2 > 0)) continue;
-        if (n[2] / area2 > 0.5) {
+        /* the cell just outside the face */
+        double qo[3];
+        for (int d = 0; d < 3; d++)
+            qo[d] = (a[d] + b[d] + c[d]) / 3 + 0.75 * g->dx_mm * n[d] / area2;
+        int ci = (int)floor(qo[0] / g->dx_mm), cj = (int)floor(qo[1] / g->dx_mm),
+            ck = (int)floor(qo[2] / g->dx_mm);
+        int out = ci < 0 || cj < 0 || ck < 0 || ci >= g->nx || cj >= g->ny || ck >= g->nz;
+        uint8_t cell = out ? SS_CELL_BOUND : g->cell[ss_heal_idx(g, ci, cj, ck)];
+        int on_air = cell == SS_CELL_AIR;
+        int lateral = 0;
+        for (int d = 0; d < 2; d++) {
+            int all_lo = 1, all_hi = 1;
+            for (int k = 0; k < 3; k++) {
+                double x = M->x[3 * v[k] + d];
+                all_lo &= fabs(x - lo[d]) < eps;
+                all_hi &= fabs(x - hi[d]) < eps;
+            }
+            lateral |= all_lo || all_hi;
+        }
+        if (!on_air && !lateral && n[2] / area2 > 0.5 && tissue(cell))
+            on_air = 1;                              /* coarse lattice */
+        if (on_air && n[2] / area2 <= 0.5) continue; /* a free riser */
+        if (on_air) {
             if (m->ntri == cap) {
                 cap *= 2;
                 int32_t *nt = realloc(m->tri, 3 * (size_t)cap * sizeof(int32_t));
@@ -139,7 +174,12 @@ static ss_status boundary(ss_mech *m, ss_error *err) {
             }
             memcpy(m->tri + 3 * (size_t)m->ntri++, v, sizeof v);
         } else {
-            for (int k = 0; k < 3; k++) m->S->anchor[v[k]] += m->p.anchor * 0.5 * area2 / 3.0;
+            int side = lateral;
+            double an = side ? m->p.anchor_side : m->p.anchor;
+            for (int k = 0; k < 3; k++) {
+                m->S->anchor[v[k]] += an * 0.5 * area2 / 3.0;
+                if (side) m->side[v[k]] = 1;
+            }
         }
     }
     free(fs);
@@ -157,6 +197,34 @@ static int nearest_node(const ss_mech *m, const double p[3], double *dist) {
     }
     *dist = sqrt(bd);
     return best;
+}
+
+/* The nodes within r of p (the nearest one, near, always among them). */
+static ss_status bite_nodes(const ss_mech *m, const double p[3], double r, int near, int **out,
+                            int *n) {
+    int cap = 16, k = 0;
+    int *v = malloc((size_t)cap * sizeof(int));
+    if (!v) return SS_ERR_NOMEM;
+    v[k++] = near;
+    for (int i = 0; i < m->mesh->nnodes; i++) {
+        const double *x = m->mesh->x + 3 * i;
+        double d = (x[0] - p[0]) * (x[0] - p[0]) + (x[1] - p[1]) * (x[1] - p[1]) +
+                   (x[2] - p[2]) * (x[2] - p[2]);
+        if (i == near || d > r * r) continue;
+        if (k == cap) {
+            cap *= 2;
+            int *w = realloc(v, (size_t)cap * sizeof(int));
+            if (!w) {
+                free(v);
+                return SS_ERR_NOMEM;
+            }
+            v = w;
+        }
+        v[k++] = i;
+    }
+    *out = v;
+    *n = k;
+    return SS_OK;
 }
 
 ss_mech *ss_mech_create(ss_heal_grid *g, const ss_heal_params *heal, const ss_mech_params *p,
@@ -217,13 +285,19 @@ ss_mech *ss_mech_create(ss_heal_grid *g, const ss_heal_params *heal, const ss_me
         goto fail;
     if (!(m->S = ss_springs_create(m->mesh, 9.0 * p->K_bulk, err))) goto fail;
     const int nn = m->mesh->nnodes, ns = m->S->nsprings;
-    if (boundary(m, err) != SS_OK) goto fail;
-    /* sutures */
+    if (!(m->side = calloc((size_t)nn, 1))) goto nomem;
+    if (boundary(m, g, err) != SS_OK) goto fail;
+    /* sutures: each end holds the tissue of its bite (the nodes within 1.5
+     * tet edges of the point, at least the nearest), and every node pair
+     * across the stitch gets a share of its stiffness with the rest length
+     * that pulls the two points together; a point load on a single node
+     * folds the tets around it */
+    m->ntissue = m->S->nsprings;
     if (nsut > 0) {
-        m->suture_spring = malloc((size_t)nsut * sizeof(int));
+        m->suture_spring = malloc(((size_t)nsut + 1) * sizeof(int));
         m->suture_day = malloc((size_t)nsut * sizeof(double));
         if (!m->suture_spring || !m->suture_day) goto nomem;
-        double reach = 1.5 * p->tet_size_mm;
+        double reach = 1.5 * p->tet_size_mm, bite = 1.5 * p->tet_size_mm;
         for (int i = 0; i < nsut; i++) {
             double da, db;
             int a = nearest_node(m, sut[i].a, &da), b = nearest_node(m, sut[i].b, &db);
@@ -234,15 +308,43 @@ ss_mech *ss_mech_create(ss_heal_grid *g, const ss_heal_params *heal, const ss_me
                     a == b ? "joins a node to itself" : "has a point outside the skin domain");
                 goto fail;
             }
-            if (ss_springs_add(m->S, a, b, 0.0, p->k_suture, err) != SS_OK) goto fail;
-            m->suture_spring[i] = m->S->nsprings - 1;
+            int *A = NULL, *B = NULL, na = 0, nb = 0;
+            if (bite_nodes(m, sut[i].a, bite, a, &A, &na) != SS_OK ||
+                bite_nodes(m, sut[i].b, bite, b, &B, &nb) != SS_OK) {
+                free(A);
+                free(B);
+                goto nomem;
+            }
+            double gap = 0;
+            for (int d = 0; d < 3; d++)
+                gap += (sut[i].b[d] - sut[i].a[d]) * (sut[i].b[d] - sut[i].a[d]);
+            gap = sqrt(gap);
+            m->suture_spring[i] = m->S->nsprings;
+            ss_status st = SS_OK;
+            for (int u = 0; u < na && !st; u++)
+                for (int v = 0; v < nb && !st; v++) {
+                    if (A[u] == B[v]) continue;
+                    const double *xa = m->mesh->x + 3 * A[u], *xb = m->mesh->x + 3 * B[v];
+                    double l =
+                        sqrt((xb[0] - xa[0]) * (xb[0] - xa[0]) + (xb[1] - xa[1]) * (xb[1] - xa[1]) +
+                             (xb[2] - xa[2]) * (xb[2] - xa[2]));
+                    double rest = l - gap > 0 ? l - gap : 0.0;
+                    st = ss_springs_add(m->S, A[u], B[v], rest, p->k_suture / (na * nb), err);
+                }
+            free(A);
+            free(B);
+            if (st) goto fail;
             m->suture_day[i] = sut[i].remove_day;
         }
+        m->suture_spring[nsut] = m->S->nsprings;
         m->nsutures = nsut;
     }
     const int nsp = m->S->nsprings;
     (void)ns;
     m->kbase = malloc((size_t)nsp * sizeof(double));
+    m->rest_old = malloc((size_t)nsp * sizeof(double));
+    m->k_old = malloc((size_t)nsp * sizeof(double));
+    if (!m->rest_old || !m->k_old) goto nomem;
     m->nmyo = calloc((size_t)nn, sizeof(double));
     m->nth = calloc((size_t)nn, sizeof(double));
     m->necm = calloc((size_t)nn, sizeof(double));
@@ -435,7 +537,9 @@ ss_status ss_mech_step(ss_mech *m, ss_heal_grid *g, double dt_days, ss_error *er
         m->stress[i] = ss_mech_pcell(p, m->nth[i]) * m->nmyo[i] * p->K_m;
     }
     /* 2. rest lengths and stiffness of the tissue springs */
-    const int ntis = S->nsprings - m->nsutures;
+    const int ntis = m->ntissue;
+    memcpy(m->rest_old, S->rest, (size_t)S->nsprings * sizeof(double));
+    memcpy(m->k_old, S->k, (size_t)S->nsprings * sizeof(double));
 #pragma omp parallel for schedule(static)
     for (int s = 0; s < ntis; s++) {
         int a = S->e[2 * s], b = S->e[2 * s + 1];
@@ -450,13 +554,54 @@ ss_status ss_mech_step(ss_mech *m, ss_heal_grid *g, double dt_days, ss_error *er
         S->k[s] = m->kbase[s] * (ecm > 0 ? ecm : p->ecm_floor);
     }
     for (int i = 0; i < m->nsutures; i++)
-        S->k[m->suture_spring[i]] =
-            g->t_days >= m->suture_day[i] ? 0.0 : m->kbase[m->suture_spring[i]];
+        for (int sp = m->suture_spring[i]; sp < m->suture_spring[i + 1]; sp++)
+            S->k[sp] = g->t_days >= m->suture_day[i] ? 0.0 : m->kbase[sp];
     ss_springs_update_mass(S);
     /* 3. relax from the last configuration, at rest */
     memcpy(m->xprev, S->x, 3 * (size_t)nn * sizeof(double));
     memset(S->v, 0, 3 * (size_t)nn * sizeof(double));
+    int inv0 = ss_mech_inverted_tets(m);
     m->last_substeps = ss_springs_relax(S, p->tol, p->max_substeps, &m->last_converged);
+    m->last_increments = 1;
+    /* inversion guard: a frame that folds tets is redone from the last
+     * configuration with its load (rest lengths, stiffness) applied in 2, 4,
+     * ... 32 increments, each relaxed to the criterion (a continuation: the
+     * relaxation then follows the unfolded branch) */
+    m->last_inverted = ss_mech_inverted_tets(m);
+    if (m->last_inverted > inv0) {
+        const int nsp = S->nsprings;
+        double *rest_new = malloc((size_t)nsp * sizeof(double)),
+               *k_new = malloc((size_t)nsp * sizeof(double));
+        if (!rest_new || !k_new) {
+            free(rest_new);
+            free(k_new);
+            return ss_error_set(err, SS_ERR_NOMEM, "mechanics step: out of memory");
+        }
+        memcpy(rest_new, S->rest, (size_t)nsp * sizeof(double));
+        memcpy(k_new, S->k, (size_t)nsp * sizeof(double));
+        for (int inc = 2; inc <= 32 && m->last_inverted > inv0; inc *= 2) {
+            memcpy(S->x, m->xprev, 3 * (size_t)nn * sizeof(double));
+            int total = 0, conv = 1;
+            for (int q = 1; q <= inc; q++) {
+                double w = (double)q / inc;
+                for (int sp = 0; sp < nsp; sp++) {
+                    S->rest[sp] = m->rest_old[sp] + w * (rest_new[sp] - m->rest_old[sp]);
+                    S->k[sp] = m->k_old[sp] + w * (k_new[sp] - m->k_old[sp]);
+                }
+                ss_springs_update_mass(S);
+                memset(S->v, 0, 3 * (size_t)nn * sizeof(double));
+                int c = 0;
+                total += ss_springs_relax(S, p->tol, p->max_substeps, &c);
+                conv &= c;
+            }
+            m->last_substeps = total;
+            m->last_converged = conv;
+            m->last_increments = inc;
+            m->last_inverted = ss_mech_inverted_tets(m);
+        }
+        free(rest_new);
+        free(k_new);
+    }
     /* 4. velocities and the grid */
     double vmax = 0;
     for (int i = 0; i < 3 * nn; i++) {
@@ -473,13 +618,41 @@ ss_status ss_mech_step(ss_mech *m, ss_heal_grid *g, double dt_days, ss_error *er
     return SS_OK;
 }
 
+/* Signed volume of tet t at positions x (mm^3). */
+static double tet_volume(const int32_t *q, const double *x) {
+    double u[3], v[3], w[3];
+    for (int d = 0; d < 3; d++) {
+        u[d] = x[3 * q[1] + d] - x[3 * q[0] + d];
+        v[d] = x[3 * q[2] + d] - x[3 * q[0] + d];
+        w[d] = x[3 * q[3] + d] - x[3 * q[0] + d];
+    }
+    return (u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) +
+            u[2] * (v[0] * w[1] - v[1] * w[0])) /
+           6.0;
+}
+
+int ss_mech_inverted_tets(const ss_mech *m) {
+    int c = 0;
+    for (int t = 0; t < m->mesh->ntets; t++) c += !(tet_volume(m->mesh->tet + 4 * t, m->S->x) > 0);
+    return c;
+}
+
 void ss_mech_stats_compute(const ss_mech *m, ss_mech_stats *st) {
     memset(st, 0, sizeof *st);
     st->substeps = m->last_substeps;
     st->converged = m->last_converged;
+    st->increments = m->last_increments;
     st->max_speed_mm_day = m->last_vmax;
     st->initial_outline_area_mm2 = m->outline0;
     const double *x = m->S->x;
+    st->inverted_tets = ss_mech_inverted_tets(m);
+    for (int i = 0; i < m->mesh->nnodes; i++) {
+        if (!m->side[i]) continue;
+        double d2 = 0;
+        for (int d = 0; d < 3; d++)
+            d2 += (x[3 * i + d] - m->S->X[3 * i + d]) * (x[3 * i + d] - m->S->X[3 * i + d]);
+        if (d2 > st->side_max_disp_mm * st->side_max_disp_mm) st->side_max_disp_mm = sqrt(d2);
+    }
     double A = 0, cx = 0, cy = 0, sxx = 0, syy = 0, sxy = 0;
     double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
     for (int t = 0; t < m->ntri; t++) {

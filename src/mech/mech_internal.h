@@ -16,12 +16,15 @@ struct ss_mech {
     double kernel_width;
     uint8_t *mask;           /* tissue cells */
     uint8_t *wound0;         /* initial wound cells */
+    uint8_t *side;           /* per node: on a side face (far-field boundary) */
     float *ecm;              /* rho_ecm / rho_ecm_hat per cell (scratch) */
     float *myo;              /* myofibroblast density per cell (scratch) */
     double *usub[3], *thsub; /* sub-lattice displacement and volumetric strain */
     uint8_t *usub_valid;
     float *u[3];                        /* grid displacement, mm (filled on demand) */
     double *kbase;                      /* undamaged spring stiffness */
+    double *rest_old, *k_old;           /* the last frame's rest lengths and stiffness */
+    int last_inverted, last_increments; /* folded tets after the frame, load increments */
     double *nmyo, *nth, *necm, *stress; /* per node */
     double *vel;                        /* 3n, mm/day */
     double *xprev, *grad, *disp;
@@ -29,7 +32,8 @@ struct ss_mech {
     uint8_t *tri_wound;
     int ntri;
     int nsutures;
-    int *suture_spring;
+    int ntissue;        /* springs before the first stitch spring */
+    int *suture_spring; /* first spring of stitch i; its springs run to suture_spring[i+1] */
     double *suture_day;
     double outline0;
     int last_substeps, last_converged;

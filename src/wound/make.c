@@ -34,7 +34,10 @@ typedef struct job {
     ss_mm_table *table;
     ss_wound_recipe recipe;
     ss_image *skin;
-    ss_heal_run *run;
+    ss_heal_run *run;         /* simulated here, or */
+    ss_heal_saved_run *saved; /* read back from --heal DIR */
+    ss_heal_grid *grid0;      /* --heal: the first snapshot (day 0) */
+    float *disp0;             /* --heal: its displacement (NULL without mechanics) */
     ss_wound_tissue *tissue;
     ss_wound_renderer *renderer;
     double side_mm;
@@ -47,6 +50,22 @@ static void job_free(job *j) {
     ss_wound_renderer_free(j->renderer);
     ss_wound_tissue_free(j->tissue);
     ss_heal_run_free(j->run);
+    ss_heal_saved_run_free(j->saved);
+    ss_heal_grid_free(j->grid0);
+    free(j->disp0);
+}
+
+static const char *job_scenario(const job *j) {
+    return j->run ? ss_heal_run_scenario(j->run) : ss_heal_saved_run_scenario(j->saved);
+}
+static double job_dt(const job *j) {
+    return j->run ? ss_heal_run_dt(j->run) : ss_heal_saved_run_dt(j->saved);
+}
+static const ss_heal_params *job_params(const job *j) {
+    return j->run ? ss_heal_run_params(j->run) : ss_heal_saved_run_params(j->saved);
+}
+static const ss_heal_grid *job_grid(const job *j) {
+    return j->run ? ss_heal_run_grid(j->run) : j->grid0;
 }
 
 static ss_status check_days(const ss_wound_make_config *c, ss_error *err) {
@@ -72,6 +91,54 @@ static ss_status read_skin(job *j, ss_error *err) {
     return j->skin ? SS_OK : (err->code ? err->code : SS_ERR_INPUT);
 }
 
+/* --heal DIR: a finished heal run instead of a simulation. The healing
+ * problem then comes from DIR (the heal options must be left alone), every
+ * requested day must be one of its snapshots, and its first snapshot (day 0)
+ * is read now, so a damaged folder is an input error before anything is
+ * written. */
+static ss_status open_saved(job *j, ss_error *err) {
+    const ss_wound_make_config *c = j->c;
+    ss_heal_run_config def;
+    ss_heal_run_config_default(&def);
+    def.mechanics = c->heal.mechanics; /* --mechanics: see below */
+    if (memcmp(&def, &c->heal, sizeof def))
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "--heal %s: the healing problem comes from the run folder; leave out "
+                            "the options of skinsim heal (--scenario, --stroke, --grid, ...)",
+                            c->heal_dir);
+    ss_status st = ss_heal_saved_run_open(c->heal_dir, &j->saved, err);
+    if (st) return st;
+    const ss_heal_saved_run *s = j->saved;
+    double end = ss_heal_saved_run_end_day(s);
+    for (int i = 0; i < c->ndays; i++) {
+        if (c->days[i] > end + 1e-3 * ss_heal_saved_run_dt(s))
+            return ss_error_set(err, SS_ERR_INPUT,
+                                "--days: day %g is outside the run in --heal %s (simulated to "
+                                "day %g)",
+                                c->days[i], c->heal_dir, end);
+        if (ss_heal_saved_run_find(s, c->days[i]) < 0)
+            return ss_error_set(err, SS_ERR_INPUT,
+                                "--days: --heal %s has no snapshot at day %g (snapshots every "
+                                "%g days up to day %g; run skinsim heal with --snapshot-every)",
+                                c->heal_dir, c->days[i],
+                                ss_heal_saved_run_snapshot_count(s) > 1
+                                    ? ss_heal_saved_run_snapshot_day(s, 1) -
+                                          ss_heal_saved_run_snapshot_day(s, 0)
+                                    : end,
+                                end);
+    }
+    if (ss_heal_saved_run_snapshot_day(s, 0) > 1e-3 * ss_heal_saved_run_dt(s))
+        return ss_error_set(err, SS_ERR_INPUT, "--heal %s: its first snapshot is not day 0",
+                            c->heal_dir);
+    if (!(j->grid0 = ss_heal_saved_run_load(s, 0, &j->disp0, err))) return err->code;
+    if ((c->mechanics || c->heal.mechanics) && !j->disp0)
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "--mechanics: --heal %s was run without --mechanics (its snapshots "
+                            "hold no displacement)",
+                            c->heal_dir);
+    return SS_OK;
+}
+
 static ss_status read_inputs(job *j, ss_error *err) {
     const ss_wound_make_config *c = j->c;
     ss_status st = check_days(c, err);
@@ -82,15 +149,19 @@ static ss_status read_inputs(job *j, ss_error *err) {
     if (!j->table) return err->code;
     ss_wound_recipe_default(&j->recipe);
     if (c->recipe_path && (st = ss_wound_recipe_load(c->recipe_path, &j->recipe, err))) return st;
-    /* the heal run: in memory, to the last requested day (at least one step) */
-    ss_heal_run_config hc = c->heal;
-    hc.out_dir = NULL;
-    hc.resume_dir = NULL;
-    hc.mechanics = c->mechanics || c->heal.mechanics; /* the run's own coupled mechanics */
-    double last = c->days[c->ndays - 1];
-    hc.days = last > 0 ? last : 1;
-    if ((st = ss_heal_run_create(&hc, &j->run, err))) return st;
-    const ss_heal_grid *g = ss_heal_run_grid(j->run);
+    if (c->heal_dir) {
+        st = open_saved(j, err);
+    } else { /* the heal run: in memory, to the last requested day (at least one step) */
+        ss_heal_run_config hc = c->heal;
+        hc.out_dir = NULL;
+        hc.resume_dir = NULL;
+        hc.mechanics = c->mechanics || c->heal.mechanics; /* the run's own coupled mechanics */
+        double last = c->days[c->ndays - 1];
+        hc.days = last > 0 ? last : 1;
+        st = ss_heal_run_create(&hc, &j->run, err);
+    }
+    if (st) return st;
+    const ss_heal_grid *g = job_grid(j);
     j->side_mm = g->nx * g->dx_mm;
     if (fabs(g->ny * g->dx_mm - j->side_mm) > 1e-9 * j->side_mm)
         return ss_error_set(err, SS_ERR_INPUT,
@@ -98,20 +169,26 @@ static ss_status read_inputs(job *j, ss_error *err) {
                             "(--size-mm X,X,Z)",
                             j->side_mm, g->ny * g->dx_mm);
     for (int i = 0; i < c->ndays; i++) {
-        long long k = llround(c->days[i] / ss_heal_run_dt(j->run));
-        if (fabs(k * ss_heal_run_dt(j->run) - c->days[i]) > 1e-6 * (c->days[i] + 1))
+        long long k = llround(c->days[i] / job_dt(j));
+        if (fabs(k * job_dt(j) - c->days[i]) > 1e-6 * (c->days[i] + 1))
             return ss_error_set(err, SS_ERR_INPUT,
                                 "--days: %g is not a whole number of steps of %g days", c->days[i],
-                                ss_heal_run_dt(j->run));
+                                job_dt(j));
     }
     return read_skin(j, err);
 }
 
 /* The output folder and the inputs it must not overwrite (src/core/output.c). */
 static ss_status declare_outputs(const ss_wound_make_config *c, ss_outputs *outs, ss_error *err) {
-    const char *ins[] = {
-        c->heal.wound_stroke,      c->heal.wound_mask, c->heal.wound_mesh, c->heal.params_path,
-        c->heal.wound_depth_image, c->skin_path,       c->table_path,      c->recipe_path};
+    const char *ins[] = {c->heal.wound_stroke,
+                         c->heal.wound_mask,
+                         c->heal.wound_mesh,
+                         c->heal.params_path,
+                         c->heal.wound_depth_image,
+                         c->skin_path,
+                         c->table_path,
+                         c->recipe_path,
+                         c->heal_dir};
     ss_status st = SS_OK;
     for (size_t k = 0; k < sizeof ins / sizeof *ins && !st; k++)
         if (ins[k]) st = ss_outputs_input(outs, ins[k], err);
@@ -268,30 +345,69 @@ static ss_status write_compare(job *j, const char *dir, const ss_image *mask0,
 
 /* ---- the run ----------------------------------------------------------------------------- */
 
+/* Brings the tissue to `day`: steps the heal run, observing every step, or
+ * reads the saved run's snapshots up to that day, observing each (closure
+ * days are then known at snapshot resolution). *def receives the day's
+ * per-texel deformation when the run has mechanics. */
+static ss_status advance(job *j, double day, int *next_snap, ss_progress *pr, ss_image **def,
+                         ss_error *err) {
+    const ss_wound_make_config *c = j->c;
+    ss_status st = SS_OK;
+    *def = NULL;
+    if (j->run) {
+        long long target = llround(day / ss_heal_run_dt(j->run));
+        while (!st && ss_heal_run_step_index(j->run) < target) {
+            st = ss_heal_run_step(j->run, err);
+            if (!st) ss_wound_tissue_observe(j->tissue, ss_heal_run_grid(j->run));
+            ss_progress_update(pr, (double)ss_heal_run_step_index(j->run));
+        }
+        ss_mech *mech = ss_heal_run_mech(j->run);
+        if (!st && mech &&
+            !(*def = ss_wound_deformation_from_grid(ss_heal_run_grid(j->run),
+                                                    ss_mech_grid_displacement(mech), c->size, err)))
+            st = err->code;
+        return st;
+    }
+    int last = ss_heal_saved_run_find(j->saved, day);
+    ss_heal_grid *g = NULL;
+    float *disp = NULL;
+    if (*next_snap == 0) { /* day 0: read while checking the inputs */
+        ss_wound_tissue_observe(j->tissue, j->grid0);
+        *next_snap = 1;
+        if (last == 0) g = j->grid0, disp = j->disp0;
+    }
+    for (; !st && *next_snap <= last; (*next_snap)++) {
+        if (g != j->grid0) ss_heal_grid_free(g), free(disp);
+        g = ss_heal_saved_run_load(j->saved, *next_snap, &disp, err);
+        if (!g) st = err->code ? err->code : SS_ERR_RUNTIME;
+        if (!st) ss_wound_tissue_observe(j->tissue, g);
+        ss_progress_update(pr, (double)*next_snap);
+    }
+    if (!st && g && disp) {
+        size_t n = (size_t)g->nx * (size_t)g->ny * (size_t)g->nz;
+        float *const comp[3] = {disp, disp + n, disp + 2 * n};
+        if (!(*def = ss_wound_deformation_from_grid(g, comp, c->size, err))) st = err->code;
+    }
+    if (g != j->grid0) ss_heal_grid_free(g), free(disp);
+    return st;
+}
+
 static ss_status run_days(job *j, const char *dir, cJSON *frames, ss_image **thumbs,
                           ss_error *err) {
     const ss_wound_make_config *c = j->c;
     ss_wound_textures tex = {0};
     ss_status st = ss_wound_textures_create(c->size, &tex, err);
     ss_progress pr;
-    ss_progress_begin(&pr, "wound", (double)ss_heal_run_steps_total(j->run), c->quiet);
-    double range = j->recipe.v[SS_WR_HEIGHT_RANGE_MM], dt = ss_heal_run_dt(j->run);
+    double total = j->run ? (double)ss_heal_run_steps_total(j->run)
+                          : (double)ss_heal_saved_run_find(j->saved, c->days[c->ndays - 1]);
+    ss_progress_begin(&pr, "wound", total, c->quiet);
+    double range = j->recipe.v[SS_WR_HEIGHT_RANGE_MM];
+    int next_snap = 0;
     for (int i = 0; !st && i < c->ndays; i++) {
-        long long target = llround(c->days[i] / dt);
         double t0 = ss_now();
-        while (!st && ss_heal_run_step_index(j->run) < target) {
-            st = ss_heal_run_step(j->run, err);
-            long long k = ss_heal_run_step_index(j->run);
-            if (!st) ss_wound_tissue_observe(j->tissue, ss_heal_run_grid(j->run));
-            ss_progress_update(&pr, (double)k);
-        }
-        double t1 = ss_now();
         ss_image *def = NULL;
-        ss_mech *mech = ss_heal_run_mech(j->run);
-        if (!st && mech &&
-            !(def = ss_wound_deformation_from_grid(ss_heal_run_grid(j->run),
-                                                   ss_mech_grid_displacement(mech), c->size, err)))
-            st = err->code;
+        st = advance(j, c->days[i], &next_snap, &pr, &def, err);
+        double t1 = ss_now();
         if (!st) st = ss_wound_render(j->renderer, j->tissue, def, &tex, err);
         ss_image_free(def);
         double t2 = ss_now();
@@ -331,8 +447,7 @@ static ss_status make(job *j, const char *dir, cJSON *sum, ss_error *err) {
     ss_status st = ss_wound_renderer_create(&ro, &j->renderer, err);
     j->t_setup = ss_now() - t0;
     if (!st) {
-        j->tissue = ss_wound_tissue_create(ss_heal_run_grid(j->run), ss_heal_run_params(j->run),
-                                           &j->recipe, err);
+        j->tissue = ss_wound_tissue_create(job_grid(j), job_params(j), &j->recipe, err);
         if (!j->tissue) st = err->code;
     }
     /* the wound region of day 0, for the abrasion comparison */
@@ -372,7 +487,8 @@ static cJSON *summary_base(const job *j) {
     const ss_wound_make_config *c = j->c;
     cJSON *s = cJSON_CreateObject();
     cJSON_AddStringToObject(s, "command", "wound");
-    cJSON_AddStringToObject(s, "scenario", ss_heal_run_scenario(j->run));
+    cJSON_AddStringToObject(s, "scenario", job_scenario(j));
+    if (c->heal_dir) cJSON_AddStringToObject(s, "heal_dir", c->heal_dir);
     cJSON_AddArrayToObject(s,
                            "keys"); /* abrasion's key positions: none, every frame is simulated */
     cJSON_AddNumberToObject(s, "end_day", c->days[c->ndays - 1]);
@@ -382,7 +498,8 @@ static cJSON *summary_base(const job *j) {
     cJSON_AddNumberToObject(s, "height_range_mm", j->recipe.v[SS_WR_HEIGHT_RANGE_MM]);
     cJSON_AddStringToObject(s, "height_encoding", "0.5 + 0.5 * height_mm / height_range_mm");
     cJSON_AddStringToObject(s, "base_skin", c->skin_path ? c->skin_path : "forearm (built-in)");
-    cJSON_AddBoolToObject(s, "mechanics", c->mechanics || c->heal.mechanics);
+    cJSON_AddBoolToObject(s, "mechanics",
+                          j->run ? c->mechanics || c->heal.mechanics : j->disp0 != NULL);
     char *rj = ss_wound_recipe_to_json(&j->recipe);
     cJSON *r = rj ? cJSON_Parse(rj) : NULL;
     free(rj);

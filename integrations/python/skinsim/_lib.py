@@ -592,6 +592,12 @@ class ss_heal_run_config(ctypes.Structure):
         ("tet_size_mm", c_double),
         ("sutures", c_char_p),
         ("tet_mesh", c_char_p),
+        ("adapt_tol", c_double),
+        ("skin_mesh", c_char_p),
+        ("wound_uv", c_char_p),
+        ("skin_thickness_mm", c_double),
+        ("voxel_mm", c_double),
+        ("mesh_units_mm", c_double),
     ]
 
 

@@ -78,7 +78,9 @@ int main(void) {
         F(ss_heal_run_config, checkpoint_every), F(ss_heal_run_config, out_dir),
         F(ss_heal_run_config, force), F(ss_heal_run_config, resume_dir),
         F(ss_heal_run_config, seed), F(ss_heal_run_config, mechanics), F(ss_heal_run_config, kappa),
-        F(ss_heal_run_config, tet_mesh);
+        F(ss_heal_run_config, tet_mesh), F(ss_heal_run_config, adapt_tol),
+        F(ss_heal_run_config, skin_mesh), F(ss_heal_run_config, wound_uv),
+        F(ss_heal_run_config, mesh_units_mm);
     S(ss_skin_dist);
     S(ss_skin_settings), F(ss_skin_settings, world_size_cm), F(ss_skin_settings, seed),
         F(ss_skin_settings, wrap), F(ss_skin_settings, sampler), F(ss_skin_settings, count),

@@ -1,0 +1,658 @@
+/* Skin on a closed surface mesh (seed 001 §5.1, §5.4): the healing grid of a
+ * wound on a real body, and the fields mapped back onto the mesh.
+ *
+ * Design:
+ * - The grid is a local patch, not the whole body: a box of voxels around the
+ *   wound with its z axis along the area-weighted mean normal of the wound's
+ *   surface, x and y in the tangent plane, sized to the wound plus a margin
+ *   of intact skin. A body at 0.5 mm voxels would need 10^8 cells for a hand;
+ *   the patch needs 10^5.
+ * - Voxels are classified by ray tests (§5.1): one ray per column from above
+ *   along -z gives the surface (first crossing, an entry) and the far side of
+ *   the body (second crossing); voxels between them within thickness_mm of
+ *   the surface are skin (the top one epidermis), deeper ones inside the body
+ *   are the inner bound (intact tissue held at healthy values), the rest air.
+ *   Columns whose surface lies farther than the patch's half-width from the
+ *   wound's height (a neighbouring finger, the palm under the back of the
+ *   hand) count as air.
+ * - The wound: UV strokes are hulled in UV space (geom's stroke hulls, as
+ *   `skinsim abrasion` does) and a column is wounded when the UV of its
+ *   surface hit lies in a hull; its voxels within depth_mm of the surface are
+ *   cut out. A wound mesh is voxelised by ray parity along the column.
+ * - Mapping back (§5.4): a vertex takes the fields of its column's surface
+ *   cell and the displacement there, rotated into the mesh frame.
+ * - Closedness welds vertices by position (seams duplicate them) and asks
+ *   every edge to have exactly two triangles; self-intersection casts every
+ *   edge as a ray segment through the BVH: an edge that pierces a triangle
+ *   not sharing its vertices means two triangles cross. */
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "skinsim/geom.h"
+#include "skinsim/paint.h"
+#include "skinsim/shell.h"
+
+void ss_shell_opts_default(ss_shell_opts *o) {
+    memset(o, 0, sizeof *o);
+    o->voxel_mm = SS_HEAL_DEFAULT_DX_MM;
+    o->thickness_mm = 3.0;
+    o->epidermis_mm = SS_HEAL_DEFAULT_EPIDERMIS_MM;
+    o->depth_mm = SS_HEAL_DEFAULT_DEPTH_MM;
+}
+
+static int ends_with(const char *s, const char *suf) {
+    size_t a = strlen(s), b = strlen(suf);
+    if (a < b) return 0;
+    for (size_t i = 0; i < b; i++) {
+        char c = s[a - b + i];
+        if (c >= 'A' && c <= 'Z') c = (char)(c - 'A' + 'a');
+        if (c != suf[i]) return 0;
+    }
+    return 1;
+}
+
+double ss_shell_units_for(const char *path, double units_mm) {
+    if (units_mm > 0) return units_mm;
+    return path && (ends_with(path, ".glb") || ends_with(path, ".gltf")) ? 1000.0 : 1.0;
+}
+
+/* ---- closedness and self-intersection ------------------------------------------- */
+
+static const float *sort_pos;
+static int cmp_pos(const void *a, const void *b) {
+    const float *p = sort_pos + 3 * *(const int *)a, *q = sort_pos + 3 * *(const int *)b;
+    for (int d = 0; d < 3; d++)
+        if (p[d] != q[d]) return p[d] < q[d] ? -1 : 1;
+    return *(const int *)a - *(const int *)b;
+}
+
+typedef struct sedge {
+    int a, b, t;
+} sedge;
+static int cmp_sedge(const void *x, const void *y) {
+    const sedge *p = x, *q = y;
+    if (p->a != q->a) return p->a < q->a ? -1 : 1;
+    if (p->b != q->b) return p->b < q->b ? -1 : 1;
+    return p->t - q->t;
+}
+
+/* weld[v]: the lowest-index vertex at the same position. Not thread-safe
+ * (qsort's comparator reads a static); the meshes are checked once. */
+static int *weld_vertices(const ss_mesh *m) {
+    int n = m->nvertices;
+    int *order = malloc((size_t)n * sizeof(int)), *weld = malloc((size_t)n * sizeof(int));
+    if (!order || !weld) {
+        free(order);
+        free(weld);
+        return NULL;
+    }
+    for (int i = 0; i < n; i++) order[i] = i;
+    sort_pos = m->positions;
+    qsort(order, (size_t)n, sizeof(int), cmp_pos);
+    for (int i = 0; i < n; i++) {
+        const float *p = m->positions + 3 * order[i];
+        const float *q = i ? m->positions + 3 * order[i - 1] : NULL;
+        weld[order[i]] =
+            q && p[0] == q[0] && p[1] == q[1] && p[2] == q[2] ? weld[order[i - 1]] : order[i];
+    }
+    free(order);
+    return weld;
+}
+
+ss_status ss_shell_check_closed(const ss_mesh *m, const char *name, ss_error *err) {
+    if (!m || m->ntriangles < 4)
+        return ss_error_set(err, SS_ERR_INPUT, "%s: too few triangles for a closed surface", name);
+    int *weld = weld_vertices(m);
+    sedge *e = malloc(3 * (size_t)m->ntriangles * sizeof *e);
+    ss_bvh *bvh = NULL;
+    ss_status st = SS_OK;
+    if (!weld || !e) {
+        st = ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", name);
+        goto done;
+    }
+    for (int t = 0; t < m->ntriangles; t++) {
+        int v[3];
+        for (int k = 0; k < 3; k++) v[k] = weld[m->indices[3 * t + k]];
+        if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) {
+            st = ss_error_set(err, SS_ERR_INPUT,
+                              "%s: triangle %d is degenerate (a vertex repeated); the skin must be "
+                              "a closed surface",
+                              name, t + 1);
+            goto done;
+        }
+        for (int k = 0; k < 3; k++) {
+            int a = v[k], b = v[(k + 1) % 3];
+            e[3 * t + k] = (sedge){a < b ? a : b, a < b ? b : a, t};
+        }
+    }
+    size_t ne = 3 * (size_t)m->ntriangles;
+    qsort(e, ne, sizeof *e, cmp_sedge);
+    for (size_t i = 0; i < ne;) {
+        size_t j = i;
+        while (j < ne && e[j].a == e[i].a && e[j].b == e[i].b) j++;
+        if (j - i != 2) {
+            st = ss_error_set(err, SS_ERR_INPUT,
+                              "%s: not a closed surface: the edge of triangle %d between vertices "
+                              "%d and %d belongs to %zu triangle%s (a closed surface has 2)",
+                              name, e[i].t + 1, e[i].a + 1, e[i].b + 1, j - i,
+                              j - i == 1 ? "" : "s");
+            goto done;
+        }
+        i = j;
+    }
+    /* self-intersection: every unique edge as a segment through the BVH */
+    if (!(bvh = ss_bvh_build(m, err))) {
+        st = err->code ? err->code : SS_ERR_NOMEM;
+        goto done;
+    }
+    for (size_t i = 0; i < ne && !st; i += 2) {
+        const float *pa = m->positions + 3 * e[i].a, *pb = m->positions + 3 * e[i].b;
+        float dir[3] = {pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]};
+        float t0 = 1e-4f;
+        for (int tries = 0; tries < 32; tries++) {
+            ss_ray_hit h;
+            if (!ss_bvh_raycast(bvh, pa, dir, t0, 1.0f - 1e-4f, &h)) break;
+            const uint32_t *q = m->indices + 3 * h.triangle;
+            int touches = 0;
+            for (int k = 0; k < 3; k++) {
+                int w = weld[q[k]];
+                touches |= w == e[i].a || w == e[i].b;
+            }
+            if (!touches) {
+                st = ss_error_set(err, SS_ERR_INPUT,
+                                  "%s: the surface intersects itself: the edge of triangle %d "
+                                  "crosses triangle %d",
+                                  name, e[i].t + 1, h.triangle + 1);
+                break;
+            }
+            t0 = h.t + 1e-5f;
+        }
+    }
+done:
+    ss_bvh_free(bvh);
+    free(weld);
+    free(e);
+    return st;
+}
+
+/* ---- the patch ---------------------------------------------------------------------- */
+
+void ss_shell_patch_free(ss_shell_patch *p) {
+    if (!p) return;
+    free(p->cell);
+    free(p->surf_z);
+    free(p);
+}
+
+static void normalise(double v[3]) {
+    double l = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    if (l > 0)
+        for (int d = 0; d < 3; d++) v[d] /= l;
+}
+
+static void tri_normal(const ss_mesh *m, int t, double n[3]) {
+    const uint32_t *q = m->indices + 3 * t;
+    const float *a = m->positions + 3 * q[0], *b = m->positions + 3 * q[1],
+                *c = m->positions + 3 * q[2];
+    double u[3], w[3];
+    for (int d = 0; d < 3; d++) {
+        u[d] = (double)b[d] - a[d];
+        w[d] = (double)c[d] - a[d];
+    }
+    n[0] = u[1] * w[2] - u[2] * w[1];
+    n[1] = u[2] * w[0] - u[0] * w[2];
+    n[2] = u[0] * w[1] - u[1] * w[0];
+}
+
+/* What decides the wound: per column from the surface hit's UV (a UV
+ * footprint), or per voxel by parity against a wound mesh. */
+typedef struct wound_src {
+    const ss_image *fp; /* UV footprint, > 0.5 = wound */
+    double depth_mm;
+    const ss_mesh *wmesh; /* in skin units */
+    ss_bvh *wbvh;
+} wound_src;
+
+/* The frame, the columns' ray tests and the cells. c: wound centre (mm), n:
+ * normal, rw: wound radius (mm). */
+static ss_shell_patch *build_patch(const ss_mesh *skin, const char *name, const double c[3],
+                                   const double n_in[3], double rw, const ss_shell_opts *o,
+                                   double units, const wound_src *ws, ss_error *err) {
+    const double dx = o->voxel_mm;
+    double n[3] = {n_in[0], n_in[1], n_in[2]};
+    normalise(n);
+    /* tangent axes: the world axis least aligned with n, made orthogonal */
+    int ax = 0;
+    for (int d = 1; d < 3; d++)
+        if (fabs(n[d]) < fabs(n[ax])) ax = d;
+    double e1[3] = {0, 0, 0}, e2[3];
+    e1[ax] = 1;
+    double dot = e1[0] * n[0] + e1[1] * n[1] + e1[2] * n[2];
+    for (int d = 0; d < 3; d++) e1[d] -= dot * n[d];
+    normalise(e1);
+    e2[0] = n[1] * e1[2] - n[2] * e1[1];
+    e2[1] = n[2] * e1[0] - n[0] * e1[2];
+    e2[2] = n[0] * e1[1] - n[1] * e1[0];
+    double margin = o->margin_mm > 0 ? o->margin_mm : fmax(rw, 5.0);
+    double half = rw + margin;
+    int nh = (int)ceil(half / dx);
+    int nx = 2 * nh + 2, ny = nx;
+    if ((double)nx * nx > 4e6) {
+        ss_error_set(err, SS_ERR_INPUT,
+                     "%s: the wound patch needs %d x %d columns of %g mm; use a coarser voxel",
+                     name, nx, ny, dx);
+        return NULL;
+    }
+    const double zr = half; /* surface heights kept: within +-zr of the wound centre */
+    ss_bvh *bvh = ss_bvh_build(skin, err);
+    if (!bvh) return NULL;
+    size_t ncol = (size_t)nx * ny;
+    float *hz = malloc(ncol * sizeof(float)), *span = malloc(ncol * sizeof(float));
+    uint8_t *wcol = calloc(ncol, 1);
+    ss_shell_patch *p = calloc(1, sizeof *p);
+    if (!hz || !span || !wcol || !p) {
+        ss_bvh_free(bvh);
+        free(hz);
+        free(span);
+        free(wcol);
+        free(p);
+        ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", name);
+        return NULL;
+    }
+    double zlo = INFINITY, zhi = -INFINITY;
+    const double top = zr + o->thickness_mm + 2 * dx;
+    for (int j = 0; j < ny; j++)
+        for (int i = 0; i < nx; i++) {
+            size_t col = (size_t)j * nx + i;
+            double a = (i + 0.5 - nx / 2.0) * dx, b = (j + 0.5 - ny / 2.0) * dx;
+            float org[3], dir[3];
+            for (int d = 0; d < 3; d++) {
+                org[d] = (float)((c[d] + a * e1[d] + b * e2[d] + top * n[d]) / units);
+                dir[d] = (float)-n[d];
+            }
+            hz[col] = NAN;
+            ss_ray_hit h1, h2;
+            if (!ss_bvh_raycast(bvh, org, dir, 0.0f, (float)(3 * top / units), &h1)) continue;
+            double z = top - h1.t * units; /* height above the centre along n */
+            if (fabs(z) > zr) continue;
+            double s = 1e9;
+            if (ss_bvh_raycast(bvh, org, dir, h1.t + 1e-6f, (float)(1e9), &h2))
+                s = (h2.t - h1.t) * units;
+            hz[col] = (float)z;
+            span[col] = (float)s;
+            if (ws->fp) {
+                int px = (int)(h1.uv[0] * ws->fp->width), py = (int)(h1.uv[1] * ws->fp->height);
+                if (px >= 0 && py >= 0 && px < ws->fp->width && py < ws->fp->height)
+                    wcol[col] = ws->fp->data[(size_t)py * ws->fp->width + px] > 0.5f;
+            }
+            double lo = z - fmin(s, o->thickness_mm);
+            if (lo < zlo) zlo = lo;
+            if (z > zhi) zhi = z;
+        }
+    if (!(zhi > zlo)) {
+        ss_error_set(err, SS_ERR_INPUT, "%s: no skin surface under the wound", name);
+        goto fail;
+    }
+    /* z: one bound layer, the tissue, one air layer, one bound layer */
+    int nz = (int)ceil((zhi - zlo) / dx) + 4;
+    double z0 = zlo - dx; /* height of the grid's bottom face above the centre */
+    p->nx = nx;
+    p->ny = ny;
+    p->nz = nz;
+    p->dx_mm = dx;
+    p->units_mm = units;
+    for (int d = 0; d < 3; d++) {
+        p->axis[0][d] = e1[d];
+        p->axis[1][d] = e2[d];
+        p->axis[2][d] = n[d];
+        p->origin_mm[d] = c[d] - (nx / 2.0) * dx * e1[d] - (ny / 2.0) * dx * e2[d] + z0 * n[d];
+        p->wound_centre_mm[d] = c[d];
+    }
+    p->wound_radius_mm = rw;
+    p->skin_top_mm = zhi - z0;
+    size_t nc = ncol * (size_t)nz;
+    p->cell = calloc(nc, 1);
+    p->surf_z = malloc(ncol * sizeof(float));
+    if (!p->cell || !p->surf_z) {
+        ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory for %d x %d x %d voxels", name, nx, ny,
+                     nz);
+        goto fail;
+    }
+    const double epi = fmax(o->epidermis_mm, 1e-9);
+    for (int j = 0; j < ny; j++)
+        for (int i = 0; i < nx; i++) {
+            size_t col = (size_t)j * nx + i;
+            p->surf_z[col] = isnan(hz[col]) ? NAN : (float)(hz[col] - z0);
+            /* wound-mesh crossings along +n through this column */
+            double cross[64];
+            int ncross = 0;
+            if (ws->wbvh) {
+                double a = (i + 0.5) * dx, b = (j + 0.5) * dx;
+                float org[3], dir[3];
+                for (int d = 0; d < 3; d++) {
+                    org[d] = (float)((p->origin_mm[d] + a * e1[d] + b * e2[d] - dx * n[d]) / units);
+                    dir[d] = (float)n[d];
+                }
+                float t0 = 0;
+                ss_ray_hit h;
+                while (ncross < 64 &&
+                       ss_bvh_raycast(ws->wbvh, org, dir, t0, (float)((nz + 2) * dx / units), &h)) {
+                    cross[ncross++] = h.t * units - dx;
+                    t0 = h.t + 1e-6f;
+                }
+            }
+            for (int k = 0; k < nz; k++) {
+                size_t idx = ((size_t)k * ny + j) * nx + i;
+                double zc = (k + 0.5) * dx; /* above the grid bottom */
+                uint8_t s = SS_CELL_AIR;
+                if (!isnan(hz[col])) {
+                    double h = hz[col] - z0, depth = h - zc;
+                    if (depth >= 0 && depth <= span[col]) {
+                        if (depth > o->thickness_mm)
+                            s = SS_CELL_BOUND;
+                        else {
+                            int wound = 0;
+                            if (ws->fp) wound = wcol[col] && depth <= ws->depth_mm;
+                            if (ws->wbvh) {
+                                int below = 0;
+                                for (int q = 0; q < ncross; q++) below += cross[q] < zc;
+                                wound = below & 1;
+                            }
+                            int ktop = (int)floor(h / dx - 0.5); /* the surface voxel */
+                            s = wound                       ? SS_CELL_WOUND
+                                : k == ktop || depth <= epi ? SS_CELL_EPIDERMIS
+                                                            : SS_CELL_DERMIS;
+                        }
+                    }
+                }
+                if (i == 0 || j == 0 || k == 0 || i == nx - 1 || j == ny - 1 || k == nz - 1)
+                    s = s == SS_CELL_AIR ? SS_CELL_AIR : SS_CELL_BOUND;
+                if (s == SS_CELL_WOUND) p->wound_cells++;
+                p->cell[idx] = s;
+            }
+        }
+    /* the outermost shell is a wall everywhere */
+    for (int k = 0; k < nz; k++)
+        for (int j = 0; j < ny; j++)
+            for (int i = 0; i < nx; i++)
+                if (i == 0 || j == 0 || k == 0 || i == nx - 1 || j == ny - 1 || k == nz - 1)
+                    p->cell[((size_t)k * ny + j) * nx + i] = SS_CELL_BOUND;
+    ss_bvh_free(bvh);
+    free(hz);
+    free(span);
+    free(wcol);
+    return p;
+fail:
+    ss_bvh_free(bvh);
+    free(hz);
+    free(span);
+    free(wcol);
+    ss_shell_patch_free(p);
+    return NULL;
+}
+
+static ss_status check_opts(const ss_shell_opts *o, ss_error *err) {
+    if (!(o->voxel_mm >= 0.05 && o->voxel_mm <= 10))
+        return ss_error_set(err, SS_ERR_INPUT, "--voxel-mm %g: need 0.05..10 mm", o->voxel_mm);
+    if (!(o->thickness_mm >= 3 * o->voxel_mm && o->thickness_mm <= 100))
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "--skin-thickness-mm %g: need at least 3 voxels (%g mm) and <= 100",
+                            o->thickness_mm, 3 * o->voxel_mm);
+    if (!(o->depth_mm > 0 && o->depth_mm <= o->thickness_mm))
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "--wound-depth-mm %g: need > 0 and at most the skin thickness %g mm",
+                            o->depth_mm, o->thickness_mm);
+    if (!(o->margin_mm >= 0 && o->margin_mm <= 1000) || !(o->units_mm >= 0 && o->units_mm < 1e9))
+        return ss_error_set(err, SS_ERR_INPUT, "shell options: margin or units out of range");
+    return SS_OK;
+}
+
+ss_shell_patch *ss_shell_patch_from_uv(const ss_mesh *skin, const char *skin_name, const char *csv,
+                                       const ss_shell_opts *o, ss_error *err) {
+    if (check_opts(o, err)) return NULL;
+    if (!skin->has_uvs) {
+        ss_error_set(err, SS_ERR_INPUT, "%s: the mesh has no UVs for --wound-uv", skin_name);
+        return NULL;
+    }
+    ss_stroke_set s;
+    if (ss_stroke_csv_read(csv, &s, err)) return NULL;
+    double units = ss_shell_units_for(skin_name, o->units_mm);
+    int *island = malloc((size_t)skin->ntriangles * sizeof(int));
+    int *pisl = malloc((size_t)s.nstrokes * sizeof(int));
+    double(*pos)[3] = malloc((size_t)s.npoints * sizeof *pos);
+    ss_image *fp = NULL;
+    ss_shell_patch *p = NULL;
+    if (!island || !pisl || !pos) {
+        ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", csv);
+        goto done;
+    }
+    ss_mesh_uv_islands(skin, island);
+    for (int k = 0; k < s.nstrokes; k++) pisl[k] = -1;
+    double c[3] = {0, 0, 0}, n[3] = {0, 0, 0};
+    for (int i = 0; i < s.npoints; i++) {
+        float uv[2] = {(float)s.u[i], (float)s.v[i]}, ps[3];
+        int t = ss_mesh_locate_uv(skin, uv, ps);
+        if (t < 0) {
+            ss_error_set(err, SS_ERR_INPUT,
+                         "%s: point %d (u %g, v %g) lies outside the UV islands of %s", csv, i + 1,
+                         s.u[i], s.v[i], skin_name);
+            goto done;
+        }
+        int k = 0;
+        while (s.stroke_ids[k] != s.stroke[i]) k++;
+        if (pisl[k] >= 0 && pisl[k] != island[t]) {
+            ss_error_set(err, SS_ERR_INPUT,
+                         "%s: stroke %d spans two UV islands of %s (point %d, u %g, v %g); a "
+                         "hull across a seam would cut the wrong skin: split the stroke",
+                         csv, s.stroke[i], skin_name, i + 1, s.u[i], s.v[i]);
+            goto done;
+        }
+        pisl[k] = island[t];
+        double tn[3];
+        tri_normal(skin, t, tn);
+        for (int d = 0; d < 3; d++) {
+            pos[i][d] = ps[d] * units;
+            c[d] += pos[i][d] / s.npoints;
+            n[d] += tn[d];
+        }
+    }
+    double rw = 0;
+    normalise(n);
+    for (int i = 0; i < s.npoints; i++) {
+        double v[3], h = 0, r2 = 0;
+        for (int d = 0; d < 3; d++) v[d] = pos[i][d] - c[d];
+        for (int d = 0; d < 3; d++) h += v[d] * n[d];
+        for (int d = 0; d < 3; d++) r2 += (v[d] - h * n[d]) * (v[d] - h * n[d]);
+        if (sqrt(r2) > rw) rw = sqrt(r2);
+    }
+    if (!(fp = ss_stroke_footprint(&s, 2048, 2048, o->concave_k, csv, err))) goto done;
+    wound_src ws = {fp, o->depth_mm, NULL, NULL};
+    p = build_patch(skin, skin_name, c, n, rw + o->voxel_mm, o, units, &ws, err);
+    if (p && p->wound_cells == 0) {
+        ss_error_set(err, SS_ERR_INPUT,
+                     "%s: the strokes cut no skin voxel of %s (wound too small "
+                     "for %g mm voxels?)",
+                     csv, skin_name, o->voxel_mm);
+        ss_shell_patch_free(p);
+        p = NULL;
+    }
+done:
+    ss_image_free(fp);
+    free(island);
+    free(pisl);
+    free(pos);
+    ss_stroke_set_free(&s);
+    return p;
+}
+
+ss_shell_patch *ss_shell_patch_from_mesh(const ss_mesh *skin, const char *skin_name,
+                                         const ss_mesh *wound, const char *wound_name,
+                                         const ss_shell_opts *o, ss_error *err) {
+    if (check_opts(o, err)) return NULL;
+    double units = ss_shell_units_for(skin_name, o->units_mm);
+    double lo[3], hi[3], c[3], n[3] = {0, 0, 0};
+    for (int d = 0; d < 3; d++) {
+        lo[d] = wound->bbox_min[d] * units - o->voxel_mm;
+        hi[d] = wound->bbox_max[d] * units + o->voxel_mm;
+        c[d] = 0.5 * (lo[d] + hi[d]);
+    }
+    /* the skin facing the wound: area-weighted normals of the skin triangles
+     * whose centroid lies in the wound's bounding box */
+    int hit = 0;
+    for (int t = 0; t < skin->ntriangles; t++) {
+        double g[3] = {0, 0, 0};
+        for (int k = 0; k < 3; k++)
+            for (int d = 0; d < 3; d++)
+                g[d] += skin->positions[3 * skin->indices[3 * t + k] + d] * units / 3;
+        if (g[0] < lo[0] || g[1] < lo[1] || g[2] < lo[2] || g[0] > hi[0] || g[1] > hi[1] ||
+            g[2] > hi[2])
+            continue;
+        double tn[3];
+        tri_normal(skin, t, tn);
+        for (int d = 0; d < 3; d++) n[d] += tn[d];
+        hit++;
+    }
+    if (!hit || !(n[0] * n[0] + n[1] * n[1] + n[2] * n[2] > 0)) {
+        ss_error_set(err, SS_ERR_INPUT, "%s: the wound mesh misses the skin of %s", wound_name,
+                     skin_name);
+        return NULL;
+    }
+    double rw = 0;
+    for (int d = 0; d < 3; d++) rw = fmax(rw, 0.5 * (hi[d] - lo[d]));
+    wound_src ws = {NULL, 0, wound, ss_bvh_build(wound, err)};
+    if (!ws.wbvh) return NULL;
+    ss_shell_patch *p = build_patch(skin, skin_name, c, n, rw, o, units, &ws, err);
+    ss_bvh_free(ws.wbvh);
+    if (p && p->wound_cells == 0) {
+        ss_error_set(err, SS_ERR_INPUT, "%s: the wound mesh misses the skin of %s", wound_name,
+                     skin_name);
+        ss_shell_patch_free(p);
+        return NULL;
+    }
+    return p;
+}
+
+ss_status ss_shell_patch_grid_init(const ss_shell_patch *p, ss_heal_grid *g,
+                                   const ss_heal_params *hp, ss_error *err) {
+    if (!p || !g || !hp || g->nx != p->nx || g->ny != p->ny || g->nz != p->nz)
+        return ss_error_set(err, SS_ERR_INPUT, "shell grid: the grid does not match the patch");
+    float hv[SS_HEAL_NFIELDS];
+    ss_heal_params_healthy(hp, hv);
+    g->skin_top_mm = p->skin_top_mm;
+    g->t_days = 0;
+    g->step = 0;
+    size_t n = (size_t)p->nx * p->ny * p->nz;
+    for (size_t i = 0; i < n; i++) {
+        uint8_t s = p->cell[i];
+        g->cell[i] = s;
+        float v[SS_HEAL_NFIELDS] = {0};
+        if (s == SS_CELL_EPIDERMIS || s == SS_CELL_DERMIS || s == SS_CELL_BOUND) {
+            if (s != SS_CELL_BOUND || !isnan(p->surf_z[i % ((size_t)p->nx * p->ny)]))
+                for (int f = 0; f < SS_HEAL_NFIELDS; f++) v[f] = hv[f];
+            v[SS_HEAL_EPITHELIUM] = s == SS_CELL_EPIDERMIS ? 1.0f : 0.0f;
+        } else if (s == SS_CELL_WOUND) {
+            v[SS_HEAL_OXYGEN] = (float)hp->u1_wound;
+            v[SS_HEAL_PLASMA] = 1.0f;
+        }
+        for (int f = 0; f < SS_HEAL_NFIELDS; f++) g->field[f][i] = v[f];
+    }
+    return SS_OK;
+}
+
+/* ---- mapping back (§5.4) -------------------------------------------------------------- */
+
+void ss_shell_vertex_fields(const ss_shell_patch *p, const ss_mesh *skin, const ss_heal_grid *g,
+                            const ss_heal_params *hp, float *const *disp, float *out) {
+    float hv[SS_HEAL_NFIELDS];
+    ss_heal_params_healthy(hp, hv);
+    hv[SS_HEAL_EPITHELIUM] = 1.0f;
+    const int nx = p->nx, ny = p->ny, nz = p->nz;
+#pragma omp parallel for schedule(static)
+    for (int v = 0; v < skin->nvertices; v++) {
+        float *o = out + (size_t)v * SS_SHELL_VERTEX_STRIDE;
+        for (int f = 0; f < SS_HEAL_NFIELDS; f++) o[f] = hv[f];
+        o[SS_HEAL_NFIELDS] = o[SS_HEAL_NFIELDS + 1] = o[SS_HEAL_NFIELDS + 2] = 0;
+        double q[3] = {0, 0, 0};
+        for (int a = 0; a < 3; a++)
+            for (int d = 0; d < 3; d++)
+                q[a] +=
+                    (skin->positions[3 * v + d] * p->units_mm - p->origin_mm[d]) * p->axis[a][d];
+        int i = (int)floor(q[0] / p->dx_mm), j = (int)floor(q[1] / p->dx_mm);
+        if (i < 1 || j < 1 || i >= nx - 1 || j >= ny - 1) continue;
+        size_t col = (size_t)j * nx + i;
+        if (isnan(p->surf_z[col]) || fabs(q[2] - p->surf_z[col]) > 2 * p->dx_mm) continue;
+        int top = -1;
+        for (int k = nz - 2; k >= 1 && top < 0; k--) {
+            uint8_t c = g->cell[((size_t)k * ny + j) * nx + i];
+            if (c == SS_CELL_EPIDERMIS || c == SS_CELL_DERMIS || c == SS_CELL_WOUND) top = k;
+        }
+        if (top < 0) continue;
+        size_t idx = ((size_t)top * ny + j) * nx + i;
+        for (int f = 0; f < SS_HEAL_NFIELDS; f++) o[f] = g->field[f][idx];
+        if (disp)
+            for (int d = 0; d < 3; d++)
+                o[SS_HEAL_NFIELDS + d] =
+                    (float)((disp[0][idx] * p->axis[0][d] + disp[1][idx] * p->axis[1][d] +
+                             disp[2][idx] * p->axis[2][d]));
+    }
+}
+
+ss_status ss_shell_surface_vtu_write(const ss_shell_patch *p, const ss_mesh *skin, const float *vf,
+                                     const char *path, double t_days, ss_error *err) {
+    ss_atomic_file af;
+    ss_status st = ss_atomic_open(&af, path, err);
+    if (st) return st;
+    FILE *f = af.fp;
+    const int nv = skin->nvertices, nt = skin->ntriangles;
+    const int S = SS_SHELL_VERTEX_STRIDE;
+    fprintf(f, "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" "
+               "byte_order=\"LittleEndian\">\n<UnstructuredGrid>\n");
+    fprintf(f,
+            "<FieldData><DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" "
+            "format=\"ascii\">%.17g</DataArray></FieldData>\n",
+            t_days);
+    fprintf(f, "<Piece NumberOfPoints=\"%d\" NumberOfCells=\"%d\">\n", nv, nt);
+    fprintf(f, "<Points><DataArray type=\"Float32\" NumberOfComponents=\"3\" format=\"ascii\">\n");
+    for (int v = 0; v < nv; v++)
+        fprintf(f, "%.7g %.7g %.7g\n",
+                skin->positions[3 * v] * p->units_mm + vf[S * v + SS_HEAL_NFIELDS],
+                skin->positions[3 * v + 1] * p->units_mm + vf[S * v + SS_HEAL_NFIELDS + 1],
+                skin->positions[3 * v + 2] * p->units_mm + vf[S * v + SS_HEAL_NFIELDS + 2]);
+    fprintf(f, "</DataArray></Points>\n<Cells>\n<DataArray type=\"Int32\" Name=\"connectivity\" "
+               "format=\"ascii\">\n");
+    for (int t = 0; t < nt; t++)
+        fprintf(f, "%u %u %u\n", skin->indices[3 * t], skin->indices[3 * t + 1],
+                skin->indices[3 * t + 2]);
+    fprintf(f, "</DataArray>\n<DataArray type=\"Int32\" Name=\"offsets\" format=\"ascii\">\n");
+    for (int t = 0; t < nt; t++) fprintf(f, "%d\n", 3 * (t + 1));
+    fprintf(f, "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n");
+    for (int t = 0; t < nt; t++) fprintf(f, "5\n");
+    fprintf(
+        f, "</DataArray>\n</Cells>\n<PointData Scalars=\"epithelium\" Vectors=\"displacement\">\n");
+    fprintf(f, "<DataArray type=\"Float32\" Name=\"displacement\" NumberOfComponents=\"3\" "
+               "format=\"ascii\">\n");
+    for (int v = 0; v < nv; v++)
+        fprintf(f, "%.7g %.7g %.7g\n", vf[S * v + SS_HEAL_NFIELDS], vf[S * v + SS_HEAL_NFIELDS + 1],
+                vf[S * v + SS_HEAL_NFIELDS + 2]);
+    fprintf(f, "</DataArray>\n");
+    for (int k = 0; k < SS_HEAL_NFIELDS; k++) {
+        fprintf(f, "<DataArray type=\"Float32\" Name=\"%s\" format=\"ascii\">\n",
+                ss_heal_field_name(k));
+        for (int v = 0; v < nv; v++) fprintf(f, "%.6g\n", vf[S * v + k]);
+        fprintf(f, "</DataArray>\n");
+    }
+    fprintf(f, "<DataArray type=\"UInt8\" Name=\"open_wound\" format=\"ascii\">\n");
+    for (int v = 0; v < nv; v++)
+        fprintf(f, "%d\n",
+                vf[S * v + SS_HEAL_PLASMA] > SS_HEAL_P_MIN &&
+                    vf[S * v + SS_HEAL_EPITHELIUM] < ss_heal_open_threshold());
+    fprintf(f, "</DataArray>\n</PointData>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
+    if (ferror(f)) {
+        ss_atomic_abort(&af);
+        return ss_error_set(err, SS_ERR_RUNTIME, "%s: write failed", path);
+    }
+    return ss_atomic_commit(&af, err);
+}
