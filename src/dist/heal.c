@@ -13,7 +13,8 @@
  * it validates the input, writes every output with the single-process code
  * and drives the others through a command channel (one broadcast per step,
  * area row, gather or snapshot). Its hooks replace the run's step (all ranks
- * step), its statistics (exact fixed-point partial sums reduced with integer
+ * step; an adaptive run's rejected step is undone on all ranks, its largest
+ * change is a max-reduction), its statistics (exact fixed-point partial sums reduced with integer
  * additions, ss_heal_stats_acc) and its snapshot/checkpoint reads (the boxes
  * are gathered into the whole grid first); after each snapshot every rank
  * also writes its box as a .vti piece, joined by a .pvti. The kernels compute
