@@ -51,7 +51,11 @@ equal_on_ranks() {
     done
     echo "ok: heal $name bit-identical on 1, 2, 3, 4 ranks"
 }
-for grid in 24x20x8 23x17x9; do
+# SKINSIM_TEST_QUICK (the sanitizer suite): the uneven grid only, a shorter adaptive run
+grids="24x20x8 23x17x9"
+adapt_days=40
+if [ -n "${SKINSIM_TEST_QUICK:-}" ]; then grids=23x17x9; adapt_days=30; fi
+for grid in $grids; do
     equal_on_ranks "explicit-$grid" --scheme explicit --grid $grid --scenario scab --days 0.6 \
         --snapshot-every 0.3 --area-every 0.05 --quiet --threads 1
 done
@@ -103,7 +107,7 @@ equal_on_ranks split-23x17x9 --grid 23x17x9 --scenario scab --days 1 --snapshot-
     --area-every 0.05 --quiet --threads 1
 
 # --- adaptive steps (the split scheme's default) with rejected, undone steps
-OPTS="--grid 23x17x9 --scenario keloid --days 40 --snapshot-every 20 --adapt-tol 0.05 --quiet --threads 1"
+OPTS="--grid 23x17x9 --scenario keloid --days $adapt_days --snapshot-every 10 --adapt-tol 0.05 --quiet --threads 1"
 "$CLI" heal $OPTS --out "$T/adapt" || fail "single-process adaptive run"
 grep -q '"retried":[[:space:]]*[1-9]' "$T/adapt/summary.json" || fail "the adaptive case retries no step"
 run_np 3 heal $OPTS --out "$T/adapt-3" || fail "adaptive run on 3 ranks"
