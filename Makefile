@@ -38,6 +38,7 @@ demo: build
 	$(BUILD)/skinsim heal --days 21 --out $(DEMO_OUT)/heal
 	$(BUILD)/skinsim skin --size 1024 --gltf --out $(DEMO_OUT)/skin
 	$(BUILD)/skinsim wound --scenario scab --skin $(DEMO_OUT)/skin --out $(DEMO_OUT)/wound
+	$(BUILD)/skinsim wound --heal $(DEMO_OUT)/heal --days 0,3,7,14,21 --out $(DEMO_OUT)/wound-from-heal
 	@echo
 	@echo "Look at:"
 	@echo "  $(DEMO_OUT)/abrasion/contact_sheet.png   abrasion from injury to day 30"
@@ -46,6 +47,7 @@ demo: build
 	@echo "  $(DEMO_OUT)/heal/fields/fields.pvd       open in ParaView"
 	@echo "  $(DEMO_OUT)/skin/contact_sheet.png       a patch of forearm skin: every map side by side"
 	@echo "  $(DEMO_OUT)/wound/contact_sheet.png      simulated healing as skin, day 0 to 365"
+	@echo "  $(DEMO_OUT)/wound-from-heal/contact_sheet.png  the heal run above as skin (wound --heal)"
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)

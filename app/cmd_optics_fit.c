@@ -54,6 +54,9 @@ static const char *MC_HELP =
     "                           projected (solid angle x cos theta_i cos theta_r)\n"
     "  --max-theta-deg D        leave out bins whose theta_i or theta_r centre is above\n"
     "                           D degrees (90: all bins, as the seed)\n"
+    "  --base B                 albedo (default): base colour from the skin's diffuse\n"
+    "                           albedo, lobe fitted to the surface reflection; free:\n"
+    "                           base colour and lobe fitted together (seed §4.6)\n"
     "  --threads N              worker threads (default $SKINSIM_THREADS or all cores)\n"
     "  --json                   machine-readable output on stdout\n"
     "  --quiet                  no progress bar\n";
@@ -120,6 +123,19 @@ static int parse_shared(const char *cmd, int argc, char **argv, int *i, fit_cli 
             return -1;
         }
         c->build.fit.weighting = k;
+        return 1;
+    }
+    if (!strcmp(a, "--base")) {
+        if ((*rc = need(cmd, argc, *i, a))) return -1;
+        const char *b = argv[++*i];
+        if (!strcmp(b, "albedo"))
+            c->build.fit.base_mode = SS_FIT_BASE_ALBEDO;
+        else if (!strcmp(b, "free"))
+            c->build.fit.base_mode = SS_FIT_BASE_FREE;
+        else {
+            *rc = cli_usage_error(cmd, "--base: '%s' is neither albedo nor free", b);
+            return -1;
+        }
         return 1;
     }
     if (!strcmp(a, "--json")) {
@@ -291,10 +307,24 @@ int cmd_optics_fit(int argc, char **argv) {
         }
     }
     double rms[SS_RENDER_NMODELS];
+    ss_fit_options fo = c.build.fit;
+    ss_brdf_sampled surf = {0, 0, 0, NULL};
+    if (fo.base_mode == SS_FIT_BASE_ALBEDO) {
+        for (int ch = 0; ch < 3; ch++) fo.albedo_rgb[ch] = fmin(1.0, fmax(0.0, en.albedo_rgb[ch]));
+        if (ss_optics_surface_brdf_sample(&c.build.spectrum, c.build.n_theta_i, c.build.n_theta_r,
+                                          c.build.n_phi, &surf, &e)) {
+            ss_brdf_sampled_free(&s);
+            return cli_fail(cmd, &e);
+        }
+    }
     for (int m = 0; m < SS_RENDER_NMODELS; m++) {
         ss_fit_result r;
-        if (ss_render_fit((ss_render_model)m, &s, &c.build.fit, &r, &e)) {
+        /* the GGX lobe models the surface reflection; the Ashikhmin-Shirley
+         * lobe cannot (its best fit to it is no lobe), so it keeps the whole BRDF */
+        fo.surface = (m == SS_RENDER_GGX && surf.f_rgb) ? &surf : NULL;
+        if (ss_render_fit((ss_render_model)m, &s, &fo, &r, &e)) {
             ss_brdf_sampled_free(&s);
+            ss_brdf_sampled_free(&surf);
             return cli_fail(cmd, &e);
         }
         en.fit[m] = r.params;
@@ -302,6 +332,7 @@ int cmd_optics_fit(int argc, char **argv) {
         rms[m] = r.residual_rms;
     }
     ss_brdf_sampled_free(&s);
+    ss_brdf_sampled_free(&surf);
     double secs = ss_now() - t0;
     if (c.json) {
         printf("{\"method\": \"%s\", \"photons\": %llu, \"weighting\": \"%s\", \"seconds\": %.3f, ",

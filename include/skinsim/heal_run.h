@@ -206,6 +206,16 @@ int ss_heal_run_snapshot_count(const ss_heal_run *r);
 long long ss_heal_run_resumed_from(const ss_heal_run *r);
 /* Checkpoints skipped as damaged while resuming ("" if none). */
 const char *ss_heal_run_note(const ss_heal_run *r);
+/* The closure day of every column so far (skinsim/heal_io.h's
+ * ss_heal_closure_update, updated every step; nx*ny, grid order). Saved in
+ * the snapshots and checkpoints. */
+const double *ss_heal_run_closure(const ss_heal_run *r);
+/* On a real body (skin_mesh): the patch the grid is laid on and the skin
+ * mesh (skinsim/shell.h, skinsim/mesh.h); NULL on the flat block. */
+struct ss_shell_patch;
+struct ss_mesh;
+const struct ss_shell_patch *ss_heal_run_shell(const ss_heal_run *r);
+const struct ss_mesh *ss_heal_run_skin_mesh(const ss_heal_run *r);
 /* The contraction mechanics of the run (skinsim/mech.h), NULL when off. */
 struct ss_mech *ss_heal_run_mech(ss_heal_run *r);
 
@@ -232,11 +242,12 @@ double ss_heal_saved_run_snapshot_day(const ss_heal_saved_run *s, int i);
 /* The snapshot whose day is `day` (within a thousandth of a step), -1 if none. */
 int ss_heal_saved_run_find(const ss_heal_saved_run *s, double day);
 /* Reads snapshot i (0-based, in time order) as a new grid with the run's
- * skin_top_mm; displacement as ss_heal_vti_read (NULL when the run had no
- * mechanics). A damaged snapshot, or one whose grid or day disagrees with
+ * skin_top_mm; displacement and closed_day as ss_heal_vti_read (NULL when
+ * the run had no mechanics; the closure days are in every snapshot of this
+ * format). A damaged snapshot, or one whose grid or day disagrees with
  * summary.json and fields.pvd -> SS_ERR_INPUT naming the file. */
 ss_heal_grid *ss_heal_saved_run_load(const ss_heal_saved_run *s, int i, float **displacement,
-                                     ss_error *err);
+                                     double **closed_day, ss_error *err);
 
 #ifdef __cplusplus
 }

@@ -34,6 +34,7 @@ void ss_heal_run_free(ss_heal_run *r) {
     if (!r) return;
     ss_heal_solver_free(r->s);
     ss_heal_grid_free(r->g);
+    free(r->closed_day);
     ss_heal_params_free(r->p);
     free(r->params_json);
     free(r->rows);
@@ -110,6 +111,12 @@ ss_status ss_heal_run_create(const ss_heal_run_config *c, ss_heal_run **out, ss_
     if (!st)
         st = c->resume_dir ? ss_heal_run__setup_resume(r, err) : ss_heal_run__setup_fresh(r, err);
     if (!st) st = set_end(r, err);
+    if (!st && !r->closed_day) { /* fresh, or a checkpoint from before the closure days */
+        if (!(r->closed_day = malloc((size_t)r->g->nx * (size_t)r->g->ny * sizeof *r->closed_day)))
+            st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+        else
+            ss_heal_closure_init(r->g, r->closed_day);
+    }
     if (!st && r->out_dir) st = ss_heal_run__outputs_open(r, err);
     if (!st && !c->resume_dir) st = ss_heal_run__add_row(r, err); /* day 0 */
     if (st) {
@@ -299,6 +306,7 @@ static ss_status run_step(ss_heal_run *r, long long limit, ss_error *err) {
     if (!st) st = solver_step(r, limit, err);
     if (!st && r->mech && !(st = ss_mech_step(r->mech, r->g, r->dt, err))) cap_velocity(r);
     if (st) return st;
+    ss_heal_closure_update(r->g, r->closed_day);
     long long k = (long long)r->g->step;
     int last = k == r->nsteps;
     if (k / r->area_every != k0 / r->area_every || last) st = ss_heal_run__add_row(r, err);
@@ -391,3 +399,5 @@ const char *ss_heal_run_note(const ss_heal_run *r) { return r->note; }
 struct ss_mech *ss_heal_run_mech(ss_heal_run *r) {
     return r->mech;
 }
+
+const double *ss_heal_run_closure(const ss_heal_run *r) { return r->closed_day; }

@@ -46,6 +46,7 @@ struct ss_heal_run {
     double close_day;
     ss_mech_stats close_st;
     cJSON *mech_aux; /* the checkpoint's "mechanics" object while resuming */
+    double *closed_day; /* closure day per column (ss_heal_closure_update), nx*ny */
     /* adaptive steps (run.c): a step is mult x dt; adapt_tol 0 = fixed */
     double adapt_tol;
     long long mult, mult_max, retried, taken;

@@ -82,21 +82,38 @@ static void put_vec3(FILE *f, float *const v[3], size_t n) {
 }
 
 static ss_status write_vti(const char *path, const ss_heal_grid *g, int nvec,
-                           const char *const *names, float *const (*vecs)[3], const int off[3],
-                           const int whole[3], ss_error *err);
+                           const char *const *names, float *const (*vecs)[3],
+                           const double *closed_day, const int off[3], const int whole[3],
+                           ss_error *err);
 
 ss_status ss_heal_vti_write_vectors(const char *path, const ss_heal_grid *g, int nvec,
                                     const char *const *names, float *const (*vecs)[3],
                                     ss_error *err) {
+    return ss_heal_vti_write_all(path, g, nvec, names, vecs, NULL, err);
+}
+
+static void put_f64le(FILE *f, const double *a, size_t n) {
+    for (size_t i = 0; i < n; i++) {
+        uint64_t v;
+        unsigned char b[8];
+        memcpy(&v, &a[i], 8);
+        for (int k = 0; k < 8; k++) b[k] = (unsigned char)(v >> (8 * k));
+        fwrite(b, 1, 8, f);
+    }
+}
+
+ss_status ss_heal_vti_write_all(const char *path, const ss_heal_grid *g, int nvec,
+                                const char *const *names, float *const (*vecs)[3],
+                                const double *closed_day, ss_error *err) {
     if (!g || !g->cell) return ss_error_set(err, SS_ERR_INPUT, "%s: no grid", path);
     const int off[3] = {0, 0, 0}, whole[3] = {g->nx, g->ny, g->nz};
-    return write_vti(path, g, nvec, names, vecs, off, whole, err);
+    return write_vti(path, g, nvec, names, vecs, closed_day, off, whole, err);
 }
 
 ss_status ss_heal_vti_write_piece(const char *path, const ss_heal_grid *piece, const int off[3],
                                   const int whole[3], ss_error *err) {
     if (!piece || !piece->cell) return ss_error_set(err, SS_ERR_INPUT, "%s: no grid", path);
-    return write_vti(path, piece, 0, NULL, NULL, off, whole, err);
+    return write_vti(path, piece, 0, NULL, NULL, NULL, off, whole, err);
 }
 
 ss_status ss_heal_pvti_write(const char *path, const int whole[3], double dx_mm, double t_days,
@@ -132,8 +149,9 @@ ss_status ss_heal_pvti_write(const char *path, const int whole[3], double dx_mm,
 /* The grid g as the piece of a larger image whose cell (0,0,0) is at off and
  * whose dimensions are whole (the plain file: off 0, whole = g's). */
 static ss_status write_vti(const char *path, const ss_heal_grid *g, int nvec,
-                           const char *const *names, float *const (*vecs)[3], const int org[3],
-                           const int whole[3], ss_error *err) {
+                           const char *const *names, float *const (*vecs)[3],
+                           const double *closed_day, const int org[3], const int whole[3],
+                           ss_error *err) {
     int vel = g->velocity[0] && g->velocity[1] && g->velocity[2];
     size_t n = (size_t)g->nx * (size_t)g->ny * (size_t)g->nz;
     ss_atomic_file af;
@@ -150,9 +168,18 @@ static ss_status write_vti(const char *path, const ss_heal_grid *g, int nvec,
     fprintf(f,
             "    <FieldData>\n"
             "      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" "
-            "format=\"ascii\">%.17g</DataArray>\n"
-            "    </FieldData>\n",
+            "format=\"ascii\">%.17g</DataArray>\n",
             g->t_days);
+    /* the closure days go after every cell array in the appended data */
+    size_t ncol = (size_t)g->nx * (size_t)g->ny;
+    uint64_t coff = 8 + n + SS_HEAL_NFIELDS * (8 + 4 * (uint64_t)n) +
+                    (uint64_t)(vel + nvec) * (8 + 12 * (uint64_t)n);
+    if (closed_day)
+        fprintf(f,
+                "      <DataArray type=\"Float64\" Name=\"closed_day\" NumberOfTuples=\"%zu\" "
+                "format=\"appended\" offset=\"%llu\"/>\n",
+                ncol, (unsigned long long)coff);
+    fprintf(f, "    </FieldData>\n");
     fprintf(f, "    <Piece Extent=\"%d %d %d %d %d %d\">\n", org[0], org[0] + g->nx, org[1],
             org[1] + g->ny, org[2], org[2] + g->nz);
     fprintf(f, "      <CellData Scalars=\"cell_state\">\n");
@@ -193,6 +220,10 @@ static ss_status write_vti(const char *path, const ss_heal_grid *g, int nvec,
     }
     if (vel) put_vec3(f, g->velocity, n);
     for (int v = 0; v < nvec; v++) put_vec3(f, vecs[v], n);
+    if (closed_day) {
+        put_u64le(f, (uint64_t)(8 * ncol));
+        put_f64le(f, closed_day, ncol);
+    }
     fprintf(f, "\n  </AppendedData>\n</VTKFile>\n");
     if (ferror(f)) {
         ss_atomic_abort(&af);
@@ -261,8 +292,11 @@ static const unsigned char *vti_block(const unsigned char *data, size_t avail, u
     return data + off + 8;
 }
 
-ss_heal_grid *ss_heal_vti_read(const char *path, float **displacement, ss_error *err) {
+ss_heal_grid *ss_heal_vti_read(const char *path, float **displacement, double **closed_day,
+                               ss_error *err) {
     if (displacement) *displacement = NULL;
+    if (closed_day) *closed_day = NULL;
+    double *closed = NULL;
     size_t len = 0;
     char *text = ss_read_file(path, &len, err);
     if (!text) return NULL;
@@ -307,6 +341,21 @@ ss_heal_grid *ss_heal_vti_read(const char *path, float **displacement, ss_error 
         size_t nl = q ? (size_t)(q - nm) : 0;
         unsigned long long off = strtoull(of, NULL, 10);
         int comps = nc ? atoi(nc) : 1;
+        if (nl == 10 && !strncmp(nm, "closed_day", 10)) {
+            size_t ncol = (size_t)n[0] * (size_t)n[1];
+            const unsigned char *b = strncmp(ty ? ty : "", "Float64\"", 8)
+                                         ? NULL
+                                         : vti_block(data, avail, off, 8 * (uint64_t)ncol);
+            if (!b)
+                why = "the closed_day array is malformed";
+            else if (closed_day && !(closed = malloc(ncol * sizeof *closed)))
+                why = "out of memory";
+            for (size_t i = 0; closed && !why && i < ncol; i++) {
+                uint64_t v = get_u64le(b + 8 * i);
+                memcpy(&closed[i], &v, 8);
+            }
+            continue;
+        }
         if (nl == 10 && !strncmp(nm, "cell_state", 10)) {
             const unsigned char *b =
                 strncmp(ty ? ty : "", "UInt8\"", 6) ? NULL : vti_block(data, avail, off, ncell);
@@ -350,9 +399,11 @@ ss_heal_grid *ss_heal_vti_read(const char *path, float **displacement, ss_error 
         ss_error_set(err, SS_ERR_INPUT, "%s: %s", path, why);
         ss_heal_grid_free(g);
         free(disp);
+        free(closed);
         return NULL;
     }
     g->t_days = t;
     if (displacement) *displacement = disp;
+    if (closed_day) *closed_day = closed;
     return g;
 }

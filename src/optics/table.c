@@ -421,6 +421,7 @@ void ss_mm_build_options_default(ss_mm_build_options *o) {
     o->n_theta_r = 8;
     o->n_phi = 8;
     ss_fit_options_default(&o->fit);
+    o->fit.base_mode = SS_FIT_BASE_ALBEDO; /* departure from the seed: docs/optics.md */
     ss_bio_params_default(&o->base);
     o->quiet = 1;
 }
@@ -762,7 +763,12 @@ static ss_status build_range(ss_mm_table *t, const ss_mm_build_options *o, int g
         return st ? st : ss_error_set(err, SS_ERR_NOMEM, "ModelMatch: out of memory");
     }
     ss_optics_data *data = NULL;
-    if ((st = ss_optics_data_open(&data, err))) {
+    ss_brdf_sampled surf = {0, 0, 0, NULL}; /* surface part, the same for every entry */
+    if ((st = ss_optics_data_open(&data, err)) ||
+        (o->fit.base_mode == SS_FIT_BASE_ALBEDO && !o->fit.surface &&
+         (st = ss_optics_surface_brdf_sample(&o->spectrum, o->n_theta_i, o->n_theta_r, o->n_phi,
+                                             &surf, err)))) {
+        ss_optics_data_close(data);
         free_geo_out(&g);
         free(bios);
         free(wl);
@@ -806,9 +812,15 @@ static ss_status build_range(ss_mm_table *t, const ss_mm_build_options *o, int g
             ss_mm_entry e;
             memset(&e, 0, sizeof e);
             ss_error e2;
+            ss_fit_options fo = o->fit;
+            for (int c = 0; c < 3; c++) fo.albedo_rgb[c] = g.albedo[(size_t)a * 3 + c];
             for (int m = 0; m < SS_RENDER_NMODELS; m++) {
                 ss_fit_result fr;
-                ss_status s2 = ss_render_fit((ss_render_model)m, &s, &o->fit, &fr, &e2);
+                /* the GGX lobe models the surface reflection; the Ashikhmin-
+                 * Shirley lobe cannot (its best fit to it is no lobe) and is
+                 * fitted to the whole BRDF (docs/optics.md) */
+                if (surf.f_rgb) fo.surface = m == SS_RENDER_GGX ? &surf : NULL;
+                ss_status s2 = ss_render_fit((ss_render_model)m, &s, &fo, &fr, &e2);
                 if (s2) {
 #pragma omp critical(mm_fit_err)
                     {
@@ -840,6 +852,7 @@ static ss_status build_range(ss_mm_table *t, const ss_mm_build_options *o, int g
     }
     ss_progress_end(&prog);
     ss_optics_data_close(data);
+    ss_brdf_sampled_free(&surf);
     if (!st) ss_mm_table_record_options(t, o);
     free_geo_out(&g);
     free(bios);
