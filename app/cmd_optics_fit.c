@@ -14,6 +14,9 @@
 #include "cli.h"
 #include "optics_opts.h"
 #include "skinsim/optics_fit.h"
+#ifdef SKINSIM_HAVE_MPI
+#include "skinsim/dist.h"
+#endif
 
 typedef struct fit_cli {
     ss_bio_params bio;
@@ -475,15 +478,29 @@ int cmd_optics_table(int argc, char **argv) {
         ss_mm_table_free(t);
         return 0;
     }
-    /* the table file: checked now, staged, swapped in whole when built */
-    ss_outputs *outs = ss_outputs_create("optics", &e);
-    ss_status st = outs ? SS_OK : SS_ERR_NOMEM;
+    /* Under MPI (several ranks) every rank builds with rank 0 (src/dist/table.c):
+     * each calls table_build exactly once, rank 0 with its verdict on the output. */
+    int dist = 0, rank0 = 1;
+#ifdef SKINSIM_HAVE_MPI
+    dist = ss_dist_size() > 1;
+    rank0 = ss_dist_rank() == 0;
+#define TABLE_BUILD(t, root_st)                                                                    \
+    (dist        ? ss_dist_mm_table_build((t), &c.build, (root_st), &e)                            \
+     : (root_st) ? (root_st)                                                                       \
+                 : ss_mm_table_build((t), &c.build, &e))
+#else
+#define TABLE_BUILD(t, root_st) ((root_st) ? (root_st) : ss_mm_table_build((t), &c.build, &e))
+#endif
+    /* the table file: checked now, staged, swapped in whole when built (rank 0) */
+    ss_outputs *outs = rank0 ? ss_outputs_create("optics", &e) : NULL;
+    ss_status st = outs || !rank0 ? SS_OK : SS_ERR_NOMEM;
     double bytes = 8.0 * SS_MM_NFIELDS;
     for (int a = 0; a < SS_MM_NAXES; a++)
         bytes *= c.axis_values[a] ? c.axis_count[a] : (int)c.samples;
-    if (!st) st = ss_outputs_add(outs, "--out", c.out, SS_OUTPUT_FILE, bytes + 4096, &e);
-    if (!st) st = ss_outputs_begin(outs, &e);
+    if (!st && rank0) st = ss_outputs_add(outs, "--out", c.out, SS_OUTPUT_FILE, bytes + 4096, &e);
+    if (!st && rank0) st = ss_outputs_begin(outs, &e);
     if (st) {
+        if (dist) TABLE_BUILD(NULL, st);
         ss_outputs_free(outs);
         for (int a = 0; a < SS_MM_NAXES; a++) free(c.axis_values[a]);
         return cli_fail(cmd, &e);
@@ -500,13 +517,18 @@ int cmd_optics_table(int argc, char **argv) {
             for (int k = 0; k < ns[a]; k++) t->axis[a][k] = c.axis_values[a][k];
     for (int a = 0; a < SS_MM_NAXES; a++) free(c.axis_values[a]);
     if (!t) {
+        if (dist) TABLE_BUILD(NULL, rank0 ? e.code : SS_OK);
         ss_outputs_free(outs);
         return cli_fail(cmd, &e);
     }
     c.build.base = c.bio; /* bilirubin, beta-carotene (the non-axis parameters) */
     double t0 = ss_now();
-    st = ss_mm_table_build(t, &c.build, &e);
+    st = TABLE_BUILD(t, SS_OK);
     double secs = ss_now() - t0;
+    if (!rank0) { /* the others only built */
+        ss_mm_table_free(t);
+        return ss_status_exit_code(st);
+    }
     if (!st) st = ss_mm_table_write(ss_outputs_path(outs, 0), t, &e);
     st = ss_outputs_finish(outs, st, &e);
     ss_outputs_free(outs);

@@ -700,11 +700,41 @@ ss_status ss_mm_sample_fast(const ss_bio_params *bio, const ss_mm_build_options 
     return st;
 }
 
+void ss_mm_table_record_options(ss_mm_table *t, const ss_mm_build_options *o) {
+    t->photons = o->spectrum.mc.photons;
+    t->seed = o->spectrum.mc.seed;
+    t->n_theta_i = o->n_theta_i;
+    t->n_theta_r = o->n_theta_r;
+    t->n_phi = o->n_phi;
+    t->wl_min_nm = o->spectrum.wl_min_nm;
+    t->wl_max_nm = o->spectrum.wl_max_nm;
+    t->wl_step_nm = o->spectrum.wl_step_nm;
+}
+
+int ss_mm_table_ngeometries(const ss_mm_table *t) {
+    return t->nsamples[SS_MM_AXIS_SC] * t->nsamples[SS_MM_AXIS_EPIDERMIS];
+}
+
+static ss_status build_range(ss_mm_table *t, const ss_mm_build_options *o, int g0, int g1,
+                             ss_error *err);
+
 ss_status ss_mm_table_build(ss_mm_table *t, const ss_mm_build_options *o, ss_error *err) {
+    return build_range(t, o, 0, ss_mm_table_ngeometries(t), err);
+}
+
+ss_status ss_mm_table_build_geometry(ss_mm_table *t, const ss_mm_build_options *o, int gi,
+                                     ss_error *err) {
+    if (gi < 0 || gi >= ss_mm_table_ngeometries(t))
+        return ss_error_set(err, SS_ERR_INPUT, "ModelMatch: geometry %d is not in 0..%d", gi,
+                            ss_mm_table_ngeometries(t) - 1);
+    return build_range(t, o, gi, gi + 1, err);
+}
+
+ss_status ss_mm_table_build_check(const ss_mm_table *t, const ss_mm_build_options *o,
+                                  ss_error *err) {
     int nwl;
     ss_status st = check_build_options(o, &nwl, err);
     if (st) return st;
-    /* every node must be a valid parameter set */
     for (int a = 0; a < SS_MM_NAXES; a++)
         for (int k = 0; k < t->nsamples[a]; k++) {
             double v = t->axis[a][k];
@@ -713,10 +743,17 @@ ss_status ss_mm_table_build(ss_mm_table *t, const ss_mm_build_options *o, ss_err
                 return ss_error_set(err, SS_ERR_INPUT, "ModelMatch: axis %s value %g is outside %s",
                                     axis_names[a], v, thick ? "(0, 1] cm" : "[0, 1]");
         }
+    return SS_OK;
+}
+
+static ss_status build_range(ss_mm_table *t, const ss_mm_build_options *o, int g0, int g1,
+                             ss_error *err) {
+    int nwl;
+    ss_status st = ss_mm_table_build_check(t, o, err); /* options, and every node valid */
+    if (st || (st = check_build_options(o, &nwl, err))) return st;
     double *wl, *W;
     if ((st = make_wavelengths(o, nwl, &wl, &W, err))) return st;
     int nabs = t->nsamples[0] * t->nsamples[1] * t->nsamples[2] * t->nsamples[3];
-    int ngeo = t->nsamples[4] * t->nsamples[5];
     ss_bio_params *bios = malloc((size_t)nabs * sizeof *bios);
     mm_geo_out g = {0};
     if (!bios || (st = alloc_geo_out(&g, nabs, o, err))) {
@@ -739,10 +776,11 @@ ss_status ss_mm_table_build(ss_mm_table *t, const ss_mm_build_options *o, ss_err
         return st;
     }
     ss_progress prog;
-    ss_progress_begin(&prog, "ModelMatch table", (double)ngeo * nwl * (o->n_theta_i + 1), o->quiet);
+    ss_progress_begin(&prog, "ModelMatch table", (double)(g1 - g0) * nwl * (o->n_theta_i + 1),
+                      o->quiet);
     double done = 0;
     size_t per = (size_t)o->n_theta_i * o->n_theta_r * o->n_phi * 3;
-    for (int gi = 0; gi < ngeo && !st; gi++) {
+    for (int gi = g0; gi < g1 && !st; gi++) {
         int isc = gi / t->nsamples[5], iep = gi % t->nsamples[5];
         for (int a = 0; a < nabs; a++) {
             int r = a;
@@ -815,16 +853,7 @@ ss_status ss_mm_table_build(ss_mm_table *t, const ss_mm_build_options *o, ss_err
     ss_progress_end(&prog);
     ss_optics_data_close(data);
     ss_brdf_sampled_free(&surf);
-    if (!st) {
-        t->photons = o->spectrum.mc.photons;
-        t->seed = o->spectrum.mc.seed;
-        t->n_theta_i = o->n_theta_i;
-        t->n_theta_r = o->n_theta_r;
-        t->n_phi = o->n_phi;
-        t->wl_min_nm = o->spectrum.wl_min_nm;
-        t->wl_max_nm = o->spectrum.wl_max_nm;
-        t->wl_step_nm = o->spectrum.wl_step_nm;
-    }
+    if (!st) ss_mm_table_record_options(t, o);
     free_geo_out(&g);
     free(bios);
     free(wl);

@@ -726,7 +726,7 @@ except AttributeError:
 
 # ---- wound ------------------------------------------------------------------------
 
-SS_WR_NKEYS = 29
+SS_WR_NKEYS = 42
 
 
 class ss_wound_recipe(ctypes.Structure):
