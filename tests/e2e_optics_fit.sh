@@ -35,7 +35,9 @@ done
 grep -q "^ggx " "$T/f.txt" || fail "fit text output"
 # default (--base albedo): the GGX base colour is the albedo (within 10 % per
 # channel) and the lobe stays inside its bounds; --base free runs the seed's fit
-python3 - "$T/f.json" <<'PY' || fail "fit --base albedo: base colour vs albedo"
+"$CLI" optics fit --photons 3000 --wl-min 450 --wl-max 650 --wl-step 100 --theta-i 6 \
+  --theta-r 6 --phi 6 --fast --json --threads 2 >"$T/fb.json" || fail "fit 6x6x6"
+python3 - "$T/fb.json" <<'PY' || fail "fit --base albedo: base colour vs albedo"
 import json, sys
 d = json.load(open(sys.argv[1]))
 g, a = d["models"]["ggx"], d["albedo_linear"]

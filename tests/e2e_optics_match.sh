@@ -42,8 +42,9 @@ assert d["delta_e00"] <= float(sys.argv[3]), d["delta_e00"]
 PY
 }
 # both patches: the issue's target, Delta-E00 <= 3, in the default geometry
-# (SCI: albedo + surface reflectance, as measured colours are). The albedo
-# alone (SCE) cannot reach the dark patch's low chroma (docs/validation.md).
+# (SCI: albedo + surface reflectance, as measured colours are; the albedo
+# alone, SCE, reaches the dark patch only at the ends of three axes,
+# docs/validation.md).
 check light-skin 194,150,130 3
 check dark-skin 115,82,68 3
 python3 -c "

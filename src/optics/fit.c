@@ -51,21 +51,21 @@ typedef struct fit_ctx {
     int base_mode;         /* SS_FIT_BASE_FREE or SS_FIT_BASE_ALBEDO */
     double albedo[3];      /* base_mode ALBEDO */
     const double *surface; /* base_mode ALBEDO: surface-reflected part (nbins * 3) or NULL */
+    double as0;            /* Ashikhmin-Shirley diffuse albedo per unit base at F0 = 0 */
 } fit_ctx;
 
-/* Diffuse directional albedo at normal incidence of the model's diffuse term
- * per unit base colour, for the lobe (specular, roughness). */
-static double diffuse_albedo_per_base(ss_render_model m, double spec, double rough) {
-    ss_render_params p1, p0;
-    memset(&p1, 0, sizeof p1);
-    p1.specular = spec;
-    p1.roughness = rough;
-    p0 = p1;
-    for (int ch = 0; ch < 3; ch++) p1.base_rgb[ch] = 1.0;
-    return ss_render_albedo(m, &p1, 0.0, 0, 48) - ss_render_albedo(m, &p0, 0.0, 0, 48);
-}
-
 static double clampd(double v, double lo, double hi) { return v < lo ? lo : v > hi ? hi : v; }
+
+/* Diffuse directional albedo at normal incidence of the model's diffuse term
+ * per unit base colour, for the lobe (specular, roughness), in closed form:
+ * GGX's energy-compensated Lambert term (1 - E(i)) (1 - E(r)) / (pi (1 -
+ * E_avg)) integrates to 1 - E(1) at normal incidence; Ashikhmin-Shirley's
+ * diffuse term is (1 - F0) times a fixed shape whose albedo (as0, computed
+ * once by quadrature) does not depend on the roughness. */
+static double diffuse_albedo_per_base(ss_render_model m, double spec, double rough, double as0) {
+    if (m == SS_RENDER_GGX) return 1.0 - ss_render_ggx_spec_albedo(spec, rough, 1.0);
+    return (1.0 - SS_RENDER_F0_PER_SPECULAR * spec) * as0;
+}
 
 /* Distance for (specular, roughness) with the best base colour; writes it. */
 static double objective(fit_ctx *c, double spec, double rough, double base[3]) {
@@ -90,7 +90,7 @@ static double objective(fit_ctx *c, double spec, double rough, double base[3]) {
         for (int ch = 0; ch < 3; ch++) num[ch] += wb * a * (c->data[b * 3 + ch] - s);
     }
     if (c->base_mode == SS_FIT_BASE_ALBEDO) {
-        double dn = diffuse_albedo_per_base(c->model, spec, rough);
+        double dn = diffuse_albedo_per_base(c->model, spec, rough, c->as0);
         for (int ch = 0; ch < 3; ch++)
             base[ch] = dn > 0 ? clampd(c->albedo[ch] / dn, 0.0, 1.0) : 0.0;
         if (c->surface) { /* the lobe against the surface-reflected part */
@@ -226,6 +226,8 @@ ss_status ss_render_fit(ss_render_model m, const ss_brdf_sampled *data, const ss
     c.model = m;
     c.base_mode = o->base_mode;
     if (o->base_mode == SS_FIT_BASE_ALBEDO) {
+        ss_render_params p1 = {{1.0, 1.0, 1.0}, 0.0, 0.5};
+        if (m == SS_RENDER_AS) c.as0 = ss_render_albedo(SS_RENDER_AS, &p1, 0.0, 0, 96);
         for (int ch = 0; ch < 3; ch++) {
             if (!(o->albedo_rgb[ch] >= 0.0 && o->albedo_rgb[ch] <= 1.0))
                 return ss_error_set(err, SS_ERR_INPUT,

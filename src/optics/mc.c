@@ -38,38 +38,35 @@
 #endif
 
 /* ---- per-photon random stream ------------------------------------------ *
- * Photon i's stream is xoshiro256** (Blackman & Vigna 2018) whose 256-bit state
- * is drawn from the counter-based Philox generator at (seed, stream = i,
- * indices 0 and 1) via ss_rng4. Every photon's draws are therefore a pure
- * function of (seed, i), independent of threads and order, while each step
- * costs a few integer operations instead of a Philox block. */
+ * Photon i's stream is xoroshiro128++ (Blackman & Vigna 2018, "Scrambled
+ * linear pseudorandom number generators"; 2^128 - 1 period, passes BigCrush)
+ * whose 128-bit state is one Philox block of the counter-based generator at
+ * (seed, stream = i, index 0) via ss_rng4. Every photon's draws are therefore
+ * a pure function of (seed, i), independent of threads and order, while each
+ * draw costs a few integer operations and two registers of state (the photon
+ * loop is register-bound; xoshiro256** with four words was 2-3 % slower). A
+ * photon uses a few thousand draws at most, far below the period. */
 typedef struct prng {
-    uint64_t s[4];
+    uint64_t s0, s1;
 } prng;
 
 static inline void prng_init(prng *r, uint64_t seed, uint64_t stream) {
-    uint32_t a[4], b[4];
+    uint32_t a[4];
     ss_rng4(seed, stream, 0, a);
-    ss_rng4(seed, stream, 1, b);
-    r->s[0] = (uint64_t)a[0] << 32 | a[1];
-    r->s[1] = (uint64_t)a[2] << 32 | a[3];
-    r->s[2] = (uint64_t)b[0] << 32 | b[1];
-    r->s[3] = (uint64_t)b[2] << 32 | b[3];
-    if (!(r->s[0] | r->s[1] | r->s[2] | r->s[3])) r->s[0] = 1; /* never all zero */
+    r->s0 = (uint64_t)a[0] << 32 | a[1];
+    r->s1 = (uint64_t)a[2] << 32 | a[3];
+    if (!(r->s0 | r->s1)) r->s0 = 1; /* never all zero */
 }
 
 static inline uint64_t rotl64(uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
 
 static inline uint64_t prng_next(prng *r) {
-    uint64_t *s = r->s;
-    const uint64_t out = rotl64(s[1] * 5, 7) * 9;
-    const uint64_t t = s[1] << 17;
-    s[2] ^= s[0];
-    s[3] ^= s[1];
-    s[1] ^= s[2];
-    s[0] ^= s[3];
-    s[2] ^= t;
-    s[3] = rotl64(s[3], 45);
+    const uint64_t s0 = r->s0;
+    uint64_t s1 = r->s1;
+    const uint64_t out = rotl64(s0 + s1, 17) + s0;
+    s1 ^= s0;
+    r->s0 = rotl64(s0, 49) ^ s1 ^ (s1 << 21);
+    r->s1 = rotl64(s1, 28);
     return out;
 }
 
@@ -388,7 +385,8 @@ int ss_ms_walk(double alpha, double n_in, double n_out, double w[3], uint64_t se
 
 /* ---- per-block accumulators ------------------------------------------------ */
 typedef struct mc_acc {
-    double specular, diffuse, diffuse2, transmit, transmit2, absorbed, roulette;
+    double specular, diffuse, diffuse2, transmit, transmit2, absorbed, roulette; /* absorbed:
+        only in the reduced total (sum of abs_layer) */
     double abs_layer[SS_OPTICS_MAX_LAYERS];
     double *brdf, *rd_r, *a_z, *rd_a, *tt_r, *tt_a;
     double *a_rz, *rd_ra, *tt_ra; /* MCML 2-D arrays [ir][iz], [ir][ia] */
@@ -452,15 +450,15 @@ static inline int angle_bin(int na, double cos_out) {
     return ia >= na ? na - 1 : ia;
 }
 
-/* MCML absorption tallies A(z) and A(r, z), overflow in the last bins. */
+/* MCML absorption tally A(r, z), overflow in the last bins (A(z) is its sum
+ * over r, formed after the run: one scattered add per interaction, not two). */
 static inline void mcml_absorb(const mc_ctx *c, mc_acc *a, double x, double y, double z,
                                double dw) {
     double q = z * c->inv_dz;
     int iz = q < (double)c->spec.nz ? (int)q : c->spec.nz - 1;
     if (iz < 0) iz = 0;
     int ir = radial_bin(c, x, y, c->spec.rad_n, 1);
-    a->a_z[iz] += dw;
-    a->a_rz[(size_t)ir * c->spec.nz + iz] += dw;
+    a->a_rz[(size_t)ir * c->spec.nz + iz] += dw; /* A(z) is summed from A(r, z) at the end */
 }
 
 /* Traces one photon. */
@@ -515,6 +513,7 @@ static void run_photon(const mc_ctx *c, uint64_t idx, mc_acc *a, path_buf *pb) {
     }
     int layer = 0;
     double hpath = 0.0; /* horizontal path length (seed §4.7.1 D), if path_dist */
+    const int track = c->paths || c->path_dist; /* per-segment bookkeeping needed */
     double dsum = 0.0;  /* this photon's diffuse reflectance */
     double tsum = 0.0;
 
@@ -536,20 +535,23 @@ static void run_photon(const mc_ctx *c, uint64_t idx, mc_acc *a, path_buf *pb) {
                 x += s * d[0];
                 y += s * d[1];
                 z += s * d[2];
-                if (c->paths) plen[layer] += s;
-                if (c->path_dist) hpath += s * sqrt(d[0] * d[0] + d[1] * d[1]);
+                if (track) {
+                    if (c->paths) plen[layer] += s;
+                    if (c->path_dist) hpath += s * sqrt(d[0] * d[0] + d[1] * d[1]);
+                }
                 break;
             }
             if (db == HUGE_VAL) { /* clear layer, horizontal: cannot move */
                 a->abs_layer[layer] += w;
-                a->absorbed += w;
                 return;
             }
             /* move to the boundary */
             x += db * d[0];
             y += db * d[1];
-            if (c->paths) plen[layer] += db;
-            if (c->path_dist) hpath += db * sqrt(d[0] * d[0] + d[1] * d[1]);
+            if (track) {
+                if (c->paths) plen[layer] += db;
+                if (c->path_dist) hpath += db * sqrt(d[0] * d[0] + d[1] * d[1]);
+            }
             tau -= db * L->mut;
             if (tau < 0.0) tau = 0.0;
             if (uz > 0.0) {
@@ -711,7 +713,6 @@ static void run_photon(const mc_ctx *c, uint64_t idx, mc_acc *a, path_buf *pb) {
             if (c->stochastic) {
                 if (prng_u(&r) < L->absfrac) {
                     a->abs_layer[layer] += w;
-                    a->absorbed += w;
                     if (mcml) mcml_absorb(c, a, x, y, z, w);
                     goto done;
                 }
@@ -719,7 +720,6 @@ static void run_photon(const mc_ctx *c, uint64_t idx, mc_acc *a, path_buf *pb) {
                 double dw = w * L->absfrac;
                 w -= dw;
                 a->abs_layer[layer] += dw;
-                a->absorbed += dw;
                 if (mcml) mcml_absorb(c, a, x, y, z, dw);
             }
         }
@@ -762,7 +762,7 @@ static void run_photon(const mc_ctx *c, uint64_t idx, mc_acc *a, path_buf *pb) {
         }
 
         /* ---- roulette ---- */
-        if (!c->stochastic && w < 1e-4) {
+        if (w < 1e-4 && !c->stochastic) {
             if (w == 0.0) goto done;
             if (prng_u(&r) < 0.1) {
                 a->roulette += 9.0 * w;
@@ -939,7 +939,7 @@ static ss_status run_blocks(const mc_ctx *c, uint64_t photons, run_out *out, ss_
         t->diffuse2 += a->diffuse2;
         t->transmit += a->transmit;
         t->transmit2 += a->transmit2;
-        t->absorbed += a->absorbed;
+        for (int l = 0; l < c->nl; l++) t->absorbed += a->abs_layer[l]; /* total absorbed */
         t->roulette += a->roulette;
         for (int l = 0; l < c->nl; l++) t->abs_layer[l] += a->abs_layer[l];
         for (size_t k = 0; k < asz; k++) out->mem[k] += mem[b * asz + k];
@@ -1005,6 +1005,12 @@ ss_status ss_mc_run_tallies(const ss_optics_slab *slab, const ss_mc_options *opt
     t->tt_r = o.total.tt_r;
     t->tt_a = o.total.tt_a;
     t->a_rz = o.total.a_rz;
+    if (spec->mcml) /* A(z): A(r, z) summed over r, in r order */
+        for (int iz = 0; iz < spec->nz; iz++) {
+            double sum = 0.0;
+            for (int ir = 0; ir < spec->rad_n; ir++) sum += t->a_rz[(size_t)ir * spec->nz + iz];
+            t->a_z[iz] = sum;
+        }
     t->rd_ra = o.total.rd_ra;
     t->tt_ra = o.total.tt_ra;
     return SS_OK;

@@ -217,19 +217,27 @@ void ss_brdf_sampled_free(ss_brdf_sampled *b) {
     b->f_rgb = NULL;
 }
 
-ss_status ss_optics_brdf_sample(const ss_bio_params *bio, const ss_spectrum_options *o,
-                                int n_theta_i, int n_theta_r, int n_phi, ss_brdf_sampled *out,
-                                ss_error *err) {
+/* Checks shared by the BRDF samplers; clears *out, sets *n (wavelengths). */
+static ss_status check_brdf_args(const ss_spectrum_options *o, int n_theta_i, int n_theta_r,
+                                 int n_phi, ss_brdf_sampled *out, int *n, ss_error *err) {
     if (!out) return ss_error_set(err, SS_ERR_INPUT, "BRDF output is NULL");
     memset(out, 0, sizeof *out);
-    int n;
-    ss_status st = check_spec_opts(o, &n, err);
+    ss_status st = check_spec_opts(o, n, err);
     if (st) return st;
     if (n_theta_i < 1 || n_theta_i > 256 || n_theta_r < 1 || n_theta_r > 256 || n_phi < 1 ||
         n_phi > 256)
         return ss_error_set(err, SS_ERR_INPUT,
                             "BRDF bins theta_i %d x theta_r %d x phi %d: each must be 1..256",
                             n_theta_i, n_theta_r, n_phi);
+    return SS_OK;
+}
+
+ss_status ss_optics_brdf_sample(const ss_bio_params *bio, const ss_spectrum_options *o,
+                                int n_theta_i, int n_theta_r, int n_phi, ss_brdf_sampled *out,
+                                ss_error *err) {
+    int n;
+    ss_status st = check_brdf_args(o, n_theta_i, n_theta_r, n_phi, out, &n, err);
+    if (st) return st;
     if ((st = ss_bio_params_validate(bio, err))) return st;
     ss_optics_data d;
     if ((st = ss_optics_data_load(&d, err))) return st;
@@ -278,16 +286,9 @@ ss_status ss_optics_brdf_sample(const ss_bio_params *bio, const ss_spectrum_opti
 
 ss_status ss_optics_surface_brdf_sample(const ss_spectrum_options *o, int n_theta_i, int n_theta_r,
                                         int n_phi, ss_brdf_sampled *out, ss_error *err) {
-    if (!out) return ss_error_set(err, SS_ERR_INPUT, "BRDF output is NULL");
-    memset(out, 0, sizeof *out);
     int n;
-    ss_status st = check_spec_opts(o, &n, err);
+    ss_status st = check_brdf_args(o, n_theta_i, n_theta_r, n_phi, out, &n, err);
     if (st) return st;
-    if (n_theta_i < 1 || n_theta_i > 256 || n_theta_r < 1 || n_theta_r > 256 || n_phi < 1 ||
-        n_phi > 256)
-        return ss_error_set(err, SS_ERR_INPUT,
-                            "BRDF bins theta_i %d x theta_r %d x phi %d: each must be 1..256",
-                            n_theta_i, n_theta_r, n_phi);
     /* the skin's own surface: indices of air and stratum corneum from the slab */
     ss_bio_params bio;
     ss_bio_params_default(&bio);
