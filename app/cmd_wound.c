@@ -29,6 +29,8 @@ static void help(void) {
            "  block), --stroke CSV, --concave-k K, --wound-mask PNG, --wound-mesh OBJ,\n"
            "  --wound-depth-mm D, --wound-depth-image F, --skin-top-mm, --epidermis-mm,\n"
            "  --dt DAYS, --scheme explicit|split\n"
+           "  --mesh M --wound-uv CSV  on a body (as skinsim heal): the textures cover the\n"
+           "                         mesh's UV layout and each day's glTF is the mesh\n"
            "  --heal DIR             instead: render a finished `skinsim heal --out DIR` run\n"
            "                         (no heal options then; every day must be one of its\n"
            "                         snapshot days, see its --snapshot-every)\n"

@@ -4,7 +4,9 @@
  * default 30 x 30 x 4 mm block, output days 0,1,3,7,14,28,90,365 at
  * 2048 x 2048. Prints the one-off renderer set-up (base skin textures, the
  * blood-layer tables), then per day the heal time since the previous day
- * (stepping plus the tissue tracker) and the texture time (ss_wound_render).
+ * (stepping; the run keeps each column's closure day) and the texture time
+ * (sampling the tissue with ss_wound_tissue_observe_closure, then
+ * ss_wound_render), as `skinsim wound` does it.
  * PNG writing is not included. CPU seconds (all threads) are printed next to
  * the wall clock: on a loaded machine CPU / threads is what idle cores give.
  * Usage: bench_wound [--size N] [--threads N]
@@ -81,9 +83,9 @@ int main(int argc, char **argv) {
                 fprintf(stderr, "bench_wound: %s\n", err.msg);
                 return 1;
             }
-            ss_wound_tissue_observe(t, ss_heal_run_grid(run));
         }
         double b = ss_now(), cb = cpu();
+        ss_wound_tissue_observe_closure(t, ss_heal_run_grid(run), ss_heal_run_closure(run));
         if (ss_wound_render(r, t, NULL, &tex, &err)) {
             fprintf(stderr, "bench_wound: %s\n", err.msg);
             return 1;

@@ -1,10 +1,9 @@
 #!/usr/bin/env bash
 # End-to-end test of `skinsim wound --heal DIR`: a finished `skinsim heal` run
 # folder is rendered instead of simulating again. Its snapshots hold the full
-# state, so the frames equal those of `skinsim wound` running the same problem
-# itself, byte for byte, up to the first day a column closes (after that the
-# closure day is known at snapshot resolution: docs/wound.md); a run with
-# denser snapshots is read as well. Bad input: a folder of another version,
+# state and the closure day of every column (which no field holds), so the
+# frames equal those of `skinsim wound` running the same problem itself, byte
+# for byte, on every day, also after margin columns have closed. Bad input: a folder of another version,
 # an unfinished one, a folder that is not a heal run, days outside the run or
 # between its snapshots, heal options next to --heal, --mechanics on a run
 # without it, a damaged snapshot: exit 2 naming the input, nothing written.
@@ -15,15 +14,16 @@ T=$(mktemp -d /tmp/skinsim-e2e-wound-heal-XXXXXX)
 trap 'rm -rf "$T"' EXIT
 fail() { echo "FAIL: $*" >&2; exit 1; }
 
-PROB="--scenario scab --grid 24x24x8"
-"$CLI" heal $PROB --days 4 --quiet --out "$T/h" || fail "heal run failed"
+printf 'u,v\n0.25,0.3\n0.7,0.22\n0.78,0.6\n0.45,0.8\n0.2,0.62\n' >"$T/stroke.csv"
+PROB="--scenario scab --grid 24x24x8 --stroke $T/stroke.csv"
+"$CLI" heal $PROB --adapt-tol 0 --days 4 --quiet --out "$T/h" || fail "heal run failed"
 grep -q '"format":[[:space:]]*1' "$T/h/run.json" || fail "run.json has no format stamp"
 
-# --- the frames equal an in-memory run of the same problem (no column closes by day 3)
-"$CLI" wound --heal "$T/h" --days 0,1,3 --size 48 --quiet --out "$T/a" --json >"$T/a.json" ||
+# --- the frames equal an in-memory run of the same problem (margins close from day 3)
+"$CLI" wound --heal "$T/h" --days 0,1,3,4 --size 48 --quiet --out "$T/a" --json >"$T/a.json" ||
     fail "wound --heal failed"
-"$CLI" wound $PROB --days 0,1,3 --size 48 --quiet --out "$T/b" || fail "wound (in memory) failed"
-for d in 0 1 3; do
+"$CLI" wound $PROB --days 0,1,3,4 --size 48 --quiet --out "$T/b" || fail "wound (in memory) failed"
+for d in 0 1 3 4; do
     for m in base_color roughness height normal; do
         cmp -s "$T/a/frames/t${d}_$m.png" "$T/b/frames/t${d}_$m.png" ||
             fail "day $d $m differs between --heal and the in-memory run"
@@ -34,12 +34,14 @@ cmp -s "$T/a/contact_sheet.png" "$T/b/contact_sheet.png" || fail "contact sheets
 import json, sys
 t = json.load(open(sys.argv[1]))
 assert t["scenario"] == "scab" and t["heal_dir"] == sys.argv[2], t
-assert [f["day"] for f in t["frames"]] == [0, 1, 3]
+assert [f["day"] for f in t["frames"]] == [0, 1, 3, 4]
 PY
-# a later day (closure between snapshots) still renders, and the heal folder is untouched
+# the last day alone (no earlier snapshot read) gives the same frame; the heal folder is untouched
 before=$(cd "$T/h" && find . -type f -exec md5sum {} + | sort)
 "$CLI" wound --heal "$T/h" --days 4 --size 48 --quiet --no-compare --out "$T/c" ||
     fail "wound --heal at the last day failed"
+cmp -s "$T/c/frames/t4_base_color.png" "$T/a/frames/t4_base_color.png" ||
+    fail "day 4 alone differs from day 4 in a sequence"
 after=$(cd "$T/h" && find . -type f -exec md5sum {} + | sort)
 [ "$before" = "$after" ] || fail "wound --heal changed the heal folder"
 

@@ -184,7 +184,7 @@ static void test_vti_roundtrip(void **state) {
      * time, a displacement array de-interleaved into x, y, z blocks */
     {
         float *disp = (float *)1;
-        ss_heal_grid *h = ss_heal_vti_read(path, &disp, &err);
+        ss_heal_grid *h = ss_heal_vti_read(path, &disp, NULL, &err);
         assert_non_null(h);
         assert_null(disp);
         assert_int_equal(h->nx, nx);
@@ -197,12 +197,19 @@ static void test_vti_roundtrip(void **state) {
         char *pv = join(dir, "v.vti");
         const char *name = "displacement";
         float *const vec[1][3] = {{g->field[0], g->field[1], g->field[2]}};
-        assert_int_equal(ss_heal_vti_write_vectors(pv, g, 1, &name, vec, &err), SS_OK);
-        h = ss_heal_vti_read(pv, &disp, &err);
+        double *closed = malloc(sizeof *closed * (size_t)nx * ny), *cback = NULL;
+        ss_heal_closure_init(g, closed);
+        closed[3] = 2.75;
+        assert_int_equal(ss_heal_vti_write_all(pv, g, 1, &name, vec, closed, &err), SS_OK);
+        h = ss_heal_vti_read(pv, &disp, &cback, &err);
         assert_non_null(h);
         assert_non_null(disp);
+        assert_non_null(cback);
         for (int c = 0; c < 3; c++) assert_memory_equal(disp + (size_t)c * n, g->field[c], 4 * n);
+        assert_memory_equal(cback, closed, sizeof *closed * (size_t)nx * ny);
         free(disp);
+        free(closed);
+        free(cback);
         ss_heal_grid_free(h);
         /* truncated: an input error naming the file, no crash */
         size_t vlen;
@@ -213,7 +220,7 @@ static void test_vti_roundtrip(void **state) {
             fwrite(vd, 1, cut, fp);
             fclose(fp);
             ss_error_clear(&err);
-            assert_null(ss_heal_vti_read(pv, &disp, &err));
+            assert_null(ss_heal_vti_read(pv, &disp, NULL, &err));
             assert_int_equal(err.code, SS_ERR_INPUT);
             assert_non_null(strstr(err.msg, "v.vti"));
         }

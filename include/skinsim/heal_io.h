@@ -74,14 +74,47 @@ ss_status ss_heal_vti_write_vectors(const char *path, const ss_heal_grid *g, int
                                     const char *const *names, float *const (*vecs)[3],
                                     ss_error *err);
 
+/* A piece of a parallel image (the MPI driver's per-rank pieces): piece is
+ * the box, its cell (0,0,0) at whole-grid index off; Extent off..off+size,
+ * WholeExtent 0..whole. Cells and fields only. */
+ss_status ss_heal_vti_write_piece(const char *path, const ss_heal_grid *piece, const int off[3],
+                                  const int whole[3], ss_error *err);
+/* The .pvti that joins npieces such pieces: ext[i] = x0 x1 y0 y1 z0 z1 (point
+ * extents), files[i] relative to the .pvti. ParaView opens it as one image. */
+ss_status ss_heal_pvti_write(const char *path, const int whole[3], double dx_mm, double t_days,
+                             int npieces, const int (*ext)[6], const char *const *files,
+                             ss_error *err);
 /* Reads a snapshot written by ss_heal_vti_write(_vectors) back into a new grid
  * (cell states, every field, t_days; skin_top_mm and step are left 0: the
  * file does not hold them). displacement: if not NULL, receives a malloc'd
  * array of 3 x nx*ny*nz floats (the x components of every cell, then y, then
- * z) when the file has a `displacement` array, else NULL. A file this writer
+ * z) when the file has a `displacement` array, else NULL; closed_day likewise
+ * the malloc'd closure days (nx*ny) of a `closed_day` array. A file this writer
  * did not make, a truncated one or a missing array -> SS_ERR_INPUT naming the
  * file. */
-ss_heal_grid *ss_heal_vti_read(const char *path, float **displacement, ss_error *err);
+ss_heal_grid *ss_heal_vti_read(const char *path, float **displacement, double **closed_day,
+                               ss_error *err);
+
+/* ---- closure day per column ----------------------------------------------------
+ * The day each (x, y) column's epithelial layer (ss_heal_surface_map's
+ * SS_SURFACE_LAYER value) last rose to the open threshold (0.5) from below:
+ * the age of the new tissue, which no field holds and a renderer of the
+ * surface needs (docs/wound.md). Arrays of nx*ny days in grid order (index
+ * y*nx + x); a column that was never seen open is SS_HEAL_CLOSED_INTACT, one
+ * that is open now SS_HEAL_CLOSED_OPEN. */
+#define SS_HEAL_CLOSED_INTACT (-1.0)
+#define SS_HEAL_CLOSED_OPEN (-2.0)
+/* Every column intact, then an update (open columns become OPEN). */
+void ss_heal_closure_init(const ss_heal_grid *g, double *closed);
+/* After a step: open columns become OPEN; an OPEN column now at or above the
+ * threshold closed at g->t_days. Columns of air only are left alone. */
+void ss_heal_closure_update(const ss_heal_grid *g, double *closed);
+
+/* ss_heal_vti_write_vectors plus, if closed_day is not NULL, the closure day
+ * per column (nx*ny, as above) as a Float64 FieldData array `closed_day`. */
+ss_status ss_heal_vti_write_all(const char *path, const ss_heal_grid *g, int nvec,
+                                const char *const *names, float *const (*vecs)[3],
+                                const double *closed_day, ss_error *err);
 
 /* ParaView collection: `n` datasets with their times (days) and file names
  * relative to the .pvd. Written atomically. */

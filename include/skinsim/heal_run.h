@@ -154,6 +154,35 @@ ss_status ss_heal_run_write_snapshot(ss_heal_run *r, ss_error *err);
  * newest two kept) from which ss_heal_run_create resumes; needs out_dir. */
 ss_status ss_heal_run_write_checkpoint(ss_heal_run *r, ss_error *err);
 
+/* ---- an external solver (the MPI driver, src/dist) ---- */
+/* With hooks set, the run calls step instead of ss_heal_step (g's fields may
+ * then be stale; an adaptive run's rejected step is taken back with undo), stats instead of
+ * ss_heal_stats_compute for every area row, sync before anything reads g's
+ * fields (snapshots, checkpoints) so it can bring them up to date, and
+ * snapshot after each snapshot's .vti. NULL
+ * members keep the run's own behaviour. Not with the contraction mechanics. */
+typedef struct ss_heal_run_hooks {
+    void *ctx;
+    /* one step of dt_days (the run's step or, adaptive, a multiple of it):
+     * advances g->t_days by dt_days and g->step by one; with max_change not
+     * NULL keeps a copy of the fields first and returns the largest change of
+     * any species in any cell (the adaptive control) */
+    ss_status (*step)(void *ctx, ss_heal_grid *g, double dt_days, double *max_change,
+                      ss_error *err);
+    /* puts the fields back as they were before the last step (t_days and
+     * step are the run's to restore) */
+    void (*undo)(void *ctx, ss_heal_grid *g);
+    void (*stats)(void *ctx, const ss_heal_grid *g, ss_heal_stats *st);
+    ss_status (*sync)(void *ctx, ss_heal_grid *g, ss_error *err);
+    /* after snapshot `index` was written into the folder fields_dir (more
+     * files for it, e.g. per-rank pieces) */
+    ss_status (*snapshot)(void *ctx, const ss_heal_grid *g, const char *fields_dir, int index,
+                          ss_error *err);
+} ss_heal_run_hooks;
+/* Sets (h) or clears (NULL) the hooks; SS_ERR_INPUT when the run has the
+ * contraction mechanics (naming --mechanics). */
+ss_status ss_heal_run_set_hooks(ss_heal_run *r, const ss_heal_run_hooks *h, ss_error *err);
+
 /* ---- state ---- */
 /* The grid holds all the state (fields, cells, t_days, step). A caller may
  * change fields or velocities between steps (the mechanics does). */
@@ -177,6 +206,16 @@ int ss_heal_run_snapshot_count(const ss_heal_run *r);
 long long ss_heal_run_resumed_from(const ss_heal_run *r);
 /* Checkpoints skipped as damaged while resuming ("" if none). */
 const char *ss_heal_run_note(const ss_heal_run *r);
+/* The closure day of every column so far (skinsim/heal_io.h's
+ * ss_heal_closure_update, updated every step; nx*ny, grid order). Saved in
+ * the snapshots and checkpoints. */
+const double *ss_heal_run_closure(const ss_heal_run *r);
+/* On a real body (skin_mesh): the patch the grid is laid on and the skin
+ * mesh (skinsim/shell.h, skinsim/mesh.h); NULL on the flat block. */
+struct ss_shell_patch;
+struct ss_mesh;
+const struct ss_shell_patch *ss_heal_run_shell(const ss_heal_run *r);
+const struct ss_mesh *ss_heal_run_skin_mesh(const ss_heal_run *r);
 /* The contraction mechanics of the run (skinsim/mech.h), NULL when off. */
 struct ss_mech *ss_heal_run_mech(ss_heal_run *r);
 
@@ -203,11 +242,12 @@ double ss_heal_saved_run_snapshot_day(const ss_heal_saved_run *s, int i);
 /* The snapshot whose day is `day` (within a thousandth of a step), -1 if none. */
 int ss_heal_saved_run_find(const ss_heal_saved_run *s, double day);
 /* Reads snapshot i (0-based, in time order) as a new grid with the run's
- * skin_top_mm; displacement as ss_heal_vti_read (NULL when the run had no
- * mechanics). A damaged snapshot, or one whose grid or day disagrees with
+ * skin_top_mm; displacement and closed_day as ss_heal_vti_read (NULL when
+ * the run had no mechanics; the closure days are in every snapshot of this
+ * format). A damaged snapshot, or one whose grid or day disagrees with
  * summary.json and fields.pvd -> SS_ERR_INPUT naming the file. */
 ss_heal_grid *ss_heal_saved_run_load(const ss_heal_saved_run *s, int i, float **displacement,
-                                     ss_error *err);
+                                     double **closed_day, ss_error *err);
 
 #ifdef __cplusplus
 }

@@ -60,6 +60,23 @@ enum {
     SS_WR_KELOID_SCALE,           /* 1: raise per mm of collagen above the keloid threshold */
     SS_WR_KELOID_MAX_MM,          /* mm: the raise saturates towards this height */
     SS_WR_HEIGHT_RANGE_MM,        /* mm: height map 0..1 spans -range..+range */
+    /* the crust's structure (docs/wound.md: mottled, thicker in the middle, cracked at
+     * the edges) */
+    SS_WR_SCAB_MOTTLE,    /* 1: relative thickness variation of the crust (value noise) */
+    SS_WR_SCAB_SEROUS,    /* 1: largest share of serous (haemoglobin-poor) crust in the
+                             mottling */
+    SS_WR_SCAB_SEROUS_HB, /* 1: haemoglobin of serous crust, multiple of whole blood's */
+    SS_WR_SCAB_DOME_MM,   /* mm: distance from the crust's edge to its full thickness */
+    SS_WR_SCAB_EDGE,      /* 1: crust thickness at its edge, fraction of the full */
+    SS_WR_CRACK_WIDTH,    /* 1: width of the crack lines (noise units, 0 = none) */
+    SS_WR_CRACK_REACH_MM, /* mm: how far from the crust's edge it cracks */
+    /* the keloid's look: raised, shiny, red to purple-brown */
+    SS_WR_KELOID_LOOK_MM,     /* mm: keloid swelling at which its look is 63 % there */
+    SS_WR_KELOID_BLOOD,       /* 1: blood volume fraction of keloid tissue */
+    SS_WR_KELOID_OXYGENATION, /* 1: blood oxygenation in keloid tissue */
+    SS_WR_KELOID_MELANIN,     /* 1: melanin of keloid epidermis, multiple of the skin's */
+    SS_WR_KELOID_ROUGHNESS,   /* 1: roughness of the keloid's stretched surface (shiny) */
+    SS_WR_SCAB_BILIRUBIN,     /* g/L: serum pigment (bilirubin, carotenoids) of the dried crust */
     SS_WR_NKEYS
 };
 
@@ -109,6 +126,12 @@ ss_wound_tissue *ss_wound_tissue_create(const ss_heal_grid *g, const ss_heal_par
  * Call it after every step for exact closure days (it costs a pass over the
  * grid's columns), or at least at every day to be rendered. */
 void ss_wound_tissue_observe(ss_wound_tissue *t, const ss_heal_grid *g);
+/* The same, with each column's closure day taken from closed_day (nx*ny in
+ * grid order, skinsim/heal_io.h's encoding: ss_heal_run_closure, or a saved
+ * snapshot's) instead of tracked, so observing the render days alone is
+ * exact. */
+void ss_wound_tissue_observe_closure(ss_wound_tissue *t, const ss_heal_grid *g,
+                                     const double *closed_day);
 void ss_wound_tissue_free(ss_wound_tissue *t);
 
 /* ---- base skin: bio-parameter maps -------------------------------------------------
@@ -131,6 +154,7 @@ ss_image *ss_wound_skin_read(const char *path, ss_error *err);
 typedef struct ss_blood_layer {
     double hb_factor, oxygenation;
     double mus_per_cm, g, n;
+    double bilirubin_g_per_l; /* yellow serum pigment in the layer (docs/wound.md), g/L */
 } ss_blood_layer;
 /* The scab (dried blood, docs/wound.md) and fresh clotted blood. */
 void ss_blood_layer_scab(double hb_factor, ss_blood_layer *l);
@@ -189,6 +213,25 @@ const ss_wound_textures *ss_wound_renderer_base(const ss_wound_renderer *r);
  * (ss_wound_deformation_from_grid makes it from the mechanics' grid arrays). */
 ss_status ss_wound_render(ss_wound_renderer *r, const ss_wound_tissue *t,
                           const ss_image *deformation, ss_wound_textures *out, ss_error *err);
+
+/* ---- textures in a mesh's UV space (a heal run on a real body) -------------------- */
+struct ss_shell_patch;
+struct ss_mesh;
+/* Per texel of a size x size texture over the mesh's UV layout (u right, v
+ * down): the tissue-map coordinates (x, y in columns, the ss_wound_tissue
+ * orientation) of the patch column under the skin point the texel shows, or
+ * NaN where the texel shows no point of the patch's skin (no UV triangle,
+ * outside the patch, or another sheet of skin). *mm_per_uv: the mesh's mean
+ * scale (sqrt of 3D area / UV area), the texture's world size. A mesh without
+ * UVs -> SS_ERR_INPUT. (src/wound/uvmap.c) */
+ss_image *ss_wound_uv_columns(const struct ss_shell_patch *p, const struct ss_mesh *m, int size,
+                              double *mm_per_uv, ss_error *err);
+/* Makes the renderer sample the tissue at `columns` (size x size x 2, as
+ * ss_wound_uv_columns gives; copied) instead of over a flat block; NaN texels
+ * are the base skin. NULL returns to the flat block. A deformation is not
+ * drawn on such a map (ss_wound_render refuses one). */
+ss_status ss_wound_renderer_set_columns(ss_wound_renderer *r, const ss_image *columns,
+                                        ss_error *err);
 
 /* The per-texel deformation (size x size x 3, mm) from a displacement field on
  * the heal grid (3 arrays of nx*ny*nz, mm, e.g. ss_mech_grid_displacement):

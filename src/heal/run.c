@@ -34,6 +34,7 @@ void ss_heal_run_free(ss_heal_run *r) {
     if (!r) return;
     ss_heal_solver_free(r->s);
     ss_heal_grid_free(r->g);
+    free(r->closed_day);
     ss_heal_params_free(r->p);
     free(r->params_json);
     free(r->rows);
@@ -59,7 +60,10 @@ ss_status ss_heal_run__add_row(ss_heal_run *r, ss_error *err) {
     }
     ss_heal_area_row *row = &r->rows[r->nrows++];
     row->t_days = r->g->t_days;
-    ss_heal_stats_compute(r->g, &row->st);
+    if (r->hooks.stats)
+        r->hooks.stats(r->hooks.ctx, r->g, &row->st);
+    else
+        ss_heal_stats_compute(r->g, &row->st);
     return ss_heal_run__mech_row(r, err);
 }
 
@@ -107,6 +111,12 @@ ss_status ss_heal_run_create(const ss_heal_run_config *c, ss_heal_run **out, ss_
     if (!st)
         st = c->resume_dir ? ss_heal_run__setup_resume(r, err) : ss_heal_run__setup_fresh(r, err);
     if (!st) st = set_end(r, err);
+    if (!st && !r->closed_day) { /* fresh, or a checkpoint from before the closure days */
+        if (!(r->closed_day = malloc((size_t)r->g->nx * (size_t)r->g->ny * sizeof *r->closed_day)))
+            st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+        else
+            ss_heal_closure_init(r->g, r->closed_day);
+    }
     if (!st && r->out_dir) st = ss_heal_run__outputs_open(r, err);
     if (!st && !c->resume_dir) st = ss_heal_run__add_row(r, err); /* day 0 */
     if (st) {
@@ -154,6 +164,7 @@ ss_status ss_heal_run_write_checkpoint(ss_heal_run *r, ss_error *err) {
     if (!r->out_dir) return ss_error_set(err, SS_ERR_INPUT, "heal run: no output directory");
     ss_status st0 = start_output(r, err);
     if (st0) return st0;
+    if ((st0 = ss_heal_run__sync(r, err))) return st0;
     char *aux = ss_heal_run__aux_json(r, r->wall_prev + ss_now() - r->t0);
     if (!aux) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     ss_status st = ss_heal_checkpoint_save(r->out_dir, r->g, r->scenario, r->params_json,
@@ -244,25 +255,35 @@ static double max_change(float *const *a, float *const *b, size_t n) {
 static ss_status solver_step(ss_heal_run *r, long long limit, ss_error *err) {
     ss_heal_grid *g = r->g;
     const size_t n = (size_t)g->nx * (size_t)g->ny * (size_t)g->nz;
-    if (r->adapt_tol > 0 && !r->backup[0])
+    const int ext = r->hooks.step != NULL; /* an external solver keeps its own copy */
+    if (r->adapt_tol > 0 && !r->backup[0] && !ext)
         for (int f = 0; f < SS_HEAL_NFIELDS; f++)
             if (!(r->backup[f] = malloc(n * sizeof(float))))
                 return ss_error_set(err, SS_ERR_NOMEM, "out of memory (adaptive step copy)");
-    if (!(r->adapt_tol > 0)) return ss_heal_step(r->s, g, err);
+    if (!(r->adapt_tol > 0))
+        return ext ? r->hooks.step(r->hooks.ctx, g, r->dt, NULL, err) : ss_heal_step(r->s, g, err);
     for (;;) {
         const long long k = (long long)g->step;
         const long long m = min_ll(r->mult, landing(r, k, limit));
         const double t = g->t_days;
         const uint64_t step = g->step;
         ss_status st = SS_OK;
-        if (ss_heal_solver_dt(r->s) != (double)m * r->dt)
-            st = ss_heal_solver_set_dt(r->s, (double)m * r->dt, err);
-        if (st) return st;
-        fields_copy(r->backup, g->field, n);
-        if ((st = ss_heal_step(r->s, g, err))) return st;
-        const double d = max_change(g->field, r->backup, n);
+        double d = 0.0;
+        if (ext) {
+            if ((st = r->hooks.step(r->hooks.ctx, g, (double)m * r->dt, &d, err))) return st;
+        } else {
+            if (ss_heal_solver_dt(r->s) != (double)m * r->dt)
+                st = ss_heal_solver_set_dt(r->s, (double)m * r->dt, err);
+            if (st) return st;
+            fields_copy(r->backup, g->field, n);
+            if ((st = ss_heal_step(r->s, g, err))) return st;
+            d = max_change(g->field, r->backup, n);
+        }
         if (m > 1 && d > r->adapt_tol) { /* undo, retry shorter */
-            fields_copy(g->field, r->backup, n);
+            if (ext)
+                r->hooks.undo(r->hooks.ctx, g);
+            else
+                fields_copy(g->field, r->backup, n);
             g->t_days = t;
             g->step = step;
             r->mult = m / 2 > 1 ? m / 2 : 1;
@@ -285,6 +306,7 @@ static ss_status run_step(ss_heal_run *r, long long limit, ss_error *err) {
     if (!st) st = solver_step(r, limit, err);
     if (!st && r->mech && !(st = ss_mech_step(r->mech, r->g, r->dt, err))) cap_velocity(r);
     if (st) return st;
+    ss_heal_closure_update(r->g, r->closed_day);
     long long k = (long long)r->g->step;
     int last = k == r->nsteps;
     if (k / r->area_every != k0 / r->area_every || last) st = ss_heal_run__add_row(r, err);
@@ -335,6 +357,24 @@ ss_status ss_heal_run_finish(ss_heal_run *r, char **summary_json, ss_error *err)
     return st;
 }
 
+ss_status ss_heal_run_set_hooks(ss_heal_run *r, const ss_heal_run_hooks *h, ss_error *err) {
+    if (h && h->step && !h->undo)
+        return ss_error_set(err, SS_ERR_INPUT, "heal run: an external step needs an undo hook");
+    if (h && r->mech)
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "--mechanics: the contraction mechanics needs the whole grid in one "
+                            "process; it cannot run with an external (distributed) solver");
+    if (h)
+        r->hooks = *h;
+    else
+        memset(&r->hooks, 0, sizeof r->hooks);
+    return SS_OK;
+}
+
+ss_status ss_heal_run__sync(ss_heal_run *r, ss_error *err) {
+    return r->hooks.sync ? r->hooks.sync(r->hooks.ctx, r->g, err) : SS_OK;
+}
+
 /* ---- accessors ------------------------------------------------------------------ */
 
 ss_heal_grid *ss_heal_run_grid(ss_heal_run *r) { return r->g; }
@@ -359,3 +399,5 @@ const char *ss_heal_run_note(const ss_heal_run *r) { return r->note; }
 struct ss_mech *ss_heal_run_mech(ss_heal_run *r) {
     return r->mech;
 }
+
+const double *ss_heal_run_closure(const ss_heal_run *r) { return r->closed_day; }

@@ -209,31 +209,44 @@ int ss_heal_saved_run_find(const ss_heal_saved_run *s, double day) {
 }
 
 ss_heal_grid *ss_heal_saved_run_load(const ss_heal_saved_run *s, int i, float **displacement,
-                                     ss_error *err) {
+                                     double **closed_day, ss_error *err) {
     if (displacement) *displacement = NULL;
+    if (closed_day) *closed_day = NULL;
+    double *closed = NULL;
     if (i < 0 || i >= s->n) {
         ss_error_set(err, SS_ERR_INPUT, "--heal %s: no snapshot %d", s->dir, i);
         return NULL;
     }
     char path[4800];
     snprintf(path, sizeof path, "%s/fields/%s", s->dir, s->file[i]);
-    ss_heal_grid *g = ss_heal_vti_read(path, displacement, err);
+    ss_heal_grid *g = ss_heal_vti_read(path, displacement, &closed, err);
     if (!g) return NULL;
-    if (g->nx != s->nx || g->ny != s->ny || g->nz != s->nz ||
+    if (!closed)
+        ss_error_set(err, SS_ERR_INPUT,
+                     "%s: no closed_day array (every snapshot of run format %d has one)", path,
+                     SS_HEAL_RUN_FORMAT);
+    if (!closed || g->nx != s->nx || g->ny != s->ny || g->nz != s->nz ||
         fabs(g->dx_mm - s->dx) > 1e-9 * s->dx ||
         fabs(g->t_days - s->day[i]) > 1e-6 * (1 + s->day[i])) {
-        ss_error_set(err, SS_ERR_INPUT,
-                     "%s: grid %dx%dx%d of %g mm at day %g, but summary.json and fields.pvd say "
-                     "%dx%dx%d of %g mm at day %g",
-                     path, g->nx, g->ny, g->nz, g->dx_mm, g->t_days, s->nx, s->ny, s->nz, s->dx,
-                     s->day[i]);
+        if (closed)
+            ss_error_set(
+                err, SS_ERR_INPUT,
+                "%s: grid %dx%dx%d of %g mm at day %g, but summary.json and fields.pvd say "
+                "%dx%dx%d of %g mm at day %g",
+                path, g->nx, g->ny, g->nz, g->dx_mm, g->t_days, s->nx, s->ny, s->nz, s->dx,
+                s->day[i]);
         ss_heal_grid_free(g);
+        free(closed);
         if (displacement) {
             free(*displacement);
             *displacement = NULL;
         }
         return NULL;
     }
+    if (closed_day)
+        *closed_day = closed;
+    else
+        free(closed);
     g->skin_top_mm = s->skin_top;
     g->step = (uint64_t)llround(g->t_days / s->dt);
     return g;

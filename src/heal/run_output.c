@@ -17,6 +17,7 @@
  * resumed run draws the same pictures as an uninterrupted one. */
 #define _POSIX_C_SOURCE 200809L
 #include <dirent.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -67,6 +68,14 @@ char *ss_heal_run__aux_json(const ss_heal_run *r, double wall) {
         cJSON_AddItemToArray(sn, e);
     }
     ss_heal_run__mech_aux(r, j);
+    if (r->closed_day) { /* as text of %.17g numbers: cJSON's own printing rounds */
+        size_t ncol = (size_t)r->g->nx * (size_t)r->g->ny, len = 0;
+        char *txt = malloc(ncol * 26 + 1);
+        for (size_t i = 0; txt && i < ncol; i++)
+            len += (size_t)snprintf(txt + len, 26, i ? " %.17g" : "%.17g", r->closed_day[i]);
+        if (txt) cJSON_AddStringToObject(j, "closed_day", txt);
+        free(txt);
+    }
     ss_heal_run__shell_aux(r, j);
     char *s = cJSON_PrintUnformatted(j);
     cJSON_Delete(j);
@@ -155,6 +164,21 @@ ss_status ss_heal_run__aux_restore(ss_heal_run *r, const char *aux, const char *
     cJSON *mo = cJSON_GetObjectItem(j, "mechanics");
     if (mo && !(r->mech_aux = cJSON_Duplicate(mo, 1)))
         st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    const cJSON *cd = cJSON_GetObjectItem(j, "closed_day");
+    size_t ncol = (size_t)r->g->nx * (size_t)r->g->ny;
+    if (!st && cd) { /* checkpoints from before it lack it: the run starts tracking anew */
+        const char *p = cJSON_IsString(cd) ? cd->valuestring : NULL;
+        if (!p || !(r->closed_day = malloc(ncol * sizeof *r->closed_day)))
+            st = ss_error_set(err, p ? SS_ERR_NOMEM : SS_ERR_INPUT,
+                              p ? "out of memory" : "%s: checkpoint closure days malformed", dir);
+        for (size_t k = 0; !st && k < ncol; k++) {
+            char *end;
+            r->closed_day[k] = strtod(p, &end);
+            if (end == p || !isfinite(r->closed_day[k]))
+                st = ss_error_set(err, SS_ERR_INPUT, "%s: checkpoint closure days malformed", dir);
+            p = end;
+        }
+    }
     cJSON *so = cJSON_GetObjectItem(j, "shell");
     if (so && !(r->shell_aux = cJSON_Duplicate(so, 1)))
         st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
@@ -431,6 +455,8 @@ static ss_status write_surface_maps(ss_heal_run *r, int idx, ss_error *err) {
 
 ss_status ss_heal_run__snapshot(ss_heal_run *r, ss_error *err) {
     if (!r->out_dir) return ss_error_set(err, SS_ERR_INPUT, "heal run: no output directory");
+    ss_status st0 = ss_heal_run__sync(r, err);
+    if (st0) return st0;
     char rel[64], path[4400];
     int idx = r->nsnap;
     /* a resumed run may redo snapshots the killed run wrote after its checkpoint */
@@ -442,12 +468,16 @@ ss_status ss_heal_run__snapshot(ss_heal_run *r, ss_error *err) {
         if (!u) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
         const char *name = "displacement";
         float *const vec[1][3] = {{u[0], u[1], u[2]}};
-        st = ss_heal_vti_write_vectors(path, r->g, 1, &name, vec, err);
+        st = ss_heal_vti_write_all(path, r->g, 1, &name, vec, r->closed_day, err);
     } else {
-        st = ss_heal_vti_write(path, r->g, err);
+        st = ss_heal_vti_write_all(path, r->g, 0, NULL, NULL, r->closed_day, err);
     }
     if (!st) st = ss_heal_run__mech_snapshot(r, idx, err);
     if (!st) st = ss_heal_run__shell_snapshot(r, idx, err);
+    if (!st && r->hooks.snapshot) { /* e.g. the MPI driver's per-rank pieces */
+        snprintf(path, sizeof path, "%s/fields", r->out_dir);
+        st = r->hooks.snapshot(r->hooks.ctx, r->g, path, idx, err);
+    }
     if (!st) st = ss_heal_run__add_snap(r, r->g->t_days, rel, err);
     if (st) return st;
     snprintf(path, sizeof path, "%s/fields/fields.pvd", r->out_dir);

@@ -199,3 +199,8 @@ void ss_heal_run__shell_free(ss_heal_run *r) {
     free(r->vfields);
     cJSON_Delete(r->shell_aux);
 }
+
+const struct ss_shell_patch *ss_heal_run_shell(const ss_heal_run *r) { return r->shell; }
+const struct ss_mesh *ss_heal_run_skin_mesh(const ss_heal_run *r) {
+    return r->shell ? &r->skin : NULL;
+}

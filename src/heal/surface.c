@@ -42,3 +42,43 @@ ss_image *ss_heal_surface_map(const ss_heal_grid *g, int field, ss_heal_surface_
     }
     return img;
 }
+
+/* ---- closure day per column ---------------------------------------------------------- */
+
+/* The epithelial layer of column (x, y): the larger value of its two topmost
+ * tissue cells (the SS_SURFACE_LAYER rule above); -1 for a column of air. */
+static float column_layer(const ss_heal_grid *g, int x, int y) {
+    const float *e = g->field[SS_HEAL_EPITHELIUM];
+    float v = -1;
+    int found = 0;
+    for (int z = g->nz - 1; z >= 0 && found < 2; z--) {
+        size_t i = ss_heal_idx(g, x, y, z);
+        if (g->cell[i] == SS_CELL_AIR ||
+            (g->cell[i] == SS_CELL_BOUND &&
+             (z == 0 || z == g->nz - 1 || (z + 0.5) * g->dx_mm > g->skin_top_mm)))
+            continue;
+        if (!found || e[i] > v) v = e[i];
+        found++;
+    }
+    return v;
+}
+
+void ss_heal_closure_update(const ss_heal_grid *g, double *closed) {
+    const float thr = (float)ss_heal_open_threshold();
+#pragma omp parallel for schedule(static) if (g->nx * g->ny > 16384)
+    for (int y = 0; y < g->ny; y++)
+        for (int x = 0; x < g->nx; x++) {
+            float v = column_layer(g, x, y);
+            double *c = &closed[(size_t)y * (size_t)g->nx + (size_t)x];
+            if (v < 0) continue; /* air only: stays as it is */
+            if (v < thr)
+                *c = SS_HEAL_CLOSED_OPEN;
+            else if (*c == SS_HEAL_CLOSED_OPEN)
+                *c = g->t_days;
+        }
+}
+
+void ss_heal_closure_init(const ss_heal_grid *g, double *closed) {
+    for (size_t i = 0; i < (size_t)g->nx * (size_t)g->ny; i++) closed[i] = SS_HEAL_CLOSED_INTACT;
+    ss_heal_closure_update(g, closed);
+}

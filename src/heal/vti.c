@@ -35,6 +35,37 @@ static void put_f32le(FILE *f, const float *a, size_t n) {
     }
 }
 
+/* Swaps a written file in, or drops it after a write error. */
+static ss_status commit(ss_atomic_file *af, const char *path, ss_error *err) {
+    if (ferror(af->fp)) {
+        int e = errno;
+        ss_atomic_abort(af);
+        return ss_error_set(err, SS_ERR_RUNTIME, "%s: write failed: %s", path, strerror(e));
+    }
+    return ss_atomic_commit(af, err);
+}
+
+static void xml_attr(FILE *f, const char *s) {
+    for (; *s; s++) {
+        switch (*s) {
+        case '&':
+            fputs("&amp;", f);
+            break;
+        case '<':
+            fputs("&lt;", f);
+            break;
+        case '>':
+            fputs("&gt;", f);
+            break;
+        case '"':
+            fputs("&quot;", f);
+            break;
+        default:
+            fputc(*s, f);
+        }
+    }
+}
+
 ss_status ss_heal_vti_write(const char *path, const ss_heal_grid *g, ss_error *err) {
     return ss_heal_vti_write_vectors(path, g, 0, NULL, NULL, err);
 }
@@ -50,10 +81,77 @@ static void put_vec3(FILE *f, float *const v[3], size_t n) {
     }
 }
 
+static ss_status write_vti(const char *path, const ss_heal_grid *g, int nvec,
+                           const char *const *names, float *const (*vecs)[3],
+                           const double *closed_day, const int off[3], const int whole[3],
+                           ss_error *err);
+
 ss_status ss_heal_vti_write_vectors(const char *path, const ss_heal_grid *g, int nvec,
                                     const char *const *names, float *const (*vecs)[3],
                                     ss_error *err) {
+    return ss_heal_vti_write_all(path, g, nvec, names, vecs, NULL, err);
+}
+
+static void put_f64le(FILE *f, const double *a, size_t n) {
+    for (size_t i = 0; i < n; i++) {
+        uint64_t v;
+        unsigned char b[8];
+        memcpy(&v, &a[i], 8);
+        for (int k = 0; k < 8; k++) b[k] = (unsigned char)(v >> (8 * k));
+        fwrite(b, 1, 8, f);
+    }
+}
+
+ss_status ss_heal_vti_write_all(const char *path, const ss_heal_grid *g, int nvec,
+                                const char *const *names, float *const (*vecs)[3],
+                                const double *closed_day, ss_error *err) {
     if (!g || !g->cell) return ss_error_set(err, SS_ERR_INPUT, "%s: no grid", path);
+    const int off[3] = {0, 0, 0}, whole[3] = {g->nx, g->ny, g->nz};
+    return write_vti(path, g, nvec, names, vecs, closed_day, off, whole, err);
+}
+
+ss_status ss_heal_vti_write_piece(const char *path, const ss_heal_grid *piece, const int off[3],
+                                  const int whole[3], ss_error *err) {
+    if (!piece || !piece->cell) return ss_error_set(err, SS_ERR_INPUT, "%s: no grid", path);
+    return write_vti(path, piece, 0, NULL, NULL, NULL, off, whole, err);
+}
+
+ss_status ss_heal_pvti_write(const char *path, const int whole[3], double dx_mm, double t_days,
+                             int npieces, const int (*ext)[6], const char *const *files,
+                             ss_error *err) {
+    ss_atomic_file af;
+    ss_status st = ss_atomic_open(&af, path, err);
+    if (st) return st;
+    FILE *f = af.fp;
+    fprintf(f, "<?xml version=\"1.0\"?>\n"
+               "<VTKFile type=\"PImageData\" version=\"1.0\" byte_order=\"LittleEndian\" "
+               "header_type=\"UInt64\">\n");
+    fprintf(f,
+            "  <PImageData WholeExtent=\"0 %d 0 %d 0 %d\" GhostLevel=\"0\" Origin=\"0 0 0\" "
+            "Spacing=\"%.17g %.17g %.17g\">\n",
+            whole[0], whole[1], whole[2], dx_mm, dx_mm, dx_mm);
+    fprintf(f, "    <PCellData Scalars=\"cell_state\">\n"
+               "      <PDataArray type=\"UInt8\" Name=\"cell_state\"/>\n");
+    for (int k = 0; k < SS_HEAL_NFIELDS; k++)
+        fprintf(f, "      <PDataArray type=\"Float32\" Name=\"%s\"/>\n", ss_heal_field_name(k));
+    fprintf(f, "    </PCellData>\n");
+    for (int i = 0; i < npieces; i++) {
+        fprintf(f, "    <Piece Extent=\"%d %d %d %d %d %d\" Source=\"", ext[i][0], ext[i][1],
+                ext[i][2], ext[i][3], ext[i][4], ext[i][5]);
+        xml_attr(f, files[i]);
+        fprintf(f, "\"/>\n");
+    }
+    fprintf(f, "  </PImageData>\n</VTKFile>\n");
+    (void)t_days;
+    return commit(&af, path, err);
+}
+
+/* The grid g as the piece of a larger image whose cell (0,0,0) is at off and
+ * whose dimensions are whole (the plain file: off 0, whole = g's). */
+static ss_status write_vti(const char *path, const ss_heal_grid *g, int nvec,
+                           const char *const *names, float *const (*vecs)[3],
+                           const double *closed_day, const int org[3], const int whole[3],
+                           ss_error *err) {
     int vel = g->velocity[0] && g->velocity[1] && g->velocity[2];
     size_t n = (size_t)g->nx * (size_t)g->ny * (size_t)g->nz;
     ss_atomic_file af;
@@ -66,14 +164,24 @@ ss_status ss_heal_vti_write_vectors(const char *path, const ss_heal_grid *g, int
     fprintf(f,
             "  <ImageData WholeExtent=\"0 %d 0 %d 0 %d\" Origin=\"0 0 0\" "
             "Spacing=\"%.17g %.17g %.17g\">\n",
-            g->nx, g->ny, g->nz, g->dx_mm, g->dx_mm, g->dx_mm);
+            whole[0], whole[1], whole[2], g->dx_mm, g->dx_mm, g->dx_mm);
     fprintf(f,
             "    <FieldData>\n"
             "      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" "
-            "format=\"ascii\">%.17g</DataArray>\n"
-            "    </FieldData>\n",
+            "format=\"ascii\">%.17g</DataArray>\n",
             g->t_days);
-    fprintf(f, "    <Piece Extent=\"0 %d 0 %d 0 %d\">\n", g->nx, g->ny, g->nz);
+    /* the closure days go after every cell array in the appended data */
+    size_t ncol = (size_t)g->nx * (size_t)g->ny;
+    uint64_t coff = 8 + n + SS_HEAL_NFIELDS * (8 + 4 * (uint64_t)n) +
+                    (uint64_t)(vel + nvec) * (8 + 12 * (uint64_t)n);
+    if (closed_day)
+        fprintf(f,
+                "      <DataArray type=\"Float64\" Name=\"closed_day\" NumberOfTuples=\"%zu\" "
+                "format=\"appended\" offset=\"%llu\"/>\n",
+                ncol, (unsigned long long)coff);
+    fprintf(f, "    </FieldData>\n");
+    fprintf(f, "    <Piece Extent=\"%d %d %d %d %d %d\">\n", org[0], org[0] + g->nx, org[1],
+            org[1] + g->ny, org[2], org[2] + g->nz);
     fprintf(f, "      <CellData Scalars=\"cell_state\">\n");
     uint64_t off = 0;
     fprintf(f,
@@ -112,33 +220,16 @@ ss_status ss_heal_vti_write_vectors(const char *path, const ss_heal_grid *g, int
     }
     if (vel) put_vec3(f, g->velocity, n);
     for (int v = 0; v < nvec; v++) put_vec3(f, vecs[v], n);
+    if (closed_day) {
+        put_u64le(f, (uint64_t)(8 * ncol));
+        put_f64le(f, closed_day, ncol);
+    }
     fprintf(f, "\n  </AppendedData>\n</VTKFile>\n");
     if (ferror(f)) {
         ss_atomic_abort(&af);
         return ss_error_set(err, SS_ERR_RUNTIME, "%s: write failed: %s", path, strerror(errno));
     }
     return ss_atomic_commit(&af, err);
-}
-
-static void xml_attr(FILE *f, const char *s) {
-    for (; *s; s++) {
-        switch (*s) {
-        case '&':
-            fputs("&amp;", f);
-            break;
-        case '<':
-            fputs("&lt;", f);
-            break;
-        case '>':
-            fputs("&gt;", f);
-            break;
-        case '"':
-            fputs("&quot;", f);
-            break;
-        default:
-            fputc(*s, f);
-        }
-    }
 }
 
 ss_status ss_heal_pvd_write(const char *path, int n, const double *t_days, const char *const *files,
@@ -156,12 +247,7 @@ ss_status ss_heal_pvd_write(const char *path, int n, const double *t_days, const
         fprintf(f, "\"/>\n");
     }
     fprintf(f, "  </Collection>\n</VTKFile>\n");
-    if (ferror(f)) {
-        int e = errno;
-        ss_atomic_abort(&af);
-        return ss_error_set(err, SS_ERR_RUNTIME, "%s: write failed: %s", path, strerror(e));
-    }
-    return ss_atomic_commit(&af, err);
+    return commit(&af, path, err);
 }
 
 /* ---- reading back what ss_heal_vti_write_vectors wrote ----------------------------------
@@ -206,8 +292,11 @@ static const unsigned char *vti_block(const unsigned char *data, size_t avail, u
     return data + off + 8;
 }
 
-ss_heal_grid *ss_heal_vti_read(const char *path, float **displacement, ss_error *err) {
+ss_heal_grid *ss_heal_vti_read(const char *path, float **displacement, double **closed_day,
+                               ss_error *err) {
     if (displacement) *displacement = NULL;
+    if (closed_day) *closed_day = NULL;
+    double *closed = NULL;
     size_t len = 0;
     char *text = ss_read_file(path, &len, err);
     if (!text) return NULL;
@@ -252,6 +341,21 @@ ss_heal_grid *ss_heal_vti_read(const char *path, float **displacement, ss_error 
         size_t nl = q ? (size_t)(q - nm) : 0;
         unsigned long long off = strtoull(of, NULL, 10);
         int comps = nc ? atoi(nc) : 1;
+        if (nl == 10 && !strncmp(nm, "closed_day", 10)) {
+            size_t ncol = (size_t)n[0] * (size_t)n[1];
+            const unsigned char *b = strncmp(ty ? ty : "", "Float64\"", 8)
+                                         ? NULL
+                                         : vti_block(data, avail, off, 8 * (uint64_t)ncol);
+            if (!b)
+                why = "the closed_day array is malformed";
+            else if (closed_day && !(closed = malloc(ncol * sizeof *closed)))
+                why = "out of memory";
+            for (size_t i = 0; closed && !why && i < ncol; i++) {
+                uint64_t v = get_u64le(b + 8 * i);
+                memcpy(&closed[i], &v, 8);
+            }
+            continue;
+        }
         if (nl == 10 && !strncmp(nm, "cell_state", 10)) {
             const unsigned char *b =
                 strncmp(ty ? ty : "", "UInt8\"", 6) ? NULL : vti_block(data, avail, off, ncell);
@@ -295,9 +399,11 @@ ss_heal_grid *ss_heal_vti_read(const char *path, float **displacement, ss_error 
         ss_error_set(err, SS_ERR_INPUT, "%s: %s", path, why);
         ss_heal_grid_free(g);
         free(disp);
+        free(closed);
         return NULL;
     }
     g->t_days = t;
     if (displacement) *displacement = disp;
+    if (closed_day) *closed_day = closed;
     return g;
 }

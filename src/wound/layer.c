@@ -50,21 +50,21 @@ static const double THICK_MM[SS_LAYER_NTHICK] = {0,   0.005, 0.01, 0.02, 0.05,
 #define NWL 16
 
 void ss_blood_layer_scab(double hb_factor, ss_blood_layer *l) {
-    *l = (ss_blood_layer){hb_factor, 0.0, 1500.0, 0.9, 1.45};
+    *l = (ss_blood_layer){hb_factor, 0.0, 1500.0, 0.9, 1.45, 0.0};
 }
 
 void ss_blood_layer_clot(double oxygenation, ss_blood_layer *l) {
-    *l = (ss_blood_layer){1.0, oxygenation, 300.0, 0.9, 1.40};
+    *l = (ss_blood_layer){1.0, oxygenation, 300.0, 0.9, 1.40, 0.0};
 }
 
 /* Whole-blood absorption (1/cm) at an oxygenation and wavelength wl. */
-static ss_status blood_mua(const ss_optics_data *d, double oxygenation, double wl, double *mua,
-                           ss_error *err) {
+static ss_status blood_mua(const ss_optics_data *d, double oxygenation, double bilirubin, double wl,
+                           double *mua, ss_error *err) {
     ss_bio_params bio;
     ss_bio_params_default(&bio);
     bio.blood = 1;
     bio.oxygenation = oxygenation;
-    bio.bilirubin_g_per_l = 0;
+    bio.bilirubin_g_per_l = bilirubin;
     bio.betacarotene_g_per_l = 0;
     ss_optics_slab slab;
     ss_status st = ss_optics_skin_slab_with(d, &bio, wl, &slab, err);
@@ -74,11 +74,13 @@ static ss_status blood_mua(const ss_optics_data *d, double oxygenation, double w
 
 ss_status ss_layer_table_build(const ss_blood_layer *l, uint64_t photons, uint64_t seed,
                                ss_layer_table *out, ss_error *err) {
-    if (!(l->hb_factor >= 0) || !(l->oxygenation >= 0 && l->oxygenation <= 1) ||
-        !(l->mus_per_cm >= 0) || !(fabs(l->g) < 1) || !(l->n >= 1) || photons < 100)
-        return ss_error_set(err, SS_ERR_INPUT,
-                            "blood layer: need hb_factor >= 0, oxygenation 0..1, mus >= 0, "
-                            "|g| < 1, n >= 1 and >= 100 photons");
+    if (!(l->hb_factor >= 0) || !(l->bilirubin_g_per_l >= 0 && l->bilirubin_g_per_l <= 100) ||
+        !(l->oxygenation >= 0 && l->oxygenation <= 1) || !(l->mus_per_cm >= 0) ||
+        !(fabs(l->g) < 1) || !(l->n >= 1) || photons < 100)
+        return ss_error_set(
+            err, SS_ERR_INPUT,
+            "blood layer: need hb_factor >= 0, bilirubin 0..100 g/L, oxygenation 0..1, mus >= 0, "
+            "|g| < 1, n >= 1 and >= 100 photons");
     memset(out, 0, sizeof *out);
     memcpy(out->thickness_mm, THICK_MM, sizeof THICK_MM);
     ss_optics_data *d = NULL;
@@ -87,8 +89,14 @@ ss_status ss_layer_table_build(const ss_blood_layer *l, uint64_t photons, uint64
     double wl[NWL], mua[NWL];
     for (int w = 0; w < NWL && !st; w++) {
         wl[w] = WL_MIN + WL_STEP * w;
-        st = blood_mua(d, l->oxygenation, wl[w], &mua[w], err);
-        mua[w] *= l->hb_factor;
+        /* haemoglobin at hb_factor times whole blood's, plus the bilirubin term
+         * (the optics model's blood with and without it) at the layer's own
+         * concentration */
+        double base = 0, with = 0;
+        st = blood_mua(d, l->oxygenation, 0, wl[w], &base, err);
+        if (!st && l->bilirubin_g_per_l > 0)
+            st = blood_mua(d, l->oxygenation, l->bilirubin_g_per_l, wl[w], &with, err);
+        mua[w] = base * l->hb_factor + (l->bilirubin_g_per_l > 0 ? with - base : 0);
     }
     /* the bare skin: R = 0, T = 1 */
     for (int c = 0; c < 3; c++) out->transmit[0][c] = 1;

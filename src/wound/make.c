@@ -17,7 +17,15 @@
 
 #include "skinsim/abrasion.h"
 #include "skinsim/mech.h"
+#include "skinsim/mesh.h"
+#include "skinsim/shell.h"
+#include "skinsim/texture.h"
 #include "skinsim/wound.h"
+#include "wound_internal.h"
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
 
 void ss_wound_make_config_default(ss_wound_make_config *c) {
     memset(c, 0, sizeof *c);
@@ -38,10 +46,13 @@ typedef struct job {
     ss_heal_saved_run *saved; /* read back from --heal DIR */
     ss_heal_grid *grid0;      /* --heal: the first snapshot (day 0) */
     float *disp0;             /* --heal: its displacement (NULL without mechanics) */
+    double *closed0;          /* --heal: its closure days */
     ss_wound_tissue *tissue;
     ss_wound_renderer *renderer;
     double side_mm;
     double t_heal, t_render, t_write, t_setup, t_compare;
+    const ss_mesh *mesh; /* on a real body (--mesh): the skin mesh, textures in its UVs */
+    ss_image *columns;   /* then: the tissue column under every texel */
 } job;
 
 static void job_free(job *j) {
@@ -52,7 +63,9 @@ static void job_free(job *j) {
     ss_heal_run_free(j->run);
     ss_heal_saved_run_free(j->saved);
     ss_heal_grid_free(j->grid0);
+    ss_image_free(j->columns);
     free(j->disp0);
+    free(j->closed0);
 }
 
 static const char *job_scenario(const job *j) {
@@ -89,6 +102,50 @@ static ss_status read_skin(job *j, ss_error *err) {
     j->skin = c->skin_path ? ss_wound_skin_read(c->skin_path, err)
                            : ss_wound_default_skin(c->size, j->side_mm, c->seed, err);
     return j->skin ? SS_OK : (err->code ? err->code : SS_ERR_INPUT);
+}
+
+/* The built-in wound of `skinsim wound` when none is given: an irregular
+ * abrasion instead of heal's schematic square. An ellipse of 0.74 x 0.5 of the
+ * block (22 x 15 mm on the default 30 mm block), turned by 15 degrees, its
+ * outline moved by value noise (seed 000 §3.2, about a third of the block per
+ * period), then frayed along the scrape by seed 000's shape erosion (Alg. 3.1,
+ * horizontal min filter of random widths up to 9 of 256 pixels): ragged
+ * margins and streaks, as a scrape leaves them. A footprint over the whole
+ * block (ss_heal_run_config.wound_footprint), deterministic per seed. */
+#define FOOT_PX 256
+static ss_image *default_footprint(uint64_t seed, ss_error *err) {
+    ss_image *noise = ss_image_create(FOOT_PX, FOOT_PX, 1, err);
+    ss_image *mask = noise ? ss_image_create(FOOT_PX, FOOT_PX, 1, err) : NULL;
+    int *widths = mask ? malloc(sizeof *widths * FOOT_PX * FOOT_PX) : NULL;
+    ss_status st = !noise || !mask ? err->code
+                   : !widths       ? ss_error_set(err, SS_ERR_NOMEM, "out of memory")
+                                   : SS_OK;
+    if (!st) st = ss_wound__noise(FOOT_PX, FOOT_PX, FOOT_PX / 3.0, 3, seed, 301, noise, err);
+    if (!st) {
+        const double a = 0.37, b = 0.25, ang = 15 * M_PI / 180, ca = cos(ang), sa = sin(ang);
+        for (int y = 0; y < FOOT_PX; y++)
+            for (int x = 0; x < FOOT_PX; x++) {
+                double u = (x + 0.5) / FOOT_PX - 0.5, v = (y + 0.5) / FOOT_PX - 0.5;
+                double xr = ca * u + sa * v, yr = -sa * u + ca * v;
+                double e = (xr / a) * (xr / a) + (yr / b) * (yr / b);
+                size_t i = (size_t)y * FOOT_PX + (size_t)x;
+                mask->data[i] = 1 - e + 0.6 * (noise->data[i] - 0.5) > 0 ? 1.f : 0.f;
+            }
+        ss_erosion_widths(FOOT_PX, FOOT_PX, 0, 9, seed, 302, widths);
+        ss_erode(mask, widths, noise);
+    }
+    free(widths);
+    ss_image_free(mask);
+    if (st) {
+        ss_image_free(noise);
+        return NULL;
+    }
+    return noise;
+}
+
+static int heal_has_wound(const ss_heal_run_config *h) {
+    return h->wound_mask || h->wound_stroke || h->wound_mesh || h->wound_footprint ||
+           h->wound_depth_image || h->skin_mesh || h->wound_uv;
 }
 
 /* --heal DIR: a finished heal run instead of a simulation. The healing
@@ -130,7 +187,7 @@ static ss_status open_saved(job *j, ss_error *err) {
     if (ss_heal_saved_run_snapshot_day(s, 0) > 1e-3 * ss_heal_saved_run_dt(s))
         return ss_error_set(err, SS_ERR_INPUT, "--heal %s: its first snapshot is not day 0",
                             c->heal_dir);
-    if (!(j->grid0 = ss_heal_saved_run_load(s, 0, &j->disp0, err))) return err->code;
+    if (!(j->grid0 = ss_heal_saved_run_load(s, 0, &j->disp0, &j->closed0, err))) return err->code;
     if ((c->mechanics || c->heal.mechanics) && !j->disp0)
         return ss_error_set(err, SS_ERR_INPUT,
                             "--mechanics: --heal %s was run without --mechanics (its snapshots "
@@ -158,12 +215,25 @@ static ss_status read_inputs(job *j, ss_error *err) {
         hc.mechanics = c->mechanics || c->heal.mechanics; /* the run's own coupled mechanics */
         double last = c->days[c->ndays - 1];
         hc.days = last > 0 ? last : 1;
+        ss_image *foot = NULL;
+        if (!heal_has_wound(&hc) && !(hc.wound_footprint = foot = default_footprint(c->seed, err)))
+            return err->code;
         st = ss_heal_run_create(&hc, &j->run, err);
+        ss_image_free(foot);
     }
     if (st) return st;
     const ss_heal_grid *g = job_grid(j);
     j->side_mm = g->nx * g->dx_mm;
-    if (fabs(g->ny * g->dx_mm - j->side_mm) > 1e-9 * j->side_mm)
+    const ss_shell_patch *patch = j->run ? ss_heal_run_shell(j->run) : NULL;
+    if (patch) { /* on a real body: the textures cover the mesh's UV layout */
+        if (c->mechanics || c->heal.mechanics)
+            return ss_error_set(err, SS_ERR_INPUT,
+                                "--mechanics: not drawn on a --mesh's UV layout (yet); leave it "
+                                "out, or heal a flat block");
+        j->mesh = ss_heal_run_skin_mesh(j->run);
+        if (!(j->columns = ss_wound_uv_columns(patch, j->mesh, c->size, &j->side_mm, err)))
+            return err->code;
+    } else if (fabs(g->ny * g->dx_mm - j->side_mm) > 1e-9 * j->side_mm)
         return ss_error_set(err, SS_ERR_INPUT,
                             "the heal block is %g x %g mm; the texture needs a square block "
                             "(--size-mm X,X,Z)",
@@ -188,7 +258,9 @@ static ss_status declare_outputs(const ss_wound_make_config *c, ss_outputs *outs
                          c->skin_path,
                          c->table_path,
                          c->recipe_path,
-                         c->heal_dir};
+                         c->heal_dir,
+                         c->heal.skin_mesh,
+                         c->heal.wound_uv};
     ss_status st = SS_OK;
     for (size_t k = 0; k < sizeof ins / sizeof *ins && !st; k++)
         if (ins[k]) st = ss_outputs_input(outs, ins[k], err);
@@ -243,7 +315,7 @@ static ss_status write_frame(const char *dir, const char *stem, const ss_wound_t
 
 /* glTF metallic-roughness: G = roughness, B = metallic 0, R unused (1). */
 static ss_status write_gltf(const char *dir, const char *stem, const ss_wound_textures *t,
-                            double side_mm, cJSON *files, ss_error *err) {
+                            double side_mm, const ss_mesh *mesh, cJSON *files, ss_error *err) {
     int w = t->roughness->width, h = t->roughness->height;
     ss_image *mr = ss_image_create(w, h, 3, err);
     if (!mr) return err->code;
@@ -265,7 +337,8 @@ static ss_status write_gltf(const char *dir, const char *stem, const ss_wound_te
     snprintf(nrm, sizeof nrm, "%s_normal.png", base);
     snprintf(rel, sizeof rel, "%s.gltf", stem);
     snprintf(path, sizeof path, "%s/%s", dir, rel);
-    st = ss_gltf_write_textured_square(path, side_mm / 1000.0, base, col, mrn, nrm, err);
+    st = mesh ? ss_gltf_write_textured_mesh(path, mesh, base, col, mrn, nrm, err)
+              : ss_gltf_write_textured_square(path, side_mm / 1000.0, base, col, mrn, nrm, err);
     if (!st) cJSON_AddStringToObject(files, "gltf", rel);
     return st;
 }
@@ -290,9 +363,10 @@ static ss_status write_compare(job *j, const char *dir, const ss_image *mask0,
     int size = c->size < 256 ? c->size : 256, n = c->ndays; /* the sheet's tile size */
     ss_wound_shape *shape = NULL;
     ss_status st;
-    if (c->heal.wound_stroke) {
+    const char *strokes = c->heal.wound_stroke ? c->heal.wound_stroke : c->heal.wound_uv;
+    if (strokes) { /* a flat block's strokes, or a mesh's UV strokes */
         ss_stroke_set ss;
-        st = ss_stroke_csv_read(c->heal.wound_stroke, &ss, err);
+        st = ss_stroke_csv_read(strokes, &ss, err);
         if (!st)
             st = ss_wound_shape_from_strokes(
                 &ss, c->heal.concave_k ? SS_HULL_CONCAVE : SS_HULL_CONVEX,
@@ -345,12 +419,11 @@ static ss_status write_compare(job *j, const char *dir, const ss_image *mask0,
 
 /* ---- the run ----------------------------------------------------------------------------- */
 
-/* Brings the tissue to `day`: steps the heal run, observing every step, or
- * reads the saved run's snapshots up to that day, observing each (closure
- * days are then known at snapshot resolution). *def receives the day's
+/* Brings the tissue to `day`: steps the heal run there, or reads the saved
+ * run's snapshot of that day, and observes it with the run's own closure
+ * days (kept every step, so both are exact). *def receives the day's
  * per-texel deformation when the run has mechanics. */
-static ss_status advance(job *j, double day, int *next_snap, ss_progress *pr, ss_image **def,
-                         ss_error *err) {
+static ss_status advance(job *j, double day, ss_progress *pr, ss_image **def, ss_error *err) {
     const ss_wound_make_config *c = j->c;
     ss_status st = SS_OK;
     *def = NULL;
@@ -358,37 +431,35 @@ static ss_status advance(job *j, double day, int *next_snap, ss_progress *pr, ss
         long long target = llround(day / ss_heal_run_dt(j->run));
         while (!st && ss_heal_run_step_index(j->run) < target) {
             st = ss_heal_run_step(j->run, err);
-            if (!st) ss_wound_tissue_observe(j->tissue, ss_heal_run_grid(j->run));
             ss_progress_update(pr, (double)ss_heal_run_step_index(j->run));
         }
+        if (st) return st;
+        ss_wound_tissue_observe_closure(j->tissue, ss_heal_run_grid(j->run),
+                                        ss_heal_run_closure(j->run));
         ss_mech *mech = ss_heal_run_mech(j->run);
-        if (!st && mech &&
-            !(*def = ss_wound_deformation_from_grid(ss_heal_run_grid(j->run),
-                                                    ss_mech_grid_displacement(mech), c->size, err)))
+        if (mech && !(*def = ss_wound_deformation_from_grid(
+                          ss_heal_run_grid(j->run), ss_mech_grid_displacement(mech), c->size, err)))
             st = err->code;
         return st;
     }
-    int last = ss_heal_saved_run_find(j->saved, day);
-    ss_heal_grid *g = NULL;
-    float *disp = NULL;
-    if (*next_snap == 0) { /* day 0: read while checking the inputs */
-        ss_wound_tissue_observe(j->tissue, j->grid0);
-        *next_snap = 1;
-        if (last == 0) g = j->grid0, disp = j->disp0;
-    }
-    for (; !st && *next_snap <= last; (*next_snap)++) {
-        if (g != j->grid0) ss_heal_grid_free(g), free(disp);
-        g = ss_heal_saved_run_load(j->saved, *next_snap, &disp, err);
-        if (!g) st = err->code ? err->code : SS_ERR_RUNTIME;
-        if (!st) ss_wound_tissue_observe(j->tissue, g);
-        ss_progress_update(pr, (double)*next_snap);
-    }
-    if (!st && g && disp) {
+    int i = ss_heal_saved_run_find(j->saved, day);
+    ss_heal_grid *g = j->grid0;
+    float *disp = j->disp0;
+    double *closed = j->closed0;
+    if (i > 0 && !(g = ss_heal_saved_run_load(j->saved, i, &disp, &closed, err)))
+        return err->code ? err->code : SS_ERR_RUNTIME;
+    ss_wound_tissue_observe_closure(j->tissue, g, closed);
+    ss_progress_update(pr, (double)i);
+    if (disp) {
         size_t n = (size_t)g->nx * (size_t)g->ny * (size_t)g->nz;
         float *const comp[3] = {disp, disp + n, disp + 2 * n};
         if (!(*def = ss_wound_deformation_from_grid(g, comp, c->size, err))) st = err->code;
     }
-    if (g != j->grid0) ss_heal_grid_free(g), free(disp);
+    if (g != j->grid0) {
+        ss_heal_grid_free(g);
+        free(disp);
+        free(closed);
+    }
     return st;
 }
 
@@ -402,11 +473,10 @@ static ss_status run_days(job *j, const char *dir, cJSON *frames, ss_image **thu
                           : (double)ss_heal_saved_run_find(j->saved, c->days[c->ndays - 1]);
     ss_progress_begin(&pr, "wound", total, c->quiet);
     double range = j->recipe.v[SS_WR_HEIGHT_RANGE_MM];
-    int next_snap = 0;
     for (int i = 0; !st && i < c->ndays; i++) {
         double t0 = ss_now();
         ss_image *def = NULL;
-        st = advance(j, c->days[i], &next_snap, &pr, &def, err);
+        st = advance(j, c->days[i], &pr, &def, err);
         double t1 = ss_now();
         if (!st) st = ss_wound_render(j->renderer, j->tissue, def, &tex, err);
         ss_image_free(def);
@@ -419,7 +489,7 @@ static ss_status run_days(job *j, const char *dir, cJSON *frames, ss_image **thu
         cJSON_AddStringToObject(f, "phase", "simulated");
         cJSON *files = cJSON_AddObjectToObject(f, "files");
         if (!st) st = write_frame(dir, stem, &tex, range, c->exr, files, err);
-        if (!st) st = write_gltf(dir, stem, &tex, j->side_mm, files, err);
+        if (!st) st = write_gltf(dir, stem, &tex, j->side_mm, j->mesh, files, err);
         int ts = c->size < 512 ? c->size : 512;
         if (!st && !(thumbs[i] = ss_image_resize(tex.base_color, ts, ts, err))) st = err->code;
         j->t_heal += t1 - t0;
@@ -450,11 +520,26 @@ static ss_status make(job *j, const char *dir, cJSON *sum, ss_error *err) {
         j->tissue = ss_wound_tissue_create(job_grid(j), job_params(j), &j->recipe, err);
         if (!j->tissue) st = err->code;
     }
-    /* the wound region of day 0, for the abrasion comparison */
+    if (!st && j->columns) st = ss_wound_renderer_set_columns(j->renderer, j->columns, err);
+    /* the wound region of day 0, for the abrasion comparison (over the block,
+     * or over the UV layout through the column map) */
     ss_image *mask0 = NULL;
-    if (!st && !(mask0 = ss_image_create(j->tissue->nx, j->tissue->ny, 1, err))) st = err->code;
-    for (size_t i = 0; !st && i < (size_t)j->tissue->nx * (size_t)j->tissue->ny; i++)
-        mask0->data[i] = j->tissue->plasma[i] > 0.5f ? 1.f : 0.f;
+    const ss_wound_tissue *t = j->tissue;
+    if (!st && j->columns) {
+        if (!(mask0 = ss_image_create(c->size, c->size, 1, err))) st = err->code;
+        for (size_t i = 0; !st && i < (size_t)c->size * (size_t)c->size; i++) {
+            const float *cm = j->columns->data + 2 * i;
+            long x = cm[0] == cm[0] ? lround(cm[0]) : -1, y = cm[0] == cm[0] ? lround(cm[1]) : -1;
+            mask0->data[i] = x >= 0 && y >= 0 && x < t->nx && y < t->ny &&
+                                     t->plasma[(size_t)y * (size_t)t->nx + (size_t)x] > 0.5f
+                                 ? 1.f
+                                 : 0.f;
+        }
+    } else if (!st && !(mask0 = ss_image_create(t->nx, t->ny, 1, err))) {
+        st = err->code;
+    }
+    for (size_t i = 0; !st && !j->columns && i < (size_t)t->nx * (size_t)t->ny; i++)
+        mask0->data[i] = t->plasma[i] > 0.5f ? 1.f : 0.f;
     char path[4600];
     snprintf(path, sizeof path, "%s/frames", dir);
     if (!st) st = ss_mkdir_p(path, err);
@@ -488,7 +573,11 @@ static cJSON *summary_base(const job *j) {
     cJSON *s = cJSON_CreateObject();
     cJSON_AddStringToObject(s, "command", "wound");
     cJSON_AddStringToObject(s, "scenario", job_scenario(j));
-    if (c->heal_dir) cJSON_AddStringToObject(s, "heal_dir", c->heal_dir);
+    if (c->heal_dir)
+        cJSON_AddStringToObject(s, "heal_dir", c->heal_dir);
+    else if (!heal_has_wound(&c->heal))
+        cJSON_AddStringToObject(s, "wound",
+                                "built-in irregular abrasion (0.74 x 0.5 of the block)");
     cJSON_AddArrayToObject(s,
                            "keys"); /* abrasion's key positions: none, every frame is simulated */
     cJSON_AddNumberToObject(s, "end_day", c->days[c->ndays - 1]);
@@ -498,6 +587,11 @@ static cJSON *summary_base(const job *j) {
     cJSON_AddNumberToObject(s, "height_range_mm", j->recipe.v[SS_WR_HEIGHT_RANGE_MM]);
     cJSON_AddStringToObject(s, "height_encoding", "0.5 + 0.5 * height_mm / height_range_mm");
     cJSON_AddStringToObject(s, "base_skin", c->skin_path ? c->skin_path : "forearm (built-in)");
+    if (j->mesh) {
+        cJSON_AddStringToObject(s, "skin_mesh", c->heal.skin_mesh);
+        cJSON_AddStringToObject(s, "texture_space", "the mesh's UV layout");
+        cJSON_AddNumberToObject(s, "mm_per_uv", j->side_mm);
+    }
     cJSON_AddBoolToObject(s, "mechanics",
                           j->run ? c->mechanics || c->heal.mechanics : j->disp0 != NULL);
     char *rj = ss_wound_recipe_to_json(&j->recipe);

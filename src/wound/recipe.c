@@ -49,6 +49,19 @@ static const struct {
     [SS_WR_KELOID_SCALE] = {"keloid_scale", "1", 1, 0, 100},
     [SS_WR_KELOID_MAX_MM] = {"keloid_max", "mm", 4, 1e-3, 100},
     [SS_WR_HEIGHT_RANGE_MM] = {"height_range", "mm", 2, 1e-3, 1e3},
+    [SS_WR_SCAB_MOTTLE] = {"scab_mottle", "1", 0.6, 0, 1},
+    [SS_WR_SCAB_SEROUS] = {"scab_serous", "1", 0.5, 0, 1},
+    [SS_WR_SCAB_SEROUS_HB] = {"scab_serous_hb", "1", 0.4, 0, 20},
+    [SS_WR_SCAB_DOME_MM] = {"scab_dome", "mm", 2, 1e-3, 100},
+    [SS_WR_SCAB_EDGE] = {"scab_edge", "1", 0.25, 0, 1},
+    [SS_WR_CRACK_WIDTH] = {"crack_width", "1", 0.05, 0, 0.5},
+    [SS_WR_CRACK_REACH_MM] = {"crack_reach", "mm", 4, 1e-3, 100},
+    [SS_WR_KELOID_LOOK_MM] = {"keloid_look", "mm", 0.3, 1e-3, 100},
+    [SS_WR_KELOID_BLOOD] = {"keloid_blood", "1", 0.05, 0, 1},
+    [SS_WR_KELOID_OXYGENATION] = {"keloid_oxygenation", "1", 0.8, 0, 1},
+    [SS_WR_KELOID_MELANIN] = {"keloid_melanin", "1", 1.15, 0, 10},
+    [SS_WR_KELOID_ROUGHNESS] = {"keloid_roughness", "1", 0.22, 0, 1},
+    [SS_WR_SCAB_BILIRUBIN] = {"scab_bilirubin", "g/L", 1.5, 0, 100},
 };
 
 void ss_wound_recipe_default(ss_wound_recipe *r) {

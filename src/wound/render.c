@@ -28,6 +28,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "skinsim/geom.h"
 #include "skinsim/texture.h"
 #include "wound_internal.h"
 
@@ -37,15 +38,22 @@
 #define EPI_FLOOR_CM 0.004
 #define SC_FLOOR_CM 0.001
 #define MELANIN_FLOOR 0.0
+/* The jitter of the tissue sampling, in grid columns (docs/wound.md). */
+#define WARP_COLUMNS 0.7
 
 struct ss_wound_renderer {
     ss_wound_render_options o;
     ss_image *skin; /* size x size x SS_BIO_NCHANNELS */
     ss_skin_lut *lut;
     float mean[SS_BIO_NCHANNELS];
-    ss_layer_table scab, clot;
-    ss_image *crust; /* value noise 0..1 at ~1.5 mm: the crust is uneven */
+    ss_layer_table scab, serous, clot;
+    ss_image *crust;   /* value noise 0..1 at ~1.5 mm: the crust's thickness is uneven */
+    ss_image *mottle;  /* value noise at ~3 mm: where the crust is serous, not bloody */
+    ss_image *crack;   /* value noise at ~2.5 mm: its mid-level lines are the cracks */
+    ss_image *warp[2]; /* value noise at ~1.2 mm: jitter of where the tissue maps are
+                          sampled, so margins are ragged, not stepped with the voxels */
     ss_wound_textures base;
+    ss_image *columns; /* NULL: the flat block; else tissue-map coordinates per texel */
 };
 
 void ss_wound_render_options_default(ss_wound_render_options *o) {
@@ -132,14 +140,27 @@ ss_status ss_wound_renderer_create(const ss_wound_render_options *o, ss_wound_re
             r->mean[c] = (float)(acc / (double)n);
         }
     }
-    ss_blood_layer scab, clot;
+    ss_blood_layer scab, serous, clot;
     ss_blood_layer_scab(o->recipe.v[SS_WR_SCAB_HB_FACTOR], &scab);
+    ss_blood_layer_scab(o->recipe.v[SS_WR_SCAB_SEROUS_HB], &serous);
+    scab.bilirubin_g_per_l = serous.bilirubin_g_per_l = o->recipe.v[SS_WR_SCAB_BILIRUBIN];
     ss_blood_layer_clot(o->recipe.v[SS_WR_BED_OXYGENATION], &clot);
     if (!st) st = ss_layer_table_build(&scab, o->scab_photons, o->seed, &r->scab, err);
     if (!st) st = ss_layer_table_build(&clot, o->scab_photons, o->seed + 1000, &r->clot, err);
+    if (!st) st = ss_layer_table_build(&serous, o->scab_photons, o->seed + 2000, &r->serous, err);
     if (!st && !(r->lut = ss_skin_lut_create(o->table, err))) st = err->code;
     if (!st && !(r->crust = ss_image_create(o->size, o->size, 1, err))) st = err->code;
     if (!st) st = ss_wound__noise(o->size, o->side_mm, 1.5, 2, o->seed, 201, r->crust, err);
+    if (!st && !(r->mottle = ss_image_create(o->size, o->size, 1, err))) st = err->code;
+    if (!st) st = ss_wound__noise(o->size, o->side_mm, 2.0, 3, o->seed, 202, r->mottle, err);
+    if (!st && !(r->crack = ss_image_create(o->size, o->size, 1, err))) st = err->code;
+    if (!st) st = ss_wound__noise(o->size, o->side_mm, 2.5, 3, o->seed, 203, r->crack, err);
+    for (int k = 0; k < 2 && !st; k++) {
+        if (!(r->warp[k] = ss_image_create(o->size, o->size, 1, err))) st = err->code;
+        if (!st)
+            st = ss_wound__noise(o->size, o->side_mm, 0.6, 2, o->seed, 204 + (uint64_t)k,
+                                 r->warp[k], err);
+    }
     if (!st) st = render_base(r, err);
     if (st) {
         ss_wound_renderer_free(r);
@@ -153,12 +174,30 @@ void ss_wound_renderer_free(ss_wound_renderer *r) {
     if (!r) return;
     ss_image_free(r->skin);
     ss_image_free(r->crust);
+    ss_image_free(r->columns);
+    ss_image_free(r->mottle);
+    ss_image_free(r->crack);
+    ss_image_free(r->warp[0]);
+    ss_image_free(r->warp[1]);
     ss_skin_lut_free(r->lut);
     ss_wound_textures_free(&r->base);
     free(r);
 }
 
 const ss_wound_textures *ss_wound_renderer_base(const ss_wound_renderer *r) { return &r->base; }
+
+ss_status ss_wound_renderer_set_columns(ss_wound_renderer *r, const ss_image *columns,
+                                        ss_error *err) {
+    int n = r->o.size;
+    if (columns && (columns->width != n || columns->height != n || columns->channels != 2))
+        return ss_error_set(err, SS_ERR_INPUT, "wound renderer: the column map must be %dx%d x 2",
+                            n, n);
+    ss_image *c = columns ? ss_image_clone(columns, err) : NULL;
+    if (columns && !c) return err->code ? err->code : SS_ERR_NOMEM;
+    ss_image_free(r->columns);
+    r->columns = c;
+    return SS_OK;
+}
 
 /* ---- render ------------------------------------------------------------------------------ */
 
@@ -173,9 +212,11 @@ static double lerp(double a, double b, double t) { return a + (b - a) * t; }
 /* The tissue at one texel (bilinear between column centres, clamped at the edges). */
 typedef struct texel_tissue {
     double e, cap, oxy, plasma, scab, scar, keloid, depth, age;
+    double crust_in; /* mm from the crust's edge inwards (0 outside the crust) */
 } texel_tissue;
 
-static void sample_tissue(const ss_wound_tissue *t, double mx, double my, texel_tissue *s) {
+static void sample_tissue(const ss_wound_tissue *t, const float *crust_in, double mx, double my,
+                          texel_tissue *s) {
     if (mx < 0) mx = 0;
     if (my < 0) my = 0;
     if (mx > t->nx - 1) mx = t->nx - 1;
@@ -197,6 +238,7 @@ static void sample_tissue(const ss_wound_tissue *t, double mx, double my, texel_
     s->keloid = BL(t->keloid_mm);
     s->depth = BL(t->depth_mm);
     s->age = BL(t->age_days);
+    s->crust_in = BL(crust_in);
 #undef BL
 }
 
@@ -212,7 +254,12 @@ typedef struct texel_out {
     double rgb[3], roughness, height_mm;
 } texel_out;
 
-static void render_texel(const ss_wound_renderer *r, const float *skin, float crust,
+/* The three crust noises at a texel (0..1). */
+typedef struct crust_noise {
+    float thick, mottle, crack;
+} crust_noise;
+
+static void render_texel(const ss_wound_renderer *r, const float *skin, const crust_noise *nz,
                          const texel_tissue *s, texel_out *o) {
     const double *v = r->o.recipe.v;
     double cover = ramp(s->e, v[SS_WR_EPITHELIUM_LO], v[SS_WR_EPITHELIUM_HI]), open = 1 - cover;
@@ -223,8 +270,11 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, float cr
     double scar = ramp(s->scar, 0, v[SS_WR_SCAR_DENSITY_HI]);
     float b[SS_BIO_NCHANNELS], k[SS_BIO_NCHANNELS];
     for (int c = 0; c < SS_BIO_NCHANNELS; c++) k[c] = (float)lerp(skin[c], r->mean[c], reg);
+    /* keloid tissue: hypervascular, hypoxic, often hyperpigmented (docs/wound.md) */
+    double kel = 1 - exp(-s->keloid / v[SS_WR_KELOID_LOOK_MM]);
     double mel = k[SS_BIO_MELANIN] * cover *
-                 lerp(1, lerp(v[SS_WR_NEW_MELANIN], v[SS_WR_SCAR_MELANIN], m_pig), reg);
+                 lerp(1, lerp(v[SS_WR_NEW_MELANIN], v[SS_WR_SCAR_MELANIN], m_pig), reg) *
+                 lerp(1, v[SS_WR_KELOID_MELANIN], kel);
     double epi =
         lerp(EPI_FLOOR_CM,
              k[SS_BIO_EPIDERMIS_CM] * lerp(1, lerp(v[SS_WR_NEW_EPIDERMIS], 1, m_epi), reg), cover);
@@ -233,11 +283,13 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, float cr
     double tissue_blood =
         k[SS_BIO_BLOOD] * cap * lerp(1, v[SS_WR_SCAR_BLOOD], reg * scar * m_scar) +
         v[SS_WR_YOUNG_BLOOD] * reg * cover * (1 - m_scar);
+    tissue_blood = lerp(tissue_blood, v[SS_WR_KELOID_BLOOD], kel * cover);
     double blood = lerp(tissue_blood, v[SS_WR_BED_BLOOD], open * reg);
     /* blood under cover follows the tissue's oxygen; blood in the open bed is
      * oxygenated by the air (atmospheric O2 reaches ~0.3 mm deep) */
     double oxy = lerp(lerp(v[SS_WR_TISSUE_MIN_OXYGENATION], k[SS_BIO_OXYGENATION], clamp01(s->oxy)),
                       v[SS_WR_BED_OXYGENATION], open * reg);
+    oxy = lerp(oxy, v[SS_WR_KELOID_OXYGENATION], kel * cover);
     b[SS_BIO_MELANIN] = (float)(mel > MELANIN_FLOOR ? mel : MELANIN_FLOOR);
     b[SS_BIO_PHEOMELANIN] = k[SS_BIO_PHEOMELANIN];
     b[SS_BIO_BLOOD] = (float)clamp01(blood);
@@ -247,18 +299,32 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, float cr
     lookup5 l;
     bio_to_render(r->lut, b, &l);
     /* dense mature collagen scatters more: lift the albedo towards white */
-    double white = v[SS_WR_SCAR_WHITENING] * reg * scar * m_scar * cover;
+    double white = v[SS_WR_SCAR_WHITENING] * reg * scar * m_scar * cover * (1 - kel);
     double skin_rgb[3];
     for (int c = 0; c < 3; c++) skin_rgb[c] = clamp01(l.rgb[c] + white * (1 - l.rgb[c]));
     /* the clot filling the open, avascular part of the bed (below the
      * crust), then the scab: blood layers over the skin */
-    /* a crust is uneven: its thickness varies by +-30 % at ~1.5 mm */
-    double thick = s->scab * v[SS_WR_SCAB_SCALE] * (0.7 + 0.6 * crust), R[3], T[3], mid[3];
+    /* the crust: thin at its edge, full from scab_dome inwards; its thickness
+     * mottled (+-scab_mottle at ~1.5 mm); cracked along the mid-level lines of
+     * a noise, the more the nearer its edge (where it dries and lifts first) */
+    double dome = lerp(v[SS_WR_SCAB_EDGE], 1, 1 - exp(-s->crust_in / v[SS_WR_SCAB_DOME_MM]));
+    double thick =
+        s->scab * v[SS_WR_SCAB_SCALE] * dome * (1 + v[SS_WR_SCAB_MOTTLE] * (2.0 * nz->thick - 1));
+    double crack = v[SS_WR_CRACK_WIDTH] > 0
+                       ? (1 - ramp(fabs(nz->crack - 0.5), 0, v[SS_WR_CRACK_WIDTH])) *
+                             exp(-s->crust_in / v[SS_WR_CRACK_REACH_MM])
+                       : 0;
+    thick *= 1 - crack;
+    /* patches of serous (haemoglobin-poor, amber) crust among the bloody one */
+    double serous = v[SS_WR_SCAB_SEROUS] * ramp(nz->mottle, 0.5, 0.8);
+    double R[3], T[3], R2[3], T2[3], mid[3];
     double clot =
         open * reg * (s->depth - s->scab > 0 ? s->depth - s->scab : 0) * v[SS_WR_CLOT_SCALE];
     ss_layer_table_eval(&r->clot, clot, R, T);
     ss_layer_over(R, T, skin_rgb, mid);
     ss_layer_table_eval(&r->scab, thick, R, T);
+    ss_layer_table_eval(&r->serous, thick, R2, T2);
+    for (int c = 0; c < 3; c++) R[c] = lerp(R[c], R2[c], serous), T[c] = lerp(T[c], T2[c], serous);
     ss_layer_over(R, T, mid, o->rgb);
     /* the extra colour (hair) over everything, gone where the tissue was destroyed */
     double ea = k[SS_BIO_EXTRA_A] * (1 - reg);
@@ -268,6 +334,7 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, float cr
     double rough = l.roughness;
     rough = lerp(rough, v[SS_WR_WET_ROUGHNESS], open * reg);
     rough = lerp(rough, v[SS_WR_SCAR_ROUGHNESS], reg * cover * m_epi * scar);
+    rough = lerp(rough, v[SS_WR_KELOID_ROUGHNESS], kel * cover);
     rough = lerp(rough, v[SS_WR_SCAB_ROUGHNESS], scab_cover);
     o->roughness = clamp01(rough);
     /* the keloid's swelling saturates at a few mm (Vancouver Scar Scale heights:
@@ -275,6 +342,23 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, float cr
     double kmax = v[SS_WR_KELOID_MAX_MM];
     double keloid = kmax * (1 - exp(-v[SS_WR_KELOID_SCALE] * s->keloid / kmax));
     o->height_mm = k[SS_BIO_HEIGHT_MM] - v[SS_WR_DEPTH_SCALE] * s->depth + thick + keloid;
+}
+
+/* Per column: mm from the crust's edge inwards (0 where there is no crust):
+ * the distance to the nearest column without crust, less half a column so
+ * that it is about 0 at the edge. */
+static ss_image *crust_depth(const ss_wound_tissue *t, double scale, ss_error *err) {
+    ss_image *no = ss_image_create(t->nx, t->ny, 1, err);
+    ss_image *d = no ? ss_image_create(t->nx, t->ny, 1, err) : NULL;
+    size_t n = (size_t)t->nx * (size_t)t->ny;
+    for (size_t i = 0; d && i < n; i++) no->data[i] = t->scab_mm[i] * scale < 0.01 ? 1.f : 0.f;
+    if (d && ss_distance_transform(no, d, err)) ss_image_free(d), d = NULL;
+    for (size_t i = 0; d && i < n; i++) {
+        double mm = isfinite(d->data[i]) ? (d->data[i] - 0.5) * t->dx_mm : 1e3;
+        d->data[i] = (float)(mm > 0 ? mm : 0);
+    }
+    ss_image_free(no);
+    return d;
 }
 
 ss_status ss_wound_render(ss_wound_renderer *r, const ss_wound_tissue *t,
@@ -286,11 +370,19 @@ ss_status ss_wound_render(ss_wound_renderer *r, const ss_wound_tissue *t,
     if (deformation &&
         (deformation->width != n || deformation->height != n || deformation->channels != 3))
         return ss_error_set(err, SS_ERR_INPUT, "wound render: deformation must be %dx%d x 3", n, n);
+    if (deformation && r->columns)
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "wound render: no deformation on a mesh's UV layout (yet)");
     /* per column: healthy (identity mapping) */
     size_t ncol = (size_t)t->nx * (size_t)t->ny;
     uint8_t *healthy = malloc(ncol);
     if (!healthy) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     for (size_t i = 0; i < ncol; i++) healthy[i] = (uint8_t)column_healthy(t, i);
+    ss_image *crust_in = crust_depth(t, r->o.recipe.v[SS_WR_SCAB_SCALE], err);
+    if (!crust_in) {
+        free(healthy);
+        return err->code ? err->code : SS_ERR_NOMEM;
+    }
     const double side_x = t->nx * t->dx_mm, side_y = t->ny * t->dx_mm;
 #pragma omp parallel for schedule(dynamic, 8)
     for (int y = 0; y < n; y++) {
@@ -304,12 +396,23 @@ ss_status ss_wound_render(ss_wound_renderer *r, const ss_wound_tissue *t,
                 dz = d[2];
             }
             double mx = u * t->nx - 0.5, my = vv * t->ny - 0.5;
+            int off = 0; /* on a mesh: the texel shows no skin of the patch */
+            if (r->columns) {
+                const float *cm = r->columns->data + i * 2;
+                off = !(cm[0] == cm[0]);
+                mx = cm[0], my = cm[1];
+            }
+            /* +-WARP_COLUMNS of a column, so a margin follows no voxel staircase */
+            mx += WARP_COLUMNS * (2.0 * r->warp[0]->data[i] - 1);
+            my += WARP_COLUMNS * (2.0 * r->warp[1]->data[i] - 1);
+            if (off) mx = my = 0;
             double cx = mx < 0 ? 0 : mx > t->nx - 1 ? t->nx - 1 : mx;
             double cy = my < 0 ? 0 : my > t->ny - 1 ? t->ny - 1 : my;
             int x0 = (int)cx, y0 = (int)cy;
             int x1 = x0 + 1 < t->nx ? x0 + 1 : x0, y1 = y0 + 1 < t->ny ? y0 + 1 : y0;
-            int base = healthy[(size_t)y0 * t->nx + x0] && healthy[(size_t)y0 * t->nx + x1] &&
-                       healthy[(size_t)y1 * t->nx + x0] && healthy[(size_t)y1 * t->nx + x1];
+            int base =
+                off || (healthy[(size_t)y0 * t->nx + x0] && healthy[(size_t)y0 * t->nx + x1] &&
+                        healthy[(size_t)y1 * t->nx + x0] && healthy[(size_t)y1 * t->nx + x1]);
             if (base) {
                 for (int c = 0; c < 3; c++)
                     out->base_color->data[i * 3 + c] = r->base.base_color->data[i * 3 + c];
@@ -318,15 +421,17 @@ ss_status ss_wound_render(ss_wound_renderer *r, const ss_wound_tissue *t,
                 continue;
             }
             texel_tissue s;
-            sample_tissue(t, mx, my, &s);
+            sample_tissue(t, crust_in->data, mx, my, &s);
             texel_out o;
-            render_texel(r, r->skin->data + i * SS_BIO_NCHANNELS, r->crust->data[i], &s, &o);
+            crust_noise nz = {r->crust->data[i], r->mottle->data[i], r->crack->data[i]};
+            render_texel(r, r->skin->data + i * SS_BIO_NCHANNELS, &nz, &s, &o);
             for (int c = 0; c < 3; c++) out->base_color->data[i * 3 + c] = (float)o.rgb[c];
             out->roughness->data[i] = (float)o.roughness;
             out->height->data[i] = (float)(o.height_mm + dz);
         }
     }
     free(healthy);
+    ss_image_free(crust_in);
     /* height in mm -> normal: slope per texel times texels per mm */
     ss_height_to_normal(out->height, (float)(n / r->o.side_mm), out->normal);
     return SS_OK;

@@ -17,6 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "skinsim/heal_io.h"
 #include "skinsim/wound.h"
 
 ss_wound_tissue *ss_wound_tissue_create(const ss_heal_grid *g, const ss_heal_params *p,
@@ -97,7 +98,16 @@ static float column_depth(const ss_heal_grid *g, const ss_wound_tissue *t, int x
     return (float)(g->skin_top_mm - dx); /* no vascular tissue: the whole column */
 }
 
-void ss_wound_tissue_observe(ss_wound_tissue *t, const ss_heal_grid *g) {
+static void observe(ss_wound_tissue *t, const ss_heal_grid *g, const double *closed);
+
+void ss_wound_tissue_observe(ss_wound_tissue *t, const ss_heal_grid *g) { observe(t, g, NULL); }
+
+void ss_wound_tissue_observe_closure(ss_wound_tissue *t, const ss_heal_grid *g,
+                                     const double *closed_day) {
+    observe(t, g, closed_day);
+}
+
+static void observe(ss_wound_tissue *t, const ss_heal_grid *g, const double *closed) {
     const int nx = g->nx, ny = g->ny, nz = g->nz;
     const float *e = g->field[SS_HEAL_EPITHELIUM], *u3 = g->field[SS_HEAL_CAPILLARY],
                 *u1 = g->field[SS_HEAL_OXYGEN], *pl = g->field[SS_HEAL_PLASMA],
@@ -141,10 +151,16 @@ void ss_wound_tissue_observe(ss_wound_tissue *t, const ss_heal_grid *g) {
             t->depth_mm[o] = column_depth(g, t, x, y, ztop);
             /* closure tracking: open (e < 0.5) sets +inf; the first observation
              * at or above 0.5 after that records the day */
-            if (ev < 0.5f)
+            if (closed) { /* the heal run's own record */
+                double c = closed[(size_t)y * (size_t)nx + (size_t)x];
+                t->closed_day[o] = c == SS_HEAL_CLOSED_OPEN     ? INFINITY
+                                   : c == SS_HEAL_CLOSED_INTACT ? -INFINITY
+                                                                : c;
+            } else if (ev < 0.5f) {
                 t->closed_day[o] = INFINITY;
-            else if (t->closed_day[o] == INFINITY)
+            } else if (t->closed_day[o] == INFINITY) {
                 t->closed_day[o] = day;
+            }
             double cd = t->closed_day[o];
             t->age_days[o] = cd == -INFINITY  ? SS_WOUND_AGE_INTACT
                              : cd == INFINITY ? 0.0f

@@ -20,6 +20,13 @@ else:
     wound = None
 
 BLOCK = dict(grid=(24, 24, 8), size_mm=(12, 12, 4))
+# `skinsim wound`'s built-in wound is an irregular abrasion; here, for a
+# region known in advance, the centred 8 mm square of heal's built-in wound
+# drawn as a stroke (u, v from 1/6 to 5/6 of the 12 mm block)
+SQUARE = tempfile.NamedTemporaryFile("w", suffix=".csv", delete=False)
+SQUARE.write("u,v\n%r,%r\n%r,%r\n%r,%r\n%r,%r\n" % (1 / 6, 1 / 6, 5 / 6, 1 / 6, 5 / 6, 5 / 6,
+                                                    1 / 6, 5 / 6))
+SQUARE.close()
 N = 32 if os.environ.get("SKINSIM_TEST_QUICK") else 64
 
 
@@ -27,7 +34,7 @@ N = 32 if os.environ.get("SKINSIM_TEST_QUICK") else 64
 class Textures(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
-        cls.heal_run = heal.Run(days=3, **BLOCK)
+        cls.heal_run = heal.Run(days=3, wound_stroke=SQUARE.name, **BLOCK)
         cls.tex = wound.Textures(cls.heal_run, size=N)
         cls.day0 = {k: v.copy() for k, v in cls.tex.render().items()}
         cls.tex.advance_to(3)
@@ -37,15 +44,17 @@ class Textures(unittest.TestCase):
         self.assertEqual(self.day3["base_color"].shape, (N, N, 3))
         self.assertEqual(self.day3["height_mm"].shape, (N, N))
         d = np.abs(self.day3["base_color"] - self.day0["base_color"]).max(axis=2)
-        # the default wound: a centred 8 mm square in the 12 mm block; the
+        # the wound: a centred 8 mm square in the 12 mm block; the
         # outer 1 mm ring (texels), 1 mm from the wound, is intact skin and
-        # changes at most slightly (oxygen diffusing towards the wound)
+        # changes at most slightly (oxygen diffusing towards the wound; the
+        # renderer samples the tissue up to 0.7 of a 0.5 mm column off, so a
+        # ring texel may see tissue 0.35 mm nearer the wound: 0.0055 here)
         ring = N // 12
         inner = d[N // 3:2 * N // 3, N // 3:2 * N // 3]
         outer = np.concatenate([d[:ring].ravel(), d[-ring:].ravel(), d[:, :ring].ravel(),
                                 d[:, -ring:].ravel()])
         self.assertGreater(inner.mean(), 0.01)  # the epithelium closes in
-        self.assertLess(outer.max(), 0.005)
+        self.assertLess(outer.max(), 0.006)
         # the open wound bed lies below the skin surface
         self.assertLess(self.day0["height_mm"][N // 2, N // 2], -0.1)
 
@@ -54,7 +63,8 @@ class Textures(unittest.TestCase):
         if not cli:
             self.skipTest("SKINSIM_CLI not set")
         with tempfile.TemporaryDirectory() as d:
-            subprocess.run([cli, "wound", "--grid", "24x24x8", "--size-mm", "12,12,4", "--days",
+            subprocess.run([cli, "wound", "--grid", "24x24x8", "--size-mm", "12,12,4", "--stroke",
+                            SQUARE.name, "--days",
                             "0,3", "--size", str(N), "--no-compare", "--quiet", "--out",
                             os.path.join(d, "w")], check=True)
             for day, ours in (("0", self.day0), ("3", self.day3)):
