@@ -30,10 +30,13 @@ for k in range(12):
     a = 2 * math.pi * k / 12
     print('%.4f,%.4f,0' % (0.2 + 0.02 * math.cos(a), 0.62 + 0.014 * math.sin(a)))
 " >"$T/cut.csv"
-RUN="--mesh $HAND --wound-uv $T/cut.csv --voxel-mm 1 --mechanics --snapshot-every 0.5 --quiet"
+# sanitizer runs (SKINSIM_TEST_QUICK): half the time
+D=1; H=0.5
+[ -n "${SKINSIM_TEST_QUICK:-}" ] && { D=0.5; H=0.25; }
+RUN="--mesh $HAND --wound-uv $T/cut.csv --voxel-mm 1 --mechanics --snapshot-every $H --quiet"
 
-# --- the hand, 1 day, 2 threads
-"$CLI" heal $RUN --days 1 --threads 2 --out "$T/a" --json >"$T/a.json" || fail "hand run failed"
+# --- the hand, 1 day (0.5 quick), 2 threads
+"$CLI" heal $RUN --days $D --threads 2 --out "$T/a" --json >"$T/a.json" || fail "hand run failed"
 for f in surface/skin.pvd surface/skin_0000.vtu surface/skin_0002.vtu fields/mesh_0002.vtu \
          surface/velocity_0002.png summary.json; do
     [ -s "$T/a/$f" ] || fail "missing $f"
@@ -57,9 +60,9 @@ d = arr(sys.argv[3], "displacement")
 assert max(abs(x) for x in d) > 0.01, "no deformation mapped onto the mesh"
 PY
 
-# --- checkpoint at day 0.5 on 1 thread, resume to day 1: the same bytes
-"$CLI" heal $RUN --days 0.5 --threads 1 --checkpoint-every 0.5 --out "$T/b" || fail "checkpointed run failed"
-"$CLI" heal --resume "$T/b" --days 1 --threads 1 --quiet || fail "resume failed"
+# --- checkpoint half way on 1 thread, resume to the end: the same bytes
+"$CLI" heal $RUN --days $H --threads 1 --checkpoint-every $H --out "$T/b" || fail "checkpointed run failed"
+"$CLI" heal --resume "$T/b" --days $D --threads 1 --quiet || fail "resume failed"
 for f in fields/fields_0002.vti surface/skin_0002.vtu area.csv; do
     cmp -s "$T/a/$f" "$T/b/$f" || fail "resumed $f differs from the uninterrupted run"
 done

@@ -52,6 +52,7 @@ void ss_mech_free(ss_mech *m) {
     free(m->mask);
     free(m->wound0);
     free(m->side);
+    free(m->foot);
     free(m->ecm);
     free(m->myo);
     for (int d = 0; d < 3; d++) free(m->usub[d]);
@@ -363,7 +364,7 @@ ss_mech *ss_mech_create(ss_heal_grid *g, const ss_heal_params *heal, const ss_me
     memcpy(m->kbase, m->S->k, (size_t)nsp * sizeof(double));
     ss_springs_update_mass(m->S);
     /* the wound's top triangles: reference centroid over a column with a wound voxel */
-    uint8_t *foot = calloc((size_t)g->nx * g->ny, 1);
+    uint8_t *foot = m->foot = calloc((size_t)g->nx * g->ny, 1);
     if (!foot) goto nomem;
     for (size_t i = 0; i < n; i++)
         if (m->wound0[i]) foot[i % ((size_t)g->nx * g->ny)] = 1;
@@ -385,7 +386,6 @@ ss_mech *ss_mech_create(ss_heal_grid *g, const ss_heal_params *heal, const ss_me
         if (ix >= 0 && iy >= 0 && ix < g->nx && iy < g->ny)
             m->tri_wound[t] = foot[(size_t)iy * g->nx + ix];
     }
-    free(foot);
     double w = ss_mech_kernel_width(ncells, (size_t)nn);
     int stride = (int)floor(w + 0.5);
     if (stride < 1) stride = 1;

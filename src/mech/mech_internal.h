@@ -17,6 +17,7 @@ struct ss_mech {
     uint8_t *mask;           /* tissue cells */
     uint8_t *wound0;         /* initial wound cells */
     uint8_t *side;           /* per node: on a side face (far-field boundary) */
+    uint8_t *foot;           /* per column: the initial wound's footprint */
     float *ecm;              /* rho_ecm / rho_ecm_hat per cell (scratch) */
     float *myo;              /* myofibroblast density per cell (scratch) */
     double *usub[3], *thsub; /* sub-lattice displacement and volumetric strain */

@@ -157,9 +157,32 @@ ss_image *ss_mech_top_view(const ss_mech *m, int px, double vmax, ss_error *err)
                 int hb = r[0] == b || r[1] == b || r[2] == b;
                 shared = ha && hb;
             }
-            if (!shared)
-                put_line(img, x[3 * a] * sc, (H - x[3 * a + 1]) * sc, x[3 * b] * sc,
-                         (H - x[3 * b + 1]) * sc);
+            if (shared) continue;
+            /* on a stepped surface (a patch of a curved body) a step's riser
+             * separates two wound triangles: an outline edge has intact skin
+             * on its far side (the reference footprint half a lattice cube
+             * across, where the neighbouring square's centre is, the point
+             * ss_mech_create classified the triangles by) */
+            const double *A = m->mesh->x + 3 * a, *B = m->mesh->x + 3 * b;
+            double mx = 0.5 * (A[0] + B[0]), my = 0.5 * (A[1] + B[1]);
+            double nx_ = B[1] - A[1], ny_ = -(B[0] - A[0]), len = hypot(nx_, ny_);
+            const int32_t *q = m->tri + 3 * t;
+            double cx = 0, cy = 0;
+            for (int k2 = 0; k2 < 3; k2++) {
+                cx += m->mesh->x[3 * q[k2]] / 3;
+                cy += m->mesh->x[3 * q[k2] + 1] / 3;
+            }
+            if (len > 0 && (mx - cx) * nx_ + (my - cy) * ny_ < 0) nx_ = -nx_, ny_ = -ny_;
+            if (len > 0) {
+                const double hs = 0.5 * m->p.tet_size_mm;
+                int ix = (int)floor((mx + hs * nx_ / len) / m->dx),
+                    iy = (int)floor((my + hs * ny_ / len) / m->dx);
+                if (ix >= 0 && iy >= 0 && ix < m->nx && iy < m->ny &&
+                    m->foot[(size_t)iy * m->nx + ix])
+                    continue;
+            }
+            put_line(img, x[3 * a] * sc, (H - x[3 * a + 1]) * sc, x[3 * b] * sc,
+                     (H - x[3 * b + 1]) * sc);
         }
     }
     free(speed);
