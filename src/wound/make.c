@@ -428,9 +428,12 @@ static ss_status advance(job *j, double day, ss_progress *pr, ss_image **def, ss
     ss_status st = SS_OK;
     *def = NULL;
     if (j->run) {
-        long long target = llround(day / ss_heal_run_dt(j->run));
-        while (!st && ss_heal_run_step_index(j->run) < target) {
-            st = ss_heal_run_step(j->run, err);
+        /* in pieces of a fiftieth of the run (at least 2 days), for the
+         * progress bar; each lands exactly (adaptive steps included) */
+        double piece = fmax(2.0, c->days[c->ndays - 1] / 50.0);
+        while (!st && ss_heal_run_day(j->run) < day - 1e-9 * (1 + day)) {
+            double next = fmin(day, ss_heal_run_day(j->run) + piece);
+            st = ss_heal_run_advance_to(j->run, next, err);
             ss_progress_update(pr, (double)ss_heal_run_step_index(j->run));
         }
         if (st) return st;
