@@ -5,13 +5,15 @@ ASAN     ?= build-asan
 JOBS     ?= $(shell nproc)
 DEPS      = build-essential cmake pkg-config libpng-dev libopenexr-dev zlib1g-dev \
             libcjson-dev libcmocka-dev libcairo2-dev fonts-dejavu-core python3 \
-            python3-numpy $(VIEW_DEPS)
+            python3-numpy $(VIEW_DEPS) $(MPI_DEPS)
+# MPI for the distributed healing solver and optics table (docs/scaling.md)
+MPI_DEPS  = libopenmpi-dev openmpi-bin
 # The viewer (skinsim view): GTK 4, libepoxy, Mesa's software OpenGL/EGL, and
 # Xvfb so its tests have a display on a machine without one.
 VIEW_DEPS = libgtk-4-dev libepoxy-dev libgl1-mesa-dri libegl-mesa0 xvfb
 DEMO_OUT ?= demo-out
 
-.PHONY: all deps build demo test test-asan bench fuzz clean install test-blender
+.PHONY: all deps build demo test test-asan bench fuzz clean install test-blender demo-mpi bench-mpi
 
 all: build
 
@@ -68,6 +70,21 @@ test-blender: build
 	  SUDO=""; [ "$$(id -u)" = 0 ] || SUDO=sudo; \
 	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq blender; }
 	cd $(BUILD) && SKINSIM_TEST_BLENDER=1 ctest --output-on-failure -R '^e2e_blender$$'
+
+# The healing solver and the ModelMatch table on 4 MPI ranks (docs/scaling.md).
+# OpenMPI refuses to run as root without --allow-run-as-root; --oversubscribe
+# lets 4 ranks share fewer cores. Same files, bit for bit, as `make demo`'s heal.
+MPIRUN ?= mpirun --allow-run-as-root --oversubscribe
+demo-mpi: build
+	@rm -rf $(DEMO_OUT)/heal-mpi
+	$(MPIRUN) -np 4 $(BUILD)/skinsim heal --days 21 --out $(DEMO_OUT)/heal-mpi
+	$(MPIRUN) -np 3 $(BUILD)/skinsim optics table --samples 2 --photons 2000 --out $(DEMO_OUT)/mm-mpi.sstab
+	@echo "Look at: $(DEMO_OUT)/heal-mpi/area.png, $(DEMO_OUT)/heal-mpi/fields/fields.pvd"
+
+# Strong and weak scaling of the MPI healing solver (figures in docs/scaling.md).
+bench-mpi: build
+	bench/heal_mpi.sh $(BUILD) 20 3 1 explicit
+	bench/heal_mpi.sh $(BUILD) 10 3 1 split
 
 bench: build
 	@for b in $(BUILD)/bench_*; do echo "== $$b"; $$b; done

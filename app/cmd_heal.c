@@ -14,6 +14,9 @@
 #include "cli.h"
 #include "heal_opts.h"
 #include "skinsim/heal_run.h"
+#ifdef SKINSIM_HAVE_MPI
+#include "skinsim/dist.h"
+#endif
 
 #define CMD "heal"
 
@@ -254,6 +257,91 @@ static void print_notes(const opts *o, ss_heal_run *r) {
     }
 }
 
+/* Ends the run on every MPI rank with rank 0's status (no-op without MPI). */
+static void dist_end(void *dist, ss_status st) {
+#ifdef SKINSIM_HAVE_MPI
+    if (dist) ss_dist_heal_end(dist, st);
+#else
+    (void)dist;
+    (void)st;
+#endif
+}
+
+/* Rank 0 under MPI: the distributed solver's times (slowest rank). */
+static void print_dist_timing(const opts *o, void *dist) {
+#ifdef SKINSIM_HAVE_MPI
+    if (!dist || o->quiet) return;
+    ss_dist_heal_timing t;
+    ss_dist_heal_timing_get(dist, &t);
+    fprintf(stderr,
+            "skinsim heal: MPI %d ranks (%dx%dx%d): %lld steps, compute %.3f s, halo exchange "
+            "%.3f s, statistics %.3f s, gathers %.3f s (slowest rank); halo %.0f bytes/step\n",
+            t.dims[0] * t.dims[1] * t.dims[2], t.dims[0], t.dims[1], t.dims[2], t.steps,
+            t.compute_s, t.halo_s, t.stats_s, t.gather_s, t.halo_bytes_per_step);
+#else
+    (void)o;
+    (void)dist;
+#endif
+}
+
+/* Start, steps, finish and the printed summary of a created run; dist is the
+ * MPI driver on rank 0 (NULL without MPI). */
+static int run_steps(const opts *o, ss_heal_run *r, ss_error *err, void *dist) {
+    /* The output folder: locked, checked against the free space, staged or
+     * marked unfinished; errors here are still about the input (exit 2). */
+    ss_status st = ss_heal_run_start(r, err);
+    if (st) {
+        dist_end(dist, st);
+        return cli_fail(CMD, err);
+    }
+    /* Everything is validated: from here on, files are written. */
+    ss_progress pr;
+    ss_progress_begin(&pr, "heal", (double)ss_heal_run_steps_total(r), o->quiet);
+    while (!st && !ss_heal_run_done(r)) {
+        st = ss_heal_run_step(r, err);
+        ss_progress_update(&pr, (double)ss_heal_run_step_index(r));
+    }
+    ss_progress_end(&pr);
+    char *summary = NULL;
+    if (!st) st = ss_heal_run_finish(r, &summary, err);
+    if (st) {
+        if (err->code == SS_ERR_INPUT) err->code = SS_ERR_RUNTIME; /* mid-run: runtime failure */
+        dist_end(dist, err->code);
+        return cli_fail(CMD, err);
+    }
+    dist_end(dist, SS_OK);
+    print_dist_timing(o, dist);
+    if (o->json)
+        printf("%s\n", summary);
+    else if (!o->quiet)
+        print_summary(r, o->c.resume_dir ? o->c.resume_dir : o->c.out_dir);
+    free(summary);
+    return 0;
+}
+
+#ifdef SKINSIM_HAVE_MPI
+/* Several MPI ranks: rank 0 creates (validates) the run and drives it, the
+ * others step their boxes (src/dist/heal.c); every rank exits with rank 0's code. */
+static int heal_mpi(const opts *o, ss_error *err) {
+    ss_heal_run *r = NULL;
+    ss_status cst = ss_dist_rank() == 0 ? ss_heal_run_create(&o->c, &r, err) : SS_OK;
+    ss_dist_heal *d = NULL;
+    ss_status st = ss_dist_heal_create(r, cst, &d, err);
+    int rc;
+    if (st) {
+        rc = ss_dist_rank() == 0 ? cli_fail(CMD, err) : ss_status_exit_code(st);
+    } else if (ss_dist_rank() != 0) {
+        rc = ss_status_exit_code(ss_dist_heal_serve(d, err));
+    } else {
+        print_notes(o, r);
+        rc = run_steps(o, r, err, d);
+    }
+    ss_dist_heal_free(d);
+    ss_heal_run_free(r);
+    return rc;
+}
+#endif
+
 int cmd_heal(int argc, char **argv) {
     ss_error err;
     ss_error_clear(&err);
@@ -271,40 +359,17 @@ int cmd_heal(int argc, char **argv) {
         return cli_fail(CMD, &err);
     }
     ss_threads_set(o.threads);
+#ifdef SKINSIM_HAVE_MPI
+    /* one rank under mpirun takes the distributed path too when it can (a
+     * fresh run without mechanics), so its times are reported alike */
+    if (ss_dist_size() > 1 || (ss_dist_active() && !o.c.resume_dir && !o.c.mechanics))
+        return heal_mpi(&o, &err);
+#endif
 
     ss_heal_run *r;
     if (ss_heal_run_create(&o.c, &r, &err)) return cli_fail(CMD, &err);
     print_notes(&o, r);
-
-    /* The output folder: locked, checked against the free space, staged or
-     * marked unfinished; errors here are still about the input (exit 2). */
-    if (ss_heal_run_start(r, &err)) {
-        int rc = cli_fail(CMD, &err);
-        ss_heal_run_free(r);
-        return rc;
-    }
-    /* Everything is validated: from here on, files are written. */
-    ss_status st = SS_OK;
-    ss_progress pr;
-    ss_progress_begin(&pr, "heal", (double)ss_heal_run_steps_total(r), o.quiet);
-    while (!st && !ss_heal_run_done(r)) {
-        st = ss_heal_run_step(r, &err);
-        ss_progress_update(&pr, (double)ss_heal_run_step_index(r));
-    }
-    ss_progress_end(&pr);
-    char *summary = NULL;
-    if (!st) st = ss_heal_run_finish(r, &summary, &err);
-    if (st) {
-        if (err.code == SS_ERR_INPUT) err.code = SS_ERR_RUNTIME; /* mid-run: runtime failure */
-        int rc = cli_fail(CMD, &err);
-        ss_heal_run_free(r);
-        return rc;
-    }
-    if (o.json)
-        printf("%s\n", summary);
-    else if (!o.quiet)
-        print_summary(r, o.c.resume_dir ? o.c.resume_dir : o.c.out_dir);
-    free(summary);
+    int rc = run_steps(&o, r, &err, NULL);
     ss_heal_run_free(r);
-    return 0;
+    return rc;
 }

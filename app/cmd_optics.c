@@ -135,7 +135,10 @@ static void spectrum_help(FILE *f) {
             "                           r_min_cm,r_max_cm,rd_r,rd_g,rd_b in 1/cm^2 (a separate\n"
             "                           Monte Carlo run with the same options)\n"
             "  --radial-bins N          radial bins (50)\n"
-            "  --radial-max-cm X        radial extent, cm (0.5)\n\n%s",
+            "  --radial-max-cm X        radial extent, cm (0.5)\n"
+            "  --radial-distance D      net (default): entry-to-exit distance; path: the\n"
+            "                           seed's D, the horizontal path length summed over\n"
+            "                           every segment (seed §4.7.1)\n\n%s",
             COMMON_HELP);
 }
 
@@ -182,6 +185,7 @@ static int optics_spectrum(int argc, char **argv) {
     const char *radial_out = NULL;
     long rbins = 50;
     double rmax = 0.5;
+    int rdist = SS_RADIAL_NET;
     ss_error e;
     ss_error_clear(&e);
     for (int i = 1; i < argc; i++) {
@@ -193,11 +197,19 @@ static int optics_spectrum(int argc, char **argv) {
         if (k < 0) return rc;
         if (k == 1) continue;
         if (!strcmp(argv[i], "--radial-out") || !strcmp(argv[i], "--radial-bins") ||
-            !strcmp(argv[i], "--radial-max-cm")) {
+            !strcmp(argv[i], "--radial-max-cm") || !strcmp(argv[i], "--radial-distance")) {
             if (i + 1 >= argc) return cli_usage_error(cmd, "%s needs a value", argv[i]);
             if (!strcmp(argv[i], "--radial-out"))
                 radial_out = argv[i + 1];
-            else if (!strcmp(argv[i], "--radial-bins")) {
+            else if (!strcmp(argv[i], "--radial-distance")) {
+                if (!strcmp(argv[i + 1], "net"))
+                    rdist = SS_RADIAL_NET;
+                else if (!strcmp(argv[i + 1], "path"))
+                    rdist = SS_RADIAL_PATH;
+                else
+                    return cli_usage_error(cmd, "--radial-distance: '%s' is neither net nor path",
+                                           argv[i + 1]);
+            } else if (!strcmp(argv[i], "--radial-bins")) {
                 if (cli_parse_int(argv[i], argv[i + 1], 1, 10000, &rbins, &e))
                     return cli_fail(cmd, &e);
             } else if (cli_parse_double(argv[i], argv[i + 1], 1e-4, 50, &rmax, &e))
@@ -208,6 +220,7 @@ static int optics_spectrum(int argc, char **argv) {
         return cli_usage_error(cmd, "unknown option '%s'", argv[i]);
     }
     if ((rc = common_finish(cmd, &c))) return rc;
+    c.spec.mc.radial_distance = rdist;
     /* Outputs checked before the Monte Carlo runs, written staged, swapped
      * in together at the end (src/core/output.c). */
     ss_outputs *outs = ss_outputs_create("optics", &e);

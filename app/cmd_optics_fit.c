@@ -14,6 +14,9 @@
 #include "cli.h"
 #include "optics_opts.h"
 #include "skinsim/optics_fit.h"
+#ifdef SKINSIM_HAVE_MPI
+#include "skinsim/dist.h"
+#endif
 
 typedef struct fit_cli {
     ss_bio_params bio;
@@ -51,6 +54,9 @@ static const char *MC_HELP =
     "                           projected (solid angle x cos theta_i cos theta_r)\n"
     "  --max-theta-deg D        leave out bins whose theta_i or theta_r centre is above\n"
     "                           D degrees (90: all bins, as the seed)\n"
+    "  --base B                 albedo (default): base colour from the skin's diffuse\n"
+    "                           albedo, lobe fitted to the surface reflection; free:\n"
+    "                           base colour and lobe fitted together (seed §4.6)\n"
     "  --threads N              worker threads (default $SKINSIM_THREADS or all cores)\n"
     "  --json                   machine-readable output on stdout\n"
     "  --quiet                  no progress bar\n";
@@ -117,6 +123,19 @@ static int parse_shared(const char *cmd, int argc, char **argv, int *i, fit_cli 
             return -1;
         }
         c->build.fit.weighting = k;
+        return 1;
+    }
+    if (!strcmp(a, "--base")) {
+        if ((*rc = need(cmd, argc, *i, a))) return -1;
+        const char *b = argv[++*i];
+        if (!strcmp(b, "albedo"))
+            c->build.fit.base_mode = SS_FIT_BASE_ALBEDO;
+        else if (!strcmp(b, "free"))
+            c->build.fit.base_mode = SS_FIT_BASE_FREE;
+        else {
+            *rc = cli_usage_error(cmd, "--base: '%s' is neither albedo nor free", b);
+            return -1;
+        }
         return 1;
     }
     if (!strcmp(a, "--json")) {
@@ -288,10 +307,24 @@ int cmd_optics_fit(int argc, char **argv) {
         }
     }
     double rms[SS_RENDER_NMODELS];
+    ss_fit_options fo = c.build.fit;
+    ss_brdf_sampled surf = {0, 0, 0, NULL};
+    if (fo.base_mode == SS_FIT_BASE_ALBEDO) {
+        for (int ch = 0; ch < 3; ch++) fo.albedo_rgb[ch] = fmin(1.0, fmax(0.0, en.albedo_rgb[ch]));
+        if (ss_optics_surface_brdf_sample(&c.build.spectrum, c.build.n_theta_i, c.build.n_theta_r,
+                                          c.build.n_phi, &surf, &e)) {
+            ss_brdf_sampled_free(&s);
+            return cli_fail(cmd, &e);
+        }
+    }
     for (int m = 0; m < SS_RENDER_NMODELS; m++) {
         ss_fit_result r;
-        if (ss_render_fit((ss_render_model)m, &s, &c.build.fit, &r, &e)) {
+        /* the GGX lobe models the surface reflection; the Ashikhmin-Shirley
+         * lobe cannot (its best fit to it is no lobe), so it keeps the whole BRDF */
+        fo.surface = (m == SS_RENDER_GGX && surf.f_rgb) ? &surf : NULL;
+        if (ss_render_fit((ss_render_model)m, &s, &fo, &r, &e)) {
             ss_brdf_sampled_free(&s);
+            ss_brdf_sampled_free(&surf);
             return cli_fail(cmd, &e);
         }
         en.fit[m] = r.params;
@@ -299,6 +332,7 @@ int cmd_optics_fit(int argc, char **argv) {
         rms[m] = r.residual_rms;
     }
     ss_brdf_sampled_free(&s);
+    ss_brdf_sampled_free(&surf);
     double secs = ss_now() - t0;
     if (c.json) {
         printf("{\"method\": \"%s\", \"photons\": %llu, \"weighting\": \"%s\", \"seconds\": %.3f, ",
@@ -444,15 +478,29 @@ int cmd_optics_table(int argc, char **argv) {
         ss_mm_table_free(t);
         return 0;
     }
-    /* the table file: checked now, staged, swapped in whole when built */
-    ss_outputs *outs = ss_outputs_create("optics", &e);
-    ss_status st = outs ? SS_OK : SS_ERR_NOMEM;
+    /* Under MPI (several ranks) every rank builds with rank 0 (src/dist/table.c):
+     * each calls table_build exactly once, rank 0 with its verdict on the output. */
+    int dist = 0, rank0 = 1;
+#ifdef SKINSIM_HAVE_MPI
+    dist = ss_dist_size() > 1;
+    rank0 = ss_dist_rank() == 0;
+#define TABLE_BUILD(t, root_st)                                                                    \
+    (dist        ? ss_dist_mm_table_build((t), &c.build, (root_st), &e)                            \
+     : (root_st) ? (root_st)                                                                       \
+                 : ss_mm_table_build((t), &c.build, &e))
+#else
+#define TABLE_BUILD(t, root_st) ((root_st) ? (root_st) : ss_mm_table_build((t), &c.build, &e))
+#endif
+    /* the table file: checked now, staged, swapped in whole when built (rank 0) */
+    ss_outputs *outs = rank0 ? ss_outputs_create("optics", &e) : NULL;
+    ss_status st = outs || !rank0 ? SS_OK : SS_ERR_NOMEM;
     double bytes = 8.0 * SS_MM_NFIELDS;
     for (int a = 0; a < SS_MM_NAXES; a++)
         bytes *= c.axis_values[a] ? c.axis_count[a] : (int)c.samples;
-    if (!st) st = ss_outputs_add(outs, "--out", c.out, SS_OUTPUT_FILE, bytes + 4096, &e);
-    if (!st) st = ss_outputs_begin(outs, &e);
+    if (!st && rank0) st = ss_outputs_add(outs, "--out", c.out, SS_OUTPUT_FILE, bytes + 4096, &e);
+    if (!st && rank0) st = ss_outputs_begin(outs, &e);
     if (st) {
+        if (dist) TABLE_BUILD(NULL, st);
         ss_outputs_free(outs);
         for (int a = 0; a < SS_MM_NAXES; a++) free(c.axis_values[a]);
         return cli_fail(cmd, &e);
@@ -469,13 +517,18 @@ int cmd_optics_table(int argc, char **argv) {
             for (int k = 0; k < ns[a]; k++) t->axis[a][k] = c.axis_values[a][k];
     for (int a = 0; a < SS_MM_NAXES; a++) free(c.axis_values[a]);
     if (!t) {
+        if (dist) TABLE_BUILD(NULL, rank0 ? e.code : SS_OK);
         ss_outputs_free(outs);
         return cli_fail(cmd, &e);
     }
     c.build.base = c.bio; /* bilirubin, beta-carotene (the non-axis parameters) */
     double t0 = ss_now();
-    st = ss_mm_table_build(t, &c.build, &e);
+    st = TABLE_BUILD(t, SS_OK);
     double secs = ss_now() - t0;
+    if (!rank0) { /* the others only built */
+        ss_mm_table_free(t);
+        return ss_status_exit_code(st);
+    }
     if (!st) st = ss_mm_table_write(ss_outputs_path(outs, 0), t, &e);
     st = ss_outputs_finish(outs, st, &e);
     ss_outputs_free(outs);

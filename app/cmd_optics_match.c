@@ -14,11 +14,13 @@
 static void match_help(FILE *f) {
     fprintf(f, "usage: skinsim optics match (--srgb R,G,B | --lab L,a,b) [options]\n\n"
                "The biological skin parameters (melanin, pheomelanin ratio, blood, oxygenation,\n"
-               "stratum corneum and epidermis thickness) whose rendered colour - the diffuse\n"
-               "albedo at normal incidence under D65, specular excluded - is closest to a target\n"
-               "colour in CIEDE2000. The ModelMatch table gives the start, photon transport at\n"
-               "the thicknesses found refines the four pigment parameters. Prints both stages'\n"
-               "Delta-E00.\n\n"
+               "stratum corneum and epidermis thickness) whose colour under D65 is closest to a\n"
+               "target colour in CIEDE2000. The colour is the diffuse albedo at normal incidence\n"
+               "plus, by default, the light the rough surface reflects (as a colorimeter or a\n"
+               "d:8 spectrophotometer with the specular component included measures skin, and\n"
+               "as a photo under diffuse light shows it). The ModelMatch table gives the start,\n"
+               "photon transport at the thicknesses found refines the four pigment parameters.\n"
+               "Prints both stages' Delta-E00.\n\n"
                "  --srgb R,G,B      target as 8-bit sRGB (0..255 each, e.g. picked from a photo)\n"
                "  --lab L,a,b       target as CIELAB (D65)\n"
                "  --table FILE      ModelMatch table (data/modelmatch_default.sstab)\n"
@@ -27,6 +29,8 @@ static void match_help(FILE *f) {
                "  --threads N       threads (default: $SKINSIM_THREADS or all cores); the\n"
                "                    answer is the same for any count\n"
                "  --table-only      skip the transport stage\n"
+               "  --geometry G      sci (default): albedo + surface reflectance (specular\n"
+               "                    component included); sce: the albedo alone\n"
                "  --json            print JSON\n"
                "  --quiet           accepted for symmetry (no progress output)\n");
 }
@@ -71,7 +75,8 @@ int cmd_optics_match(int argc, char **argv) {
             return 0;
         }
         int val = !strcmp(a, "--srgb") || !strcmp(a, "--lab") || !strcmp(a, "--table") ||
-                  !strcmp(a, "--photons") || !strcmp(a, "--seed") || !strcmp(a, "--threads");
+                  !strcmp(a, "--photons") || !strcmp(a, "--seed") || !strcmp(a, "--threads") ||
+                  !strcmp(a, "--geometry");
         if (val && i + 1 >= argc) return cli_usage_error(cmd, "%s needs a value", a);
         int rc;
         if (!strcmp(a, "--srgb")) {
@@ -96,6 +101,14 @@ int cmd_optics_match(int argc, char **argv) {
             int n;
             if (ss_threads_parse("--threads", argv[++i], &n, &e)) return cli_fail(cmd, &e);
             threads = n;
+        } else if (!strcmp(a, "--geometry")) {
+            const char *g = argv[++i];
+            if (!strcmp(g, "sci"))
+                o.geometry = SS_MM_GEOMETRY_SCI;
+            else if (!strcmp(g, "sce"))
+                o.geometry = SS_MM_GEOMETRY_SCE;
+            else
+                return cli_usage_error(cmd, "--geometry: '%s' is neither sci nor sce", g);
         } else if (!strcmp(a, "--table-only")) {
             table_only = 1;
         } else if (!strcmp(a, "--json")) {
@@ -130,9 +143,11 @@ int cmd_optics_match(int argc, char **argv) {
         printf("{\"target_lab\": [%.4f, %.4f, %.4f], \"bio\": ", target[0], target[1], target[2]);
         print_bio_json(&r.bio);
         printf(", \"albedo_rgb\": [%.6f, %.6f, %.6f], \"lab\": [%.4f, %.4f, %.4f], "
-               "\"delta_e00\": %.4f, \"refined\": %s, \"table_bio\": ",
+               "\"delta_e00\": %.4f, \"refined\": %s, \"geometry\": \"%s\", \"surface\": %.5f, "
+               "\"table_bio\": ",
                r.albedo_rgb[0], r.albedo_rgb[1], r.albedo_rgb[2], r.lab[0], r.lab[1], r.lab[2],
-               r.delta_e00, r.refined ? "true" : "false");
+               r.delta_e00, r.refined ? "true" : "false",
+               o.geometry == SS_MM_GEOMETRY_SCI ? "sci" : "sce", r.surface);
         print_bio_json(&r.table_bio);
         printf(", \"table_lab\": [%.4f, %.4f, %.4f], \"table_delta_e00\": %.4f}\n", r.table_lab[0],
                r.table_lab[1], r.table_lab[2], r.table_delta_e00);
@@ -147,6 +162,8 @@ int cmd_optics_match(int argc, char **argv) {
            r.lab[0], r.lab[1], r.lab[2], C, h, ita);
     printf("albedo             %.4f %.4f %.4f (linear sRGB)\n", r.albedo_rgb[0], r.albedo_rgb[1],
            r.albedo_rgb[2]);
+    printf("geometry           %s (surface reflectance %.4f added to the albedo)\n",
+           o.geometry == SS_MM_GEOMETRY_SCI ? "sci" : "sce", r.surface);
     printf("Delta-E00          %.3f (%s; table stage %.3f)\n", r.delta_e00,
            r.refined ? "transport" : "table", r.table_delta_e00);
     return 0;

@@ -1,8 +1,12 @@
 /* The `skinsim` command: dispatches to one subcommand per file (cmd_*.c). */
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "cli.h"
+#ifdef SKINSIM_HAVE_MPI
+#include "skinsim/dist.h"
+#endif
 
 static const cli_command commands[] = {
     {"abrasion", "abrasion-healing texture timeline (seed 000)", cmd_abrasion},
@@ -29,7 +33,38 @@ static void usage(FILE *f) {
                "Environment: SKINSIM_THREADS (default thread count), SKINSIM_DATA (data dir).\n");
 }
 
+static int dispatch(int argc, char **argv);
+
+/* Under mpirun (a build with MPI) every rank runs the same command line; only
+ * rank 0 prints (the others' stdout and stderr go to /dev/null unless
+ * SKINSIM_DIST_VERBOSE=1) and only heal and optics run on several ranks. */
 int main(int argc, char **argv) {
+#ifdef SKINSIM_HAVE_MPI
+    if (ss_dist_init(&argc, &argv)) {
+        fprintf(stderr, "skinsim: error: MPI_Init failed\n");
+        return 1;
+    }
+    const char *verbose = getenv("SKINSIM_DIST_VERBOSE");
+    if (ss_dist_rank() > 0 && !(verbose && verbose[0] == '1')) {
+        if (!freopen("/dev/null", "w", stdout) || !freopen("/dev/null", "w", stderr)) return 1;
+    }
+    int rc = 2;
+    if (ss_dist_size() > 1 && argc >= 2 && strcmp(argv[1], "heal") &&
+        !(argc >= 3 && !strcmp(argv[1], "optics") && !strcmp(argv[2], "table")))
+        fprintf(stderr,
+                "skinsim: error: '%s' does not run on %d MPI ranks; only heal and "
+                "optics table do (run it without mpirun)\n",
+                argv[1], ss_dist_size());
+    else
+        rc = dispatch(argc, argv);
+    ss_dist_finalize();
+    return rc;
+#else
+    return dispatch(argc, argv);
+#endif
+}
+
+static int dispatch(int argc, char **argv) {
     if (argc < 2) {
         usage(stderr);
         return 2;
@@ -40,7 +75,11 @@ int main(int argc, char **argv) {
         return 0;
     }
     if (!strcmp(cmd, "--version") || !strcmp(cmd, "-V")) {
+#ifdef SKINSIM_HAVE_MPI
+        printf("skinsim %s (with MPI)\n", SKINSIM_VERSION);
+#else
         printf("skinsim %s\n", SKINSIM_VERSION);
+#endif
         return 0;
     }
     /* SKINSIM_THREADS is checked like --threads, once for every command */

@@ -60,8 +60,9 @@ int main(int argc, char **argv) {
            "160x124x159 <= 1.32/5 = 0.264 s.\n");
     printf("# cpu_s: process CPU seconds per frame (all threads): on a loaded machine, cpu_s on 1 "
            "thread is the idle figure.\n");
-    printf("%-14s %8s %8s %3s %8s %10s %10s %10s %10s %10s %10s\n", "grid", "tets", "seedtets",
-           "thr", "stride", "s/frame", "cpu_s", "substeps", "seed_s", "coupled_s", "cpl_cpu_s");
+    printf("%-14s %8s %8s %3s %8s %10s %10s %10s %6s %5s %10s %10s %10s\n", "grid", "tets",
+           "seedtets", "thr", "stride", "s/frame", "cpu_s", "substeps", "incr", "folds", "seed_s",
+           "coupled_s", "cpl_cpu_s");
     for (int gi = 0; gi < 3; gi++) {
         if (gi == 2 && skip_large) continue;
         const int nx = dims[gi][0], ny = dims[gi][1], nz = dims[gi][2];
@@ -88,7 +89,8 @@ int main(int argc, char **argv) {
             }
             size_t n = (size_t)nx * ny * nz;
             double tm = 0, tc = 0;
-            long subs = 0;
+            long subs = 0, incs = 0;
+            int folds = 0;
             for (int f = -1; f < frames; f++) { /* frame -1: untimed start-up to n = 0.5 */
                 float level = (float)(0.5 + 0.01 * (f + 1));
                 for (size_t i = 0; i < n; i++)
@@ -104,6 +106,8 @@ int main(int argc, char **argv) {
                 ss_mech_stats st;
                 ss_mech_stats_compute(m, &st);
                 subs += st.substeps;
+                incs += st.increments;
+                if (st.inverted_tets > folds) folds = st.inverted_tets;
             }
             double coupled = -1, coupled_cpu = -1;
             if (gi == 1) { /* one split heal step + one mechanics frame */
@@ -128,9 +132,10 @@ int main(int argc, char **argv) {
             ss_mech_kernel(m, &stride);
             char gname[32];
             snprintf(gname, sizeof gname, "%dx%dx%d", nx, ny, nz);
-            printf("%-14s %8d %8d %3d %8d %10.4f %10.4f %10.1f %10.3f %10.4f %10.4f\n", gname,
-                   ss_mech_mesh(m)->ntets, seed_tets[gi], threads[ti], stride, tm / frames,
-                   tc / frames, (double)subs / frames, seed_s[gi], coupled, coupled_cpu);
+            printf("%-14s %8d %8d %3d %8d %10.4f %10.4f %10.1f %6.2f %5d %10.3f %10.4f %10.4f\n",
+                   gname, ss_mech_mesh(m)->ntets, seed_tets[gi], threads[ti], stride, tm / frames,
+                   tc / frames, (double)subs / frames, (double)incs / frames, folds, seed_s[gi],
+                   coupled, coupled_cpu);
             fflush(stdout);
             ss_mech_free(m);
             ss_heal_grid_free(g);

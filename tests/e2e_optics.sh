@@ -35,6 +35,11 @@ cmp -s "$T/s.json" "$T/s9.json" && fail "a different seed gave identical output"
   --radial-max-cm 0.2 >/dev/null || fail "radial"
 [ "$(head -1 "$T/r.csv")" = "r_min_cm,r_max_cm,rd_r,rd_g,rd_b" ] || fail "radial header"
 [ "$(wc -l <"$T/r.csv")" -eq 11 ] || fail "radial rows"
+# the seed's subsurface distance D (summed horizontal path) as an option
+"$CLI" optics spectrum --photons 1000 --wl-step 100 --radial-out "$T/rp.csv" --radial-bins 10 \
+  --radial-max-cm 0.2 --radial-distance path >/dev/null || fail "radial path"
+[ "$(wc -l <"$T/rp.csv")" -eq 11 ] || fail "radial path rows"
+cmp -s "$T/r.csv" "$T/rp.csv" && fail "--radial-distance path changed nothing"
 
 # brdf
 "$CLI" optics brdf --out "$T/b.csv" --photons 500 --wl-step 200 --theta-i 2 --theta-r 3 --phi 4 \
@@ -79,6 +84,7 @@ expect2() {
 expect2 "$T/x.png" "$CLI" optics swatch --out "$T/x.png" --melanin-list 0.1,-1
 expect2 "$T/x.csv" "$CLI" optics spectrum --out "$T/x.csv" --melanin -0.1
 expect2 "$T/x.csv" "$CLI" optics spectrum --out "$T/x.csv" --blood 1.5
+expect2 "$T/x.csv" "$CLI" optics spectrum --out "$T/x.csv" --radial-distance far
 expect2 "$T/x.csv" "$CLI" optics spectrum --out "$T/x.csv" --oxygenation nan
 expect2 "$T/x.csv" "$CLI" optics spectrum --out "$T/x.csv" --epidermis-thickness-cm 0
 expect2 "$T/x.csv" "$CLI" optics brdf --out "$T/x.csv" --theta-i 0

@@ -33,6 +33,18 @@ for k in base_color_linear specular roughness residual_rel subsurface_radius_cm 
 done
 "$CLI" optics fit $SMALL --fast --weighting projected >"$T/f.txt" || fail "fit --fast"
 grep -q "^ggx " "$T/f.txt" || fail "fit text output"
+# default (--base albedo): the GGX base colour is the albedo (within 10 % per
+# channel) and the lobe stays inside its bounds; --base free runs the seed's fit
+python3 - "$T/f.json" <<'PY' || fail "fit --base albedo: base colour vs albedo"
+import json, sys
+d = json.load(open(sys.argv[1]))
+g, a = d["models"]["ggx"], d["albedo_linear"]
+for b, x in zip(g["base_color_linear"], a):
+    assert abs(b - x) <= 0.1 * x, (g, a)
+assert 0.0 < g["specular"] < 1.0 and 0.0 < g["roughness"] < 1.0, g
+PY
+"$CLI" optics fit $SMALL --fast --base free >"$T/ff.txt" || fail "fit --base free"
+grep -q "^ggx " "$T/ff.txt" || fail "fit --base free output"
 
 # table build: 1 vs 2 threads give identical files
 "$CLI" optics table --samples 2 $SMALL --out "$T/t1.sstab" --threads 1 --quiet || fail "table t1"
@@ -51,6 +63,8 @@ grep -q '"ggx"' "$T/l.json" || fail "lookup json"
 expect2 "$CLI" optics fit --melanin 2
 expect2 "$CLI" optics fit --photons abc
 expect2 "$CLI" optics fit --weighting foo
+expect2 "$CLI" optics fit --base none
+expect2 "$CLI" optics fit --base
 expect2 "$CLI" optics fit --bogus
 expect2 "$CLI" optics fit --max-theta-deg 5
 expect2 "$CLI" optics fit --max-theta-deg 91

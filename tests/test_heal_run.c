@@ -236,9 +236,9 @@ static void test_run_adaptive(void **state) {
     /* 1 and 2 threads on a grid large enough to run in parallel */
     ss_heal_run_config tc;
     ss_heal_run_config_default(&tc);
-    tc.grid[0] = tc.grid[1] = 40;
-    tc.grid[2] = 24;
-    tc.days = tu_quick() ? 14 : 24;
+    tc.grid[0] = tc.grid[1] = 36; /* 33696 cells: just above the parallel threshold */
+    tc.grid[2] = 26;
+    tc.days = tu_quick() ? 12 : 16;
     tc.adapt_tol = 0.01;
     ss_heal_run *t1, *t2;
     ss_threads_set(1);

@@ -2,7 +2,9 @@
  * conservation, a semi-infinite medium against Chandrasekhar's exact
  * H-function result, Fresnel against closed forms, clear-slab multiple
  * reflections, BRDF / radial normalisation, the absorption-free path method
- * against direct runs, determinism across thread counts, parameter checks. */
+ * against direct runs, determinism across thread counts, parameter checks,
+ * and the inner loop's samplers (ziggurat exponential, polynomial azimuth)
+ * against their distributions. */
 #include "testutil.h"
 
 #include <math.h>
@@ -11,6 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "../src/optics/optics_internal.h"
 #include "skinsim/optics.h"
 
 #ifndef M_PI
@@ -413,6 +416,107 @@ static void test_bad_parameters(void **state) {
     assert_int_equal(ss_mc_run(&t, &o, &r, &e), SS_ERR_INPUT);
 }
 
+/* Chi-square statistic of n samples over nb equiprobable bins. */
+static double chi2_of(const long *cnt, int nb, double n) {
+    double e = n / nb, c2 = 0.0;
+    for (int k = 0; k < nb; k++) c2 += (cnt[k] - e) * (cnt[k] - e) / e;
+    return c2;
+}
+
+/* The transport's step lengths come from a ziggurat exponential sampler and
+ * its azimuths from a polynomial sine/cosine: both must have exactly the
+ * distributions they replace (-ln u; uniform angle on the unit circle). */
+static void test_inner_loop_samplers(void **state) {
+    (void)state;
+    const size_t n = tu_quick() ? 500000 : 2000000;
+    double *e = malloc(n * sizeof *e), *c = malloc(n * sizeof *c), *s = malloc(n * sizeof *s);
+    assert_non_null(e);
+    assert_non_null(c);
+    assert_non_null(s);
+    ss_mc_test_samplers(12345, n, e, c, s);
+    enum { NB = 64 };
+    long he[NB] = {0}, ha[NB] = {0};
+    double m1 = 0, m2 = 0, cm = 0, sm = 0, maxdev = 0;
+    const double tt[6] = {0.25, 1.0, 2.0, 4.0, 7.69711747013104972, 10.0};
+    long tail[6] = {0};
+    for (size_t i = 0; i < n; i++) {
+        assert_true(e[i] > 0.0 && isfinite(e[i]));
+        m1 += e[i];
+        m2 += e[i] * e[i];
+        for (int k = 0; k < 6; k++) tail[k] += e[i] > tt[k];
+        int b = (int)((1.0 - exp(-e[i])) * NB); /* CDF: equiprobable bins */
+        he[b < NB ? b : NB - 1]++;
+        double dev = fabs(c[i] * c[i] + s[i] * s[i] - 1.0);
+        if (dev > maxdev) maxdev = dev;
+        cm += c[i];
+        sm += s[i];
+        int a = (int)((atan2(s[i], c[i]) + M_PI) / (2.0 * M_PI) * NB);
+        ha[a < NB ? a : NB - 1]++;
+    }
+    double dn = (double)n;
+    /* moments: mean 1 (variance 1), E[X^2] = 2 (variance 20); 5 sigma */
+    assert_true(fabs(m1 / dn - 1.0) < 5.0 / sqrt(dn));
+    assert_true(fabs(m2 / dn - 2.0) < 5.0 * sqrt(20.0 / dn));
+    /* tails P(X > t) = exp(-t), including the ziggurat's base-strip tail r = 7.697 */
+    for (int k = 0; k < 6; k++) {
+        double p = exp(-tt[k]), sd = sqrt(p * (1 - p) / dn);
+        assert_true(fabs(tail[k] / dn - p) < 5.0 * sd + 1.0 / dn);
+    }
+    /* 64 equiprobable bins, chi-square with 63 degrees of freedom (sd 11.2) */
+    assert_true(chi2_of(he, NB, dn) < 63.0 + 6.0 * 11.2);
+    assert_true(chi2_of(ha, NB, dn) < 63.0 + 6.0 * 11.2);
+    /* unit vectors to rounding, centred (mean cos, sin: sd sqrt(0.5 / n)) */
+    assert_true(maxdev < 1e-14);
+    assert_true(fabs(cm / dn) < 5.0 * sqrt(0.5 / dn));
+    assert_true(fabs(sm / dn) < 5.0 * sqrt(0.5 / dn));
+    /* a pure function of the seed */
+    double e2[8], c2[8], s2[8];
+    ss_mc_test_samplers(12345, 8, e2, c2, s2);
+    for (int i = 0; i < 8; i++) {
+        assert_true(e2[i] == e[i]);
+        assert_true(c2[i] == c[i] && s2[i] == s[i]);
+    }
+    free(e);
+    free(c);
+    free(s);
+}
+
+/* Seed §4.7.1's subsurface distance D (radial_distance = SS_RADIAL_PATH): the
+ * horizontal path length summed over segments is at least the net distance of
+ * every packet, and the random streams do not change, so the same packets
+ * leave: the diffuse reflectance is identical and the cumulative Rd within
+ * every radius is never larger with D than with the net distance; an
+ * unknown mode is an input error. */
+static void test_radial_path_distance(void **state) {
+    (void)state;
+    ss_error err;
+    ss_optics_slab s = one_layer(1.4, 0.5, 100.0, 0.8, 0.2);
+    ss_mc_options o;
+    ss_mc_options_default(&o);
+    o.photons = nph(40000);
+    o.radial_bins = 40;
+    o.radial_max_cm = 2.0;
+    ss_mc_result net, path;
+    assert_int_equal(ss_mc_run(&s, &o, &net, &err), SS_OK);
+    o.radial_distance = SS_RADIAL_PATH;
+    assert_int_equal(ss_mc_run(&s, &o, &path, &err), SS_OK);
+    assert_true(net.diffuse == path.diffuse);
+    double cn = 0, cp = 0, mn = 0, mp = 0;
+    for (int k = 0; k < o.radial_bins; k++) {
+        double r0 = k * 0.05, r1 = r0 + 0.05, area = M_PI * (r1 * r1 - r0 * r0);
+        cn += net.radial[k] * area;
+        cp += path.radial[k] * area;
+        mn += net.radial[k] * area * 0.5 * (r0 + r1);
+        mp += path.radial[k] * area * 0.5 * (r0 + r1);
+        assert_true(cp <= cn * (1.0 + 1e-12));
+    }
+    assert_true(mp / cp > 1.2 * (mn / cn)); /* paths meander: D clearly exceeds r */
+    ss_mc_result_free(&net);
+    ss_mc_result_free(&path);
+    o.radial_distance = 7;
+    assert_int_equal(ss_mc_run(&s, &o, &net, &err), SS_ERR_INPUT);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_van_de_hulst),
@@ -424,6 +528,8 @@ int main(void) {
         cmocka_unit_test(test_determinism_threads),
         cmocka_unit_test(test_paths_vs_run),
         cmocka_unit_test(test_bad_parameters),
+        cmocka_unit_test(test_inner_loop_samplers),
+        cmocka_unit_test(test_radial_path_distance),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -145,6 +145,59 @@ static void test_fit_with_noise(void **state) {
     }
 }
 
+/* Albedo-constrained fit (SS_FIT_BASE_ALBEDO): on a synthetic GGX BRDF whose
+ * surface part (the lobe alone, base colour 0) is given separately and whose
+ * diffuse albedo at normal incidence is known, the lobe and the base colour
+ * come back; without the surface part the lobe is fitted to the whole BRDF
+ * and also comes back. A wrong albedo moves the base colour with it. */
+static void test_fit_albedo_mode(void **state) {
+    (void)state;
+    ss_error err;
+    ss_render_params truth = {{0.5, 0.28, 0.12}, 0.7, 0.8};
+    ss_render_params lobe = truth;
+    lobe.base_rgb[0] = lobe.base_rgb[1] = lobe.base_rgb[2] = 0.0;
+    ss_brdf_sampled s, surf;
+    assert_int_equal(ss_render_brdf_sample(SS_RENDER_GGX, &truth, 6, 8, 8, 3, &s, &err), SS_OK);
+    assert_int_equal(ss_render_brdf_sample(SS_RENDER_GGX, &lobe, 6, 8, 8, 3, &surf, &err), SS_OK);
+    double alb[3];
+    for (int c = 0; c < 3; c++)
+        alb[c] = ss_render_albedo(SS_RENDER_GGX, &truth, 0.0, c, 48) -
+                 ss_render_albedo(SS_RENDER_GGX, &lobe, 0.0, c, 48);
+    ss_fit_options o;
+    ss_fit_options_default(&o);
+    assert_int_equal(o.base_mode, SS_FIT_BASE_FREE);
+    o.base_mode = SS_FIT_BASE_ALBEDO;
+    memcpy(o.albedo_rgb, alb, sizeof alb);
+    for (int with_surface = 1; with_surface >= 0; with_surface--) {
+        o.surface = with_surface ? &surf : NULL;
+        ss_fit_result r;
+        assert_int_equal(ss_render_fit(SS_RENDER_GGX, &s, &o, &r, &err), SS_OK);
+        assert_true(fabs(r.params.specular - truth.specular) < 0.02);
+        assert_true(fabs(r.params.roughness - truth.roughness) < 0.02);
+        for (int c = 0; c < 3; c++)
+            assert_true(fabs(r.params.base_rgb[c] - truth.base_rgb[c]) < 0.02 * truth.base_rgb[c]);
+        assert_true(r.residual_rel < 0.02);
+    }
+    /* the base colour follows the albedo it is given */
+    o.surface = &surf;
+    for (int c = 0; c < 3; c++) o.albedo_rgb[c] = 0.5 * alb[c];
+    ss_fit_result r;
+    assert_int_equal(ss_render_fit(SS_RENDER_GGX, &s, &o, &r, &err), SS_OK);
+    for (int c = 0; c < 3; c++)
+        assert_true(fabs(r.params.base_rgb[c] - 0.5 * truth.base_rgb[c]) <
+                    0.02 * truth.base_rgb[c]);
+    assert_true(r.residual_rel > 0.05); /* the whole BRDF no longer fits */
+    /* bad input: albedo outside 0..1, surface bins that differ */
+    o.albedo_rgb[1] = 1.5;
+    assert_int_equal(ss_render_fit(SS_RENDER_GGX, &s, &o, &r, &err), SS_ERR_INPUT);
+    o.albedo_rgb[1] = 0.2;
+    surf.n_phi = 7;
+    assert_int_equal(ss_render_fit(SS_RENDER_GGX, &s, &o, &r, &err), SS_ERR_INPUT);
+    surf.n_phi = 8;
+    free(s.f_rgb);
+    free(surf.f_rgb);
+}
+
 /* Bins above max_theta_rad are left out: garbage in the grazing bins does
  * not disturb the fit once they are excluded, and does when they are not. */
 static void test_fit_max_theta(void **state) {
@@ -496,11 +549,28 @@ static void test_table_build(void **state) {
     assert_int_equal(ss_mm_sample_fast(&b, &o, &s, sss, alb, &err), SS_OK);
     ss_mm_entry e;
     ss_mm_entry_unpack(t1->entries + ss_mm_table_index(t1, idx) * SS_MM_NFIELDS, &e);
+    /* the builder's default fit: base colour from the albedo, GGX lobe on the
+     * surface-reflected part (the same for every entry) */
+    assert_int_equal(o.fit.base_mode, SS_FIT_BASE_ALBEDO);
+    ss_brdf_sampled surf;
+    assert_int_equal(
+        ss_optics_surface_brdf_sample(&o.spectrum, o.n_theta_i, o.n_theta_r, o.n_phi, &surf, &err),
+        SS_OK);
     for (int m = 0; m < SS_RENDER_NMODELS; m++) {
         ss_fit_result r;
-        assert_int_equal(ss_render_fit((ss_render_model)m, &s, &o.fit, &r, &err), SS_OK);
+        ss_fit_options fo = o.fit;
+        for (int c = 0; c < 3; c++) fo.albedo_rgb[c] = alb[c];
+        fo.surface = m == SS_RENDER_GGX ? &surf : NULL;
+        assert_int_equal(ss_render_fit((ss_render_model)m, &s, &fo, &r, &err), SS_OK);
         assert_memory_equal(&r.params, &e.fit[m], sizeof r.params);
     }
+    /* a usable GGX fit: base colour within 10 % of the albedo per channel,
+     * specular and roughness inside their bounds */
+    for (int c = 0; c < 3; c++)
+        assert_true(fabs(e.fit[SS_RENDER_GGX].base_rgb[c] - alb[c]) <= 0.1 * alb[c]);
+    assert_true(e.fit[SS_RENDER_GGX].specular > 0.05 && e.fit[SS_RENDER_GGX].specular < 0.99);
+    assert_true(e.fit[SS_RENDER_GGX].roughness > 0.1 && e.fit[SS_RENDER_GGX].roughness < 0.99);
+    ss_brdf_sampled_free(&surf);
     for (int c = 0; c < 3; c++) {
         assert_true(sss[c] == e.sss_radius_cm[c]);
         assert_true(alb[c] == e.albedo_rgb[c]);
@@ -576,6 +646,7 @@ int main(void) {
         cmocka_unit_test(test_fit_recovers_parameters),
         cmocka_unit_test(test_fit_with_noise),
         cmocka_unit_test(test_fit_max_theta),
+        cmocka_unit_test(test_fit_albedo_mode),
         cmocka_unit_test(test_fit_bad_input),
         cmocka_unit_test(test_table_lookup),
         cmocka_unit_test(test_table_file),

@@ -204,6 +204,13 @@ typedef struct ss_heal_solver ss_heal_solver;
 #define SS_HEAL_SPLIT_DEFAULT_DT_DAYS 0.05
 ss_heal_solver *ss_heal_solver_create(const ss_heal_grid *g, const ss_heal_params *p,
                                       ss_heal_scheme s, double dt_days, ss_error *err);
+/* The same on a sub-box of a larger grid (src/dist): g holds the box and a
+ * one-cell halo around it, goff is the whole-grid index of g's cell (0,0,0),
+ * gdim the whole grid's dimensions (see ss_heal_rd_system.goff). The box must
+ * span the whole grid in z (each column's epithelium reads its whole depth). */
+ss_heal_solver *ss_heal_solver_create_sub(const ss_heal_grid *g, const int goff[3],
+                                          const int gdim[3], const ss_heal_params *p,
+                                          ss_heal_scheme s, double dt_days, ss_error *err);
 double ss_heal_solver_dt(const ss_heal_solver *s);
 /* Changes the step (adaptive stepping). EXPLICIT: up to the stability limit;
  * SPLIT: up to SS_HEAL_SPLIT_LATE_MAX_DT_DAYS, for the slow phases once the
@@ -214,6 +221,17 @@ ss_status ss_heal_solver_set_dt(ss_heal_solver *s, double dt_days, ss_error *err
  * t_days, step); the solver holds only params, dt and scratch memory. */
 ss_status ss_heal_step(ss_heal_solver *s, ss_heal_grid *g, ss_error *err);
 void ss_heal_solver_free(ss_heal_solver *s);
+/* The split step in three phases (the MPI driver, src/dist, runs the y sweep
+ * on another decomposition): 0 = first reaction half and the x sweep, 1 = the
+ * y sweep, 2 = the z sweep and the second reaction half, then t_days += dt and
+ * step++. Phases 0, 1, 2 in turn are ss_heal_step exactly. SS_ERR_INPUT for
+ * the explicit scheme or a velocity field. */
+ss_status ss_heal_step_phase(ss_heal_solver *s, ss_heal_grid *g, int phase, ss_error *err);
+/* The split scheme's frozen diffusion multipliers of slot k (one float per
+ * cell of the solver's grid; set by phase 0, read by phases 1 and 2); NULL
+ * for the explicit scheme or a slot out of range. */
+float *ss_heal_solver_multipliers(ss_heal_solver *s, int slot);
+int ss_heal_solver_nslots(const ss_heal_solver *s);
 
 /* ---- diagnostics ---------------------------------------------------------------- */
 
@@ -231,6 +249,27 @@ typedef struct ss_heal_stats {
 /* Epithelium level below which the surface counts as open: 0.5. */
 double ss_heal_open_threshold(void);
 void ss_heal_stats_compute(const ss_heal_grid *g, ss_heal_stats *st);
+/* The same in parts (the MPI driver's reductions): sums of float values are
+ * kept exactly (fixed-point limbs), so the result does not depend on how the
+ * columns are split or in which order the parts are merged. */
+#define SS_HEAL_ACC_LIMBS 12
+typedef struct ss_heal_stats_acc {
+    int64_t n_initial, n_region, n_open, n_wcol, n_tissue, n_nonfinite;
+    int64_t sum[SS_HEAL_NFIELDS + 1][SS_HEAL_ACC_LIMBS]; /* fields, then the eschar
+                                                            column maxima */
+    int64_t adds;    /* additions since the limbs were last normalised */
+    double scar_max; /* largest rho */
+} ss_heal_stats_acc;
+void ss_heal_stats_acc_init(ss_heal_stats_acc *a);
+/* Adds the columns x0 <= x < x1, y0 <= y < y1 of g (grid indices, all z). */
+void ss_heal_stats_acc_add(ss_heal_stats_acc *a, const ss_heal_grid *g, int x0, int x1, int y0,
+                           int y1);
+/* a += b (limb by limb; both normalised after). */
+void ss_heal_stats_acc_merge(ss_heal_stats_acc *a, const ss_heal_stats_acc *b);
+/* Brings every limb into [0, 2^32) (the top one keeps the sign): done by add
+ * and merge; integer sums of normalised parts stay exact. */
+void ss_heal_stats_acc_normalise(ss_heal_stats_acc *a);
+void ss_heal_stats_acc_finish(const ss_heal_stats_acc *a, double dx_mm, ss_heal_stats *st);
 /* omega for one cell (1 = wound region) under params p. */
 int ss_heal_in_region(const ss_heal_grid *g, const ss_heal_params *p, size_t idx);
 
@@ -330,6 +369,12 @@ typedef struct ss_heal_rd_system {
     uint8_t lateral[SS_HEAL_RD_MAXF]; /* 1 = field diffuses along x and y only */
     double mmax;                      /* bound on every multiplier m (for the stability limit) */
     double rate_max;                  /* bound on every loss_f (1/day), explicit positivity limit */
+    /* A sub-box of a larger grid (the MPI driver, src/dist): gdim are the whole
+     * grid's dimensions and goff the whole-grid index of this grid's cell
+     * (0,0,0); all 0 = this grid is the whole problem. The outermost shell of
+     * the whole grid is the wall shell; this grid's own outermost shell is a
+     * halo (read as neighbours, never updated). */
+    int goff[3], gdim[3];
 } ss_heal_rd_system;
 
 typedef struct ss_heal_rd_work ss_heal_rd_work;

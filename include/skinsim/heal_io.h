@@ -74,6 +74,16 @@ ss_status ss_heal_vti_write_vectors(const char *path, const ss_heal_grid *g, int
                                     const char *const *names, float *const (*vecs)[3],
                                     ss_error *err);
 
+/* A piece of a parallel image (the MPI driver's per-rank pieces): piece is
+ * the box, its cell (0,0,0) at whole-grid index off; Extent off..off+size,
+ * WholeExtent 0..whole. Cells and fields only. */
+ss_status ss_heal_vti_write_piece(const char *path, const ss_heal_grid *piece, const int off[3],
+                                  const int whole[3], ss_error *err);
+/* The .pvti that joins npieces such pieces: ext[i] = x0 x1 y0 y1 z0 z1 (point
+ * extents), files[i] relative to the .pvti. ParaView opens it as one image. */
+ss_status ss_heal_pvti_write(const char *path, const int whole[3], double dx_mm, double t_days,
+                             int npieces, const int (*ext)[6], const char *const *files,
+                             ss_error *err);
 /* Reads a snapshot written by ss_heal_vti_write(_vectors) back into a new grid
  * (cell states, every field, t_days; skin_top_mm and step are left 0: the
  * file does not hold them). displacement: if not NULL, receives a malloc'd

@@ -154,6 +154,35 @@ ss_status ss_heal_run_write_snapshot(ss_heal_run *r, ss_error *err);
  * newest two kept) from which ss_heal_run_create resumes; needs out_dir. */
 ss_status ss_heal_run_write_checkpoint(ss_heal_run *r, ss_error *err);
 
+/* ---- an external solver (the MPI driver, src/dist) ---- */
+/* With hooks set, the run calls step instead of ss_heal_step (g's fields may
+ * then be stale; an adaptive run's rejected step is taken back with undo), stats instead of
+ * ss_heal_stats_compute for every area row, sync before anything reads g's
+ * fields (snapshots, checkpoints) so it can bring them up to date, and
+ * snapshot after each snapshot's .vti. NULL
+ * members keep the run's own behaviour. Not with the contraction mechanics. */
+typedef struct ss_heal_run_hooks {
+    void *ctx;
+    /* one step of dt_days (the run's step or, adaptive, a multiple of it):
+     * advances g->t_days by dt_days and g->step by one; with max_change not
+     * NULL keeps a copy of the fields first and returns the largest change of
+     * any species in any cell (the adaptive control) */
+    ss_status (*step)(void *ctx, ss_heal_grid *g, double dt_days, double *max_change,
+                      ss_error *err);
+    /* puts the fields back as they were before the last step (t_days and
+     * step are the run's to restore) */
+    void (*undo)(void *ctx, ss_heal_grid *g);
+    void (*stats)(void *ctx, const ss_heal_grid *g, ss_heal_stats *st);
+    ss_status (*sync)(void *ctx, ss_heal_grid *g, ss_error *err);
+    /* after snapshot `index` was written into the folder fields_dir (more
+     * files for it, e.g. per-rank pieces) */
+    ss_status (*snapshot)(void *ctx, const ss_heal_grid *g, const char *fields_dir, int index,
+                          ss_error *err);
+} ss_heal_run_hooks;
+/* Sets (h) or clears (NULL) the hooks; SS_ERR_INPUT when the run has the
+ * contraction mechanics (naming --mechanics). */
+ss_status ss_heal_run_set_hooks(ss_heal_run *r, const ss_heal_run_hooks *h, ss_error *err);
+
 /* ---- state ---- */
 /* The grid holds all the state (fields, cells, t_days, step). A caller may
  * change fields or velocities between steps (the mechanics does). */

@@ -60,12 +60,13 @@ void ss_tetmesh_free(ss_tetmesh *m);
 
 typedef struct ss_mech_params {
     /* myofibroblast stress sigma_cell = p_cell(theta) n K_m (§4.2) */
-    double K_pas;  /* kPa, passive volumetric stiffness of the contractile element */
-    double K_act;  /* kPa, active volumetric stiffness */
-    double p_max;  /* kPa, maximal active pressure */
-    double theta1; /* 1, shortening strain limit (< 0) */
-    double theta2; /* 1, lengthening strain limit (> p_max / K_act) */
-    double K_m;    /* 1, enhancement factor */
+    double K_pas;   /* kPa, passive volumetric stiffness of the contractile element */
+    double K_act;   /* kPa, active volumetric stiffness */
+    double p_max;   /* kPa, maximal active pressure */
+    double theta1;  /* 1, shortening strain limit (< 0) */
+    double theta2;  /* 1, lengthening strain limit (> p_max / K_act) */
+    double K_m;     /* 1, enhancement factor */
+    double tau_myo; /* days, differentiation lag of the myofibroblasts (0 = none) */
     /* GOH skin (§4.3): Psi = mu/2 (I1bar - 3) + K/2 (J - 1)^2 + sum_i Psi_fi */
     double mu;          /* kPa, ground matrix shear modulus */
     double K_bulk;      /* kPa, ground matrix bulk modulus */

@@ -87,7 +87,14 @@ typedef struct ss_mc_options {
     int brdf_n_theta, brdf_n_phi; /* if > 0, fill result.brdf_exit (theta_r x dphi bins) */
     int radial_bins;
     double radial_max_cm; /* if > 0, fill result.radial (Rd(r)) */
+    int radial_distance;  /* SS_RADIAL_NET (default) or SS_RADIAL_PATH */
 } ss_mc_options;
+/* The distance Rd(r) is binned by: NET, the distance from the entry point to
+ * the exit point (the diffusion profile renderers use); PATH, seed 003
+ * §4.7.1's D, the length of the path's horizontal projection summed over
+ * every segment (D >= net distance for every packet). MCML runs use NET. */
+#define SS_RADIAL_NET 0
+#define SS_RADIAL_PATH 1
 void ss_mc_options_default(ss_mc_options *o);
 typedef struct ss_mc_result {
     double specular, diffuse, transmit, absorbed; /* fractions of incident */
@@ -182,6 +189,12 @@ ss_status ss_optics_brdf_sample(const ss_bio_params *bio, const ss_spectrum_opti
                                 int n_theta_i, int n_theta_r, int n_phi, ss_brdf_sampled *out,
                                 ss_error *err);
 void ss_brdf_sampled_free(ss_brdf_sampled *b);
+/* The surface-reflected part of the skin BRDF alone (air over the stratum
+ * corneum's index, rough as o->mc.roughness_sigma; nothing returns from
+ * below), the same bins as ss_optics_brdf_sample; grey (equal channels: the
+ * indices do not depend on wavelength). o->mc.photons per incidence bin. */
+ss_status ss_optics_surface_brdf_sample(const ss_spectrum_options *o, int n_theta_i, int n_theta_r,
+                                        int n_phi, ss_brdf_sampled *out, ss_error *err);
 /* Radial diffuse reflectance profile Rd(r) per linear-sRGB channel (seed
  * §4.7.1): the spectral Rd(r, lambda) of each radial bin is converted with the
  * CIE observer and D65 like an albedo. Bins of width max_cm/bins from r = 0;

@@ -113,7 +113,18 @@ typedef struct ss_fit_options {
     int weighting;        /* an ss_fit_weighting (default SS_FIT_SOLID_ANGLE) */
     double max_theta_rad; /* bins whose theta_i or theta_r centre lies above this get
                              weight 0 (default pi/2: all bins) */
+    int base_mode;        /* an ss_fit_base_mode (default SS_FIT_BASE_FREE) */
+    double albedo_rgb[3]; /* SS_FIT_BASE_ALBEDO: the skin's diffuse albedo at normal incidence */
+    const struct ss_brdf_sampled *surface; /* SS_FIT_BASE_ALBEDO, optional: the surface-reflected
+                                              part of the BRDF alone (same bins); the lobe is
+                                              fitted to it */
 } ss_fit_options;
+/* How the base colour is found. FREE: in closed form with the lobe, minimising
+ * the seed's distance over the whole BRDF. ALBEDO: the base colour whose
+ * diffuse term reflects albedo_rgb at normal incidence (the render model then
+ * has the skin's albedo), and only the lobe (specular, roughness) is fitted:
+ * to `surface` when given, else to the whole BRDF. */
+enum { SS_FIT_BASE_FREE = 0, SS_FIT_BASE_ALBEDO = 1 };
 void ss_fit_options_default(ss_fit_options *o);
 
 typedef struct ss_fit_result {
@@ -226,6 +237,19 @@ void ss_mm_radial_albedo(const double *radial_rgb, int bins, double max_cm, doub
 
 /* Fills every entry of t (axes set by ss_mm_table_create). */
 ss_status ss_mm_table_build(ss_mm_table *t, const ss_mm_build_options *o, ss_error *err);
+/* The same in parts (the MPI driver shares them out, src/dist): a geometry is
+ * one pair of layer thicknesses (axes 4 and 5, gi = isc * nsamples[5] + iep),
+ * whose photon paths are traced once for all its absorption sets (axes 0-3,
+ * entry a of the geometry at axis indices a = ((i0 n1 + i1) n2 + i2) n3 + i3).
+ * Building every geometry, in any order or process, gives the bytes of
+ * ss_mm_table_build. build_check validates the options and axes only. */
+int ss_mm_table_ngeometries(const ss_mm_table *t);
+/* Records how the table is made (photons, seed, angles, wavelengths) in t. */
+void ss_mm_table_record_options(ss_mm_table *t, const ss_mm_build_options *o);
+ss_status ss_mm_table_build_geometry(ss_mm_table *t, const ss_mm_build_options *o, int gi,
+                                     ss_error *err);
+ss_status ss_mm_table_build_check(const ss_mm_table *t, const ss_mm_build_options *o,
+                                  ss_error *err);
 
 /* ---- colour -> biology (src/optics/match.c, `skinsim optics match`) ---------- */
 typedef struct ss_mm_match_options {
@@ -236,7 +260,15 @@ typedef struct ss_mm_match_options {
                                      thicknesses (0.02) */
     int base_set;                 /* 1: take the non-axis parameters from base */
     ss_bio_params base;
+    int geometry; /* colour compared with the target: SS_MM_GEOMETRY_SCI (default) or _SCE */
 } ss_mm_match_options;
+/* Measurement geometry of the target colour. SCI (CIE d:8, specular component
+ * included - skin colorimeters and spectrophotometers, a photo under diffuse
+ * light): the albedo plus the rough surface's reflectance at normal incidence
+ * (by reciprocity the light a diffusely lit surface reflects towards the
+ * viewer). SCE: the albedo alone (surface reflection excluded entirely). */
+#define SS_MM_GEOMETRY_SCI 0
+#define SS_MM_GEOMETRY_SCE 1
 void ss_mm_match_options_default(ss_mm_match_options *o);
 typedef struct ss_mm_match_result {
     ss_bio_params bio;       /* the answer (transport-refined if refined) */
@@ -246,9 +278,12 @@ typedef struct ss_mm_match_result {
     int refined;             /* 1 if the transport stage ran */
     ss_bio_params table_bio; /* the table stage's answer, its interpolated albedo, Lab, dE00 */
     double table_albedo_rgb[3], table_lab[3], table_delta_e00;
+    double surface; /* surface reflectance added to the albedo before comparing (SCI; 0 for SCE);
+                       lab and table_lab are of albedo + surface */
 } ss_mm_match_result;
-/* The biological parameters (within the table's axis ranges) whose albedo is
- * closest in CIEDE2000 to target_lab (D65 CIELAB): table search, then
+/* The biological parameters (within the table's axis ranges) whose colour
+ * (albedo, plus the surface reflectance for SCI) is closest in CIEDE2000 to
+ * target_lab (D65 CIELAB): table search, then
  * transport refinement (design in match.c). Deterministic. */
 ss_status ss_mm_match(const ss_mm_table *t, const double target_lab[3],
                       const ss_mm_match_options *o, ss_mm_match_result *out, ss_error *err);

@@ -28,23 +28,29 @@ void ss_heal_rd__build_masks(const ss_heal_rd_system *sys, ss_heal_rd_work *w) {
     const int nx = sys->nx, ny = sys->ny, nz = sys->nz;
     const size_t sy = (size_t)nx, sz = (size_t)nx * (size_t)ny;
     const int par = (size_t)nx * (size_t)ny * (size_t)nz >= RD_PAR_MIN_CELLS;
+    /* a sub-box (src/dist): walls and neighbour bits by whole-grid index */
+    const int ox = sys->goff[0], oy = sys->goff[1], oz = sys->goff[2];
+    const int gx = sys->gdim[0] ? sys->gdim[0] : nx, gy = sys->gdim[1] ? sys->gdim[1] : ny;
+    const int gz = sys->gdim[2] ? sys->gdim[2] : nz;
 #pragma omp parallel for schedule(static) if (par)
     for (int z = 0; z < nz; z++) {
         for (int y = 0; y < ny; y++) {
             for (int x = 0; x < nx; x++) {
                 size_t c = (size_t)z * sz + (size_t)y * sy + (size_t)x;
                 uint8_t k = cls_of(sys, c) & (SS_HEAL_RD_MAXCLASS - 1);
+                const int X = x + ox, Y = y + oy, Z = z + oz;
                 int wall = sys->wall[k] || x == 0 || y == 0 || z == 0 || x == nx - 1 ||
-                           y == ny - 1 || z == nz - 1;
+                           y == ny - 1 || z == nz - 1 || X <= 0 || Y <= 0 || Z <= 0 ||
+                           X >= gx - 1 || Y >= gy - 1 || Z >= gz - 1;
                 uint8_t b = 0;
                 if (!wall) {
 #define NBW(off) (sys->wall[cls_of(sys, (off)) & (SS_HEAL_RD_MAXCLASS - 1)])
-                    if (x > 1 && !NBW(c - 1)) b |= NB_XM;
-                    if (x < nx - 2 && !NBW(c + 1)) b |= NB_XP;
-                    if (y > 1 && !NBW(c - sy)) b |= NB_YM;
-                    if (y < ny - 2 && !NBW(c + sy)) b |= NB_YP;
-                    if (z > 1 && !NBW(c - sz)) b |= NB_ZM;
-                    if (z < nz - 2 && !NBW(c + sz)) b |= NB_ZP;
+                    if (X > 1 && !NBW(c - 1)) b |= NB_XM;
+                    if (X < gx - 2 && !NBW(c + 1)) b |= NB_XP;
+                    if (Y > 1 && !NBW(c - sy)) b |= NB_YM;
+                    if (Y < gy - 2 && !NBW(c + sy)) b |= NB_YP;
+                    if (Z > 1 && !NBW(c - sz)) b |= NB_ZM;
+                    if (Z < gz - 2 && !NBW(c + sz)) b |= NB_ZP;
 #undef NBW
                 }
                 w->nb[c] = b;

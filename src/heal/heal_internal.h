@@ -37,6 +37,11 @@ void ss_heal_rd__build_masks(const ss_heal_rd_system *sys, ss_heal_rd_work *w);
 void ss_heal_rd__convect(const ss_heal_rd_system *sys, const ss_heal_rd_work *w, int f,
                          const float *src, float *dst, double dt);
 
+/* Split step in phases (split.c): 0 = first reaction half, convection, x
+ * sweep; 1 = y sweep; 2 = z sweep, second reaction half. */
+void ss_heal_rd__step_split_phase(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt, int nsub,
+                                  int phase);
+
 /* clamp without the libm call fminf/fmaxf need without -ffast-math */
 static inline float clampf(float v, float lo, float hi) {
     v = v > lo ? v : lo;

@@ -383,8 +383,30 @@ double ss_heal_stable_dt(const ss_heal_grid *g, const ss_heal_params *p, ss_heal
     return ss_heal_rd_explicit_dt(&sys);
 }
 
+static ss_heal_solver *solver_create(const ss_heal_grid *g, const int *goff, const int *gdim,
+                                     const ss_heal_params *p, ss_heal_scheme scheme, double dt,
+                                     ss_error *err);
+
 ss_heal_solver *ss_heal_solver_create(const ss_heal_grid *g, const ss_heal_params *p,
                                       ss_heal_scheme scheme, double dt, ss_error *err) {
+    return solver_create(g, NULL, NULL, p, scheme, dt, err);
+}
+
+ss_heal_solver *ss_heal_solver_create_sub(const ss_heal_grid *g, const int goff[3],
+                                          const int gdim[3], const ss_heal_params *p,
+                                          ss_heal_scheme scheme, double dt, ss_error *err) {
+    if (!g || !goff || !gdim || goff[2] != 0 || gdim[2] != g->nz || gdim[0] < g->nx - 2 ||
+        gdim[1] < g->ny - 2) {
+        ss_error_set(err, SS_ERR_INPUT,
+                     "heal solver: a sub-box must span the whole grid in z and lie inside it");
+        return NULL;
+    }
+    return solver_create(g, goff, gdim, p, scheme, dt, err);
+}
+
+static ss_heal_solver *solver_create(const ss_heal_grid *g, const int *goff, const int *gdim,
+                                     const ss_heal_params *p, ss_heal_scheme scheme, double dt,
+                                     ss_error *err) {
     if (!g || !p) {
         ss_error_set(err, SS_ERR_INPUT, "heal solver: no grid or parameters");
         return NULL;
@@ -442,6 +464,10 @@ ss_heal_solver *ss_heal_solver_create(const ss_heal_grid *g, const ss_heal_param
     }
     find_surface(&s->ctx);
     sys_init(&s->sys, &s->ctx, g, &s->p);
+    for (int d = 0; goff && d < 3; d++) {
+        s->sys.goff[d] = goff[d];
+        s->sys.gdim[d] = gdim[d];
+    }
     double r = s->sys.rate_max;
     /* reaction substeps of at most 0.1 / rate_max (both halves together) */
     s->nsub = (int)ceil(dt * r / 0.1);
@@ -483,6 +509,32 @@ void ss_heal_solver_free(ss_heal_solver *s) {
     free(s->ctx.zt_max);
     free(s);
 }
+
+ss_status ss_heal_step_phase(ss_heal_solver *s, ss_heal_grid *g, int phase, ss_error *err) {
+    if (!s || !g || s->scheme != SS_HEAL_SPLIT || phase < 0 || phase > 2 || g->velocity[0] ||
+        g->velocity[1] || g->velocity[2])
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "heal step phase: the split scheme without velocity, phase 0..2");
+    if (g->nx != s->nx || g->ny != s->ny || g->nz != s->nz)
+        return ss_error_set(err, SS_ERR_INPUT, "heal step phase: grid does not match the solver");
+    s->ctx.cell = g->cell;
+    s->sys.cls = g->cell;
+    if (s->ctx.ztop_of != g->cell) find_surface(&s->ctx);
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++) s->sys.u[f] = g->field[f];
+    ss_heal_rd__step_split_phase(&s->sys, s->w, s->dt, s->nsub, phase);
+    if (phase == 2) {
+        g->t_days += s->dt;
+        g->step++;
+    }
+    return SS_OK;
+}
+
+float *ss_heal_solver_multipliers(ss_heal_solver *s, int slot) {
+    if (!s || !s->w || !s->w->have_mslot || slot < 0 || slot >= s->sys.nslots) return NULL;
+    return s->w->mslot[slot];
+}
+
+int ss_heal_solver_nslots(const ss_heal_solver *s) { return s ? s->sys.nslots : 0; }
 
 ss_status ss_heal_step(ss_heal_solver *s, ss_heal_grid *g, ss_error *err) {
     if (!s || !g) return ss_error_set(err, SS_ERR_INPUT, "heal step: no solver or grid");

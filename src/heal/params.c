@@ -46,9 +46,15 @@ static const pdef PDEFS[] = {
     {"u3_eq", OFF(u3_eq), "1", "normalisation: healthy capillary density = 1", 1.0, 1.0, 1.0},
     {"Dn", OFF(Dn), "mm^2/day", DIM ": fibroblast random motility ~0.01-0.1 mm^2/day", 0.05, 0.05,
      0.05},
-    {"rn", OFF(rn), "1/day", DIM ": fibroblast doubling ~1 day when oxygenated", 0.8, 0.8, 0.8},
+    {"rn", OFF(rn), "1/day",
+     DIM ": fibroblast doubling ~1 day when oxygenated; Jin et al. 2011 (BMC Syst Biol 5:60, "
+         "Table 4) use a fibroblast growth rate of 0.924/day",
+     0.8, 0.8, 0.8},
     {"K", OFF(K), "1", "normalisation: fibroblast capacity = 1", 1.0, 1.0, 1.0},
-    {"lamnn", OFF(lamnn), "1/day", DIM ": fibroblast lifetime ~1 week", 0.15, 0.15, 0.15},
+    {"lamnn", OFF(lamnn), "1/day",
+     DIM ": fibroblast lifetime ~1 week; Jin et al. 2011 (BMC Syst Biol 5:60, Table 4) use a "
+         "fibroblast apoptosis rate of 0.12/day",
+     0.15, 0.15, 0.15},
     {"Ds", OFF(Ds), "mm^2/day",
      CAL ": the eschar stays a surface crust (penetrates ~0.3 mm in 2 weeks) instead of diffusing "
          "into the healthy dermis",

@@ -60,7 +60,10 @@ ss_status ss_heal_run__add_row(ss_heal_run *r, ss_error *err) {
     }
     ss_heal_area_row *row = &r->rows[r->nrows++];
     row->t_days = r->g->t_days;
-    ss_heal_stats_compute(r->g, &row->st);
+    if (r->hooks.stats)
+        r->hooks.stats(r->hooks.ctx, r->g, &row->st);
+    else
+        ss_heal_stats_compute(r->g, &row->st);
     return ss_heal_run__mech_row(r, err);
 }
 
@@ -161,6 +164,7 @@ ss_status ss_heal_run_write_checkpoint(ss_heal_run *r, ss_error *err) {
     if (!r->out_dir) return ss_error_set(err, SS_ERR_INPUT, "heal run: no output directory");
     ss_status st0 = start_output(r, err);
     if (st0) return st0;
+    if ((st0 = ss_heal_run__sync(r, err))) return st0;
     char *aux = ss_heal_run__aux_json(r, r->wall_prev + ss_now() - r->t0);
     if (!aux) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     ss_status st = ss_heal_checkpoint_save(r->out_dir, r->g, r->scenario, r->params_json,
@@ -251,25 +255,35 @@ static double max_change(float *const *a, float *const *b, size_t n) {
 static ss_status solver_step(ss_heal_run *r, long long limit, ss_error *err) {
     ss_heal_grid *g = r->g;
     const size_t n = (size_t)g->nx * (size_t)g->ny * (size_t)g->nz;
-    if (r->adapt_tol > 0 && !r->backup[0])
+    const int ext = r->hooks.step != NULL; /* an external solver keeps its own copy */
+    if (r->adapt_tol > 0 && !r->backup[0] && !ext)
         for (int f = 0; f < SS_HEAL_NFIELDS; f++)
             if (!(r->backup[f] = malloc(n * sizeof(float))))
                 return ss_error_set(err, SS_ERR_NOMEM, "out of memory (adaptive step copy)");
-    if (!(r->adapt_tol > 0)) return ss_heal_step(r->s, g, err);
+    if (!(r->adapt_tol > 0))
+        return ext ? r->hooks.step(r->hooks.ctx, g, r->dt, NULL, err) : ss_heal_step(r->s, g, err);
     for (;;) {
         const long long k = (long long)g->step;
         const long long m = min_ll(r->mult, landing(r, k, limit));
         const double t = g->t_days;
         const uint64_t step = g->step;
         ss_status st = SS_OK;
-        if (ss_heal_solver_dt(r->s) != (double)m * r->dt)
-            st = ss_heal_solver_set_dt(r->s, (double)m * r->dt, err);
-        if (st) return st;
-        fields_copy(r->backup, g->field, n);
-        if ((st = ss_heal_step(r->s, g, err))) return st;
-        const double d = max_change(g->field, r->backup, n);
+        double d = 0.0;
+        if (ext) {
+            if ((st = r->hooks.step(r->hooks.ctx, g, (double)m * r->dt, &d, err))) return st;
+        } else {
+            if (ss_heal_solver_dt(r->s) != (double)m * r->dt)
+                st = ss_heal_solver_set_dt(r->s, (double)m * r->dt, err);
+            if (st) return st;
+            fields_copy(r->backup, g->field, n);
+            if ((st = ss_heal_step(r->s, g, err))) return st;
+            d = max_change(g->field, r->backup, n);
+        }
         if (m > 1 && d > r->adapt_tol) { /* undo, retry shorter */
-            fields_copy(g->field, r->backup, n);
+            if (ext)
+                r->hooks.undo(r->hooks.ctx, g);
+            else
+                fields_copy(g->field, r->backup, n);
             g->t_days = t;
             g->step = step;
             r->mult = m / 2 > 1 ? m / 2 : 1;
@@ -341,6 +355,24 @@ ss_status ss_heal_run_finish(ss_heal_run *r, char **summary_json, ss_error *err)
     }
     cJSON_Delete(summary);
     return st;
+}
+
+ss_status ss_heal_run_set_hooks(ss_heal_run *r, const ss_heal_run_hooks *h, ss_error *err) {
+    if (h && h->step && !h->undo)
+        return ss_error_set(err, SS_ERR_INPUT, "heal run: an external step needs an undo hook");
+    if (h && r->mech)
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "--mechanics: the contraction mechanics needs the whole grid in one "
+                            "process; it cannot run with an external (distributed) solver");
+    if (h)
+        r->hooks = *h;
+    else
+        memset(&r->hooks, 0, sizeof r->hooks);
+    return SS_OK;
+}
+
+ss_status ss_heal_run__sync(ss_heal_run *r, ss_error *err) {
+    return r->hooks.sync ? r->hooks.sync(r->hooks.ctx, r->g, err) : SS_OK;
 }
 
 /* ---- accessors ------------------------------------------------------------------ */

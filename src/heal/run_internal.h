@@ -60,7 +60,10 @@ struct ss_heal_run {
     int shell_concave;
     float *vfields;         /* per skin vertex, SS_SHELL_VERTEX_STRIDE floats */
     cJSON *shell_aux;       /* the checkpoint's "shell" object while resuming */
+    ss_heal_run_hooks hooks; /* an external solver (src/dist); members NULL = none */
 };
+/* Brings r->g's fields up to date when an external solver steps it. */
+ss_status ss_heal_run__sync(ss_heal_run *r, ss_error *err);
 
 /* run.c */
 ss_status ss_heal_run__add_row(ss_heal_run *r, ss_error *err);

@@ -455,6 +455,8 @@ static ss_status write_surface_maps(ss_heal_run *r, int idx, ss_error *err) {
 
 ss_status ss_heal_run__snapshot(ss_heal_run *r, ss_error *err) {
     if (!r->out_dir) return ss_error_set(err, SS_ERR_INPUT, "heal run: no output directory");
+    ss_status st0 = ss_heal_run__sync(r, err);
+    if (st0) return st0;
     char rel[64], path[4400];
     int idx = r->nsnap;
     /* a resumed run may redo snapshots the killed run wrote after its checkpoint */
@@ -472,6 +474,10 @@ ss_status ss_heal_run__snapshot(ss_heal_run *r, ss_error *err) {
     }
     if (!st) st = ss_heal_run__mech_snapshot(r, idx, err);
     if (!st) st = ss_heal_run__shell_snapshot(r, idx, err);
+    if (!st && r->hooks.snapshot) { /* e.g. the MPI driver's per-rank pieces */
+        snprintf(path, sizeof path, "%s/fields", r->out_dir);
+        st = r->hooks.snapshot(r->hooks.ctx, r->g, path, idx, err);
+    }
     if (!st) st = ss_heal_run__add_snap(r, r->g->t_days, rel, err);
     if (st) return st;
     snprintf(path, sizeof path, "%s/fields/fields.pvd", r->out_dir);

@@ -499,29 +499,33 @@ ss_shell_patch *ss_shell_patch_from_mesh(const ss_mesh *skin, const char *skin_n
         hi[d] = wound->bbox_max[d] * units + o->voxel_mm;
         c[d] = 0.5 * (lo[d] + hi[d]);
     }
-    /* the skin facing the wound: area-weighted normals of the skin triangles
-     * whose centroid lies in the wound's bounding box */
-    int hit = 0;
-    for (int t = 0; t < skin->ntriangles; t++) {
-        double g[3] = {0, 0, 0};
-        for (int k = 0; k < 3; k++)
-            for (int d = 0; d < 3; d++)
-                g[d] += skin->positions[3 * skin->indices[3 * t + k] + d] * units / 3;
-        if (g[0] < lo[0] || g[1] < lo[1] || g[2] < lo[2] || g[0] > hi[0] || g[1] > hi[1] ||
-            g[2] > hi[2])
-            continue;
-        double tn[3];
-        tri_normal(skin, t, tn);
-        for (int d = 0; d < 3; d++) n[d] += tn[d];
-        hit++;
-    }
-    if (!hit || !(n[0] * n[0] + n[1] * n[1] + n[2] * n[2] > 0)) {
+    /* the skin facing the wound: the nearest surface hit of 26 rays from the
+     * wound's centre (axes, face and space diagonals), its triangle's normal */
+    double rw = 0;
+    for (int d = 0; d < 3; d++) rw = fmax(rw, 0.5 * (hi[d] - lo[d]));
+    ss_bvh *sb = ss_bvh_build(skin, err);
+    if (!sb) return NULL;
+    double best = INFINITY;
+    for (int a = -1; a <= 1; a++)
+        for (int b = -1; b <= 1; b++)
+            for (int e = -1; e <= 1; e++) {
+                if (!a && !b && !e) continue;
+                double l = sqrt((double)(a * a + b * b + e * e));
+                float org[3], dir[3] = {(float)(a / l), (float)(b / l), (float)(e / l)};
+                for (int d = 0; d < 3; d++) org[d] = (float)(c[d] / units);
+                ss_ray_hit h;
+                if (ss_bvh_raycast(sb, org, dir, 0.0f, 1e30f, &h) && h.t * units < best) {
+                    best = h.t * units;
+                    tri_normal(skin, h.triangle, n);
+                }
+            }
+    ss_bvh_free(sb);
+    if (!(best <= rw + o->thickness_mm) || !(n[0] * n[0] + n[1] * n[1] + n[2] * n[2] > 0)) {
         ss_error_set(err, SS_ERR_INPUT, "%s: the wound mesh misses the skin of %s", wound_name,
                      skin_name);
         return NULL;
     }
-    double rw = 0;
-    for (int d = 0; d < 3; d++) rw = fmax(rw, 0.5 * (hi[d] - lo[d]));
+
     wound_src ws = {NULL, 0, wound, ss_bvh_build(wound, err)};
     if (!ws.wbvh) return NULL;
     ss_shell_patch *p = build_patch(skin, skin_name, c, n, rw, o, units, &ws, err);

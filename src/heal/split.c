@@ -229,7 +229,7 @@ static inline void bundle_x(const ss_heal_rd_system *sys, const ss_heal_rd_work 
  * region, three work-shared sweeps (x bundles per z, y bundles per z, z bundles per
  * y), fields looped inside, the admissible-range clamp fused into the last
  * (the y sweep for lateral fields, which skip z). */
-static void diffuse_all(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt) {
+static void diffuse_all(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt, int dirs) {
     const int nx = sys->nx, ny = sys->ny, nz = sys->nz, nf = sys->nfields;
     const double ih2 = 1.0 / (sys->h_mm * sys->h_mm);
     float kD[SS_HEAL_RD_MAXF];
@@ -245,9 +245,11 @@ static void diffuse_all(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt) {
 #pragma omp parallel num_threads(thread_count(w)) if (w->ncell >= RD_PAR_MIN_CELLS)
     {
         float *scr = w->tscratch[omp_get_thread_num()];
+        /* dirs: bit 0 x, bit 1 y, bit 2 z (the MPI driver runs them apart) */
 #pragma omp for collapse(2) schedule(static)
         for (int z = 1; z < nz - 1; z++)
             for (int y0 = 1; y0 < ny - 1; y0 += BUNDLE) {
+                if (!(dirs & 1)) continue;
                 const int ch = ny - 1 - y0 < BUNDLE ? ny - 1 - y0 : BUNDLE;
                 for (int a = 0; a < na; a++)
                     bundle_x(sys, w, act[a], kD[act[a]], mk[act[a]], z, y0, ch, scr);
@@ -255,6 +257,7 @@ static void diffuse_all(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt) {
 #pragma omp for collapse(2) schedule(static)
         for (int z = 1; z < nz - 1; z++)
             for (int x0 = 1; x0 < nx - 1; x0 += BUNDLE) {
+                if (!(dirs & 2)) continue;
                 const int cw = nx - 1 - x0 < BUNDLE ? nx - 1 - x0 : BUNDLE;
                 for (int a = 0; a < na; a++)
                     bundle_yz(sys, w, act[a], kD[act[a]], mk[act[a]], 1, z, x0, cw, scr,
@@ -263,6 +266,7 @@ static void diffuse_all(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt) {
 #pragma omp for collapse(2) schedule(static)
         for (int y = 1; y < ny - 1; y++)
             for (int x0 = 1; x0 < nx - 1; x0 += BUNDLE) {
+                if (!(dirs & 4)) continue;
                 const int cw = nx - 1 - x0 < BUNDLE ? nx - 1 - x0 : BUNDLE;
                 for (int a = 0; a < na; a++)
                     if (!sys->lateral[act[a]])
@@ -271,25 +275,36 @@ static void diffuse_all(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt) {
     }
 }
 
-void ss_heal_rd_step_split(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt, int nsub) {
+void ss_heal_rd__step_split_phase(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt, int nsub,
+                                  int phase) {
     /* Strang: half reaction, transport, half reaction */
     const int nhalf = (nsub + 1) / 2;
-    reaction_pass(sys, w, 0.5 * dt, nhalf);
-    const int has_vel = sys->velocity[0] || sys->velocity[1] || sys->velocity[2];
-    if (has_vel && w->have_buf) {
-        double speed = ss_heal_rd_max_speed(sys);
-        int nc = (int)ceil(dt * speed / sys->h_mm / 0.9);
-        if (nc < 1) nc = 1;
-        double h = dt / nc;
-        for (int f = 0; f < sys->nfields; f++) {
-            for (int s = 0; s < nc; s++) {
-                ss_heal_rd__convect(sys, w, f, sys->u[f], w->buf[f], h);
-                float *t = sys->u[f];
-                sys->u[f] = w->buf[f];
-                w->buf[f] = t;
+    if (phase == 0) {
+        reaction_pass(sys, w, 0.5 * dt, nhalf);
+        const int has_vel = sys->velocity[0] || sys->velocity[1] || sys->velocity[2];
+        if (has_vel && w->have_buf) {
+            double speed = ss_heal_rd_max_speed(sys);
+            int nc = (int)ceil(dt * speed / sys->h_mm / 0.9);
+            if (nc < 1) nc = 1;
+            double h = dt / nc;
+            for (int f = 0; f < sys->nfields; f++) {
+                for (int s = 0; s < nc; s++) {
+                    ss_heal_rd__convect(sys, w, f, sys->u[f], w->buf[f], h);
+                    float *t = sys->u[f];
+                    sys->u[f] = w->buf[f];
+                    w->buf[f] = t;
+                }
             }
         }
+        diffuse_all(sys, w, dt, 1);
+    } else if (phase == 1) {
+        diffuse_all(sys, w, dt, 2);
+    } else {
+        diffuse_all(sys, w, dt, 4);
+        reaction_pass(sys, w, 0.5 * dt, nhalf);
     }
-    diffuse_all(sys, w, dt);
-    reaction_pass(sys, w, 0.5 * dt, nhalf);
+}
+
+void ss_heal_rd_step_split(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt, int nsub) {
+    for (int phase = 0; phase < 3; phase++) ss_heal_rd__step_split_phase(sys, w, dt, nsub, phase);
 }

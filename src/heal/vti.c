@@ -35,6 +35,37 @@ static void put_f32le(FILE *f, const float *a, size_t n) {
     }
 }
 
+/* Swaps a written file in, or drops it after a write error. */
+static ss_status commit(ss_atomic_file *af, const char *path, ss_error *err) {
+    if (ferror(af->fp)) {
+        int e = errno;
+        ss_atomic_abort(af);
+        return ss_error_set(err, SS_ERR_RUNTIME, "%s: write failed: %s", path, strerror(e));
+    }
+    return ss_atomic_commit(af, err);
+}
+
+static void xml_attr(FILE *f, const char *s) {
+    for (; *s; s++) {
+        switch (*s) {
+        case '&':
+            fputs("&amp;", f);
+            break;
+        case '<':
+            fputs("&lt;", f);
+            break;
+        case '>':
+            fputs("&gt;", f);
+            break;
+        case '"':
+            fputs("&quot;", f);
+            break;
+        default:
+            fputc(*s, f);
+        }
+    }
+}
+
 ss_status ss_heal_vti_write(const char *path, const ss_heal_grid *g, ss_error *err) {
     return ss_heal_vti_write_vectors(path, g, 0, NULL, NULL, err);
 }
@@ -49,6 +80,11 @@ static void put_vec3(FILE *f, float *const v[3], size_t n) {
         put_f32le(f, buf, 3 * m);
     }
 }
+
+static ss_status write_vti(const char *path, const ss_heal_grid *g, int nvec,
+                           const char *const *names, float *const (*vecs)[3],
+                           const double *closed_day, const int off[3], const int whole[3],
+                           ss_error *err);
 
 ss_status ss_heal_vti_write_vectors(const char *path, const ss_heal_grid *g, int nvec,
                                     const char *const *names, float *const (*vecs)[3],
@@ -70,6 +106,52 @@ ss_status ss_heal_vti_write_all(const char *path, const ss_heal_grid *g, int nve
                                 const char *const *names, float *const (*vecs)[3],
                                 const double *closed_day, ss_error *err) {
     if (!g || !g->cell) return ss_error_set(err, SS_ERR_INPUT, "%s: no grid", path);
+    const int off[3] = {0, 0, 0}, whole[3] = {g->nx, g->ny, g->nz};
+    return write_vti(path, g, nvec, names, vecs, closed_day, off, whole, err);
+}
+
+ss_status ss_heal_vti_write_piece(const char *path, const ss_heal_grid *piece, const int off[3],
+                                  const int whole[3], ss_error *err) {
+    if (!piece || !piece->cell) return ss_error_set(err, SS_ERR_INPUT, "%s: no grid", path);
+    return write_vti(path, piece, 0, NULL, NULL, NULL, off, whole, err);
+}
+
+ss_status ss_heal_pvti_write(const char *path, const int whole[3], double dx_mm, double t_days,
+                             int npieces, const int (*ext)[6], const char *const *files,
+                             ss_error *err) {
+    ss_atomic_file af;
+    ss_status st = ss_atomic_open(&af, path, err);
+    if (st) return st;
+    FILE *f = af.fp;
+    fprintf(f, "<?xml version=\"1.0\"?>\n"
+               "<VTKFile type=\"PImageData\" version=\"1.0\" byte_order=\"LittleEndian\" "
+               "header_type=\"UInt64\">\n");
+    fprintf(f,
+            "  <PImageData WholeExtent=\"0 %d 0 %d 0 %d\" GhostLevel=\"0\" Origin=\"0 0 0\" "
+            "Spacing=\"%.17g %.17g %.17g\">\n",
+            whole[0], whole[1], whole[2], dx_mm, dx_mm, dx_mm);
+    fprintf(f, "    <PCellData Scalars=\"cell_state\">\n"
+               "      <PDataArray type=\"UInt8\" Name=\"cell_state\"/>\n");
+    for (int k = 0; k < SS_HEAL_NFIELDS; k++)
+        fprintf(f, "      <PDataArray type=\"Float32\" Name=\"%s\"/>\n", ss_heal_field_name(k));
+    fprintf(f, "    </PCellData>\n");
+    for (int i = 0; i < npieces; i++) {
+        fprintf(f, "    <Piece Extent=\"%d %d %d %d %d %d\" Source=\"", ext[i][0], ext[i][1],
+                ext[i][2], ext[i][3], ext[i][4], ext[i][5]);
+        xml_attr(f, files[i]);
+        fprintf(f, "\"/>\n");
+    }
+    fprintf(f, "  </PImageData>\n</VTKFile>\n");
+    (void)t_days;
+    return commit(&af, path, err);
+}
+
+/* The grid g as the piece of a larger image whose cell (0,0,0) is at off and
+ * whose dimensions are whole (the plain file: off 0, whole = g's). */
+static ss_status write_vti(const char *path, const ss_heal_grid *g, int nvec,
+                           const char *const *names, float *const (*vecs)[3],
+                           const double *closed_day, const int org[3], const int whole[3],
+                           ss_error *err) {
     int vel = g->velocity[0] && g->velocity[1] && g->velocity[2];
     size_t n = (size_t)g->nx * (size_t)g->ny * (size_t)g->nz;
     ss_atomic_file af;
@@ -82,7 +164,7 @@ ss_status ss_heal_vti_write_all(const char *path, const ss_heal_grid *g, int nve
     fprintf(f,
             "  <ImageData WholeExtent=\"0 %d 0 %d 0 %d\" Origin=\"0 0 0\" "
             "Spacing=\"%.17g %.17g %.17g\">\n",
-            g->nx, g->ny, g->nz, g->dx_mm, g->dx_mm, g->dx_mm);
+            whole[0], whole[1], whole[2], g->dx_mm, g->dx_mm, g->dx_mm);
     fprintf(f,
             "    <FieldData>\n"
             "      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" "
@@ -91,15 +173,15 @@ ss_status ss_heal_vti_write_all(const char *path, const ss_heal_grid *g, int nve
     /* the closure days go after every cell array in the appended data */
     size_t ncol = (size_t)g->nx * (size_t)g->ny;
     uint64_t coff = 8 + n + SS_HEAL_NFIELDS * (8 + 4 * (uint64_t)n) +
-                    (uint64_t)((g->velocity[0] && g->velocity[1] && g->velocity[2]) + nvec) *
-                        (8 + 12 * (uint64_t)n);
+                    (uint64_t)(vel + nvec) * (8 + 12 * (uint64_t)n);
     if (closed_day)
         fprintf(f,
                 "      <DataArray type=\"Float64\" Name=\"closed_day\" NumberOfTuples=\"%zu\" "
                 "format=\"appended\" offset=\"%llu\"/>\n",
                 ncol, (unsigned long long)coff);
     fprintf(f, "    </FieldData>\n");
-    fprintf(f, "    <Piece Extent=\"0 %d 0 %d 0 %d\">\n", g->nx, g->ny, g->nz);
+    fprintf(f, "    <Piece Extent=\"%d %d %d %d %d %d\">\n", org[0], org[0] + g->nx, org[1],
+            org[1] + g->ny, org[2], org[2] + g->nz);
     fprintf(f, "      <CellData Scalars=\"cell_state\">\n");
     uint64_t off = 0;
     fprintf(f,
@@ -150,27 +232,6 @@ ss_status ss_heal_vti_write_all(const char *path, const ss_heal_grid *g, int nve
     return ss_atomic_commit(&af, err);
 }
 
-static void xml_attr(FILE *f, const char *s) {
-    for (; *s; s++) {
-        switch (*s) {
-        case '&':
-            fputs("&amp;", f);
-            break;
-        case '<':
-            fputs("&lt;", f);
-            break;
-        case '>':
-            fputs("&gt;", f);
-            break;
-        case '"':
-            fputs("&quot;", f);
-            break;
-        default:
-            fputc(*s, f);
-        }
-    }
-}
-
 ss_status ss_heal_pvd_write(const char *path, int n, const double *t_days, const char *const *files,
                             ss_error *err) {
     ss_atomic_file af;
@@ -186,12 +247,7 @@ ss_status ss_heal_pvd_write(const char *path, int n, const double *t_days, const
         fprintf(f, "\"/>\n");
     }
     fprintf(f, "  </Collection>\n</VTKFile>\n");
-    if (ferror(f)) {
-        int e = errno;
-        ss_atomic_abort(&af);
-        return ss_error_set(err, SS_ERR_RUNTIME, "%s: write failed: %s", path, strerror(e));
-    }
-    return ss_atomic_commit(&af, err);
+    return commit(&af, path, err);
 }
 
 /* ---- reading back what ss_heal_vti_write_vectors wrote ----------------------------------

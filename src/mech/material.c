@@ -47,6 +47,7 @@ static const key keys[] = {
     K(theta1, "1", -0.99, -1e-9),
     K(theta2, "1", 1e-9, 10),
     K(K_m, "1", 0, 1e6),
+    K(tau_myo, "day", 0, 1e3),
     K(mu, "kPa", 0, 1e7),
     K(K_bulk, "kPa", 1e-9, 1e7),
     K(k1, "kPa", 0, 1e7),
@@ -72,6 +73,7 @@ void ss_mech_params_default(ss_mech_params *p) {
     p->theta1 = -0.6;
     p->theta2 = 0.5;
     p->K_m = 50.0;
+    p->tau_myo = 0.0;
     p->mu = 13.5;
     p->K_bulk = 29.0;
     p->k1 = 1500.0;
@@ -83,7 +85,7 @@ void ss_mech_params_default(ss_mech_params *p) {
     p->tet_size_mm = 1.0;
     p->anchor = 0.1;
     p->anchor_side = 2.0;
-    p->k_suture = 3.0;
+    p->k_suture = 1.0;
     p->max_shorten = 0.5;
     p->tol = 1e-4;
     p->max_substeps = 400;

@@ -62,6 +62,7 @@ void ss_mech_free(ss_mech *m) {
     free(m->rest_old);
     free(m->k_old);
     free(m->nmyo);
+    free(m->nlag);
     free(m->nth);
     free(m->necm);
     free(m->stress);
@@ -346,6 +347,8 @@ ss_mech *ss_mech_create(ss_heal_grid *g, const ss_heal_params *heal, const ss_me
     m->k_old = malloc((size_t)nsp * sizeof(double));
     if (!m->rest_old || !m->k_old) goto nomem;
     m->nmyo = calloc((size_t)nn, sizeof(double));
+    m->nlag = calloc((size_t)nn, sizeof(double));
+    if (!m->nlag) goto nomem;
     m->nth = calloc((size_t)nn, sizeof(double));
     m->necm = calloc((size_t)nn, sizeof(double));
     m->stress = calloc((size_t)nn, sizeof(double));
@@ -532,9 +535,14 @@ ss_status ss_mech_step(ss_mech *m, ss_heal_grid *g, double dt_days, ss_error *er
     ss_mech_g2p(m->T, m->myo, m->mask, S->x, nn, m->nmyo);
     ss_mech_g2p_sub(m->T, m->thsub, m->usub_valid, S->x, nn, m->nth);
     ss_mech_g2p(m->T, m->ecm, m->mask, S->x, nn, m->necm);
+    /* myofibroblasts differentiate from the fibroblasts of the open wound
+     * (and go by apoptosis once it is covered) with the lag tau_myo: a
+     * first-order relaxation of the contracting density towards its target */
+    const double lag = p->tau_myo > 0 ? 1.0 - exp(-dt_days / p->tau_myo) : 1.0;
     for (int i = 0; i < nn; i++) {
         if (m->nmyo[i] < 0) m->nmyo[i] = 0;
-        m->stress[i] = ss_mech_pcell(p, m->nth[i]) * m->nmyo[i] * p->K_m;
+        m->nlag[i] += lag * (m->nmyo[i] - m->nlag[i]);
+        m->stress[i] = ss_mech_pcell(p, m->nth[i]) * m->nlag[i] * p->K_m;
     }
     /* 2. rest lengths and stiffness of the tissue springs */
     const int ntis = m->ntissue;
@@ -693,7 +701,7 @@ void ss_mech_stats_compute(const ss_mech *m, ss_mech_stats *st) {
 }
 
 size_t ss_mech_state_size(const ss_mech *m) {
-    return ((size_t)m->mesh->nnodes * 7 + (size_t)m->S->nsprings) * sizeof(double) +
+    return ((size_t)m->mesh->nnodes * 8 + (size_t)m->S->nsprings) * sizeof(double) +
            sizeof(uint64_t);
 }
 
@@ -706,7 +714,8 @@ void ss_mech_state_get(const ss_mech *m, void *buf) {
     memcpy(b, m->S->x, 3 * nn * sizeof(double));
     memcpy(b + 3 * nn * sizeof(double), m->vel, 3 * nn * sizeof(double));
     memcpy(b + 6 * nn * sizeof(double), m->stress, nn * sizeof(double));
-    memcpy(b + 7 * nn * sizeof(double), m->S->rest, (size_t)m->S->nsprings * sizeof(double));
+    memcpy(b + 7 * nn * sizeof(double), m->nlag, nn * sizeof(double));
+    memcpy(b + 8 * nn * sizeof(double), m->S->rest, (size_t)m->S->nsprings * sizeof(double));
 }
 
 ss_status ss_mech_state_set(ss_mech *m, const void *buf, size_t size, ss_error *err) {
@@ -723,7 +732,8 @@ ss_status ss_mech_state_set(ss_mech *m, const void *buf, size_t size, ss_error *
     memcpy(m->S->x, b, 3 * nn * sizeof(double));
     memcpy(m->vel, b + 3 * nn * sizeof(double), 3 * nn * sizeof(double));
     memcpy(m->stress, b + 6 * nn * sizeof(double), nn * sizeof(double));
-    memcpy(m->S->rest, b + 7 * nn * sizeof(double), (size_t)m->S->nsprings * sizeof(double));
+    memcpy(m->nlag, b + 7 * nn * sizeof(double), nn * sizeof(double));
+    memcpy(m->S->rest, b + 8 * nn * sizeof(double), (size_t)m->S->nsprings * sizeof(double));
     for (size_t i = 0; i < 3 * nn; i++)
         if (!isfinite(m->S->x[i]) || !isfinite(m->vel[i]))
             return ss_error_set(err, SS_ERR_INPUT, "mechanics state: non-finite value");

@@ -26,6 +26,7 @@ struct ss_mech {
     double *rest_old, *k_old;           /* the last frame's rest lengths and stiffness */
     int last_inverted, last_increments; /* folded tets after the frame, load increments */
     double *nmyo, *nth, *necm, *stress; /* per node */
+    double *nlag;                       /* per node: myofibroblasts (lagged nmyo) */
     double *vel;                        /* 3n, mm/day */
     double *xprev, *grad, *disp;
     int32_t *tri; /* top surface triangles (3 per) */

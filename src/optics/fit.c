@@ -7,7 +7,13 @@
  * solid angle times cos at the bin centre), by subsampling.
  * Variable projection: the base colour is linear in the model and solved in
  * closed form (clamped to [0,1]) for each (specular, roughness); those two are
- * found by a coarse grid followed by a bounded Nelder-Mead simplex. */
+ * found by a coarse grid followed by a bounded Nelder-Mead simplex.
+ * Albedo-constrained mode (SS_FIT_BASE_ALBEDO, a departure from the seed used
+ * by default for skin, docs/optics.md): the base colour is the one whose
+ * diffuse term reflects the given albedo at normal incidence, and the lobe is
+ * fitted alone - to the surface-reflected part of the BRDF when given (the
+ * renderer's specular lobe models the surface reflection), else to the whole
+ * BRDF. The residual is always that of the whole BRDF. */
 #include "skinsim/optics_fit.h"
 
 #include <math.h>
@@ -24,6 +30,9 @@ void ss_fit_options_default(ss_fit_options *o) {
     o->tol = 1e-10;
     o->weighting = SS_FIT_SOLID_ANGLE;
     o->max_theta_rad = M_PI / 2;
+    o->base_mode = SS_FIT_BASE_FREE;
+    o->albedo_rgb[0] = o->albedo_rgb[1] = o->albedo_rgb[2] = 0.0;
+    o->surface = NULL;
 }
 
 const char *ss_fit_weighting_name(int w) {
@@ -39,7 +48,22 @@ typedef struct fit_ctx {
     double *subw;         /* nsub weights per bin (sum 1), same for all bins of a theta_r row */
     double *A, *S;        /* scratch nbins */
     int evals;
+    int base_mode;         /* SS_FIT_BASE_FREE or SS_FIT_BASE_ALBEDO */
+    double albedo[3];      /* base_mode ALBEDO */
+    const double *surface; /* base_mode ALBEDO: surface-reflected part (nbins * 3) or NULL */
 } fit_ctx;
+
+/* Diffuse directional albedo at normal incidence of the model's diffuse term
+ * per unit base colour, for the lobe (specular, roughness). */
+static double diffuse_albedo_per_base(ss_render_model m, double spec, double rough) {
+    ss_render_params p1, p0;
+    memset(&p1, 0, sizeof p1);
+    p1.specular = spec;
+    p1.roughness = rough;
+    p0 = p1;
+    for (int ch = 0; ch < 3; ch++) p1.base_rgb[ch] = 1.0;
+    return ss_render_albedo(m, &p1, 0.0, 0, 48) - ss_render_albedo(m, &p0, 0.0, 0, 48);
+}
 
 static double clampd(double v, double lo, double hi) { return v < lo ? lo : v > hi ? hi : v; }
 
@@ -65,7 +89,21 @@ static double objective(fit_ctx *c, double spec, double rough, double base[3]) {
         den += wb * a * a;
         for (int ch = 0; ch < 3; ch++) num[ch] += wb * a * (c->data[b * 3 + ch] - s);
     }
-    for (int ch = 0; ch < 3; ch++) base[ch] = den > 0 ? clampd(num[ch] / den, 0.0, 1.0) : 0.0;
+    if (c->base_mode == SS_FIT_BASE_ALBEDO) {
+        double dn = diffuse_albedo_per_base(c->model, spec, rough);
+        for (int ch = 0; ch < 3; ch++)
+            base[ch] = dn > 0 ? clampd(c->albedo[ch] / dn, 0.0, 1.0) : 0.0;
+        if (c->surface) { /* the lobe against the surface-reflected part */
+            double dist = 0;
+            for (int b = 0; b < c->nbins; b++)
+                for (int ch = 0; ch < 3; ch++) {
+                    double r = c->S[b] - c->surface[b * 3 + ch];
+                    dist += c->weight[b] * r * r;
+                }
+            return dist;
+        }
+    } else
+        for (int ch = 0; ch < 3; ch++) base[ch] = den > 0 ? clampd(num[ch] / den, 0.0, 1.0) : 0.0;
     double dist = 0;
     for (int b = 0; b < c->nbins; b++) {
         double e = 0;
@@ -171,7 +209,8 @@ ss_status ss_render_fit(ss_render_model m, const ss_brdf_sampled *data, const ss
         data->n_theta_i > 1024 || data->n_theta_r > 1024 || data->n_phi > 1024)
         return ss_error_set(err, SS_ERR_INPUT, "fit: sampled BRDF is empty or has bad bin counts");
     if (o->subsamples < 1 || o->subsamples > 16 || o->max_iter < 1 || o->weighting < 0 ||
-        o->weighting > SS_FIT_PROJECTED ||
+        o->weighting > SS_FIT_PROJECTED || o->base_mode < SS_FIT_BASE_FREE ||
+        o->base_mode > SS_FIT_BASE_ALBEDO ||
         !(o->max_theta_rad > 0.0 && o->max_theta_rad <= M_PI / 2))
         return ss_error_set(err, SS_ERR_INPUT,
                             "fit: bad options (subsamples %d, max_iter %d, weighting %d, "
@@ -185,6 +224,23 @@ ss_status ss_render_fit(ss_render_model m, const ss_brdf_sampled *data, const ss
     fit_ctx c;
     memset(&c, 0, sizeof c);
     c.model = m;
+    c.base_mode = o->base_mode;
+    if (o->base_mode == SS_FIT_BASE_ALBEDO) {
+        for (int ch = 0; ch < 3; ch++) {
+            if (!(o->albedo_rgb[ch] >= 0.0 && o->albedo_rgb[ch] <= 1.0))
+                return ss_error_set(err, SS_ERR_INPUT,
+                                    "fit: albedo channel %d = %g is outside 0..1", ch,
+                                    o->albedo_rgb[ch]);
+            c.albedo[ch] = o->albedo_rgb[ch];
+        }
+        if (o->surface) {
+            if (!o->surface->f_rgb || o->surface->n_theta_i != data->n_theta_i ||
+                o->surface->n_theta_r != data->n_theta_r || o->surface->n_phi != data->n_phi)
+                return ss_error_set(err, SS_ERR_INPUT,
+                                    "fit: the surface BRDF's bins differ from the data's");
+            c.surface = o->surface->f_rgb;
+        }
+    }
     c.nbins = (int)nbins;
     c.nsub = o->subsamples * o->subsamples;
     c.data = data->f_rgb;
@@ -266,6 +322,10 @@ ss_status ss_render_fit(ss_render_model m, const ss_brdf_sampled *data, const ss
     nelder_mead(&c, best, 0.01, o->max_iter, o->tol);
     double base[3];
     double dist = objective(&c, best[0], best[1], base);
+    if (c.surface) { /* report the whole BRDF's distance */
+        c.surface = NULL;
+        dist = objective(&c, best[0], best[1], base);
+    }
     out->model = m;
     for (int ch = 0; ch < 3; ch++) out->params.base_rgb[ch] = base[ch];
     out->params.specular = clampd(best[0], 0.0, 1.0);

@@ -11,6 +11,12 @@
  *    varies melanin, pheomelanin ratio, blood and oxygenation with the albedo
  *    recomputed exactly by reweighting (ss_mc_paths_apply) - the same
  *    transport the table was built with, without its interpolation error.
+ * 3. Geometry: with SCI (default) the compared colour is the albedo plus the
+ *    rough surface's reflectance at normal incidence, a spectrally flat
+ *    constant (n of the stratum corneum does not vary with wavelength in the
+ *    model) estimated once from surface walks alone; SCE compares the albedo.
+ *    Measured skin colours (colorimeters, d:8 spectrophotometers in SCI mode,
+ *    photos) include the light the surface scatters; the albedo does not.
  * The objective is Delta-E00 plus a weak pull (0.02 x squared distance in
  *    units of the axis range) of the parameters colour cannot pin down
  *    (pheomelanin ratio, oxygenation, thicknesses) towards the defaults, so
@@ -37,6 +43,7 @@ void ss_mm_match_options_default(ss_mm_match_options *o) {
 typedef struct match_ctx {
     const ss_mm_table *t;
     double target[3];
+    double surface; /* added to every channel before comparing (SCI) */
     double lo[SS_MM_NAXES], hi[SS_MM_NAXES], def[SS_MM_NAXES];
     double prior;
     /* transport stage */
@@ -65,8 +72,8 @@ static double prior_pen(const match_ctx *c, const double x[SS_MM_NAXES]) {
 }
 
 static double de_of_rgb(const match_ctx *c, const double rgb[3]) {
-    double lab[3];
-    ss_srgb_linear_to_lab(rgb, lab);
+    double lab[3], v[3] = {rgb[0] + c->surface, rgb[1] + c->surface, rgb[2] + c->surface};
+    ss_srgb_linear_to_lab(v, lab);
     return ss_ciede2000(lab, c->target);
 }
 
@@ -185,6 +192,23 @@ static double nelder_mead(match_ctx *c, int mode, int n, const double *lo, const
     return F[b];
 }
 
+/* Reflectance of the rough air/skin surface at normal incidence: the share of
+ * Smith microsurface walks (the transport's own surface, mc.c) from air into
+ * the stratum corneum that end reflected; Fresnel's ((n-1)/(n+1))^2 when
+ * smooth. Deterministic (fixed seed and count). */
+static double surface_reflectance(double sigma, uint64_t seed) {
+    const double n_sc = 1.55; /* stratum corneum (tissue.c) */
+    if (!(sigma > 0.0)) return ((n_sc - 1.0) / (n_sc + 1.0)) * ((n_sc - 1.0) / (n_sc + 1.0));
+    const int nw = 200000;
+    long refl = 0;
+    for (int k = 0; k < nw; k++) {
+        double w[3] = {0.0, 0.0, -1.0};
+        int order;
+        refl += !ss_ms_walk(sigma, 1.0, n_sc, w, seed, (uint64_t)k, &order);
+    }
+    return (double)refl / nw;
+}
+
 static void bio_from_x(const ss_bio_params *base, const double x[SS_MM_NAXES], ss_bio_params *b) {
     *b = *base;
     b->melanin = x[SS_MM_AXIS_MELANIN];
@@ -212,6 +236,16 @@ ss_status ss_mm_match(const ss_mm_table *t, const double target_lab[3],
     c.t = t;
     c.err = err;
     c.prior = o->prior_weight >= 0.0 ? o->prior_weight : 0.0;
+    if (o->geometry != SS_MM_GEOMETRY_SCI && o->geometry != SS_MM_GEOMETRY_SCE)
+        return ss_error_set(err, SS_ERR_INPUT, "match: geometry %d is neither SCI (0) nor SCE (1)",
+                            o->geometry);
+    if (!(o->spectrum.mc.roughness_sigma >= 0.0 && o->spectrum.mc.roughness_sigma <= 10.0))
+        return ss_error_set(err, SS_ERR_INPUT, "match: roughness %g is outside [0, 10]",
+                            o->spectrum.mc.roughness_sigma);
+    c.surface = o->geometry == SS_MM_GEOMETRY_SCI
+                    ? surface_reflectance(o->spectrum.mc.roughness_sigma, o->spectrum.mc.seed)
+                    : 0.0;
+    out->surface = c.surface;
     memcpy(c.target, target_lab, sizeof c.target);
     ss_bio_params def;
     ss_bio_params_default(&def);
@@ -250,7 +284,9 @@ ss_status ss_mm_match(const ss_mm_table *t, const double target_lab[3],
     ss_mm_table_lookup(t, bx, v);
     bio_from_x(o->base_set ? &o->base : &def, bx, &out->table_bio);
     memcpy(out->table_albedo_rgb, v + 15, sizeof out->table_albedo_rgb);
-    ss_srgb_linear_to_lab(out->table_albedo_rgb, out->table_lab);
+    double sv[3];
+    for (int k = 0; k < 3; k++) sv[k] = out->table_albedo_rgb[k] + c.surface;
+    ss_srgb_linear_to_lab(sv, out->table_lab);
     out->table_delta_e00 = ss_ciede2000(out->table_lab, target_lab);
     out->bio = out->table_bio;
     memcpy(out->albedo_rgb, out->table_albedo_rgb, sizeof out->albedo_rgb);
@@ -314,7 +350,8 @@ ss_status ss_mm_match(const ss_mm_table *t, const double target_lab[3],
     }
     out->bio = b;
     memcpy(out->albedo_rgb, rgb, sizeof rgb);
-    ss_srgb_linear_to_lab(rgb, out->lab);
+    for (int k = 0; k < 3; k++) sv[k] = rgb[k] + c.surface;
+    ss_srgb_linear_to_lab(sv, out->lab);
     out->delta_e00 = ss_ciede2000(out->lab, target_lab);
     out->refined = 1;
 done:

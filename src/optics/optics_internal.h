@@ -41,6 +41,10 @@ void ss_mc_tallies_free(ss_mc_tallies *t);
  * *order = number of facet interactions. Random numbers: stream (seed, stream). */
 int ss_ms_walk(double alpha, double n_in, double n_out, double w[3], uint64_t seed, uint64_t stream,
                int *order);
+/* Test hook for the inner loop's samplers (mc.c): n standard exponential
+ * variates (ziggurat) and n uniform azimuths (cos, sin) from the stream
+ * (seed, 0); any output pointer may be NULL. */
+void ss_mc_test_samplers(uint64_t seed, size_t n, double *expo, double *cosp, double *sinp);
 
 #define SS_BRULS_COLUMNS 9
 

@@ -276,6 +276,54 @@ ss_status ss_optics_brdf_sample(const ss_bio_params *bio, const ss_spectrum_opti
     return st;
 }
 
+ss_status ss_optics_surface_brdf_sample(const ss_spectrum_options *o, int n_theta_i, int n_theta_r,
+                                        int n_phi, ss_brdf_sampled *out, ss_error *err) {
+    if (!out) return ss_error_set(err, SS_ERR_INPUT, "BRDF output is NULL");
+    memset(out, 0, sizeof *out);
+    int n;
+    ss_status st = check_spec_opts(o, &n, err);
+    if (st) return st;
+    if (n_theta_i < 1 || n_theta_i > 256 || n_theta_r < 1 || n_theta_r > 256 || n_phi < 1 ||
+        n_phi > 256)
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "BRDF bins theta_i %d x theta_r %d x phi %d: each must be 1..256",
+                            n_theta_i, n_theta_r, n_phi);
+    /* the skin's own surface: indices of air and stratum corneum from the slab */
+    ss_bio_params bio;
+    ss_bio_params_default(&bio);
+    ss_optics_slab skin, slab;
+    if ((st = ss_optics_skin_slab(&bio, 550.0, &skin, err))) return st;
+    memset(&slab, 0, sizeof slab);
+    slab.nlayers = 1;
+    slab.layer[0].n = skin.layer[0].n;
+    slab.layer[0].d_cm = skin.layer[0].d_cm;
+    slab.n_above = skin.n_above;
+    slab.n_below = skin.layer[0].n; /* what enters leaves: only the surface reflects */
+    slab.bottom_albedo = -1.0;
+    size_t nb = (size_t)n_theta_r * (size_t)n_phi;
+    out->f_rgb = calloc((size_t)n_theta_i * nb * 3, sizeof(double));
+    if (!out->f_rgb) return ss_error_set(err, SS_ERR_NOMEM, "out of memory for the BRDF");
+    out->n_theta_i = n_theta_i;
+    out->n_theta_r = n_theta_r;
+    out->n_phi = n_phi;
+    for (int ti = 0; ti < n_theta_i && !st; ti++) {
+        ss_mc_options mc = o->mc;
+        mc.theta_i_rad = (ti + 0.5) * M_PI / (2.0 * n_theta_i);
+        mc.brdf_n_theta = n_theta_r;
+        mc.brdf_n_phi = n_phi;
+        mc.radial_bins = 0;
+        mc.radial_max_cm = 0;
+        ss_mc_result r;
+        if ((st = ss_mc_run(&slab, &mc, &r, err))) break;
+        double *f = out->f_rgb + (size_t)ti * nb * 3;
+        for (size_t b = 0; b < nb; b++)
+            for (int c = 0; c < 3; c++) f[b * 3 + c] = r.brdf_exit[b]; /* grey */
+        ss_mc_result_free(&r);
+    }
+    if (st) ss_brdf_sampled_free(out);
+    return st;
+}
+
 ss_status ss_optics_radial_profile_rgb(const ss_bio_params *bio, const ss_spectrum_options *o,
                                        int bins, double max_cm, double *rgb, ss_error *err) {
     int n;

@@ -421,6 +421,7 @@ void ss_mm_build_options_default(ss_mm_build_options *o) {
     o->n_theta_r = 8;
     o->n_phi = 8;
     ss_fit_options_default(&o->fit);
+    o->fit.base_mode = SS_FIT_BASE_ALBEDO; /* departure from the seed: docs/optics.md */
     ss_bio_params_default(&o->base);
     o->quiet = 1;
 }
@@ -699,11 +700,41 @@ ss_status ss_mm_sample_fast(const ss_bio_params *bio, const ss_mm_build_options 
     return st;
 }
 
+void ss_mm_table_record_options(ss_mm_table *t, const ss_mm_build_options *o) {
+    t->photons = o->spectrum.mc.photons;
+    t->seed = o->spectrum.mc.seed;
+    t->n_theta_i = o->n_theta_i;
+    t->n_theta_r = o->n_theta_r;
+    t->n_phi = o->n_phi;
+    t->wl_min_nm = o->spectrum.wl_min_nm;
+    t->wl_max_nm = o->spectrum.wl_max_nm;
+    t->wl_step_nm = o->spectrum.wl_step_nm;
+}
+
+int ss_mm_table_ngeometries(const ss_mm_table *t) {
+    return t->nsamples[SS_MM_AXIS_SC] * t->nsamples[SS_MM_AXIS_EPIDERMIS];
+}
+
+static ss_status build_range(ss_mm_table *t, const ss_mm_build_options *o, int g0, int g1,
+                             ss_error *err);
+
 ss_status ss_mm_table_build(ss_mm_table *t, const ss_mm_build_options *o, ss_error *err) {
+    return build_range(t, o, 0, ss_mm_table_ngeometries(t), err);
+}
+
+ss_status ss_mm_table_build_geometry(ss_mm_table *t, const ss_mm_build_options *o, int gi,
+                                     ss_error *err) {
+    if (gi < 0 || gi >= ss_mm_table_ngeometries(t))
+        return ss_error_set(err, SS_ERR_INPUT, "ModelMatch: geometry %d is not in 0..%d", gi,
+                            ss_mm_table_ngeometries(t) - 1);
+    return build_range(t, o, gi, gi + 1, err);
+}
+
+ss_status ss_mm_table_build_check(const ss_mm_table *t, const ss_mm_build_options *o,
+                                  ss_error *err) {
     int nwl;
     ss_status st = check_build_options(o, &nwl, err);
     if (st) return st;
-    /* every node must be a valid parameter set */
     for (int a = 0; a < SS_MM_NAXES; a++)
         for (int k = 0; k < t->nsamples[a]; k++) {
             double v = t->axis[a][k];
@@ -712,10 +743,17 @@ ss_status ss_mm_table_build(ss_mm_table *t, const ss_mm_build_options *o, ss_err
                 return ss_error_set(err, SS_ERR_INPUT, "ModelMatch: axis %s value %g is outside %s",
                                     axis_names[a], v, thick ? "(0, 1] cm" : "[0, 1]");
         }
+    return SS_OK;
+}
+
+static ss_status build_range(ss_mm_table *t, const ss_mm_build_options *o, int g0, int g1,
+                             ss_error *err) {
+    int nwl;
+    ss_status st = ss_mm_table_build_check(t, o, err); /* options, and every node valid */
+    if (st || (st = check_build_options(o, &nwl, err))) return st;
     double *wl, *W;
     if ((st = make_wavelengths(o, nwl, &wl, &W, err))) return st;
     int nabs = t->nsamples[0] * t->nsamples[1] * t->nsamples[2] * t->nsamples[3];
-    int ngeo = t->nsamples[4] * t->nsamples[5];
     ss_bio_params *bios = malloc((size_t)nabs * sizeof *bios);
     mm_geo_out g = {0};
     if (!bios || (st = alloc_geo_out(&g, nabs, o, err))) {
@@ -725,7 +763,12 @@ ss_status ss_mm_table_build(ss_mm_table *t, const ss_mm_build_options *o, ss_err
         return st ? st : ss_error_set(err, SS_ERR_NOMEM, "ModelMatch: out of memory");
     }
     ss_optics_data *data = NULL;
-    if ((st = ss_optics_data_open(&data, err))) {
+    ss_brdf_sampled surf = {0, 0, 0, NULL}; /* surface part, the same for every entry */
+    if ((st = ss_optics_data_open(&data, err)) ||
+        (o->fit.base_mode == SS_FIT_BASE_ALBEDO && !o->fit.surface &&
+         (st = ss_optics_surface_brdf_sample(&o->spectrum, o->n_theta_i, o->n_theta_r, o->n_phi,
+                                             &surf, err)))) {
+        ss_optics_data_close(data);
         free_geo_out(&g);
         free(bios);
         free(wl);
@@ -733,10 +776,11 @@ ss_status ss_mm_table_build(ss_mm_table *t, const ss_mm_build_options *o, ss_err
         return st;
     }
     ss_progress prog;
-    ss_progress_begin(&prog, "ModelMatch table", (double)ngeo * nwl * (o->n_theta_i + 1), o->quiet);
+    ss_progress_begin(&prog, "ModelMatch table", (double)(g1 - g0) * nwl * (o->n_theta_i + 1),
+                      o->quiet);
     double done = 0;
     size_t per = (size_t)o->n_theta_i * o->n_theta_r * o->n_phi * 3;
-    for (int gi = 0; gi < ngeo && !st; gi++) {
+    for (int gi = g0; gi < g1 && !st; gi++) {
         int isc = gi / t->nsamples[5], iep = gi % t->nsamples[5];
         for (int a = 0; a < nabs; a++) {
             int r = a;
@@ -768,9 +812,15 @@ ss_status ss_mm_table_build(ss_mm_table *t, const ss_mm_build_options *o, ss_err
             ss_mm_entry e;
             memset(&e, 0, sizeof e);
             ss_error e2;
+            ss_fit_options fo = o->fit;
+            for (int c = 0; c < 3; c++) fo.albedo_rgb[c] = g.albedo[(size_t)a * 3 + c];
             for (int m = 0; m < SS_RENDER_NMODELS; m++) {
                 ss_fit_result fr;
-                ss_status s2 = ss_render_fit((ss_render_model)m, &s, &o->fit, &fr, &e2);
+                /* the GGX lobe models the surface reflection; the Ashikhmin-
+                 * Shirley lobe cannot (its best fit to it is no lobe) and is
+                 * fitted to the whole BRDF (docs/optics.md) */
+                if (surf.f_rgb) fo.surface = m == SS_RENDER_GGX ? &surf : NULL;
+                ss_status s2 = ss_render_fit((ss_render_model)m, &s, &fo, &fr, &e2);
                 if (s2) {
 #pragma omp critical(mm_fit_err)
                     {
@@ -802,16 +852,8 @@ ss_status ss_mm_table_build(ss_mm_table *t, const ss_mm_build_options *o, ss_err
     }
     ss_progress_end(&prog);
     ss_optics_data_close(data);
-    if (!st) {
-        t->photons = o->spectrum.mc.photons;
-        t->seed = o->spectrum.mc.seed;
-        t->n_theta_i = o->n_theta_i;
-        t->n_theta_r = o->n_theta_r;
-        t->n_phi = o->n_phi;
-        t->wl_min_nm = o->spectrum.wl_min_nm;
-        t->wl_max_nm = o->spectrum.wl_max_nm;
-        t->wl_step_nm = o->spectrum.wl_step_nm;
-    }
+    ss_brdf_sampled_free(&surf);
+    if (!st) ss_mm_table_record_options(t, o);
     free_geo_out(&g);
     free(bios);
     free(wl);

@@ -285,12 +285,16 @@ double ss_spectrum_table_eval(const ss_spectrum_table *t, double nm) {
 
 /* ---- the skin slab ----------------------------------------------------------- */
 /* Stratum corneum (epi = 0) or epidermis (epi = 1) deflection-angle phase
- * function from Bruls & van der Leun 1984: the cumulative transmitted share
- * over the exitant angle at the two nearest measured wavelengths, interpolated
- * linearly in wavelength (clamped outside the measured 254/302-546 nm),
- * normalised and inverted at probabilities k / (n - 1); the exitant angle is
- * used as the deflection angle, as BioSpec does. g gets its mean cosine. */
-static void bruls_phase(const ss_optics_data *d, int epi, double nm, ss_optics_layer *L) {
+ * function from Bruls & van der Leun 1984, mixed with a wide-angle
+ * (isotropic) share iso_frac: the Bruls cumulative transmitted share over
+ * the exitant angle at the two nearest measured wavelengths, interpolated
+ * linearly in wavelength (clamped outside the measured 254/302-546 nm) and
+ * normalised, F(theta) = (1 - iso_frac) F_Bruls(theta) + iso_frac (1 - cos
+ * theta) / 2 on a 0.25-degree grid, inverted at probabilities k / (n - 1);
+ * the exitant angle is used as the deflection angle, as BioSpec does. g gets
+ * the mixture's mean cosine. Returns the Bruls part's mean cosine. */
+static double bruls_phase(const ss_optics_data *d, int epi, double nm, double iso_frac,
+                          ss_optics_layer *L) {
     static const double wl_sc[5] = {254, 302, 365, 436, 546}, wl_epi[4] = {302, 365, 436, 546};
     const double *wl = epi ? wl_epi : wl_sc;
     int nw = epi ? 4 : 5, c0 = epi ? 5 : 0, a = 0, b = 0;
@@ -312,26 +316,76 @@ static void bruls_phase(const ss_optics_data *d, int epi, double nm, ss_optics_l
     }
     double top = cdf[n - 1] > 0.0 ? cdf[n - 1] : 1.0;
     for (int i = 0; i < n; i++) cdf[i] /= top;
+    /* mean cosine of the Bruls part (piecewise-uniform angle density) */
+    double gb = 0.0;
+    for (int j = 0; j + 1 < n; j++) {
+        double w = cdf[j + 1] - cdf[j], t0 = ang[j], t1 = ang[j + 1];
+        gb += w * (t1 > t0 ? (sin(t1) - sin(t0)) / (t1 - t0) : cos(t0));
+    }
+    /* the mixture's CDF on a fine grid over [0, pi] */
+    enum { NG = 721 };
+    double fg[NG], tg[NG];
+    int i = 0;
+    for (int k = 0; k < NG; k++) {
+        double t = M_PI * k / (NG - 1), fb;
+        while (i < n - 2 && ang[i + 1] < t) i++;
+        if (t >= ang[n - 1])
+            fb = 1.0;
+        else {
+            double span = ang[i + 1] - ang[i];
+            double u = span > 0.0 ? (t - ang[i]) / span : 1.0;
+            fb = cdf[i] + fmin(1.0, fmax(0.0, u)) * (cdf[i + 1] - cdf[i]);
+        }
+        tg[k] = t;
+        fg[k] = (1.0 - iso_frac) * fb + iso_frac * 0.5 * (1.0 - cos(t));
+        if (k > 0 && fg[k] < fg[k - 1]) fg[k] = fg[k - 1];
+    }
+    fg[NG - 1] = 1.0;
+    /* the last angle carrying probability (62.5 degrees without iso part) */
+    int last = NG - 1;
+    while (last > 0 && fg[last - 1] >= 1.0) last--;
     const int N = SS_OPTICS_PHASE_MAX;
     L->phase_n = N;
-    int i = 0;
+    i = 0;
     for (int k = 0; k < N; k++) {
         double p = (double)k / (N - 1);
-        while (i < n - 2 && cdf[i + 1] < p) i++;
-        double span = cdf[i + 1] - cdf[i];
-        double t = span > 0.0 ? (p - cdf[i]) / span : 0.0;
-        L->phase_theta[k] = ang[i] + fmin(1.0, fmax(0.0, t)) * (ang[i + 1] - ang[i]);
+        while (i < NG - 2 && fg[i + 1] < p) i++;
+        double span = fg[i + 1] - fg[i];
+        double t = span > 0.0 ? (p - fg[i]) / span : 0.0;
+        L->phase_theta[k] = tg[i] + fmin(1.0, fmax(0.0, t)) * (tg[i + 1] - tg[i]);
         if (k > 0 && L->phase_theta[k] < L->phase_theta[k - 1])
             L->phase_theta[k] = L->phase_theta[k - 1];
     }
-    L->phase_theta[N - 1] = ang[n - 1];
-    /* mean cosine of the piecewise-uniform angle density */
-    double g = 0.0;
-    for (int j = 0; j + 1 < n; j++) {
-        double w = cdf[j + 1] - cdf[j], t0 = ang[j], t1 = ang[j + 1];
-        g += w * (t1 > t0 ? (sin(t1) - sin(t0)) / (t1 - t0) : cos(t0));
-    }
-    L->g = g;
+    L->phase_theta[N - 1] = tg[last];
+    L->g = (1.0 - iso_frac) * gb; /* the isotropic part has mean cosine 0 */
+    return gb;
+}
+
+/* Reduced scattering coefficient of excised human epidermis measured with
+ * integrating spheres (Marchesini, Clemente, Pignoli & Brambilla 1992, J.
+ * Photochem. Photobiol. B 16:127): 32 /cm at 400 nm falling to 21 /cm at 800
+ * nm; linear in between, held outside. */
+static double musp_marchesini(double nm) {
+    double t = fmin(1.0, fmax(0.0, (nm - 400.0) / 400.0));
+    return 32.0 - 11.0 * t;
+}
+
+/* SC or epidermis scattering: the Bruls & van der Leun forward distribution
+ * with mus_B = 1 / d (one deflection per normal traversal, BioSpec), plus
+ * isotropic scattering mus_iso that brings the layer's reduced scattering
+ * mus_B (1 - g_B) + mus_iso up to Marchesini's mus' (none if the Bruls part
+ * already reaches it). Bruls & van der Leun measured only light transmitted
+ * forward; the isotropic share is the wide-angle and backward scattering
+ * their set-up could not see. */
+static void epidermal_scattering(const ss_optics_data *d, int epi, double nm, ss_optics_layer *L) {
+    double mus_b = 1.0 / L->d_cm;
+    double gb = bruls_phase(d, epi, nm, 0.0, L);
+    double iso = musp_marchesini(nm) - mus_b * (1.0 - gb);
+    if (iso > 0.0) {
+        L->mus_per_cm = mus_b + iso;
+        bruls_phase(d, epi, nm, iso / (mus_b + iso), L);
+    } else
+        L->mus_per_cm = mus_b;
 }
 
 static double musp_jacques(double nm) { return 2e5 * pow(nm, -1.5) + 2e12 * pow(nm, -4.0); }
@@ -369,13 +423,11 @@ ss_status ss_optics_skin_slab_data(const ss_optics_data *d, const ss_bio_params 
     L[0].n = N_SC;
     L[0].mua_per_cm = bc;
     L[0].d_cm = bio->sc_thickness_cm;
-    L[0].mus_per_cm = 1.0 / L[0].d_cm;
-    bruls_phase(d, 0, nm, &L[0]);
+    epidermal_scattering(d, 0, nm, &L[0]);
     L[1].n = N_EPI;
     L[1].mua_per_cm = bio->melanin * mel + bc;
     L[1].d_cm = bio->epidermis_thickness_cm;
-    L[1].mus_per_cm = 1.0 / L[1].d_cm;
-    bruls_phase(d, 1, nm, &L[1]);
+    epidermal_scattering(d, 1, nm, &L[1]);
     /* papillary and reticular dermis */
     double mua_d = bio->blood * blood + bc;
     L[2].n = N_PAP;

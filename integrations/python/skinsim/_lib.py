@@ -282,6 +282,7 @@ class ss_mc_options(ctypes.Structure):
         ("brdf_n_phi", c_int),
         ("radial_bins", c_int),
         ("radial_max_cm", c_double),
+        ("radial_distance", c_int),
     ]
 
 
@@ -329,6 +330,9 @@ class ss_fit_options(ctypes.Structure):
         ("tol", c_double),
         ("weighting", c_int),
         ("max_theta_rad", c_double),
+        ("base_mode", c_int),
+        ("albedo_rgb", c_double * 3),
+        ("surface", POINTER(ss_brdf_sampled)),
     ]
 
 

@@ -34,7 +34,7 @@ int main(void) {
     S(ss_mc_options), F(ss_mc_options, photons), F(ss_mc_options, seed),
         F(ss_mc_options, theta_i_rad), F(ss_mc_options, roughness_sigma),
         F(ss_mc_options, stochastic_absorb), F(ss_mc_options, radial_bins),
-        F(ss_mc_options, radial_max_cm);
+        F(ss_mc_options, radial_max_cm), F(ss_mc_options, radial_distance);
     S(ss_spectrum_options), F(ss_spectrum_options, wl_step_nm), F(ss_spectrum_options, mc),
         F(ss_spectrum_options, progress), F(ss_spectrum_options, progress_user);
     S(ss_reflectance_spectrum), F(ss_reflectance_spectrum, wavelength_nm),
@@ -42,7 +42,8 @@ int main(void) {
     S(ss_brdf_sampled), F(ss_brdf_sampled, n_phi), F(ss_brdf_sampled, f_rgb);
     S(ss_render_params), F(ss_render_params, specular), F(ss_render_params, roughness);
     S(ss_fit_options), F(ss_fit_options, tol), F(ss_fit_options, weighting),
-        F(ss_fit_options, max_theta_rad);
+        F(ss_fit_options, max_theta_rad), F(ss_fit_options, base_mode),
+        F(ss_fit_options, albedo_rgb), F(ss_fit_options, surface);
     S(ss_fit_result), F(ss_fit_result, params), F(ss_fit_result, distance),
         F(ss_fit_result, residual_rel), F(ss_fit_result, evaluations);
     S(ss_mm_entry), F(ss_mm_entry, residual_rel), F(ss_mm_entry, sss_radius_cm),

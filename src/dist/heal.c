@@ -1,0 +1,857 @@
+/* The healing solver of seed 001 §4.1 on MPI (docs/scaling.md). The grid is
+ * cut by a Cartesian process grid (MPI_Cart_create over x, y and z; z is kept
+ * whole, dims[2] = 1, because each column's epithelium reads the wound bed
+ * below it). Explicit scheme: MPI_Dims_create splits x and y; every rank steps
+ * its box plus a one-cell halo with the library's own kernel in its sub-box
+ * form (ss_heal_solver_create_sub) and then exchanges the faces of all eight
+ * fields with its four neighbours (non-blocking sends and receives). Split
+ * scheme: the boxes are y slabs (x lines and z columns whole) and the y sweep
+ * runs on x slabs, reached by two MPI_Alltoallv transposes per step, so every
+ * Thomas line solve runs whole, as in one process (no halo needed).
+ *
+ * Rank 0 also holds the run object (skinsim/heal_run.h) with the whole grid:
+ * it validates the input, writes every output with the single-process code
+ * and drives the others through a command channel (one broadcast per step,
+ * area row, gather or snapshot). Its hooks replace the run's step (all ranks
+ * step), its statistics (exact fixed-point partial sums reduced with integer
+ * additions, ss_heal_stats_acc) and its snapshot/checkpoint reads (the boxes
+ * are gathered into the whole grid first); after each snapshot every rank
+ * also writes its box as a .vti piece, joined by a .pvti. The kernels compute
+ * every cell from the same neighbours in the same arithmetic as one process,
+ * so fields, area.csv, snapshots and checkpoints are bit-identical for any
+ * rank count, and a checkpoint (always of the whole grid) resumes on any
+ * rank count. Gave up: rank 0 keeps the whole grid (set-up, gathered outputs
+ * and checkpoints), so its memory is that of a single-process run; the halo
+ * exchange is not overlapped with the kernel; the mechanics stay
+ * single-process (an error names --mechanics). */
+#include <math.h>
+#include <mpi.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "skinsim/dist.h"
+
+enum { CMD_STEP = 1, CMD_UNDO, CMD_STATS, CMD_SYNC, CMD_PIECES, CMD_END };
+enum { FACE_XM, FACE_XP, FACE_YM, FACE_YP, NFACES };
+
+/* What rank 0 tells every rank about the run before the boxes are sent. */
+typedef struct setup {
+    int G[3];
+    int dims[3];
+    int scheme;
+    double dx_mm, skin_top_mm, t_days, dt;
+    unsigned long long step;
+    ss_heal_params p;
+} setup;
+
+struct ss_dist_heal {
+    MPI_Comm cart;
+    int rank, size, dims[3], coords[3];
+    int nbr[NFACES];
+    setup su;
+    int lo[2], n[2]; /* owned box in x, y (whole grid indices), z whole */
+    ss_heal_grid *g; /* box + halo in x, y */
+    ss_heal_solver *s;
+    float *sbuf[NFACES], *rbuf[NFACES];
+    int fcount[NFACES]; /* floats per face message */
+    /* split scheme: the boxes above are y slabs (dims 1 x P x 1); the y sweep
+     * runs on x slabs (gB, sB), reached by two transposes per step */
+    int split, nslots;
+    ss_heal_grid *gB;
+    ss_heal_solver *sB;
+    float *tsend, *trecv;
+    int *scnt, *sdsp, *rcnt, *rdsp;
+    double tbytes;                  /* transpose bytes this rank sends per step */
+    ss_heal_run *run;               /* rank 0 */
+    const char *pdir;               /* rank 0: the fields folder of the snapshot being written */
+    double next_dt;                 /* rank 0: the step being broadcast */
+    float *backup[SS_HEAL_NFIELDS]; /* adaptive steps: the fields before the step */
+    double saved_t;
+    uint64_t saved_step;
+    int dirty; /* rank 0: the run's whole grid is behind the boxes */
+    double t_compute, t_halo, t_stats, t_gather;
+    long long steps;
+    ss_dist_heal_timing tmax; /* rank 0, after end */
+};
+
+/* Block split of n cells over p parts: part i starts at i n / p. */
+static int part_lo(int n, int p, int i) { return (int)((long long)n * i / p); }
+
+static void box_of(const ss_dist_heal *d, const int coords[3], int lo[2], int n[2]) {
+    for (int a = 0; a < 2; a++) {
+        lo[a] = part_lo(d->su.G[a], d->su.dims[a], coords[a]);
+        n[a] = part_lo(d->su.G[a], d->su.dims[a], coords[a] + 1) - lo[a];
+    }
+}
+
+/* ---- the box: scatter from and gather to rank 0's whole grid ---------------------- */
+
+/* The box + halo of a rank with origin lo and size n, cut from the whole grid
+ * G (cells outside it are BOUND with zero fields): cells then 8 field planes. */
+static void pack_box(const ss_heal_grid *G, const int lo[2], const int n[2], uint8_t *cells,
+                     float *fields) {
+    const int nxl = n[0] + 2, nyl = n[1] + 2, nz = G->nz;
+    const size_t nl = (size_t)nxl * nyl * nz;
+    for (int z = 0; z < nz; z++)
+        for (int y = 0; y < nyl; y++)
+            for (int x = 0; x < nxl; x++) {
+                const int X = lo[0] - 1 + x, Y = lo[1] - 1 + y;
+                const size_t c = ((size_t)z * nyl + y) * nxl + x;
+                if (X < 0 || Y < 0 || X >= G->nx || Y >= G->ny) {
+                    cells[c] = SS_CELL_BOUND;
+                    for (int f = 0; f < SS_HEAL_NFIELDS; f++) fields[f * nl + c] = 0.0f;
+                    continue;
+                }
+                const size_t gc = ss_heal_idx(G, X, Y, z);
+                cells[c] = G->cell[gc];
+                for (int f = 0; f < SS_HEAL_NFIELDS; f++) fields[f * nl + c] = G->field[f][gc];
+            }
+}
+
+/* Owned cells only, all fields: the gather message of a box. */
+static size_t owned_count(const int n[2], int nz) { return (size_t)n[0] * n[1] * nz; }
+
+static void pack_owned(const ss_heal_grid *g, const int n[2], float *buf) {
+    size_t k = 0;
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+        for (int z = 0; z < g->nz; z++)
+            for (int y = 1; y <= n[1]; y++) {
+                memcpy(buf + k, g->field[f] + ss_heal_idx(g, 1, y, z),
+                       (size_t)n[0] * sizeof(float));
+                k += (size_t)n[0];
+            }
+}
+
+static void unpack_owned(ss_heal_grid *G, const int lo[2], const int n[2], const float *buf) {
+    size_t k = 0;
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+        for (int z = 0; z < G->nz; z++)
+            for (int y = 0; y < n[1]; y++) {
+                memcpy(G->field[f] + ss_heal_idx(G, lo[0], lo[1] + y, z), buf + k,
+                       (size_t)n[0] * sizeof(float));
+                k += (size_t)n[0];
+            }
+}
+
+/* ---- halo exchange -------------------------------------------------------------- */
+
+/* Face planes: x faces are (y, z) planes at x = 1 / nxl-2 (sent) and x = 0 /
+ * nxl-1 (received); y faces are (x, z) rows at y = 1 / nyl-2 and 0 / nyl-1. */
+static void face_io(ss_heal_grid *g, int face, int recv, float *buf) {
+    const int nxl = g->nx, nyl = g->ny, nz = g->nz;
+    size_t k = 0;
+    if (face == FACE_XM || face == FACE_XP) {
+        int x = face == FACE_XM ? (recv ? 0 : 1) : (recv ? nxl - 1 : nxl - 2);
+        for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+            for (int z = 0; z < nz; z++)
+                for (int y = 0; y < nyl; y++) {
+                    float *p = g->field[f] + ss_heal_idx(g, x, y, z);
+                    if (recv)
+                        *p = buf[k++];
+                    else
+                        buf[k++] = *p;
+                }
+    } else {
+        int y = face == FACE_YM ? (recv ? 0 : 1) : (recv ? nyl - 1 : nyl - 2);
+        for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+            for (int z = 0; z < nz; z++) {
+                float *p = g->field[f] + ss_heal_idx(g, 0, y, z);
+                if (recv)
+                    memcpy(p, buf + k, (size_t)nxl * sizeof(float));
+                else
+                    memcpy(buf + k, p, (size_t)nxl * sizeof(float));
+                k += (size_t)nxl;
+            }
+    }
+}
+
+static void halo_exchange(ss_dist_heal *d) {
+    MPI_Request rq[2 * NFACES];
+    int nr = 0;
+    /* a face's opposite: what the neighbour on the -x side sends us is its +x face */
+    static const int opposite[NFACES] = {FACE_XP, FACE_XM, FACE_YP, FACE_YM};
+    for (int f = 0; f < NFACES; f++) {
+        if (d->nbr[f] == MPI_PROC_NULL) continue;
+        MPI_Irecv(d->rbuf[f], d->fcount[f], MPI_FLOAT, d->nbr[f], opposite[f], d->cart, &rq[nr++]);
+    }
+    for (int f = 0; f < NFACES; f++) {
+        if (d->nbr[f] == MPI_PROC_NULL) continue;
+        face_io(d->g, f, 0, d->sbuf[f]);
+        MPI_Isend(d->sbuf[f], d->fcount[f], MPI_FLOAT, d->nbr[f], f, d->cart, &rq[nr++]);
+    }
+    MPI_Waitall(nr, rq, MPI_STATUSES_IGNORE);
+    for (int f = 0; f < NFACES; f++)
+        if (d->nbr[f] != MPI_PROC_NULL) face_io(d->g, f, 1, d->rbuf[f]);
+}
+
+/* ---- the split scheme's transposes ---------------------------------------------- */
+
+/* x slab of rank j (the y sweep's decomposition) */
+static void xslab(const ss_dist_heal *d, int j, int *lo, int *n) {
+    *lo = part_lo(d->su.G[0], d->size, j);
+    *n = part_lo(d->su.G[0], d->size, j + 1) - *lo;
+}
+static void yslab(const ss_dist_heal *d, int j, int *lo, int *n) {
+    *lo = part_lo(d->su.G[1], d->size, j);
+    *n = part_lo(d->su.G[1], d->size, j + 1) - *lo;
+}
+
+/* the quantities moved: fields, then (A -> B only) the frozen multipliers */
+static float *quantity(ss_heal_grid *g, ss_heal_solver *s, int q) {
+    return q < SS_HEAL_NFIELDS ? g->field[q] : ss_heal_solver_multipliers(s, q - SS_HEAL_NFIELDS);
+}
+
+/* A (y slab, owned rows) -> B (x slab, all rows): every field and multiplier */
+static void transpose_ab(ss_dist_heal *d) {
+    const int nz = d->su.G[2], nq = SS_HEAL_NFIELDS + d->nslots, me = d->rank;
+    int ylo, yn, xlo, xn;
+    yslab(d, me, &ylo, &yn);
+    size_t k = 0;
+    for (int j = 0; j < d->size; j++) {
+        xslab(d, j, &xlo, &xn);
+        d->sdsp[j] = (int)k;
+        for (int q = 0; q < nq; q++) {
+            const float *u = quantity(d->g, d->s, q);
+            for (int z = 0; z < nz; z++)
+                for (int y = 0; y < yn; y++) {
+                    memcpy(d->tsend + k, u + ss_heal_idx(d->g, xlo + 1, y + 1, z),
+                           (size_t)xn * sizeof(float));
+                    k += (size_t)xn;
+                }
+        }
+        d->scnt[j] = (int)k - d->sdsp[j];
+    }
+    xslab(d, me, &xlo, &xn);
+    k = 0;
+    for (int j = 0; j < d->size; j++) {
+        int jlo, jn;
+        yslab(d, j, &jlo, &jn);
+        d->rdsp[j] = (int)k;
+        d->rcnt[j] = nq * nz * jn * xn;
+        k += (size_t)d->rcnt[j];
+    }
+    MPI_Alltoallv(d->tsend, d->scnt, d->sdsp, MPI_FLOAT, d->trecv, d->rcnt, d->rdsp, MPI_FLOAT,
+                  d->cart);
+    k = 0;
+    for (int j = 0; j < d->size; j++) {
+        int jlo, jn;
+        yslab(d, j, &jlo, &jn);
+        for (int q = 0; q < nq; q++) {
+            float *u = quantity(d->gB, d->sB, q);
+            for (int z = 0; z < nz; z++)
+                for (int y = 0; y < jn; y++) {
+                    memcpy(u + ss_heal_idx(d->gB, 1, jlo + y + 1, z), d->trecv + k,
+                           (size_t)xn * sizeof(float));
+                    k += (size_t)xn;
+                }
+        }
+    }
+}
+
+/* B (x slab) -> A (y slab): the fields after the y sweep */
+static void transpose_ba(ss_dist_heal *d) {
+    const int nz = d->su.G[2], nq = SS_HEAL_NFIELDS, me = d->rank;
+    int xlo, xn, ylo, yn;
+    xslab(d, me, &xlo, &xn);
+    size_t k = 0;
+    for (int j = 0; j < d->size; j++) {
+        int jlo, jn;
+        yslab(d, j, &jlo, &jn);
+        d->sdsp[j] = (int)k;
+        for (int q = 0; q < nq; q++)
+            for (int z = 0; z < nz; z++)
+                for (int y = 0; y < jn; y++) {
+                    memcpy(d->tsend + k, d->gB->field[q] + ss_heal_idx(d->gB, 1, jlo + y + 1, z),
+                           (size_t)xn * sizeof(float));
+                    k += (size_t)xn;
+                }
+        d->scnt[j] = (int)k - d->sdsp[j];
+    }
+    yslab(d, me, &ylo, &yn);
+    k = 0;
+    for (int j = 0; j < d->size; j++) {
+        int jlo, jn;
+        xslab(d, j, &jlo, &jn);
+        d->rdsp[j] = (int)k;
+        d->rcnt[j] = nq * nz * yn * jn;
+        k += (size_t)d->rcnt[j];
+    }
+    MPI_Alltoallv(d->tsend, d->scnt, d->sdsp, MPI_FLOAT, d->trecv, d->rcnt, d->rdsp, MPI_FLOAT,
+                  d->cart);
+    k = 0;
+    for (int j = 0; j < d->size; j++) {
+        int jlo, jn;
+        xslab(d, j, &jlo, &jn);
+        for (int q = 0; q < nq; q++)
+            for (int z = 0; z < nz; z++)
+                for (int y = 0; y < yn; y++) {
+                    memcpy(d->g->field[q] + ss_heal_idx(d->g, jlo + 1, y + 1, z), d->trecv + k,
+                           (size_t)jn * sizeof(float));
+                    k += (size_t)jn;
+                }
+    }
+}
+
+/* One split step: x sweep on the y slabs, y sweep on the x slabs, z sweep back
+ * on the y slabs (columns and x lines are whole on a y slab, y lines on an x
+ * slab: every line is solved whole, as in one process). */
+static ss_status split_step(ss_dist_heal *d, ss_error *err) {
+    double t0 = MPI_Wtime();
+    ss_status st = ss_heal_step_phase(d->s, d->g, 0, err);
+    double t1 = MPI_Wtime();
+    transpose_ab(d);
+    double t2 = MPI_Wtime();
+    if (!st) st = ss_heal_step_phase(d->sB, d->gB, 1, err);
+    double t3 = MPI_Wtime();
+    transpose_ba(d);
+    double t4 = MPI_Wtime();
+    if (!st) st = ss_heal_step_phase(d->s, d->g, 2, err);
+    double t5 = MPI_Wtime();
+    d->t_compute += (t1 - t0) + (t3 - t2) + (t5 - t4);
+    d->t_halo += (t2 - t1) + (t4 - t3);
+    d->steps++;
+    return st;
+}
+
+/* ---- the commands ------------------------------------------------------------- */
+
+static ss_status plain_step(ss_dist_heal *d, ss_error *err) {
+    if (d->split) return split_step(d, err);
+    double t0 = MPI_Wtime();
+    ss_status st = ss_heal_step(d->s, d->g, err);
+    double t1 = MPI_Wtime();
+    halo_exchange(d);
+    d->t_compute += t1 - t0;
+    d->t_halo += MPI_Wtime() - t1;
+    d->steps++;
+    return st;
+}
+
+/* One step of dt (rank 0 broadcasts it: the adaptive run's multiple of its
+ * step); with want_change the fields are kept first and the largest change of
+ * any species in any cell is returned (a max: the same for any split). */
+static ss_status do_step(ss_dist_heal *d, int want_change, double *change, ss_error *err) {
+    double dt = 0;
+    if (d->rank == 0) dt = d->next_dt;
+    MPI_Bcast(&dt, 1, MPI_DOUBLE, 0, d->cart);
+    ss_status st = SS_OK;
+    if (ss_heal_solver_dt(d->s) != dt) st = ss_heal_solver_set_dt(d->s, dt, err);
+    if (!st && d->sB && ss_heal_solver_dt(d->sB) != dt) st = ss_heal_solver_set_dt(d->sB, dt, err);
+    if (st) MPI_Abort(d->cart, 2); /* rank 0 checked the step: cannot differ here */
+    const size_t n = (size_t)d->g->nx * d->g->ny * d->g->nz;
+    if (want_change) {
+        for (int f = 0; f < SS_HEAL_NFIELDS; f++) {
+            if (!d->backup[f] && !(d->backup[f] = malloc(n * sizeof(float)))) MPI_Abort(d->cart, 3);
+            memcpy(d->backup[f], d->g->field[f], n * sizeof(float));
+        }
+        d->saved_t = d->g->t_days;
+        d->saved_step = d->g->step;
+    }
+    st = plain_step(d, err);
+    if (want_change) {
+        double m = 0.0, mall = 0.0;
+        for (int f = 0; f < SS_HEAL_NFIELDS; f++) {
+            const float *x = d->g->field[f], *y = d->backup[f];
+            float mf = 0.0f;
+            for (size_t i = 0; i < n; i++) {
+                const float c = fabsf(x[i] - y[i]);
+                mf = c > mf ? c : mf;
+            }
+            if (mf > m) m = mf;
+        }
+        MPI_Allreduce(&m, &mall, 1, MPI_DOUBLE, MPI_MAX, d->cart);
+        if (change) *change = mall;
+    }
+    return st;
+}
+
+static void do_undo(ss_dist_heal *d) {
+    const size_t n = (size_t)d->g->nx * d->g->ny * d->g->nz;
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+        if (d->backup[f]) memcpy(d->g->field[f], d->backup[f], n * sizeof(float));
+    d->g->t_days = d->saved_t;
+    d->g->step = d->saved_step;
+}
+
+static void do_stats(ss_dist_heal *d, ss_heal_stats *st) {
+    double t0 = MPI_Wtime();
+    ss_heal_stats_acc a;
+    ss_heal_stats_acc_init(&a);
+    ss_heal_stats_acc_add(&a, d->g, 1, d->g->nx - 1, 1, d->g->ny - 1);
+    /* integer parts: counts and limbs (normalised, so sums cannot overflow) */
+    enum { NI = 6 + (SS_HEAL_NFIELDS + 1) * SS_HEAL_ACC_LIMBS };
+    int64_t in[NI], out[NI];
+    int64_t cnt[6] = {a.n_initial, a.n_region, a.n_open, a.n_wcol, a.n_tissue, a.n_nonfinite};
+    memcpy(in, cnt, sizeof cnt);
+    memcpy(in + 6, a.sum, sizeof a.sum);
+    double mx = a.scar_max, mxall = 0;
+    MPI_Reduce(in, out, NI, MPI_INT64_T, MPI_SUM, 0, d->cart);
+    MPI_Reduce(&mx, &mxall, 1, MPI_DOUBLE, MPI_MAX, 0, d->cart);
+    if (d->rank == 0) {
+        ss_heal_stats_acc t;
+        ss_heal_stats_acc_init(&t);
+        t.n_initial = out[0];
+        t.n_region = out[1];
+        t.n_open = out[2];
+        t.n_wcol = out[3];
+        t.n_tissue = out[4];
+        t.n_nonfinite = out[5];
+        memcpy(t.sum, out + 6, sizeof t.sum);
+        t.scar_max = mxall;
+        ss_heal_stats_acc_finish(&t, d->su.dx_mm, st);
+    }
+    d->t_stats += MPI_Wtime() - t0;
+}
+
+static ss_status do_gather(ss_dist_heal *d, ss_error *err) {
+    double t0 = MPI_Wtime();
+    const int nz = d->su.G[2];
+    ss_status st = SS_OK;
+    if (d->rank != 0) {
+        size_t cnt = owned_count(d->n, nz) * SS_HEAL_NFIELDS;
+        float *buf = malloc(cnt * sizeof(float));
+        if (!buf) MPI_Abort(d->cart, 3); /* rank 0 waits for this box */
+        pack_owned(d->g, d->n, buf);
+        MPI_Send(buf, (int)cnt, MPI_FLOAT, 0, 100, d->cart);
+        free(buf);
+    } else {
+        ss_heal_grid *G = ss_heal_run_grid(d->run);
+        float *buf = NULL;
+        for (int r = 0; r < d->size; r++) {
+            int coords[3], lo[2], n[2];
+            MPI_Cart_coords(d->cart, r, 3, coords);
+            box_of(d, coords, lo, n);
+            size_t cnt = owned_count(n, nz) * SS_HEAL_NFIELDS;
+            float *b = realloc(buf, cnt * sizeof(float));
+            if (!b) MPI_Abort(d->cart, 3);
+            buf = b;
+            if (r == 0)
+                pack_owned(d->g, n, buf);
+            else
+                MPI_Recv(buf, (int)cnt, MPI_FLOAT, r, 100, d->cart, MPI_STATUS_IGNORE);
+            unpack_owned(G, lo, n, buf);
+        }
+        free(buf);
+        d->dirty = 0;
+    }
+    (void)err;
+    d->t_gather += MPI_Wtime() - t0;
+    return st;
+}
+
+/* Every rank writes its owned box as fields_dir/fields_NNNN_pRRRR.vti and
+ * rank 0 the fields_NNNN.pvti that joins them (ParaView opens it as one
+ * image): the per-rank output that needs no gather. */
+static ss_status do_pieces(ss_dist_heal *d, int index, ss_error *err) {
+    double t0 = MPI_Wtime();
+    int len = 0;
+    char dir[4096] = "";
+    if (d->rank == 0) len = (int)strlen(d->pdir) + 1;
+    MPI_Bcast(&len, 1, MPI_INT, 0, d->cart);
+    if (len > (int)sizeof dir) len = (int)sizeof dir;
+    if (d->rank == 0) memcpy(dir, d->pdir, (size_t)len);
+    MPI_Bcast(dir, len, MPI_CHAR, 0, d->cart);
+    dir[sizeof dir - 1] = 0;
+    const int nz = d->su.G[2];
+    char path[4400];
+    snprintf(path, sizeof path, "%s/fields_%04d_p%04d.vti", dir, index, d->rank);
+    ss_error e;
+    ss_error_clear(&e);
+    /* the owned box as a grid of its own (allocated at least 3 wide, as grids are) */
+    ss_heal_grid *p = ss_heal_grid_create(d->n[0] < 3 ? 3 : d->n[0], d->n[1] < 3 ? 3 : d->n[1], nz,
+                                          d->su.dx_mm, &e);
+    ss_status st = p ? SS_OK : (e.code ? e.code : SS_ERR_NOMEM);
+    if (p) {
+        p->nx = d->n[0];
+        p->ny = d->n[1];
+        p->t_days = d->g->t_days;
+        for (int z = 0; z < nz; z++)
+            for (int y = 0; y < d->n[1]; y++) {
+                const size_t src = ss_heal_idx(d->g, 1, y + 1, z), dst = ss_heal_idx(p, 0, y, z);
+                memcpy(p->cell + dst, d->g->cell + src, (size_t)d->n[0]);
+                for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+                    memcpy(p->field[f] + dst, d->g->field[f] + src,
+                           (size_t)d->n[0] * sizeof(float));
+            }
+        const int off[3] = {d->lo[0], d->lo[1], 0};
+        st = ss_heal_vti_write_piece(path, p, off, d->su.G, &e);
+        ss_heal_grid_free(p);
+    }
+    int v = (int)st, vmax = 0;
+    MPI_Allreduce(&v, &vmax, 1, MPI_INT, MPI_MAX, d->cart);
+    if (d->rank == 0 && vmax) {
+        if (st)
+            *err = e;
+        else
+            ss_error_set(err, SS_ERR_RUNTIME, "%s: a rank could not write its piece", dir);
+    } else if (d->rank == 0) {
+        int(*ext)[6] = malloc((size_t)d->size * sizeof *ext);
+        char **files = malloc((size_t)d->size * sizeof *files);
+        char *names = malloc((size_t)d->size * 32);
+        if (!ext || !files || !names) {
+            vmax = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+        } else {
+            for (int q = 0; q < d->size; q++) {
+                int coords[3], lo[2], n[2];
+                MPI_Cart_coords(d->cart, q, 3, coords);
+                box_of(d, coords, lo, n);
+                const int e6[6] = {lo[0], lo[0] + n[0], lo[1], lo[1] + n[1], 0, nz};
+                memcpy(ext[q], e6, sizeof e6);
+                files[q] = names + (size_t)q * 32;
+                snprintf(files[q], 32, "fields_%04d_p%04d.vti", index, q);
+            }
+            snprintf(path, sizeof path, "%s/fields_%04d.pvti", dir, index);
+            vmax = ss_heal_pvti_write(path, d->su.G, d->su.dx_mm, d->g->t_days, d->size,
+                                      (const int(*)[6])ext, (const char *const *)files, err);
+        }
+        free(ext);
+        free(files);
+        free(names);
+    }
+    d->t_gather += MPI_Wtime() - t0;
+    return (ss_status)vmax;
+}
+
+static void send_cmd(ss_dist_heal *d, int cmd, int arg) {
+    int m[2] = {cmd, arg};
+    MPI_Bcast(m, 2, MPI_INT, 0, d->cart);
+}
+
+/* rank 0's hooks on its run */
+static ss_status hook_step(void *ctx, ss_heal_grid *G, double dt, double *max_change,
+                           ss_error *err) {
+    ss_dist_heal *d = ctx;
+    send_cmd(d, CMD_STEP, max_change != NULL);
+    d->next_dt = dt;
+    ss_status st = do_step(d, max_change != NULL, max_change, err);
+    G->t_days = d->g->t_days;
+    G->step++;
+    d->dirty = 1;
+    return st;
+}
+
+static void hook_undo(void *ctx, ss_heal_grid *G) {
+    ss_dist_heal *d = ctx;
+    (void)G;
+    send_cmd(d, CMD_UNDO, 0);
+    do_undo(d);
+}
+
+static void hook_stats(void *ctx, const ss_heal_grid *G, ss_heal_stats *st) {
+    ss_dist_heal *d = ctx;
+    (void)G;
+    send_cmd(d, CMD_STATS, 0);
+    do_stats(d, st);
+}
+
+static ss_status hook_sync(void *ctx, ss_heal_grid *G, ss_error *err) {
+    ss_dist_heal *d = ctx;
+    (void)G;
+    if (!d->dirty) return SS_OK;
+    send_cmd(d, CMD_SYNC, 0);
+    return do_gather(d, err);
+}
+
+static ss_status hook_snapshot(void *ctx, const ss_heal_grid *G, const char *fields_dir, int index,
+                               ss_error *err) {
+    ss_dist_heal *d = ctx;
+    (void)G;
+    if (d->size < 2) return SS_OK; /* one rank: the .vti is the piece */
+    d->pdir = fields_dir;
+    send_cmd(d, CMD_PIECES, index);
+    return do_pieces(d, index, err);
+}
+
+/* ---- set-up ----------------------------------------------------------------------- */
+
+/* Rank 0 sends every rank its box + halo of its whole grid (cells and
+ * fields) into g: the boxes of the process grid, or (xslabs) the split
+ * scheme's x slabs. */
+static void scatter(ss_dist_heal *d, ss_heal_run *r, ss_heal_grid *g, int xslabs) {
+    const int nz = d->su.G[2], tag = xslabs ? 12 : 10;
+    if (d->rank != 0) {
+        const size_t nl = (size_t)g->nx * g->ny * nz;
+        float *fields = malloc(nl * SS_HEAL_NFIELDS * sizeof(float));
+        if (!fields) MPI_Abort(d->cart, 3);
+        MPI_Recv(g->cell, (int)nl, MPI_BYTE, 0, tag, d->cart, MPI_STATUS_IGNORE);
+        MPI_Recv(fields, (int)(nl * SS_HEAL_NFIELDS), MPI_FLOAT, 0, tag + 1, d->cart,
+                 MPI_STATUS_IGNORE);
+        for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+            memcpy(g->field[f], fields + f * nl, nl * sizeof(float));
+        free(fields);
+        return;
+    }
+    const ss_heal_grid *G = ss_heal_run_grid(r);
+    for (int q = d->size - 1; q >= 0; q--) {
+        int lo[2] = {0, 0}, n[2] = {0, d->su.G[1]};
+        if (xslabs) {
+            xslab(d, q, &lo[0], &n[0]);
+        } else {
+            int coords[3];
+            MPI_Cart_coords(d->cart, q, 3, coords);
+            box_of(d, coords, lo, n);
+        }
+        size_t nq = (size_t)(n[0] + 2) * (n[1] + 2) * nz;
+        uint8_t *cells = q == 0 ? g->cell : malloc(nq);
+        float *fields = malloc(nq * SS_HEAL_NFIELDS * sizeof(float));
+        if (!cells || !fields) MPI_Abort(d->cart, 3);
+        pack_box(G, lo, n, cells, fields);
+        if (q == 0) {
+            for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+                memcpy(g->field[f], fields + f * nq, nq * sizeof(float));
+        } else {
+            MPI_Send(cells, (int)nq, MPI_BYTE, q, tag, d->cart);
+            MPI_Send(fields, (int)(nq * SS_HEAL_NFIELDS), MPI_FLOAT, q, tag + 1, d->cart);
+            free(cells);
+        }
+        free(fields);
+    }
+}
+
+/* The split scheme's x slab of every rank (cells and fields from rank 0's
+ * whole grid, like the y slabs) and the transpose buffers. */
+static ss_status split_setup(ss_dist_heal *d, ss_heal_run *r, ss_error *err) {
+    const int nz = d->su.G[2];
+    int xlo, xn;
+    xslab(d, d->rank, &xlo, &xn);
+    d->nslots = ss_heal_solver_nslots(d->s);
+    d->gB = ss_heal_grid_create(xn + 2, d->su.G[1] + 2, nz, d->su.dx_mm, err);
+    if (!d->gB) return err->code ? err->code : SS_ERR_NOMEM;
+    d->gB->skin_top_mm = d->su.skin_top_mm;
+    scatter(d, r, d->gB, 1);
+    int goff[3] = {xlo - 1, -1, 0};
+    d->sB = ss_heal_solver_create_sub(d->gB, goff, d->su.G, &d->su.p, SS_HEAL_SPLIT, d->su.dt, err);
+    if (!d->sB) return err->code ? err->code : SS_ERR_RUNTIME;
+    /* the largest message set: A's owned rows or B's owned columns, all quantities */
+    int ylo, yn;
+    yslab(d, d->rank, &ylo, &yn);
+    size_t na = (size_t)d->su.G[0] * yn * nz, nbo = (size_t)xn * d->su.G[1] * nz;
+    size_t cap = (na > nbo ? na : nbo) * (size_t)(SS_HEAL_NFIELDS + d->nslots);
+    d->tsend = malloc(cap * sizeof(float));
+    d->trecv = malloc(cap * sizeof(float));
+    d->scnt = malloc((size_t)d->size * 4 * sizeof(int));
+    if (!d->tsend || !d->trecv || !d->scnt) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    d->sdsp = d->scnt + d->size;
+    d->rcnt = d->sdsp + d->size;
+    d->rdsp = d->rcnt + d->size;
+    /* bytes sent to other ranks per step: both transposes, less what stays here */
+    int xo, xno;
+    xslab(d, d->rank, &xo, &xno);
+    d->tbytes = 4.0 * nz *
+                ((double)(d->su.G[0] - xno) * yn * (SS_HEAL_NFIELDS + d->nslots) +
+                 (double)xno * (d->su.G[1] - yn) * SS_HEAL_NFIELDS);
+    return SS_OK;
+}
+
+/* Rank 0: what the distributed solver cannot do, as an input error. */
+static ss_status check_root(ss_heal_run *r, int size, int dims[3], ss_error *err) {
+    const ss_heal_grid *G = ss_heal_run_grid(r);
+    if (ss_heal_run_mech(r))
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "--mechanics cannot run on %d MPI ranks: the contraction mechanics "
+                            "needs the whole grid in one process (run it without mpirun, or "
+                            "with -np 1)",
+                            size);
+    if (ss_heal_run_scheme(r) != SS_HEAL_EXPLICIT) {
+        /* y slabs, and x slabs for the y sweep: every line solve stays whole */
+        dims[0] = dims[2] = 1;
+        dims[1] = size;
+        if (size > G->nx || size > G->ny)
+            return ss_error_set(err, SS_ERR_INPUT,
+                                "%d MPI ranks are too many for the %dx%dx%d grid with --scheme "
+                                "split (slabs in y and in x, one column each at least); use at "
+                                "most %d ranks, a larger --grid or --scheme explicit",
+                                size, G->nx, G->ny, G->nz, G->nx < G->ny ? G->nx : G->ny);
+        return SS_OK;
+    }
+    dims[0] = dims[1] = 0;
+    dims[2] = 1; /* columns stay whole */
+    if (MPI_Dims_create(size, 3, dims) != MPI_SUCCESS)
+        return ss_error_set(err, SS_ERR_INPUT, "MPI: no process grid for %d ranks", size);
+    if (dims[0] > G->nx || dims[1] > G->ny)
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "%d MPI ranks are too many for the %dx%dx%d grid: the process grid "
+                            "%dx%dx%d would leave a rank without a column (x and y are split, "
+                            "z is kept whole); use at most %d ranks or a larger --grid",
+                            size, G->nx, G->ny, G->nz, dims[0], dims[1], dims[2],
+                            G->nx < G->ny ? G->nx : G->ny);
+    return SS_OK;
+}
+
+static ss_status agree(MPI_Comm comm, ss_status st) {
+    int v = (int)st, m = 0;
+    MPI_Allreduce(&v, &m, 1, MPI_INT, MPI_MAX, comm);
+    return (ss_status)m;
+}
+
+ss_status ss_dist_heal_create(ss_heal_run *r, ss_status root_st, ss_dist_heal **out,
+                              ss_error *err) {
+    *out = NULL;
+    int rank, size;
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    MPI_Comm_size(MPI_COMM_WORLD, &size);
+    setup su;
+    memset(&su, 0, sizeof su);
+    int v = (int)root_st;
+    if (rank == 0 && !root_st) {
+        v = (int)check_root(r, size, su.dims, err);
+    }
+    MPI_Bcast(&v, 1, MPI_INT, 0, MPI_COMM_WORLD);
+    if (v) {
+        if (rank != 0) ss_error_set(err, (ss_status)v, "rank 0 refused the run");
+        return (ss_status)v;
+    }
+    if (rank == 0) {
+        const ss_heal_grid *G = ss_heal_run_grid(r);
+        su.G[0] = G->nx;
+        su.G[1] = G->ny;
+        su.G[2] = G->nz;
+        su.scheme = (int)ss_heal_run_scheme(r);
+        su.dx_mm = G->dx_mm;
+        su.skin_top_mm = G->skin_top_mm;
+        su.t_days = G->t_days;
+        su.step = G->step;
+        su.dt = ss_heal_run_dt(r);
+        su.p = *ss_heal_run_params(r);
+    }
+    MPI_Bcast(&su, (int)sizeof su, MPI_BYTE, 0, MPI_COMM_WORLD);
+
+    ss_dist_heal *d = calloc(1, sizeof *d);
+    ss_status st = d ? SS_OK : ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    if (agree(MPI_COMM_WORLD, st)) {
+        free(d);
+        return SS_ERR_NOMEM;
+    }
+    d->su = su;
+    d->size = size;
+    d->run = rank == 0 ? r : NULL;
+    int periods[3] = {0, 0, 0};
+    memcpy(d->dims, su.dims, sizeof d->dims);
+    MPI_Cart_create(MPI_COMM_WORLD, 3, d->dims, periods, 0, &d->cart);
+    MPI_Comm_rank(d->cart, &d->rank);
+    MPI_Cart_coords(d->cart, d->rank, 3, d->coords);
+    MPI_Cart_shift(d->cart, 0, 1, &d->nbr[FACE_XM], &d->nbr[FACE_XP]);
+    MPI_Cart_shift(d->cart, 1, 1, &d->nbr[FACE_YM], &d->nbr[FACE_YP]);
+    box_of(d, d->coords, d->lo, d->n);
+
+    /* the box + halo grid and its solver */
+    const int nxl = d->n[0] + 2, nyl = d->n[1] + 2, nz = su.G[2];
+    d->g = ss_heal_grid_create(nxl, nyl, nz, su.dx_mm, err);
+    if (d->g) {
+        d->g->skin_top_mm = su.skin_top_mm;
+        d->g->t_days = su.t_days;
+        d->g->step = su.step;
+    }
+    d->fcount[FACE_XM] = d->fcount[FACE_XP] = SS_HEAL_NFIELDS * nyl * nz;
+    d->fcount[FACE_YM] = d->fcount[FACE_YP] = SS_HEAL_NFIELDS * nxl * nz;
+    for (int f = 0; f < NFACES && d->g; f++) {
+        d->sbuf[f] = malloc((size_t)d->fcount[f] * sizeof(float));
+        d->rbuf[f] = malloc((size_t)d->fcount[f] * sizeof(float));
+        if (!d->sbuf[f] || !d->rbuf[f]) st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    }
+    if (!d->g) st = err->code ? err->code : SS_ERR_NOMEM;
+    if ((st = agree(d->cart, st))) {
+        if (rank != 0) ss_error_set(err, st, "a rank could not allocate its box");
+        ss_dist_heal_free(d);
+        return st;
+    }
+
+    scatter(d, r, d->g, 0); /* every rank its box + halo */
+    int goff[3] = {d->lo[0] - 1, d->lo[1] - 1, 0};
+    d->s =
+        ss_heal_solver_create_sub(d->g, goff, su.G, &su.p, (ss_heal_scheme)su.scheme, su.dt, err);
+    st = d->s ? SS_OK : (err->code ? err->code : SS_ERR_RUNTIME);
+    if ((st = agree(d->cart, st))) {
+        if (d->rank != 0) ss_error_set(err, st, "a rank could not set up its solver");
+        ss_dist_heal_free(d);
+        return st;
+    }
+    d->split = su.scheme == SS_HEAL_SPLIT && size > 1; /* one rank: the plain step */
+    if (d->split) st = split_setup(d, r, err);
+    if ((st = agree(d->cart, st))) {
+        if (d->rank != 0) ss_error_set(err, st, "a rank could not set up its x slab");
+        ss_dist_heal_free(d);
+        return st;
+    }
+    if (d->rank == 0) {
+        ss_heal_run_hooks h = {d, hook_step, hook_undo, hook_stats, hook_sync, hook_snapshot};
+        ss_heal_run_set_hooks(r, &h, err);
+    }
+    *out = d;
+    return SS_OK;
+}
+
+static void reduce_timing(ss_dist_heal *d) {
+    double t[5] = {d->t_compute, d->t_halo, d->t_stats, d->t_gather, 0}, m[5];
+    size_t fb = 0;
+    for (int f = 0; f < NFACES; f++)
+        if (d->nbr[f] != MPI_PROC_NULL) fb += (size_t)d->fcount[f] * sizeof(float);
+    t[4] = d->split ? d->tbytes : (double)fb;
+    MPI_Reduce(t, m, 5, MPI_DOUBLE, MPI_MAX, 0, d->cart);
+    if (d->rank == 0) {
+        d->tmax.compute_s = m[0];
+        d->tmax.halo_s = m[1];
+        d->tmax.stats_s = m[2];
+        d->tmax.gather_s = m[3];
+        d->tmax.halo_bytes_per_step = m[4];
+        memcpy(d->tmax.dims, d->dims, sizeof d->dims);
+        d->tmax.steps = d->steps;
+    }
+}
+
+ss_status ss_dist_heal_serve(ss_dist_heal *d, ss_error *err) {
+    for (;;) {
+        int m[2];
+        MPI_Bcast(m, 2, MPI_INT, 0, d->cart);
+        switch (m[0]) {
+        case CMD_STEP:
+            do_step(d, m[1], NULL, err);
+            break;
+        case CMD_UNDO:
+            do_undo(d);
+            break;
+        case CMD_STATS: {
+            ss_heal_stats st;
+            do_stats(d, &st);
+            break;
+        }
+        case CMD_SYNC:
+            do_gather(d, err);
+            break;
+        case CMD_PIECES:
+            do_pieces(d, m[1], err);
+            break;
+        default: /* CMD_END */
+            reduce_timing(d);
+            if (m[1]) return ss_error_set(err, (ss_status)m[1], "rank 0 stopped the run");
+            return SS_OK;
+        }
+    }
+}
+
+void ss_dist_heal_end(ss_dist_heal *d, ss_status st) {
+    if (!d || d->rank != 0) return;
+    send_cmd(d, CMD_END, (int)st);
+    reduce_timing(d);
+    ss_heal_run_set_hooks(d->run, NULL, NULL);
+}
+
+void ss_dist_heal_timing_get(const ss_dist_heal *d, ss_dist_heal_timing *t) { *t = d->tmax; }
+
+void ss_dist_heal_free(ss_dist_heal *d) {
+    if (!d) return;
+    for (int f = 0; f < NFACES; f++) {
+        free(d->sbuf[f]);
+        free(d->rbuf[f]);
+    }
+    ss_heal_solver_free(d->s);
+    ss_heal_grid_free(d->g);
+    ss_heal_solver_free(d->sB);
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++) free(d->backup[f]);
+    ss_heal_grid_free(d->gB);
+    free(d->tsend);
+    free(d->trecv);
+    free(d->scnt);
+    if (d->cart != MPI_COMM_NULL && d->cart) MPI_Comm_free(&d->cart);
+    free(d);
+}

@@ -1,0 +1,159 @@
+/* Diagnostics of a healing grid (seed 001 Fig. 4's open area, the wound
+ * region, field means, scar volume) in parts that merge exactly: counts are
+ * integers and sums of float values are kept as fixed-point integers
+ * (limbs of 32 bits covering every float from the smallest subnormal up, with
+ * room for 2^40 terms), so a sum does not depend on the order of its terms.
+ * The MPI driver (src/dist) adds its sub-box on each rank and reduces the
+ * limbs with integer sums: the figures are bit-identical to a single-process
+ * run on any number of ranks. The conversion to double is deterministic (a
+ * Horner pass over the limbs, a few units in the last place of the exact sum). */
+#include <math.h>
+#include <string.h>
+
+#include "skinsim/heal.h"
+
+/* bit 0 of limb 0 weighs 2^-LIMB_BIAS; the smallest float term is 2^-172 x 2^23 */
+#define LIMB_BIAS 176
+#define LIMB_MASK ((int64_t)0xffffffff)
+/* normalise before a limb could overflow (each term adds < 2^32 to a limb) */
+#define ADDS_MAX ((int64_t)1 << 30)
+
+static int is_tissue(uint8_t c) { return c != SS_CELL_AIR && c != SS_CELL_BOUND; }
+
+void ss_heal_stats_acc_init(ss_heal_stats_acc *a) { memset(a, 0, sizeof *a); }
+
+static void limbs_normalise(int64_t *l) {
+    for (int i = 0; i < SS_HEAL_ACC_LIMBS - 1; i++) {
+        int64_t lo = l[i] & LIMB_MASK; /* two's complement: the low 32 bits, >= 0 */
+        int64_t carry = (l[i] - lo) / ((int64_t)1 << 32);
+        l[i] = lo;
+        l[i + 1] += carry;
+    }
+}
+
+void ss_heal_stats_acc_normalise(ss_heal_stats_acc *a) {
+    for (int k = 0; k <= SS_HEAL_NFIELDS; k++) limbs_normalise(a->sum[k]);
+    a->adds = 0;
+}
+
+/* Adds the float v exactly; a non-finite value is counted instead. */
+static void limbs_add(ss_heal_stats_acc *a, int k, float v) {
+    if (!isfinite(v)) {
+        a->n_nonfinite++;
+        return;
+    }
+    if (v == 0.0f) return;
+    int e;
+    float m = frexpf(fabsf(v), &e);         /* |v| = m 2^e, m in [0.5, 1) */
+    int64_t M = (int64_t)ldexpf(m, 24);     /* 24-bit integer mantissa */
+    int pos = e - 24 + LIMB_BIAS;           /* >= 4 for the smallest subnormal */
+    uint64_t t = (uint64_t)M << (pos % 32); /* < 2^56 */
+    int64_t lo = (int64_t)(t & 0xffffffffu), hi = (int64_t)(t >> 32);
+    int64_t *l = a->sum[k] + pos / 32;
+    if (v > 0) {
+        l[0] += lo;
+        l[1] += hi;
+    } else {
+        l[0] -= lo;
+        l[1] -= hi;
+    }
+    if (++a->adds >= ADDS_MAX) ss_heal_stats_acc_normalise(a);
+}
+
+static double limbs_value(const int64_t *src) {
+    int64_t l[SS_HEAL_ACC_LIMBS];
+    memcpy(l, src, sizeof l);
+    limbs_normalise(l);
+    double d = 0.0;
+    for (int i = SS_HEAL_ACC_LIMBS - 1; i >= 0; i--) d = d * 4294967296.0 + (double)l[i];
+    return ldexp(d, -LIMB_BIAS);
+}
+
+void ss_heal_stats_acc_add(ss_heal_stats_acc *a, const ss_heal_grid *g, int x0, int x1, int y0,
+                           int y1) {
+    const double thr = ss_heal_open_threshold();
+    const float *e = g->field[SS_HEAL_EPITHELIUM], *p = g->field[SS_HEAL_PLASMA];
+    const float *s = g->field[SS_HEAL_ESCHAR], *rho = g->field[SS_HEAL_SCAR];
+    if (x0 < 0) x0 = 0;
+    if (y0 < 0) y0 = 0;
+    if (x1 > g->nx) x1 = g->nx;
+    if (y1 > g->ny) y1 = g->ny;
+    for (int y = y0; y < y1; y++) {
+        for (int x = x0; x < x1; x++) {
+            /* columns: the epithelium is a sheet on the tissue surface, so a
+             * column of the wound (a WOUND voxel at the surface at t = 0, or in
+             * omega now) is open while the epithelial coverage of its surface
+             * cell is below thr. The outermost shell is BOUND: no surface. */
+            int ztop = -1;
+            for (int z = g->nz - 2; z >= 1; z--)
+                if (is_tissue(g->cell[ss_heal_idx(g, x, y, z)])) {
+                    ztop = z;
+                    break;
+                }
+            if (ztop >= 0) {
+                size_t c0 = ss_heal_idx(g, x, y, ztop);
+                int initial = g->cell[c0] == SS_CELL_WOUND;
+                int region = p[c0] > (float)SS_HEAL_P_MIN;
+                if (initial) {
+                    a->n_initial++;
+                    float smax = 0;
+                    for (int z = ztop; z >= 1; z--) {
+                        size_t c = ss_heal_idx(g, x, y, z);
+                        if (!is_tissue(g->cell[c])) break;
+                        if (s[c] > smax) smax = s[c];
+                    }
+                    limbs_add(a, SS_HEAL_NFIELDS, smax);
+                    a->n_wcol++;
+                }
+                if (region) a->n_region++;
+                if ((initial || region) && e[c0] < thr) a->n_open++;
+            }
+            for (int z = 0; z < g->nz; z++) {
+                size_t c = ss_heal_idx(g, x, y, z);
+                if (!is_tissue(g->cell[c])) continue;
+                a->n_tissue++;
+                for (int f = 0; f < SS_HEAL_NFIELDS; f++) limbs_add(a, f, g->field[f][c]);
+                if (rho[c] > a->scar_max) a->scar_max = rho[c];
+            }
+        }
+    }
+    ss_heal_stats_acc_normalise(a);
+}
+
+void ss_heal_stats_acc_merge(ss_heal_stats_acc *a, const ss_heal_stats_acc *b) {
+    a->n_initial += b->n_initial;
+    a->n_region += b->n_region;
+    a->n_open += b->n_open;
+    a->n_wcol += b->n_wcol;
+    a->n_tissue += b->n_tissue;
+    a->n_nonfinite += b->n_nonfinite;
+    for (int k = 0; k <= SS_HEAL_NFIELDS; k++)
+        for (int i = 0; i < SS_HEAL_ACC_LIMBS; i++) a->sum[k][i] += b->sum[k][i];
+    if (b->scar_max > a->scar_max) a->scar_max = b->scar_max;
+    ss_heal_stats_acc_normalise(a);
+}
+
+void ss_heal_stats_acc_finish(const ss_heal_stats_acc *a, double dx_mm, ss_heal_stats *st) {
+    memset(st, 0, sizeof *st);
+    const double area = dx_mm * dx_mm;
+    st->initial_area_mm2 = (double)a->n_initial * area;
+    st->wound_region_area_mm2 = (double)a->n_region * area;
+    st->open_area_mm2 = (double)a->n_open * area;
+    const double esum = limbs_value(a->sum[SS_HEAL_NFIELDS]);
+    st->eschar_wound_mean = a->n_wcol ? esum / (double)a->n_wcol : 0.0;
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+        st->field_mean[f] = a->n_tissue ? limbs_value(a->sum[f]) / (double)a->n_tissue : 0.0;
+    st->scar_volume_mm3 = limbs_value(a->sum[SS_HEAL_SCAR]) * area * dx_mm;
+    st->scar_max = a->scar_max;
+    if (a->n_nonfinite) { /* a blown-up field shows as NaN, never as a plausible figure */
+        for (int f = 0; f < SS_HEAL_NFIELDS; f++) st->field_mean[f] = NAN;
+        st->scar_volume_mm3 = st->eschar_wound_mean = NAN;
+    }
+}
+
+void ss_heal_stats_compute(const ss_heal_grid *g, ss_heal_stats *st) {
+    ss_heal_stats_acc a;
+    ss_heal_stats_acc_init(&a);
+    ss_heal_stats_acc_add(&a, g, 0, g->nx, 0, g->ny);
+    ss_heal_stats_acc_finish(&a, g->dx_mm, st);
+}

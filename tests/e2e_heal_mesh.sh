@@ -1,0 +1,109 @@
+#!/usr/bin/env bash
+# End-to-end test of `skinsim heal --mesh` (seed 001 §5.1, §5.4): the hand of
+# ../shared/data/meshes (or data/meshes) with a wound painted as UV strokes on
+# the back of the hand runs with the mechanics on a coarse patch, writes the
+# fields mapped onto the mesh (surface/skin_*.vtu + skin.pvd) and the
+# skin_mesh block of summary.json; a checkpointed run resumed on another thread
+# count is byte-identical; a wound given as a closed mesh runs; bad input (an
+# open mesh, a self-intersecting mesh, strokes outside the UV islands, a
+# stroke across two islands, a wound mesh away from the skin, --wound-uv
+# without --mesh) exits 2 naming the input and writes nothing.
+# usage: e2e_heal_mesh.sh <skinsim> <source dir>
+set -u
+CLI=$1
+SRC=$2
+T=$(mktemp -d /tmp/skinsim-e2e-mesh-XXXXXX)
+trap 'rm -rf "$T"' EXIT
+fail() { echo "FAIL: $*" >&2; exit 1; }
+HAND=""
+for h in "$SRC/data/meshes/generic-hand-left.glb" "$SRC/../shared/data/meshes/generic-hand-left.glb" \
+         "$SRC/../../shared/data/meshes/generic-hand-left.glb" /work/shared/data/meshes/generic-hand-left.glb; do
+    [ -f "$h" ] && { HAND=$h; break; }
+done
+[ -n "$HAND" ] || { echo "no hand mesh: skipped"; exit 77; }
+
+# an ellipse of strokes on the back of the hand (UV island lower left)
+python3 -c "
+import math
+print('u,v,stroke')
+for k in range(12):
+    a = 2 * math.pi * k / 12
+    print('%.4f,%.4f,0' % (0.2 + 0.02 * math.cos(a), 0.62 + 0.014 * math.sin(a)))
+" >"$T/cut.csv"
+RUN="--mesh $HAND --wound-uv $T/cut.csv --voxel-mm 1 --mechanics --snapshot-every 0.5 --quiet"
+
+# --- the hand, 1 day, 2 threads
+"$CLI" heal $RUN --days 1 --threads 2 --out "$T/a" --json >"$T/a.json" || fail "hand run failed"
+for f in surface/skin.pvd surface/skin_0000.vtu surface/skin_0002.vtu fields/mesh_0002.vtu \
+         surface/velocity_0002.png summary.json; do
+    [ -s "$T/a/$f" ] || fail "missing $f"
+done
+for a in displacement epithelium scar open_wound; do
+    grep -q "Name=\"$a\"" "$T/a/surface/skin_0002.vtu" || fail "skin .vtu lacks $a"
+done
+python3 - "$T/a.json" "$T/a/surface/skin_0000.vtu" "$T/a/surface/skin_0002.vtu" <<'PY' || fail "summary/skin values"
+import json, re, sys
+s = json.load(open(sys.argv[1]))
+m, k = s["mechanics"], s["skin_mesh"]
+assert k["triangles"] == 2314 and k["units_mm"] == 1000, k
+assert abs(sum(x * x for x in k["patch_normal"]) - 1) < 1e-9
+assert m["tets"] > 500 and 0 < m["contraction_percent"] < 90, m
+def arr(path, name):
+    t = open(path).read()
+    return [float(x) for x in re.search(r'Name="%s"[^>]*>(.*?)</DataArray>' % name, t, re.S).group(1).split()]
+o0, o2 = arr(sys.argv[2], "open_wound"), arr(sys.argv[3], "open_wound")
+assert sum(o0) > 0, "no vertex on the open wound at day 0"
+d = arr(sys.argv[3], "displacement")
+assert max(abs(x) for x in d) > 0.01, "no deformation mapped onto the mesh"
+PY
+
+# --- checkpoint at day 0.5 on 1 thread, resume to day 1: the same bytes
+"$CLI" heal $RUN --days 0.5 --threads 1 --checkpoint-every 0.5 --out "$T/b" || fail "checkpointed run failed"
+"$CLI" heal --resume "$T/b" --days 1 --threads 1 --quiet || fail "resume failed"
+for f in fields/fields_0002.vti surface/skin_0002.vtu area.csv; do
+    cmp -s "$T/a/$f" "$T/b/$f" || fail "resumed $f differs from the uninterrupted run"
+done
+
+# --- a closed wound mesh (an octahedron, in metres like the hand) on the back of the hand
+python3 - "$T/a.json" >"$T/wound.obj" <<'PY'
+import json, sys
+c = json.load(open(sys.argv[1]))["skin_mesh"]["wound_centre_mm"]
+c = [x / 1000 for x in c]; r = 0.004
+v = [(c[0]+r,c[1],c[2]),(c[0]-r,c[1],c[2]),(c[0],c[1]+r,c[2]),(c[0],c[1]-r,c[2]),(c[0],c[1],c[2]+r),(c[0],c[1],c[2]-r)]
+for p in v: print("v %.7f %.7f %.7f" % p)
+for f in ((1,3,5),(3,2,5),(2,4,5),(4,1,5),(3,1,6),(2,3,6),(4,2,6),(1,4,6)): print("f %d %d %d" % f)
+PY
+"$CLI" heal --mesh "$HAND" --wound-mesh "$T/wound.obj" --mesh-units-mm 1000 --voxel-mm 1 --days 0.2 \
+    --quiet --out "$T/w" || fail "wound-mesh run failed"
+
+# --- bad input: exit 2 naming the input, nothing written
+bad() {
+    local what=$1
+    shift
+    rm -rf "$T/bad"
+    "$CLI" heal --days 0.1 --quiet --out "$T/bad" "$@" 2>"$T/err.txt"
+    [ $? -eq 2 ] || fail "exit code for: $*"
+    [ ! -e "$T/bad" ] || fail "output written for: $*"
+    grep -q -- "$what" "$T/err.txt" || fail "message does not name $what: $(cat "$T/err.txt")"
+}
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\n' >"$T/open.obj"
+bad open.obj --mesh "$T/open.obj" --wound-uv "$T/cut.csv"
+python3 - >"$T/twice.obj" <<'PY'
+# two overlapping tetrahedra: closed, but their surfaces cross
+for o in (0, 0.3):
+    for p in ((0,0,0),(1,0,0),(0,1,0),(0,0,1)): print("v %g %g %g" % (p[0]+o, p[1]+o, p[2]+o))
+for b in (0, 4):
+    for f in ((1,3,2),(1,2,4),(1,4,3),(2,3,4)): print("f %d %d %d" % tuple(b + i for i in f))
+PY
+bad twice.obj --mesh "$T/twice.obj" --wound-mesh "$T/wound.obj"
+printf 'u,v\n0.9,0.9\n0.95,0.9\n0.95,0.95\n' >"$T/off.csv"
+bad off.csv --mesh "$HAND" --wound-uv "$T/off.csv"
+printf 'u,v\n0.2,0.62\n0.22,0.62\n0.6,0.4\n' >"$T/seam.csv"
+bad seam.csv --mesh "$HAND" --wound-uv "$T/seam.csv"
+python3 -c "
+for p in ((1,0,0),(-1,0,0),(0,1,0),(0,-1,0),(0,0,1),(0,0,-1)): print('v %g %g %g' % (p[0]+5, p[1]+5, p[2]+5))
+for f in ((1,3,5),(3,2,5),(2,4,5),(4,1,5),(3,1,6),(2,3,6),(4,2,6),(1,4,6)): print('f %d %d %d' % f)
+" >"$T/far.obj"
+bad far.obj --mesh "$HAND" --wound-mesh "$T/far.obj"
+bad "need --mesh" --wound-uv "$T/cut.csv"
+echo "e2e_heal_mesh: OK"

@@ -1,0 +1,162 @@
+#!/usr/bin/env bash
+# End-to-end test of skinsim on MPI (docs/scaling.md): `skinsim heal` on 1, 2,
+# 3 and 4 ranks (mpirun --oversubscribe on this 2-core machine) writes the same
+# bytes as the single-process run: area.csv, every VTK snapshot, fields.pvd,
+# run.json, the surface maps and summary.json (less its wall time and thread
+# count), on a grid that divides by the rank counts and one that does not; a
+# run checkpointed on 4 ranks resumes on 3 to the uninterrupted single-process
+# result; bad input (too many ranks for the grid with either scheme, the
+# mechanics, a missing or damaged checkpoint) exits 2 on every rank with
+# nothing written; `optics table` on 2, 3 and 4 ranks writes the bytes of the
+# single-process table. Skips (77) without mpirun or without an MPI build.
+# usage: e2e_mpi.sh <skinsim> <source dir>
+set -u
+CLI=$1
+command -v mpirun >/dev/null || { echo "skip: no mpirun"; exit 77; }
+"$CLI" --version | grep -q "with MPI" || { echo "skip: skinsim built without MPI"; exit 77; }
+T=$(mktemp -d /tmp/skinsim-e2e-mpi-XXXXXX)
+trap 'rm -rf "$T"' EXIT
+fail() { echo "FAIL: $*" >&2; exit 1; }
+# these machines run as root (DESIGN.md: OpenMPI refuses root without these)
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+# OpenMPI keeps allocations until exit: leak reports under ASan are its own
+export ASAN_OPTIONS="${ASAN_OPTIONS:-}:detect_leaks=0"
+MPIRUN="mpirun --oversubscribe --allow-run-as-root --mca btl self,vader"
+run_np() { local n=$1; shift; $MPIRUN -np "$n" "$CLI" "$@"; }
+
+# compares every output of run dir $1 with $2
+same_run() {
+    for f in area.csv run.json fields/fields.pvd; do
+        cmp -s "$1/$f" "$2/$f" || fail "$2/$f differs from the single-process run"
+    done
+    for f in "$1"/fields/*.vti "$1"/surface/*.png; do
+        cmp -s "$f" "$2/${f#$1/}" || fail "$2/${f#$1/} differs from the single-process run"
+    done
+    # (more than one rank also writes per-rank pieces: fields_NNNN_pRRRR.vti + .pvti)
+    [ "$(ls "$1"/fields/fields_????.vti | wc -l)" = "$(ls "$2"/fields/fields_????.vti | wc -l)" ] ||
+        fail "$2: snapshot count"
+    diff <(grep -v -e wall_time_s -e '"threads"' "$1/summary.json") \
+        <(grep -v -e wall_time_s -e '"threads"' "$2/summary.json") >/dev/null ||
+        fail "$2/summary.json differs from the single-process run"
+}
+
+# runs heal with options $2.. without mpirun into $T/$1, then on 1-4 ranks into
+# $T/$1-N, and compares every output
+equal_on_ranks() {
+    local name=$1; shift
+    "$CLI" heal "$@" --out "$T/$name" || fail "single-process run ($name)"
+    for n in 1 2 3 4; do
+        run_np $n heal "$@" --out "$T/$name-$n" || fail "run on $n ranks ($name)"
+        same_run "$T/$name" "$T/$name-$n"
+    done
+    echo "ok: heal $name bit-identical on 1, 2, 3, 4 ranks"
+}
+for grid in 24x20x8 23x17x9; do
+    equal_on_ranks "explicit-$grid" --scheme explicit --grid $grid --scenario scab --days 0.6 \
+        --snapshot-every 0.3 --area-every 0.05 --quiet --threads 1
+done
+
+# --- per-rank pieces: fields_NNNN.pvti joins one .vti per rank, which together
+# hold exactly the gathered snapshot
+python3 - "$T/explicit-23x17x9-4/fields" <<'PY' || fail "the .pvti pieces do not make up the gathered snapshot"
+import re, struct, sys
+def read(path):  # extent, [(itemsize, bytes)] of the appended arrays
+    b = open(path, 'rb').read()
+    head, raw = b.split(b'<AppendedData encoding="raw">', 1)
+    raw = raw[raw.index(b'_') + 1:]
+    ext = [int(v) for v in re.search(rb'<Piece Extent="([^"]+)"', head).group(1).split()]
+    arrays, pos = [], 0
+    for typ in re.findall(rb'<DataArray type="(\w+)" Name="\w+" format="appended"', head):
+        n = struct.unpack('<Q', raw[pos:pos + 8])[0]
+        arrays.append((1 if typ == b'UInt8' else 4, raw[pos + 8:pos + 8 + n]))
+        pos += 8 + n
+    return ext, arrays
+d = sys.argv[1]
+wext, whole = read(d + '/fields_0001.vti')
+NX, NY, NZ = wext[1], wext[3], wext[5]
+pv = open(d + '/fields_0001.pvti').read()
+pieces = re.findall(r'<Piece Extent="([^"]+)" Source="([^"]+)"', pv)
+assert len(pieces) == 4, pieces
+cover = {}
+for ext_s, src in pieces:
+    ext, arrs = read(d + '/' + src)
+    assert [int(v) for v in ext_s.split()] == ext, (ext_s, ext)
+    x0, x1, y0, y1, z0, z1 = ext
+    w = x1 - x0
+    for (isz, a), (_, full) in zip(arrs, whole):
+        k = 0
+        for z in range(z0, z1):
+            for y in range(y0, y1):
+                o = ((z * NY + y) * NX + x0) * isz
+                assert a[k:k + w * isz] == full[o:o + w * isz], (src, z, y)
+                k += w * isz
+    for z in range(z0, z1):
+        for y in range(y0, y1):
+            for x in range(x0, x1):
+                cover[(x, y, z)] = cover.get((x, y, z), 0) + 1
+assert len(cover) == NX * NY * NZ and set(cover.values()) == {1}, "pieces overlap or leave gaps"
+PY
+echo "ok: per-rank .vti pieces + .pvti equal the gathered snapshot"
+
+# --- the split scheme (the default): y sweeps on x slabs, reached by transposes
+equal_on_ranks split-23x17x9 --grid 23x17x9 --scenario scab --days 1 --snapshot-every 0.5 \
+    --area-every 0.05 --quiet --threads 1
+
+# --- adaptive steps (the split scheme's default) with rejected, undone steps
+OPTS="--grid 23x17x9 --scenario keloid --days 40 --snapshot-every 20 --adapt-tol 0.05 --quiet --threads 1"
+"$CLI" heal $OPTS --out "$T/adapt" || fail "single-process adaptive run"
+grep -q '"retried":[[:space:]]*[1-9]' "$T/adapt/summary.json" || fail "the adaptive case retries no step"
+run_np 3 heal $OPTS --out "$T/adapt-3" || fail "adaptive run on 3 ranks"
+same_run "$T/adapt" "$T/adapt-3"
+echo "ok: adaptive steps (with retries) bit-identical on 3 ranks"
+
+# --- checkpoint on 4 ranks, resume on 3: the uninterrupted single-process result
+OPTS="--scheme explicit --grid 23x17x9 --scenario scab --snapshot-every 0.3 --area-every 0.05 --quiet --threads 1"
+"$CLI" heal $OPTS --days 0.9 --out "$T/full" || fail "single-process 0.9-day run"
+run_np 4 heal $OPTS --days 0.6 --checkpoint-every 0.3 --out "$T/cut" || fail "4-rank run with checkpoints"
+ls "$T"/cut/checkpoints/*.sshc >/dev/null 2>&1 || fail "no checkpoint written on 4 ranks"
+run_np 3 heal --resume "$T/cut" --days 0.9 --quiet || fail "resume on 3 ranks"
+cmp -s "$T/full/area.csv" "$T/cut/area.csv" || fail "resumed (4 -> 3 ranks) area.csv differs"
+# (the cut run's own last snapshot shifts the numbering: compare the newest of each)
+cmp -s "$(ls "$T"/full/fields/fields_????.vti | tail -1)" "$(ls "$T"/cut/fields/fields_????.vti | tail -1)" ||
+    fail "resumed (4 -> 3 ranks) final fields differ"
+echo "ok: checkpoint on 4 ranks resumes on 3 bit-identically"
+
+# --- the ModelMatch table: geometries shared out by rank 0, the same bytes
+TAB="--samples 2 --photons 400 --wl-min 450 --wl-max 650 --wl-step 100 --theta-i 2 --theta-r 3 --phi 3 --quiet --threads 1"
+"$CLI" optics table $TAB --out "$T/t1.sstab" || fail "single-process table"
+for n in 2 3 4; do
+    run_np $n optics table $TAB --out "$T/t$n.sstab" || fail "table on $n ranks"
+    cmp -s "$T/t1.sstab" "$T/t$n.sstab" || fail "table on $n ranks differs from the single-process one"
+done
+echo "ok: optics table bit-identical on 2, 3, 4 ranks"
+
+# --- bad input: exit 2 on every rank, a message naming the input, nothing written
+bad() { # name, expected message part, ranks, args...
+    local name=$1 msg=$2 n=$3; shift 3
+    run_np "$n" "$@" >"$T/$name.out" 2>"$T/$name.err"
+    local rc=$?
+    [ $rc -eq 2 ] || { cat "$T/$name.err"; fail "$name: exit $rc, expected 2"; }
+    grep -q -- "$msg" "$T/$name.err" || { cat "$T/$name.err"; fail "$name: no message naming $msg"; }
+}
+bad ranks "too many" 5 heal --scheme explicit --grid 4x40x8 --days 0.1 --out "$T/bad1"
+[ -e "$T/bad1" ] && fail "too many ranks: output written"
+bad split "--scheme split" 5 heal --grid 40x4x8 --days 0.1 --out "$T/bad2"
+[ -e "$T/bad2" ] && fail "split on too many ranks: output written"
+bad mech "--mechanics" 2 heal --scheme explicit --mechanics --grid 24x20x8 --days 0.1 --out "$T/bad3"
+[ -e "$T/bad3" ] && fail "mechanics on 2 ranks: output written"
+bad missing "resume" 3 heal --resume "$T/nowhere" --quiet
+cp -r "$T/cut" "$T/dmg"
+for f in "$T"/dmg/checkpoints/*.sshc; do printf 'garbage' >"$f"; done
+before=$(cd "$T/dmg" && find . -type f -exec md5sum {} + | sort | md5sum)
+bad damaged "checkpoint" 2 heal --resume "$T/dmg" --days 1.2 --quiet
+after=$(cd "$T/dmg" && find . -type f -exec md5sum {} + | sort | md5sum)
+[ "$before" = "$after" ] || fail "a refused resume changed the run directory"
+bad other "does not run on" 2 skin --size 64 --out "$T/bad4"
+[ -e "$T/bad4" ] && fail "skin on 2 ranks: output written"
+mkdir -p "$T/adir"
+bad tabdir "--out" 3 optics table $TAB --out "$T/adir"
+bad tabsamples "--samples" 2 optics table --samples 0 --out "$T/t0.sstab"
+[ -e "$T/t0.sstab" ] && fail "bad table: output written"
+echo "ok: bad input exits 2 on every rank, nothing written"
+echo "e2e_mpi: all passed"

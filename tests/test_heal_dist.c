@@ -1,0 +1,180 @@
+/* The library side of the MPI healing solver (docs/scaling.md), without MPI:
+ * the exact statistics give the same figures however the columns are split
+ * and merged (and are exact where a float sum is not); the sub-box solver
+ * (ss_heal_solver_create_sub) steps a box with a one-cell halo to the same
+ * bits as the whole grid, and the split step in phases equals ss_heal_step. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "testutil.h"
+#include "skinsim/heal.h"
+
+/* scab scenario: a 6 mm wound in a block of nx x ny x nz 0.5 mm voxels */
+static ss_heal_grid *problem(const ss_heal_params *p, int nx, int ny, int nz) {
+    ss_error err;
+    ss_heal_grid *g = ss_heal_grid_create(nx, ny, nz, 0.5, &err);
+    assert_non_null(g);
+    double top = (nz - 2) * 0.5;
+    uint8_t *w = ss_heal_wound_box(g, top, 6.0, 4.0, 1.0, &err);
+    assert_non_null(w);
+    assert_int_equal(ss_heal_grid_init(g, top, 0.1, w, p, &err), SS_OK);
+    free(w);
+    return g;
+}
+
+static void run(ss_heal_grid *g, const ss_heal_params *p, ss_heal_scheme sc, int steps) {
+    ss_error err;
+    ss_heal_solver *s = ss_heal_solver_create(g, p, sc, 0, &err);
+    assert_non_null(s);
+    for (int i = 0; i < steps; i++) assert_int_equal(ss_heal_step(s, g, &err), SS_OK);
+    ss_heal_solver_free(s);
+}
+
+static void test_stats_parts(void **state) {
+    (void)state;
+    ss_error err;
+    ss_heal_params *p = ss_heal_params_preset("scab", &err);
+    ss_heal_grid *g = problem(p, 23, 17, 9);
+    run(g, p, SS_HEAL_SPLIT, 6);
+    ss_heal_stats whole;
+    ss_heal_stats_compute(g, &whole);
+    /* 3 x 2 blocks of columns with ragged edges, merged in reverse order */
+    const int xs[4] = {0, 7, 8, 23}, ys[3] = {0, 11, 17};
+    ss_heal_stats_acc part[6], all;
+    for (int j = 0; j < 2; j++)
+        for (int i = 0; i < 3; i++) {
+            ss_heal_stats_acc_init(&part[j * 3 + i]);
+            ss_heal_stats_acc_add(&part[j * 3 + i], g, xs[i], xs[i + 1], ys[j], ys[j + 1]);
+        }
+    ss_heal_stats_acc_init(&all);
+    for (int k = 5; k >= 0; k--) ss_heal_stats_acc_merge(&all, &part[k]);
+    ss_heal_stats merged;
+    ss_heal_stats_acc_finish(&all, g->dx_mm, &merged);
+    assert_memory_equal(&whole, &merged, sizeof whole);
+    assert_true(whole.initial_area_mm2 > 0 && whole.field_mean[SS_HEAL_OXYGEN] > 0);
+    ss_heal_grid_free(g);
+    ss_heal_params_free(p);
+
+    /* exact where a float sum is not: 1e30 + 1 - 1e30 over 8 tissue cells */
+    g = ss_heal_grid_create(4, 4, 4, 1.0, &err);
+    assert_non_null(g);
+    for (int z = 1; z < 3; z++)
+        for (int y = 1; y < 3; y++)
+            for (int x = 1; x < 3; x++) g->cell[ss_heal_idx(g, x, y, z)] = SS_CELL_DERMIS;
+    g->field[SS_HEAL_MDGF][ss_heal_idx(g, 1, 1, 1)] = 1e30f;
+    g->field[SS_HEAL_MDGF][ss_heal_idx(g, 2, 1, 1)] = 1.0f;
+    g->field[SS_HEAL_MDGF][ss_heal_idx(g, 1, 2, 1)] = -1e30f;
+    g->field[SS_HEAL_MDGF][ss_heal_idx(g, 2, 2, 2)] = 1e-40f; /* subnormal */
+    ss_heal_stats st;
+    ss_heal_stats_compute(g, &st);
+    assert_true(st.field_mean[SS_HEAL_MDGF] == (1.0 + (double)1e-40f) / 8.0);
+    g->field[SS_HEAL_MDGF][ss_heal_idx(g, 2, 1, 1)] = NAN;
+    ss_heal_stats_compute(g, &st);
+    assert_true(isnan(st.field_mean[SS_HEAL_MDGF]));
+    ss_heal_grid_free(g);
+}
+
+/* Box [x0, x0 + bx) x [y0, y0 + by) of G with a one-cell halo (outside G:
+ * BOUND, zero), every field and the cells. */
+static void cut(const ss_heal_grid *G, ss_heal_grid *b, int x0, int y0) {
+    for (int z = 0; z < b->nz; z++)
+        for (int y = 0; y < b->ny; y++)
+            for (int x = 0; x < b->nx; x++) {
+                int X = x0 - 1 + x, Y = y0 - 1 + y;
+                size_t c = ss_heal_idx(b, x, y, z);
+                int in = X >= 0 && Y >= 0 && X < G->nx && Y < G->ny;
+                b->cell[c] = in ? G->cell[ss_heal_idx(G, X, Y, z)] : SS_CELL_BOUND;
+                for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+                    b->field[f][c] = in ? G->field[f][ss_heal_idx(G, X, Y, z)] : 0.0f;
+            }
+}
+
+static void test_subbox_explicit(void **state) {
+    (void)state;
+    ss_error err;
+    ss_heal_params *p = ss_heal_params_preset("scab", &err);
+    ss_heal_grid *G = problem(p, 23, 17, 9);
+    ss_heal_solver *S = ss_heal_solver_create(G, p, SS_HEAL_EXPLICIT, 0, &err);
+    assert_non_null(S);
+    const double dt = ss_heal_solver_dt(S);
+    /* 2 x 2 boxes, uneven: x 0..10 | 11..22, y 0..7 | 8..16 */
+    const int xs[3] = {0, 11, 23}, ys[3] = {0, 8, 17}, gdim[3] = {23, 17, 9};
+    ss_heal_grid *b[4];
+    ss_heal_solver *s[4];
+    for (int k = 0; k < 4; k++) {
+        int i = k % 2, j = k / 2;
+        b[k] = ss_heal_grid_create(xs[i + 1] - xs[i] + 2, ys[j + 1] - ys[j] + 2, 9, 0.5, &err);
+        assert_non_null(b[k]);
+        cut(G, b[k], xs[i], ys[j]);
+        const int goff[3] = {xs[i] - 1, ys[j] - 1, 0};
+        s[k] = ss_heal_solver_create_sub(b[k], goff, gdim, p, SS_HEAL_EXPLICIT, dt, &err);
+        assert_non_null(s[k]);
+    }
+    const int bad[3] = {0, 0, 1};
+    assert_null(ss_heal_solver_create_sub(b[0], bad, gdim, p, SS_HEAL_EXPLICIT, dt, &err));
+    int steps = tu_quick() ? 5 : 30;
+    for (int n = 0; n < steps; n++) {
+        assert_int_equal(ss_heal_step(S, G, &err), SS_OK);
+        for (int k = 0; k < 4; k++) {
+            int i = k % 2, j = k / 2;
+            assert_int_equal(ss_heal_step(s[k], b[k], &err), SS_OK);
+            /* every owned cell equals the whole grid's, bit for bit */
+            for (int z = 0; z < 9; z++)
+                for (int y = ys[j]; y < ys[j + 1]; y++)
+                    for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+                        assert_memory_equal(b[k]->field[f] + ss_heal_idx(b[k], 1, y - ys[j] + 1, z),
+                                            G->field[f] + ss_heal_idx(G, xs[i], y, z),
+                                            (size_t)(xs[i + 1] - xs[i]) * sizeof(float));
+            assert_true(b[k]->t_days == G->t_days);
+            cut(G, b[k], xs[i], ys[j]); /* the halo exchange */
+        }
+    }
+    for (int k = 0; k < 4; k++) {
+        ss_heal_solver_free(s[k]);
+        ss_heal_grid_free(b[k]);
+    }
+    ss_heal_solver_free(S);
+    ss_heal_grid_free(G);
+    ss_heal_params_free(p);
+}
+
+static void test_split_phases(void **state) {
+    (void)state;
+    ss_error err;
+    ss_heal_params *p = ss_heal_params_preset("scab", &err);
+    ss_heal_grid *a = problem(p, 20, 16, 9), *b = problem(p, 20, 16, 9);
+    ss_heal_solver *sa = ss_heal_solver_create(a, p, SS_HEAL_SPLIT, 0, &err);
+    ss_heal_solver *sb = ss_heal_solver_create(b, p, SS_HEAL_SPLIT, 0, &err);
+    assert_non_null(sa);
+    assert_non_null(sb);
+    assert_int_equal(ss_heal_solver_nslots(sb), 2);
+    assert_non_null(ss_heal_solver_multipliers(sb, 1));
+    assert_null(ss_heal_solver_multipliers(sb, 2));
+    for (int n = 0; n < 8; n++) {
+        assert_int_equal(ss_heal_step(sa, a, &err), SS_OK);
+        for (int ph = 0; ph < 3; ph++) assert_int_equal(ss_heal_step_phase(sb, b, ph, &err), SS_OK);
+    }
+    size_t nc = (size_t)a->nx * a->ny * a->nz;
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+        assert_memory_equal(a->field[f], b->field[f], nc * sizeof(float));
+    assert_true(a->t_days == b->t_days && a->step == b->step);
+    assert_int_equal(ss_heal_step_phase(sb, b, 3, &err), SS_ERR_INPUT);
+    ss_heal_solver *se = ss_heal_solver_create(a, p, SS_HEAL_EXPLICIT, 0, &err);
+    assert_int_equal(ss_heal_step_phase(se, a, 0, &err), SS_ERR_INPUT);
+    ss_heal_solver_free(se);
+    ss_heal_solver_free(sa);
+    ss_heal_solver_free(sb);
+    ss_heal_grid_free(a);
+    ss_heal_grid_free(b);
+    ss_heal_params_free(p);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_stats_parts),
+        cmocka_unit_test(test_subbox_explicit),
+        cmocka_unit_test(test_split_phases),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

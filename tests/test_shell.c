@@ -1,0 +1,224 @@
+/* Skin on a closed surface (seed 001 §5.1, §5.4; src/heal/shell.c) on a
+ * 40 mm cube whose faces each have their own UV island (a 3 x 2 atlas):
+ * - closedness: the cube passes; without a triangle it is open; two
+ *   overlapping cubes are closed but intersect themselves;
+ * - a UV-stroke wound on the top face: the patch's normal is +z, the surface
+ *   sits where the cube's top is, the cut is depth_mm deep and has the area
+ *   of the stroke hull, the skin is thickness_mm thick; strokes outside the
+ *   islands or across two of them are input errors naming the CSV;
+ * - a wound mesh cuts the voxels inside it; one away from the skin misses it;
+ * - mapping back (§5.4): vertices over the wound read the wound's fields, the
+ *   others healthy values, and a uniform displacement comes back rotated. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "testutil.h"
+#include "skinsim/shell.h"
+
+/* A cube [0,s]^3 shifted by off, 24 vertices, one UV cell per face. */
+static void cube(double s, double off, ss_mesh *m) {
+    static const int F[6][4][3] = {
+        {{0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}}, /* top z = s */
+        {{0, 1, 0}, {1, 1, 0}, {1, 0, 0}, {0, 0, 0}}, /* bottom */
+        {{0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1}}, /* y = 0 */
+        {{1, 1, 0}, {0, 1, 0}, {0, 1, 1}, {1, 1, 1}}, /* y = s */
+        {{0, 1, 0}, {0, 0, 0}, {0, 0, 1}, {0, 1, 1}}, /* x = 0 */
+        {{1, 0, 0}, {1, 1, 0}, {1, 1, 1}, {1, 0, 1}}, /* x = s */
+    };
+    float pos[72], uv[48];
+    uint32_t idx[36];
+    for (int f = 0; f < 6; f++) {
+        double u0 = (f % 3) / 3.0 + 0.01, v0 = (f / 3) / 2.0 + 0.01, du = 1 / 3.0 - 0.02,
+               dv = 0.5 - 0.02;
+        static const double cu[4] = {0, 1, 1, 0}, cv[4] = {1, 1, 0, 0};
+        for (int k = 0; k < 4; k++) {
+            for (int d = 0; d < 3; d++) pos[3 * (4 * f + k) + d] = (float)(F[f][k][d] * s + off);
+            uv[2 * (4 * f + k)] = (float)(u0 + cu[k] * du);
+            uv[2 * (4 * f + k) + 1] = (float)(v0 + cv[k] * dv);
+        }
+        uint32_t b = 4 * f, q[6] = {b, b + 1, b + 2, b, b + 2, b + 3};
+        memcpy(idx + 6 * f, q, sizeof q);
+    }
+    ss_error err;
+    assert_int_equal(ss_mesh_from_arrays(pos, NULL, uv, 24, idx, 12, "cube", m, &err), SS_OK);
+}
+
+static void test_closed(void **state) {
+    (void)state;
+    ss_mesh m, open, two;
+    ss_error err;
+    cube(40, 0, &m);
+    assert_int_equal(ss_shell_check_closed(&m, "cube", &err), SS_OK);
+    assert_int_equal(
+        ss_mesh_from_arrays(m.positions, NULL, NULL, 24, m.indices, 11, "open", &open, &err),
+        SS_OK);
+    assert_int_equal(ss_shell_check_closed(&open, "open.obj", &err), SS_ERR_INPUT);
+    assert_non_null(strstr(err.msg, "open.obj"));
+    assert_non_null(strstr(err.msg, "not a closed surface"));
+    /* two cubes, the second shifted into the first */
+    ss_mesh b;
+    cube(40, 10, &b);
+    float pos[144];
+    uint32_t idx[72];
+    memcpy(pos, m.positions, 72 * sizeof(float));
+    memcpy(pos + 72, b.positions, 72 * sizeof(float));
+    for (int i = 0; i < 36; i++) idx[i] = m.indices[i], idx[36 + i] = b.indices[i] + 24;
+    assert_int_equal(ss_mesh_from_arrays(pos, NULL, NULL, 48, idx, 24, "two", &two, &err), SS_OK);
+    assert_int_equal(ss_shell_check_closed(&two, "two.obj", &err), SS_ERR_INPUT);
+    assert_non_null(strstr(err.msg, "intersects itself"));
+    ss_mesh_free(&m);
+    ss_mesh_free(&open);
+    ss_mesh_free(&two);
+    ss_mesh_free(&b);
+}
+
+static void write_text(const char *path, const char *t) {
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fputs(t, f);
+    fclose(f);
+}
+
+static void test_uv_patch(void **state) {
+    (void)state;
+    ss_error err;
+    ss_mesh m;
+    cube(40, 0, &m);
+    char *dir = tu_tmpdir("shell"), csv[4096];
+    snprintf(csv, sizeof csv, "%s/s.csv", dir);
+    /* top face island: u in 0.01..0.323, v in 0.01..0.49 (v = 0.49 at y = 0);
+     * a square of 0.1 x 0.2 UV = 0.1/0.313*40 x 0.2/0.48*40 mm */
+    write_text(csv, "u,v\n0.1,0.1\n0.2,0.1\n0.2,0.3\n0.1,0.3\n");
+    ss_shell_opts o;
+    ss_shell_opts_default(&o);
+    o.units_mm = 1;
+    ss_shell_patch *p = ss_shell_patch_from_uv(&m, "cube.obj", csv, &o, &err);
+    assert_non_null(p);
+    assert_float_equal(p->axis[2][2], 1.0, 1e-9);
+    /* the surface: z = 40 mm */
+    double top = p->origin_mm[2] + p->skin_top_mm;
+    assert_float_equal(top, 40.0, 1e-6);
+    double w = 0.1 / (1 / 3.0 - 0.02) * 40, h = 0.2 / (0.5 - 0.02) * 40;
+    int cols = 0, tissue_max = 0;
+    for (int j = 0; j < p->ny; j++)
+        for (int i = 0; i < p->nx; i++) {
+            int wc = 0, t = 0;
+            for (int k = 0; k < p->nz; k++) {
+                uint8_t c = p->cell[((size_t)k * p->ny + j) * p->nx + i];
+                wc += c == SS_CELL_WOUND;
+                t += c == SS_CELL_WOUND || c == SS_CELL_EPIDERMIS || c == SS_CELL_DERMIS;
+            }
+            if (wc) {
+                assert_int_equal(wc, (int)lround(o.depth_mm / o.voxel_mm));
+                cols++;
+            }
+            if (t > tissue_max) tissue_max = t;
+        }
+    assert_int_equal(tissue_max, (int)lround(o.thickness_mm / o.voxel_mm));
+    double area = cols * o.voxel_mm * o.voxel_mm;
+    assert_true(fabs(area - w * h) < 0.1 * w * h);
+    /* grid and mapping back */
+    ss_heal_params *hp = ss_heal_params_preset("clean", &err);
+    ss_heal_grid *g = ss_heal_grid_create(p->nx, p->ny, p->nz, p->dx_mm, &err);
+    assert_int_equal(ss_shell_patch_grid_init(p, g, hp, &err), SS_OK);
+    size_t n = (size_t)p->nx * p->ny * p->nz;
+    float *u[3];
+    for (int d = 0; d < 3; d++) {
+        u[d] = malloc(n * sizeof(float));
+        for (size_t i = 0; i < n; i++) u[d][i] = d == 0 ? 0.5f : 0.0f;
+    }
+    float *vf = malloc((size_t)m.nvertices * SS_SHELL_VERTEX_STRIDE * sizeof(float));
+    ss_shell_vertex_fields(p, &m, g, hp, u, vf);
+    /* the bottom face is outside the patch: healthy, no displacement */
+    for (int v = 0; v < m.nvertices; v++) {
+        if (m.positions[3 * v + 2] != 0) continue;
+        assert_float_equal(vf[v * SS_SHELL_VERTEX_STRIDE + SS_HEAL_EPITHELIUM], 1.0, 1e-6);
+        assert_float_equal(vf[v * SS_SHELL_VERTEX_STRIDE + SS_HEAL_NFIELDS], 0.0, 0);
+    }
+    /* a vertex on the wound: a one-vertex mesh at the top face centre of the cut */
+    ss_mesh one;
+    float c[9] = {(float)(0.15 / (1 / 3.0 - 0.02) * 40 - 0.01 * 40 / (1 / 3.0 - 0.02)),
+                  0,
+                  40,
+                  0,
+                  0,
+                  40,
+                  0,
+                  0,
+                  40};
+    double vc = 0.2, yy = (0.49 - vc) / 0.48 * 40; /* v -> y on the top face */
+    c[0] = (float)((0.15 - 0.01) / (1 / 3.0 - 0.02) * 40);
+    c[1] = (float)yy;
+    c[3] = 1, c[6] = 2; /* a second, third vertex far away on the top */
+    c[4] = 1, c[7] = 1;
+    uint32_t t3[3] = {0, 1, 2};
+    assert_int_equal(ss_mesh_from_arrays(c, NULL, NULL, 3, t3, 1, "one", &one, &err), SS_OK);
+    float vf1[3 * SS_SHELL_VERTEX_STRIDE];
+    ss_shell_vertex_fields(p, &one, g, hp, u, vf1);
+    assert_float_equal(vf1[SS_HEAL_EPITHELIUM], 0.0, 1e-6);
+    assert_float_equal(vf1[SS_HEAL_PLASMA], 1.0, 1e-6);
+    for (int d = 0; d < 3; d++) /* 0.5 mm along the patch's x axis, in the mesh frame */
+        assert_float_equal(vf1[SS_HEAL_NFIELDS + d], 0.5 * p->axis[0][d], 1e-6);
+    ss_mesh_free(&one);
+    free(vf);
+    for (int d = 0; d < 3; d++) free(u[d]);
+    ss_heal_grid_free(g);
+    ss_heal_params_free(hp);
+    ss_shell_patch_free(p);
+    /* bad strokes */
+    write_text(csv, "u,v\n0.333,0.2\n0.334,0.3\n0.333,0.4\n"); /* between two islands */
+    assert_null(ss_shell_patch_from_uv(&m, "cube.obj", csv, &o, &err));
+    assert_non_null(strstr(err.msg, "outside the UV islands"));
+    assert_non_null(strstr(err.msg, "s.csv"));
+    write_text(csv, "u,v\n0.1,0.1\n0.2,0.1\n0.5,0.3\n");
+    assert_null(ss_shell_patch_from_uv(&m, "cube.obj", csv, &o, &err));
+    assert_non_null(strstr(err.msg, "two UV islands"));
+    ss_mesh_free(&m);
+    tu_rmtree(dir);
+    free(dir);
+}
+
+static void test_wound_mesh(void **state) {
+    (void)state;
+    ss_error err;
+    ss_mesh m, w, far;
+    cube(40, 0, &m);
+    cube(4, 18, &w); /* 18..22 in x, y, z */
+    /* a 6 mm box straddling the top face */
+    float pos[72];
+    memcpy(pos, w.positions, sizeof pos);
+    for (int i = 0; i < 24; i++) pos[3 * i + 2] += 20.5f; /* z 38.5..42.5 */
+    ss_mesh_free(&w);
+    uint32_t idx[36];
+    ss_mesh tmp;
+    cube(4, 18, &tmp);
+    memcpy(idx, tmp.indices, sizeof idx);
+    ss_mesh_free(&tmp);
+    assert_int_equal(ss_mesh_from_arrays(pos, NULL, NULL, 24, idx, 12, "w", &w, &err), SS_OK);
+    ss_shell_opts o;
+    ss_shell_opts_default(&o);
+    o.units_mm = 1;
+    ss_shell_patch *p = ss_shell_patch_from_mesh(&m, "cube.obj", &w, "w.obj", &o, &err);
+    assert_non_null(p);
+    assert_float_equal(p->axis[2][2], 1.0, 1e-9);
+    /* 4 x 4 mm footprint, 1.5 mm deep (38.5..40) */
+    assert_int_equal(p->wound_cells, 8 * 8 * 3);
+    ss_shell_patch_free(p);
+    cube(2, 100, &far);
+    assert_null(ss_shell_patch_from_mesh(&m, "cube.obj", &far, "far.obj", &o, &err));
+    assert_non_null(strstr(err.msg, "misses the skin"));
+    ss_mesh_free(&far);
+    ss_mesh_free(&w);
+    ss_mesh_free(&m);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_closed),
+        cmocka_unit_test(test_uv_patch),
+        cmocka_unit_test(test_wound_mesh),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
