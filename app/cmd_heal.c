@@ -251,9 +251,11 @@ static void print_notes(const opts *o, ss_heal_run *r) {
         const ss_heal_grid *g = ss_heal_run_grid(r);
         fprintf(stderr,
                 "skinsim heal: %s, %dx%dx%d voxels of %g mm, %s scheme, dt %g days, %lld "
-                "steps\n",
+                "steps%s\n",
                 ss_heal_run_scenario(r), g->nx, g->ny, g->nz, g->dx_mm,
-                ss_heal_run_scheme(r) == SS_HEAL_EXPLICIT ? "explicit" : "split", dt, nsteps);
+                ss_heal_run_scheme(r) == SS_HEAL_EXPLICIT ? "explicit" : "split", dt, nsteps,
+                o->c.adapt_tol > 0 ? " (adaptive: a solver step spans up to 2 days, --adapt-tol)"
+                                   : "");
     }
 }
 

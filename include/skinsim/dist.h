@@ -36,8 +36,8 @@ typedef struct ss_dist_heal ss_dist_heal;
 /* Collective. Rank 0 passes its run (created, so every input is validated)
  * or NULL with root_st the status of its create; the other ranks pass NULL
  * and SS_OK. Rank 0 checks what the distributed solver needs (no mechanics,
- * at least one column per rank in x and y), decomposes the grid, hands every rank its box with a one-cell
- * halo and hooks the run (ss_heal_run_set_hooks) so its steps, area rows and
+ * at least one column per rank in x and y), decomposes the grid, hands every rank its box with a
+ * one-cell halo and hooks the run (ss_heal_run_set_hooks) so its steps, area rows and
  * snapshot/checkpoint gathers run on all ranks. Every rank returns the same
  * status; messages on rank 0 name the input. */
 ss_status ss_dist_heal_create(ss_heal_run *r, ss_status root_st, ss_dist_heal **out, ss_error *err);

@@ -174,6 +174,10 @@ typedef struct ss_heal_run_hooks {
     void (*undo)(void *ctx, ss_heal_grid *g);
     void (*stats)(void *ctx, const ss_heal_grid *g, ss_heal_stats *st);
     ss_status (*sync)(void *ctx, ss_heal_grid *g, ss_error *err);
+    /* instead of ss_heal_closure_update after each accepted step: keeps the
+     * closure day per column (skinsim/heal_io.h), current in closed_day
+     * after sync */
+    void (*closure)(void *ctx, ss_heal_grid *g, double *closed_day);
     /* after snapshot `index` was written into the folder fields_dir (more
      * files for it, e.g. per-rank pieces) */
     ss_status (*snapshot)(void *ctx, const ss_heal_grid *g, const char *fields_dir, int index,

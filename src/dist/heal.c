@@ -13,7 +13,8 @@
  * it validates the input, writes every output with the single-process code
  * and drives the others through a command channel (one broadcast per step,
  * area row, gather or snapshot). Its hooks replace the run's step (all ranks
- * step), its statistics (exact fixed-point partial sums reduced with integer
+ * step; an adaptive run's rejected step is undone on all ranks, its largest
+ * change is a max-reduction), its statistics (exact fixed-point partial sums reduced with integer
  * additions, ss_heal_stats_acc) and its snapshot/checkpoint reads (the boxes
  * are gathered into the whole grid first); after each snapshot every rank
  * also writes its box as a .vti piece, joined by a .pvti. The kernels compute
@@ -31,7 +32,7 @@
 
 #include "skinsim/dist.h"
 
-enum { CMD_STEP = 1, CMD_UNDO, CMD_STATS, CMD_SYNC, CMD_PIECES, CMD_END };
+enum { CMD_STEP = 1, CMD_UNDO, CMD_CLOSURE, CMD_STATS, CMD_SYNC, CMD_PIECES, CMD_END };
 enum { FACE_XM, FACE_XP, FACE_YM, FACE_YP, NFACES };
 
 /* What rank 0 tells every rank about the run before the boxes are sent. */
@@ -67,6 +68,8 @@ struct ss_dist_heal {
     double next_dt;                 /* rank 0: the step being broadcast */
     float *backup[SS_HEAL_NFIELDS]; /* adaptive steps: the fields before the step */
     double saved_t;
+    double *closed;      /* closure day per column of the box + halo (heal_io.h) */
+    double *closed_root; /* rank 0: the run's closure days, filled by the gather */
     uint64_t saved_step;
     int dirty; /* rank 0: the run's whole grid is behind the boxes */
     double t_compute, t_halo, t_stats, t_gather;
@@ -365,6 +368,8 @@ static ss_status do_step(ss_dist_heal *d, int want_change, double *change, ss_er
     return st;
 }
 
+static void do_closure(ss_dist_heal *d) { ss_heal_closure_update(d->g, d->closed); }
+
 static void do_undo(ss_dist_heal *d) {
     const size_t n = (size_t)d->g->nx * d->g->ny * d->g->nz;
     for (int f = 0; f < SS_HEAL_NFIELDS; f++)
@@ -414,6 +419,13 @@ static ss_status do_gather(ss_dist_heal *d, ss_error *err) {
         pack_owned(d->g, d->n, buf);
         MPI_Send(buf, (int)cnt, MPI_FLOAT, 0, 100, d->cart);
         free(buf);
+        double *cb = malloc((size_t)d->n[0] * d->n[1] * sizeof(double));
+        if (!cb) MPI_Abort(d->cart, 3);
+        for (int y = 0; y < d->n[1]; y++)
+            memcpy(cb + (size_t)y * d->n[0], d->closed + (size_t)(y + 1) * d->g->nx + 1,
+                   (size_t)d->n[0] * sizeof(double));
+        MPI_Send(cb, d->n[0] * d->n[1], MPI_DOUBLE, 0, 101, d->cart);
+        free(cb);
     } else {
         ss_heal_grid *G = ss_heal_run_grid(d->run);
         float *buf = NULL;
@@ -430,6 +442,20 @@ static ss_status do_gather(ss_dist_heal *d, ss_error *err) {
             else
                 MPI_Recv(buf, (int)cnt, MPI_FLOAT, r, 100, d->cart, MPI_STATUS_IGNORE);
             unpack_owned(G, lo, n, buf);
+            /* the closure days of the box's columns */
+            double *cb = malloc((size_t)n[0] * n[1] * sizeof(double));
+            if (!cb) MPI_Abort(d->cart, 3);
+            if (r == 0)
+                for (int y = 0; y < n[1]; y++)
+                    memcpy(cb + (size_t)y * n[0], d->closed + (size_t)(y + 1) * d->g->nx + 1,
+                           (size_t)n[0] * sizeof(double));
+            else
+                MPI_Recv(cb, n[0] * n[1], MPI_DOUBLE, r, 101, d->cart, MPI_STATUS_IGNORE);
+            if (d->closed_root)
+                for (int y = 0; y < n[1]; y++)
+                    memcpy(d->closed_root + (size_t)(lo[1] + y) * G->nx + lo[0],
+                           cb + (size_t)y * n[0], (size_t)n[0] * sizeof(double));
+            free(cb);
         }
         free(buf);
         d->dirty = 0;
@@ -530,6 +556,15 @@ static ss_status hook_step(void *ctx, ss_heal_grid *G, double dt, double *max_ch
     return st;
 }
 
+static void hook_closure(void *ctx, ss_heal_grid *G, double *closed_day) {
+    ss_dist_heal *d = ctx;
+    (void)G;
+    d->closed_root = closed_day;
+    send_cmd(d, CMD_CLOSURE, 0);
+    do_closure(d);
+    d->dirty = 1;
+}
+
 static void hook_undo(void *ctx, ss_heal_grid *G) {
     ss_dist_heal *d = ctx;
     (void)G;
@@ -605,6 +640,36 @@ static void scatter(ss_dist_heal *d, ss_heal_run *r, ss_heal_grid *g, int xslabs
             free(cells);
         }
         free(fields);
+    }
+}
+
+/* Rank 0 sends every rank the closure days of its box + halo columns (the
+ * run's, fresh or from the checkpoint; columns outside the grid: intact). */
+static void scatter_closed(ss_dist_heal *d, ss_heal_run *r) {
+    const size_t nl = (size_t)d->g->nx * d->g->ny;
+    if (d->rank != 0) {
+        MPI_Recv(d->closed, (int)nl, MPI_DOUBLE, 0, 14, d->cart, MPI_STATUS_IGNORE);
+        return;
+    }
+    const double *C = ss_heal_run_closure(r);
+    const ss_heal_grid *G = ss_heal_run_grid(r);
+    for (int q = d->size - 1; q >= 0; q--) {
+        int coords[3], lo[2], n[2];
+        MPI_Cart_coords(d->cart, q, 3, coords);
+        box_of(d, coords, lo, n);
+        const int nxl = n[0] + 2, nyl = n[1] + 2;
+        double *c = q == 0 ? d->closed : malloc((size_t)nxl * nyl * sizeof(double));
+        if (!c) MPI_Abort(d->cart, 3);
+        for (int y = 0; y < nyl; y++)
+            for (int x = 0; x < nxl; x++) {
+                const int X = lo[0] - 1 + x, Y = lo[1] - 1 + y;
+                const int in = C && X >= 0 && Y >= 0 && X < G->nx && Y < G->ny;
+                c[(size_t)y * nxl + x] = in ? C[(size_t)Y * G->nx + X] : SS_HEAL_CLOSED_INTACT;
+            }
+        if (q != 0) {
+            MPI_Send(c, nxl * nyl, MPI_DOUBLE, q, 14, d->cart);
+            free(c);
+        }
     }
 }
 
@@ -757,6 +822,10 @@ ss_status ss_dist_heal_create(ss_heal_run *r, ss_status root_st, ss_dist_heal **
     }
 
     scatter(d, r, d->g, 0); /* every rank its box + halo */
+    if ((d->closed = malloc((size_t)nxl * nyl * sizeof(double))))
+        scatter_closed(d, r);
+    else
+        MPI_Abort(d->cart, 3);
     int goff[3] = {d->lo[0] - 1, d->lo[1] - 1, 0};
     d->s =
         ss_heal_solver_create_sub(d->g, goff, su.G, &su.p, (ss_heal_scheme)su.scheme, su.dt, err);
@@ -774,7 +843,8 @@ ss_status ss_dist_heal_create(ss_heal_run *r, ss_status root_st, ss_dist_heal **
         return st;
     }
     if (d->rank == 0) {
-        ss_heal_run_hooks h = {d, hook_step, hook_undo, hook_stats, hook_sync, hook_snapshot};
+        ss_heal_run_hooks h = {d,         hook_step,    hook_undo,    hook_stats,
+                               hook_sync, hook_closure, hook_snapshot};
         ss_heal_run_set_hooks(r, &h, err);
     }
     *out = d;
@@ -809,6 +879,9 @@ ss_status ss_dist_heal_serve(ss_dist_heal *d, ss_error *err) {
             break;
         case CMD_UNDO:
             do_undo(d);
+            break;
+        case CMD_CLOSURE:
+            do_closure(d);
             break;
         case CMD_STATS: {
             ss_heal_stats st;
@@ -848,6 +921,7 @@ void ss_dist_heal_free(ss_dist_heal *d) {
     ss_heal_grid_free(d->g);
     ss_heal_solver_free(d->sB);
     for (int f = 0; f < SS_HEAL_NFIELDS; f++) free(d->backup[f]);
+    free(d->closed);
     ss_heal_grid_free(d->gB);
     free(d->tsend);
     free(d->trecv);

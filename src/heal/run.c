@@ -311,7 +311,10 @@ static ss_status run_step(ss_heal_run *r, long long limit, ss_error *err) {
      * reduction of the surface layer would be cheaper; docs/scaling.md) */
     if (!st && r->hooks.step) st = ss_heal_run__sync(r, err);
     if (st) return st;
-    ss_heal_closure_update(r->g, r->closed_day);
+    if (r->hooks.closure)
+        r->hooks.closure(r->hooks.ctx, r->g, r->closed_day);
+    else
+        ss_heal_closure_update(r->g, r->closed_day);
     long long k = (long long)r->g->step;
     int last = k == r->nsteps;
     if (k / r->area_every != k0 / r->area_every || last) st = ss_heal_run__add_row(r, err);
