@@ -305,11 +305,6 @@ static ss_status run_step(ss_heal_run *r, long long limit, ss_error *err) {
     const long long k0 = (long long)r->g->step;
     if (!st) st = solver_step(r, limit, err);
     if (!st && r->mech && !(st = ss_mech_step(r->mech, r->g, r->dt, err))) cap_velocity(r);
-    /* the closure days need this step's epithelium: with a distributed
-     * solver (hooks) that is the gathered grid, so the days are those of one
-     * process, bit for bit. Gave up: a gather per step on MPI (a per-rank
-     * reduction of the surface layer would be cheaper; docs/scaling.md) */
-    if (!st && r->hooks.step) st = ss_heal_run__sync(r, err);
     if (st) return st;
     if (r->hooks.closure)
         r->hooks.closure(r->hooks.ctx, r->g, r->closed_day);
