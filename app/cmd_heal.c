@@ -215,8 +215,7 @@ static int parse_args(int argc, char **argv, opts *o, ss_error *err) {
     }
     /* adaptive steps by default where they apply: split scheme, the automatic
      * step, no mechanics (--dt fixes the step; --adapt-tol 0 too) */
-    if (!o->have_adapt && c->scheme == SS_HEAL_SPLIT && c->dt_days == 0 && !c->mechanics)
-        c->adapt_tol = SS_HEAL_RUN_DEFAULT_ADAPT_TOL;
+    if (!o->have_adapt) heal_default_adapt_tol(c);
     return 0;
 }
 

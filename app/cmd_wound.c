@@ -28,7 +28,7 @@ static void help(void) {
            "  --grid NXxNYxNZ, --size-mm X,Y,Z (square in x, y: the texture covers the\n"
            "  block), --stroke CSV, --concave-k K, --wound-mask PNG, --wound-mesh OBJ,\n"
            "  --wound-depth-mm D, --wound-depth-image F, --skin-top-mm, --epidermis-mm,\n"
-           "  --dt DAYS, --scheme explicit|split\n"
+           "  --dt DAYS, --scheme explicit|split, --adapt-tol X\n"
            "  --mesh M --wound-uv CSV  on a body (as skinsim heal): the textures cover the\n"
            "                         mesh's UV layout and each day's glTF is the mesh\n"
            "  --heal DIR             instead: render a finished `skinsim heal --out DIR` run\n"
@@ -85,6 +85,7 @@ static int parse_args(int argc, char **argv, opts *o, ss_error *err) {
     ss_wound_make_config_default(c);
     c->out_dir = "wound-out";
     const char *days = "0,1,3,7,14,28,90,365";
+    int have_adapt = 0;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) return 1;
@@ -116,6 +117,9 @@ static int parse_args(int argc, char **argv, opts *o, ss_error *err) {
             days = v;
         } else if (!strcmp(a, "--heal")) {
             c->heal_dir = v;
+        } else if (!strcmp(a, "--adapt-tol")) {
+            st = cli_parse_double(a, v, 0, 1, &c->heal.adapt_tol, err);
+            have_adapt = 1;
         } else if (!strcmp(a, "--size")) {
             st = cli_parse_int(a, v, 16, 16384, &l, err);
             c->size = (int)l;
@@ -139,6 +143,8 @@ static int parse_args(int argc, char **argv, opts *o, ss_error *err) {
         if (st) return -1;
     }
     if (cli_parse_double_list("--days", days, 0, 1e4, &o->days, &c->ndays, err)) return -1;
+    /* adaptive steps as skinsim heal's (a --heal DIR run was made already) */
+    if (!have_adapt && !c->heal_dir) heal_default_adapt_tol(&c->heal);
     c->days = o->days;
     return 0;
 }

@@ -113,3 +113,8 @@ int heal_parse_problem_option(const char *a, const char *v, ss_heal_run_config *
     }
     return st ? -1 : 1;
 }
+
+void heal_default_adapt_tol(ss_heal_run_config *c) {
+    if (c->scheme == SS_HEAL_SPLIT && c->dt_days == 0 && !c->mechanics)
+        c->adapt_tol = SS_HEAL_RUN_DEFAULT_ADAPT_TOL;
+}

@@ -17,4 +17,10 @@ int heal_parse_problem_flag(const char *opt, ss_heal_run_config *c);
 int heal_parse_problem_option(const char *opt, const char *val, ss_heal_run_config *c,
                               ss_error *err);
 
+/* Adaptive steps where they apply, as `skinsim heal` defaults to them: the
+ * split scheme with the automatic step and no mechanics get
+ * SS_HEAL_RUN_DEFAULT_ADAPT_TOL (--dt fixes the step; an explicit --adapt-tol,
+ * 0 included, is kept: call this only when it was not given). */
+void heal_default_adapt_tol(ss_heal_run_config *c);
+
 #endif

@@ -4,7 +4,8 @@
  * default 30 x 30 x 4 mm block, output days 0,1,3,7,14,28,90,365 at
  * 2048 x 2048. Prints the one-off renderer set-up (base skin textures, the
  * blood-layer tables), then per day the heal time since the previous day
- * (stepping; the run keeps each column's closure day) and the texture time
+ * (adaptive steps as `skinsim wound` takes them; the run keeps each column's
+ * closure day) and the texture time
  * (sampling the tissue with ss_wound_tissue_observe_closure, then
  * ss_wound_render), as `skinsim wound` does it.
  * PNG writing is not included. CPU seconds (all threads) are printed next to
@@ -42,6 +43,7 @@ int main(int argc, char **argv) {
     ss_heal_run_config_default(&hc);
     hc.scenario = "scab";
     hc.days = days[ndays - 1];
+    hc.adapt_tol = SS_HEAL_RUN_DEFAULT_ADAPT_TOL; /* as `skinsim wound` runs it */
     ss_heal_run *run;
     char path[4096];
     snprintf(path, sizeof path, "%s/modelmatch_default.sstab", ss_data_dir());
@@ -77,12 +79,9 @@ int main(int argc, char **argv) {
     double heal_sum = 0, tex_sum = 0, tex_cpu = 0;
     for (int k = 0; k < ndays; k++) {
         double a = ss_now(), ca = cpu();
-        long long target = llround(days[k] / ss_heal_run_dt(run));
-        while (ss_heal_run_step_index(run) < target) {
-            if (ss_heal_run_step(run, &err)) {
-                fprintf(stderr, "bench_wound: %s\n", err.msg);
-                return 1;
-            }
+        if (ss_heal_run_advance_to(run, days[k], &err)) {
+            fprintf(stderr, "bench_wound: %s\n", err.msg);
+            return 1;
         }
         double b = ss_now(), cb = cpu();
         ss_wound_tissue_observe_closure(t, ss_heal_run_grid(run), ss_heal_run_closure(run));

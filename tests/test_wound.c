@@ -5,11 +5,12 @@
  *   - outside the wound region (beyond the contraction's reach) the colour
  *     equals the base skin (Delta-E00 < 1) on every day;
  *   - day 1 (clean): the wound is redder than the skin (a* at least 5 higher);
- *   - day 3 (scab): a dark crust (L* at least 15 below the skin);
+ *   - day 3 (scab): a dark crust (L* at least 15 below the skin), mottled (L*
+ *     standard deviation > 1.5) and thicker in the middle than at its rim;
  *   - day 28 (clean): closed and pinker than the skin (a* higher);
  *   - day 365 (clean): the scar is visible (Delta-E00 > 2) but close to skin
  *     (Delta-E00 < 12);
- *   - keloid: raised (height above the clean scar's);
+ *   - keloid: raised (height above the clean scar's) and red (a* 3 above skin);
  *   - the textures are bit-identical for 1 and 2 threads.
  * These are written to the clinical criteria; docs/wound.md says which ones
  * the current healing model meets. */
@@ -151,15 +152,19 @@ static void scene_free(scene *s) {
  * far skin against the base skin. */
 typedef struct stats {
     double wound[3], skin[3], worst_far_de, wound_de, height_wound;
-    double cover; /* mean epithelium over the region's columns */
-    int far_skin; /* texels of skin beyond the margin (a keloid may leave none) */
+    double cover;          /* mean epithelium over the region's columns */
+    int far_skin;          /* texels of skin beyond the margin (a keloid may leave none) */
+    double l_sd;           /* standard deviation of L* over the region (a mottled crust) */
+    double inner_h, rim_h; /* mean height (mm) more than 3 mm inside the region's edge, and
+                              within 1 mm of it */
 } stats;
 
 static void measure(const scene *s, const ss_wound_tissue *t, const ss_wound_textures *tex,
                     double margin_mm, stats *out) {
     const ss_wound_textures *base = ss_wound_renderer_base(s->r);
     double side = t->nx * t->dx_mm, acc_w[3] = {0}, acc_s[3] = {0};
-    int nw = 0, ns = 0;
+    int nw = 0, ns = 0, n_in = 0, n_rim = 0;
+    double acc_l2 = 0;
     memset(out, 0, sizeof *out);
     for (int y = 0; y < TEX; y++)
         for (int x = 0; x < TEX; x++) {
@@ -177,7 +182,17 @@ static void measure(const scene *s, const ss_wound_tissue *t, const ss_wound_tex
             ss_linear_srgb_to_lab(rgb, lab);
             for (int c = 0; c < 3; c++) rgb[c] = base->base_color->data[i * 3 + c];
             ss_linear_srgb_to_lab(rgb, blab);
-            if (dmin <= 0.25) { /* inside the region (column centres) */
+            if (dmin <= 0.25) {    /* inside the region (column centres) */
+                double dout = 1e9; /* to the nearest column outside it */
+                for (int r = 0; r < t->ny; r++)
+                    for (int c = 0; c < t->nx; c++)
+                        if (!(t->plasma[(size_t)r * t->nx + c] > 0.5f)) {
+                            double d = hypot(px - (c + 0.5) * t->dx_mm, py - (r + 0.5) * t->dx_mm);
+                            if (d < dout) dout = d;
+                        }
+                if (dout > 3) out->inner_h += tex->height->data[i], n_in++;
+                if (dout < 1) out->rim_h += tex->height->data[i], n_rim++;
+                acc_l2 += lab[0] * lab[0];
                 for (int c = 0; c < 3; c++) acc_w[c] += lab[c];
                 out->height_wound += tex->height->data[i];
                 nw++;
@@ -193,6 +208,9 @@ static void measure(const scene *s, const ss_wound_tissue *t, const ss_wound_tex
     for (int c = 0; c < 3; c++)
         out->wound[c] = acc_w[c] / nw, out->skin[c] = ns ? acc_s[c] / ns : NAN;
     out->height_wound /= nw;
+    out->l_sd = sqrt(fmax(0, acc_l2 / nw - out->wound[0] * out->wound[0]));
+    out->inner_h = n_in ? out->inner_h / n_in : NAN;
+    out->rim_h = n_rim ? out->rim_h / n_rim : NAN;
     out->wound_de = ss_delta_e2000(out->wound, out->skin);
 }
 
@@ -270,12 +288,20 @@ static void test_clinical(void **state) {
     stats sc;
     run_days(&s, "scab", sdays, 1, &sc);
     assert_true(sc.wound[0] <= sc.skin[0] - 15);
+    /* the crust is mottled, and thicker in the middle than at its rim (the
+     * wound bed is equally deep: docs/wound.md, crust structure) */
+    fprintf(stderr, "scab day 3: L* sd %.2f, height inside %.3f mm, at the rim %.3f mm\n", sc.l_sd,
+            sc.inner_h, sc.rim_h);
+    assert_true(sc.l_sd > 1.5);
+    assert_true(sc.inner_h > sc.rim_h + 0.05);
     if (!quick) {
         /* keloid: raised above the clean scar (day 60) */
         double kdays[] = {60};
         stats k;
         run_days(&s, "keloid", kdays, 1, &k);
         clinical(k.height_wound > c[2].height_wound + 0.05, "keloid raised above the clean scar");
+        /* and red (hypervascular), not the pale of a mature scar */
+        clinical(k.wound[1] >= k.skin[1] + 3, "keloid redder than the skin (a* + 3)");
         /* day 365: still closed, the scar visible but close to skin */
         clinical(c[3].cover >= 0.9, "day 365: the wound is still closed");
         clinical(c[3].wound_de > 2, "day 365: the scar is visible (Delta-E00 > 2)");

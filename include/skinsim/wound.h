@@ -5,7 +5,8 @@
  * dried-blood layer of the optics model colours the scab. Outputs follow the
  * texture-timeline format of seed 000 (`skinsim abrasion`).
  *
- *   heal run --(ss_wound_tissue_observe, every step)--> tissue maps (grid resolution)
+ *   heal run (or a saved run's snapshot) --(ss_wound_tissue_observe_closure, on the
+ *   days to render, with the run's closure days)--> tissue maps (grid resolution)
  *   tissue maps + base bio maps --(ss_wound_render)--> base colour, roughness,
  *                                                      height, normal (texture size)
  *

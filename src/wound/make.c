@@ -1,14 +1,18 @@
-/* `skinsim wound` as a library call: run the heal simulation in memory,
- * observe the tissue after every step, and at each requested day render the
- * textures and write them in the texture-timeline layout of `skinsim
- * abrasion` (frames/t<days>_*.png, timeline.json, contact_sheet.png), plus a
- * glTF scene per day and compare_abrasion.png (the same wound through seed
- * 000's artist phases, row above row).
+/* `skinsim wound` as a library call: run the heal simulation in memory (or
+ * read a finished run folder, --heal DIR), and at each requested day sample
+ * the tissue with the run's own closure days, render the textures and write
+ * them in the texture-timeline layout of `skinsim abrasion`
+ * (frames/t<days>_*.png, timeline.json, contact_sheet.png), plus a glTF scene
+ * per day and compare_abrasion.png (the same wound through seed 000's artist
+ * phases, row above row). The textures cover the heal block, or on a body
+ * (--mesh) the mesh's UV layout. Without a wound input the wound is a
+ * built-in irregular abrasion (default_footprint).
  *
  * Order of work, so that bad input writes nothing: parse and check the days,
  * read the table, the recipe and the base skin, create the heal run (which
- * validates the whole healing problem), check the output directory; only then
- * stage the output directory (ss_output_dir_begin), fill it and swap it in. */
+ * validates the whole healing problem) or open the run folder and read its
+ * day-0 snapshot, check the output directory; only then stage the output
+ * directory (ss_output_dir_begin), fill it and swap it in. */
 #define _POSIX_C_SOURCE 200809L
 #include <cjson/cJSON.h>
 #include <math.h>
@@ -428,9 +432,12 @@ static ss_status advance(job *j, double day, ss_progress *pr, ss_image **def, ss
     ss_status st = SS_OK;
     *def = NULL;
     if (j->run) {
-        long long target = llround(day / ss_heal_run_dt(j->run));
-        while (!st && ss_heal_run_step_index(j->run) < target) {
-            st = ss_heal_run_step(j->run, err);
+        /* in pieces of a fiftieth of the run (at least 2 days), for the
+         * progress bar; each lands exactly (adaptive steps included) */
+        double piece = fmax(2.0, c->days[c->ndays - 1] / 50.0);
+        while (!st && ss_heal_run_day(j->run) < day - 1e-9 * (1 + day)) {
+            double next = fmin(day, ss_heal_run_day(j->run) + piece);
+            st = ss_heal_run_advance_to(j->run, next, err);
             ss_progress_update(pr, (double)ss_heal_run_step_index(j->run));
         }
         if (st) return st;
