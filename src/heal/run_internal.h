@@ -45,7 +45,7 @@ struct ss_heal_run {
     int closed; /* 95 % closure reached; close_* hold the state then */
     double close_day;
     ss_mech_stats close_st;
-    cJSON *mech_aux; /* the checkpoint's "mechanics" object while resuming */
+    cJSON *mech_aux;    /* the checkpoint's "mechanics" object while resuming */
     double *closed_day; /* closure day per column (ss_heal_closure_update), nx*ny */
     /* adaptive steps (run.c): a step is mult x dt; adapt_tol 0 = fixed */
     double adapt_tol;
@@ -56,10 +56,10 @@ struct ss_heal_run {
     ss_mesh skin;
     char *skin_path, *wound_path; /* owned copies (a resume re-reads them) */
     int wound_is_uv;
-    double shell_opts[6];   /* voxel, thickness, epidermis, depth, margin, units */
+    double shell_opts[6]; /* voxel, thickness, epidermis, depth, margin, units */
     int shell_concave;
-    float *vfields;         /* per skin vertex, SS_SHELL_VERTEX_STRIDE floats */
-    cJSON *shell_aux;       /* the checkpoint's "shell" object while resuming */
+    float *vfields;          /* per skin vertex, SS_SHELL_VERTEX_STRIDE floats */
+    cJSON *shell_aux;        /* the checkpoint's "shell" object while resuming */
     ss_heal_run_hooks hooks; /* an external solver (src/dist); members NULL = none */
 };
 /* Brings r->g's fields up to date when an external solver steps it. */

@@ -514,7 +514,7 @@ static void run_photon(const mc_ctx *c, uint64_t idx, mc_acc *a, path_buf *pb) {
     int layer = 0;
     double hpath = 0.0; /* horizontal path length (seed §4.7.1 D), if path_dist */
     const int track = c->paths || c->path_dist; /* per-segment bookkeeping needed */
-    double dsum = 0.0;  /* this photon's diffuse reflectance */
+    double dsum = 0.0;                          /* this photon's diffuse reflectance */
     double tsum = 0.0;
 
     for (;;) {
