@@ -78,6 +78,10 @@ ss_status ss_heal_run__setup_resume(ss_heal_run *r, ss_error *err);
 /* run_output.c */
 /* Writes a snapshot now (the outputs must have begun). */
 ss_status ss_heal_run__snapshot(ss_heal_run *r, ss_error *err);
+/* out_dir/dir/stem.pvd: the time series of stem_0000.vtu .. stem_NNNN.vtu, one
+ * file per snapshot so far (r->snap_t) plus the one being written now. */
+ss_status ss_heal_run__series_pvd(const ss_heal_run *r, const char *dir, const char *stem,
+                                  ss_error *err);
 /* Checkpoint metadata: intervals, seed, wall time, wound, area rows, snapshots. */
 char *ss_heal_run__aux_json(const ss_heal_run *r, double wall);
 ss_status ss_heal_run__aux_restore(ss_heal_run *r, const char *aux, const char *dir, ss_error *err);

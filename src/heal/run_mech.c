@@ -229,25 +229,11 @@ ss_status ss_heal_run__mech_row(ss_heal_run *r, ss_error *err) {
 
 ss_status ss_heal_run__mech_snapshot(ss_heal_run *r, int idx, ss_error *err) {
     if (!r->mech) return SS_OK;
-    char path[4400], rel[64];
+    char path[4400];
     snprintf(path, sizeof path, "%s/fields/mesh_%04d.vtu", r->out_dir, idx);
     ss_status st = ss_mech_vtu_write(r->mech, path, r->g->t_days, err);
     if (st) return st;
-    /* the collection: the snapshots so far (r->snap_t) and this one */
-    int n = r->nsnap + 1;
-    double *t = malloc((size_t)n * sizeof *t);
-    char **names = calloc((size_t)n, sizeof *names);
-    if (!t || !names) st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
-    for (int i = 0; !st && i < n; i++) {
-        t[i] = i < r->nsnap ? r->snap_t[i] : r->g->t_days;
-        snprintf(rel, sizeof rel, "mesh_%04d.vtu", i);
-        if (!(names[i] = strdup(rel))) st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
-    }
-    snprintf(path, sizeof path, "%s/fields/mesh.pvd", r->out_dir);
-    if (!st) st = ss_heal_pvd_write(path, n, t, (const char *const *)names, err);
-    for (int i = 0; names && i < n; i++) free(names[i]);
-    free(names);
-    free(t);
+    st = ss_heal_run__series_pvd(r, "fields", "mesh", err);
     if (st) return st;
     /* Fig. 7: speed on a fixed scale for the run, 0 .. the first frame's
      * reference of 0.5 mm/day (the seed's 7.7e-3 mm/s is for a face mesh) */

@@ -453,6 +453,28 @@ static ss_status write_surface_maps(ss_heal_run *r, int idx, ss_error *err) {
     return SS_OK;
 }
 
+ss_status ss_heal_run__series_pvd(const ss_heal_run *r, const char *dir, const char *stem,
+                                  ss_error *err) {
+    int n = r->nsnap + 1;
+    double *t = malloc((size_t)n * sizeof *t);
+    char **names = calloc((size_t)n, sizeof *names);
+    ss_status st = SS_OK;
+    if (!t || !names) st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    for (int i = 0; !st && i < n; i++) {
+        char rel[128];
+        t[i] = i < r->nsnap ? r->snap_t[i] : r->g->t_days;
+        snprintf(rel, sizeof rel, "%s_%04d.vtu", stem, i);
+        if (!(names[i] = strdup(rel))) st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    }
+    char path[4400];
+    snprintf(path, sizeof path, "%s/%s/%s.pvd", r->out_dir, dir, stem);
+    if (!st) st = ss_heal_pvd_write(path, n, t, (const char *const *)names, err);
+    for (int i = 0; names && i < n; i++) free(names[i]);
+    free(names);
+    free(t);
+    return st;
+}
+
 ss_status ss_heal_run__snapshot(ss_heal_run *r, ss_error *err) {
     if (!r->out_dir) return ss_error_set(err, SS_ERR_INPUT, "heal run: no output directory");
     ss_status st0 = ss_heal_run__sync(r, err);

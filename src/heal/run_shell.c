@@ -152,26 +152,12 @@ ss_status ss_heal_run__shell_snapshot(ss_heal_run *r, int idx, ss_error *err) {
     float *const *u = r->mech ? ss_mech_grid_displacement(r->mech) : NULL;
     if (r->mech && !u) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     ss_shell_vertex_fields(r->shell, &r->skin, r->g, r->p, u, r->vfields);
-    char path[4400], rel[64];
+    char path[4400];
     snprintf(path, sizeof path, "%s/surface/skin_%04d.vtu", r->out_dir, idx);
     ss_status st =
         ss_shell_surface_vtu_write(r->shell, &r->skin, r->vfields, path, r->g->t_days, err);
     if (st) return st;
-    int n = r->nsnap + 1;
-    double *t = malloc((size_t)n * sizeof *t);
-    char **names = calloc((size_t)n, sizeof *names);
-    if (!t || !names) st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
-    for (int i = 0; !st && i < n; i++) {
-        t[i] = i < r->nsnap ? r->snap_t[i] : r->g->t_days;
-        snprintf(rel, sizeof rel, "skin_%04d.vtu", i);
-        if (!(names[i] = strdup(rel))) st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
-    }
-    snprintf(path, sizeof path, "%s/surface/skin.pvd", r->out_dir);
-    if (!st) st = ss_heal_pvd_write(path, n, t, (const char *const *)names, err);
-    for (int i = 0; names && i < n; i++) free(names[i]);
-    free(names);
-    free(t);
-    return st;
+    return ss_heal_run__series_pvd(r, "surface", "skin", err);
 }
 
 void ss_heal_run__shell_summary(const ss_heal_run *r, cJSON *j) {

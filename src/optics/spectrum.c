@@ -232,6 +232,19 @@ static ss_status check_brdf_args(const ss_spectrum_options *o, int n_theta_i, in
     return SS_OK;
 }
 
+/* One incidence row of a sampled BRDF: theta_i at the centre of row ti, the
+ * exit directions binned, no radial profile. */
+static ss_mc_options brdf_row_options(const ss_mc_options *base, int ti, int n_theta_i,
+                                      int n_theta_r, int n_phi) {
+    ss_mc_options mc = *base;
+    mc.theta_i_rad = (ti + 0.5) * M_PI / (2.0 * n_theta_i);
+    mc.brdf_n_theta = n_theta_r;
+    mc.brdf_n_phi = n_phi;
+    mc.radial_bins = 0;
+    mc.radial_max_cm = 0;
+    return mc;
+}
+
 ss_status ss_optics_brdf_sample(const ss_bio_params *bio, const ss_spectrum_options *o,
                                 int n_theta_i, int n_theta_r, int n_phi, ss_brdf_sampled *out,
                                 ss_error *err) {
@@ -260,12 +273,7 @@ ss_status ss_optics_brdf_sample(const ss_bio_params *bio, const ss_spectrum_opti
         ss_optics_slab slab;
         st = ss_optics_skin_slab_data(&d, bio, wl[k], &slab, err);
         for (int ti = 0; ti < n_theta_i && !st; ti++) {
-            ss_mc_options mc = o->mc;
-            mc.theta_i_rad = (ti + 0.5) * M_PI / (2.0 * n_theta_i);
-            mc.brdf_n_theta = n_theta_r;
-            mc.brdf_n_phi = n_phi;
-            mc.radial_bins = 0;
-            mc.radial_max_cm = 0;
+            ss_mc_options mc = brdf_row_options(&o->mc, ti, n_theta_i, n_theta_r, n_phi);
             ss_mc_result r;
             st = ss_mc_run(&slab, &mc, &r, err);
             if (st) break;
@@ -308,12 +316,7 @@ ss_status ss_optics_surface_brdf_sample(const ss_spectrum_options *o, int n_thet
     out->n_theta_r = n_theta_r;
     out->n_phi = n_phi;
     for (int ti = 0; ti < n_theta_i && !st; ti++) {
-        ss_mc_options mc = o->mc;
-        mc.theta_i_rad = (ti + 0.5) * M_PI / (2.0 * n_theta_i);
-        mc.brdf_n_theta = n_theta_r;
-        mc.brdf_n_phi = n_phi;
-        mc.radial_bins = 0;
-        mc.radial_max_cm = 0;
+        ss_mc_options mc = brdf_row_options(&o->mc, ti, n_theta_i, n_theta_r, n_phi);
         ss_mc_result r;
         if ((st = ss_mc_run(&slab, &mc, &r, err))) break;
         double *f = out->f_rgb + (size_t)ti * nb * 3;
