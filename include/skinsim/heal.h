@@ -96,6 +96,10 @@ typedef struct ss_heal_params {
     double kscab;   /* 1, fraction by which a full eschar slows the epithelial sheet under it */
     double rho_sat; /* 1, packing limit of collagen (x normal dermis): keloid deposition
                        saturates as (1 - rho/rho_sat) */
+    /* keloid invasion (docs/heal-model.md §2 [D6]) */
+    double keloid_tau; /* day, e-folding time of the invasion signal a(t) = exp(-t/keloid_tau):
+                          keloid deposition in tissue not yet keloid (rho < rho_max) is scaled
+                          by a(t), so the front slows and stops; 0 = no decay (a = 1) */
 } ss_heal_params;
 
 /* omega = [p > SS_HEAL_P_MIN] (plasma is normalised to 1 in the fresh clot). */
@@ -289,6 +293,7 @@ typedef struct ss_heal_course_opts {
                               gone (the slow remodelling phase); 0 = dt throughout */
     double deep_check_day; /* day of the deep-epithelium check; < 0 = none */
     double keloid_thr;     /* scar level of the keloid extent; 0 = none */
+    double keloid_day[2];  /* days of two more keloid-extent readings (0 = none) */
 } ss_heal_course_opts;
 typedef struct ss_heal_course {
     double t50, t95;      /* days to 50 % / 95 % closure (-1 = not reached) */
@@ -312,6 +317,9 @@ typedef struct ss_heal_course {
     int bounds_ok;            /* final fields non-negative, finite; s, e, p <= 1 */
     long steps;
     double wall_s;
+    double keloid_beyond_day[2]; /* keloid extent at opts.keloid_day[k] (first step at or after) */
+    double keloid_beyond_max;    /* its largest value over the run (regression if > the end) */
+    double scar_max_end;         /* largest rho at the end (regression if below the peak) */
 } ss_heal_course;
 ss_status ss_heal_course_run(const ss_heal_params *p, const ss_heal_course_opts *o,
                              ss_heal_course *c, ss_error *err);

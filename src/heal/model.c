@@ -36,6 +36,7 @@ typedef struct model_ctx {
     float lam11, lam31, lam12, lam22, beta2, lam33, lam32, inv_u3eq, rn, inv_K, lamnn;
     float Rs, lames, lamge, lamee, gamma1, lamnrho, lamrhop, lamkrho, lampp, inv_rhomax, rhomax;
     float kscab, bed_mm, h, rho_closed, inv_rhosat;
+    float kact; /* keloid invasion signal a(t) for the current step (keloid_activity) */
     int scab, static_region;
     const uint8_t *cell;
     int nx, ny, nz;
@@ -98,6 +99,7 @@ react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep) {
     const float scab_h = m->scab_h, kscab = m->kscab, rclosed = m->rho_closed;
     const float lamnrho = m->lamnrho, lamkrho = m->lamkrho, lamge = m->lamge, lamee = m->lamee;
     const float lames = m->lames, irsat = m->inv_rhosat;
+    const float kact = m->kact, nkact = 1.0f - m->kact, irmax = m->inv_rhomax;
     float *restrict m0 = row->m[0], *restrict m1 = row->m[1];
     float *restrict p1 = pr[0], *restrict p2 = pr[1], *restrict p3 = pr[2], *restrict p4 = pr[3];
     float *restrict p5 = pr[4], *restrict p6 = pr[5], *restrict p7 = pr[6], *restrict p8 = pr[7];
@@ -143,10 +145,12 @@ react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep) {
         p6[i] = deep ? 0.0f : me * lamge * e;
         l6[i] = deep ? 0.0f : surf * lamee;
         /* 4.1.7 scar, restricted to omega:
-         * (1-s) n ((1-u3)(1-e) lamnrho + lamkrho (1 - rho/rho_sat)+)
-         * - lamrhop rho */
+         * (1-s) n ((1-u3)(1-e) lamnrho + lamkrho G (1 - rho/rho_sat)+)
+         * - lamrhop rho; G = a + (1 - a) clamp(rho/rho_max - 1, 0, 1): tissue
+         * not yet keloid needs the invasion signal a(t) [D6] */
         const float imm = pos(1.0f - rclosed * u3); /* (1 - u3) at rho_open = 0 */
-        p7[i] = om * ns * nn * (imm * necl * lamnrho + lamkrho * pos(1.0f - rho * irsat));
+        const float kg = kact + nkact * clampf(rho * irmax - 1.0f, 0.0f, 1.0f);
+        p7[i] = om * ns * nn * (imm * necl * lamnrho + lamkrho * kg * pos(1.0f - rho * irsat));
         l7[i] = m->lamrhop;
         /* 4.1.8 plasma: Dp lap p + lampp p + C(rho)(1-p) */
         const float C = pos(rho - m->rhomax) * m->inv_rhomax;
@@ -290,6 +294,7 @@ static void ctx_init(model_ctx *c, const ss_heal_params *p, const ss_heal_grid *
     c->nz = g->nz;
     c->kscab = (float)p->kscab;
     c->inv_rhosat = (float)(1.0 / p->rho_sat);
+    c->kact = 1.0f;
     c->rho_closed = (float)(1.0 - p->rho_open);
     c->bed_mm = (float)p->bed_mm;
     c->h = (float)g->dx_mm;
@@ -510,6 +515,14 @@ void ss_heal_solver_free(ss_heal_solver *s) {
     free(s);
 }
 
+/* The keloid's invasion signal over a step from day t of length dt, at the
+ * step's midpoint: a = exp(-t_mid / keloid_tau), 1 without decay. A function
+ * of the grid's day only, so resumed runs and any rank count see the same. */
+static float keloid_signal(const ss_heal_params *p, double t, double dt) {
+    if (!(p->keloid_tau > 0)) return 1.0f;
+    return (float)exp(-(t + 0.5 * dt) / p->keloid_tau);
+}
+
 ss_status ss_heal_step_phase(ss_heal_solver *s, ss_heal_grid *g, int phase, ss_error *err) {
     if (!s || !g || s->scheme != SS_HEAL_SPLIT || phase < 0 || phase > 2 || g->velocity[0] ||
         g->velocity[1] || g->velocity[2])
@@ -520,6 +533,7 @@ ss_status ss_heal_step_phase(ss_heal_solver *s, ss_heal_grid *g, int phase, ss_e
     s->ctx.cell = g->cell;
     s->sys.cls = g->cell;
     if (s->ctx.ztop_of != g->cell) find_surface(&s->ctx);
+    s->ctx.kact = keloid_signal(&s->p, g->t_days, s->dt);
     for (int f = 0; f < SS_HEAL_NFIELDS; f++) s->sys.u[f] = g->field[f];
     ss_heal_rd__step_split_phase(&s->sys, s->w, s->dt, s->nsub, phase);
     if (phase == 2) {
@@ -545,6 +559,7 @@ ss_status ss_heal_step(ss_heal_solver *s, ss_heal_grid *g, ss_error *err) {
     s->ctx.cell = g->cell;
     s->sys.cls = g->cell;
     if (s->ctx.ztop_of != g->cell) find_surface(&s->ctx);
+    s->ctx.kact = keloid_signal(&s->p, g->t_days, s->dt);
     for (int f = 0; f < SS_HEAL_NFIELDS; f++) s->sys.u[f] = g->field[f];
     int has_vel = 0;
     for (int d = 0; d < 3; d++) {
