@@ -389,7 +389,7 @@ static void test_keloid(void **state) {
 
 /* Keloid stop: the invasion signal decays (keloid_tau), so the front slows
  * and stops at a finite extent set by the biology, not by the block walls.
- * A 6 mm wound in two blocks run for a year (quick: 200 days): the extent
+ * A 6 mm wound in two blocks run for a year (quick: 160 days): the extent
  * still grows after day 60, has stopped between the second reading and the
  * end, never regresses (extent and peak density), and is the same in both
  * blocks (within 10 %, the issue's bound). Without the stop (keloid_tau = 0)
@@ -397,7 +397,7 @@ static void test_keloid(void **state) {
 static void test_keloid_stop(void **state) {
     (void)state;
     const int quick = tu_quick();
-    const double days = quick ? 200 : 365, blk[2] = {16, quick ? 22 : 24};
+    const double days = quick ? 160 : 365, blk[2] = {16, quick ? 20 : 24};
     ss_heal_course c[2];
     ss_error err;
     ss_heal_params *p = ss_heal_params_preset("keloid", &err);

@@ -71,12 +71,14 @@ static inline float qwin(float u3, float g1, float ig1, float ig2) {
 /* One row of the reaction. `deep` (a constant at each call, so the compiler
  * emits two loops): no cell of the row is a surface cell or inside the scab
  * layer, so the sheet and eschar-source terms are zero there and are not
- * computed (the values written are the same as the full loop's). */
+ * computed (the values written are the same as the full loop's). `kel`
+ * (likewise): the keloid deposition is on (lamkrho > 0); without it the term
+ * is skipped (it would add exactly 0). */
 #if defined(__GNUC__)
 __attribute__((always_inline))
 #endif
 static inline void
-react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep) {
+react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep, const int kel) {
     const int n = row->n;
     const size_t col0 = (size_t)row->y * (size_t)m->nx + (size_t)row->x0;
     const int *restrict ZT = m->ztop + col0;
@@ -97,9 +99,11 @@ react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep) {
     const float ibeta = 1.0f / m->beta2;
     const int z = row->z;
     const float scab_h = m->scab_h, kscab = m->kscab, rclosed = m->rho_closed;
-    const float lamnrho = m->lamnrho, lamkrho = m->lamkrho, lamge = m->lamge, lamee = m->lamee;
+    const float lamnrho = m->lamnrho, lamge = m->lamge, lamee = m->lamee;
     const float lames = m->lames, irsat = m->inv_rhosat;
-    const float kact = m->kact, nkact = 1.0f - m->kact, irmax = m->inv_rhomax;
+    /* keloid factor G = a + (1 - a) clamp(rho/rho_max - 1, 0, 1), times lamkrho */
+    const float lka = m->lamkrho * m->kact, lkb = m->lamkrho * (1.0f - m->kact);
+    const float irmax = m->inv_rhomax;
     float *restrict m0 = row->m[0], *restrict m1 = row->m[1];
     float *restrict p1 = pr[0], *restrict p2 = pr[1], *restrict p3 = pr[2], *restrict p4 = pr[3];
     float *restrict p5 = pr[4], *restrict p6 = pr[5], *restrict p7 = pr[6], *restrict p8 = pr[7];
@@ -149,8 +153,10 @@ react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep) {
          * - lamrhop rho; G = a + (1 - a) clamp(rho/rho_max - 1, 0, 1): tissue
          * not yet keloid needs the invasion signal a(t) [D6] */
         const float imm = pos(1.0f - rclosed * u3); /* (1 - u3) at rho_open = 0 */
-        const float kg = kact + nkact * clampf(rho * irmax - 1.0f, 0.0f, 1.0f);
-        p7[i] = om * ns * nn * (imm * necl * lamnrho + lamkrho * kg * pos(1.0f - rho * irsat));
+        const float kdep =
+            kel ? (lka + lkb * clampf(rho * irmax - 1.0f, 0.0f, 1.0f)) * pos(1.0f - rho * irsat)
+                : 0.0f;
+        p7[i] = om * ns * nn * (imm * necl * lamnrho + kdep);
         l7[i] = m->lamrhop;
         /* 4.1.8 plasma: Dp lap p + lampp p + C(rho)(1-p) */
         const float C = pos(rho - m->rhomax) * m->inv_rhomax;
@@ -169,10 +175,16 @@ static void heal_react(void *vctx, const ss_heal_rd_row *row) {
      * the scab layer (levels below the surface with wsc > 0: kf < scab_h), or
      * below z (no surface in the column at this height) */
     const int deep = z > m->zt_max[y] || m->zt_min[y] - z >= m->kdeep;
-    if (deep)
-        react_row(m, row, 1);
-    else
-        react_row(m, row, 0);
+    if (m->lamkrho > 0.0f) {
+        if (deep)
+            react_row(m, row, 1, 1);
+        else
+            react_row(m, row, 0, 1);
+    } else if (deep) {
+        react_row(m, row, 1, 0);
+    } else {
+        react_row(m, row, 0, 0);
+    }
 }
 
 static int is_tissue(uint8_t c) { return c != SS_CELL_AIR && c != SS_CELL_BOUND; }
