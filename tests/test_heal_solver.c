@@ -80,6 +80,8 @@ static void test_params(void **state) {
         {"{\"params\": {\"gamma1\": {\"value\": 1.5, \"unit\": \"1\"}}}", "'gamma1'"},
         {"{\"params\": {\"De\": 0.1}}", "'De'"},
         {"{\"params\": {\"rho_sat\": {\"value\": 0, \"unit\": \"1\"}}}", "'rho_sat'"},
+        {"{\"params\": {\"keloid_tau\": {\"value\": -1, \"unit\": \"day\"}}}", "'keloid_tau'"},
+        {"{\"params\": {\"keloid_tau\": {\"value\": 20, \"unit\": \"1/day\"}}}", "'keloid_tau'"},
         {"{\"switches\": {\"scab\": 3}}", "'scab'"},
         {"{\"scenario\": \"burn\"}", "burn"},
         {"[1, 2]", "malformed"},
