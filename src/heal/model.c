@@ -15,6 +15,8 @@
  * eschar source R(omega) acts in the top scab_mm of the exposed wound. These
  * column inputs are gathered before each reaction pass (prepare hook), so
  * rows stay independent and results bit-identical for any thread count.
+ * The keloid's invasion signal a(t) (keloid_tau) depends on the grid's day
+ * only and is set before each step, so resumes and rank counts agree.
  * docs/heal-model.md §2 lists where and why this departs from §4.1 as printed. */
 /* The hot loops are written branch-free for SIMD. At -O2 GCC vectorises
  * their compares/selects only with loop if-conversion and without treating
@@ -36,7 +38,7 @@ typedef struct model_ctx {
     float lam11, lam31, lam12, lam22, beta2, lam33, lam32, inv_u3eq, rn, inv_K, lamnn;
     float Rs, lames, lamge, lamee, gamma1, lamnrho, lamrhop, lamkrho, lampp, inv_rhomax, rhomax;
     float kscab, bed_mm, h, rho_closed, inv_rhosat;
-    float kact; /* keloid invasion signal a(t) for the current step (keloid_activity) */
+    float kact; /* keloid invasion signal a(t) for the current step (keloid_signal) */
     int scab, static_region;
     const uint8_t *cell;
     int nx, ny, nz;
