@@ -60,6 +60,57 @@ d = arr(sys.argv[3], "displacement")
 assert max(abs(x) for x in d) > 0.01, "no deformation mapped onto the mesh"
 PY
 
+# --- the same snapshots as binary glTF: valid (tests/gltf_check.py, the glTF
+# 2.0 rules a viewer relies on; gltfpack's reader, cgltf_validate, where
+# installed), the fields as _ attributes equal to the .vtu's, the open wound in
+# COLOR_0, the displacement as a morph target
+for f in surface/skin_0000.glb surface/skin_0002.glb; do
+    [ -s "$T/a/$f" ] || fail "missing $f"
+done
+if command -v gltfpack >/dev/null; then
+    for i in 0000 0002; do
+        gltfpack -i "$T/a/surface/skin_$i.glb" -o "$T/repacked.glb" >/dev/null 2>"$T/gp.txt" \
+            || fail "gltfpack rejects skin_$i.glb: $(cat "$T/gp.txt")"
+    done
+fi
+PY=/usr/bin/python3
+[ -x "$PY" ] || PY=$(command -v python3)
+if "$PY" -c "import numpy" 2>/dev/null; then
+    PYTHONPATH="$SRC/tests" "$PY" - "$T/a/surface" <<'PY' || fail "glb contents"
+import re, sys
+import numpy as np
+import gltf_check
+d = sys.argv[1]
+def vtu(path, name):
+    t = open(path).read()
+    return np.array(re.search(r'Name="%s"[^>]*>(.*?)</DataArray>' % name, t, re.S).group(1).split(), float)
+for i in ("0000", "0002"):
+    doc, a = gltf_check.load("%s/skin_%s.glb" % (d, i))
+    for f in ("oxygen", "mdgf", "capillary", "fibroblast", "eschar", "epithelium", "scar", "plasma",
+              "open_wound"):
+        x = a["_" + f.upper()]
+        assert x.dtype == np.float32 and x.ndim == 1, f
+        np.testing.assert_allclose(x, vtu("%s/skin_%s.vtu" % (d, i), f), rtol=1e-5, atol=1e-6)  # the .vtu has 6 digits
+    n = len(a["POSITION"])
+    assert doc["meshes"][0]["extras"]["targetNames"] == ["displacement"]
+    assert doc["meshes"][0]["weights"] == [1]
+    disp = a["target0/POSITION"] * 1000  # m -> mm
+    np.testing.assert_allclose(disp.ravel(), vtu("%s/skin_%s.vtu" % (d, i), "displacement"), atol=1e-4)
+    t = doc["nodes"][0]["extras"]["t_days"]
+    assert (t == 0) == (i == "0000"), t
+    c = a["COLOR_0"]
+    op = a["_OPEN_WOUND"] > 0.5
+    skin = np.all(np.abs(c - [0.70, 0.42, 0.32]) < 1e-6, axis=1)
+    if i == "0000":
+        assert op.any() and (a["_PLASMA"][op] > 0.5).all()
+        assert np.all(c[op][:, 0] > 2 * c[op][:, 1]), "open wound not red"
+        assert skin[~op].all(), "intact skin is not skin-coloured at day 0"
+        assert np.abs(disp).max() == 0
+    else:
+        assert np.abs(disp).max() > 0.01, "no deformation in the morph target"
+PY
+fi
+
 # --- checkpoint half way on 1 thread, resume to the end: the same bytes
 "$CLI" heal $RUN --days $H --threads 1 --checkpoint-every $H --out "$T/b" || fail "checkpointed run failed"
 "$CLI" heal --resume "$T/b" --days $D --threads 1 --quiet || fail "resume failed"

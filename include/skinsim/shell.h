@@ -106,6 +106,22 @@ ss_status ss_shell_surface_vtu_write(const ss_shell_patch *p, const ss_mesh *ski
                                      const float *vertex_fields, const char *path, double t_days,
                                      ss_error *err);
 
+/* The same snapshot as a binary glTF (.glb, ss_gltf_write_mesh_glb): the
+ * undeformed mesh in metres, the eight heal fields and the open-wound flag as
+ * float vertex attributes _OXYGEN, _MDGF, _CAPILLARY, _FIBROBLAST, _ESCHAR,
+ * _EPITHELIUM, _SCAR, _PLASMA, _OPEN_WOUND, the displacement as a morph
+ * target "displacement" shown at weight 1 (slide it to 0 for the undeformed
+ * mesh), and COLOR_0 from ss_shell_wound_colour. The node's extras hold
+ * t_days and the field names. Atomic. */
+ss_status ss_shell_surface_glb_write(const ss_shell_patch *p, const ss_mesh *skin,
+                                     const float *vertex_fields, const char *path, double t_days,
+                                     ss_error *err);
+/* The wound state at a glance, linear RGB: intact skin a light skin tone;
+ * wound tissue (plasma above SS_HEAL_P_MIN, or scar collagen) raw red while
+ * open, turning pink as the epithelium covers it; dark brown where eschar
+ * (crust) lies, in proportion to it. f: one vertex's SS_HEAL_NFIELDS values. */
+void ss_shell_wound_colour(const float *f, float rgb[3]);
+
 #ifdef __cplusplus
 }
 #endif

@@ -3,7 +3,10 @@
  * or a closed wound mesh) are read and checked, the healing grid is the
  * shell's patch around the wound, and every snapshot maps the fields and the
  * mechanics' displacement back onto the undeformed mesh
- * (surface/skin_NNNN.vtu with a surface/skin.pvd time series).
+ * (surface/skin_NNNN.vtu with a surface/skin.pvd time series for ParaView,
+ * and surface/skin_NNNN.glb for glTF viewers and Blender: the fields as
+ * vertex attributes, the displacement as a morph target, a wound-state
+ * vertex colour).
  *
  * Design: the patch is rebuilt from the same files on resume (its
  * construction is deterministic), so a checkpoint stores only the paths and
@@ -157,6 +160,9 @@ ss_status ss_heal_run__shell_snapshot(ss_heal_run *r, int idx, ss_error *err) {
     ss_status st =
         ss_shell_surface_vtu_write(r->shell, &r->skin, r->vfields, path, r->g->t_days, err);
     if (st) return st;
+    snprintf(path, sizeof path, "%s/surface/skin_%04d.glb", r->out_dir, idx);
+    if ((st = ss_shell_surface_glb_write(r->shell, &r->skin, r->vfields, path, r->g->t_days, err)))
+        return st;
     return ss_heal_run__series_pvd(r, "surface", "skin", err);
 }
 

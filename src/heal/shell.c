@@ -660,3 +660,72 @@ ss_status ss_shell_surface_vtu_write(const ss_shell_patch *p, const ss_mesh *ski
     }
     return ss_atomic_commit(&af, err);
 }
+
+void ss_shell_wound_colour(const float *f, float rgb[3]) {
+    static const float skin[3] = {0.70f, 0.42f, 0.32f}, raw[3] = {0.45f, 0.03f, 0.03f},
+                       pink[3] = {0.85f, 0.38f, 0.40f}, crust[3] = {0.10f, 0.03f, 0.015f};
+    float e = f[SS_HEAL_EPITHELIUM], s = f[SS_HEAL_ESCHAR], rho = f[SS_HEAL_SCAR];
+    e = e > 0 ? (e < 1 ? e : 1) : 0;
+    s = s > 0 ? (s < 1 ? s : 1) : 0;
+    /* how much of this vertex is wound tissue: the clot's plasma, then the
+     * scar's collagen that replaces it */
+    float w = f[SS_HEAL_PLASMA] > SS_HEAL_P_MIN ? 1.0f : (rho > 0 ? (rho < 1 ? rho : 1) : 0);
+    for (int c = 0; c < 3; c++) {
+        float bed = raw[c] + (pink[c] - raw[c]) * e;
+        float v = skin[c] + (bed - skin[c]) * w;
+        rgb[c] = v + (crust[c] - v) * s;
+    }
+}
+
+ss_status ss_shell_surface_glb_write(const ss_shell_patch *p, const ss_mesh *skin, const float *vf,
+                                     const char *path, double t_days, ss_error *err) {
+    enum { NA = SS_HEAL_NFIELDS + 1 };
+    const int nv = skin->nvertices, S = SS_SHELL_VERTEX_STRIDE;
+    float *a = malloc((size_t)nv * NA * sizeof *a), *col = malloc((size_t)nv * 3 * sizeof *col),
+          *dl = malloc((size_t)nv * 3 * sizeof *dl);
+    if (!a || !col || !dl) {
+        free(a), free(col), free(dl);
+        return ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", path);
+    }
+    char names[NA][32];
+    ss_gltf_vertex_attr at[NA];
+    for (int k = 0; k < NA; k++) {
+        const char *n = k < SS_HEAL_NFIELDS ? ss_heal_field_name(k) : "open_wound";
+        names[k][0] = '_';
+        int i = 0;
+        for (; n[i] && i < 30; i++)
+            names[k][i + 1] = (char)(n[i] >= 'a' && n[i] <= 'z' ? n[i] - 32 : n[i]);
+        names[k][i + 1] = '\0';
+        at[k] = (ss_gltf_vertex_attr){names[k], a + (size_t)k * nv, 1};
+    }
+    const double thr = ss_heal_open_threshold();
+    for (int v = 0; v < nv; v++) {
+        const float *f = vf + (size_t)S * v;
+        for (int k = 0; k < SS_HEAL_NFIELDS; k++) a[(size_t)k * nv + v] = f[k];
+        a[(size_t)SS_HEAL_NFIELDS * nv + v] =
+            f[SS_HEAL_PLASMA] > SS_HEAL_P_MIN && f[SS_HEAL_EPITHELIUM] < thr ? 1.0f : 0.0f;
+        ss_shell_wound_colour(f, col + 3 * (size_t)v);
+        for (int d = 0; d < 3; d++) /* mm -> mesh units */
+            dl[3 * (size_t)v + d] = (float)(f[SS_HEAL_NFIELDS + d] / p->units_mm);
+    }
+    char extras[512];
+    int len = snprintf(extras, sizeof extras, "{\"t_days\":%.17g,\"units\":\"m\",\"attributes\":[",
+                       t_days);
+    for (int k = 0; k < NA; k++)
+        len +=
+            snprintf(extras + len, sizeof extras - (size_t)len, "%s\"%s\"", k ? "," : "", names[k]);
+    snprintf(extras + len, sizeof extras - (size_t)len,
+             "],\"morph_target\":\"displacement\",\"color\":\"wound state\"}");
+    ss_gltf_vertex_data d = {.scale_m = p->units_mm / 1000.0,
+                             .name = "skin",
+                             .color = col,
+                             .attrs = at,
+                             .nattrs = NA,
+                             .morph_delta = dl,
+                             .morph_name = "displacement",
+                             .morph_weight = 1.0,
+                             .extras_json = extras};
+    ss_status st = ss_gltf_write_mesh_glb(path, skin, &d, err);
+    free(a), free(col), free(dl);
+    return st;
+}
