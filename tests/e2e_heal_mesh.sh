@@ -6,8 +6,9 @@
 # skin_mesh block of summary.json; a checkpointed run resumed on another thread
 # count is byte-identical; a wound given as a closed mesh runs; bad input (an
 # open mesh, a self-intersecting mesh, strokes outside the UV islands, a
-# stroke across two islands, a wound mesh away from the skin, --wound-uv
-# without --mesh) exits 2 naming the input and writes nothing.
+# stroke across two islands, a wound mesh away from the skin, a wound wrapping
+# around a finger, --wound-uv without --mesh) exits 2 naming the input and
+# writes nothing.
 # usage: e2e_heal_mesh.sh <skinsim> <source dir>
 set -u
 CLI=$1
@@ -159,5 +160,23 @@ for p in ((1,0,0),(-1,0,0),(0,1,0),(0,-1,0),(0,0,1),(0,0,-1)): print('v %g %g %g
 for f in ((1,3,5),(3,2,5),(2,4,5),(4,1,5),(3,1,6),(2,3,6),(4,2,6),(1,4,6)): print('f %d %d %d' % f)
 " >"$T/far.obj"
 bad far.obj --mesh "$HAND" --wound-mesh "$T/far.obj"
+# a wound wrapping around the index finger (the back of the finger's UV
+# island reaches round to its side), as strokes and as a closed wound mesh
+# around the finger: refused, not cut off at the steep sides
+python3 -c "
+import math
+print('u,v,stroke')
+for k in range(12):
+    a = 2 * math.pi * k / 12
+    print('%.4f,%.4f,0' % (0.512 + 0.03 * math.cos(a), 0.51 + 0.035 * math.sin(a)))
+" >"$T/wrap.csv"
+bad "wrap.csv: the wound wraps around" --mesh "$HAND" --wound-uv "$T/wrap.csv"
+grep -q "more than the 60 degrees" "$T/err.txt" || fail "the wrap message names no limit"
+python3 -c "
+c = (-0.0238, -0.0974, -0.0152); r = 0.010
+for p in ((1,0,0),(-1,0,0),(0,1,0),(0,-1,0),(0,0,1),(0,0,-1)): print('v %.6f %.6f %.6f' % tuple(c[i] + r * p[i] for i in range(3)))
+for f in ((1,3,5),(3,2,5),(2,4,5),(4,1,5),(3,1,6),(2,3,6),(4,2,6),(1,4,6)): print('f %d %d %d' % f)
+" >"$T/ring.obj"
+bad "ring.obj: the wound wraps around" --mesh "$HAND" --wound-mesh "$T/ring.obj" --mesh-units-mm 1000
 bad "need --mesh" --wound-uv "$T/cut.csv"
 echo "e2e_heal_mesh: OK"

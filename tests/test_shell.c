@@ -8,8 +8,13 @@
  *   islands or across two of them are input errors naming the CSV;
  * - a wound mesh cuts the voxels inside it; one away from the skin misses it;
  * - mapping back (§5.4): vertices over the wound read the wound's fields, the
- *   others healthy values, and a uniform displacement comes back rotated. */
+ *   others healthy values, and a uniform displacement comes back rotated;
+ * - on a cylinder (a finger): a wound over 60 degrees of arc is cut whole, one
+ *   over 150 degrees wraps too far and is refused (SS_SHELL_MAX_WRAP_DEG). */
 #include <math.h>
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -214,11 +219,115 @@ static void test_wound_mesh(void **state) {
     ss_mesh_free(&m);
 }
 
+/* A closed cylinder along x (0..len mm, radius r), n segments around: the
+ * side is one UV island (u = 0.05 + 0.9 phi / 2 pi, v = 0.45 x / len), the
+ * caps two more (v > 0.5). phi = 90 degrees faces +z. */
+static void cylinder(double r, double len, int n, ss_mesh *m) {
+    const int M = 12, nside = (n + 1) * (M + 1), nv = nside + 2 * (n + 1);
+    float *pos = malloc((size_t)nv * 3 * sizeof(float)),
+          *uv = malloc((size_t)nv * 2 * sizeof(float));
+    uint32_t *idx = malloc((size_t)(2 * n * M + 2 * n) * 3 * sizeof(uint32_t));
+    int t = 0;
+    for (int j = 0; j <= M; j++)
+        for (int k = 0; k <= n; k++) {
+            double phi = k == n ? 0 : 2 * M_PI * k / n; /* the seam welds exactly */
+            int v = j * (n + 1) + k;
+            pos[3 * v] = (float)(len * j / M), pos[3 * v + 1] = (float)(r * cos(phi)),
+                    pos[3 * v + 2] = (float)(r * sin(phi));
+            uv[2 * v] = (float)(0.05 + 0.9 * k / n), uv[2 * v + 1] = (float)(0.45 * j / M);
+        }
+    for (int j = 0; j < M; j++)
+        for (int k = 0; k < n; k++) {
+            uint32_t a = (uint32_t)(j * (n + 1) + k), b = a + 1, c = a + (uint32_t)(n + 1),
+                     d = c + 1;
+            uint32_t q[6] = {a, b, d, a, d, c};
+            memcpy(idx + 3 * t, q, sizeof q);
+            t += 2;
+        }
+    /* caps: a centre and a ring each, at x = 0 (facing -x) and x = len */
+    for (int e = 0; e < 2; e++) {
+        int base = nside + e * (n + 1);
+        double x = e ? len : 0;
+        pos[3 * base] = (float)x, pos[3 * base + 1] = 0, pos[3 * base + 2] = 0;
+        uv[2 * base] = (float)(0.25 + 0.5 * e), uv[2 * base + 1] = 0.75f;
+        for (int k = 0; k < n; k++) {
+            double phi = 2 * M_PI * k / n;
+            int v = base + 1 + k;
+            pos[3 * v] = (float)x, pos[3 * v + 1] = (float)(r * cos(phi)),
+                    pos[3 * v + 2] = (float)(r * sin(phi));
+            uv[2 * v] = (float)(0.25 + 0.5 * e + 0.2 * cos(phi)),
+                   uv[2 * v + 1] = (float)(0.75 + 0.2 * sin(phi));
+        }
+        for (int k = 0; k < n; k++) {
+            uint32_t c = (uint32_t)base, a = c + 1 + (uint32_t)k,
+                     b = c + 1 + (uint32_t)((k + 1) % n);
+            uint32_t q[3] = {c, e ? a : b, e ? b : a};
+            memcpy(idx + 3 * t, q, sizeof q);
+            t++;
+        }
+    }
+    /* the caps' rings weld to the side's ends by position */
+    ss_error err;
+    assert_int_equal(ss_mesh_from_arrays(pos, NULL, uv, nv, idx, t, "cyl", m, &err), SS_OK);
+    free(pos), free(uv), free(idx);
+}
+
+/* A wound on a finger-like cylinder: 60 degrees of arc heals whole (no
+ * column cut off); 150 degrees of arc wraps too far and is refused, naming
+ * the CSV and the limit. */
+static void test_wrap(void **state) {
+    (void)state;
+    ss_error err;
+    ss_mesh m;
+    cylinder(8, 60, 72, &m);
+    assert_int_equal(ss_shell_check_closed(&m, "cyl.obj", &err), SS_OK);
+    char *dir = tu_tmpdir("shell"), csv[4096], text[512];
+    snprintf(csv, sizeof csv, "%s/arc.csv", dir);
+    ss_shell_opts o;
+    ss_shell_opts_default(&o);
+    o.units_mm = 1;
+    const double half_deg[2] = {30, 75};
+    for (int c = 0; c < 2; c++) {
+        double u0 = 0.05 + 0.9 * (90 - half_deg[c]) / 360,
+               u1 = 0.05 + 0.9 * (90 + half_deg[c]) / 360;
+        double v0 = 0.45 * 25 / 60, v1 = 0.45 * 35 / 60; /* x 25..35 mm */
+        snprintf(text, sizeof text, "u,v\n%.6f,%.6f\n%.6f,%.6f\n%.6f,%.6f\n%.6f,%.6f\n", u0, v0, u1,
+                 v0, u1, v1, u0, v1);
+        write_text(csv, text);
+        ss_shell_patch *p = ss_shell_patch_from_uv(&m, "cyl.obj", csv, &o, &err);
+        if (c == 0) {
+            assert_non_null(p);
+            assert_float_equal(p->axis[2][2], 1.0, 1e-3);
+            /* every wound column: the projected arc, 10 mm x 2 r sin 30 deg */
+            int cols = 0;
+            for (size_t q = 0; q < (size_t)p->nx * p->ny; q++) {
+                int wc = 0;
+                for (int k = 0; k < p->nz; k++)
+                    wc += p->cell[(size_t)k * p->nx * p->ny + q] == SS_CELL_WOUND;
+                cols += wc > 0;
+            }
+            double area = cols * o.voxel_mm * o.voxel_mm, want = 10 * 2 * 8 * sin(M_PI / 6);
+            assert_true(fabs(area - want) < 0.15 * want);
+            ss_shell_patch_free(p);
+        } else {
+            assert_null(p);
+            assert_int_equal(err.code, SS_ERR_INPUT);
+            assert_non_null(strstr(err.msg, "arc.csv"));
+            assert_non_null(strstr(err.msg, "wraps around"));
+            assert_non_null(strstr(err.msg, "60 degrees"));
+        }
+    }
+    ss_mesh_free(&m);
+    tu_rmtree(dir);
+    free(dir);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_closed),
         cmocka_unit_test(test_uv_patch),
         cmocka_unit_test(test_wound_mesh),
+        cmocka_unit_test(test_wrap),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

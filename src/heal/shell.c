@@ -21,6 +21,11 @@
  *   cut out. A wound mesh is voxelised by ray parity along the column.
  * - Mapping back (§5.4): a vertex takes the fields of its column's surface
  *   cell and the displacement there, rotated into the mesh frame.
+ * - A wound that wraps around the body (a finger) is refused: its surface
+ *   normals, at the stroke points and at the mesh vertices inside it, may
+ *   turn at most SS_SHELL_MAX_WRAP_DEG from the patch's normal. Beyond that
+ *   the columns meet the skin at a grazing angle (the shell, measured along
+ *   the column, thins to thickness x cos) and past 90 degrees miss it.
  * - Closedness welds vertices by position (seams duplicate them) and asks
  *   every edge to have exactly two triangles; self-intersection casts every
  *   edge as a ray segment through the BVH: an edge that pierces a triangle
@@ -410,6 +415,43 @@ static ss_status check_opts(const ss_shell_opts *o, ss_error *err) {
     return SS_OK;
 }
 
+/* ---- how far a wound wraps around the body ------------------------------------------ */
+
+/* The smooth (vertex-interpolated) normal of triangle t at uv. */
+static void smooth_normal_at_uv(const ss_mesh *m, int t, const float uv[2], double nrm[3]) {
+    const uint32_t *q = m->indices + 3 * t;
+    const float *a = m->uvs + 2 * q[0], *b = m->uvs + 2 * q[1], *c = m->uvs + 2 * q[2];
+    double d = (double)(b[0] - a[0]) * (c[1] - a[1]) - (double)(c[0] - a[0]) * (b[1] - a[1]);
+    double w1 = 1.0 / 3, w2 = 1.0 / 3;
+    if (fabs(d) > 1e-30) {
+        w1 = ((double)(uv[0] - a[0]) * (c[1] - a[1]) - (double)(c[0] - a[0]) * (uv[1] - a[1])) / d;
+        w2 = ((double)(b[0] - a[0]) * (uv[1] - a[1]) - (double)(uv[0] - a[0]) * (b[1] - a[1])) / d;
+    }
+    double w[3] = {1 - w1 - w2, w1, w2};
+    for (int k = 0; k < 3; k++) nrm[k] = 0;
+    for (int v = 0; v < 3; v++)
+        for (int k = 0; k < 3; k++) nrm[k] += w[v] * m->normals[3 * q[v] + k];
+    normalise(nrm);
+}
+
+/* Angle in degrees between unit n and nrm (normalised here). */
+static double angle_deg(const double n[3], double nrm[3]) {
+    normalise(nrm);
+    double c = n[0] * nrm[0] + n[1] * nrm[1] + n[2] * nrm[2];
+    return acos(c > 1 ? 1 : c < -1 ? -1 : c) * 57.295779513082321; /* radians to degrees */
+}
+
+static ss_status wrap_error(ss_error *err, const char *wound, const char *skin, double deg,
+                            const double at_mm[3]) {
+    return ss_error_set(err, SS_ERR_INPUT,
+                        "%s: the wound wraps around the surface of %s: its surface turns %.0f "
+                        "degrees away from the skin patch's normal (at %.1f, %.1f, %.1f mm), more "
+                        "than the %d degrees one skin patch can hold (its voxel columns follow one "
+                        "direction, so the wound's steep sides would be cut off); split it into "
+                        "wounds that each face one way and run them separately",
+                        wound, skin, deg, at_mm[0], at_mm[1], at_mm[2], SS_SHELL_MAX_WRAP_DEG);
+}
+
 ss_shell_patch *ss_shell_patch_from_uv(const ss_mesh *skin, const char *skin_name, const char *csv,
                                        const ss_shell_opts *o, ss_error *err) {
     if (check_opts(o, err)) return NULL;
@@ -469,6 +511,32 @@ ss_shell_patch *ss_shell_patch_from_uv(const ss_mesh *skin, const char *skin_nam
         if (sqrt(r2) > rw) rw = sqrt(r2);
     }
     if (!(fp = ss_stroke_footprint(&s, 2048, 2048, o->concave_k, csv, err))) goto done;
+    /* how far the wound wraps: the smooth surface normal at every stroke
+     * point and at every mesh vertex inside a hull, against the mean normal */
+    double worst = 0, at[3] = {0, 0, 0};
+    for (int i = 0; i < s.npoints; i++) {
+        float uv[2] = {(float)s.u[i], (float)s.v[i]}, ps[3];
+        double sn[3];
+        smooth_normal_at_uv(skin, ss_mesh_locate_uv(skin, uv, ps), uv, sn);
+        double a = angle_deg(n, sn);
+        if (a > worst) worst = a, at[0] = pos[i][0], at[1] = pos[i][1], at[2] = pos[i][2];
+    }
+    for (int v = 0; v < skin->nvertices; v++) {
+        int px = (int)(skin->uvs[2 * v] * fp->width), py = (int)(skin->uvs[2 * v + 1] * fp->height);
+        if (px < 0 || py < 0 || px >= fp->width || py >= fp->height ||
+            !(fp->data[(size_t)py * fp->width + px] > 0.5f))
+            continue;
+        double sn[3] = {skin->normals[3 * v], skin->normals[3 * v + 1], skin->normals[3 * v + 2]};
+        double a = angle_deg(n, sn);
+        if (a > worst) {
+            worst = a;
+            for (int d = 0; d < 3; d++) at[d] = skin->positions[3 * v + d] * units;
+        }
+    }
+    if (worst > SS_SHELL_MAX_WRAP_DEG) {
+        wrap_error(err, csv, skin_name, worst, at);
+        goto done;
+    }
     wound_src ws = {fp, o->depth_mm, NULL, NULL};
     p = build_patch(skin, skin_name, c, n, rw + o->voxel_mm, o, units, &ws, err);
     if (p && p->wound_cells == 0) {
@@ -528,6 +596,33 @@ ss_shell_patch *ss_shell_patch_from_mesh(const ss_mesh *skin, const char *skin_n
 
     wound_src ws = {NULL, 0, wound, ss_bvh_build(wound, err)};
     if (!ws.wbvh) return NULL;
+    /* how far the wound wraps: the normal of every skin vertex inside the
+     * wound mesh (ray parity) against the skin's normal facing the wound */
+    normalise(n);
+    for (int v = 0; v < skin->nvertices; v++) {
+        const float *q = skin->positions + 3 * v;
+        int inside = 1;
+        for (int d = 0; d < 3; d++)
+            inside &= q[d] >= wound->bbox_min[d] && q[d] <= wound->bbox_max[d];
+        if (!inside) continue;
+        const float dir[3] = {0.5773503f, 0.5773503f, 0.5773503f};
+        int crossings = 0;
+        float t0 = 0;
+        ss_ray_hit h;
+        while (crossings < 1000 && ss_bvh_raycast(ws.wbvh, q, dir, t0, 1e30f, &h)) {
+            crossings++;
+            t0 = h.t + 1e-6f;
+        }
+        if (!(crossings & 1)) continue;
+        double sn[3] = {skin->normals[3 * v], skin->normals[3 * v + 1], skin->normals[3 * v + 2]};
+        double a = angle_deg(n, sn);
+        if (a > SS_SHELL_MAX_WRAP_DEG) {
+            double at[3] = {q[0] * units, q[1] * units, q[2] * units};
+            wrap_error(err, wound_name, skin_name, a, at);
+            ss_bvh_free(ws.wbvh);
+            return NULL;
+        }
+    }
     ss_shell_patch *p = build_patch(skin, skin_name, c, n, rw, o, units, &ws, err);
     ss_bvh_free(ws.wbvh);
     if (p && p->wound_cells == 0) {
