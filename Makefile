@@ -71,7 +71,7 @@ test-blender: build
 	@dpkg-query -W -f='$${Status}' blender 2>/dev/null | grep -q "ok installed" || { \
 	  SUDO=""; [ "$$(id -u)" = 0 ] || SUDO=sudo; \
 	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq blender; }
-	cd $(BUILD) && SKINSIM_TEST_BLENDER=1 ctest --output-on-failure -R '^e2e_blender$$'
+	cd $(BUILD) && SKINSIM_TEST_BLENDER=1 ctest --output-on-failure -R '^e2e_blender'
 
 # The healing solver and the ModelMatch table on 4 MPI ranks (docs/scaling.md).
 # OpenMPI refuses to run as root without --allow-run-as-root; --oversubscribe
