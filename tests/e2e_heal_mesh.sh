@@ -50,6 +50,8 @@ import json, re, sys
 s = json.load(open(sys.argv[1]))
 m, k = s["mechanics"], s["skin_mesh"]
 assert k["triangles"] == 2314 and k["units_mm"] == 1000, k
+# the surface the fields map onto: the mesh refined around the wound
+assert k["surface_triangles"] > 2314 and k["surface_vertices"] > 1360, k
 assert abs(sum(x * x for x in k["patch_normal"]) - 1) < 1e-9
 assert m["tets"] > 500 and 0 < m["contraction_percent"] < 90, m
 def arr(path, name):

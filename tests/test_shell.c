@@ -10,7 +10,9 @@
  * - mapping back (§5.4): vertices over the wound read the wound's fields, the
  *   others healthy values, and a uniform displacement comes back rotated;
  * - on a cylinder (a finger): a wound over 60 degrees of arc is cut whole, one
- *   over 150 degrees wraps too far and is refused (SS_SHELL_MAX_WRAP_DEG). */
+ *   over 150 degrees wraps too far and is refused (SS_SHELL_MAX_WRAP_DEG);
+ * - the mesh refined around the wound for the mapping back stays closed and
+ *   keeps its shape. */
 #include <math.h>
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -20,6 +22,7 @@
 #include <string.h>
 
 #include "testutil.h"
+#include "skinsim/paint.h"
 #include "skinsim/shell.h"
 
 /* A cube [0,s]^3 shifted by off, 24 vertices, one UV cell per face. */
@@ -322,12 +325,98 @@ static void test_wrap(void **state) {
     free(dir);
 }
 
+static double mesh_area(const ss_mesh *m) {
+    double a = 0;
+    for (int t = 0; t < m->ntriangles; t++) {
+        const float *p0 = m->positions + 3 * m->indices[3 * t],
+                    *p1 = m->positions + 3 * m->indices[3 * t + 1],
+                    *p2 = m->positions + 3 * m->indices[3 * t + 2];
+        double u[3], w[3];
+        for (int d = 0; d < 3; d++) u[d] = p1[d] - p0[d], w[d] = p2[d] - p0[d];
+        double c0 = u[1] * w[2] - u[2] * w[1], c1 = u[2] * w[0] - u[0] * w[2],
+               c2 = u[0] * w[1] - u[1] * w[0];
+        a += 0.5 * sqrt(c0 * c0 + c1 * c1 + c2 * c2);
+    }
+    return a;
+}
+
+/* The mesh the fields are mapped onto (ss_mesh_refine_near): refined around
+ * a point on the cylinder it stays closed (no T-junction, seams included),
+ * keeps its area and its old vertices, has short edges near the point, and
+ * every new vertex sits where its UV lies on the original mesh. */
+static void test_refine(void **state) {
+    (void)state;
+    ss_error err;
+    ss_mesh m, r;
+    cylinder(8, 60, 24, &m);               /* 2.1 mm around, 5 mm along */
+    const float c[3] = {30, 7.52f, 2.74f}; /* 20 degrees from the UV seam at +y */
+    assert_int_equal(ss_mesh_refine_near(&m, c, 6, 0.8f, 6, &r, &err), SS_OK);
+    assert_true(r.ntriangles > 4 * m.ntriangles / 3);
+    assert_int_equal(ss_shell_check_closed(&r, "refined", &err), SS_OK);
+    assert_float_equal(mesh_area(&r), mesh_area(&m), 1e-4 * mesh_area(&m));
+    assert_memory_equal(r.positions, m.positions, (size_t)m.nvertices * 3 * sizeof(float));
+    for (int t = 0; t < r.ntriangles; t++)
+        for (int k = 0; k < 3; k++) {
+            const float *a = r.positions + 3 * r.indices[3 * t + k],
+                        *b = r.positions + 3 * r.indices[3 * t + (k + 1) % 3];
+            float da = 0, e = 0;
+            for (int d = 0; d < 3; d++)
+                da += (a[d] - c[d]) * (a[d] - c[d]), e += (a[d] - b[d]) * (a[d] - b[d]);
+            if (da < 3 * 3) assert_true(sqrtf(e) <= 0.8f);
+        }
+    for (int v = m.nvertices; v < r.nvertices; v++) {
+        float p[3];
+        assert_true(ss_mesh_locate_uv(&m, r.uvs + 2 * v, p) >= 0);
+        for (int d = 0; d < 3; d++) assert_float_equal(p[d], r.positions[3 * v + d], 1e-3);
+        float l = 0;
+        for (int d = 0; d < 3; d++) l += r.normals[3 * v + d] * r.normals[3 * v + d];
+        assert_float_equal(l, 1.0, 1e-5);
+    }
+    /* a seam: a unit square of two triangles whose shared diagonal has its
+     * vertices duplicated (other UVs); refining near (0,0) splits the first
+     * triangle, and the second must split the diagonal too: every edge used
+     * by only one triangle lies on the square's border */
+    const float sp[18] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0},
+                su[12] = {0, 0, 0.4f, 0, 0, 0.4f, 0.6f, 0, 1, 0, 0.6f, 0.4f};
+    const uint32_t si[6] = {0, 1, 2, 3, 4, 5};
+    ss_mesh sq, sr;
+    assert_int_equal(ss_mesh_from_arrays(sp, NULL, su, 6, si, 2, "square", &sq, &err), SS_OK);
+    const float corner[3] = {0, 0, 0};
+    assert_int_equal(ss_mesh_refine_near(&sq, corner, 0.3f, 0.9f, 1, &sr, &err), SS_OK);
+    assert_int_equal(sr.ntriangles, 4 + 2);
+    for (int t = 0; t < sr.ntriangles; t++)
+        for (int k = 0; k < 3; k++) {
+            const float *a = sr.positions + 3 * sr.indices[3 * t + k],
+                        *b = sr.positions + 3 * sr.indices[3 * t + (k + 1) % 3];
+            int uses = 0;
+            for (int t2 = 0; t2 < sr.ntriangles; t2++)
+                for (int k2 = 0; k2 < 3; k2++) {
+                    const float *c2 = sr.positions + 3 * sr.indices[3 * t2 + k2],
+                                *d2 = sr.positions + 3 * sr.indices[3 * t2 + (k2 + 1) % 3];
+                    uses += (!memcmp(a, c2, 12) && !memcmp(b, d2, 12)) ||
+                            (!memcmp(a, d2, 12) && !memcmp(b, c2, 12));
+                }
+            int border = (a[0] == b[0] && (a[0] == 0 || a[0] == 1)) ||
+                         (a[1] == b[1] && (a[1] == 0 || a[1] == 1));
+            assert_int_equal(uses, border ? 1 : 2);
+        }
+    ss_mesh_free(&sq);
+    ss_mesh_free(&sr);
+    /* nothing near: the same mesh */
+    ss_mesh same;
+    const float far[3] = {500, 0, 0};
+    assert_int_equal(ss_mesh_refine_near(&m, far, 1, 0.8f, 6, &same, &err), SS_OK);
+    assert_int_equal(same.ntriangles, m.ntriangles);
+    ss_mesh_free(&same);
+    ss_mesh_free(&r);
+    ss_mesh_free(&m);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_closed),
-        cmocka_unit_test(test_uv_patch),
-        cmocka_unit_test(test_wound_mesh),
-        cmocka_unit_test(test_wrap),
+        cmocka_unit_test(test_closed),     cmocka_unit_test(test_uv_patch),
+        cmocka_unit_test(test_wound_mesh), cmocka_unit_test(test_wrap),
+        cmocka_unit_test(test_refine),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

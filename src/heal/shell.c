@@ -66,14 +66,6 @@ double ss_shell_units_for(const char *path, double units_mm) {
 
 /* ---- closedness and self-intersection ------------------------------------------- */
 
-static const float *sort_pos;
-static int cmp_pos(const void *a, const void *b) {
-    const float *p = sort_pos + 3 * *(const int *)a, *q = sort_pos + 3 * *(const int *)b;
-    for (int d = 0; d < 3; d++)
-        if (p[d] != q[d]) return p[d] < q[d] ? -1 : 1;
-    return *(const int *)a - *(const int *)b;
-}
-
 typedef struct sedge {
     int a, b, t;
 } sedge;
@@ -84,33 +76,10 @@ static int cmp_sedge(const void *x, const void *y) {
     return p->t - q->t;
 }
 
-/* weld[v]: the lowest-index vertex at the same position. Not thread-safe
- * (qsort's comparator reads a static); the meshes are checked once. */
-static int *weld_vertices(const ss_mesh *m) {
-    int n = m->nvertices;
-    int *order = malloc((size_t)n * sizeof(int)), *weld = malloc((size_t)n * sizeof(int));
-    if (!order || !weld) {
-        free(order);
-        free(weld);
-        return NULL;
-    }
-    for (int i = 0; i < n; i++) order[i] = i;
-    sort_pos = m->positions;
-    qsort(order, (size_t)n, sizeof(int), cmp_pos);
-    for (int i = 0; i < n; i++) {
-        const float *p = m->positions + 3 * order[i];
-        const float *q = i ? m->positions + 3 * order[i - 1] : NULL;
-        weld[order[i]] =
-            q && p[0] == q[0] && p[1] == q[1] && p[2] == q[2] ? weld[order[i - 1]] : order[i];
-    }
-    free(order);
-    return weld;
-}
-
 ss_status ss_shell_check_closed(const ss_mesh *m, const char *name, ss_error *err) {
     if (!m || m->ntriangles < 4)
         return ss_error_set(err, SS_ERR_INPUT, "%s: too few triangles for a closed surface", name);
-    int *weld = weld_vertices(m);
+    int *weld = malloc((size_t)m->nvertices * sizeof *weld);
     sedge *e = malloc(3 * (size_t)m->ntriangles * sizeof *e);
     ss_bvh *bvh = NULL;
     ss_status st = SS_OK;
@@ -118,6 +87,7 @@ ss_status ss_shell_check_closed(const ss_mesh *m, const char *name, ss_error *er
         st = ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", name);
         goto done;
     }
+    if ((st = ss_mesh_weld(m, weld, err))) goto done;
     for (int t = 0; t < m->ntriangles; t++) {
         int v[3];
         for (int k = 0; k < 3; k++) v[k] = weld[m->indices[3 * t + k]];
