@@ -14,13 +14,7 @@ HAND="$SRC/data/meshes/generic-hand-left.glb"
 [ -f "$HAND" ] || { echo "SKIP: no hand mesh"; exit 77; }
 T=$(mktemp -d /tmp/skinsim-e2e-blglb-XXXXXX)
 trap 'rm -rf "$T"' EXIT
-python3 -c "
-import math
-print('u,v,stroke')
-for k in range(12):
-    a = 2 * math.pi * k / 12
-    print('%.4f,%.4f,0' % (0.2 + 0.02 * math.cos(a), 0.62 + 0.014 * math.sin(a)))
-" >"$T/cut.csv"
+python3 "$SRC/tests/strokes_ellipse.py" 0.2 0.62 0.02 0.014 >"$T/cut.csv"
 "$CLI" heal --mesh "$HAND" --wound-uv "$T/cut.csv" --voxel-mm 1 --mechanics --days 0.2 \
     --snapshot-every 0 --quiet --out "$T/run" || { echo "FAIL: heal run"; exit 1; }
 unset LD_PRELOAD

@@ -24,13 +24,7 @@ done
 [ -n "$HAND" ] || { echo "no hand mesh: skipped"; exit 77; }
 
 # an ellipse of strokes on the back of the hand (UV island lower left)
-python3 -c "
-import math
-print('u,v,stroke')
-for k in range(12):
-    a = 2 * math.pi * k / 12
-    print('%.4f,%.4f,0' % (0.2 + 0.02 * math.cos(a), 0.62 + 0.014 * math.sin(a)))
-" >"$T/cut.csv"
+python3 "$SRC/tests/strokes_ellipse.py" 0.2 0.62 0.02 0.014 >"$T/cut.csv"
 # sanitizer runs (SKINSIM_TEST_QUICK): half the time
 D=1; H=0.5
 [ -n "${SKINSIM_TEST_QUICK:-}" ] && { D=0.5; H=0.25; }
@@ -165,13 +159,7 @@ bad far.obj --mesh "$HAND" --wound-mesh "$T/far.obj"
 # a wound wrapping around the index finger (the back of the finger's UV
 # island reaches round to its side), as strokes and as a closed wound mesh
 # around the finger: refused, not cut off at the steep sides
-python3 -c "
-import math
-print('u,v,stroke')
-for k in range(12):
-    a = 2 * math.pi * k / 12
-    print('%.4f,%.4f,0' % (0.512 + 0.03 * math.cos(a), 0.51 + 0.035 * math.sin(a)))
-" >"$T/wrap.csv"
+python3 "$SRC/tests/strokes_ellipse.py" 0.512 0.51 0.03 0.035 >"$T/wrap.csv"
 bad "wrap.csv: the wound wraps around" --mesh "$HAND" --wound-uv "$T/wrap.csv"
 grep -q "more than the 60 degrees" "$T/err.txt" || fail "the wrap message names no limit"
 python3 -c "

@@ -143,6 +143,26 @@ static cJSON *texture_ref(int index) {
     return r;
 }
 
+/* meshes[0] with one triangle primitive: POSITION, NORMAL, the indices and
+ * material 0; returns the primitive's attributes object for the rest. */
+static cJSON *gb_mesh(gbuf *b, const char *name, int a_pos, int a_nrm, int a_idx,
+                      cJSON **mesh_out) {
+    cJSON *meshes = cJSON_AddArrayToObject(b->root, "meshes");
+    cJSON *mesh = cJSON_CreateObject();
+    if (name) cJSON_AddStringToObject(mesh, "name", name);
+    cJSON *prims = cJSON_AddArrayToObject(mesh, "primitives");
+    cJSON *prim = cJSON_CreateObject();
+    cJSON *attrs = cJSON_AddObjectToObject(prim, "attributes");
+    cJSON_AddNumberToObject(attrs, "POSITION", a_pos);
+    cJSON_AddNumberToObject(attrs, "NORMAL", a_nrm);
+    cJSON_AddNumberToObject(prim, "indices", a_idx);
+    cJSON_AddNumberToObject(prim, "material", 0);
+    cJSON_AddItemToArray(prims, prim);
+    cJSON_AddItemToArray(meshes, mesh);
+    if (mesh_out) *mesh_out = mesh;
+    return attrs;
+}
+
 /* One textured triangle mesh as a glTF 2.0 file: the arrays packed into one
  * base64 buffer (positions, normals, optional tangents, UVs, 32-bit indices),
  * a metallic-roughness material with the given texture URIs. */
@@ -175,19 +195,9 @@ static ss_status write_textured(const char *path, const char *name, const float 
     cJSON_AddItemToArray(buffers, bo);
     free(uri);
 
-    cJSON *meshes = cJSON_AddArrayToObject(root, "meshes");
-    cJSON *mesh = cJSON_CreateObject();
-    cJSON *prims = cJSON_AddArrayToObject(mesh, "primitives");
-    cJSON *prim = cJSON_CreateObject();
-    cJSON *attrs = cJSON_AddObjectToObject(prim, "attributes");
-    cJSON_AddNumberToObject(attrs, "POSITION", a_pos);
-    cJSON_AddNumberToObject(attrs, "NORMAL", a_nrm);
+    cJSON *attrs = gb_mesh(&b, NULL, a_pos, a_nrm, a_idx, NULL);
     if (a_tan >= 0) cJSON_AddNumberToObject(attrs, "TANGENT", a_tan);
     cJSON_AddNumberToObject(attrs, "TEXCOORD_0", a_uv);
-    cJSON_AddNumberToObject(prim, "indices", a_idx);
-    cJSON_AddNumberToObject(prim, "material", 0);
-    cJSON_AddItemToArray(prims, prim);
-    cJSON_AddItemToArray(meshes, mesh);
 
     cJSON *samplers = cJSON_AddArrayToObject(root, "samplers");
     cJSON *smp = cJSON_CreateObject();
@@ -365,21 +375,14 @@ ss_status ss_gltf_write_mesh_glb(const char *path, const struct ss_mesh *m,
     cJSON *bo = cJSON_CreateObject();
     cJSON_AddNumberToObject(bo, "byteLength", (double)b.len);
     cJSON_AddItemToArray(buffers, bo);
-    cJSON *meshes = cJSON_AddArrayToObject(root, "meshes");
-    cJSON *mesh = cJSON_CreateObject();
-    cJSON_AddStringToObject(mesh, "name", name);
-    cJSON *prims = cJSON_AddArrayToObject(mesh, "primitives");
-    cJSON *prim = cJSON_CreateObject();
-    cJSON *attrs = cJSON_AddObjectToObject(prim, "attributes");
-    cJSON_AddNumberToObject(attrs, "POSITION", a_pos);
-    cJSON_AddNumberToObject(attrs, "NORMAL", a_nrm);
+    cJSON *mesh;
+    cJSON *attrs = gb_mesh(&b, name, a_pos, a_nrm, a_idx, &mesh);
+    cJSON *prim = cJSON_GetArrayItem(cJSON_GetObjectItem(mesh, "primitives"), 0);
     if (a_uv >= 0) cJSON_AddNumberToObject(attrs, "TEXCOORD_0", a_uv);
     if (a_col >= 0) cJSON_AddNumberToObject(attrs, "COLOR_0", a_col);
     for (int k = 0; a_attr && k < d->nattrs; k++)
         cJSON_AddNumberToObject(attrs, d->attrs[k].name, a_attr[k]);
     free(a_attr);
-    cJSON_AddNumberToObject(prim, "indices", a_idx);
-    cJSON_AddNumberToObject(prim, "material", 0);
     cJSON_AddNumberToObject(prim, "mode", 4);
     if (a_morph >= 0) {
         cJSON *targets = cJSON_AddArrayToObject(prim, "targets");
@@ -392,8 +395,6 @@ ss_status ss_gltf_write_mesh_glb(const char *path, const struct ss_mesh *m,
         cJSON_AddItemToArray(names,
                              cJSON_CreateString(d->morph_name ? d->morph_name : "displacement"));
     }
-    cJSON_AddItemToArray(prims, prim);
-    cJSON_AddItemToArray(meshes, mesh);
     /* white, rough, not metallic: the viewer shows COLOR_0 as it is */
     cJSON *materials = cJSON_AddArrayToObject(root, "materials");
     cJSON *mat = cJSON_CreateObject();
