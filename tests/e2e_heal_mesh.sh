@@ -127,6 +127,16 @@ PY
 "$CLI" heal --mesh "$HAND" --wound-mesh "$T/wound.obj" --mesh-units-mm 1000 --voxel-mm 1 --days 0.2 \
     --quiet --out "$T/w" || fail "wound-mesh run failed"
 
+# --- the shipped example abrasion (README, docs/wound.md): four strokes, concave hulls
+"$CLI" heal --mesh "$HAND" --wound-uv "$SRC/data/heal/hand_abrasion_uv.csv" --concave-k 6 \
+    --voxel-mm 1 --days 0.1 --snapshot-every 0 --quiet --out "$T/ex" --json >"$T/ex.json" \
+    || fail "the example abrasion does not run"
+python3 -c "
+import json, sys
+w = json.load(open(sys.argv[1]))['wound']
+assert w['voxels'] > 100, w
+" "$T/ex.json" || fail "the example abrasion cuts too little"
+
 # --- bad input: exit 2 naming the input, nothing written
 bad() {
     local what=$1
