@@ -487,15 +487,26 @@ ss_shell_patch *ss_shell_patch_from_uv(const ss_mesh *skin, const char *skin_nam
     for (int i = 0; i < s.npoints; i++) {
         float uv[2] = {(float)s.u[i], (float)s.v[i]}, ps[3];
         double sn[3];
-        smooth_normal_at_uv(skin, ss_mesh_locate_uv(skin, uv, ps), uv, sn);
+        int t = ss_mesh_locate_uv(skin, uv, ps);
+        if (t < 0) continue; /* cannot happen: every point was located above */
+        smooth_normal_at_uv(skin, t, uv, sn);
         double a = angle_deg(n, sn);
         if (a > worst) worst = a, at[0] = pos[i][0], at[1] = pos[i][1], at[2] = pos[i][2];
     }
+    /* (vertices far from the strokes are skipped: a layout that mirrors UVs
+     * puts another part of the body under the same hulls) */
+    const double near2 = (2 * rw + 5) * (2 * rw + 5);
     for (int v = 0; v < skin->nvertices; v++) {
         int px = (int)(skin->uvs[2 * v] * fp->width), py = (int)(skin->uvs[2 * v + 1] * fp->height);
         if (px < 0 || py < 0 || px >= fp->width || py >= fp->height ||
             !(fp->data[(size_t)py * fp->width + px] > 0.5f))
             continue;
+        double dd = 0;
+        for (int d = 0; d < 3; d++) {
+            double x = skin->positions[3 * v + d] * units - c[d];
+            dd += x * x;
+        }
+        if (dd > near2) continue;
         double sn[3] = {skin->normals[3 * v], skin->normals[3 * v + 1], skin->normals[3 * v + 2]};
         double a = angle_deg(n, sn);
         if (a > worst) {
