@@ -10,7 +10,9 @@
  * - mapping back (§5.4): vertices over the wound read the wound's fields, the
  *   others healthy values, and a uniform displacement comes back rotated;
  * - on a cylinder (a finger): a wound over 60 degrees of arc is cut whole, one
- *   over 150 degrees wraps too far and is refused (SS_SHELL_MAX_WRAP_DEG);
+ *   over 150 degrees wraps too far and is refused (SS_SHELL_MAX_WRAP_DEG),
+ *   one over 110 degrees with its points crowded on one side is held by the
+ *   minimax normal;
  * - the mesh refined around the wound for the mapping back stays closed and
  *   keeps its shape. */
 #include <math.h>
@@ -319,6 +321,33 @@ static void test_wrap(void **state) {
             assert_non_null(strstr(err.msg, "wraps around"));
             assert_non_null(strstr(err.msg, "60 degrees"));
         }
+    }
+    /* 30..140 degrees of arc (half-span 55) with the stroke's points crowded
+     * on the 140 degree edge: their mean normal leans there (the 30 degree
+     * edge is 96 degrees off it); the patch takes the normal that minimises
+     * the largest angle instead (85 degrees) and holds the whole arc */
+    {
+        double u0 = 0.05 + 0.9 * 30 / 360.0, u1 = 0.05 + 0.9 * 140 / 360.0;
+        double v0 = 0.45 * 25 / 60, v1 = 0.45 * 35 / 60;
+        int len = snprintf(text, sizeof text, "u,v\n%.6f,%.6f\n%.6f,%.6f\n", u0, v0, u0, v1);
+        for (int k = 0; k <= 10; k++)
+            len += snprintf(text + len, sizeof text - (size_t)len, "%.6f,%.6f\n", u1,
+                            v0 + (v1 - v0) * k / 10);
+        write_text(csv, text);
+        ss_shell_patch *p = ss_shell_patch_from_uv(&m, "cyl.obj", csv, &o, &err);
+        assert_non_null(p);
+        double phi = atan2(p->axis[2][2], p->axis[2][1]) * 180 / M_PI;
+        assert_true(fabs(phi - 85) < 3);
+        int cols = 0;
+        for (size_t q = 0; q < (size_t)p->nx * p->ny; q++) {
+            int wc = 0;
+            for (int k = 0; k < p->nz; k++)
+                wc += p->cell[(size_t)k * p->nx * p->ny + q] == SS_CELL_WOUND;
+            cols += wc > 0;
+        }
+        double area = cols * o.voxel_mm * o.voxel_mm, want = 10 * 2 * 8 * sin(55 * M_PI / 180);
+        assert_true(fabs(area - want) < 0.15 * want);
+        ss_shell_patch_free(p);
     }
     ss_mesh_free(&m);
     tu_rmtree(dir);

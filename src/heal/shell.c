@@ -411,6 +411,45 @@ static double angle_deg(const double n[3], double nrm[3]) {
     return acos(c > 1 ? 1 : c < -1 ? -1 : c) * 57.295779513082321; /* radians to degrees */
 }
 
+/* The largest angle (degrees) between unit n and the unit normals nrm[0..ns),
+ * and in *at the index where it is. */
+static double max_angle(double (*nrm)[3], int ns, const double n[3], int *at) {
+    double worst = 0;
+    *at = 0;
+    for (int i = 0; i < ns; i++) {
+        double v[3] = {nrm[i][0], nrm[i][1], nrm[i][2]}, a = angle_deg(n, v);
+        if (a > worst) worst = a, *at = i;
+    }
+    return worst;
+}
+
+/* The direction whose largest angle to the normals is smallest (the axis of
+ * the narrowest cone holding them), by Badoiu and Clarkson's iteration for
+ * the smallest enclosing ball: step towards the farthest normal by 1/(k+1),
+ * renormalise. Deterministic; from n0. */
+static void minimax_normal(double (*nrm)[3], int ns, const double n0[3], double m[3]) {
+    memcpy(m, n0, 3 * sizeof *m);
+    for (int k = 1; k <= 400 && ns > 0; k++) {
+        int w;
+        max_angle(nrm, ns, m, &w);
+        for (int d = 0; d < 3; d++) m[d] += (nrm[w][d] - m[d]) / (k + 1);
+        normalise(m);
+    }
+}
+
+/* The stroke points' largest distance from c across n (the wound radius). */
+static double projected_radius(double (*pos)[3], int np, const double c[3], const double n[3]) {
+    double rw = 0;
+    for (int i = 0; i < np; i++) {
+        double v[3], h = 0, r2 = 0;
+        for (int d = 0; d < 3; d++) v[d] = pos[i][d] - c[d];
+        for (int d = 0; d < 3; d++) h += v[d] * n[d];
+        for (int d = 0; d < 3; d++) r2 += (v[d] - h * n[d]) * (v[d] - h * n[d]);
+        if (sqrt(r2) > rw) rw = sqrt(r2);
+    }
+    return rw;
+}
+
 static ss_status wrap_error(ss_error *err, const char *wound, const char *skin, double deg,
                             const double at_mm[3]) {
     return ss_error_set(err, SS_ERR_INPUT,
@@ -435,6 +474,7 @@ ss_shell_patch *ss_shell_patch_from_uv(const ss_mesh *skin, const char *skin_nam
     int *island = malloc((size_t)skin->ntriangles * sizeof(int));
     int *pisl = malloc((size_t)s.nstrokes * sizeof(int));
     double(*pos)[3] = malloc((size_t)s.npoints * sizeof *pos);
+    double(*nrm)[3] = NULL, (*npos)[3] = NULL; /* surface normals over the wound, and where */
     ss_image *fp = NULL;
     ss_shell_patch *p = NULL;
     if (!island || !pisl || !pos) {
@@ -471,30 +511,26 @@ ss_shell_patch *ss_shell_patch_from_uv(const ss_mesh *skin, const char *skin_nam
             n[d] += tn[d];
         }
     }
-    double rw = 0;
     normalise(n);
-    for (int i = 0; i < s.npoints; i++) {
-        double v[3], h = 0, r2 = 0;
-        for (int d = 0; d < 3; d++) v[d] = pos[i][d] - c[d];
-        for (int d = 0; d < 3; d++) h += v[d] * n[d];
-        for (int d = 0; d < 3; d++) r2 += (v[d] - h * n[d]) * (v[d] - h * n[d]);
-        if (sqrt(r2) > rw) rw = sqrt(r2);
-    }
+    double rw = projected_radius(pos, s.npoints, c, n);
     if (!(fp = ss_stroke_footprint(&s, 2048, 2048, o->concave_k, csv, err))) goto done;
     /* how far the wound wraps: the smooth surface normal at every stroke
-     * point and at every mesh vertex inside a hull, against the mean normal */
-    double worst = 0, at[3] = {0, 0, 0};
+     * point and at every mesh vertex inside a hull (vertices far from the
+     * strokes are skipped: a layout that mirrors UVs puts another part of
+     * the body under the same hulls) */
+    if (!(nrm = malloc(((size_t)s.npoints + (size_t)skin->nvertices) * sizeof *nrm)) ||
+        !(npos = malloc(((size_t)s.npoints + (size_t)skin->nvertices) * sizeof *npos))) {
+        ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", csv);
+        goto done;
+    }
+    int ns = 0;
     for (int i = 0; i < s.npoints; i++) {
         float uv[2] = {(float)s.u[i], (float)s.v[i]}, ps[3];
-        double sn[3];
         int t = ss_mesh_locate_uv(skin, uv, ps);
         if (t < 0) continue; /* cannot happen: every point was located above */
-        smooth_normal_at_uv(skin, t, uv, sn);
-        double a = angle_deg(n, sn);
-        if (a > worst) worst = a, at[0] = pos[i][0], at[1] = pos[i][1], at[2] = pos[i][2];
+        smooth_normal_at_uv(skin, t, uv, nrm[ns]);
+        memcpy(npos[ns++], pos[i], sizeof npos[0]);
     }
-    /* (vertices far from the strokes are skipped: a layout that mirrors UVs
-     * puts another part of the body under the same hulls) */
     const double near2 = (2 * rw + 5) * (2 * rw + 5);
     for (int v = 0; v < skin->nvertices; v++) {
         int px = (int)(skin->uvs[2 * v] * fp->width), py = (int)(skin->uvs[2 * v + 1] * fp->height);
@@ -503,19 +539,30 @@ ss_shell_patch *ss_shell_patch_from_uv(const ss_mesh *skin, const char *skin_nam
             continue;
         double dd = 0;
         for (int d = 0; d < 3; d++) {
-            double x = skin->positions[3 * v + d] * units - c[d];
-            dd += x * x;
+            npos[ns][d] = skin->positions[3 * v + d] * units;
+            nrm[ns][d] = skin->normals[3 * v + d];
+            dd += (npos[ns][d] - c[d]) * (npos[ns][d] - c[d]);
         }
-        if (dd > near2) continue;
-        double sn[3] = {skin->normals[3 * v], skin->normals[3 * v + 1], skin->normals[3 * v + 2]};
-        double a = angle_deg(n, sn);
-        if (a > worst) {
-            worst = a;
-            for (int d = 0; d < 3; d++) at[d] = skin->positions[3 * v + d] * units;
+        if (dd <= near2) normalise(nrm[ns++]);
+    }
+    int wi;
+    double worst = max_angle(nrm, ns, n, &wi);
+    if (worst > SS_SHELL_MAX_WRAP_DEG) {
+        /* the mean of the stroke points' normals leans to where the points
+         * are dense: the normal that minimises the largest angle may hold
+         * the wound (then the patch takes it) */
+        double m[3];
+        minimax_normal(nrm, ns, n, m);
+        int wj;
+        double w2 = max_angle(nrm, ns, m, &wj);
+        if (w2 < worst) {
+            worst = w2, wi = wj;
+            memcpy(n, m, sizeof m);
+            rw = projected_radius(pos, s.npoints, c, n);
         }
     }
     if (worst > SS_SHELL_MAX_WRAP_DEG) {
-        wrap_error(err, csv, skin_name, worst, at);
+        wrap_error(err, csv, skin_name, worst, npos[wi]);
         goto done;
     }
     wound_src ws = {fp, o->depth_mm, NULL, NULL};
@@ -533,6 +580,8 @@ done:
     free(island);
     free(pisl);
     free(pos);
+    free(nrm);
+    free(npos);
     ss_stroke_set_free(&s);
     return p;
 }
