@@ -77,7 +77,8 @@ typedef struct ss_shell_patch {
  * each stroke's hull is cut to o->depth_mm under the surface. A point in no
  * UV triangle, a stroke spanning two UV islands, or a wound whose surface
  * normals (at the stroke points and the mesh vertices inside the hulls) turn
- * more than SS_SHELL_MAX_WRAP_DEG from their mean -> SS_ERR_INPUT naming the
+ * more than SS_SHELL_MAX_WRAP_DEG from their mean and from the direction that
+ * minimises the largest angle -> SS_ERR_INPUT naming the
  * CSV, the point and the mesh. The mesh must be closed (ss_shell_check_closed
  * is the caller's job, done once per mesh). */
 ss_shell_patch *ss_shell_patch_from_uv(const ss_mesh *skin, const char *skin_name,

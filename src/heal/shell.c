@@ -26,6 +26,8 @@
  *   turn at most SS_SHELL_MAX_WRAP_DEG from the patch's normal. Beyond that
  *   the columns meet the skin at a grazing angle (the shell, measured along
  *   the column, thins to thickness x cos) and past 90 degrees miss it.
+ *   For UV strokes the patch's normal is the mean of the stroke points'
+ *   normals; when that fails, the minimax normal (Badoiu-Clarkson) is tried.
  * - Closedness welds vertices by position (seams duplicate them) and asks
  *   every edge to have exactly two triangles; self-intersection casts every
  *   edge as a ray segment through the BVH: an edge that pierces a triangle
