@@ -536,7 +536,9 @@ float *ss_heal_solver_multipliers(ss_heal_solver *s, int slot) {
 
 int ss_heal_solver_nslots(const ss_heal_solver *s) { return s ? s->sys.nslots : 0; }
 
-ss_status ss_heal_step(ss_heal_solver *s, ss_heal_grid *g, ss_error *err) {
+/* What every step does first: check the grid, point the system at its
+ * fields and velocity, re-check the explicit limit under a velocity. */
+static ss_status step_begin(ss_heal_solver *s, ss_heal_grid *g, ss_error *err) {
     if (!s || !g) return ss_error_set(err, SS_ERR_INPUT, "heal step: no solver or grid");
     if (g->nx != s->nx || g->ny != s->ny || g->nz != s->nz)
         return ss_error_set(err, SS_ERR_INPUT,
@@ -566,12 +568,38 @@ ss_status ss_heal_step(ss_heal_solver *s, ss_heal_grid *g, ss_error *err) {
                                 "solver was created; create the solver with the velocity set");
         }
     }
+    return SS_OK;
+}
+
+static void step_end(ss_heal_solver *s, ss_heal_grid *g) {
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++) g->field[f] = s->sys.u[f];
+    g->t_days += s->dt;
+    g->step++;
+}
+
+ss_status ss_heal_step(ss_heal_solver *s, ss_heal_grid *g, ss_error *err) {
+    ss_status st = step_begin(s, g, err);
+    if (st) return st;
     if (s->scheme == SS_HEAL_EXPLICIT)
         ss_heal_rd_step_explicit(&s->sys, s->w, s->dt);
     else
         ss_heal_rd_step_split(&s->sys, s->w, s->dt, s->nsub);
-    for (int f = 0; f < SS_HEAL_NFIELDS; f++) g->field[f] = s->sys.u[f];
-    g->t_days += s->dt;
-    g->step++;
+    step_end(s, g);
+    return SS_OK;
+}
+
+ss_status ss_heal_step_part(ss_heal_solver *s, ss_heal_grid *g, int part, ss_error *err) {
+    if (!s || s->scheme != SS_HEAL_EXPLICIT || (part != 1 && part != 2))
+        return ss_error_set(err, SS_ERR_INPUT, "heal step part: the explicit scheme, part 1 or 2");
+    if (part == 1) {
+        ss_status st = step_begin(s, g, err);
+        if (st) return st;
+        ss_heal_rd__step_explicit_part(&s->sys, s->w, s->dt, RD_PART_INTERIOR);
+        return SS_OK;
+    }
+    if (!g || g->nx != s->nx || g->ny != s->ny || g->nz != s->nz)
+        return ss_error_set(err, SS_ERR_INPUT, "heal step part: grid does not match the solver");
+    ss_heal_rd__step_explicit_part(&s->sys, s->w, s->dt, RD_PART_RING);
+    step_end(s, g);
     return SS_OK;
 }
