@@ -120,6 +120,53 @@ void ss_heal_stats_acc_add(ss_heal_stats_acc *a, const ss_heal_grid *g, int x0, 
     ss_heal_stats_acc_normalise(a);
 }
 
+void ss_heal_stats_acc_add_stack(ss_heal_stats_acc *a, const ss_heal_grid *g, int x0, int x1,
+                                 int y0, int y1, int zoff, int gz, ss_heal_col_state *cols,
+                                 int bottom) {
+    const double thr = ss_heal_open_threshold();
+    const float *e = g->field[SS_HEAL_EPITHELIUM], *p = g->field[SS_HEAL_PLASMA];
+    const float *s = g->field[SS_HEAL_ESCHAR], *rho = g->field[SS_HEAL_SCAR];
+    for (int y = y0; y < y1; y++) {
+        for (int x = x0; x < x1; x++) {
+            /* the column scan of ss_heal_stats_acc_add, continued level by level */
+            ss_heal_col_state *cs = cols + (size_t)(y - y0) * (size_t)(x1 - x0) + (x - x0);
+            for (int z = g->nz - 2; z >= 1 && cs->phase < 2; z--) {
+                const int Z = z + zoff;
+                if (Z < 1 || Z > gz - 2) continue;
+                const size_t c = ss_heal_idx(g, x, y, z);
+                if (cs->phase == 0) {
+                    if (!is_tissue(g->cell[c])) continue;
+                    cs->phase = 1;
+                    cs->initial = g->cell[c] == SS_CELL_WOUND;
+                    cs->region = p[c] > (float)SS_HEAL_P_MIN;
+                    cs->open = e[c] < thr;
+                } else if (!is_tissue(g->cell[c])) {
+                    cs->phase = 2;
+                    break;
+                }
+                if (s[c] > cs->smax) cs->smax = s[c];
+            }
+            if (bottom && cs->phase) {
+                if (cs->initial) {
+                    a->n_initial++;
+                    limbs_add(a, SS_HEAL_NFIELDS, cs->smax);
+                    a->n_wcol++;
+                }
+                if (cs->region) a->n_region++;
+                if ((cs->initial || cs->region) && cs->open) a->n_open++;
+            }
+            for (int z = 1; z < g->nz - 1; z++) {
+                size_t c = ss_heal_idx(g, x, y, z);
+                if (!is_tissue(g->cell[c])) continue;
+                a->n_tissue++;
+                for (int f = 0; f < SS_HEAL_NFIELDS; f++) limbs_add(a, f, g->field[f][c]);
+                if (rho[c] > a->scar_max) a->scar_max = rho[c];
+            }
+        }
+    }
+    ss_heal_stats_acc_normalise(a);
+}
+
 void ss_heal_stats_acc_merge(ss_heal_stats_acc *a, const ss_heal_stats_acc *b) {
     a->n_initial += b->n_initial;
     a->n_region += b->n_region;
