@@ -10,6 +10,7 @@
 
 #include "testutil.h"
 #include "skinsim/heal.h"
+#include "skinsim/heal_io.h"
 
 /* scab scenario: a 6 mm wound in a block of nx x ny x nz 0.5 mm voxels */
 static ss_heal_grid *problem(const ss_heal_params *p, int nx, int ny, int nz) {
@@ -89,6 +90,75 @@ static void cut(const ss_heal_grid *G, ss_heal_grid *b, int x0, int y0) {
                 for (int f = 0; f < SS_HEAL_NFIELDS; f++)
                     b->field[f][c] = in ? G->field[f][ss_heal_idx(G, X, Y, z)] : 0.0f;
             }
+}
+
+/* The same with a halo in z too: levels [z0 - 1, z0 - 1 + b->nz) of G. */
+static void cut3(const ss_heal_grid *G, ss_heal_grid *b, int z0) {
+    for (int z = 0; z < b->nz; z++)
+        for (int y = 0; y < b->ny; y++)
+            for (int x = 0; x < b->nx; x++) {
+                int X = x - 1, Y = y - 1, Z = z0 - 1 + z;
+                size_t c = ss_heal_idx(b, x, y, z);
+                int in = X >= 0 && Y >= 0 && Z >= 0 && X < G->nx && Y < G->ny && Z < G->nz;
+                b->cell[c] = in ? G->cell[ss_heal_idx(G, X, Y, Z)] : SS_CELL_BOUND;
+                for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+                    b->field[f][c] = in ? G->field[f][ss_heal_idx(G, X, Y, Z)] : 0.0f;
+            }
+    b->skin_top_mm = G->skin_top_mm;
+    b->t_days = G->t_days;
+}
+
+/* A stack of two boxes in z (the MPI driver's z split): the statistics and the
+ * closure days scanned down the stack, top box first, equal the whole grid's. */
+static void test_stack_columns(void **state) {
+    (void)state;
+    ss_error err;
+    ss_heal_params *p = ss_heal_params_preset("scab", &err);
+    ss_heal_grid *G = problem(p, 23, 17, 9);
+    run(G, p, SS_HEAL_EXPLICIT, 40);
+    /* levels 0..4 (bottom) and 5..8 (top), each with a one-level halo */
+    ss_heal_grid *bot = ss_heal_grid_create(25, 19, 7, 0.5, &err);
+    ss_heal_grid *top = ss_heal_grid_create(25, 19, 6, 0.5, &err);
+    assert_non_null(bot);
+    assert_non_null(top);
+    cut3(G, bot, 0);
+    cut3(G, top, 5);
+    ss_heal_col_state cols[23 * 17];
+    memset(cols, 0, sizeof cols);
+    ss_heal_stats_acc a;
+    ss_heal_stats_acc_init(&a);
+    ss_heal_stats_acc_add_stack(&a, top, 1, 24, 1, 18, 4, 9, cols, 0);
+    ss_heal_stats_acc_add_stack(&a, bot, 1, 24, 1, 18, -1, 9, cols, 1);
+    ss_heal_stats whole, stacked;
+    ss_heal_stats_compute(G, &whole);
+    ss_heal_stats_acc_finish(&a, G->dx_mm, &stacked);
+    assert_memory_equal(&whole, &stacked, sizeof whole);
+    assert_true(whole.initial_area_mm2 > 0 && whole.eschar_wound_mean > 0);
+
+    double closedG[23 * 17], closedB[25 * 19];
+    float v[25 * 19], found[25 * 19];
+    ss_heal_closure_init(G, closedG);
+    ss_heal_closure_update(G, closedG);
+    for (int i = 0; i < 25 * 19; i++) {
+        closedB[i] = SS_HEAL_CLOSED_INTACT;
+        v[i] = -1.0f;
+        found[i] = 0.0f;
+    }
+    ss_heal_closure_scan(top, 4, 9, v, found);
+    ss_heal_closure_scan(bot, -1, 9, v, found);
+    ss_heal_closure_apply(bot, v, closedB);
+    ss_heal_closure_apply(bot, v, closedB); /* twice, as init + update */
+    int open = 0;
+    for (int y = 0; y < 17; y++)
+        for (int x = 0; x < 23; x++) {
+            assert_true(closedG[y * 23 + x] == closedB[(y + 1) * 25 + x + 1]);
+            open += closedG[y * 23 + x] == SS_HEAL_CLOSED_OPEN;
+        }
+    assert_true(open > 0);
+    ss_heal_grid_free(bot);
+    ss_heal_grid_free(top);
+    ss_heal_grid_free(G);
+    ss_heal_params_free(p);
 }
 
 static void test_subbox_explicit(void **state) {
@@ -230,10 +300,9 @@ static void test_explicit_parts(void **state) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_stats_parts),
-        cmocka_unit_test(test_subbox_explicit),
-        cmocka_unit_test(test_split_phases),
-        cmocka_unit_test(test_explicit_parts),
+        cmocka_unit_test(test_stats_parts),   cmocka_unit_test(test_subbox_explicit),
+        cmocka_unit_test(test_split_phases),  cmocka_unit_test(test_explicit_parts),
+        cmocka_unit_test(test_stack_columns),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
