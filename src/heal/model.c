@@ -213,6 +213,22 @@ static void find_surface(model_ctx *c) {
     c->ztop_of = c->cell;
 }
 
+/* One level z of the bed sum of a row of columns: the part of voxel level
+ * k = zt - z below the surface that lies in the bed window [ds, ds + bed_mm]
+ * weights its u3 (Ur). */
+static inline void bed_level(const int *zt, const float *ds, const float *Ur, float *bed, float *ws,
+                             int nx, int z, float h, float bedmm) {
+    for (int x = 0; x < nx; x++) {
+        const int k = zt[x] - z;
+        if (k < 0) continue;
+        const float a = ds[x], b = ds[x] + bedmm;
+        const float lo = k * h > a ? k * h : a, hi = (k + 1) * h < b ? (k + 1) * h : b;
+        if (hi <= lo) continue;
+        bed[x] += (hi - lo) * Ur[x];
+        ws[x] += hi - lo;
+    }
+}
+
 static void heal_prepare_z(model_ctx *c, float *const *u);
 
 /* prepare hook: the surface epithelium and the bed's mean capillary density
@@ -260,15 +276,7 @@ static void heal_prepare(void *vctx, float *const *u) {
         if (zlo < 1) zlo = 1;
         for (int z = zhi; z >= zlo; z--) {
             const float *Ur = U3 + (size_t)z * sz + r0;
-            for (int x = 0; x < nx; x++) {
-                const int k = zt[x] - z;
-                if (k < 0) continue;
-                const float a = ds[x], b = ds[x] + bedmm;
-                const float lo = k * h > a ? k * h : a, hi = (k + 1) * h < b ? (k + 1) * h : b;
-                if (hi <= lo) continue;
-                bed[x] += (hi - lo) * Ur[x];
-                ws[x] += hi - lo;
-            }
+            bed_level(zt, ds, Ur, bed, ws, nx, z, h, bedmm);
         }
         for (int x = 0; x < nx; x++) {
             if (zt[x] < 0) continue;
@@ -336,15 +344,7 @@ static void heal_prepare_z(model_ctx *c, float *const *u) {
         if (zlo < own_lo) zlo = own_lo;
         for (int z = zhi < own_hi ? zhi : own_hi; z >= zlo; z--) {
             const float *Ur = U3 + (size_t)(z - zoff) * sz + r0;
-            for (int x = 0; x < nx; x++) {
-                const int k = zt[x] - z;
-                if (k < 0) continue;
-                const float a = ds[x], b = ds[x] + bedmm;
-                const float lo = k * h > a ? k * h : a, hi = (k + 1) * h < b ? (k + 1) * h : b;
-                if (hi <= lo) continue;
-                bed[x] += (hi - lo) * Ur[x];
-                ws[x] += hi - lo;
-            }
+            bed_level(zt, ds, Ur, bed, ws, nx, z, h, bedmm);
         }
         if (own_lo > 0) continue; /* the bottom box (global level 1 inside) finishes */
         for (int x = 0; x < nx; x++) {
