@@ -1,10 +1,14 @@
 /* The healing solver of seed 001 §4.1 on MPI (docs/scaling.md). The grid is
- * cut by a Cartesian process grid (MPI_Cart_create over x, y and z; z is kept
- * whole, dims[2] = 1, because each column's epithelium reads the wound bed
- * below it). Explicit scheme: MPI_Dims_create splits x and y; every rank steps
- * its box plus a one-cell halo with the library's own kernel in its sub-box
- * form (ss_heal_solver_create_sub) and then exchanges the faces of all eight
- * fields with its four neighbours (non-blocking sends and receives). Split
+ * cut by a Cartesian process grid (MPI_Cart_create over x, y and z).
+ * Explicit scheme: MPI_Dims_create splits x and y (z too on request,
+ * SKINSIM_MPI_DIMS); every rank steps its box plus a one-cell halo with the
+ * library's own kernel in its sub-box form (ss_heal_solver_create_sub): it
+ * posts the exchange of the faces of all eight fields with its (up to six)
+ * neighbours, computes the interior of its box meanwhile, then waits and
+ * computes the boundary ring (ss_heal_step_part). With z split, the column
+ * values the epithelium reads (its whole depth) run down each stack of boxes
+ * in one process's order (ss_heal_solver_set_columns over an MPI_Cart_sub
+ * communicator), as do the column statistics and the closure days. Split
  * scheme: the boxes are y slabs (x lines and z columns whole) and the y sweep
  * runs on x slabs, reached by two MPI_Alltoallv transposes per step, so every
  * Thomas line solve runs whole, as in one process (no halo needed).
@@ -14,17 +18,18 @@
  * and drives the others through a command channel (one broadcast per step,
  * area row, gather or snapshot). Its hooks replace the run's step (all ranks
  * step; an adaptive run's rejected step is undone on all ranks, its largest
- * change is a max-reduction), its statistics (exact fixed-point partial sums reduced with integer
- * additions, ss_heal_stats_acc) and its snapshot/checkpoint reads (the boxes
- * are gathered into the whole grid first); after each snapshot every rank
- * also writes its box as a .vti piece, joined by a .pvti. The kernels compute
- * every cell from the same neighbours in the same arithmetic as one process,
- * so fields, area.csv, snapshots and checkpoints are bit-identical for any
- * rank count, and a checkpoint (always of the whole grid) resumes on any
- * rank count. Gave up: rank 0 keeps the whole grid (set-up, gathered outputs
- * and checkpoints), so its memory is that of a single-process run; the halo
- * exchange is not overlapped with the kernel; the mechanics stay
- * single-process (an error names --mechanics). */
+ * change is a max-reduction), its statistics (exact fixed-point partial sums
+ * reduced with integer additions, ss_heal_stats_acc) and its snapshot/
+ * checkpoint reads (the boxes are gathered into the whole grid first); after
+ * each snapshot every rank also writes its box as a .vti piece, joined by a
+ * .pvti. The kernels compute every cell from the same neighbours in the same
+ * arithmetic as one process, so fields, area.csv, snapshots and checkpoints
+ * are bit-identical for any rank count and process grid, and a checkpoint
+ * (always of the whole grid) resumes on any rank count. Gave up: rank 0 keeps
+ * the whole grid (set-up, gathered outputs and checkpoints), so its memory is
+ * that of a single-process run; the column chain of a z stack is sequential
+ * (Pz - 1 hops per step); the mechanics stay single-process (an error names
+ * --mechanics). */
 #include <math.h>
 #include <mpi.h>
 #include <stdlib.h>
