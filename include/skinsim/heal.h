@@ -244,12 +244,13 @@ void ss_heal_solver_free(ss_heal_solver *s);
  * the explicit scheme or a velocity field. */
 ss_status ss_heal_step_phase(ss_heal_solver *s, ss_heal_grid *g, int phase, ss_error *err);
 /* The explicit step in two parts (the MPI driver, src/dist, exchanges its
- * halo meanwhile): part 1 computes every cell whose stencil stays off the
- * grid's outer shell, part 2 the rest (cells at x, y or z = 1 or n - 2) and
- * then t_days += dt and step++. Between them the outer shell's fields may be
- * rewritten (the halo received); parts 1 and 2 in turn are ss_heal_step
- * exactly. SS_ERR_INPUT for the split scheme. */
-ss_status ss_heal_step_part(ss_heal_solver *s, ss_heal_grid *g, int part, ss_error *err);
+ * halo meanwhile): part 1 computes every cell whose stencil does not reach
+ * the faces of the grid's outer shell named in `ring` (bits 1, 2, 4, 8, 16,
+ * 32: -x, +x, -y, +y, -z, +z), part 2 the rest (the cells next to those
+ * faces) and then t_days += dt and step++. Between them those faces' fields
+ * may be rewritten (the halo received); parts 1 and 2 in turn, with the same
+ * ring, are ss_heal_step exactly. SS_ERR_INPUT for the split scheme. */
+ss_status ss_heal_step_part(ss_heal_solver *s, ss_heal_grid *g, int part, int ring, ss_error *err);
 /* The split scheme's frozen diffusion multipliers of slot k (one float per
  * cell of the solver's grid; set by phase 0, read by phases 1 and 2); NULL
  * for the explicit scheme or a slot out of range. */

@@ -192,19 +192,19 @@ static void face_io(ss_heal_grid *g, int face, int recv, float *buf) {
     }
 }
 
-/* Posts the exchange of the faces of the current fields: receives into
- * rbuf, sends packed copies (the fields may be read meanwhile, never the
- * halo). Returns the request count. */
-static int halo_post(ss_dist_heal *d, MPI_Request rq[2 * NFACES]) {
+/* Posts the exchange of the faces in `mask` (bit 1 << face) of the current
+ * fields: receives into rbuf, sends packed copies (the fields may be read
+ * meanwhile, never the halo). Returns the request count. */
+static int halo_post(ss_dist_heal *d, MPI_Request rq[2 * NFACES], int mask) {
     int nr = 0;
     /* a face's opposite: what the neighbour on the -x side sends us is its +x face */
     static const int opposite[NFACES] = {FACE_XP, FACE_XM, FACE_YP, FACE_YM, FACE_ZP, FACE_ZM};
     for (int f = 0; f < NFACES; f++) {
-        if (d->nbr[f] == MPI_PROC_NULL) continue;
+        if (d->nbr[f] == MPI_PROC_NULL || !(mask & (1 << f))) continue;
         MPI_Irecv(d->rbuf[f], d->fcount[f], MPI_FLOAT, d->nbr[f], opposite[f], d->cart, &rq[nr++]);
     }
     for (int f = 0; f < NFACES; f++) {
-        if (d->nbr[f] == MPI_PROC_NULL) continue;
+        if (d->nbr[f] == MPI_PROC_NULL || !(mask & (1 << f))) continue;
         face_io(d->g, f, 0, d->sbuf[f]);
         MPI_Isend(d->sbuf[f], d->fcount[f], MPI_FLOAT, d->nbr[f], f, d->cart, &rq[nr++]);
     }
@@ -212,10 +212,10 @@ static int halo_post(ss_dist_heal *d, MPI_Request rq[2 * NFACES]) {
 }
 
 /* Waits for the exchange and writes the received faces into the halo. */
-static void halo_finish(ss_dist_heal *d, MPI_Request rq[2 * NFACES], int nr) {
+static void halo_finish(ss_dist_heal *d, MPI_Request rq[2 * NFACES], int nr, int mask) {
     MPI_Waitall(nr, rq, MPI_STATUSES_IGNORE);
     for (int f = 0; f < NFACES; f++)
-        if (d->nbr[f] != MPI_PROC_NULL) face_io(d->g, f, 1, d->rbuf[f]);
+        if (d->nbr[f] != MPI_PROC_NULL && (mask & (1 << f))) face_io(d->g, f, 1, d->rbuf[f]);
 }
 
 /* ---- the split scheme's transposes ---------------------------------------------- */
@@ -352,9 +352,12 @@ static ss_status split_step(ss_dist_heal *d, ss_error *err) {
 /* One explicit step. The halo holds the neighbours' faces of the fields
  * before the step only once the exchange posted at the step's start is
  * complete, so the kernel runs in two parts: the interior (no stencil reaches
- * the halo) while the faces travel, then the boundary ring. (After the step
- * the halo is stale until the next step's exchange: nothing reads it.)
- * SKINSIM_DIST_OVERLAP=0 (benchmarks) waits for the exchange first. */
+ * the halo in flight) while the faces travel, then the boundary ring. The x
+ * faces are waited for first: a ring in x would cut every x row (the kernel's
+ * unit) into three, whose single end cells cost more than their share; the y
+ * and z faces (whole rows of the ring) travel during the interior. (After the
+ * step the halo is stale until the next step's exchange: nothing reads it.)
+ * SKINSIM_DIST_OVERLAP=0 (benchmarks) waits for every face first. */
 static ss_status plain_step(ss_dist_heal *d, ss_error *err) {
     if (d->split) return split_step(d, err);
     ss_status st;
@@ -365,15 +368,20 @@ static ss_status plain_step(ss_dist_heal *d, ss_error *err) {
         d->steps++;
         return st;
     }
-    MPI_Request rq[2 * NFACES];
-    const int nr = halo_post(d, rq);
-    if (!d->overlap) halo_finish(d, rq, nr);
+    const int xf = 1 << FACE_XM | 1 << FACE_XP, yzf = (1 << NFACES) - 1 - xf;
+    MPI_Request rqx[2 * NFACES], rq[2 * NFACES];
+    const int nrx = halo_post(d, rqx, xf), nr = halo_post(d, rq, yzf);
+    halo_finish(d, rqx, nrx, xf);
+    if (!d->overlap) halo_finish(d, rq, nr, yzf);
+    int ring = 0; /* the faces still in flight (the kernel's bits: 1 << face) */
+    for (int f = FACE_YM; f < NFACES && d->overlap; f++)
+        if (d->nbr[f] != MPI_PROC_NULL) ring |= 1 << f;
     double t1 = MPI_Wtime(), c0 = d->t_col;
-    st = ss_heal_step_part(d->s, d->g, 1, err);
+    st = ss_heal_step_part(d->s, d->g, 1, ring, err);
     double t2 = MPI_Wtime(), tc = d->t_col - c0; /* the column exchange inside */
-    if (d->overlap) halo_finish(d, rq, nr);
+    if (d->overlap) halo_finish(d, rq, nr, yzf);
     double t3 = MPI_Wtime();
-    if (!st) st = ss_heal_step_part(d->s, d->g, 2, err);
+    if (!st) st = ss_heal_step_part(d->s, d->g, 2, ring, err);
     double t4 = MPI_Wtime();
     d->t_compute += (t2 - t1 - tc) + (t4 - t3);
     d->t_halo += (t1 - t0) + (t3 - t2) + tc;

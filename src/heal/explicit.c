@@ -236,34 +236,43 @@ static int thread_count(const ss_heal_rd_work *w) {
 }
 
 void ss_heal_rd_step_explicit(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt) {
-    ss_heal_rd__step_explicit_part(sys, w, dt, RD_PART_ALL);
+    ss_heal_rd__step_explicit_part(sys, w, dt, RD_PART_ALL, 0);
 }
 
 /* The x segments of row (y, z) that `part` computes: the whole row (ALL, or
- * a ring row of RING), the row less its ends (INTERIOR, a row off the ring),
- * the two end cells (RING, a row off the ring) or none. Ring rows are those
- * at y or z = 1 or n - 2: their stencil reaches the box's outer shell. */
-static int row_segments(int part, int nx, int ny, int nz, int y, int z, int seg[2][2]) {
-    const int ring_row = y == 1 || y == ny - 2 || z == 1 || z == nz - 2;
+ * a ring row of RING), the row less its ring ends (INTERIOR, a row off the
+ * ring), the ring end cells (RING, a row off the ring) or none. The ring is
+ * the layer of cells next to the faces in `ring` (NB_* bits): ring rows are
+ * those at y or z = 1 or n - 2 next to such a face. */
+static int row_segments(int part, int ring, int nx, int ny, int nz, int y, int z, int seg[2][2]) {
+    const int ring_row = (y == 1 && (ring & NB_YM)) || (y == ny - 2 && (ring & NB_YP)) ||
+                         (z == 1 && (ring & NB_ZM)) || (z == nz - 2 && (ring & NB_ZP));
+    const int xa = ring & NB_XM ? 2 : 1, xb = ring & NB_XP ? nx - 3 : nx - 2;
     if (part == RD_PART_ALL || (part == RD_PART_RING && ring_row)) {
         seg[0][0] = 1;
         seg[0][1] = nx - 2;
         return 1;
     }
     if (part == RD_PART_INTERIOR) {
-        if (ring_row || nx - 3 < 2) return 0;
-        seg[0][0] = 2;
-        seg[0][1] = nx - 3;
+        if (ring_row || xb < xa) return 0;
+        seg[0][0] = xa;
+        seg[0][1] = xb;
         return 1;
     }
-    seg[0][0] = seg[0][1] = 1;
-    if (nx - 2 == 1) return 1;
-    seg[1][0] = seg[1][1] = nx - 2;
-    return 2;
+    int ns = 0;
+    if (xa == 2 || xb < xa) { /* (a box 1 wide: its one cell) */
+        seg[ns][0] = seg[ns][1] = 1;
+        ns++;
+    }
+    if (xb == nx - 3 && nx - 2 > 1) {
+        seg[ns][0] = seg[ns][1] = nx - 2;
+        ns++;
+    }
+    return ns;
 }
 
-void ss_heal_rd__step_explicit_part(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt,
-                                    int part) {
+void ss_heal_rd__step_explicit_part(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt, int part,
+                                    int ring) {
     const int nx = sys->nx, ny = sys->ny, nz = sys->nz, nf = sys->nfields;
     const size_t sy = (size_t)nx, sz = (size_t)nx * (size_t)ny;
     const float dtf = (float)dt;
@@ -304,7 +313,7 @@ void ss_heal_rd__step_explicit_part(ss_heal_rd_system *sys, ss_heal_rd_work *w, 
                         w->buf[f][base + (size_t)nx - 1] = sys->u[f][base + (size_t)nx - 1];
                     }
                 int seg[2][2];
-                const int nseg = row_segments(part, nx, ny, nz, y, z, seg);
+                const int nseg = row_segments(part, ring, nx, ny, nz, y, z, seg);
                 if (sg >= nseg) continue;
                 const int xa = seg[sg][0], n = seg[sg][1] - xa + 1;
                 row.n = n;

@@ -696,18 +696,18 @@ ss_status ss_heal_step(ss_heal_solver *s, ss_heal_grid *g, ss_error *err) {
     return SS_OK;
 }
 
-ss_status ss_heal_step_part(ss_heal_solver *s, ss_heal_grid *g, int part, ss_error *err) {
+ss_status ss_heal_step_part(ss_heal_solver *s, ss_heal_grid *g, int part, int ring, ss_error *err) {
     if (!s || s->scheme != SS_HEAL_EXPLICIT || (part != 1 && part != 2))
         return ss_error_set(err, SS_ERR_INPUT, "heal step part: the explicit scheme, part 1 or 2");
     if (part == 1) {
         ss_status st = step_begin(s, g, err);
         if (st) return st;
-        ss_heal_rd__step_explicit_part(&s->sys, s->w, s->dt, RD_PART_INTERIOR);
+        ss_heal_rd__step_explicit_part(&s->sys, s->w, s->dt, RD_PART_INTERIOR, ring);
         return SS_OK;
     }
     if (!g || g->nx != s->nx || g->ny != s->ny || g->nz != s->nz)
         return ss_error_set(err, SS_ERR_INPUT, "heal step part: grid does not match the solver");
-    ss_heal_rd__step_explicit_part(&s->sys, s->w, s->dt, RD_PART_RING);
+    ss_heal_rd__step_explicit_part(&s->sys, s->w, s->dt, RD_PART_RING, ring);
     step_end(s, g);
     return SS_OK;
 }
