@@ -12,7 +12,12 @@
  * density as the mean u3 over the top bed_mm (physical depth, not voxels).
  * Its effects below the surface ((1 - e) in eschar and scar production, the
  * eschar dissolution lames e s) use the column's surface coverage. The
- * eschar source R(omega) acts in the top scab_mm of the exposed wound. These
+ * eschar is a crust confined to the top scab_mm of the exposed wound (its
+ * source acts there, it diffuses along x and y only); with the scab switch
+ * the (1 - s) of u1..n weights the cell faces (a full crust insulates the
+ * bed instead of draining it), and a dry factor from the column's crust
+ * thickness slows capillary and fibroblast growth in the wound below. The
+ * bed the sheet reads is the granulation tissue (omega) under the crust. These
  * column inputs are gathered before each reaction pass (prepare hook), so
  * rows stay independent and results bit-identical for any thread count.
  * docs/heal-model.md §2 lists where and why this departs from §4.1 as printed. */
