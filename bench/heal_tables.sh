@@ -49,7 +49,7 @@ fi
 
 if [ "$what" = sensitivity ] || [ "$what" = all ]; then
     keys="D1 lam11 lam31 D2 lam12 lam22 u1_beta2 D3 lam33 lam32 Dn rn lamnn De lamge gamma1 lamnrho rho_open lamrhop bed_mm"
-    skeys="Ds Rs lames kscab scab_mm"
+    skeys="Ds Rs lames kscab kang scab_mm"
     base=$(run --scenario clean --days 25)
     sbase=$(run --scenario scab --days 40)
     echo "| parameter | scenario | value | t95 x0.5 / x1 / x2 (days) | peak scar x0.5 / x1 / x2 |"

@@ -1,7 +1,8 @@
 /* Numerics of the generic reaction-diffusion core (src/heal/explicit.c,
  * split.c), the same code path the healing model uses: Fisher-KPP travelling
  * wave against the exact solution, Bramson front position from a step, mass
- * conservation of pure diffusion (both schemes) and of convection, the
+ * conservation of pure diffusion (both schemes), an insulating layer (face
+ * multipliers) and convection, the
  * distance a blob is carried, and bit-identical results on 1 and 2 threads. */
 #include <math.h>
 #include <stdio.h>
@@ -236,6 +237,93 @@ static void test_diffusion_mass(void **state) {
     }
 }
 
+/* An insulating layer (the scab's crust): a field q marks the layer (q = 1)
+ * and a field u diffuses with the multiplier m = 1 - q. As face
+ * conductances (mface) the layer is a no-flux wall: u keeps its mass and
+ * the layer takes none; as the seed's cell multiplier (m_i D lap u) the
+ * layer's frozen zeros drain u. Both schemes. */
+static void ins_react(void *vctx, const ss_heal_rd_row *row) {
+    (void)vctx;
+    for (int i = 0; i < row->n; i++) {
+        for (int f = 0; f < 2; f++) row->prod[f][i] = row->loss[f][i] = 0.0f;
+        const float q = row->u[0][i];
+        row->m[0][i] = q < 0.0f ? 1.0f : q > 1.0f ? 0.0f : 1.0f - q;
+    }
+}
+
+static void test_insulating_layer(void **state) {
+    (void)state;
+    const int nx = 12, ny = 10, nz = 14;
+    const size_t n = (size_t)nx * ny * nz;
+    for (int split = 0; split < 2; split++)
+        for (int face = 0; face < 2; face++) {
+            ss_heal_rd_system s;
+            memset(&s, 0, sizeof s);
+            s.nx = nx;
+            s.ny = ny;
+            s.nz = nz;
+            s.h_mm = 0.25;
+            s.nfields = 2;
+            float *q = calloc(n, sizeof(float)), *u = calloc(n, sizeof(float));
+            assert_true(q && u);
+            double below0 = 0.0;
+            for (int z = 1; z < nz - 1; z++)
+                for (int y = 1; y < ny - 1; y++)
+                    for (int x = 1; x < nx - 1; x++) {
+                        const size_t c = ((size_t)z * ny + y) * nx + x;
+                        if (z >= nz - 5) {
+                            q[c] = 1.0f; /* the layer: four cells under the top wall */
+                        } else {
+                            u[c] = (float)(0.2 + exp(-((z - 7.0) * (z - 7.0)) / 4.0));
+                            below0 += u[c];
+                        }
+                    }
+            s.u[0] = q;
+            s.u[1] = u;
+            s.D[1] = 0.4;
+            s.mslot[0] = -1;
+            s.mslot[1] = 0;
+            s.nslots = 1;
+            s.mface[0] = face ? 1 : 0; /* field 0 + 1 */
+            s.lo[0] = s.lo[1] = 0.0f;
+            s.hi[0] = s.hi[1] = INFINITY;
+            s.mmax = 1.0;
+            s.react = ins_react;
+            ss_error err;
+            ss_heal_rd_work *w = ss_heal_rd_work_create(&s, &err);
+            assert_non_null(w);
+            const double dt = split ? 0.05 : 0.9 * ss_heal_rd_explicit_dt(&s);
+            const int steps = (int)lround(4.0 / dt);
+            for (int k = 0; k < steps; k++) {
+                if (split)
+                    ss_heal_rd_step_split(&s, w, dt, 1);
+                else
+                    ss_heal_rd_step_explicit(&s, w, dt);
+            }
+            double below = 0.0, layer = 0.0;
+            for (int z = 1; z < nz - 1; z++)
+                for (int y = 1; y < ny - 1; y++)
+                    for (int x = 1; x < nx - 1; x++) {
+                        const size_t c = ((size_t)z * ny + y) * nx + x;
+                        if (z >= nz - 5)
+                            layer += s.u[1][c];
+                        else
+                            below += s.u[1][c];
+                    }
+            const double rel = (below - below0) / below0;
+            print_message("%s, %s multiplier: mass under the layer %+.2e (rel), in it %.3g\n",
+                          split ? "split" : "explicit", face ? "face" : "cell", rel, layer);
+            assert_true(layer == 0.0); /* the layer never takes anything */
+            if (face)
+                assert_true(fabs(rel) < 2e-5); /* insulated: conserved */
+            else
+                assert_true(rel < -0.01); /* the seed's cell form drains it */
+            ss_heal_rd_work_free(w);
+            free(s.u[0]);
+            free(s.u[1]);
+        }
+}
+
 /* A blob carried by a uniform velocity: mass conserved, centroid moves v t. */
 static void test_convection_blob(void **state) {
     (void)state;
@@ -304,9 +392,8 @@ static void test_convection_blob(void **state) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_fisher_travelling_wave),
-        cmocka_unit_test(test_fisher_bramson),
-        cmocka_unit_test(test_diffusion_mass),
+        cmocka_unit_test(test_fisher_travelling_wave), cmocka_unit_test(test_fisher_bramson),
+        cmocka_unit_test(test_diffusion_mass),         cmocka_unit_test(test_insulating_layer),
         cmocka_unit_test(test_convection_blob),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

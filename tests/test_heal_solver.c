@@ -331,8 +331,14 @@ static void test_scenarios(void **state) {
     double ratio = cs.t95 / cc.t95;
     print_message("scab/clean time to 95 %% closure: %.2f\n", ratio);
     assert_true(ratio >= 1.6 && ratio <= 2.6);
-    /* more scar under a scab (peak density) */
+    /* the slower start too (Winter 1962: about twice as fast when moist) */
+    assert_true(cs.t50 > 1.5 * cc.t50);
+    /* more scar under a scab (peak density), but not a keloid's */
     assert_true(cs.scar_max_peak > 1.1 * cc.scar_max_peak);
+    ss_error perr;
+    ss_heal_params *pk = ss_heal_params_preset("scab", &perr);
+    assert_true(cs.scar_max_peak < pk->rho_sat);
+    ss_heal_params_free(pk);
     /* the scab detaches after closure, within 14 days */
     assert_true(cs.scab_gone_day > cs.t95 && cs.scab_gone_day <= cs.t95 + 14.0);
     /* scar forms (clean) */
@@ -434,21 +440,78 @@ static void test_keloid_stop(void **state) {
 }
 
 /* Grid convergence of the closure times (physical thicknesses, not voxel
- * counts): 0.5 vs 0.25 mm voxels within 5 % for clean and scab, on a 10 mm
- * wound in a 16 mm block (docs/heal-model.md has the full-size table). */
+ * counts) on a reduced problem (a 6 mm wound in a 10 mm block): at 0.5,
+ * 0.25 and 0.125 mm voxels the differences shrink with the voxel size, for
+ * clean and scab, t50 and t95. Before the crust was confined to its layer
+ * and insulating (issue 8), the scab's t50 step did not shrink.
+ * docs/heal-model.md has the full-size table (within 5 % there except the
+ * scab's t50 between 0.5 and 0.25 mm). Quick (ASan) runs: clean, 0.5 vs
+ * 0.25 mm only. */
 static void test_grid_convergence(void **state) {
     (void)state;
     const char *sc[2] = {"clean", "scab"};
-    /* quick (ASan) runs check the clean pair only */
-    for (int k = 0; k < (tu_quick() ? 1 : 2); k++) {
-        ss_heal_course a = course(sc[k], 16, 10, 0.5, k ? 12 : 7, 0, -1, 0);
-        ss_heal_course b = course(sc[k], 16, 10, 0.25, k ? 12 : 7, 0, -1, 0);
+    const int quick = tu_quick();
+    for (int k = 0; k < (quick ? 1 : 2); k++) {
+        const double days = k ? 7.5 : 5;
+        ss_heal_course a = course(sc[k], 10, 6, 0.5, days, 0, -1, 0);
+        ss_heal_course b = course(sc[k], 10, 6, 0.25, days, 0, -1, 0);
         assert_true(a.t50 > 0 && a.t95 > 0 && b.t50 > 0 && b.t95 > 0);
-        double d50 = fabs(a.t50 - b.t50) / b.t50, d95 = fabs(a.t95 - b.t95) / b.t95;
+        const double d50 = fabs(a.t50 - b.t50) / b.t50, d95 = fabs(a.t95 - b.t95) / b.t95;
         print_message("%s: 0.5 vs 0.25 mm: t50 %.2f %%, t95 %.2f %%\n", sc[k], 100 * d50,
                       100 * d95);
-        assert_true(d50 <= 0.05 && d95 <= 0.05);
+        assert_true(d50 <= 0.15 && d95 <= 0.15);
+        if (quick) continue;
+        ss_heal_course c = course(sc[k], 10, 6, 0.125, days, 0, -1, 0);
+        assert_true(c.t50 > 0 && c.t95 > 0);
+        const double e50 = fabs(b.t50 - c.t50) / c.t50, e95 = fabs(b.t95 - c.t95) / c.t95;
+        print_message("%s: 0.25 vs 0.125 mm: t50 %.2f %%, t95 %.2f %%\n", sc[k], 100 * e50,
+                      100 * e95);
+        /* the steps shrink, and move the same way (no overshoot) */
+        assert_true(e50 < d50 && e95 < d95);
+        assert_true((a.t50 - b.t50) * (b.t50 - c.t50) >= 0 &&
+                    (a.t95 - b.t95) * (b.t95 - c.t95) >= 0);
     }
+}
+
+/* The scab's crust stays in its physical layer (the top scab_mm of the
+ * wound, at any voxel size) instead of diffusing into the tissue below it,
+ * and it forms there within the first day. */
+static void test_scab_crust(void **state) {
+    (void)state;
+    ss_error err;
+    ss_heal_params *p = ss_heal_params_preset("scab", &err);
+    assert_non_null(p);
+    const double dxs[2] = {0.25, 0.125};
+    for (int k = 0; k < (tu_quick() ? 1 : 2); k++) {
+        const double dx = dxs[k];
+        ss_heal_grid *g = make_problem(p, dx, 6.0, 3.0);
+        ss_heal_solver *sv = ss_heal_solver_create(g, p, SS_HEAL_SPLIT, 0.05, &err);
+        assert_non_null(sv);
+        for (int i = 0; i < 40; i++) assert_int_equal(ss_heal_step(sv, g, &err), SS_OK);
+        const int cx = g->nx / 2, cy = g->ny / 2;
+        double below = 0.0, crust = 0.0;
+        int ncrust = 0;
+        for (int z = 1; z < g->nz - 1; z++) {
+            const double depth = 4.0 - (z + 0.5) * dx; /* voxel centre below the surface */
+            if (depth < 0) continue;
+            for (int y = 1; y < g->ny - 1; y++)
+                for (int x = 1; x < g->nx - 1; x++) {
+                    const float s = g->field[SS_HEAL_ESCHAR][ss_heal_idx(g, x, y, z)];
+                    if (depth > p->scab_mm && s > below) below = s;
+                }
+            if (depth < p->scab_mm) {
+                crust += g->field[SS_HEAL_ESCHAR][ss_heal_idx(g, cx, cy, z)];
+                ncrust++;
+            }
+        }
+        print_message("dx %g: day 2: eschar below the crust layer max %.3g, crust mean %.3f\n", dx,
+                      below, crust / ncrust);
+        assert_true(below == 0.0);                       /* nothing below the layer */
+        assert_true(ncrust > 0 && crust / ncrust > 0.9); /* a full crust in it */
+        ss_heal_solver_free(sv);
+        ss_heal_grid_free(g);
+    }
+    ss_heal_params_free(p);
 }
 
 /* Smooth normalised open area: mean epithelial deficit 1 - max(e) over the
@@ -554,6 +617,7 @@ int main(void) {
         cmocka_unit_test(test_scenarios),      cmocka_unit_test(test_fig4_convergence),
         cmocka_unit_test(test_remodelling),    cmocka_unit_test(test_keloid),
         cmocka_unit_test(test_keloid_stop),    cmocka_unit_test(test_grid_convergence),
+        cmocka_unit_test(test_scab_crust),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

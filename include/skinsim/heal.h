@@ -94,6 +94,8 @@ typedef struct ss_heal_params {
     double bed_mm;  /* mm, depth of the wound bed whose mean u3 the epithelium reads */
     double scab_mm; /* mm, thickness of the exposed layer that dries into eschar */
     double kscab;   /* 1, fraction by which a full eschar slows the epithelial sheet under it */
+    double kang;    /* 1, fraction by which a full crust over a column slows capillary growth
+                       in the wound bed below it (dry wounds revascularise more slowly) */
     double rho_sat; /* 1, packing limit of collagen (x normal dermis): keloid deposition
                        saturates as (1 - rho/rho_sat) */
     /* keloid invasion (docs/heal-model.md §2 [D6]) */
@@ -422,6 +424,13 @@ typedef struct ss_heal_rd_system {
      * the whole grid is the wall shell; this grid's own outermost shell is a
      * halo (read as neighbours, never updated). */
     int goff[3], gdim[3];
+    /* 0: the multiplier of slot k scales the cell's Laplacian, m_i D lap u
+     * (the seed's form). f + 1: slot k's fields diffuse through faces of
+     * conductance min(m_i, m_j) of the two cells (conservative: a layer with
+     * m = 0 insulates instead of acting as a zero-valued sink); the reaction
+     * must then write m = clamp(1 - u_f, 0, 1) into the slot, which the
+     * explicit scheme recomputes from field f at the neighbours. */
+    uint8_t mface[SS_HEAL_RD_MAXSLOT];
 } ss_heal_rd_system;
 
 typedef struct ss_heal_rd_work ss_heal_rd_work;

@@ -83,6 +83,13 @@ static ss_heal_rd_work *work_create(const ss_heal_rd_system *sys, int need_buf, 
             return NULL;
         }
     }
+    for (int k = 0; k < sys->nslots; k++)
+        if (sys->mface[k] > sys->nfields) {
+            ss_error_set(err, SS_ERR_INPUT,
+                         "heal solver: multiplier slot %d names face field %d of %d", k,
+                         sys->mface[k] - 1, sys->nfields);
+            return NULL;
+        }
     ss_heal_rd_work *w = calloc(1, sizeof *w);
     if (!w) goto nomem;
     w->nx = sys->nx;
@@ -121,7 +128,7 @@ static ss_heal_rd_work *work_create(const ss_heal_rd_system *sys, int need_buf, 
     size_t nx = (size_t)sys->nx, big = (size_t)(sys->ny > sys->nz ? sys->ny : sys->nz);
     /* split: prod, loss, local u, multipliers; explicit: prod, loss,
      * multipliers, ones, six face weights */
-    size_t a = (size_t)(4 * sys->nfields + sys->nslots + 8) * nx;
+    size_t a = (size_t)(4 * sys->nfields + sys->nslots + 14) * nx;
     size_t b = 2 * big * nx + 4 * nx;
     w->ones_off = a > b ? a : b;
     w->tscratch_len = w->ones_off + nx + 64;
@@ -295,6 +302,16 @@ void ss_heal_rd__step_explicit_part(ss_heal_rd_system *sys, ss_heal_rd_work *w, 
         /* face weights of the row (1 = the face conducts), shared by the fields */
         float *restrict wxm = ones + nx, *restrict wxp = wxm + nx, *restrict wym = wxp + nx;
         float *restrict wyp = wym + nx, *restrict wzm = wyp + nx, *restrict wzp = wzm + nx;
+        /* face conductances of the face-multiplier slot (mface): the face
+         * weight times min(m) of the two cells, m = clamp(1 - u_ff, 0, 1) */
+        float *restrict cxm = wzp + nx, *restrict cxp = cxm + nx, *restrict cym = cxp + nx;
+        float *restrict cyp = cym + nx, *restrict czm = cyp + nx, *restrict czp = czm + nx;
+        int fslot = -1, ff = -1;
+        for (int k = 0; k < sys->nslots && fslot < 0; k++)
+            if (sys->mface[k]) {
+                fslot = k;
+                ff = sys->mface[k] - 1;
+            }
 #pragma omp for collapse(2) schedule(static)
         for (int z = 0; z < nz; z++) {
             /* each row twice: its first and its second x segment */
@@ -343,13 +360,37 @@ void ss_heal_rd__step_explicit_part(ss_heal_rd_system *sys, ss_heal_rd_work *w, 
                     wzm[x] = (float)((b >> 4) & 1);
                     wzp[x] = (float)((b >> 5) & 1);
                 }
+                if (fslot >= 0) {
+                    const float *restrict q = sys->u[ff] + base;
+#pragma omp simd
+                    for (int x = xa; x < xa + n; x++) {
+                        const float mc = clampf(1.0f - q[x], 0.0f, 1.0f);
+                        const float ml = clampf(1.0f - q[x - 1], 0.0f, 1.0f);
+                        const float mr = clampf(1.0f - q[x + 1], 0.0f, 1.0f);
+                        const float ms = clampf(1.0f - q[x - (long)sy], 0.0f, 1.0f);
+                        const float mn = clampf(1.0f - q[x + sy], 0.0f, 1.0f);
+                        const float md = clampf(1.0f - q[x - (long)sz], 0.0f, 1.0f);
+                        const float mu = clampf(1.0f - q[x + sz], 0.0f, 1.0f);
+                        cxm[x] = wxm[x] * (mc < ml ? mc : ml);
+                        cxp[x] = wxp[x] * (mc < mr ? mc : mr);
+                        cym[x] = wym[x] * (mc < ms ? mc : ms);
+                        cyp[x] = wyp[x] * (mc < mn ? mc : mn);
+                        czm[x] = wzm[x] * (mc < md ? mc : md);
+                        czp[x] = wzp[x] * (mc < mu ? mc : mu);
+                    }
+                }
                 for (int f = 0; f < nf; f++) {
                     const float *restrict u = sys->u[f] + base;
                     float *restrict un = w->buf[f] + base;
                     const uint8_t *restrict upd = w->upd[f] + base;
                     const float *restrict pr = row.prod[f];
                     const float *restrict ls = row.loss[f];
-                    const float *restrict mk = sys->mslot[f] >= 0 ? row.m[sys->mslot[f]] : ones;
+                    const int fc = fslot >= 0 && sys->mslot[f] == fslot;
+                    const float *restrict mk =
+                        sys->mslot[f] >= 0 && !fc ? row.m[sys->mslot[f]] : ones;
+                    const float *restrict Wxm = fc ? cxm : wxm, *restrict Wxp = fc ? cxp : wxp;
+                    const float *restrict Wym = fc ? cym : wym, *restrict Wyp = fc ? cyp : wyp;
+                    const float *restrict Wzm = fc ? czm : wzm, *restrict Wzp = fc ? czp : wzp;
                     const float Dh = (float)(sys->D[f] * ih2);
                     const float lo = sys->lo[f], hi = sys->hi[f];
                     /* The three variants give the same values as the full
@@ -370,9 +411,9 @@ void ss_heal_rd__step_explicit_part(ss_heal_rd_system *sys, ss_heal_rd_work *w, 
 #pragma omp simd
                         for (int x = xa; x < xa + n; x++) {
                             const float uc = u[x];
-                            const float lap = wxm[x] * (u[x - 1] - uc) + wxp[x] * (u[x + 1] - uc) +
-                                              wym[x] * (u[x - (long)sy] - uc) +
-                                              wyp[x] * (u[x + sy] - uc);
+                            const float lap = Wxm[x] * (u[x - 1] - uc) + Wxp[x] * (u[x + 1] - uc) +
+                                              Wym[x] * (u[x - (long)sy] - uc) +
+                                              Wyp[x] * (u[x + sy] - uc);
                             float v =
                                 uc + dtf * (mk[x - xa] * Dh * lap + pr[x - xa] - ls[x - xa] * uc);
                             v = v > lo ? v : lo;
@@ -384,9 +425,9 @@ void ss_heal_rd__step_explicit_part(ss_heal_rd_system *sys, ss_heal_rd_work *w, 
                         for (int x = xa; x < xa + n; x++) {
                             const float uc = u[x];
                             const float lap =
-                                wxm[x] * (u[x - 1] - uc) + wxp[x] * (u[x + 1] - uc) +
-                                wym[x] * (u[x - (long)sy] - uc) + wyp[x] * (u[x + sy] - uc) +
-                                wzm[x] * (u[x - (long)sz] - uc) + wzp[x] * (u[x + sz] - uc);
+                                Wxm[x] * (u[x - 1] - uc) + Wxp[x] * (u[x + 1] - uc) +
+                                Wym[x] * (u[x - (long)sy] - uc) + Wyp[x] * (u[x + sy] - uc) +
+                                Wzm[x] * (u[x - (long)sz] - uc) + Wzp[x] * (u[x + sz] - uc);
                             float v =
                                 uc + dtf * (mk[x - xa] * Dh * lap + pr[x - xa] - ls[x - xa] * uc);
                             v = v > lo ? v : lo;

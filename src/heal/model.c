@@ -12,7 +12,12 @@
  * density as the mean u3 over the top bed_mm (physical depth, not voxels).
  * Its effects below the surface ((1 - e) in eschar and scar production, the
  * eschar dissolution lames e s) use the column's surface coverage. The
- * eschar source R(omega) acts in the top scab_mm of the exposed wound. These
+ * eschar is a crust confined to the top scab_mm of the exposed wound (its
+ * source acts there, it diffuses along x and y only); with the scab switch
+ * the (1 - s) of u1..n weights the cell faces (a full crust insulates the
+ * bed instead of draining it), and a dry factor from the column's crust
+ * thickness slows capillary and fibroblast growth in the wound below. The
+ * bed the sheet reads is the granulation tissue (omega) under the crust. These
  * column inputs are gathered before each reaction pass (prepare hook), so
  * rows stay independent and results bit-identical for any thread count.
  * The keloid's invasion signal a(t) (keloid_tau) depends on the grid's day
@@ -37,7 +42,7 @@ ss_heal_rd_work *ss_heal_rd__work_create_ex(const ss_heal_rd_system *sys, int ne
 typedef struct model_ctx {
     float lam11, lam31, lam12, lam22, beta2, lam33, lam32, inv_u3eq, rn, inv_K, lamnn;
     float Rs, lames, lamge, lamee, gamma1, lamnrho, lamrhop, lamkrho, lampp, inv_rhomax, rhomax;
-    float kscab, bed_mm, h, rho_closed, inv_rhosat;
+    float kscab, kang, bed_mm, h, rho_closed, inv_rhosat, inv_scabmm;
     float kact; /* keloid invasion signal a(t) for the current step (keloid_signal) */
     int scab, static_region;
     const uint8_t *cell;
@@ -45,11 +50,12 @@ typedef struct model_ctx {
     /* per column (y * nx + x): surface cell z (-1: none), gathered surface
      * epithelium and wound-bed capillary density */
     int *ztop;
-    float *ecol, *bed, *ds, *wsum; /* ds, wsum: prepare's scratch */
-    const uint8_t *ztop_of;        /* the cell array ztop was computed from */
-    float scab_h;                  /* scab_mm / voxel: the scab layer in voxel levels */
-    int *zt_min, *zt_max;          /* per y: range of ztop over the row's columns */
-    int kdeep;                     /* levels below the surface where no surface/scab term acts */
+    float *ecol, *bed, *ds;   /* ds: the column's eschar thickness (mm) */
+    float *wsum, *bedo, *wso; /* prepare's scratch */
+    const uint8_t *ztop_of;   /* the cell array ztop was computed from */
+    float scab_h;             /* scab_mm / voxel: the scab layer in voxel levels */
+    int *zt_min, *zt_max;     /* per y: range of ztop over the row's columns */
+    int kdeep;                /* levels below the surface where no surface/scab term acts */
     /* a box of a stack in z (src/dist): ztop, zt_min, zt_max are whole-grid
      * levels, zoff the whole-grid level of this box's z = 0, col the exchange
      * with the boxes above and below (NULL: the columns are whole here) */
@@ -91,6 +97,7 @@ react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep, const i
     const size_t col0 = (size_t)row->y * (size_t)m->nx + (size_t)row->x0;
     const int *restrict ZT = m->ztop + col0;
     const float *restrict EC = m->ecol + col0, *restrict BED = m->bed + col0;
+    const float *restrict DS = m->ds + col0;
     const float
         *restrict U1 = row->u[SS_HEAL_OXYGEN],
                   *restrict U2 = row->u[SS_HEAL_MDGF], *restrict U3 = row->u[SS_HEAL_CAPILLARY],
@@ -112,6 +119,7 @@ react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep, const i
     /* keloid factor G = a + (1 - a) clamp(rho/rho_max - 1, 0, 1), times lamkrho */
     const float lka = m->lamkrho * m->kact, lkb = m->lamkrho * (1.0f - m->kact);
     const float irmax = m->inv_rhomax;
+    const float kang = m->kang * m->inv_scabmm;
     float *restrict m0 = row->m[0], *restrict m1 = row->m[1];
     float *restrict p1 = pr[0], *restrict p2 = pr[1], *restrict p3 = pr[2], *restrict p4 = pr[3];
     float *restrict p5 = pr[4], *restrict p6 = pr[5], *restrict p7 = pr[6], *restrict p8 = pr[7];
@@ -138,18 +146,21 @@ react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep, const i
         const float Pu1 = pos(1.0f - u1 * ibeta);
         p2[i] = ns * m->lam12 * Pu1;
         l2[i] = m->lam22;
-        /* 4.1.3 capillaries: (1-s)(D3 lap u3 + (lam33 + lam32 u2) u3 (1 - u3/u3eq)) */
-        const float g3 = ns * (m->lam33 + m->lam32 * u2) * u3;
+        /* 4.1.3 capillaries: (1-s)(D3 lap u3 + (lam33 + lam32 u2) u3 (1 - u3/u3eq)),
+         * growth in the wound region slowed by the crust over the column:
+         * (1 - kang min(1, eschar thickness / scab_mm)) */
+        const float dry = pos(1.0f - om * clampf(kang * DS[i], 0.0f, m->kang));
+        const float g3 = ns * dry * (m->lam33 + m->lam32 * u2) * u3;
         p3[i] = g3;
         l3[i] = g3 * m->inv_u3eq;
         /* 4.1.4 fibroblasts: (1-s)(Dn lap n + rn u1 n (1 - n/K)) - lamnn n */
-        const float gn = ns * m->rn * u1 * nn;
+        const float gn = ns * dry * m->rn * u1 * nn;
         p4[i] = gn;
         l4[i] = gn * m->inv_K + m->lamnn;
         /* 4.1.5 eschar: Ds lap s + (1-s)(1-u3)(1-e) R(omega) - lames e s; R acts in
          * the top scab_mm of the wound region, e is the column's surface sheet */
-        const float X = deep ? 0.0f : open3 * necl * Rs * wsc * om;
-        p5[i] = X;
+        const float X = deep ? 0.0f : open3 * necl * Rs * om * (float)(wsc > 0.0f);
+        p5[i] = X * wsc;
         l5[i] = deep ? lames * ecl : X + lames * ecl;
         /* 4.1.6 epithelium, on the surface only:
          * (1 - kscab s) Q(u3_bed)(De lap_xy e + lamge e) - lamee e */
@@ -233,9 +244,12 @@ static void find_surface(model_ctx *c) {
 
 /* One level z of the bed sum of a row of columns: the part of voxel level
  * k = zt - z below the surface that lies in the bed window [ds, ds + bed_mm]
- * weights its u3 (Ur). */
-static inline void bed_level(const int *zt, const float *ds, const float *Ur, float *bed, float *ws,
-                             int nx, int z, float h, float bedmm) {
+ * weights its u3 (Ur); bo, wo sum the granulation tissue (omega: plasma Pr
+ * above SS_HEAL_P_MIN) of the window alone. */
+static inline void bed_level(const int *zt, const float *ds, const float *Ur, const float *Pr,
+                             float *bed, float *ws, float *bo, float *wo, int nx, int z, float h,
+                             float bedmm) {
+    const float pmin = (float)SS_HEAL_P_MIN;
     for (int x = 0; x < nx; x++) {
         const int k = zt[x] - z;
         if (k < 0) continue;
@@ -244,7 +258,18 @@ static inline void bed_level(const int *zt, const float *ds, const float *Ur, fl
         if (hi <= lo) continue;
         bed[x] += (hi - lo) * Ur[x];
         ws[x] += hi - lo;
+        if (Pr[x] > pmin) {
+            bo[x] += (hi - lo) * Ur[x];
+            wo[x] += hi - lo;
+        }
     }
+}
+
+/* The bed mean of a column: the granulation tissue where the window holds
+ * some, else all the viable tissue in it, else u3 at the bottom (u3_1). */
+static inline float bed_mean(float bed, float ws, float bo, float wo, float u3_1) {
+    if (wo > 0) return bo / wo;
+    return ws > 0 ? bed / ws : u3_1;
 }
 
 static void heal_prepare_z(model_ctx *c, float *const *u);
@@ -263,6 +288,7 @@ static void heal_prepare(void *vctx, float *const *u) {
     const int nx = c->nx, ny = c->ny;
     const size_t sz = (size_t)nx * (size_t)ny;
     const float *E = u[SS_HEAL_EPITHELIUM], *U3 = u[SS_HEAL_CAPILLARY], *S = u[SS_HEAL_ESCHAR];
+    const float *P = u[SS_HEAL_PLASMA];
     const float h = c->h, bedmm = c->bed_mm;
     const int scab = c->scab;
 #pragma omp parallel for schedule(static) if (sz * (size_t)c->nz >= RD_PAR_MIN_CELLS)
@@ -270,10 +296,11 @@ static void heal_prepare(void *vctx, float *const *u) {
         const size_t r0 = (size_t)y * (size_t)nx;
         const int *zt = c->ztop + r0;
         float *ec = c->ecol + r0, *bed = c->bed + r0, *ds = c->ds + r0, *ws = c->wsum + r0;
+        float *bo = c->bedo + r0, *wo = c->wso + r0;
         int zhi = -1;
         for (int x = 0; x < nx; x++) {
             ec[x] = zt[x] >= 0 ? E[(size_t)zt[x] * sz + r0 + x] : 0.0f;
-            ds[x] = bed[x] = ws[x] = 0.0f;
+            ds[x] = bed[x] = ws[x] = bo[x] = wo[x] = 0.0f;
             if (zt[x] > zhi) zhi = zt[x];
         }
         if (zhi < 1) continue;
@@ -289,16 +316,18 @@ static void heal_prepare(void *vctx, float *const *u) {
             for (int x = 0; x < nx; x++)
                 if (ds[x] > dmax) dmax = ds[x];
         }
-        /* the bed: the top bed_mm of viable tissue below the eschar */
+        /* the bed: the top bed_mm of viable tissue below the eschar; of it, the
+         * granulation tissue (omega) where the column has some, so the mean
+         * does not mix in the intact dermis under a shallow wound */
         int zlo = zhi - (int)ceilf((dmax + bedmm) / h) - 1;
         if (zlo < 1) zlo = 1;
         for (int z = zhi; z >= zlo; z--) {
-            const float *Ur = U3 + (size_t)z * sz + r0;
-            bed_level(zt, ds, Ur, bed, ws, nx, z, h, bedmm);
+            const float *Ur = U3 + (size_t)z * sz + r0, *Pr = P + (size_t)z * sz + r0;
+            bed_level(zt, ds, Ur, Pr, bed, ws, bo, wo, nx, z, h, bedmm);
         }
         for (int x = 0; x < nx; x++) {
             if (zt[x] < 0) continue;
-            bed[x] = ws[x] > 0 ? bed[x] / ws[x] : U3[sz + r0 + x]; /* below the column: z = 1 */
+            bed[x] = bed_mean(bed[x], ws[x], bo[x], wo[x], U3[sz + r0 + x]); /* z = 1 */
         }
     }
 }
@@ -312,6 +341,7 @@ static void heal_prepare_z(model_ctx *c, float *const *u) {
     const int nx = c->nx, ny = c->ny, nz = c->nz, zoff = c->zoff;
     const size_t sz = (size_t)nx * (size_t)ny;
     const float *E = u[SS_HEAL_EPITHELIUM], *U3 = u[SS_HEAL_CAPILLARY], *S = u[SS_HEAL_ESCHAR];
+    const float *P = u[SS_HEAL_PLASMA];
     const float h = c->h, bedmm = c->bed_mm;
     const int own_hi = zoff + nz - 2, own_lo = zoff + 1; /* whole-grid levels */
     const int par = sz * (size_t)nz >= RD_PAR_MIN_CELLS;
@@ -319,7 +349,7 @@ static void heal_prepare_z(model_ctx *c, float *const *u) {
     for (size_t i = 0; i < sz; i++) {
         const int zt = c->ztop[i];
         c->ecol[i] = zt >= own_lo && zt <= own_hi ? E[(size_t)(zt - zoff) * sz + i] : -INFINITY;
-        c->ds[i] = c->bed[i] = c->wsum[i] = 0.0f;
+        c->ds[i] = c->bed[i] = c->wsum[i] = c->bedo[i] = c->wso[i] = 0.0f;
     }
     c->col(c->col_ctx, SS_HEAL_COL_MAX, c->ecol, sz);
     for (size_t i = 0; i < sz; i++)
@@ -345,11 +375,14 @@ static void heal_prepare_z(model_ctx *c, float *const *u) {
     }
     c->col(c->col_ctx, SS_HEAL_COL_FROM_ABOVE, c->bed, sz);
     c->col(c->col_ctx, SS_HEAL_COL_FROM_ABOVE, c->wsum, sz);
+    c->col(c->col_ctx, SS_HEAL_COL_FROM_ABOVE, c->bedo, sz);
+    c->col(c->col_ctx, SS_HEAL_COL_FROM_ABOVE, c->wso, sz);
 #pragma omp parallel for schedule(static) if (par)
     for (int y = 0; y < ny; y++) {
         const size_t r0 = (size_t)y * (size_t)nx;
         const int *zt = c->ztop + r0;
         float *bed = c->bed + r0, *ds = c->ds + r0, *ws = c->wsum + r0;
+        float *bo = c->bedo + r0, *wo = c->wso + r0;
         int zhi = -1;
         float dmax = 0.0f;
         for (int x = 0; x < nx; x++) {
@@ -362,16 +395,19 @@ static void heal_prepare_z(model_ctx *c, float *const *u) {
         if (zlo < own_lo) zlo = own_lo;
         for (int z = zhi < own_hi ? zhi : own_hi; z >= zlo; z--) {
             const float *Ur = U3 + (size_t)(z - zoff) * sz + r0;
-            bed_level(zt, ds, Ur, bed, ws, nx, z, h, bedmm);
+            const float *Pr = P + (size_t)(z - zoff) * sz + r0;
+            bed_level(zt, ds, Ur, Pr, bed, ws, bo, wo, nx, z, h, bedmm);
         }
         if (own_lo > 0) continue; /* the bottom box (global level 1 inside) finishes */
         for (int x = 0; x < nx; x++) {
             if (zt[x] < 0) continue;
-            bed[x] = ws[x] > 0 ? bed[x] / ws[x] : U3[(size_t)(1 - zoff) * sz + r0 + x];
+            bed[x] = bed_mean(bed[x], ws[x], bo[x], wo[x], U3[(size_t)(1 - zoff) * sz + r0 + x]);
         }
     }
     c->col(c->col_ctx, SS_HEAL_COL_TO_BELOW, c->bed, sz);
     c->col(c->col_ctx, SS_HEAL_COL_TO_BELOW, c->wsum, sz);
+    c->col(c->col_ctx, SS_HEAL_COL_TO_BELOW, c->bedo, sz);
+    c->col(c->col_ctx, SS_HEAL_COL_TO_BELOW, c->wso, sz);
     c->col(c->col_ctx, SS_HEAL_COL_FROM_BOTTOM, c->bed, sz);
 }
 
@@ -406,6 +442,8 @@ static void ctx_init(model_ctx *c, const ss_heal_params *p, const ss_heal_grid *
     c->ny = g->ny;
     c->nz = g->nz;
     c->kscab = (float)p->kscab;
+    c->kang = p->scab ? (float)p->kang : 0.0f;
+    c->inv_scabmm = p->scab_mm > 0 ? (float)(1.0 / p->scab_mm) : 0.0f;
     c->inv_rhosat = (float)(1.0 / p->rho_sat);
     c->kact = 1.0f;
     c->rho_closed = (float)(1.0 - p->rho_open);
@@ -459,6 +497,7 @@ static void sys_init(ss_heal_rd_system *s, model_ctx *c, const ss_heal_grid *g,
     for (int k = SS_CELL_BOUND + 1; k < SS_HEAL_RD_MAXCLASS; k++) s->wall[k] = 1;
     s->fixed[SS_HEAL_EPITHELIUM][SS_CELL_EPIDERMIS] = 1;
     s->lateral[SS_HEAL_EPITHELIUM] = 1; /* a surface sheet */
+    s->lateral[SS_HEAL_ESCHAR] = 1;     /* a crust confined to its layer */
     s->D[SS_HEAL_OXYGEN] = p->D1;
     s->D[SS_HEAL_MDGF] = p->D2;
     s->D[SS_HEAL_CAPILLARY] = p->D3;
@@ -471,6 +510,10 @@ static void sys_init(ss_heal_rd_system *s, model_ctx *c, const ss_heal_grid *g,
     s->mslot[SS_HEAL_CAPILLARY] = s->mslot[SS_HEAL_FIBROBLAST] = 0;
     s->mslot[SS_HEAL_EPITHELIUM] = 1;
     s->nslots = 2;
+    /* the crust insulates the tissue below it instead of draining it: u1..n
+     * diffuse through faces of conductance min(1 - s) (without the scab
+     * switch s = 0 and the two forms are the same) */
+    if (p->scab) s->mface[0] = SS_HEAL_ESCHAR + 1;
     s->hi[SS_HEAL_ESCHAR] = s->hi[SS_HEAL_EPITHELIUM] = s->hi[SS_HEAL_PLASMA] = 1.0f;
     for (int d = 0; d < 3; d++) s->velocity[d] = g->velocity[d];
     s->react = heal_react;
@@ -573,10 +616,12 @@ static ss_heal_solver *solver_create(const ss_heal_grid *g, const int *goff, con
     s->ctx.bed = calloc(ncol, sizeof(float));
     s->ctx.ds = calloc(ncol, sizeof(float));
     s->ctx.wsum = calloc(ncol, sizeof(float));
+    s->ctx.bedo = calloc(ncol, sizeof(float));
+    s->ctx.wso = calloc(ncol, sizeof(float));
     s->ctx.zt_min = malloc((size_t)g->ny * sizeof(int));
     s->ctx.zt_max = malloc((size_t)g->ny * sizeof(int));
-    if (!s->ctx.ztop || !s->ctx.ecol || !s->ctx.bed || !s->ctx.ds || !s->ctx.wsum ||
-        !s->ctx.zt_min || !s->ctx.zt_max) {
+    if (!s->ctx.ztop || !s->ctx.ecol || !s->ctx.bed || !s->ctx.ds || !s->ctx.wsum || !s->ctx.bedo ||
+        !s->ctx.wso || !s->ctx.zt_min || !s->ctx.zt_max) {
         ss_heal_solver_free(s);
         ss_error_set(err, SS_ERR_NOMEM, "heal solver: out of memory");
         return NULL;
@@ -632,6 +677,8 @@ void ss_heal_solver_free(ss_heal_solver *s) {
     free(s->ctx.bed);
     free(s->ctx.ds);
     free(s->ctx.wsum);
+    free(s->ctx.bedo);
+    free(s->ctx.wso);
     free(s->ctx.zt_min);
     free(s->ctx.zt_max);
     free(s);

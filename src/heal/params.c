@@ -60,8 +60,8 @@ static const pdef PDEFS[] = {
          "fibroblast apoptosis rate of 0.12/day",
      0.15, 0.15, 0.15},
     {"Ds", OFF(Ds), "mm^2/day",
-     CAL ": the eschar stays a surface crust (penetrates ~0.3 mm in 2 weeks) instead of diffusing "
-         "into the healthy dermis",
+     CAL ": the crust spreads along its layer only (x-y; it is confined to the top scab_mm, "
+         "docs/heal-model.md [D6]), smoothing its edge over sqrt(Ds t) ~0.3 mm in 2 weeks",
      0.005, 0.005, 0.005},
     {"Rs", OFF(Rs), "1/day",
      CAL ": scab within the first day on a dry wound (seed §3); only used with scab = 1", 4.0, 4.0,
@@ -130,8 +130,16 @@ static const pdef PDEFS[] = {
     {"kscab", OFF(kscab), "1",
      "departure from §4.1.6 (docs/heal-model.md): under a scab the epithelium has to cleave its "
      "way beneath the eschar (Winter 1962; Hinman & Maibach 1963); a full eschar slows its "
-     "migration and growth by this fraction. Calibrated: dry/moist time to 95 % closure ~2",
-     0.65, 0.65, 0.65},
+     "migration and growth by this fraction. Calibrated with kang: dry/moist time to 95 % closure "
+     "~2",
+     0.55, 0.55, 0.55},
+    {"kang", OFF(kang), "1",
+     "departure from §4.1.3 (docs/heal-model.md): dry wounds revascularise more slowly in every "
+     "zone of the wound bed (Dyson et al. 1992, J Invest Dermatol 99:729); a full crust over a "
+     "column slows capillary growth in the wound region below it by this fraction (the seed's "
+     "(1 - s) acts in the crust itself). Calibrated with kscab: dry/moist time to 95 % closure ~2 "
+     "with a peak scar below the keloid's packing limit",
+     0.9, 0.9, 0.9},
     {"rho_sat", OFF(rho_sat), "1",
      "packing limit of scar collagen, x normal dermis (docs/heal-model.md): collagen is 70-80 % "
      "of the dermis' dry weight in a tissue that is ~2/3 water, i.e. ~0.3 of its volume; a "
@@ -230,6 +238,9 @@ static ss_status check_value(const char *what, const pdef *d, double v, ss_error
                             what, v);
     if (!strcmp(d->key, "kscab") && !(v >= 0 && v < 1))
         return ss_error_set(err, SS_ERR_INPUT, "%s: parameter 'kscab' = %g must be in [0, 1)", what,
+                            v);
+    if (!strcmp(d->key, "kang") && !(v >= 0 && v <= 1))
+        return ss_error_set(err, SS_ERR_INPUT, "%s: parameter 'kang' = %g must be in [0, 1]", what,
                             v);
     if (!strcmp(d->key, "gamma1") && !(v > 0 && v < 1))
         return ss_error_set(err, SS_ERR_INPUT, "%s: parameter 'gamma1' = %g must be in (0, 1)",

@@ -106,8 +106,8 @@ static void reaction_pass(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt,
  * x in [x0, x0 + cw): the recurrence runs along the line, x is the SIMD
  * dimension. Clamps to [lo, hi] on the way back when clampit. */
 static inline void bundle_yz(const ss_heal_rd_system *sys, const ss_heal_rd_work *w, int f,
-                             float kD, const float *mk, int d, int o, int x0, int cw, float *scr,
-                             int clampit) {
+                             float kD, const float *mk, int face, int d, int o, int x0, int cw,
+                             float *scr, int clampit) {
     const size_t sy = (size_t)sys->nx, sz = (size_t)sys->nx * (size_t)sys->ny;
     const int nline = d == 1 ? sys->ny : sys->nz;
     const size_t step = d == 1 ? sy : sz;
@@ -131,6 +131,23 @@ static inline void bundle_yz(const ss_heal_rd_system *sys, const ss_heal_rd_work
         float *restrict dp = dpall + (size_t)j * ldc;
         const float *restrict cpp = cp - ldc;
         const float *restrict dpp = dp - ldc;
+        if (face) {
+            /* conservative: face conductance min(m) of the two cells */
+            const float *restrict mlo = mrow - step, *restrict mhi = mrow + step;
+#pragma omp simd
+            for (int x = 0; x < cw; x++) {
+                const float k = kD * (float)(upd[x] != 0);
+                const float ml = mrow[x] < mlo[x] ? mrow[x] : mlo[x];
+                const float mr = mrow[x] < mhi[x] ? mrow[x] : mhi[x];
+                const float wl = (float)((nb[x] & bm) != 0) * ml;
+                const float wr = (float)((nb[x] & bp) != 0) * mr;
+                const float a = -k * wl, c = -k * wr, b = 1.0f + k * (wl + wr);
+                const float r = 1.0f / (b - a * cpp[x]);
+                cp[x] = c * r;
+                dp[x] = (u[x] - a * dpp[x]) * r;
+            }
+            continue;
+        }
 #pragma omp simd
         for (int x = 0; x < cw; x++) {
             const float k = kD * mrow[x] * (float)(upd[x] != 0);
@@ -172,7 +189,7 @@ static inline void bundle_yz(const ss_heal_rd_system *sys, const ss_heal_rd_work
  * x while the independent lines form the SIMD dimension, so the Thomas sweep
  * is not bound by the latency of its division chain. Scratch layout [x][y]. */
 static inline void bundle_x(const ss_heal_rd_system *sys, const ss_heal_rd_work *w, int f, float kD,
-                            const float *mk, int z, int y0, int ch, float *scr) {
+                            const float *mk, int face, int z, int y0, int ch, float *scr) {
     const int nx = sys->nx;
     const size_t sy = (size_t)nx;
     const size_t bz = (size_t)z * (size_t)nx * (size_t)sys->ny + (size_t)y0 * sy;
@@ -200,7 +217,22 @@ static inline void bundle_x(const ss_heal_rd_system *sys, const ss_heal_rd_work 
         cp[y] = cc * r;                                                                            \
         dp[y] = (u[c] - a * dpp[y]) * r;                                                           \
     }
-        if (m) {
+        if (m && face) {
+            /* conservative: face conductance min(m) of the two cells */
+#pragma omp simd
+            for (int y = 0; y < ch; y++) {
+                const size_t c = (size_t)y * sy + (size_t)x;
+                const float k = kD * (float)(upd[c] != 0);
+                const float ml = m[c] < m[c - 1] ? m[c] : m[c - 1];
+                const float mr = m[c] < m[c + 1] ? m[c] : m[c + 1];
+                const float wl = (float)((nb[c] & NB_XM) != 0) * ml;
+                const float wr = (float)((nb[c] & NB_XP) != 0) * mr;
+                const float a = -k * wl, cc = -k * wr, b = 1.0f + k * (wl + wr);
+                const float r = 1.0f / (b - a * cpp[y]);
+                cp[y] = cc * r;
+                dp[y] = (u[c] - a * dpp[y]) * r;
+            }
+        } else if (m) {
 #pragma omp simd
             for (int y = 0; y < ch; y++) BX_BODY(m[(size_t)y * sy + (size_t)x])
         } else {
@@ -234,12 +266,13 @@ static void diffuse_all(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt, i
     const double ih2 = 1.0 / (sys->h_mm * sys->h_mm);
     float kD[SS_HEAL_RD_MAXF];
     const float *mk[SS_HEAL_RD_MAXF];
-    int act[SS_HEAL_RD_MAXF], na = 0;
+    int act[SS_HEAL_RD_MAXF], face[SS_HEAL_RD_MAXF], na = 0;
     for (int f = 0; f < nf; f++) {
         if (!(sys->D[f] > 0)) continue;
         act[na++] = f;
         kD[f] = (float)(dt * sys->D[f] * ih2);
         mk[f] = sys->mslot[f] >= 0 && w->have_mslot ? w->mslot[sys->mslot[f]] : NULL;
+        face[f] = mk[f] && sys->mface[sys->mslot[f]] != 0;
     }
     if (!na) return;
 #pragma omp parallel num_threads(thread_count(w)) if (w->ncell >= RD_PAR_MIN_CELLS)
@@ -252,7 +285,7 @@ static void diffuse_all(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt, i
                 if (!(dirs & 1)) continue;
                 const int ch = ny - 1 - y0 < BUNDLE ? ny - 1 - y0 : BUNDLE;
                 for (int a = 0; a < na; a++)
-                    bundle_x(sys, w, act[a], kD[act[a]], mk[act[a]], z, y0, ch, scr);
+                    bundle_x(sys, w, act[a], kD[act[a]], mk[act[a]], face[act[a]], z, y0, ch, scr);
             }
 #pragma omp for collapse(2) schedule(static)
         for (int z = 1; z < nz - 1; z++)
@@ -260,8 +293,8 @@ static void diffuse_all(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt, i
                 if (!(dirs & 2)) continue;
                 const int cw = nx - 1 - x0 < BUNDLE ? nx - 1 - x0 : BUNDLE;
                 for (int a = 0; a < na; a++)
-                    bundle_yz(sys, w, act[a], kD[act[a]], mk[act[a]], 1, z, x0, cw, scr,
-                              sys->lateral[act[a]]);
+                    bundle_yz(sys, w, act[a], kD[act[a]], mk[act[a]], face[act[a]], 1, z, x0, cw,
+                              scr, sys->lateral[act[a]]);
             }
 #pragma omp for collapse(2) schedule(static)
         for (int y = 1; y < ny - 1; y++)
@@ -270,7 +303,8 @@ static void diffuse_all(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt, i
                 const int cw = nx - 1 - x0 < BUNDLE ? nx - 1 - x0 : BUNDLE;
                 for (int a = 0; a < na; a++)
                     if (!sys->lateral[act[a]])
-                        bundle_yz(sys, w, act[a], kD[act[a]], mk[act[a]], 2, y, x0, cw, scr, 1);
+                        bundle_yz(sys, w, act[a], kD[act[a]], mk[act[a]], face[act[a]], 2, y, x0,
+                                  cw, scr, 1);
             }
     }
 }
