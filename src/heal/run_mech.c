@@ -332,9 +332,9 @@ static void shares(const ss_heal_run *r, int i, double *contraction, double *by_
 }
 
 int ss_heal_run__mech_columns(const ss_heal_run *r, const char *const **names, double **vals) {
-    static const char *const cols[5] = {"outline_area_mm2", "contraction",
-                                        "closure_share_contraction",
-                                        "closure_share_epithelialisation", "myofibroblast_fraction"};
+    static const char *const cols[5] = {
+        "outline_area_mm2", "contraction", "closure_share_contraction",
+        "closure_share_epithelialisation", "myofibroblast_fraction"};
     if (!r->mech) return 0;
     double *v = malloc((size_t)r->nrows * 5 * sizeof(double) + 1);
     if (!v) return -1;
@@ -414,8 +414,8 @@ void ss_heal_run__mech_summary(const ss_heal_run *r, cJSON *j) {
     cJSON_AddNumberToObject(end, "day", r->nrows ? r->rows[r->nrows - 1].t_days : 0.0);
     cJSON_AddNumberToObject(end, "contraction_percent",
                             now.initial_outline_area_mm2 > 0
-                                ? 100.0 * (1.0 - now.outline_area_mm2 /
-                                                     now.initial_outline_area_mm2)
+                                ? 100.0 *
+                                      (1.0 - now.outline_area_mm2 / now.initial_outline_area_mm2)
                                 : 0.0);
     cJSON_AddNumberToObject(end, "aspect_ratio_y_over_x",
                             now.extent_x_mm > 0 ? now.extent_y_mm / now.extent_x_mm : 0.0);
