@@ -512,40 +512,57 @@ ss_status ss_mech_step(ss_mech *m, ss_heal_grid *g, double dt_days, ss_error *er
     const float *epi = g->field[SS_HEAL_EPITHELIUM], *pla = g->field[SS_HEAL_PLASMA];
     const float *mdgf = g->field[SS_HEAL_MDGF];
     const int nx = m->nx, ny = m->ny, nz = m->nz;
+    /* per block of MECH_COLS columns, z-slab by z-slab so the cells are read
+     * and written contiguously (the same per-column sums as a column walk) */
+    enum { MECH_COLS = 256 };
+    const int ncol = nx * ny;
+    const size_t slab = (size_t)ncol;
 #pragma omp parallel for schedule(static)
-    for (int col = 0; col < nx * ny; col++) {
+    for (int c0 = 0; c0 < ncol; c0 += MECH_COLS) {
+        const int nb = ncol - c0 < MECH_COLS ? ncol - c0 : MECH_COLS;
+        int top[MECH_COLS], nw[MECH_COLS];
+        float sum[MECH_COLS], gsum[MECH_COLS], nmean[MECH_COLS], gmean[MECH_COLS], cover[MECH_COLS];
+        for (int k = 0; k < nb; k++) {
+            top[k] = -1;
+            nw[k] = 0;
+            sum[k] = gsum[k] = 0.0f;
+        }
         /* the column's surface: its top tissue cell; the wound region's
          * cells (initial wound or omega) give the mean fibroblast density
          * and growth factor, the top cell's epithelium the cover */
-        int top = -1, nw = 0;
-        float sum = 0.0f, gsum = 0.0f;
-        for (int z = nz - 1; z >= 0; z--) {
-            size_t i = (size_t)z * nx * ny + (size_t)col;
-            if (!m->mask[i]) continue;
-            if (top < 0) top = z;
-            if (m->wound0[i] || pla[i] > SS_HEAL_P_MIN) {
-                sum += fib[i];
-                gsum += mdgf[i];
-                nw++;
+        for (int z = nz - 1; z >= 0; z--)
+            for (int k = 0; k < nb; k++) {
+                size_t i = (size_t)z * slab + (size_t)(c0 + k);
+                if (!m->mask[i]) continue;
+                if (top[k] < 0) top[k] = z;
+                if (m->wound0[i] || pla[i] > SS_HEAL_P_MIN) {
+                    sum[k] += fib[i];
+                    gsum[k] += mdgf[i];
+                    nw[k]++;
+                }
+            }
+        for (int k = 0; k < nb; k++) {
+            nmean[k] = nw[k] ? sum[k] / (float)nw[k] : 0.0f;
+            gmean[k] = nw[k] ? gsum[k] / (float)nw[k] : 0.0f;
+            cover[k] = 1.0f;
+            if (top[k] >= 0 && nw[k]) {
+                float e = epi[(size_t)top[k] * slab + (size_t)(c0 + k)];
+                cover[k] = e > 1.0f ? 1.0f : e < 0.0f ? 0.0f : e;
             }
         }
-        float cover = 1.0f, nmean = nw ? sum / (float)nw : 0.0f, gmean = nw ? gsum / (float)nw : 0;
-        if (top >= 0 && nw) {
-            float e = epi[(size_t)top * nx * ny + (size_t)col];
-            cover = e > 1.0f ? 1.0f : e < 0.0f ? 0.0f : e;
-        }
-        for (int z = 0; z < nz; z++) {
-            size_t i = (size_t)z * nx * ny + (size_t)col;
-            float e = 1.0f;
-            if (m->wound0[i]) {
-                e = (float)p->ecm_floor + rho[i];
-                if (e > 1.0f) e = 1.0f;
+        for (int z = 0; z < nz; z++)
+            for (int k = 0; k < nb; k++) {
+                size_t i = (size_t)z * slab + (size_t)(c0 + k);
+                float e = 1.0f;
+                if (m->wound0[i]) {
+                    e = (float)p->ecm_floor + rho[i];
+                    if (e > 1.0f) e = 1.0f;
+                }
+                m->ecm[i] = e;
+                m->myo[i] = m->mask[i] ? nmean[k] : 0.0f;
+                m->gf[i] = m->mask[i] ? gmean[k] : 0.0f;
+                m->cov[i] = m->mask[i] ? cover[k] : 1.0f;
             }
-            m->ecm[i] = e;
-            m->myo[i] = m->mask[i] ? nmean : 0.0f;
-            m->gf[i] = m->mask[i] ? gmean : 0.0f;
-            m->cov[i] = m->mask[i] ? cover : 1.0f;
-        }
     }
     ss_mech_g2p(m->T, m->myo, m->mask, S->x, nn, m->nmyo);
     ss_mech_g2p_sub(m->T, m->thsub, m->usub_valid, S->x, nn, m->nth);
