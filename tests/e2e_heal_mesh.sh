@@ -6,8 +6,9 @@
 # skin_mesh block of summary.json; a checkpointed run resumed on another thread
 # count is byte-identical; a wound given as a closed mesh runs; bad input (an
 # open mesh, a self-intersecting mesh, strokes outside the UV islands, a
-# stroke across two islands, a wound mesh away from the skin, --wound-uv
-# without --mesh) exits 2 naming the input and writes nothing.
+# stroke across two islands, a wound mesh away from the skin, a wound wrapping
+# around a finger, --wound-uv without --mesh) exits 2 naming the input and
+# writes nothing.
 # usage: e2e_heal_mesh.sh <skinsim> <source dir>
 set -u
 CLI=$1
@@ -23,13 +24,7 @@ done
 [ -n "$HAND" ] || { echo "no hand mesh: skipped"; exit 77; }
 
 # an ellipse of strokes on the back of the hand (UV island lower left)
-python3 -c "
-import math
-print('u,v,stroke')
-for k in range(12):
-    a = 2 * math.pi * k / 12
-    print('%.4f,%.4f,0' % (0.2 + 0.02 * math.cos(a), 0.62 + 0.014 * math.sin(a)))
-" >"$T/cut.csv"
+python3 "$SRC/tests/strokes_ellipse.py" 0.2 0.62 0.02 0.014 >"$T/cut.csv"
 # sanitizer runs (SKINSIM_TEST_QUICK): half the time
 D=1; H=0.5
 [ -n "${SKINSIM_TEST_QUICK:-}" ] && { D=0.5; H=0.25; }
@@ -52,6 +47,8 @@ import json, re, sys
 s = json.load(open(sys.argv[1]))
 m, k = s["mechanics"], s["skin_mesh"]
 assert k["triangles"] == 2314 and k["units_mm"] == 1000, k
+# the surface the fields map onto: the mesh refined around the wound
+assert k["surface_triangles"] > 2314 and k["surface_vertices"] > 1360, k
 assert abs(sum(x * x for x in k["patch_normal"]) - 1) < 1e-9
 assert m["tets"] > 500 and 0 < m["contraction_percent"] < 90, m
 def arr(path, name):
@@ -62,6 +59,57 @@ assert sum(o0) > 0, "no vertex on the open wound at day 0"
 d = arr(sys.argv[3], "displacement")
 assert max(abs(x) for x in d) > 0.01, "no deformation mapped onto the mesh"
 PY
+
+# --- the same snapshots as binary glTF: valid (tests/gltf_check.py, the glTF
+# 2.0 rules a viewer relies on; gltfpack's reader, cgltf_validate, where
+# installed), the fields as _ attributes equal to the .vtu's, the open wound in
+# COLOR_0, the displacement as a morph target
+for f in surface/skin_0000.glb surface/skin_0002.glb; do
+    [ -s "$T/a/$f" ] || fail "missing $f"
+done
+if command -v gltfpack >/dev/null; then
+    for i in 0000 0002; do
+        gltfpack -i "$T/a/surface/skin_$i.glb" -o "$T/repacked.glb" >/dev/null 2>"$T/gp.txt" \
+            || fail "gltfpack rejects skin_$i.glb: $(cat "$T/gp.txt")"
+    done
+fi
+PY=/usr/bin/python3
+[ -x "$PY" ] || PY=$(command -v python3)
+if "$PY" -c "import numpy" 2>/dev/null; then
+    PYTHONPATH="$SRC/tests" "$PY" - "$T/a/surface" <<'PY' || fail "glb contents"
+import re, sys
+import numpy as np
+import gltf_check
+d = sys.argv[1]
+def vtu(path, name):
+    t = open(path).read()
+    return np.array(re.search(r'Name="%s"[^>]*>(.*?)</DataArray>' % name, t, re.S).group(1).split(), float)
+for i in ("0000", "0002"):
+    doc, a = gltf_check.load("%s/skin_%s.glb" % (d, i))
+    for f in ("oxygen", "mdgf", "capillary", "fibroblast", "eschar", "epithelium", "scar", "plasma",
+              "open_wound"):
+        x = a["_" + f.upper()]
+        assert x.dtype == np.float32 and x.ndim == 1, f
+        np.testing.assert_allclose(x, vtu("%s/skin_%s.vtu" % (d, i), f), rtol=1e-5, atol=1e-6)  # the .vtu has 6 digits
+    n = len(a["POSITION"])
+    assert doc["meshes"][0]["extras"]["targetNames"] == ["displacement"]
+    assert doc["meshes"][0]["weights"] == [1]
+    disp = a["target0/POSITION"] * 1000  # m -> mm
+    np.testing.assert_allclose(disp.ravel(), vtu("%s/skin_%s.vtu" % (d, i), "displacement"), atol=1e-4)
+    t = doc["nodes"][0]["extras"]["t_days"]
+    assert (t == 0) == (i == "0000"), t
+    c = a["COLOR_0"]
+    op = a["_OPEN_WOUND"] > 0.5
+    skin = np.all(np.abs(c - [0.70, 0.42, 0.32]) < 1e-6, axis=1)
+    if i == "0000":
+        assert op.any() and (a["_PLASMA"][op] > 0.5).all()
+        assert np.all(c[op][:, 0] > 2 * c[op][:, 1]), "open wound not red"
+        assert skin[~op].all(), "intact skin is not skin-coloured at day 0"
+        assert np.abs(disp).max() == 0
+    else:
+        assert np.abs(disp).max() > 0.01, "no deformation in the morph target"
+PY
+fi
 
 # --- checkpoint half way on 1 thread, resume to the end: the same bytes
 "$CLI" heal $RUN --days $H --threads 1 --checkpoint-every $H --out "$T/b" || fail "checkpointed run failed"
@@ -81,6 +129,16 @@ for f in ((1,3,5),(3,2,5),(2,4,5),(4,1,5),(3,1,6),(2,3,6),(4,2,6),(1,4,6)): prin
 PY
 "$CLI" heal --mesh "$HAND" --wound-mesh "$T/wound.obj" --mesh-units-mm 1000 --voxel-mm 1 --days 0.2 \
     --quiet --out "$T/w" || fail "wound-mesh run failed"
+
+# --- the shipped example abrasion (README, docs/wound.md): four strokes, concave hulls
+"$CLI" heal --mesh "$HAND" --wound-uv "$SRC/data/heal/hand_abrasion_uv.csv" --concave-k 6 \
+    --voxel-mm 1 --days 0.1 --snapshot-every 0 --quiet --out "$T/ex" --json >"$T/ex.json" \
+    || fail "the example abrasion does not run"
+python3 -c "
+import json, sys
+w = json.load(open(sys.argv[1]))['wound']
+assert w['voxels'] > 100, w
+" "$T/ex.json" || fail "the example abrasion cuts too little"
 
 # --- bad input: exit 2 naming the input, nothing written
 bad() {
@@ -111,5 +169,17 @@ for p in ((1,0,0),(-1,0,0),(0,1,0),(0,-1,0),(0,0,1),(0,0,-1)): print('v %g %g %g
 for f in ((1,3,5),(3,2,5),(2,4,5),(4,1,5),(3,1,6),(2,3,6),(4,2,6),(1,4,6)): print('f %d %d %d' % f)
 " >"$T/far.obj"
 bad far.obj --mesh "$HAND" --wound-mesh "$T/far.obj"
+# a wound wrapping around the index finger (the back of the finger's UV
+# island reaches round to its side), as strokes and as a closed wound mesh
+# around the finger: refused, not cut off at the steep sides
+python3 "$SRC/tests/strokes_ellipse.py" 0.512 0.51 0.03 0.035 >"$T/wrap.csv"
+bad "wrap.csv: the wound wraps around" --mesh "$HAND" --wound-uv "$T/wrap.csv"
+grep -q "more than the 60 degrees" "$T/err.txt" || fail "the wrap message names no limit"
+python3 -c "
+c = (-0.0238, -0.0974, -0.0152); r = 0.010
+for p in ((1,0,0),(-1,0,0),(0,1,0),(0,-1,0),(0,0,1),(0,0,-1)): print('v %.6f %.6f %.6f' % tuple(c[i] + r * p[i] for i in range(3)))
+for f in ((1,3,5),(3,2,5),(2,4,5),(4,1,5),(3,1,6),(2,3,6),(4,2,6),(1,4,6)): print('f %d %d %d' % f)
+" >"$T/ring.obj"
+bad "ring.obj: the wound wraps around" --mesh "$HAND" --wound-mesh "$T/ring.obj" --mesh-units-mm 1000
 bad "need --mesh" --wound-uv "$T/cut.csv"
 echo "e2e_heal_mesh: OK"

@@ -8,13 +8,23 @@
  *   islands or across two of them are input errors naming the CSV;
  * - a wound mesh cuts the voxels inside it; one away from the skin misses it;
  * - mapping back (§5.4): vertices over the wound read the wound's fields, the
- *   others healthy values, and a uniform displacement comes back rotated. */
+ *   others healthy values, and a uniform displacement comes back rotated;
+ * - on a cylinder (a finger): a wound over 60 degrees of arc is cut whole, one
+ *   over 150 degrees wraps too far and is refused (SS_SHELL_MAX_WRAP_DEG),
+ *   one over 110 degrees with its points crowded on one side is held by the
+ *   minimax normal;
+ * - the mesh refined around the wound for the mapping back stays closed and
+ *   keeps its shape. */
 #include <math.h>
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "testutil.h"
+#include "skinsim/paint.h"
 #include "skinsim/shell.h"
 
 /* A cube [0,s]^3 shifted by off, 24 vertices, one UV cell per face. */
@@ -214,11 +224,228 @@ static void test_wound_mesh(void **state) {
     ss_mesh_free(&m);
 }
 
+/* A closed cylinder along x (0..len mm, radius r), n segments around: the
+ * side is one UV island (u = 0.05 + 0.9 phi / 2 pi, v = 0.45 x / len), the
+ * caps two more (v > 0.5). phi = 90 degrees faces +z. */
+static void cylinder(double r, double len, int n, ss_mesh *m) {
+    const int M = 12, nside = (n + 1) * (M + 1), nv = nside + 2 * (n + 1);
+    float *pos = malloc((size_t)nv * 3 * sizeof(float)),
+          *uv = malloc((size_t)nv * 2 * sizeof(float));
+    uint32_t *idx = malloc((size_t)(2 * n * M + 2 * n) * 3 * sizeof(uint32_t));
+    int t = 0;
+    for (int j = 0; j <= M; j++)
+        for (int k = 0; k <= n; k++) {
+            double phi = k == n ? 0 : 2 * M_PI * k / n; /* the seam welds exactly */
+            int v = j * (n + 1) + k;
+            pos[3 * v] = (float)(len * j / M), pos[3 * v + 1] = (float)(r * cos(phi)),
+                    pos[3 * v + 2] = (float)(r * sin(phi));
+            uv[2 * v] = (float)(0.05 + 0.9 * k / n), uv[2 * v + 1] = (float)(0.45 * j / M);
+        }
+    for (int j = 0; j < M; j++)
+        for (int k = 0; k < n; k++) {
+            uint32_t a = (uint32_t)(j * (n + 1) + k), b = a + 1, c = a + (uint32_t)(n + 1),
+                     d = c + 1;
+            uint32_t q[6] = {a, b, d, a, d, c};
+            memcpy(idx + 3 * t, q, sizeof q);
+            t += 2;
+        }
+    /* caps: a centre and a ring each, at x = 0 (facing -x) and x = len */
+    for (int e = 0; e < 2; e++) {
+        int base = nside + e * (n + 1);
+        double x = e ? len : 0;
+        pos[3 * base] = (float)x, pos[3 * base + 1] = 0, pos[3 * base + 2] = 0;
+        uv[2 * base] = (float)(0.25 + 0.5 * e), uv[2 * base + 1] = 0.75f;
+        for (int k = 0; k < n; k++) {
+            double phi = 2 * M_PI * k / n;
+            int v = base + 1 + k;
+            pos[3 * v] = (float)x, pos[3 * v + 1] = (float)(r * cos(phi)),
+                    pos[3 * v + 2] = (float)(r * sin(phi));
+            uv[2 * v] = (float)(0.25 + 0.5 * e + 0.2 * cos(phi)),
+                   uv[2 * v + 1] = (float)(0.75 + 0.2 * sin(phi));
+        }
+        for (int k = 0; k < n; k++) {
+            uint32_t c = (uint32_t)base, a = c + 1 + (uint32_t)k,
+                     b = c + 1 + (uint32_t)((k + 1) % n);
+            uint32_t q[3] = {c, e ? a : b, e ? b : a};
+            memcpy(idx + 3 * t, q, sizeof q);
+            t++;
+        }
+    }
+    /* the caps' rings weld to the side's ends by position */
+    ss_error err;
+    assert_int_equal(ss_mesh_from_arrays(pos, NULL, uv, nv, idx, t, "cyl", m, &err), SS_OK);
+    free(pos), free(uv), free(idx);
+}
+
+/* A wound on a finger-like cylinder: 60 degrees of arc heals whole (no
+ * column cut off); 150 degrees of arc wraps too far and is refused, naming
+ * the CSV and the limit. */
+static void test_wrap(void **state) {
+    (void)state;
+    ss_error err;
+    ss_mesh m;
+    cylinder(8, 60, 72, &m);
+    assert_int_equal(ss_shell_check_closed(&m, "cyl.obj", &err), SS_OK);
+    char *dir = tu_tmpdir("shell"), csv[4096], text[512];
+    snprintf(csv, sizeof csv, "%s/arc.csv", dir);
+    ss_shell_opts o;
+    ss_shell_opts_default(&o);
+    o.units_mm = 1;
+    const double half_deg[2] = {30, 75};
+    for (int c = 0; c < 2; c++) {
+        double u0 = 0.05 + 0.9 * (90 - half_deg[c]) / 360,
+               u1 = 0.05 + 0.9 * (90 + half_deg[c]) / 360;
+        double v0 = 0.45 * 25 / 60, v1 = 0.45 * 35 / 60; /* x 25..35 mm */
+        snprintf(text, sizeof text, "u,v\n%.6f,%.6f\n%.6f,%.6f\n%.6f,%.6f\n%.6f,%.6f\n", u0, v0, u1,
+                 v0, u1, v1, u0, v1);
+        write_text(csv, text);
+        ss_shell_patch *p = ss_shell_patch_from_uv(&m, "cyl.obj", csv, &o, &err);
+        if (c == 0) {
+            assert_non_null(p);
+            assert_float_equal(p->axis[2][2], 1.0, 1e-3);
+            /* every wound column: the projected arc, 10 mm x 2 r sin 30 deg */
+            int cols = 0;
+            for (size_t q = 0; q < (size_t)p->nx * p->ny; q++) {
+                int wc = 0;
+                for (int k = 0; k < p->nz; k++)
+                    wc += p->cell[(size_t)k * p->nx * p->ny + q] == SS_CELL_WOUND;
+                cols += wc > 0;
+            }
+            double area = cols * o.voxel_mm * o.voxel_mm, want = 10 * 2 * 8 * sin(M_PI / 6);
+            assert_true(fabs(area - want) < 0.15 * want);
+            ss_shell_patch_free(p);
+        } else {
+            assert_null(p);
+            assert_int_equal(err.code, SS_ERR_INPUT);
+            assert_non_null(strstr(err.msg, "arc.csv"));
+            assert_non_null(strstr(err.msg, "wraps around"));
+            assert_non_null(strstr(err.msg, "60 degrees"));
+        }
+    }
+    /* 30..140 degrees of arc (half-span 55) with the stroke's points crowded
+     * on the 140 degree edge: their mean normal leans there (the 30 degree
+     * edge is 96 degrees off it); the patch takes the normal that minimises
+     * the largest angle instead (85 degrees) and holds the whole arc */
+    {
+        double u0 = 0.05 + 0.9 * 30 / 360.0, u1 = 0.05 + 0.9 * 140 / 360.0;
+        double v0 = 0.45 * 25 / 60, v1 = 0.45 * 35 / 60;
+        int len = snprintf(text, sizeof text, "u,v\n%.6f,%.6f\n%.6f,%.6f\n", u0, v0, u0, v1);
+        for (int k = 0; k <= 10; k++)
+            len += snprintf(text + len, sizeof text - (size_t)len, "%.6f,%.6f\n", u1,
+                            v0 + (v1 - v0) * k / 10);
+        write_text(csv, text);
+        ss_shell_patch *p = ss_shell_patch_from_uv(&m, "cyl.obj", csv, &o, &err);
+        assert_non_null(p);
+        double phi = atan2(p->axis[2][2], p->axis[2][1]) * 180 / M_PI;
+        assert_true(fabs(phi - 85) < 3);
+        int cols = 0;
+        for (size_t q = 0; q < (size_t)p->nx * p->ny; q++) {
+            int wc = 0;
+            for (int k = 0; k < p->nz; k++)
+                wc += p->cell[(size_t)k * p->nx * p->ny + q] == SS_CELL_WOUND;
+            cols += wc > 0;
+        }
+        double area = cols * o.voxel_mm * o.voxel_mm, want = 10 * 2 * 8 * sin(55 * M_PI / 180);
+        assert_true(fabs(area - want) < 0.15 * want);
+        ss_shell_patch_free(p);
+    }
+    ss_mesh_free(&m);
+    tu_rmtree(dir);
+    free(dir);
+}
+
+static double mesh_area(const ss_mesh *m) {
+    double a = 0;
+    for (int t = 0; t < m->ntriangles; t++) {
+        const float *p0 = m->positions + 3 * m->indices[3 * t],
+                    *p1 = m->positions + 3 * m->indices[3 * t + 1],
+                    *p2 = m->positions + 3 * m->indices[3 * t + 2];
+        double u[3], w[3];
+        for (int d = 0; d < 3; d++) u[d] = p1[d] - p0[d], w[d] = p2[d] - p0[d];
+        double c0 = u[1] * w[2] - u[2] * w[1], c1 = u[2] * w[0] - u[0] * w[2],
+               c2 = u[0] * w[1] - u[1] * w[0];
+        a += 0.5 * sqrt(c0 * c0 + c1 * c1 + c2 * c2);
+    }
+    return a;
+}
+
+/* The mesh the fields are mapped onto (ss_mesh_refine_near): refined around
+ * a point on the cylinder it stays closed (no T-junction, seams included),
+ * keeps its area and its old vertices, has short edges near the point, and
+ * every new vertex sits where its UV lies on the original mesh. */
+static void test_refine(void **state) {
+    (void)state;
+    ss_error err;
+    ss_mesh m, r;
+    cylinder(8, 60, 24, &m);               /* 2.1 mm around, 5 mm along */
+    const float c[3] = {30, 7.52f, 2.74f}; /* 20 degrees from the UV seam at +y */
+    assert_int_equal(ss_mesh_refine_near(&m, c, 6, 0.8f, 6, &r, &err), SS_OK);
+    assert_true(r.ntriangles > 4 * m.ntriangles / 3);
+    assert_int_equal(ss_shell_check_closed(&r, "refined", &err), SS_OK);
+    assert_float_equal(mesh_area(&r), mesh_area(&m), 1e-4 * mesh_area(&m));
+    assert_memory_equal(r.positions, m.positions, (size_t)m.nvertices * 3 * sizeof(float));
+    for (int t = 0; t < r.ntriangles; t++)
+        for (int k = 0; k < 3; k++) {
+            const float *a = r.positions + 3 * r.indices[3 * t + k],
+                        *b = r.positions + 3 * r.indices[3 * t + (k + 1) % 3];
+            float da = 0, e = 0;
+            for (int d = 0; d < 3; d++)
+                da += (a[d] - c[d]) * (a[d] - c[d]), e += (a[d] - b[d]) * (a[d] - b[d]);
+            if (da < 3 * 3) assert_true(sqrtf(e) <= 0.8f);
+        }
+    for (int v = m.nvertices; v < r.nvertices; v++) {
+        float p[3];
+        assert_true(ss_mesh_locate_uv(&m, r.uvs + 2 * v, p) >= 0);
+        for (int d = 0; d < 3; d++) assert_float_equal(p[d], r.positions[3 * v + d], 1e-3);
+        float l = 0;
+        for (int d = 0; d < 3; d++) l += r.normals[3 * v + d] * r.normals[3 * v + d];
+        assert_float_equal(l, 1.0, 1e-5);
+    }
+    /* a seam: a unit square of two triangles whose shared diagonal has its
+     * vertices duplicated (other UVs); refining near (0,0) splits the first
+     * triangle, and the second must split the diagonal too: every edge used
+     * by only one triangle lies on the square's border */
+    const float sp[18] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0},
+                su[12] = {0, 0, 0.4f, 0, 0, 0.4f, 0.6f, 0, 1, 0, 0.6f, 0.4f};
+    const uint32_t si[6] = {0, 1, 2, 3, 4, 5};
+    ss_mesh sq, sr;
+    assert_int_equal(ss_mesh_from_arrays(sp, NULL, su, 6, si, 2, "square", &sq, &err), SS_OK);
+    const float corner[3] = {0, 0, 0};
+    assert_int_equal(ss_mesh_refine_near(&sq, corner, 0.3f, 0.9f, 1, &sr, &err), SS_OK);
+    assert_int_equal(sr.ntriangles, 4 + 2);
+    for (int t = 0; t < sr.ntriangles; t++)
+        for (int k = 0; k < 3; k++) {
+            const float *a = sr.positions + 3 * sr.indices[3 * t + k],
+                        *b = sr.positions + 3 * sr.indices[3 * t + (k + 1) % 3];
+            int uses = 0;
+            for (int t2 = 0; t2 < sr.ntriangles; t2++)
+                for (int k2 = 0; k2 < 3; k2++) {
+                    const float *c2 = sr.positions + 3 * sr.indices[3 * t2 + k2],
+                                *d2 = sr.positions + 3 * sr.indices[3 * t2 + (k2 + 1) % 3];
+                    uses += (!memcmp(a, c2, 12) && !memcmp(b, d2, 12)) ||
+                            (!memcmp(a, d2, 12) && !memcmp(b, c2, 12));
+                }
+            int border = (a[0] == b[0] && (a[0] == 0 || a[0] == 1)) ||
+                         (a[1] == b[1] && (a[1] == 0 || a[1] == 1));
+            assert_int_equal(uses, border ? 1 : 2);
+        }
+    ss_mesh_free(&sq);
+    ss_mesh_free(&sr);
+    /* nothing near: the same mesh */
+    ss_mesh same;
+    const float far[3] = {500, 0, 0};
+    assert_int_equal(ss_mesh_refine_near(&m, far, 1, 0.8f, 6, &same, &err), SS_OK);
+    assert_int_equal(same.ntriangles, m.ntriangles);
+    ss_mesh_free(&same);
+    ss_mesh_free(&r);
+    ss_mesh_free(&m);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_closed),
-        cmocka_unit_test(test_uv_patch),
-        cmocka_unit_test(test_wound_mesh),
+        cmocka_unit_test(test_closed),     cmocka_unit_test(test_uv_patch),
+        cmocka_unit_test(test_wound_mesh), cmocka_unit_test(test_wrap),
+        cmocka_unit_test(test_refine),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

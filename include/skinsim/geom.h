@@ -129,6 +129,33 @@ ss_status ss_gltf_write_textured_mesh(const char *path, const struct ss_mesh *me
                                       const char *metallic_roughness_uri, const char *normal_uri,
                                       ss_error *err);
 
+/* A mesh with per-vertex data as one binary glTF 2.0 file (.glb), for any
+ * glTF viewer or Blender: POSITION (mesh units x scale_m, glTF metres),
+ * NORMAL, TEXCOORD_0 when the mesh has UVs, COLOR_0 (linear RGB, optional),
+ * application-specific float attributes (names must start with '_', as the
+ * glTF spec asks; 1-4 components), and optionally one morph target (a
+ * POSITION delta in mesh units, shown at weight morph_weight; its name in
+ * mesh.extras.targetNames, where Blender and three.js look). extras_json, a
+ * JSON object's text or NULL, becomes the node's extras. Atomic. */
+typedef struct ss_gltf_vertex_attr {
+    const char *name;  /* "_EPITHELIUM" */
+    const float *data; /* nvertices x ncomp */
+    int ncomp;         /* 1 (SCALAR) .. 4 (VEC4) */
+} ss_gltf_vertex_attr;
+typedef struct ss_gltf_vertex_data {
+    double scale_m;     /* one mesh unit in metres (> 0) */
+    const char *name;   /* node, mesh and material name; NULL = "skin" */
+    const float *color; /* nvertices x 3 linear RGB in 0..1, or NULL */
+    const ss_gltf_vertex_attr *attrs;
+    int nattrs;
+    const float *morph_delta; /* nvertices x 3 in mesh units, or NULL */
+    const char *morph_name;   /* NULL = "displacement" */
+    double morph_weight;      /* default weight of the target, 0..1 */
+    const char *extras_json;  /* the node's extras, or NULL */
+} ss_gltf_vertex_data;
+ss_status ss_gltf_write_mesh_glb(const char *path, const struct ss_mesh *mesh,
+                                 const ss_gltf_vertex_data *d, ss_error *err);
+
 #ifdef __cplusplus
 }
 #endif

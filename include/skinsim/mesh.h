@@ -56,6 +56,19 @@ void ss_mesh_free(ss_mesh *m); /* frees the arrays and zeroes the struct */
  * -1 when the mesh has no UVs or memory runs out. */
 int ss_mesh_uv_islands(const ss_mesh *m, int *island);
 
+/* weld[v] (nvertices entries, caller-allocated): the lowest index of the
+ * vertices at exactly v's position (seams duplicate positions). */
+ss_status ss_mesh_weld(const ss_mesh *m, int *weld, ss_error *err);
+/* Refines the triangles with a corner within radius of centre (mesh units):
+ * split 1-to-4 at their edge midpoints while an edge is longer than
+ * max_edge, at most max_levels times, with the neighbours split 1-to-2 (or
+ * 1-to-4) so no T-junction opens the surface; edges are matched by welded
+ * position, so seams stay closed. New vertices lie on the old triangles
+ * (shape unchanged), normals and UVs interpolated. Old vertices keep their
+ * indices. *out is a new mesh (free with ss_mesh_free). */
+ss_status ss_mesh_refine_near(const ss_mesh *m, const float centre[3], float radius, float max_edge,
+                              int max_levels, ss_mesh *out, ss_error *err);
+
 /* ---- ray casting ------------------------------------------------------- */
 
 /* A BVH over the mesh's triangles (binned surface-area heuristic, at most 4

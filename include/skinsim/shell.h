@@ -20,9 +20,10 @@
  * mm. The patch is local: the seed voxelises the whole body, which a healing
  * grid of 0.5 mm voxels cannot hold for a hand; the wound and a margin of
  * intact skin around it are what heals. Gave up: wounds wider than the
- * surface is flat (the patch's columns run along one normal, so a wound
- * wrapping more than about 60 degrees around a finger is cut at the steep
- * sides). */
+ * surface is flat: the patch's columns run along one normal, so a wound whose
+ * surface turns more than SS_SHELL_MAX_WRAP_DEG from its mean normal (one
+ * wrapping around a finger) is refused with SS_ERR_INPUT rather than cut off
+ * at its steep sides. */
 #ifndef SKINSIM_SHELL_H
 #define SKINSIM_SHELL_H
 
@@ -35,6 +36,9 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/* The most a wound's surface normal may turn from the patch's normal. */
+#define SS_SHELL_MAX_WRAP_DEG 60
 
 typedef struct ss_shell_opts {
     double voxel_mm;     /* grid voxel edge (default 0.5) */
@@ -71,7 +75,10 @@ typedef struct ss_shell_patch {
 
 /* A patch around UV strokes (u,v[,stroke] CSV, read with ss_stroke_csv_read):
  * each stroke's hull is cut to o->depth_mm under the surface. A point in no
- * UV triangle or a stroke spanning two UV islands -> SS_ERR_INPUT naming the
+ * UV triangle, a stroke spanning two UV islands, or a wound whose surface
+ * normals (at the stroke points and the mesh vertices inside the hulls) turn
+ * more than SS_SHELL_MAX_WRAP_DEG from their mean and from the direction that
+ * minimises the largest angle -> SS_ERR_INPUT naming the
  * CSV, the point and the mesh. The mesh must be closed (ss_shell_check_closed
  * is the caller's job, done once per mesh). */
 ss_shell_patch *ss_shell_patch_from_uv(const ss_mesh *skin, const char *skin_name,
@@ -79,7 +86,9 @@ ss_shell_patch *ss_shell_patch_from_uv(const ss_mesh *skin, const char *skin_nam
                                        ss_error *err);
 /* A patch around a closed wound mesh (same units as the skin mesh): the
  * tissue voxels inside it are cut out. A wound mesh that cuts no skin voxel
- * -> SS_ERR_INPUT "misses the skin". */
+ * -> SS_ERR_INPUT "misses the skin"; one holding a skin vertex whose normal
+ * turns more than SS_SHELL_MAX_WRAP_DEG from the skin's normal facing the
+ * wound -> SS_ERR_INPUT "wraps around". */
 ss_shell_patch *ss_shell_patch_from_mesh(const ss_mesh *skin, const char *skin_name,
                                          const ss_mesh *wound, const char *wound_name,
                                          const ss_shell_opts *o, ss_error *err);
@@ -105,6 +114,22 @@ void ss_shell_vertex_fields(const ss_shell_patch *p, const ss_mesh *skin, const 
 ss_status ss_shell_surface_vtu_write(const ss_shell_patch *p, const ss_mesh *skin,
                                      const float *vertex_fields, const char *path, double t_days,
                                      ss_error *err);
+
+/* The same snapshot as a binary glTF (.glb, ss_gltf_write_mesh_glb): the
+ * undeformed mesh in metres, the eight heal fields and the open-wound flag as
+ * float vertex attributes _OXYGEN, _MDGF, _CAPILLARY, _FIBROBLAST, _ESCHAR,
+ * _EPITHELIUM, _SCAR, _PLASMA, _OPEN_WOUND, the displacement as a morph
+ * target "displacement" shown at weight 1 (slide it to 0 for the undeformed
+ * mesh), and COLOR_0 from ss_shell_wound_colour. The node's extras hold
+ * t_days and the field names. Atomic. */
+ss_status ss_shell_surface_glb_write(const ss_shell_patch *p, const ss_mesh *skin,
+                                     const float *vertex_fields, const char *path, double t_days,
+                                     ss_error *err);
+/* The wound state at a glance, linear RGB: intact skin a light skin tone;
+ * wound tissue (plasma above SS_HEAL_P_MIN, or scar collagen) raw red while
+ * open, turning pink as the epithelium covers it; dark brown where eschar
+ * (crust) lies, in proportion to it. f: one vertex's SS_HEAL_NFIELDS values. */
+void ss_shell_wound_colour(const float *f, float rgb[3]);
 
 #ifdef __cplusplus
 }

@@ -36,25 +36,95 @@ static cJSON *num_array(const double *v, int n) {
     return a;
 }
 
-static void add_view(cJSON *views, int offset, int length, int target) {
-    cJSON *v = cJSON_CreateObject();
-    cJSON_AddNumberToObject(v, "buffer", 0);
-    cJSON_AddNumberToObject(v, "byteOffset", offset);
-    cJSON_AddNumberToObject(v, "byteLength", length);
-    cJSON_AddNumberToObject(v, "target", target);
-    cJSON_AddItemToArray(views, v);
+/* ---- one binary buffer, its views and accessors ---------------------------- */
+
+/* The arrays of a glTF file go into one buffer, each with its own bufferView
+ * (tightly packed, so no byteStride) and accessor; both writers below build
+ * their buffer this way and differ only in how it is stored (a base64 data
+ * URI in a .gltf, the BIN chunk of a .glb). */
+typedef struct gbuf {
+    unsigned char *data;
+    size_t len, cap;
+    cJSON *root, *views, *accs;
+    int failed; /* out of memory on the way */
+} gbuf;
+
+static void gb_init(gbuf *b, const char *node_name) {
+    memset(b, 0, sizeof *b);
+    cJSON *root = b->root = cJSON_CreateObject();
+    cJSON *asset = cJSON_AddObjectToObject(root, "asset");
+    cJSON_AddStringToObject(asset, "version", "2.0");
+    cJSON_AddStringToObject(asset, "generator", "skinsim");
+    cJSON_AddNumberToObject(root, "scene", 0);
+    cJSON *scenes = cJSON_AddArrayToObject(root, "scenes");
+    cJSON *scene = cJSON_CreateObject();
+    cJSON_AddItemToObject(scene, "nodes", num_array((const double[]){0}, 1));
+    cJSON_AddItemToArray(scenes, scene);
+    cJSON *nodes = cJSON_AddArrayToObject(root, "nodes");
+    cJSON *node = cJSON_CreateObject();
+    cJSON_AddStringToObject(node, "name", node_name);
+    cJSON_AddNumberToObject(node, "mesh", 0);
+    cJSON_AddItemToArray(nodes, node);
+    b->views = cJSON_AddArrayToObject(root, "bufferViews");
+    b->accs = cJSON_AddArrayToObject(root, "accessors");
+    if (!b->accs) b->failed = 1;
 }
 
-static void add_accessor(cJSON *acc, int view, int component, int count, const char *type,
-                         const double *min, const double *max, int ncomp) {
+static void gb_free(gbuf *b) {
+    free(b->data);
+    cJSON_Delete(b->root);
+}
+
+/* Appends count elements of ncomp components (5126 float or 5125 uint32,
+ * both 4 bytes, so every view stays 4-byte aligned) as a view of the given
+ * target and an accessor with min/max when minmax (float data only; the spec
+ * asks for them on POSITION, morph targets included). Returns the accessor's
+ * index, -1 when out of memory. */
+static int gb_add(gbuf *b, const void *src, int count, int ncomp, int component, int target,
+                  int minmax) {
+    static const char *const types[] = {"", "SCALAR", "VEC2", "VEC3", "VEC4"};
+    size_t bytes = (size_t)count * ncomp * 4;
+    if (b->failed) return -1;
+    if (b->len + bytes > b->cap) {
+        size_t cap = b->cap ? b->cap : 4096;
+        while (cap < b->len + bytes) cap *= 2;
+        unsigned char *d = realloc(b->data, cap);
+        if (!d) {
+            b->failed = 1;
+            return -1;
+        }
+        b->data = d, b->cap = cap;
+    }
+    memcpy(b->data + b->len, src, bytes);
+    cJSON *v = cJSON_CreateObject();
+    cJSON_AddNumberToObject(v, "buffer", 0);
+    cJSON_AddNumberToObject(v, "byteOffset", (double)b->len);
+    cJSON_AddNumberToObject(v, "byteLength", (double)bytes);
+    if (target) cJSON_AddNumberToObject(v, "target", target);
+    cJSON_AddItemToArray(b->views, v);
+    b->len += bytes;
     cJSON *a = cJSON_CreateObject();
-    cJSON_AddNumberToObject(a, "bufferView", view);
+    cJSON_AddNumberToObject(a, "bufferView", cJSON_GetArraySize(b->views) - 1);
     cJSON_AddNumberToObject(a, "componentType", component);
     cJSON_AddNumberToObject(a, "count", count);
-    cJSON_AddStringToObject(a, "type", type);
-    if (min) cJSON_AddItemToObject(a, "min", num_array(min, ncomp));
-    if (max) cJSON_AddItemToObject(a, "max", num_array(max, ncomp));
-    cJSON_AddItemToArray(acc, a);
+    cJSON_AddStringToObject(a, "type", types[ncomp]);
+    if (minmax && component == 5126) {
+        /* min/max of the float32 values as stored, so a validator's check
+         * against the data holds exactly */
+        double lo[4] = {INFINITY, INFINITY, INFINITY, INFINITY},
+               hi[4] = {-INFINITY, -INFINITY, -INFINITY, -INFINITY};
+        const float *f = src;
+        for (int i = 0; i < count; i++)
+            for (int c = 0; c < ncomp; c++) {
+                double x = f[(size_t)i * ncomp + c];
+                if (x < lo[c]) lo[c] = x;
+                if (x > hi[c]) hi[c] = x;
+            }
+        cJSON_AddItemToObject(a, "min", num_array(lo, ncomp));
+        cJSON_AddItemToObject(a, "max", num_array(hi, ncomp));
+    }
+    cJSON_AddItemToArray(b->accs, a);
+    return cJSON_GetArraySize(b->accs) - 1;
 }
 
 static void add_texture(cJSON *images, cJSON *textures, const char *uri) {
@@ -73,6 +143,26 @@ static cJSON *texture_ref(int index) {
     return r;
 }
 
+/* meshes[0] with one triangle primitive: POSITION, NORMAL, the indices and
+ * material 0; returns the primitive's attributes object for the rest. */
+static cJSON *gb_mesh(gbuf *b, const char *name, int a_pos, int a_nrm, int a_idx,
+                      cJSON **mesh_out) {
+    cJSON *meshes = cJSON_AddArrayToObject(b->root, "meshes");
+    cJSON *mesh = cJSON_CreateObject();
+    if (name) cJSON_AddStringToObject(mesh, "name", name);
+    cJSON *prims = cJSON_AddArrayToObject(mesh, "primitives");
+    cJSON *prim = cJSON_CreateObject();
+    cJSON *attrs = cJSON_AddObjectToObject(prim, "attributes");
+    cJSON_AddNumberToObject(attrs, "POSITION", a_pos);
+    cJSON_AddNumberToObject(attrs, "NORMAL", a_nrm);
+    cJSON_AddNumberToObject(prim, "indices", a_idx);
+    cJSON_AddNumberToObject(prim, "material", 0);
+    cJSON_AddItemToArray(prims, prim);
+    cJSON_AddItemToArray(meshes, mesh);
+    if (mesh_out) *mesh_out = mesh;
+    return attrs;
+}
+
 /* One textured triangle mesh as a glTF 2.0 file: the arrays packed into one
  * base64 buffer (positions, normals, optional tangents, UVs, 32-bit indices),
  * a metallic-roughness material with the given texture URIs. */
@@ -81,88 +171,33 @@ static ss_status write_textured(const char *path, const char *name, const float 
                                 const uint32_t *idx, int nt, const char *base_color_uri,
                                 const char *metallic_roughness_uri, const char *normal_uri,
                                 ss_error *err) {
-    const size_t o_pos = 0, o_nrm = o_pos + (size_t)nv * 12, o_tan = o_nrm + (size_t)nv * 12,
-                 o_uv = o_tan + (tan ? (size_t)nv * 16 : 0), o_idx = o_uv + (size_t)nv * 8,
-                 total = o_idx + (size_t)nt * 12;
-    unsigned char *buf = malloc(total);
-    if (!buf) return ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", path);
-    memcpy(buf + o_pos, pos, (size_t)nv * 12);
-    memcpy(buf + o_nrm, nrm, (size_t)nv * 12);
-    if (tan) memcpy(buf + o_tan, tan, (size_t)nv * 16);
-    memcpy(buf + o_uv, uv, (size_t)nv * 8);
-    memcpy(buf + o_idx, idx, (size_t)nt * 12);
-    double pmin[3] = {INFINITY, INFINITY, INFINITY}, pmax[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (int i = 0; i < nv; i++)
-        for (int c = 0; c < 3; c++) {
-            if (pos[3 * i + c] < pmin[c]) pmin[c] = pos[3 * i + c];
-            if (pos[3 * i + c] > pmax[c]) pmax[c] = pos[3 * i + c];
-        }
-    char *b64 = base64(buf, total);
-    free(buf);
-    if (!b64) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
-    size_t urilen = strlen(b64) + 64;
-    char *uri = malloc(urilen);
+    gbuf b;
+    gb_init(&b, name ? name : "skin");
+    int a_pos = gb_add(&b, pos, nv, 3, 5126, 34962, 1);
+    int a_nrm = gb_add(&b, nrm, nv, 3, 5126, 34962, 0);
+    int a_tan = tan ? gb_add(&b, tan, nv, 4, 5126, 34962, 0) : -1;
+    int a_uv = gb_add(&b, uv, nv, 2, 5126, 34962, 0);
+    int a_idx = gb_add(&b, idx, nt * 3, 1, 5125, 34963, 0);
+    char *b64 = b.failed ? NULL : base64(b.data, b.len);
+    char *uri = b64 ? malloc(strlen(b64) + 64) : NULL;
     if (!uri) {
         free(b64);
-        return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+        gb_free(&b);
+        return ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", path);
     }
-    snprintf(uri, urilen, "data:application/octet-stream;base64,%s", b64);
+    snprintf(uri, strlen(b64) + 64, "data:application/octet-stream;base64,%s", b64);
     free(b64);
-
-    cJSON *root = cJSON_CreateObject();
-    cJSON *asset = cJSON_AddObjectToObject(root, "asset");
-    cJSON_AddStringToObject(asset, "version", "2.0");
-    cJSON_AddStringToObject(asset, "generator", "skinsim");
-    cJSON_AddNumberToObject(root, "scene", 0);
-    cJSON *scenes = cJSON_AddArrayToObject(root, "scenes");
-    cJSON *scene = cJSON_CreateObject();
-    cJSON_AddItemToObject(scene, "nodes", num_array((const double[]){0}, 1));
-    cJSON_AddItemToArray(scenes, scene);
-    cJSON *nodes = cJSON_AddArrayToObject(root, "nodes");
-    cJSON *node = cJSON_CreateObject();
-    cJSON_AddStringToObject(node, "name", name ? name : "skin");
-    cJSON_AddNumberToObject(node, "mesh", 0);
-    cJSON_AddItemToArray(nodes, node);
-
+    cJSON *root = b.root;
     cJSON *buffers = cJSON_AddArrayToObject(root, "buffers");
-    cJSON *b = cJSON_CreateObject();
-    cJSON_AddNumberToObject(b, "byteLength", (double)total);
-    cJSON_AddStringToObject(b, "uri", uri);
-    cJSON_AddItemToArray(buffers, b);
+    cJSON *bo = cJSON_CreateObject();
+    cJSON_AddNumberToObject(bo, "byteLength", (double)b.len);
+    cJSON_AddStringToObject(bo, "uri", uri);
+    cJSON_AddItemToArray(buffers, bo);
     free(uri);
-    cJSON *views = cJSON_AddArrayToObject(root, "bufferViews");
-    cJSON *acc = cJSON_AddArrayToObject(root, "accessors");
-    int view = 0;
-    add_view(views, (int)o_pos, nv * 12, 34962);
-    add_accessor(acc, view++, 5126, nv, "VEC3", pmin, pmax, 3);
-    add_view(views, (int)o_nrm, nv * 12, 34962);
-    add_accessor(acc, view++, 5126, nv, "VEC3", NULL, NULL, 3);
-    int tan_acc = -1;
-    if (tan) {
-        add_view(views, (int)o_tan, nv * 16, 34962);
-        tan_acc = view;
-        add_accessor(acc, view++, 5126, nv, "VEC4", NULL, NULL, 4);
-    }
-    add_view(views, (int)o_uv, nv * 8, 34962);
-    int uv_acc = view;
-    add_accessor(acc, view++, 5126, nv, "VEC2", NULL, NULL, 2);
-    add_view(views, (int)o_idx, nt * 12, 34963);
-    int idx_acc = view;
-    add_accessor(acc, view++, 5125, nt * 3, "SCALAR", NULL, NULL, 1);
 
-    cJSON *meshes = cJSON_AddArrayToObject(root, "meshes");
-    cJSON *mesh = cJSON_CreateObject();
-    cJSON *prims = cJSON_AddArrayToObject(mesh, "primitives");
-    cJSON *prim = cJSON_CreateObject();
-    cJSON *attrs = cJSON_AddObjectToObject(prim, "attributes");
-    cJSON_AddNumberToObject(attrs, "POSITION", 0);
-    cJSON_AddNumberToObject(attrs, "NORMAL", 1);
-    if (tan_acc >= 0) cJSON_AddNumberToObject(attrs, "TANGENT", tan_acc);
-    cJSON_AddNumberToObject(attrs, "TEXCOORD_0", uv_acc);
-    cJSON_AddNumberToObject(prim, "indices", idx_acc);
-    cJSON_AddNumberToObject(prim, "material", 0);
-    cJSON_AddItemToArray(prims, prim);
-    cJSON_AddItemToArray(meshes, mesh);
+    cJSON *attrs = gb_mesh(&b, NULL, a_pos, a_nrm, a_idx, NULL);
+    if (a_tan >= 0) cJSON_AddNumberToObject(attrs, "TANGENT", a_tan);
+    cJSON_AddNumberToObject(attrs, "TEXCOORD_0", a_uv);
 
     cJSON *samplers = cJSON_AddArrayToObject(root, "samplers");
     cJSON *smp = cJSON_CreateObject();
@@ -192,7 +227,7 @@ static ss_status write_textured(const char *path, const char *name, const float 
     }
     cJSON_AddItemToArray(materials, mat);
     char *text = cJSON_Print(root);
-    cJSON_Delete(root);
+    gb_free(&b);
     if (!text) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     ss_status st = ss_write_file_atomic(path, text, strlen(text), err);
     free(text);
@@ -268,5 +303,137 @@ ss_status ss_gltf_write_textured_mesh(const char *path, const struct ss_mesh *m,
         write_textured(path, name, m->positions, m->normals, tan, m->uvs, nv, m->indices,
                        m->ntriangles, base_color_uri, metallic_roughness_uri, normal_uri, err);
     free(tan);
+    return st;
+}
+
+/* ---- binary glTF with per-vertex data ----------------------------------------- */
+
+static void put_u32(unsigned char *p, uint32_t v) {
+    p[0] = (unsigned char)v, p[1] = (unsigned char)(v >> 8), p[2] = (unsigned char)(v >> 16),
+    p[3] = (unsigned char)(v >> 24);
+}
+
+ss_status ss_gltf_write_mesh_glb(const char *path, const struct ss_mesh *m,
+                                 const ss_gltf_vertex_data *d, ss_error *err) {
+    if (!m || m->nvertices < 3 || m->ntriangles < 1 || !m->positions || !m->normals || !m->indices)
+        return ss_error_set(err, SS_ERR_INPUT, "%s: the mesh has no triangles", path);
+    if (!d || !(d->scale_m > 0 && isfinite(d->scale_m)))
+        return ss_error_set(err, SS_ERR_INPUT, "%s: the mesh scale must be > 0", path);
+    if (!(d->morph_weight >= 0 && d->morph_weight <= 1))
+        return ss_error_set(err, SS_ERR_INPUT, "%s: morph weight %g is not in 0..1", path,
+                            d->morph_weight);
+    for (int k = 0; k < d->nattrs; k++) {
+        const ss_gltf_vertex_attr *a = d->attrs + k;
+        if (!a->name || a->name[0] != '_' || !a->data || a->ncomp < 1 || a->ncomp > 4)
+            return ss_error_set(err, SS_ERR_INPUT,
+                                "%s: vertex attribute %s: a name starting with '_' (glTF's "
+                                "application-specific semantics), data and 1-4 components",
+                                path, a->name ? a->name : "(unnamed)");
+    }
+    const int nv = m->nvertices;
+    const float s = (float)d->scale_m;
+    float *tmp = malloc((size_t)nv * 3 * sizeof *tmp);
+    if (!tmp) return ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", path);
+    const char *name = d->name ? d->name : "skin";
+    gbuf b;
+    gb_init(&b, name);
+    for (int i = 0; i < 3 * nv; i++) tmp[i] = m->positions[i] * s;
+    int a_pos = gb_add(&b, tmp, nv, 3, 5126, 34962, 1);
+    int a_nrm = gb_add(&b, m->normals, nv, 3, 5126, 34962, 0);
+    int a_uv = m->has_uvs && m->uvs ? gb_add(&b, m->uvs, nv, 2, 5126, 34962, 0) : -1;
+    int a_col = -1, a_morph = -1;
+    if (d->color) {
+        for (int i = 0; i < 3 * nv; i++) {
+            float c = d->color[i];
+            tmp[i] = c > 0 ? (c < 1 ? c : 1) : 0; /* NaN -> 0: COLOR_0 must lie in 0..1 */
+        }
+        a_col = gb_add(&b, tmp, nv, 3, 5126, 34962, 0);
+    }
+    int a_idx = gb_add(&b, m->indices, 3 * m->ntriangles, 1, 5125, 34963, 0);
+    int *a_attr = calloc((size_t)d->nattrs + 1, sizeof *a_attr);
+    if (!a_attr) b.failed = 1;
+    for (int k = 0; a_attr && k < d->nattrs; k++)
+        a_attr[k] = gb_add(&b, d->attrs[k].data, nv, d->attrs[k].ncomp, 5126, 34962, 0);
+    if (d->morph_delta) {
+        for (int i = 0; i < 3 * nv; i++) tmp[i] = d->morph_delta[i] * s;
+        a_morph = gb_add(&b, tmp, nv, 3, 5126, 34962, 1);
+    }
+    free(tmp);
+    cJSON *root = b.root;
+    if (d->extras_json) {
+        cJSON *ex = cJSON_Parse(d->extras_json);
+        if (!cJSON_IsObject(ex)) {
+            cJSON_Delete(ex);
+            free(a_attr);
+            gb_free(&b);
+            return ss_error_set(err, SS_ERR_INPUT, "%s: extras are not a JSON object", path);
+        }
+        cJSON_AddItemToObject(cJSON_GetArrayItem(cJSON_GetObjectItem(root, "nodes"), 0), "extras",
+                              ex);
+    }
+    cJSON *buffers = cJSON_AddArrayToObject(root, "buffers");
+    cJSON *bo = cJSON_CreateObject();
+    cJSON_AddNumberToObject(bo, "byteLength", (double)b.len);
+    cJSON_AddItemToArray(buffers, bo);
+    cJSON *mesh;
+    cJSON *attrs = gb_mesh(&b, name, a_pos, a_nrm, a_idx, &mesh);
+    cJSON *prim = cJSON_GetArrayItem(cJSON_GetObjectItem(mesh, "primitives"), 0);
+    if (a_uv >= 0) cJSON_AddNumberToObject(attrs, "TEXCOORD_0", a_uv);
+    if (a_col >= 0) cJSON_AddNumberToObject(attrs, "COLOR_0", a_col);
+    for (int k = 0; a_attr && k < d->nattrs; k++)
+        cJSON_AddNumberToObject(attrs, d->attrs[k].name, a_attr[k]);
+    free(a_attr);
+    cJSON_AddNumberToObject(prim, "mode", 4);
+    if (a_morph >= 0) {
+        cJSON *targets = cJSON_AddArrayToObject(prim, "targets");
+        cJSON *t = cJSON_CreateObject();
+        cJSON_AddNumberToObject(t, "POSITION", a_morph);
+        cJSON_AddItemToArray(targets, t);
+        cJSON_AddItemToObject(mesh, "weights", num_array((const double[]){d->morph_weight}, 1));
+        cJSON *ex = cJSON_AddObjectToObject(mesh, "extras");
+        cJSON *names = cJSON_AddArrayToObject(ex, "targetNames");
+        cJSON_AddItemToArray(names,
+                             cJSON_CreateString(d->morph_name ? d->morph_name : "displacement"));
+    }
+    /* white, rough, not metallic: the viewer shows COLOR_0 as it is */
+    cJSON *materials = cJSON_AddArrayToObject(root, "materials");
+    cJSON *mat = cJSON_CreateObject();
+    cJSON_AddStringToObject(mat, "name", name);
+    cJSON *pbr = cJSON_AddObjectToObject(mat, "pbrMetallicRoughness");
+    cJSON_AddItemToObject(pbr, "baseColorFactor", num_array((const double[]){1, 1, 1, 1}, 4));
+    cJSON_AddNumberToObject(pbr, "metallicFactor", 0.0);
+    cJSON_AddNumberToObject(pbr, "roughnessFactor", 0.8);
+    cJSON_AddItemToArray(materials, mat);
+
+    char *json = b.failed ? NULL : cJSON_PrintUnformatted(root);
+    if (!json) {
+        gb_free(&b);
+        return ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", path);
+    }
+    /* GLB: 12-byte header, the JSON chunk padded with spaces and the BIN
+     * chunk padded with zeros to 4 bytes (glTF 2.0 §4.4) */
+    size_t jl = strlen(json), jp = (jl + 3) & ~(size_t)3, bp = (b.len + 3) & ~(size_t)3;
+    size_t total = 12 + 8 + jp + 8 + bp;
+    unsigned char *out = total <= UINT32_MAX ? calloc(total, 1) : NULL;
+    ss_status st;
+    if (!out) {
+        st = ss_error_set(err, total > UINT32_MAX ? SS_ERR_INPUT : SS_ERR_NOMEM,
+                          "%s: %zu bytes do not fit a .glb", path, total);
+    } else {
+        put_u32(out, 0x46546C67u); /* "glTF" */
+        put_u32(out + 4, 2);
+        put_u32(out + 8, (uint32_t)total);
+        put_u32(out + 12, (uint32_t)jp);
+        put_u32(out + 16, 0x4E4F534Au); /* "JSON" */
+        memcpy(out + 20, json, jl);
+        memset(out + 20 + jl, ' ', jp - jl);
+        put_u32(out + 20 + jp, (uint32_t)bp);
+        put_u32(out + 24 + jp, 0x004E4942u); /* "BIN\0" */
+        memcpy(out + 28 + jp, b.data, b.len);
+        st = ss_write_file_atomic(path, out, total, err);
+    }
+    free(out);
+    free(json);
+    gb_free(&b);
     return st;
 }

@@ -55,11 +55,12 @@ struct ss_heal_run {
     /* real geometry (run_shell.c); shell NULL on the flat block */
     struct ss_shell_patch *shell;
     ss_mesh skin;
+    ss_mesh surf; /* skin refined around the wound: the mesh the snapshots map onto */
     char *skin_path, *wound_path; /* owned copies (a resume re-reads them) */
     int wound_is_uv;
     double shell_opts[6]; /* voxel, thickness, epidermis, depth, margin, units */
     int shell_concave;
-    float *vfields;          /* per skin vertex, SS_SHELL_VERTEX_STRIDE floats */
+    float *vfields;          /* per surf vertex, SS_SHELL_VERTEX_STRIDE floats */
     cJSON *shell_aux;        /* the checkpoint's "shell" object while resuming */
     ss_heal_run_hooks hooks; /* an external solver (src/dist); members NULL = none */
 };

@@ -24,6 +24,7 @@
 #include <unistd.h>
 
 #include "run_internal.h"
+#include "skinsim/shell.h"
 
 /* ---- checkpoint metadata ------------------------------------------------------------ */
 
@@ -223,6 +224,9 @@ static double estimate_bytes(const ss_heal_run *r) {
         map += (double)M->nnodes * 120 + (double)M->ntets * 50 + 200e3;
         ckpt += r->ckpt_every ? 3 * (double)ss_mech_state_size(r->mech) * 4 / 3 : 0;
     }
+    if (r->shell) /* the skin mesh: ASCII .vtu and binary .glb per snapshot */
+        map += (double)r->surf.nvertices * (140 + 4 * (SS_SHELL_VERTEX_STRIDE + 11)) +
+               (double)r->surf.ntriangles * 45 + 4096;
     return snaps * (vti + map) + ckpt + rows * 24.0 * (4 + SS_HEAL_NFIELDS) + 500e3;
 }
 

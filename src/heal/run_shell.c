@@ -2,8 +2,12 @@
  * src/heal/shell.c, skinsim/shell.h): the skin mesh and the wound (UV strokes
  * or a closed wound mesh) are read and checked, the healing grid is the
  * shell's patch around the wound, and every snapshot maps the fields and the
- * mechanics' displacement back onto the undeformed mesh
- * (surface/skin_NNNN.vtu with a surface/skin.pvd time series).
+ * mechanics' displacement back onto the undeformed mesh, refined around the
+ * wound to about the voxel size (ss_mesh_refine_near)
+ * (surface/skin_NNNN.vtu with a surface/skin.pvd time series for ParaView,
+ * and surface/skin_NNNN.glb for glTF viewers and Blender: the fields as
+ * vertex attributes, the displacement as a morph target, a wound-state
+ * vertex colour).
  *
  * Design: the patch is rebuilt from the same files on resume (its
  * construction is deterministic), so a checkpoint stores only the paths and
@@ -54,7 +58,17 @@ static ss_status build(ss_heal_run *r, ss_error *err) {
         if (st) return st;
     }
     if (!r->shell) return err->code ? err->code : SS_ERR_INPUT;
-    r->vfields = malloc((size_t)r->skin.nvertices * SS_SHELL_VERTEX_STRIDE * sizeof(float));
+    /* the mesh the fields are mapped onto: the skin's triangles near the
+     * wound split down to about the voxel (a hand's are 5 mm, a wound a few
+     * voxels), so the vertex data shows the wound and not a few vertices */
+    const ss_shell_patch *p = r->shell;
+    float c[3];
+    for (int d = 0; d < 3; d++) c[d] = (float)(p->wound_centre_mm[d] / p->units_mm);
+    if ((st = ss_mesh_refine_near(&r->skin, c,
+                                  (float)((1.5 * p->wound_radius_mm + 2 * p->dx_mm) / p->units_mm),
+                                  (float)(1.5 * p->dx_mm / p->units_mm), 6, &r->surf, err)))
+        return st;
+    r->vfields = malloc((size_t)r->surf.nvertices * SS_SHELL_VERTEX_STRIDE * sizeof(float));
     if (!r->vfields) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     return SS_OK;
 }
@@ -151,12 +165,15 @@ ss_status ss_heal_run__shell_snapshot(ss_heal_run *r, int idx, ss_error *err) {
     if (!r->shell) return SS_OK;
     float *const *u = r->mech ? ss_mech_grid_displacement(r->mech) : NULL;
     if (r->mech && !u) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
-    ss_shell_vertex_fields(r->shell, &r->skin, r->g, r->p, u, r->vfields);
+    ss_shell_vertex_fields(r->shell, &r->surf, r->g, r->p, u, r->vfields);
     char path[4400];
     snprintf(path, sizeof path, "%s/surface/skin_%04d.vtu", r->out_dir, idx);
     ss_status st =
-        ss_shell_surface_vtu_write(r->shell, &r->skin, r->vfields, path, r->g->t_days, err);
+        ss_shell_surface_vtu_write(r->shell, &r->surf, r->vfields, path, r->g->t_days, err);
     if (st) return st;
+    snprintf(path, sizeof path, "%s/surface/skin_%04d.glb", r->out_dir, idx);
+    if ((st = ss_shell_surface_glb_write(r->shell, &r->surf, r->vfields, path, r->g->t_days, err)))
+        return st;
     return ss_heal_run__series_pvd(r, "surface", "skin", err);
 }
 
@@ -167,6 +184,8 @@ void ss_heal_run__shell_summary(const ss_heal_run *r, cJSON *j) {
     cJSON_AddStringToObject(s, "mesh", r->skin_path);
     cJSON_AddNumberToObject(s, "vertices", r->skin.nvertices);
     cJSON_AddNumberToObject(s, "triangles", r->skin.ntriangles);
+    cJSON_AddNumberToObject(s, "surface_vertices", r->surf.nvertices);
+    cJSON_AddNumberToObject(s, "surface_triangles", r->surf.ntriangles);
     cJSON_AddNumberToObject(s, "units_mm", p->units_mm);
     cJSON_AddNumberToObject(s, "thickness_mm", r->shell_opts[1]);
     cJSON_AddItemToObject(s, "patch_origin_mm", cJSON_CreateDoubleArray(p->origin_mm, 3));
@@ -180,6 +199,7 @@ void ss_heal_run__shell_summary(const ss_heal_run *r, cJSON *j) {
 void ss_heal_run__shell_free(ss_heal_run *r) {
     ss_shell_patch_free(r->shell);
     ss_mesh_free(&r->skin);
+    ss_mesh_free(&r->surf);
     free(r->skin_path);
     free(r->wound_path);
     free(r->vfields);

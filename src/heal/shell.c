@@ -21,6 +21,13 @@
  *   cut out. A wound mesh is voxelised by ray parity along the column.
  * - Mapping back (§5.4): a vertex takes the fields of its column's surface
  *   cell and the displacement there, rotated into the mesh frame.
+ * - A wound that wraps around the body (a finger) is refused: its surface
+ *   normals, at the stroke points and at the mesh vertices inside it, may
+ *   turn at most SS_SHELL_MAX_WRAP_DEG from the patch's normal. Beyond that
+ *   the columns meet the skin at a grazing angle (the shell, measured along
+ *   the column, thins to thickness x cos) and past 90 degrees miss it.
+ *   For UV strokes the patch's normal is the mean of the stroke points'
+ *   normals; when that fails, the minimax normal (Badoiu-Clarkson) is tried.
  * - Closedness welds vertices by position (seams duplicate them) and asks
  *   every edge to have exactly two triangles; self-intersection casts every
  *   edge as a ray segment through the BVH: an edge that pierces a triangle
@@ -61,14 +68,6 @@ double ss_shell_units_for(const char *path, double units_mm) {
 
 /* ---- closedness and self-intersection ------------------------------------------- */
 
-static const float *sort_pos;
-static int cmp_pos(const void *a, const void *b) {
-    const float *p = sort_pos + 3 * *(const int *)a, *q = sort_pos + 3 * *(const int *)b;
-    for (int d = 0; d < 3; d++)
-        if (p[d] != q[d]) return p[d] < q[d] ? -1 : 1;
-    return *(const int *)a - *(const int *)b;
-}
-
 typedef struct sedge {
     int a, b, t;
 } sedge;
@@ -79,33 +78,10 @@ static int cmp_sedge(const void *x, const void *y) {
     return p->t - q->t;
 }
 
-/* weld[v]: the lowest-index vertex at the same position. Not thread-safe
- * (qsort's comparator reads a static); the meshes are checked once. */
-static int *weld_vertices(const ss_mesh *m) {
-    int n = m->nvertices;
-    int *order = malloc((size_t)n * sizeof(int)), *weld = malloc((size_t)n * sizeof(int));
-    if (!order || !weld) {
-        free(order);
-        free(weld);
-        return NULL;
-    }
-    for (int i = 0; i < n; i++) order[i] = i;
-    sort_pos = m->positions;
-    qsort(order, (size_t)n, sizeof(int), cmp_pos);
-    for (int i = 0; i < n; i++) {
-        const float *p = m->positions + 3 * order[i];
-        const float *q = i ? m->positions + 3 * order[i - 1] : NULL;
-        weld[order[i]] =
-            q && p[0] == q[0] && p[1] == q[1] && p[2] == q[2] ? weld[order[i - 1]] : order[i];
-    }
-    free(order);
-    return weld;
-}
-
 ss_status ss_shell_check_closed(const ss_mesh *m, const char *name, ss_error *err) {
     if (!m || m->ntriangles < 4)
         return ss_error_set(err, SS_ERR_INPUT, "%s: too few triangles for a closed surface", name);
-    int *weld = weld_vertices(m);
+    int *weld = malloc((size_t)m->nvertices * sizeof *weld);
     sedge *e = malloc(3 * (size_t)m->ntriangles * sizeof *e);
     ss_bvh *bvh = NULL;
     ss_status st = SS_OK;
@@ -113,6 +89,7 @@ ss_status ss_shell_check_closed(const ss_mesh *m, const char *name, ss_error *er
         st = ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", name);
         goto done;
     }
+    if ((st = ss_mesh_weld(m, weld, err))) goto done;
     for (int t = 0; t < m->ntriangles; t++) {
         int v[3];
         for (int k = 0; k < 3; k++) v[k] = weld[m->indices[3 * t + k]];
@@ -410,6 +387,82 @@ static ss_status check_opts(const ss_shell_opts *o, ss_error *err) {
     return SS_OK;
 }
 
+/* ---- how far a wound wraps around the body ------------------------------------------ */
+
+/* The smooth (vertex-interpolated) normal of triangle t at uv. */
+static void smooth_normal_at_uv(const ss_mesh *m, int t, const float uv[2], double nrm[3]) {
+    const uint32_t *q = m->indices + 3 * t;
+    const float *a = m->uvs + 2 * q[0], *b = m->uvs + 2 * q[1], *c = m->uvs + 2 * q[2];
+    double d = (double)(b[0] - a[0]) * (c[1] - a[1]) - (double)(c[0] - a[0]) * (b[1] - a[1]);
+    double w1 = 1.0 / 3, w2 = 1.0 / 3;
+    if (fabs(d) > 1e-30) {
+        w1 = ((double)(uv[0] - a[0]) * (c[1] - a[1]) - (double)(c[0] - a[0]) * (uv[1] - a[1])) / d;
+        w2 = ((double)(b[0] - a[0]) * (uv[1] - a[1]) - (double)(uv[0] - a[0]) * (b[1] - a[1])) / d;
+    }
+    double w[3] = {1 - w1 - w2, w1, w2};
+    for (int k = 0; k < 3; k++) nrm[k] = 0;
+    for (int v = 0; v < 3; v++)
+        for (int k = 0; k < 3; k++) nrm[k] += w[v] * m->normals[3 * q[v] + k];
+    normalise(nrm);
+}
+
+/* Angle in degrees between unit n and nrm (normalised here). */
+static double angle_deg(const double n[3], double nrm[3]) {
+    normalise(nrm);
+    double c = n[0] * nrm[0] + n[1] * nrm[1] + n[2] * nrm[2];
+    return acos(c > 1 ? 1 : c < -1 ? -1 : c) * 57.295779513082321; /* radians to degrees */
+}
+
+/* The largest angle (degrees) between unit n and the unit normals nrm[0..ns),
+ * and in *at the index where it is. */
+static double max_angle(double (*nrm)[3], int ns, const double n[3], int *at) {
+    double worst = 0;
+    *at = 0;
+    for (int i = 0; i < ns; i++) {
+        double v[3] = {nrm[i][0], nrm[i][1], nrm[i][2]}, a = angle_deg(n, v);
+        if (a > worst) worst = a, *at = i;
+    }
+    return worst;
+}
+
+/* The direction whose largest angle to the normals is smallest (the axis of
+ * the narrowest cone holding them), by Badoiu and Clarkson's iteration for
+ * the smallest enclosing ball: step towards the farthest normal by 1/(k+1),
+ * renormalise. Deterministic; from n0. */
+static void minimax_normal(double (*nrm)[3], int ns, const double n0[3], double m[3]) {
+    memcpy(m, n0, 3 * sizeof *m);
+    for (int k = 1; k <= 400 && ns > 0; k++) {
+        int w;
+        max_angle(nrm, ns, m, &w);
+        for (int d = 0; d < 3; d++) m[d] += (nrm[w][d] - m[d]) / (k + 1);
+        normalise(m);
+    }
+}
+
+/* The stroke points' largest distance from c across n (the wound radius). */
+static double projected_radius(double (*pos)[3], int np, const double c[3], const double n[3]) {
+    double rw = 0;
+    for (int i = 0; i < np; i++) {
+        double v[3], h = 0, r2 = 0;
+        for (int d = 0; d < 3; d++) v[d] = pos[i][d] - c[d];
+        for (int d = 0; d < 3; d++) h += v[d] * n[d];
+        for (int d = 0; d < 3; d++) r2 += (v[d] - h * n[d]) * (v[d] - h * n[d]);
+        if (sqrt(r2) > rw) rw = sqrt(r2);
+    }
+    return rw;
+}
+
+static ss_status wrap_error(ss_error *err, const char *wound, const char *skin, double deg,
+                            const double at_mm[3]) {
+    return ss_error_set(err, SS_ERR_INPUT,
+                        "%s: the wound wraps around the surface of %s: its surface turns %.0f "
+                        "degrees away from the skin patch's normal (at %.1f, %.1f, %.1f mm), more "
+                        "than the %d degrees one skin patch can hold (its voxel columns follow one "
+                        "direction, so the wound's steep sides would be cut off); split it into "
+                        "wounds that each face one way and run them separately",
+                        wound, skin, deg, at_mm[0], at_mm[1], at_mm[2], SS_SHELL_MAX_WRAP_DEG);
+}
+
 ss_shell_patch *ss_shell_patch_from_uv(const ss_mesh *skin, const char *skin_name, const char *csv,
                                        const ss_shell_opts *o, ss_error *err) {
     if (check_opts(o, err)) return NULL;
@@ -423,6 +476,7 @@ ss_shell_patch *ss_shell_patch_from_uv(const ss_mesh *skin, const char *skin_nam
     int *island = malloc((size_t)skin->ntriangles * sizeof(int));
     int *pisl = malloc((size_t)s.nstrokes * sizeof(int));
     double(*pos)[3] = malloc((size_t)s.npoints * sizeof *pos);
+    double(*nrm)[3] = NULL, (*npos)[3] = NULL; /* surface normals over the wound, and where */
     ss_image *fp = NULL;
     ss_shell_patch *p = NULL;
     if (!island || !pisl || !pos) {
@@ -459,16 +513,60 @@ ss_shell_patch *ss_shell_patch_from_uv(const ss_mesh *skin, const char *skin_nam
             n[d] += tn[d];
         }
     }
-    double rw = 0;
     normalise(n);
-    for (int i = 0; i < s.npoints; i++) {
-        double v[3], h = 0, r2 = 0;
-        for (int d = 0; d < 3; d++) v[d] = pos[i][d] - c[d];
-        for (int d = 0; d < 3; d++) h += v[d] * n[d];
-        for (int d = 0; d < 3; d++) r2 += (v[d] - h * n[d]) * (v[d] - h * n[d]);
-        if (sqrt(r2) > rw) rw = sqrt(r2);
-    }
+    double rw = projected_radius(pos, s.npoints, c, n);
     if (!(fp = ss_stroke_footprint(&s, 2048, 2048, o->concave_k, csv, err))) goto done;
+    /* how far the wound wraps: the smooth surface normal at every stroke
+     * point and at every mesh vertex inside a hull (vertices far from the
+     * strokes are skipped: a layout that mirrors UVs puts another part of
+     * the body under the same hulls) */
+    if (!(nrm = malloc(((size_t)s.npoints + (size_t)skin->nvertices) * sizeof *nrm)) ||
+        !(npos = malloc(((size_t)s.npoints + (size_t)skin->nvertices) * sizeof *npos))) {
+        ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", csv);
+        goto done;
+    }
+    int ns = 0;
+    for (int i = 0; i < s.npoints; i++) {
+        float uv[2] = {(float)s.u[i], (float)s.v[i]}, ps[3];
+        int t = ss_mesh_locate_uv(skin, uv, ps);
+        if (t < 0) continue; /* cannot happen: every point was located above */
+        smooth_normal_at_uv(skin, t, uv, nrm[ns]);
+        memcpy(npos[ns++], pos[i], sizeof npos[0]);
+    }
+    const double near2 = (2 * rw + 5) * (2 * rw + 5);
+    for (int v = 0; v < skin->nvertices; v++) {
+        int px = (int)(skin->uvs[2 * v] * fp->width), py = (int)(skin->uvs[2 * v + 1] * fp->height);
+        if (px < 0 || py < 0 || px >= fp->width || py >= fp->height ||
+            !(fp->data[(size_t)py * fp->width + px] > 0.5f))
+            continue;
+        double dd = 0;
+        for (int d = 0; d < 3; d++) {
+            npos[ns][d] = skin->positions[3 * v + d] * units;
+            nrm[ns][d] = skin->normals[3 * v + d];
+            dd += (npos[ns][d] - c[d]) * (npos[ns][d] - c[d]);
+        }
+        if (dd <= near2) normalise(nrm[ns++]);
+    }
+    int wi;
+    double worst = max_angle(nrm, ns, n, &wi);
+    if (worst > SS_SHELL_MAX_WRAP_DEG) {
+        /* the mean of the stroke points' normals leans to where the points
+         * are dense: the normal that minimises the largest angle may hold
+         * the wound (then the patch takes it) */
+        double m[3];
+        minimax_normal(nrm, ns, n, m);
+        int wj;
+        double w2 = max_angle(nrm, ns, m, &wj);
+        if (w2 < worst) {
+            worst = w2, wi = wj;
+            memcpy(n, m, sizeof m);
+            rw = projected_radius(pos, s.npoints, c, n);
+        }
+    }
+    if (worst > SS_SHELL_MAX_WRAP_DEG) {
+        wrap_error(err, csv, skin_name, worst, npos[wi]);
+        goto done;
+    }
     wound_src ws = {fp, o->depth_mm, NULL, NULL};
     p = build_patch(skin, skin_name, c, n, rw + o->voxel_mm, o, units, &ws, err);
     if (p && p->wound_cells == 0) {
@@ -484,6 +582,8 @@ done:
     free(island);
     free(pisl);
     free(pos);
+    free(nrm);
+    free(npos);
     ss_stroke_set_free(&s);
     return p;
 }
@@ -528,6 +628,33 @@ ss_shell_patch *ss_shell_patch_from_mesh(const ss_mesh *skin, const char *skin_n
 
     wound_src ws = {NULL, 0, wound, ss_bvh_build(wound, err)};
     if (!ws.wbvh) return NULL;
+    /* how far the wound wraps: the normal of every skin vertex inside the
+     * wound mesh (ray parity) against the skin's normal facing the wound */
+    normalise(n);
+    for (int v = 0; v < skin->nvertices; v++) {
+        const float *q = skin->positions + 3 * v;
+        int inside = 1;
+        for (int d = 0; d < 3; d++)
+            inside &= q[d] >= wound->bbox_min[d] && q[d] <= wound->bbox_max[d];
+        if (!inside) continue;
+        const float dir[3] = {0.5773503f, 0.5773503f, 0.5773503f};
+        int crossings = 0;
+        float t0 = 0;
+        ss_ray_hit h;
+        while (crossings < 1000 && ss_bvh_raycast(ws.wbvh, q, dir, t0, 1e30f, &h)) {
+            crossings++;
+            t0 = h.t + 1e-6f;
+        }
+        if (!(crossings & 1)) continue;
+        double sn[3] = {skin->normals[3 * v], skin->normals[3 * v + 1], skin->normals[3 * v + 2]};
+        double a = angle_deg(n, sn);
+        if (a > SS_SHELL_MAX_WRAP_DEG) {
+            double at[3] = {q[0] * units, q[1] * units, q[2] * units};
+            wrap_error(err, wound_name, skin_name, a, at);
+            ss_bvh_free(ws.wbvh);
+            return NULL;
+        }
+    }
     ss_shell_patch *p = build_patch(skin, skin_name, c, n, rw, o, units, &ws, err);
     ss_bvh_free(ws.wbvh);
     if (p && p->wound_cells == 0) {
@@ -659,4 +786,73 @@ ss_status ss_shell_surface_vtu_write(const ss_shell_patch *p, const ss_mesh *ski
         return ss_error_set(err, SS_ERR_RUNTIME, "%s: write failed", path);
     }
     return ss_atomic_commit(&af, err);
+}
+
+void ss_shell_wound_colour(const float *f, float rgb[3]) {
+    static const float skin[3] = {0.70f, 0.42f, 0.32f}, raw[3] = {0.45f, 0.03f, 0.03f},
+                       pink[3] = {0.85f, 0.38f, 0.40f}, crust[3] = {0.10f, 0.03f, 0.015f};
+    float e = f[SS_HEAL_EPITHELIUM], s = f[SS_HEAL_ESCHAR], rho = f[SS_HEAL_SCAR];
+    e = e > 0 ? (e < 1 ? e : 1) : 0;
+    s = s > 0 ? (s < 1 ? s : 1) : 0;
+    /* how much of this vertex is wound tissue: the clot's plasma, then the
+     * scar's collagen that replaces it */
+    float w = f[SS_HEAL_PLASMA] > SS_HEAL_P_MIN ? 1.0f : (rho > 0 ? (rho < 1 ? rho : 1) : 0);
+    for (int c = 0; c < 3; c++) {
+        float bed = raw[c] + (pink[c] - raw[c]) * e;
+        float v = skin[c] + (bed - skin[c]) * w;
+        rgb[c] = v + (crust[c] - v) * s;
+    }
+}
+
+ss_status ss_shell_surface_glb_write(const ss_shell_patch *p, const ss_mesh *skin, const float *vf,
+                                     const char *path, double t_days, ss_error *err) {
+    enum { NA = SS_HEAL_NFIELDS + 1 };
+    const int nv = skin->nvertices, S = SS_SHELL_VERTEX_STRIDE;
+    float *a = malloc((size_t)nv * NA * sizeof *a), *col = malloc((size_t)nv * 3 * sizeof *col),
+          *dl = malloc((size_t)nv * 3 * sizeof *dl);
+    if (!a || !col || !dl) {
+        free(a), free(col), free(dl);
+        return ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", path);
+    }
+    char names[NA][32];
+    ss_gltf_vertex_attr at[NA];
+    for (int k = 0; k < NA; k++) {
+        const char *n = k < SS_HEAL_NFIELDS ? ss_heal_field_name(k) : "open_wound";
+        names[k][0] = '_';
+        int i = 0;
+        for (; n[i] && i < 30; i++)
+            names[k][i + 1] = (char)(n[i] >= 'a' && n[i] <= 'z' ? n[i] - 32 : n[i]);
+        names[k][i + 1] = '\0';
+        at[k] = (ss_gltf_vertex_attr){names[k], a + (size_t)k * nv, 1};
+    }
+    const double thr = ss_heal_open_threshold();
+    for (int v = 0; v < nv; v++) {
+        const float *f = vf + (size_t)S * v;
+        for (int k = 0; k < SS_HEAL_NFIELDS; k++) a[(size_t)k * nv + v] = f[k];
+        a[(size_t)SS_HEAL_NFIELDS * nv + v] =
+            f[SS_HEAL_PLASMA] > SS_HEAL_P_MIN && f[SS_HEAL_EPITHELIUM] < thr ? 1.0f : 0.0f;
+        ss_shell_wound_colour(f, col + 3 * (size_t)v);
+        for (int d = 0; d < 3; d++) /* mm -> mesh units */
+            dl[3 * (size_t)v + d] = (float)(f[SS_HEAL_NFIELDS + d] / p->units_mm);
+    }
+    char extras[512];
+    int len = snprintf(extras, sizeof extras, "{\"t_days\":%.17g,\"units\":\"m\",\"attributes\":[",
+                       t_days);
+    for (int k = 0; k < NA; k++)
+        len +=
+            snprintf(extras + len, sizeof extras - (size_t)len, "%s\"%s\"", k ? "," : "", names[k]);
+    snprintf(extras + len, sizeof extras - (size_t)len,
+             "],\"morph_target\":\"displacement\",\"color\":\"wound state\"}");
+    ss_gltf_vertex_data d = {.scale_m = p->units_mm / 1000.0,
+                             .name = "skin",
+                             .color = col,
+                             .attrs = at,
+                             .nattrs = NA,
+                             .morph_delta = dl,
+                             .morph_name = "displacement",
+                             .morph_weight = 1.0,
+                             .extras_json = extras};
+    ss_status st = ss_gltf_write_mesh_glb(path, skin, &d, err);
+    free(a), free(col), free(dl);
+    return st;
 }

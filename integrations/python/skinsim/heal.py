@@ -63,6 +63,12 @@ class Run:
     wound_depth_mm, scheme ("split" | "explicit"), dt_days, area_every,
     snapshot_every, checkpoint_every, params_path, no_scab, static_region,
     out_dir (None: in memory), force, resume_dir, seed
+    mechanics      True: wound contraction (mass-spring mechanics, docs/mech.md)
+    skin_mesh      closed OBJ/glTF/GLB body surface: the grid becomes a patch of
+                   skin around the wound on it (docs/mech.md, "Real geometry"),
+                   with the wound as wound_uv (strokes CSV in the mesh's UV
+                   space) or wound_mesh (closed mesh in the mesh's units);
+                   voxel_mm, skin_thickness_mm, mesh_units_mm as the options
     Bad input raises InputError with the library's message, which names the
     setting by its command-line option.
     """
@@ -72,7 +78,8 @@ class Run:
                  dt_days=None, area_every=None, snapshot_every=None, checkpoint_every=None,
                  params_path=None, no_scab=False, static_region=False, out_dir=None,
                  force=False, resume_dir=None, seed=None, concave_k=None, skin_top_mm=None,
-                 epidermis_mm=None):
+                 epidermis_mm=None, mechanics=False, skin_mesh=None, wound_uv=None,
+                 voxel_mm=None, skin_thickness_mm=None, mesh_units_mm=None):
         self._h = None
         c = L.ss_heal_run_config()
         L.lib.ss_heal_run_config_default(ctypes.byref(c))
@@ -112,6 +119,13 @@ class Run:
         else:
             c.wound_mask = text(wound_mask)
         c.wound_stroke = text(wound_stroke)
+        c.mechanics = 1 if mechanics else 0
+        c.skin_mesh = text(skin_mesh)
+        c.wound_uv = text(wound_uv)
+        for name, v in (("voxel_mm", voxel_mm), ("skin_thickness_mm", skin_thickness_mm),
+                        ("mesh_units_mm", mesh_units_mm)):
+            if v is not None:
+                setattr(c, name, float(v))
         c.wound_mesh = text(wound_mesh)
         if concave_k is not None:
             c.concave_k = int(concave_k)

@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# End-to-end: the skin-surface .glb of `skinsim heal --mesh` (a wound on the
+# hand, with the mechanics) imported by the distribution's Blender, headless
+# (tests/blender_glb_check.py): vertex colours, the displacement shape key,
+# the extras, and on Blender >= 3.5 the _ field attributes. Runs with `make
+# test-blender` (SKINSIM_TEST_BLENDER=1); skipped (77) in the ordinary suite,
+# where Blender may be missing, or without the hand mesh.
+set -u
+CLI="$(cd "$(dirname "$1")" && pwd)/$(basename "$1")"
+SRC="$(cd "$2" && pwd)"
+[ "${SKINSIM_TEST_BLENDER:-0}" = 1 ] || { echo "SKIP: run with make test-blender"; exit 77; }
+command -v blender >/dev/null || { echo "SKIP: blender is not installed"; exit 77; }
+HAND="$SRC/data/meshes/generic-hand-left.glb"
+[ -f "$HAND" ] || { echo "SKIP: no hand mesh"; exit 77; }
+T=$(mktemp -d /tmp/skinsim-e2e-blglb-XXXXXX)
+trap 'rm -rf "$T"' EXIT
+python3 "$SRC/tests/strokes_ellipse.py" 0.2 0.62 0.02 0.014 >"$T/cut.csv"
+"$CLI" heal --mesh "$HAND" --wound-uv "$T/cut.csv" --voxel-mm 1 --mechanics --days 0.2 \
+    --snapshot-every 0 --quiet --out "$T/run" || { echo "FAIL: heal run"; exit 1; }
+unset LD_PRELOAD
+for snap in "0000 0" "0001 0.2"; do
+    set -- $snap
+    blender -b --factory-startup --python-exit-code 1 --python "$SRC/tests/blender_glb_check.py" \
+        -- "$T/run/surface/skin_$1.glb" "$2" >"$T/bl.txt" 2>&1
+    rc=$?
+    grep -E "blender|shape key|drops|Error|assert" "$T/bl.txt"
+    [ $rc -eq 0 ] || { echo "FAIL: blender check of skin_$1.glb"; tail -20 "$T/bl.txt"; exit 1; }
+done
+echo "e2e_blender_glb: OK"
