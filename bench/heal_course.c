@@ -4,7 +4,7 @@
  * bench/heal_tables.sh builds from it. Prints one JSON object.
  * Usage: bench_heal_course [--scenario S] [--dx MM] [--block MM] [--wound MM]
  *        [--depth MM] [--days D] [--dt D] [--late-dt D] [--deep-day D]
- *        [--keloid-thr R] [--set KEY=VALUE]... [--scale KEY=FACTOR]...
+ *        [--keloid-thr R] [--keloid-days A,B] [--set KEY=VALUE]... [--scale KEY=FACTOR]...
  *        bench_heal_course [--scenario S] --get KEY   (prints the preset value)
  * Figures only; nothing is asserted. */
 #include <stdio.h>
@@ -31,7 +31,7 @@ static int set_param(ss_heal_params *p, const char *kv, int scale) {
 
 int main(int argc, char **argv) {
     const char *scen = "clean";
-    ss_heal_course_opts o = {30.0, 20.0, 1.0, 0.5, 30.0, 0.05, 0.0, 21.0, 0.0};
+    ss_heal_course_opts o = {30.0, 20.0, 1.0, 0.5, 30.0, 0.05, 0.0, 21.0, 0.0, {0, 0}};
     for (int i = 1; i < argc; i++)
         if (!strcmp(argv[i], "--scenario") && i + 1 < argc) scen = argv[++i];
     ss_error err;
@@ -63,6 +63,12 @@ int main(int argc, char **argv) {
             o.deep_check_day = atof(v), i++;
         } else if (v && !strcmp(a, "--keloid-thr")) {
             o.keloid_thr = atof(v), i++;
+        } else if (v && !strcmp(a, "--keloid-days")) {
+            if (sscanf(v, "%lf,%lf", &o.keloid_day[0], &o.keloid_day[1]) != 2) {
+                fprintf(stderr, "bench_heal_course: --keloid-days wants A,B (days)\n");
+                return 2;
+            }
+            i++;
         } else if (v && !strcmp(a, "--get")) {
             double val;
             if (ss_heal_param_get(p, v, &val, &err)) {
@@ -94,11 +100,13 @@ int main(int argc, char **argv) {
         "\"scar_peak_mm3\": %.4f, \"scar_peak_day\": %.2f, \"scar_end_mm3\": %.4f, "
         "\"scar_max_peak\": %.4f, \"half_life_days\": %.1f, \"deep_e_fraction\": %.4f, "
         "\"keloid_beyond_mm\": %.3f, \"keloid_beyond_t95\": %.3f, \"keloid_area_mm2\": %.1f, "
-        "\"region_area_mm2\": %.1f, \"steps\": %ld, \"wall_s\": %.2f}\n",
+        "\"region_area_mm2\": %.1f, \"keloid_beyond_days\": [%.3f, %.3f], "
+        "\"keloid_beyond_max\": %.3f, \"scar_max_end\": %.4f, \"steps\": %ld, \"wall_s\": %.2f}\n",
         scen, o.dx_mm, o.block_mm, o.wound_mm, o.days, c.t50, c.t95, c.scab_day, c.scab_gone_day,
         c.scar_peak_mm3, c.scar_peak_day, c.scar_end_mm3, c.scar_max_peak, c.half_life_days,
         c.deep_e_fraction, c.keloid_beyond_mm, c.keloid_beyond_t95, c.keloid_area_mm2,
-        c.region_area_mm2, c.steps, c.wall_s);
+        c.region_area_mm2, c.keloid_beyond_day[0], c.keloid_beyond_day[1], c.keloid_beyond_max,
+        c.scar_max_end, c.steps, c.wall_s);
     ss_heal_params_free(p);
     return 0;
 }

@@ -5,7 +5,11 @@
 # rank on THREADS OpenMP threads (default 1).
 # Prints one Markdown row per run with the slowest rank's kernel time and halo
 # exchange time per step, separated, and the halo bytes each rank sends per
-# step. Runs each case REPEAT times (default 3) and keeps the best.
+# step. Runs each case REPEAT times (default 3) and keeps the best. The
+# explicit scheme also runs the strong cases without the overlap of the halo
+# exchange and the interior kernel (SKINSIM_DIST_OVERLAP=0: the exchange
+# completes before the kernel, as before the overlap) and with boxes stacked in
+# z (SKINSIM_MPI_DIMS=1x1x2 and 2x1x2).
 # Usage: bench/heal_mpi.sh [BUILD_DIR] [STEPS] [REPEAT] [THREADS] [SCHEME]
 # mpirun runs as root here only with --allow-run-as-root (DESIGN.md).
 set -eu
@@ -52,7 +56,7 @@ row() { # kind np grid base_step
     cells=$(echo "$3" | tr x ' ' | awk '{print $1 * $2 * $3}')
     step=$(echo "$5 $6" | awk '{print $1 + $2}')
     [ "$4" = 0 ] && set -- "$1" "$2" "$3" "$step" "$5" "$6" "$7" "$8" "$9"
-    eff=$(echo "$4 $step $2 $1" | awk '{ if ($4 == "strong") printf "%.0f%%", 100 * $1 / ($2 * $3); else printf "%.0f%%", 100 * $1 / $2 }')
+    eff=$(echo "$4 $step $2 $1" | awk '{ if ($4 ~ /^strong/) printf "%.0f%%", 100 * $1 / ($2 * $3); else printf "%.0f%%", 100 * $1 / $2 }')
     rate=$(echo "$cells $step" | awk '{printf "%.2e", 8 * $1 / $2}')
     echo "| $1 | $2 | $3 | $5 | $6 | $step | $rate | $eff | $9 |"
 }
@@ -66,6 +70,12 @@ row strong 1 160x124x159 0 >"$tmp/base" && cat "$tmp/base"
 base=$(awk -F'|' '{print $7}' "$tmp/base")
 row strong 2 160x124x159 "$base"
 row strong 4 160x124x159 "$base"
+if [ "$scheme" = explicit ]; then
+    (export SKINSIM_DIST_OVERLAP=0; row strong-no-overlap 2 160x124x159 "$base")
+    (export SKINSIM_DIST_OVERLAP=0; row strong-no-overlap 4 160x124x159 "$base")
+    (export SKINSIM_MPI_DIMS=1x1x2; row strong-1x1x2 2 160x124x159 "$base")
+    (export SKINSIM_MPI_DIMS=2x1x2; row strong-2x1x2 4 160x124x159 "$base")
+fi
 row weak 1 80x62x159 0 >"$tmp/base" && cat "$tmp/base"
 wbase=$(awk -F'|' '{print $7}' "$tmp/base")
 row weak 2 160x62x159 "$wbase"

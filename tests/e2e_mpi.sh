@@ -3,10 +3,12 @@
 # 3 and 4 ranks (mpirun --oversubscribe on this 2-core machine) writes the same
 # bytes as the single-process run: area.csv, every VTK snapshot, fields.pvd,
 # run.json, the surface maps and summary.json (less its wall time and thread
-# count), on a grid that divides by the rank counts and one that does not; a
-# run checkpointed on 4 ranks resumes on 3 to the uninterrupted single-process
-# result; bad input (too many ranks for the grid with either scheme, the
-# mechanics, a missing or damaged checkpoint) exits 2 on every rank with
+# count), on a grid that divides by the rank counts and one that does not, and
+# with boxes stacked in z (SKINSIM_MPI_DIMS=1x1x2 and 2x1x2); a run
+# checkpointed on a 2x1x2 process grid resumes on 3 ranks to the uninterrupted
+# single-process result; bad input (too many ranks for the grid with either
+# scheme, z boxes too thin, a bad SKINSIM_MPI_DIMS, the mechanics, a missing
+# or damaged checkpoint) exits 2 on every rank with
 # nothing written; `optics table` on 2 and 4 ranks writes the bytes of the
 # single-process table. Skips (77) without mpirun or without an MPI build.
 # usage: e2e_mpi.sh <skinsim> <source dir>
@@ -60,9 +62,20 @@ EXPL="--scheme explicit --scenario scab --days 0.6 --snapshot-every 0.3 --area-e
     equal_on_ranks explicit-24x20x8 "2 4" --grid 24x20x8 $EXPL
 equal_on_ranks explicit-23x17x9 "1 2 3 4" --grid 23x17x9 $EXPL
 
+# --- z split too (SKINSIM_MPI_DIMS; the explicit scheme): boxes stacked in z,
+# the column values of the epithelium handed down the stack; 9 levels in 2
+# boxes of 4 and 5, 23 and 17 columns over 2 and 1
+for dims in 1x1x2 2x1x2; do
+    np=$(echo "$dims" | awk -Fx '{print $1 * $2 * $3}')
+    SKINSIM_MPI_DIMS=$dims run_np "$np" heal --grid 23x17x9 $EXPL --out "$T/zsplit-$dims" ||
+        fail "run on the process grid $dims"
+    same_run "$T/explicit-23x17x9" "$T/zsplit-$dims"
+done
+echo "ok: heal bit-identical with z split (process grids 1x1x2, 2x1x2)"
+
 # --- per-rank pieces: fields_NNNN.pvti joins one .vti per rank, which together
 # hold exactly the gathered snapshot
-python3 - "$T/explicit-23x17x9-4/fields" <<'PY' || fail "the .pvti pieces do not make up the gathered snapshot"
+pieces_ok() { python3 - "$1" <<'PY' || fail "$1: the .pvti pieces do not make up the gathered snapshot"
 import re, struct, sys
 def read(path):  # extent, [(itemsize, bytes)] of the appended arrays
     b = open(path, 'rb').read()
@@ -100,7 +113,10 @@ for ext_s, src in pieces:
                 cover[(x, y, z)] = cover.get((x, y, z), 0) + 1
 assert len(cover) == NX * NY * NZ and set(cover.values()) == {1}, "pieces overlap or leave gaps"
 PY
-echo "ok: per-rank .vti pieces + .pvti equal the gathered snapshot"
+}
+pieces_ok "$T/explicit-23x17x9-4/fields"
+pieces_ok "$T/zsplit-2x1x2/fields"
+echo "ok: per-rank .vti pieces + .pvti equal the gathered snapshot (x-y and x-z splits)"
 
 # --- the split scheme (the default): y sweeps on x slabs, reached by transposes
 equal_on_ranks split-23x17x9 "1 2 3 4" --grid 23x17x9 --scenario scab --days 1 --snapshot-every 0.5 \
@@ -117,7 +133,9 @@ echo "ok: adaptive steps (with retries) bit-identical on 3 ranks"
 # --- checkpoint on 4 ranks, resume on 3: the uninterrupted single-process result
 OPTS="--scheme explicit --grid 23x17x9 --scenario scab --snapshot-every 0.3 --area-every 0.05 --quiet --threads 1"
 "$CLI" heal $OPTS --days 0.9 --out "$T/full" || fail "single-process 0.9-day run"
-run_np 4 heal $OPTS --days 0.6 --checkpoint-every 0.3 --out "$T/cut" || fail "4-rank run with checkpoints"
+# (written on a 2x1x2 process grid: boxes stacked in z too)
+SKINSIM_MPI_DIMS=2x1x2 run_np 4 heal $OPTS --days 0.6 --checkpoint-every 0.3 --out "$T/cut" ||
+    fail "4-rank run with checkpoints"
 ls "$T"/cut/checkpoints/*.sshc >/dev/null 2>&1 || fail "no checkpoint written on 4 ranks"
 run_np 3 heal --resume "$T/cut" --days 0.9 --quiet || fail "resume on 3 ranks"
 cmp -s "$T/full/area.csv" "$T/cut/area.csv" || fail "resumed (4 -> 3 ranks) area.csv differs"
@@ -147,6 +165,13 @@ bad ranks "too many" 5 heal --scheme explicit --grid 4x40x8 --days 0.1 --out "$T
 [ -e "$T/bad1" ] && fail "too many ranks: output written"
 bad split "--scheme split" 5 heal --grid 40x4x8 --days 0.1 --out "$T/bad2"
 [ -e "$T/bad2" ] && fail "split on too many ranks: output written"
+SKINSIM_MPI_DIMS=1x1x4 bad zthin "fewer than 3 levels" 4 heal --scheme explicit --grid 23x17x9 \
+    --days 0.1 --out "$T/bad5"
+[ -e "$T/bad5" ] && fail "z boxes too thin: output written"
+SKINSIM_MPI_DIMS=1x1x2 bad zsplit "split scheme" 2 heal --grid 23x17x9 --days 0.1 --out "$T/bad6"
+SKINSIM_MPI_DIMS=2x2 bad dims "SKINSIM_MPI_DIMS" 4 heal --scheme explicit --grid 23x17x9 \
+    --days 0.1 --out "$T/bad7"
+[ -e "$T/bad6" ] || [ -e "$T/bad7" ] && fail "bad process grid: output written"
 bad mech "--mechanics" 2 heal --scheme explicit --mechanics --grid 24x20x8 --days 0.1 --out "$T/bad3"
 [ -e "$T/bad3" ] && fail "mechanics on 2 ranks: output written"
 bad missing "resume" 3 heal --resume "$T/nowhere" --quiet

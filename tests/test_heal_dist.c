@@ -2,13 +2,15 @@
  * the exact statistics give the same figures however the columns are split
  * and merged (and are exact where a float sum is not); the sub-box solver
  * (ss_heal_solver_create_sub) steps a box with a one-cell halo to the same
- * bits as the whole grid, and the split step in phases equals ss_heal_step. */
+ * bits as the whole grid, and the split step in phases and the explicit step
+ * in parts equal ss_heal_step. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "testutil.h"
 #include "skinsim/heal.h"
+#include "skinsim/heal_io.h"
 
 /* scab scenario: a 6 mm wound in a block of nx x ny x nz 0.5 mm voxels */
 static ss_heal_grid *problem(const ss_heal_params *p, int nx, int ny, int nz) {
@@ -90,6 +92,75 @@ static void cut(const ss_heal_grid *G, ss_heal_grid *b, int x0, int y0) {
             }
 }
 
+/* The same with a halo in z too: levels [z0 - 1, z0 - 1 + b->nz) of G. */
+static void cut3(const ss_heal_grid *G, ss_heal_grid *b, int z0) {
+    for (int z = 0; z < b->nz; z++)
+        for (int y = 0; y < b->ny; y++)
+            for (int x = 0; x < b->nx; x++) {
+                int X = x - 1, Y = y - 1, Z = z0 - 1 + z;
+                size_t c = ss_heal_idx(b, x, y, z);
+                int in = X >= 0 && Y >= 0 && Z >= 0 && X < G->nx && Y < G->ny && Z < G->nz;
+                b->cell[c] = in ? G->cell[ss_heal_idx(G, X, Y, Z)] : SS_CELL_BOUND;
+                for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+                    b->field[f][c] = in ? G->field[f][ss_heal_idx(G, X, Y, Z)] : 0.0f;
+            }
+    b->skin_top_mm = G->skin_top_mm;
+    b->t_days = G->t_days;
+}
+
+/* A stack of two boxes in z (the MPI driver's z split): the statistics and the
+ * closure days scanned down the stack, top box first, equal the whole grid's. */
+static void test_stack_columns(void **state) {
+    (void)state;
+    ss_error err;
+    ss_heal_params *p = ss_heal_params_preset("scab", &err);
+    ss_heal_grid *G = problem(p, 23, 17, 9);
+    run(G, p, SS_HEAL_EXPLICIT, 40);
+    /* levels 0..4 (bottom) and 5..8 (top), each with a one-level halo */
+    ss_heal_grid *bot = ss_heal_grid_create(25, 19, 7, 0.5, &err);
+    ss_heal_grid *top = ss_heal_grid_create(25, 19, 6, 0.5, &err);
+    assert_non_null(bot);
+    assert_non_null(top);
+    cut3(G, bot, 0);
+    cut3(G, top, 5);
+    ss_heal_col_state cols[23 * 17];
+    memset(cols, 0, sizeof cols);
+    ss_heal_stats_acc a;
+    ss_heal_stats_acc_init(&a);
+    ss_heal_stats_acc_add_stack(&a, top, 1, 24, 1, 18, 4, 9, cols, 0);
+    ss_heal_stats_acc_add_stack(&a, bot, 1, 24, 1, 18, -1, 9, cols, 1);
+    ss_heal_stats whole, stacked;
+    ss_heal_stats_compute(G, &whole);
+    ss_heal_stats_acc_finish(&a, G->dx_mm, &stacked);
+    assert_memory_equal(&whole, &stacked, sizeof whole);
+    assert_true(whole.initial_area_mm2 > 0 && whole.eschar_wound_mean > 0);
+
+    double closedG[23 * 17], closedB[25 * 19];
+    float v[25 * 19], found[25 * 19];
+    ss_heal_closure_init(G, closedG);
+    ss_heal_closure_update(G, closedG);
+    for (int i = 0; i < 25 * 19; i++) {
+        closedB[i] = SS_HEAL_CLOSED_INTACT;
+        v[i] = -1.0f;
+        found[i] = 0.0f;
+    }
+    ss_heal_closure_scan(top, 4, 9, v, found);
+    ss_heal_closure_scan(bot, -1, 9, v, found);
+    ss_heal_closure_apply(bot, v, closedB);
+    ss_heal_closure_apply(bot, v, closedB); /* twice, as init + update */
+    int open = 0;
+    for (int y = 0; y < 17; y++)
+        for (int x = 0; x < 23; x++) {
+            assert_true(closedG[y * 23 + x] == closedB[(y + 1) * 25 + x + 1]);
+            open += closedG[y * 23 + x] == SS_HEAL_CLOSED_OPEN;
+        }
+    assert_true(open > 0);
+    ss_heal_grid_free(bot);
+    ss_heal_grid_free(top);
+    ss_heal_grid_free(G);
+    ss_heal_params_free(p);
+}
+
 static void test_subbox_explicit(void **state) {
     (void)state;
     ss_error err;
@@ -111,8 +182,10 @@ static void test_subbox_explicit(void **state) {
         s[k] = ss_heal_solver_create_sub(b[k], goff, gdim, p, SS_HEAL_EXPLICIT, dt, &err);
         assert_non_null(s[k]);
     }
-    const int bad[3] = {0, 0, 1};
-    assert_null(ss_heal_solver_create_sub(b[0], bad, gdim, p, SS_HEAL_EXPLICIT, dt, &err));
+    /* the split scheme's boxes span z (whole z line solves); a box larger than the grid */
+    const int zoff[3] = {0, 0, 1}, small[3] = {5, 17, 9};
+    assert_null(ss_heal_solver_create_sub(b[0], zoff, gdim, p, SS_HEAL_SPLIT, 0, &err));
+    assert_null(ss_heal_solver_create_sub(b[0], zoff, small, p, SS_HEAL_EXPLICIT, dt, &err));
     int steps = tu_quick() ? 5 : 30;
     for (int n = 0; n < steps; n++) {
         assert_int_equal(ss_heal_step(S, G, &err), SS_OK);
@@ -170,11 +243,72 @@ static void test_split_phases(void **state) {
     ss_heal_params_free(p);
 }
 
+/* The explicit step in two parts (the MPI driver's overlap of the halo
+ * exchange): part 1 never reads the outer shell (it holds garbage meanwhile,
+ * as a halo in flight), and parts 1 + 2 give ss_heal_step's bits. */
+static void shell_set(ss_heal_grid *g, float *save, int restore, int ring) {
+    size_t k = 0;
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+        for (int z = 0; z < g->nz; z++)
+            for (int y = 0; y < g->ny; y++)
+                for (int x = 0; x < g->nx; x++) {
+                    /* the shell planes of the faces in `ring` (-x, +x, -y, +y, -z, +z) */
+                    const int on = (x == 0 && (ring & 1)) || (x == g->nx - 1 && (ring & 2)) ||
+                                   (y == 0 && (ring & 4)) || (y == g->ny - 1 && (ring & 8)) ||
+                                   (z == 0 && (ring & 16)) || (z == g->nz - 1 && (ring & 32));
+                    if (!on) continue;
+                    float *v = g->field[f] + ss_heal_idx(g, x, y, z);
+                    if (restore) {
+                        *v = save[k++];
+                    } else {
+                        save[k++] = *v;
+                        *v = 1e30f;
+                    }
+                }
+}
+
+static void test_explicit_parts(void **state) {
+    (void)state;
+    ss_error err;
+    ss_heal_params *p = ss_heal_params_preset("scab", &err);
+    ss_heal_grid *a = problem(p, 21, 16, 9), *b = problem(p, 21, 16, 9);
+    ss_heal_solver *sa = ss_heal_solver_create(a, p, SS_HEAL_EXPLICIT, 0, &err);
+    ss_heal_solver *sb = ss_heal_solver_create(b, p, SS_HEAL_EXPLICIT, 0, &err);
+    assert_non_null(sa);
+    assert_non_null(sb);
+    float *save = malloc((size_t)SS_HEAL_NFIELDS * 2 * (21 * 16 + 21 * 9 + 16 * 9) * sizeof(float));
+    assert_non_null(save);
+    for (int n = 0; n < 30; n++) {
+        /* every face in flight, then only some (+x, -y, +z) */
+        const int ring = n < 15 ? 63 : 2 | 4 | 32;
+        assert_int_equal(ss_heal_step(sa, a, &err), SS_OK);
+        shell_set(b, save, 0, ring);
+        assert_int_equal(ss_heal_step_part(sb, b, 1, ring, &err), SS_OK);
+        shell_set(b, save, 1, ring);
+        assert_int_equal(ss_heal_step_part(sb, b, 2, ring, &err), SS_OK);
+        shell_set(b, save, 1, ring); /* part 1 copied the garbage shell: the next halo */
+    }
+    size_t nc = (size_t)a->nx * a->ny * a->nz;
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+        assert_memory_equal(a->field[f], b->field[f], nc * sizeof(float));
+    assert_true(a->t_days == b->t_days && a->step == b->step && a->step == 30);
+    assert_int_equal(ss_heal_step_part(sb, b, 0, 63, &err), SS_ERR_INPUT);
+    ss_heal_solver *ss = ss_heal_solver_create(a, p, SS_HEAL_SPLIT, 0, &err);
+    assert_int_equal(ss_heal_step_part(ss, a, 1, 63, &err), SS_ERR_INPUT);
+    ss_heal_solver_free(ss);
+    free(save);
+    ss_heal_solver_free(sa);
+    ss_heal_solver_free(sb);
+    ss_heal_grid_free(a);
+    ss_heal_grid_free(b);
+    ss_heal_params_free(p);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_stats_parts),
-        cmocka_unit_test(test_subbox_explicit),
-        cmocka_unit_test(test_split_phases),
+        cmocka_unit_test(test_stats_parts),   cmocka_unit_test(test_subbox_explicit),
+        cmocka_unit_test(test_split_phases),  cmocka_unit_test(test_explicit_parts),
+        cmocka_unit_test(test_stack_columns),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -80,6 +80,8 @@ static void test_params(void **state) {
         {"{\"params\": {\"gamma1\": {\"value\": 1.5, \"unit\": \"1\"}}}", "'gamma1'"},
         {"{\"params\": {\"De\": 0.1}}", "'De'"},
         {"{\"params\": {\"rho_sat\": {\"value\": 0, \"unit\": \"1\"}}}", "'rho_sat'"},
+        {"{\"params\": {\"keloid_tau\": {\"value\": -1, \"unit\": \"day\"}}}", "'keloid_tau'"},
+        {"{\"params\": {\"keloid_tau\": {\"value\": 20, \"unit\": \"1/day\"}}}", "'keloid_tau'"},
         {"{\"switches\": {\"scab\": 3}}", "'scab'"},
         {"{\"scenario\": \"burn\"}", "burn"},
         {"[1, 2]", "malformed"},
@@ -295,7 +297,7 @@ static ss_heal_course course(const char *scen, double block, double wound, doubl
     ss_error err;
     ss_heal_params *p = ss_heal_params_preset(scen, &err);
     assert_non_null(p);
-    ss_heal_course_opts o = {block, wound, 1.0, dx, days, 0.05, late_dt, deep_day, kthr};
+    ss_heal_course_opts o = {block, wound, 1.0, dx, days, 0.05, late_dt, deep_day, kthr, {0, 0}};
     ss_heal_course c;
     if (ss_heal_course_run(p, &o, &c, &err)) print_error("%s\n", err.msg);
     assert_true(c.bounds_ok);
@@ -340,7 +342,7 @@ static void test_scenarios(void **state) {
     ss_heal_params *ps = ss_heal_params_preset("scab", &err),
                    *pc = ss_heal_params_preset("clean", &err);
     ss_heal_params_set_switches(ps, 0, -1);
-    ss_heal_course_opts o = {16, 10, 1.0, 0.5, 8, 0.05, 0, -1, 0};
+    ss_heal_course_opts o = {16, 10, 1.0, 0.5, 8, 0.05, 0, -1, 0, {0, 0}};
     ss_heal_course a, b;
     assert_int_equal(ss_heal_course_run(ps, &o, &a, &err), SS_OK);
     assert_int_equal(ss_heal_course_run(pc, &o, &b, &err), SS_OK);
@@ -384,6 +386,50 @@ static void test_keloid(void **state) {
     ss_heal_params *p = ss_heal_params_preset("keloid", &err);
     assert_true(a.scar_max_peak > 1.6 && a.scar_max_peak <= p->rho_sat);
     assert_true(b.scar_max_peak > 1.6 && b.scar_max_peak <= p->rho_sat);
+    ss_heal_params_free(p);
+}
+
+/* Keloid stop: the invasion signal decays (keloid_tau), so the front slows
+ * and stops at a finite extent set by the biology, not by the block walls.
+ * A 6 mm wound in two blocks run for a year (quick: 130 days): the extent
+ * still grows after day 60, has stopped between the second reading and the
+ * end, never regresses (extent and peak density), and is the same in both
+ * blocks (within 10 %, the issue's bound). Without the stop (keloid_tau = 0)
+ * the front runs into the walls and the blocks disagree. */
+static void test_keloid_stop(void **state) {
+    (void)state;
+    const int quick = tu_quick();
+    const double days = quick ? 130 : 365, blk[2] = {16, quick ? 20 : 24};
+    ss_heal_course c[2];
+    ss_error err;
+    ss_heal_params *p = ss_heal_params_preset("keloid", &err);
+    assert_non_null(p);
+    assert_true(p->keloid_tau > 0);
+    for (int k = 0; k < 2; k++) {
+        ss_heal_course_opts o = {blk[k], 6,   1.0, 0.5, days,
+                                 0.05,   1.0, -1,  1.6, {60, quick ? 100 : 180}};
+        assert_int_equal(ss_heal_course_run(p, &o, &c[k], &err), SS_OK);
+        print_message(
+            "keloid stop, block %g: t95 %.2f extent %.2f (t95) %.2f (day 60) %.2f (day "
+            "%g) %.2f (day %g, max %.2f), area %.0f mm2, rho peak %.3f end %.3f, %.1f s\n",
+            blk[k], c[k].t95, c[k].keloid_beyond_t95, c[k].keloid_beyond_day[0],
+            c[k].keloid_beyond_day[1], o.keloid_day[1], c[k].keloid_beyond_mm, days,
+            c[k].keloid_beyond_max, c[k].keloid_area_mm2, c[k].scar_max_peak, c[k].scar_max_end,
+            c[k].wall_s);
+        assert_true(c[k].bounds_ok && c[k].t95 > 0);
+        /* grows after closure and after day 60 */
+        assert_true(c[k].keloid_beyond_day[0] > c[k].keloid_beyond_t95);
+        assert_true(c[k].keloid_beyond_day[1] > c[k].keloid_beyond_day[0]);
+        /* stopped: no advance from the second reading to the end */
+        assert_true(c[k].keloid_beyond_mm - c[k].keloid_beyond_day[1] < 0.25);
+        /* does not regress */
+        assert_true(c[k].keloid_beyond_mm >= c[k].keloid_beyond_max - 1e-9);
+        assert_true(c[k].scar_max_end >= 0.99 * c[k].scar_max_peak);
+        /* the stop lies inside the smaller block, clear of its walls */
+        assert_true(c[k].keloid_beyond_mm + 1.5 < 0.5 * (blk[0] - 6));
+    }
+    assert_true(fabs(c[0].keloid_beyond_mm - c[1].keloid_beyond_mm) <= 0.1 * c[1].keloid_beyond_mm);
+    assert_true(fabs(c[0].keloid_area_mm2 - c[1].keloid_area_mm2) <= 0.1 * c[1].keloid_area_mm2);
     ss_heal_params_free(p);
 }
 
@@ -502,12 +548,12 @@ static void test_fig4_convergence(void **state) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_params),           cmocka_unit_test(test_grid_init),
-        cmocka_unit_test(test_healthy_steady),   cmocka_unit_test(test_dt_limit),
-        cmocka_unit_test(test_symmetry),         cmocka_unit_test(test_threads_bitidentical),
-        cmocka_unit_test(test_scenarios),        cmocka_unit_test(test_fig4_convergence),
-        cmocka_unit_test(test_remodelling),      cmocka_unit_test(test_keloid),
-        cmocka_unit_test(test_grid_convergence),
+        cmocka_unit_test(test_params),         cmocka_unit_test(test_grid_init),
+        cmocka_unit_test(test_healthy_steady), cmocka_unit_test(test_dt_limit),
+        cmocka_unit_test(test_symmetry),       cmocka_unit_test(test_threads_bitidentical),
+        cmocka_unit_test(test_scenarios),      cmocka_unit_test(test_fig4_convergence),
+        cmocka_unit_test(test_remodelling),    cmocka_unit_test(test_keloid),
+        cmocka_unit_test(test_keloid_stop),    cmocka_unit_test(test_grid_convergence),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -96,6 +96,10 @@ typedef struct ss_heal_params {
     double kscab;   /* 1, fraction by which a full eschar slows the epithelial sheet under it */
     double rho_sat; /* 1, packing limit of collagen (x normal dermis): keloid deposition
                        saturates as (1 - rho/rho_sat) */
+    /* keloid invasion (docs/heal-model.md §2 [D6]) */
+    double keloid_tau; /* day, e-folding time of the invasion signal a(t) = exp(-t/keloid_tau):
+                          keloid deposition in tissue not yet keloid (rho < rho_max) is scaled
+                          by a(t), so the front slows and stops; 0 = no decay (a = 1) */
 } ss_heal_params;
 
 /* omega = [p > SS_HEAL_P_MIN] (plasma is normalised to 1 in the fresh clot). */
@@ -206,11 +210,27 @@ ss_heal_solver *ss_heal_solver_create(const ss_heal_grid *g, const ss_heal_param
                                       ss_heal_scheme s, double dt_days, ss_error *err);
 /* The same on a sub-box of a larger grid (src/dist): g holds the box and a
  * one-cell halo around it, goff is the whole-grid index of g's cell (0,0,0),
- * gdim the whole grid's dimensions (see ss_heal_rd_system.goff). The box must
- * span the whole grid in z (each column's epithelium reads its whole depth). */
+ * gdim the whole grid's dimensions (see ss_heal_rd_system.goff). With the
+ * split scheme the box spans the whole grid in z; an explicit box that does
+ * not (one of a stack in z) needs ss_heal_solver_set_columns. */
 ss_heal_solver *ss_heal_solver_create_sub(const ss_heal_grid *g, const int goff[3],
                                           const int gdim[3], const ss_heal_params *p,
                                           ss_heal_scheme s, double dt_days, ss_error *err);
+/* The column values the model gathers before each reaction pass (the surface
+ * cell, the surface epithelium, the eschar thickness and the bed's capillary
+ * mean: each column's epithelium reads its whole depth) on a box that is one
+ * of a stack in z: the solver calls fn with every box of the stack at once
+ * (collectively, in the same order) on per-column float arrays of the box +
+ * halo (n = nx * ny): SS_HEAL_COL_MAX: the element-wise maximum over the
+ * stack, in place; FROM_ABOVE: replace buf with what the box above sent by
+ * TO_BELOW (the top box: leave it); TO_BELOW: send buf to the box below (the
+ * bottom box: nothing); FROM_BOTTOM: replace buf with the bottom box's. The
+ * running sums are thus continued box by box, top down, in the order of one
+ * process: the values are bit-identical. Calling it finds the surface cells
+ * over the stack (collective). */
+enum { SS_HEAL_COL_MAX, SS_HEAL_COL_FROM_ABOVE, SS_HEAL_COL_TO_BELOW, SS_HEAL_COL_FROM_BOTTOM };
+typedef void (*ss_heal_column_fn)(void *ctx, int op, float *buf, size_t n);
+void ss_heal_solver_set_columns(ss_heal_solver *s, ss_heal_column_fn fn, void *ctx);
 double ss_heal_solver_dt(const ss_heal_solver *s);
 /* Changes the step (adaptive stepping). EXPLICIT: up to the stability limit;
  * SPLIT: up to SS_HEAL_SPLIT_LATE_MAX_DT_DAYS, for the slow phases once the
@@ -227,6 +247,14 @@ void ss_heal_solver_free(ss_heal_solver *s);
  * step++. Phases 0, 1, 2 in turn are ss_heal_step exactly. SS_ERR_INPUT for
  * the explicit scheme or a velocity field. */
 ss_status ss_heal_step_phase(ss_heal_solver *s, ss_heal_grid *g, int phase, ss_error *err);
+/* The explicit step in two parts (the MPI driver, src/dist, exchanges its
+ * halo meanwhile): part 1 computes every cell whose stencil does not reach
+ * the faces of the grid's outer shell named in `ring` (bits 1, 2, 4, 8, 16,
+ * 32: -x, +x, -y, +y, -z, +z), part 2 the rest (the cells next to those
+ * faces) and then t_days += dt and step++. Between them those faces' fields
+ * may be rewritten (the halo received); parts 1 and 2 in turn, with the same
+ * ring, are ss_heal_step exactly. SS_ERR_INPUT for the split scheme. */
+ss_status ss_heal_step_part(ss_heal_solver *s, ss_heal_grid *g, int part, int ring, ss_error *err);
 /* The split scheme's frozen diffusion multipliers of slot k (one float per
  * cell of the solver's grid; set by phase 0, read by phases 1 and 2); NULL
  * for the explicit scheme or a slot out of range. */
@@ -266,6 +294,21 @@ void ss_heal_stats_acc_add(ss_heal_stats_acc *a, const ss_heal_grid *g, int x0, 
                            int y1);
 /* a += b (limb by limb; both normalised after). */
 void ss_heal_stats_acc_merge(ss_heal_stats_acc *a, const ss_heal_stats_acc *b);
+/* The same on a box that is one of a stack in z (src/dist): g is the box
+ * with a one-cell halo, zoff the whole-grid level of its z = 0, gz the whole
+ * grid's depth. Adds the tissue cells of the owned levels (z = 1 .. nz - 2)
+ * of columns [x0, x1) x [y0, y1); the column figures (surface cell, eschar
+ * maximum below it) continue the scan of the box above in cols (one per
+ * column of the range, row-major, zeroed for the top box) and are added by
+ * the bottom box (bottom = 1). Over the stack: ss_heal_stats_acc_add's sums. */
+typedef struct ss_heal_col_state {
+    float smax;
+    uint8_t phase, initial, region,
+        open; /* phase 0 above the surface, 1 in the tissue run, 2 past it */
+} ss_heal_col_state;
+void ss_heal_stats_acc_add_stack(ss_heal_stats_acc *a, const ss_heal_grid *g, int x0, int x1,
+                                 int y0, int y1, int zoff, int gz, ss_heal_col_state *cols,
+                                 int bottom);
 /* Brings every limb into [0, 2^32) (the top one keeps the sign): done by add
  * and merge; integer sums of normalised parts stay exact. */
 void ss_heal_stats_acc_normalise(ss_heal_stats_acc *a);
@@ -289,6 +332,7 @@ typedef struct ss_heal_course_opts {
                               gone (the slow remodelling phase); 0 = dt throughout */
     double deep_check_day; /* day of the deep-epithelium check; < 0 = none */
     double keloid_thr;     /* scar level of the keloid extent; 0 = none */
+    double keloid_day[2];  /* days of two more keloid-extent readings (0 = none) */
 } ss_heal_course_opts;
 typedef struct ss_heal_course {
     double t50, t95;      /* days to 50 % / 95 % closure (-1 = not reached) */
@@ -312,6 +356,9 @@ typedef struct ss_heal_course {
     int bounds_ok;            /* final fields non-negative, finite; s, e, p <= 1 */
     long steps;
     double wall_s;
+    double keloid_beyond_day[2]; /* keloid extent at opts.keloid_day[k] (first step at or after) */
+    double keloid_beyond_max;    /* its largest value over the run (regression if > the end) */
+    double scar_max_end;         /* largest rho at the end (regression if below the peak) */
 } ss_heal_course;
 ss_status ss_heal_course_run(const ss_heal_params *p, const ss_heal_course_opts *o,
                              ss_heal_course *c, ss_error *err);

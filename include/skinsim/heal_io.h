@@ -109,6 +109,12 @@ void ss_heal_closure_init(const ss_heal_grid *g, double *closed);
 /* After a step: open columns become OPEN; an OPEN column now at or above the
  * threshold closed at g->t_days. Columns of air only are left alone. */
 void ss_heal_closure_update(const ss_heal_grid *g, double *closed);
+/* The same on a box that is one of a stack in z (src/dist; zoff, gz as in
+ * ss_heal_stats_acc_add_stack): scan continues the search for the column's
+ * two topmost tissue cells over the owned levels (v = -1, found = 0 for the
+ * top box; nx*ny each, grid order); the bottom box then applies the result. */
+void ss_heal_closure_scan(const ss_heal_grid *g, int zoff, int gz, float *v, float *found);
+void ss_heal_closure_apply(const ss_heal_grid *g, const float *v, double *closed);
 
 /* ss_heal_vti_write_vectors plus, if closed_day is not NULL, the closure day
  * per column (nx*ny, as above) as a Float64 FieldData array `closed_day`. */

@@ -1,10 +1,14 @@
 /* The healing solver of seed 001 §4.1 on MPI (docs/scaling.md). The grid is
- * cut by a Cartesian process grid (MPI_Cart_create over x, y and z; z is kept
- * whole, dims[2] = 1, because each column's epithelium reads the wound bed
- * below it). Explicit scheme: MPI_Dims_create splits x and y; every rank steps
- * its box plus a one-cell halo with the library's own kernel in its sub-box
- * form (ss_heal_solver_create_sub) and then exchanges the faces of all eight
- * fields with its four neighbours (non-blocking sends and receives). Split
+ * cut by a Cartesian process grid (MPI_Cart_create over x, y and z).
+ * Explicit scheme: MPI_Dims_create splits x and y (z too on request,
+ * SKINSIM_MPI_DIMS); every rank steps its box plus a one-cell halo with the
+ * library's own kernel in its sub-box form (ss_heal_solver_create_sub): it
+ * posts the exchange of the faces of all eight fields with its (up to six)
+ * neighbours, computes the interior of its box meanwhile, then waits and
+ * computes the boundary ring (ss_heal_step_part). With z split, the column
+ * values the epithelium reads (its whole depth) run down each stack of boxes
+ * in one process's order (ss_heal_solver_set_columns over an MPI_Cart_sub
+ * communicator), as do the column statistics and the closure days. Split
  * scheme: the boxes are y slabs (x lines and z columns whole) and the y sweep
  * runs on x slabs, reached by two MPI_Alltoallv transposes per step, so every
  * Thomas line solve runs whole, as in one process (no halo needed).
@@ -14,17 +18,18 @@
  * and drives the others through a command channel (one broadcast per step,
  * area row, gather or snapshot). Its hooks replace the run's step (all ranks
  * step; an adaptive run's rejected step is undone on all ranks, its largest
- * change is a max-reduction), its statistics (exact fixed-point partial sums reduced with integer
- * additions, ss_heal_stats_acc) and its snapshot/checkpoint reads (the boxes
- * are gathered into the whole grid first); after each snapshot every rank
- * also writes its box as a .vti piece, joined by a .pvti. The kernels compute
- * every cell from the same neighbours in the same arithmetic as one process,
- * so fields, area.csv, snapshots and checkpoints are bit-identical for any
- * rank count, and a checkpoint (always of the whole grid) resumes on any
- * rank count. Gave up: rank 0 keeps the whole grid (set-up, gathered outputs
- * and checkpoints), so its memory is that of a single-process run; the halo
- * exchange is not overlapped with the kernel; the mechanics stay
- * single-process (an error names --mechanics). */
+ * change is a max-reduction), its statistics (exact fixed-point partial sums
+ * reduced with integer additions, ss_heal_stats_acc) and its snapshot/
+ * checkpoint reads (the boxes are gathered into the whole grid first); after
+ * each snapshot every rank also writes its box as a .vti piece, joined by a
+ * .pvti. The kernels compute every cell from the same neighbours in the same
+ * arithmetic as one process, so fields, area.csv, snapshots and checkpoints
+ * are bit-identical for any rank count and process grid, and a checkpoint
+ * (always of the whole grid) resumes on any rank count. Gave up: rank 0 keeps
+ * the whole grid (set-up, gathered outputs and checkpoints), so its memory is
+ * that of a single-process run; the column chain of a z stack is sequential
+ * (Pz - 1 hops per step); the mechanics stay single-process (an error names
+ * --mechanics). */
 #include <math.h>
 #include <mpi.h>
 #include <stdlib.h>
@@ -33,7 +38,7 @@
 #include "skinsim/dist.h"
 
 enum { CMD_STEP = 1, CMD_UNDO, CMD_CLOSURE, CMD_STATS, CMD_SYNC, CMD_PIECES, CMD_END };
-enum { FACE_XM, FACE_XP, FACE_YM, FACE_YP, NFACES };
+enum { FACE_XM, FACE_XP, FACE_YM, FACE_YP, FACE_ZM, FACE_ZP, NFACES };
 
 /* What rank 0 tells every rank about the run before the boxes are sent. */
 typedef struct setup {
@@ -50,8 +55,13 @@ struct ss_dist_heal {
     int rank, size, dims[3], coords[3];
     int nbr[NFACES];
     setup su;
-    int lo[2], n[2]; /* owned box in x, y (whole grid indices), z whole */
-    ss_heal_grid *g; /* box + halo in x, y */
+    int lo[3], n[3];           /* owned box (whole grid indices) */
+    int hz;                    /* 1: z is split (dims[2] > 1), the box has a halo in z too */
+    MPI_Comm zcomm;            /* the stack of boxes in z over this box's columns */
+    int zabove, zbelow, zroot; /* in zcomm: the boxes above and below, the bottom box */
+    float *colbuf;             /* the column scans down the stack */
+    double t_col;              /* the column exchange's time (in the kernel's) */
+    ss_heal_grid *g;           /* box + halo (x, y; z when split) */
     ss_heal_solver *s;
     float *sbuf[NFACES], *rbuf[NFACES];
     int fcount[NFACES]; /* floats per face message */
@@ -71,7 +81,8 @@ struct ss_dist_heal {
     double *closed;      /* closure day per column of the box + halo (heal_io.h) */
     double *closed_root; /* rank 0: the run's closure days, filled by the gather */
     uint64_t saved_step;
-    int dirty; /* rank 0: the run's whole grid is behind the boxes */
+    int dirty;   /* rank 0: the run's whole grid is behind the boxes */
+    int overlap; /* explicit: the halo exchange runs during the interior kernel */
     double t_compute, t_halo, t_stats, t_gather;
     long long steps;
     ss_dist_heal_timing tmax; /* rank 0, after end */
@@ -80,8 +91,8 @@ struct ss_dist_heal {
 /* Block split of n cells over p parts: part i starts at i n / p. */
 static int part_lo(int n, int p, int i) { return (int)((long long)n * i / p); }
 
-static void box_of(const ss_dist_heal *d, const int coords[3], int lo[2], int n[2]) {
-    for (int a = 0; a < 2; a++) {
+static void box_of(const ss_dist_heal *d, const int coords[3], int lo[3], int n[3]) {
+    for (int a = 0; a < 3; a++) {
         lo[a] = part_lo(d->su.G[a], d->su.dims[a], coords[a]);
         n[a] = part_lo(d->su.G[a], d->su.dims[a], coords[a] + 1) - lo[a];
     }
@@ -90,34 +101,35 @@ static void box_of(const ss_dist_heal *d, const int coords[3], int lo[2], int n[
 /* ---- the box: scatter from and gather to rank 0's whole grid ---------------------- */
 
 /* The box + halo of a rank with origin lo and size n, cut from the whole grid
- * G (cells outside it are BOUND with zero fields): cells then 8 field planes. */
-static void pack_box(const ss_heal_grid *G, const int lo[2], const int n[2], uint8_t *cells,
+ * G (cells outside it are BOUND with zero fields): cells then 8 field planes.
+ * hz: the box has a halo in z too (z split; else it spans the grid in z). */
+static void pack_box(const ss_heal_grid *G, const int lo[3], const int n[3], int hz, uint8_t *cells,
                      float *fields) {
-    const int nxl = n[0] + 2, nyl = n[1] + 2, nz = G->nz;
-    const size_t nl = (size_t)nxl * nyl * nz;
-    for (int z = 0; z < nz; z++)
+    const int nxl = n[0] + 2, nyl = n[1] + 2, nzl = n[2] + 2 * hz;
+    const size_t nl = (size_t)nxl * nyl * nzl;
+    for (int z = 0; z < nzl; z++)
         for (int y = 0; y < nyl; y++)
             for (int x = 0; x < nxl; x++) {
-                const int X = lo[0] - 1 + x, Y = lo[1] - 1 + y;
+                const int X = lo[0] - 1 + x, Y = lo[1] - 1 + y, Z = lo[2] - hz + z;
                 const size_t c = ((size_t)z * nyl + y) * nxl + x;
-                if (X < 0 || Y < 0 || X >= G->nx || Y >= G->ny) {
+                if (X < 0 || Y < 0 || Z < 0 || X >= G->nx || Y >= G->ny || Z >= G->nz) {
                     cells[c] = SS_CELL_BOUND;
                     for (int f = 0; f < SS_HEAL_NFIELDS; f++) fields[f * nl + c] = 0.0f;
                     continue;
                 }
-                const size_t gc = ss_heal_idx(G, X, Y, z);
+                const size_t gc = ss_heal_idx(G, X, Y, Z);
                 cells[c] = G->cell[gc];
                 for (int f = 0; f < SS_HEAL_NFIELDS; f++) fields[f * nl + c] = G->field[f][gc];
             }
 }
 
 /* Owned cells only, all fields: the gather message of a box. */
-static size_t owned_count(const int n[2], int nz) { return (size_t)n[0] * n[1] * nz; }
+static size_t owned_count(const int n[3]) { return (size_t)n[0] * n[1] * n[2]; }
 
-static void pack_owned(const ss_heal_grid *g, const int n[2], float *buf) {
+static void pack_owned(const ss_heal_grid *g, const int n[3], int hz, float *buf) {
     size_t k = 0;
     for (int f = 0; f < SS_HEAL_NFIELDS; f++)
-        for (int z = 0; z < g->nz; z++)
+        for (int z = hz; z < hz + n[2]; z++)
             for (int y = 1; y <= n[1]; y++) {
                 memcpy(buf + k, g->field[f] + ss_heal_idx(g, 1, y, z),
                        (size_t)n[0] * sizeof(float));
@@ -125,10 +137,10 @@ static void pack_owned(const ss_heal_grid *g, const int n[2], float *buf) {
             }
 }
 
-static void unpack_owned(ss_heal_grid *G, const int lo[2], const int n[2], const float *buf) {
+static void unpack_owned(ss_heal_grid *G, const int lo[3], const int n[3], const float *buf) {
     size_t k = 0;
     for (int f = 0; f < SS_HEAL_NFIELDS; f++)
-        for (int z = 0; z < G->nz; z++)
+        for (int z = lo[2]; z < lo[2] + n[2]; z++)
             for (int y = 0; y < n[1]; y++) {
                 memcpy(G->field[f] + ss_heal_idx(G, lo[0], lo[1] + y, z), buf + k,
                        (size_t)n[0] * sizeof(float));
@@ -139,7 +151,8 @@ static void unpack_owned(ss_heal_grid *G, const int lo[2], const int n[2], const
 /* ---- halo exchange -------------------------------------------------------------- */
 
 /* Face planes: x faces are (y, z) planes at x = 1 / nxl-2 (sent) and x = 0 /
- * nxl-1 (received); y faces are (x, z) rows at y = 1 / nyl-2 and 0 / nyl-1. */
+ * nxl-1 (received); y faces are (x, z) rows at y = 1 / nyl-2 and 0 / nyl-1;
+ * z faces (z split) are (x, y) planes at z = 1 / nzl-2 and 0 / nzl-1. */
 static void face_io(ss_heal_grid *g, int face, int recv, float *buf) {
     const int nxl = g->nx, nyl = g->ny, nz = g->nz;
     size_t k = 0;
@@ -154,6 +167,17 @@ static void face_io(ss_heal_grid *g, int face, int recv, float *buf) {
                     else
                         buf[k++] = *p;
                 }
+    } else if (face == FACE_ZM || face == FACE_ZP) {
+        const int z = face == FACE_ZM ? (recv ? 0 : 1) : (recv ? nz - 1 : nz - 2);
+        const size_t plane = (size_t)nxl * nyl;
+        for (int f = 0; f < SS_HEAL_NFIELDS; f++) {
+            float *p = g->field[f] + ss_heal_idx(g, 0, 0, z);
+            if (recv)
+                memcpy(p, buf + k, plane * sizeof(float));
+            else
+                memcpy(buf + k, p, plane * sizeof(float));
+            k += plane;
+        }
     } else {
         int y = face == FACE_YM ? (recv ? 0 : 1) : (recv ? nyl - 1 : nyl - 2);
         for (int f = 0; f < SS_HEAL_NFIELDS; f++)
@@ -168,23 +192,30 @@ static void face_io(ss_heal_grid *g, int face, int recv, float *buf) {
     }
 }
 
-static void halo_exchange(ss_dist_heal *d) {
-    MPI_Request rq[2 * NFACES];
+/* Posts the exchange of the faces in `mask` (bit 1 << face) of the current
+ * fields: receives into rbuf, sends packed copies (the fields may be read
+ * meanwhile, never the halo). Returns the request count. */
+static int halo_post(ss_dist_heal *d, MPI_Request rq[2 * NFACES], int mask) {
     int nr = 0;
     /* a face's opposite: what the neighbour on the -x side sends us is its +x face */
-    static const int opposite[NFACES] = {FACE_XP, FACE_XM, FACE_YP, FACE_YM};
+    static const int opposite[NFACES] = {FACE_XP, FACE_XM, FACE_YP, FACE_YM, FACE_ZP, FACE_ZM};
     for (int f = 0; f < NFACES; f++) {
-        if (d->nbr[f] == MPI_PROC_NULL) continue;
+        if (d->nbr[f] == MPI_PROC_NULL || !(mask & (1 << f))) continue;
         MPI_Irecv(d->rbuf[f], d->fcount[f], MPI_FLOAT, d->nbr[f], opposite[f], d->cart, &rq[nr++]);
     }
     for (int f = 0; f < NFACES; f++) {
-        if (d->nbr[f] == MPI_PROC_NULL) continue;
+        if (d->nbr[f] == MPI_PROC_NULL || !(mask & (1 << f))) continue;
         face_io(d->g, f, 0, d->sbuf[f]);
         MPI_Isend(d->sbuf[f], d->fcount[f], MPI_FLOAT, d->nbr[f], f, d->cart, &rq[nr++]);
     }
+    return nr;
+}
+
+/* Waits for the exchange and writes the received faces into the halo. */
+static void halo_finish(ss_dist_heal *d, MPI_Request rq[2 * NFACES], int nr, int mask) {
     MPI_Waitall(nr, rq, MPI_STATUSES_IGNORE);
     for (int f = 0; f < NFACES; f++)
-        if (d->nbr[f] != MPI_PROC_NULL) face_io(d->g, f, 1, d->rbuf[f]);
+        if (d->nbr[f] != MPI_PROC_NULL && (mask & (1 << f))) face_io(d->g, f, 1, d->rbuf[f]);
 }
 
 /* ---- the split scheme's transposes ---------------------------------------------- */
@@ -318,14 +349,42 @@ static ss_status split_step(ss_dist_heal *d, ss_error *err) {
 
 /* ---- the commands ------------------------------------------------------------- */
 
+/* One explicit step. The halo holds the neighbours' faces of the fields
+ * before the step only once the exchange posted at the step's start is
+ * complete, so the kernel runs in two parts: the interior (no stencil reaches
+ * the halo in flight) while the faces travel, then the boundary ring. The x
+ * faces are waited for first: a ring in x would cut every x row (the kernel's
+ * unit) into three, whose single end cells cost more than their share; the y
+ * and z faces (whole rows of the ring) travel during the interior. (After the
+ * step the halo is stale until the next step's exchange: nothing reads it.)
+ * SKINSIM_DIST_OVERLAP=0 (benchmarks) waits for every face first. */
 static ss_status plain_step(ss_dist_heal *d, ss_error *err) {
     if (d->split) return split_step(d, err);
+    ss_status st;
     double t0 = MPI_Wtime();
-    ss_status st = ss_heal_step(d->s, d->g, err);
-    double t1 = MPI_Wtime();
-    halo_exchange(d);
-    d->t_compute += t1 - t0;
-    d->t_halo += MPI_Wtime() - t1;
+    if (d->size == 1) {
+        st = ss_heal_step(d->s, d->g, err);
+        d->t_compute += MPI_Wtime() - t0;
+        d->steps++;
+        return st;
+    }
+    const int xf = 1 << FACE_XM | 1 << FACE_XP, yzf = (1 << NFACES) - 1 - xf;
+    MPI_Request rqx[2 * NFACES], rq[2 * NFACES];
+    const int nrx = halo_post(d, rqx, xf), nr = halo_post(d, rq, yzf);
+    halo_finish(d, rqx, nrx, xf);
+    if (!d->overlap) halo_finish(d, rq, nr, yzf);
+    int ring = 0; /* the faces still in flight (the kernel's bits: 1 << face) */
+    for (int f = FACE_YM; f < NFACES && d->overlap; f++)
+        if (d->nbr[f] != MPI_PROC_NULL) ring |= 1 << f;
+    double t1 = MPI_Wtime(), c0 = d->t_col;
+    st = ss_heal_step_part(d->s, d->g, 1, ring, err);
+    double t2 = MPI_Wtime(), tc = d->t_col - c0; /* the column exchange inside */
+    if (d->overlap) halo_finish(d, rq, nr, yzf);
+    double t3 = MPI_Wtime();
+    if (!st) st = ss_heal_step_part(d->s, d->g, 2, ring, err);
+    double t4 = MPI_Wtime();
+    d->t_compute += (t2 - t1 - tc) + (t4 - t3);
+    d->t_halo += (t1 - t0) + (t3 - t2) + tc;
     d->steps++;
     return st;
 }
@@ -368,7 +427,56 @@ static ss_status do_step(ss_dist_heal *d, int want_change, double *change, ss_er
     return st;
 }
 
-static void do_closure(ss_dist_heal *d) { ss_heal_closure_update(d->g, d->closed); }
+/* ---- the stack of boxes in z (z split): column values, top down ------------------ */
+
+/* The solver's column exchange (ss_heal_solver_set_columns) over the stack. */
+static void zcol(void *ctx, int op, float *buf, size_t n) {
+    ss_dist_heal *d = ctx;
+    const double t0 = MPI_Wtime();
+    switch (op) {
+    case SS_HEAL_COL_MAX:
+        MPI_Allreduce(MPI_IN_PLACE, buf, (int)n, MPI_FLOAT, MPI_MAX, d->zcomm);
+        break;
+    case SS_HEAL_COL_FROM_ABOVE:
+        if (d->zabove != MPI_PROC_NULL)
+            MPI_Recv(buf, (int)n, MPI_FLOAT, d->zabove, 30, d->zcomm, MPI_STATUS_IGNORE);
+        break;
+    case SS_HEAL_COL_TO_BELOW:
+        if (d->zbelow != MPI_PROC_NULL) MPI_Send(buf, (int)n, MPI_FLOAT, d->zbelow, 30, d->zcomm);
+        break;
+    default: /* SS_HEAL_COL_FROM_BOTTOM */
+        MPI_Bcast(buf, (int)n, MPI_FLOAT, d->zroot, d->zcomm);
+        break;
+    }
+    d->t_col += MPI_Wtime() - t0;
+}
+
+/* A column scan continued from the box above and handed to the box below:
+ * receives n bytes into buf (the top box: zeroes them) or sends them. */
+static void zchain(ss_dist_heal *d, void *buf, size_t n, int send) {
+    if (!send && d->zabove == MPI_PROC_NULL) memset(buf, 0, n);
+    if (!send && d->zabove != MPI_PROC_NULL)
+        MPI_Recv(buf, (int)n, MPI_BYTE, d->zabove, 31, d->zcomm, MPI_STATUS_IGNORE);
+    if (send && d->zbelow != MPI_PROC_NULL)
+        MPI_Send(buf, (int)n, MPI_BYTE, d->zbelow, 31, d->zcomm);
+}
+
+/* Closure days: the search for each column's two topmost tissue cells runs
+ * down the stack; the bottom box keeps the days of its columns. */
+static void do_closure(ss_dist_heal *d) {
+    if (!d->hz) {
+        ss_heal_closure_update(d->g, d->closed);
+        return;
+    }
+    const size_t nc = (size_t)d->g->nx * d->g->ny;
+    float *v = d->colbuf, *found = d->colbuf + nc;
+    zchain(d, d->colbuf, 2 * nc * sizeof(float), 0);
+    if (d->zabove == MPI_PROC_NULL)
+        for (size_t i = 0; i < nc; i++) v[i] = -1.0f;
+    ss_heal_closure_scan(d->g, d->lo[2] - 1, d->su.G[2], v, found);
+    zchain(d, d->colbuf, 2 * nc * sizeof(float), 1);
+    if (d->zbelow == MPI_PROC_NULL) ss_heal_closure_apply(d->g, v, d->closed);
+}
 
 static void do_undo(ss_dist_heal *d) {
     const size_t n = (size_t)d->g->nx * d->g->ny * d->g->nz;
@@ -382,7 +490,16 @@ static void do_stats(ss_dist_heal *d, ss_heal_stats *st) {
     double t0 = MPI_Wtime();
     ss_heal_stats_acc a;
     ss_heal_stats_acc_init(&a);
-    ss_heal_stats_acc_add(&a, d->g, 1, d->g->nx - 1, 1, d->g->ny - 1);
+    if (d->hz) { /* the column figures run down the stack, the bottom box adds them */
+        const size_t n = (size_t)d->n[0] * d->n[1] * sizeof(ss_heal_col_state);
+        ss_heal_col_state *cols = (ss_heal_col_state *)d->colbuf;
+        zchain(d, cols, n, 0);
+        ss_heal_stats_acc_add_stack(&a, d->g, 1, d->g->nx - 1, 1, d->g->ny - 1, d->lo[2] - 1,
+                                    d->su.G[2], cols, d->zbelow == MPI_PROC_NULL);
+        zchain(d, cols, n, 1);
+    } else {
+        ss_heal_stats_acc_add(&a, d->g, 1, d->g->nx - 1, 1, d->g->ny - 1);
+    }
     /* integer parts: counts and limbs (normalised, so sums cannot overflow) */
     enum { NI = 6 + (SS_HEAL_NFIELDS + 1) * SS_HEAL_ACC_LIMBS };
     int64_t in[NI], out[NI];
@@ -410,15 +527,18 @@ static void do_stats(ss_dist_heal *d, ss_heal_stats *st) {
 
 static ss_status do_gather(ss_dist_heal *d, ss_error *err) {
     double t0 = MPI_Wtime();
-    const int nz = d->su.G[2];
     ss_status st = SS_OK;
     if (d->rank != 0) {
-        size_t cnt = owned_count(d->n, nz) * SS_HEAL_NFIELDS;
+        size_t cnt = owned_count(d->n) * SS_HEAL_NFIELDS;
         float *buf = malloc(cnt * sizeof(float));
         if (!buf) MPI_Abort(d->cart, 3); /* rank 0 waits for this box */
-        pack_owned(d->g, d->n, buf);
+        pack_owned(d->g, d->n, d->hz, buf);
         MPI_Send(buf, (int)cnt, MPI_FLOAT, 0, 100, d->cart);
         free(buf);
+        if (d->coords[2] != 0) { /* the bottom box of the stack keeps the closure days */
+            d->t_gather += MPI_Wtime() - t0;
+            return SS_OK;
+        }
         double *cb = malloc((size_t)d->n[0] * d->n[1] * sizeof(double));
         if (!cb) MPI_Abort(d->cart, 3);
         for (int y = 0; y < d->n[1]; y++)
@@ -430,18 +550,19 @@ static ss_status do_gather(ss_dist_heal *d, ss_error *err) {
         ss_heal_grid *G = ss_heal_run_grid(d->run);
         float *buf = NULL;
         for (int r = 0; r < d->size; r++) {
-            int coords[3], lo[2], n[2];
+            int coords[3], lo[3], n[3];
             MPI_Cart_coords(d->cart, r, 3, coords);
             box_of(d, coords, lo, n);
-            size_t cnt = owned_count(n, nz) * SS_HEAL_NFIELDS;
+            size_t cnt = owned_count(n) * SS_HEAL_NFIELDS;
             float *b = realloc(buf, cnt * sizeof(float));
             if (!b) MPI_Abort(d->cart, 3);
             buf = b;
             if (r == 0)
-                pack_owned(d->g, n, buf);
+                pack_owned(d->g, n, d->hz, buf);
             else
                 MPI_Recv(buf, (int)cnt, MPI_FLOAT, r, 100, d->cart, MPI_STATUS_IGNORE);
             unpack_owned(G, lo, n, buf);
+            if (coords[2] != 0) continue; /* the bottom box of a stack sends the days */
             /* the closure days of the box's columns */
             double *cb = malloc((size_t)n[0] * n[1] * sizeof(double));
             if (!cb) MPI_Abort(d->cart, 3);
@@ -478,7 +599,7 @@ static ss_status do_pieces(ss_dist_heal *d, int index, ss_error *err) {
     if (d->rank == 0) memcpy(dir, d->pdir, (size_t)len);
     MPI_Bcast(dir, len, MPI_CHAR, 0, d->cart);
     dir[sizeof dir - 1] = 0;
-    const int nz = d->su.G[2];
+    const int nz = d->n[2];
     char path[4400];
     snprintf(path, sizeof path, "%s/fields_%04d_p%04d.vti", dir, index, d->rank);
     ss_error e;
@@ -493,13 +614,14 @@ static ss_status do_pieces(ss_dist_heal *d, int index, ss_error *err) {
         p->t_days = d->g->t_days;
         for (int z = 0; z < nz; z++)
             for (int y = 0; y < d->n[1]; y++) {
-                const size_t src = ss_heal_idx(d->g, 1, y + 1, z), dst = ss_heal_idx(p, 0, y, z);
+                const size_t src = ss_heal_idx(d->g, 1, y + 1, z + d->hz);
+                const size_t dst = ss_heal_idx(p, 0, y, z);
                 memcpy(p->cell + dst, d->g->cell + src, (size_t)d->n[0]);
                 for (int f = 0; f < SS_HEAL_NFIELDS; f++)
                     memcpy(p->field[f] + dst, d->g->field[f] + src,
                            (size_t)d->n[0] * sizeof(float));
             }
-        const int off[3] = {d->lo[0], d->lo[1], 0};
+        const int off[3] = {d->lo[0], d->lo[1], d->lo[2]};
         st = ss_heal_vti_write_piece(path, p, off, d->su.G, &e);
         ss_heal_grid_free(p);
     }
@@ -518,10 +640,10 @@ static ss_status do_pieces(ss_dist_heal *d, int index, ss_error *err) {
             vmax = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
         } else {
             for (int q = 0; q < d->size; q++) {
-                int coords[3], lo[2], n[2];
+                int coords[3], lo[3], n[3];
                 MPI_Cart_coords(d->cart, q, 3, coords);
                 box_of(d, coords, lo, n);
-                const int e6[6] = {lo[0], lo[0] + n[0], lo[1], lo[1] + n[1], 0, nz};
+                const int e6[6] = {lo[0], lo[0] + n[0], lo[1], lo[1] + n[1], lo[2], lo[2] + n[2]};
                 memcpy(ext[q], e6, sizeof e6);
                 files[q] = names + (size_t)q * 32;
                 snprintf(files[q], 32, "fields_%04d_p%04d.vti", index, q);
@@ -603,9 +725,9 @@ static ss_status hook_snapshot(void *ctx, const ss_heal_grid *G, const char *fie
  * fields) into g: the boxes of the process grid, or (xslabs) the split
  * scheme's x slabs. */
 static void scatter(ss_dist_heal *d, ss_heal_run *r, ss_heal_grid *g, int xslabs) {
-    const int nz = d->su.G[2], tag = xslabs ? 12 : 10;
+    const int tag = xslabs ? 12 : 10, hz = xslabs ? 0 : d->hz;
     if (d->rank != 0) {
-        const size_t nl = (size_t)g->nx * g->ny * nz;
+        const size_t nl = (size_t)g->nx * g->ny * g->nz;
         float *fields = malloc(nl * SS_HEAL_NFIELDS * sizeof(float));
         if (!fields) MPI_Abort(d->cart, 3);
         MPI_Recv(g->cell, (int)nl, MPI_BYTE, 0, tag, d->cart, MPI_STATUS_IGNORE);
@@ -618,7 +740,7 @@ static void scatter(ss_dist_heal *d, ss_heal_run *r, ss_heal_grid *g, int xslabs
     }
     const ss_heal_grid *G = ss_heal_run_grid(r);
     for (int q = d->size - 1; q >= 0; q--) {
-        int lo[2] = {0, 0}, n[2] = {0, d->su.G[1]};
+        int lo[3] = {0, 0, 0}, n[3] = {0, d->su.G[1], d->su.G[2]};
         if (xslabs) {
             xslab(d, q, &lo[0], &n[0]);
         } else {
@@ -626,11 +748,11 @@ static void scatter(ss_dist_heal *d, ss_heal_run *r, ss_heal_grid *g, int xslabs
             MPI_Cart_coords(d->cart, q, 3, coords);
             box_of(d, coords, lo, n);
         }
-        size_t nq = (size_t)(n[0] + 2) * (n[1] + 2) * nz;
+        size_t nq = (size_t)(n[0] + 2) * (n[1] + 2) * (n[2] + 2 * hz);
         uint8_t *cells = q == 0 ? g->cell : malloc(nq);
         float *fields = malloc(nq * SS_HEAL_NFIELDS * sizeof(float));
         if (!cells || !fields) MPI_Abort(d->cart, 3);
-        pack_box(G, lo, n, cells, fields);
+        pack_box(G, lo, n, hz, cells, fields);
         if (q == 0) {
             for (int f = 0; f < SS_HEAL_NFIELDS; f++)
                 memcpy(g->field[f], fields + f * nq, nq * sizeof(float));
@@ -654,7 +776,7 @@ static void scatter_closed(ss_dist_heal *d, ss_heal_run *r) {
     const double *C = ss_heal_run_closure(r);
     const ss_heal_grid *G = ss_heal_run_grid(r);
     for (int q = d->size - 1; q >= 0; q--) {
-        int coords[3], lo[2], n[2];
+        int coords[3], lo[3], n[3];
         MPI_Cart_coords(d->cart, q, 3, coords);
         box_of(d, coords, lo, n);
         const int nxl = n[0] + 2, nyl = n[1] + 2;
@@ -717,6 +839,24 @@ static ss_status check_root(ss_heal_run *r, int size, int dims[3], ss_error *err
                             "needs the whole grid in one process (run it without mpirun, or "
                             "with -np 1)",
                             size);
+    /* the process grid the user asked for: SKINSIM_MPI_DIMS=PXxPYxPZ (0 = any) */
+    const char *ask = getenv("SKINSIM_MPI_DIMS");
+    int want[3] = {0, 0, 1}; /* default: columns stay whole (z is split only on request) */
+    if (ask && *ask) {
+        char tail = 0;
+        if (sscanf(ask, "%dx%dx%d%c", &want[0], &want[1], &want[2], &tail) != 3 || want[0] < 0 ||
+            want[1] < 0 || want[2] < 0)
+            return ss_error_set(err, SS_ERR_INPUT,
+                                "SKINSIM_MPI_DIMS=%s: expected PXxPYxPZ, e.g. 2x1x2 (0 = let MPI "
+                                "choose that axis)",
+                                ask);
+        if (ss_heal_run_scheme(r) != SS_HEAL_EXPLICIT)
+            return ss_error_set(err, SS_ERR_INPUT,
+                                "SKINSIM_MPI_DIMS=%s: the split scheme always runs on y and x "
+                                "slabs (its line solves need whole lines); unset it or use "
+                                "--scheme explicit",
+                                ask);
+    }
     if (ss_heal_run_scheme(r) != SS_HEAL_EXPLICIT) {
         /* y slabs, and x slabs for the y sweep: every line solve stays whole */
         dims[0] = dims[2] = 1;
@@ -729,15 +869,23 @@ static ss_status check_root(ss_heal_run *r, int size, int dims[3], ss_error *err
                                 size, G->nx, G->ny, G->nz, G->nx < G->ny ? G->nx : G->ny);
         return SS_OK;
     }
-    dims[0] = dims[1] = 0;
-    dims[2] = 1; /* columns stay whole */
-    if (MPI_Dims_create(size, 3, dims) != MPI_SUCCESS)
-        return ss_error_set(err, SS_ERR_INPUT, "MPI: no process grid for %d ranks", size);
+    memcpy(dims, want, sizeof want);
+    long long fixed = 1;
+    for (int a = 0; a < 3; a++) fixed *= want[a] ? want[a] : 1;
+    if (size % fixed != 0 || MPI_Dims_create(size, 3, dims) != MPI_SUCCESS)
+        return ss_error_set(err, SS_ERR_INPUT, "%d MPI ranks do not fit the process grid %s", size,
+                            ask && *ask ? ask : "Px x Py x 1");
+    if (dims[2] > 1 && G->nz / dims[2] < 3)
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "%d MPI ranks are too many for the %dx%dx%d grid: the process grid "
+                            "%dx%dx%d splits z into boxes of fewer than 3 levels; use at most "
+                            "%d boxes in z",
+                            size, G->nx, G->ny, G->nz, dims[0], dims[1], dims[2], G->nz / 3);
     if (dims[0] > G->nx || dims[1] > G->ny)
         return ss_error_set(err, SS_ERR_INPUT,
                             "%d MPI ranks are too many for the %dx%dx%d grid: the process grid "
-                            "%dx%dx%d would leave a rank without a column (x and y are split, "
-                            "z is kept whole); use at most %d ranks or a larger --grid",
+                            "%dx%dx%d would leave a rank without a column; use at most %d "
+                            "ranks or a larger --grid",
                             size, G->nx, G->ny, G->nz, dims[0], dims[1], dims[2],
                             G->nx < G->ny ? G->nx : G->ny);
     return SS_OK;
@@ -797,10 +945,18 @@ ss_status ss_dist_heal_create(ss_heal_run *r, ss_status root_st, ss_dist_heal **
     MPI_Cart_coords(d->cart, d->rank, 3, d->coords);
     MPI_Cart_shift(d->cart, 0, 1, &d->nbr[FACE_XM], &d->nbr[FACE_XP]);
     MPI_Cart_shift(d->cart, 1, 1, &d->nbr[FACE_YM], &d->nbr[FACE_YP]);
+    MPI_Cart_shift(d->cart, 2, 1, &d->nbr[FACE_ZM], &d->nbr[FACE_ZP]);
     box_of(d, d->coords, d->lo, d->n);
+    /* the stack of boxes in z over this box's columns */
+    const int remain[3] = {0, 0, 1};
+    MPI_Cart_sub(d->cart, remain, &d->zcomm);
+    MPI_Cart_shift(d->zcomm, 0, 1, &d->zbelow, &d->zabove);
+    const int zero = 0;
+    MPI_Cart_rank(d->zcomm, &zero, &d->zroot);
+    d->hz = d->dims[2] > 1;
 
     /* the box + halo grid and its solver */
-    const int nxl = d->n[0] + 2, nyl = d->n[1] + 2, nz = su.G[2];
+    const int nxl = d->n[0] + 2, nyl = d->n[1] + 2, nz = d->n[2] + 2 * d->hz;
     d->g = ss_heal_grid_create(nxl, nyl, nz, su.dx_mm, err);
     if (d->g) {
         d->g->skin_top_mm = su.skin_top_mm;
@@ -809,6 +965,10 @@ ss_status ss_dist_heal_create(ss_heal_run *r, ss_status root_st, ss_dist_heal **
     }
     d->fcount[FACE_XM] = d->fcount[FACE_XP] = SS_HEAL_NFIELDS * nyl * nz;
     d->fcount[FACE_YM] = d->fcount[FACE_YP] = SS_HEAL_NFIELDS * nxl * nz;
+    d->fcount[FACE_ZM] = d->fcount[FACE_ZP] = SS_HEAL_NFIELDS * nxl * nyl;
+    /* the column scans down the stack: 2 floats or one ss_heal_col_state per column */
+    if (d->hz && !(d->colbuf = malloc((size_t)nxl * nyl * 2 * sizeof(float))))
+        st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     for (int f = 0; f < NFACES && d->g; f++) {
         d->sbuf[f] = malloc((size_t)d->fcount[f] * sizeof(float));
         d->rbuf[f] = malloc((size_t)d->fcount[f] * sizeof(float));
@@ -826,16 +986,19 @@ ss_status ss_dist_heal_create(ss_heal_run *r, ss_status root_st, ss_dist_heal **
         scatter_closed(d, r);
     else
         MPI_Abort(d->cart, 3);
-    int goff[3] = {d->lo[0] - 1, d->lo[1] - 1, 0};
+    int goff[3] = {d->lo[0] - 1, d->lo[1] - 1, d->lo[2] - d->hz};
     d->s =
         ss_heal_solver_create_sub(d->g, goff, su.G, &su.p, (ss_heal_scheme)su.scheme, su.dt, err);
     st = d->s ? SS_OK : (err->code ? err->code : SS_ERR_RUNTIME);
+    if (agree(d->cart, st) == SS_OK && d->hz) ss_heal_solver_set_columns(d->s, zcol, d);
     if ((st = agree(d->cart, st))) {
         if (d->rank != 0) ss_error_set(err, st, "a rank could not set up its solver");
         ss_dist_heal_free(d);
         return st;
     }
     d->split = su.scheme == SS_HEAL_SPLIT && size > 1; /* one rank: the plain step */
+    const char *ov = getenv("SKINSIM_DIST_OVERLAP");
+    d->overlap = !(ov && strcmp(ov, "0") == 0);
     if (d->split) st = split_setup(d, r, err);
     if ((st = agree(d->cart, st))) {
         if (d->rank != 0) ss_error_set(err, st, "a rank could not set up its x slab");
@@ -926,6 +1089,8 @@ void ss_dist_heal_free(ss_dist_heal *d) {
     free(d->tsend);
     free(d->trecv);
     free(d->scnt);
+    free(d->colbuf);
+    if (d->zcomm != MPI_COMM_NULL && d->zcomm) MPI_Comm_free(&d->zcomm);
     if (d->cart != MPI_COMM_NULL && d->cart) MPI_Comm_free(&d->cart);
     free(d);
 }

@@ -121,7 +121,7 @@ ss_status ss_heal_course_run(const ss_heal_params *p, const ss_heal_course_opts 
     const double a0 = stt.initial_area_mm2;
     int ns = 0;
     sm[ns++] = (sample){0, 1, stt.eschar_wound_mean, stt.scar_volume_mm3};
-    int late = 0, deep_done = o->deep_check_day < 0;
+    int late = 0, deep_done = o->deep_check_day < 0, kday_done[2] = {0, 0};
     while (g->t_days < o->days - 1e-9 && !st) {
         double dt = ss_heal_solver_dt(s);
         if (g->t_days + dt > o->days + 1e-9)
@@ -144,6 +144,15 @@ ss_status ss_heal_course_run(const ss_heal_params *p, const ss_heal_course_opts 
             c->scar_peak_day = g->t_days;
         }
         if (stt.scar_max > c->scar_max_peak) c->scar_max_peak = stt.scar_max;
+        if (o->keloid_thr > 0) {
+            const double kb = keloid_beyond(g, o->wound_mm, o->keloid_thr, NULL);
+            if (kb > c->keloid_beyond_max) c->keloid_beyond_max = kb;
+            for (int k = 0; k < 2; k++)
+                if (o->keloid_day[k] > 0 && !kday_done[k] && g->t_days >= o->keloid_day[k] - 1e-9) {
+                    c->keloid_beyond_day[k] = kb;
+                    kday_done[k] = 1;
+                }
+        }
         if (c->t95 < 0) {
             c->t95 = cross(sm, ns, 0.05, 0);
             if (c->t95 >= 0 && o->keloid_thr > 0)
@@ -171,6 +180,7 @@ ss_status ss_heal_course_run(const ss_heal_params *p, const ss_heal_course_opts 
         }
         c->t50 = cross(sm, ns, 0.5, 0);
         c->scar_end_mm3 = stt.scar_volume_mm3;
+        c->scar_max_end = stt.scar_max;
         c->region_area_mm2 = stt.wound_region_area_mm2;
         /* remodelling: decay of the scar volume over the last quarter, after the peak */
         double ta = 0.75 * o->days;

@@ -236,13 +236,50 @@ static int thread_count(const ss_heal_rd_work *w) {
 }
 
 void ss_heal_rd_step_explicit(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt) {
+    ss_heal_rd__step_explicit_part(sys, w, dt, RD_PART_ALL, 0);
+}
+
+/* The x segments of row (y, z) that `part` computes: the whole row (ALL, or
+ * a ring row of RING), the row less its ring ends (INTERIOR, a row off the
+ * ring), the ring end cells (RING, a row off the ring) or none. The ring is
+ * the layer of cells next to the faces in `ring` (NB_* bits): ring rows are
+ * those at y or z = 1 or n - 2 next to such a face. */
+static int row_segments(int part, int ring, int nx, int ny, int nz, int y, int z, int seg[2][2]) {
+    const int ring_row = (y == 1 && (ring & NB_YM)) || (y == ny - 2 && (ring & NB_YP)) ||
+                         (z == 1 && (ring & NB_ZM)) || (z == nz - 2 && (ring & NB_ZP));
+    const int xa = ring & NB_XM ? 2 : 1, xb = ring & NB_XP ? nx - 3 : nx - 2;
+    if (part == RD_PART_ALL || (part == RD_PART_RING && ring_row)) {
+        seg[0][0] = 1;
+        seg[0][1] = nx - 2;
+        return 1;
+    }
+    if (part == RD_PART_INTERIOR) {
+        if (ring_row || xb < xa) return 0;
+        seg[0][0] = xa;
+        seg[0][1] = xb;
+        return 1;
+    }
+    int ns = 0;
+    if (xa == 2 || xb < xa) { /* (a box 1 wide: its one cell) */
+        seg[ns][0] = seg[ns][1] = 1;
+        ns++;
+    }
+    if (xb == nx - 3 && nx - 2 > 1) {
+        seg[ns][0] = seg[ns][1] = nx - 2;
+        ns++;
+    }
+    return ns;
+}
+
+void ss_heal_rd__step_explicit_part(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt, int part,
+                                    int ring) {
     const int nx = sys->nx, ny = sys->ny, nz = sys->nz, nf = sys->nfields;
     const size_t sy = (size_t)nx, sz = (size_t)nx * (size_t)ny;
-    const int n = nx - 2;
     const float dtf = (float)dt;
     const double ih2 = 1.0 / (sys->h_mm * sys->h_mm);
     const int has_vel = sys->velocity[0] || sys->velocity[1] || sys->velocity[2];
-    if (sys->react && sys->prepare) sys->prepare(sys->ctx, sys->u);
+    const int first = part != RD_PART_RING; /* ALL or INTERIOR: prepare, copy the shell */
+    if (first && sys->react && sys->prepare) sys->prepare(sys->ctx, sys->u);
 #pragma omp parallel num_threads(thread_count(w)) if (w->ncell >= RD_PAR_MIN_CELLS)
     {
         float *scr = w->tscratch[omp_get_thread_num()];
@@ -260,19 +297,31 @@ void ss_heal_rd_step_explicit(ss_heal_rd_system *sys, ss_heal_rd_work *w, double
         float *restrict wyp = wym + nx, *restrict wzm = wyp + nx, *restrict wzp = wzm + nx;
 #pragma omp for collapse(2) schedule(static)
         for (int z = 0; z < nz; z++) {
-            for (int y = 0; y < ny; y++) {
+            /* each row twice: its first and its second x segment */
+            for (int ys = 0; ys < 2 * ny; ys++) {
+                const int y = ys >> 1, sg = ys & 1;
                 const size_t base = (size_t)z * sz + (size_t)y * sy;
                 if (z == 0 || y == 0 || z == nz - 1 || y == ny - 1) {
-                    for (int f = 0; f < nf; f++)
-                        memcpy(w->buf[f] + base, sys->u[f] + base, (size_t)nx * sizeof(float));
+                    if (first && !sg)
+                        for (int f = 0; f < nf; f++)
+                            memcpy(w->buf[f] + base, sys->u[f] + base, (size_t)nx * sizeof(float));
                     continue;
                 }
+                if (first && !sg)
+                    for (int f = 0; f < nf; f++) {
+                        w->buf[f][base] = sys->u[f][base];
+                        w->buf[f][base + (size_t)nx - 1] = sys->u[f][base + (size_t)nx - 1];
+                    }
+                int seg[2][2];
+                const int nseg = row_segments(part, ring, nx, ny, nz, y, z, seg);
+                if (sg >= nseg) continue;
+                const int xa = seg[sg][0], n = seg[sg][1] - xa + 1;
                 row.n = n;
-                row.x0 = 1;
+                row.x0 = xa;
                 row.y = y;
                 row.z = z;
-                row.cls = sys->cls ? sys->cls + base + 1 : NULL;
-                for (int f = 0; f < nf; f++) row.u[f] = sys->u[f] + base + 1;
+                row.cls = sys->cls ? sys->cls + base + xa : NULL;
+                for (int f = 0; f < nf; f++) row.u[f] = sys->u[f] + base + xa;
                 if (sys->react) {
                     sys->react(sys->ctx, &row);
                 } else {
@@ -285,7 +334,7 @@ void ss_heal_rd_step_explicit(ss_heal_rd_system *sys, ss_heal_rd_work *w, double
                 }
                 const uint8_t *restrict nbr = w->nb + base;
 #pragma omp simd
-                for (int x = 1; x <= n; x++) {
+                for (int x = xa; x < xa + n; x++) {
                     const uint8_t b = nbr[x];
                     wxm[x] = (float)(b & 1);
                     wxp[x] = (float)((b >> 1) & 1);
@@ -303,17 +352,15 @@ void ss_heal_rd_step_explicit(ss_heal_rd_system *sys, ss_heal_rd_work *w, double
                     const float *restrict mk = sys->mslot[f] >= 0 ? row.m[sys->mslot[f]] : ones;
                     const float Dh = (float)(sys->D[f] * ih2);
                     const float lo = sys->lo[f], hi = sys->hi[f];
-                    un[0] = u[0];
-                    un[nx - 1] = u[nx - 1];
                     /* The three variants give the same values as the full
                      * stencil: a face term that is 0 * (finite) only adds a
                      * signed zero, which the clamp at lo = 0 removes. */
                     if (!(Dh > 0.0f)) {
                         /* no diffusion (scar, a static region) */
 #pragma omp simd
-                        for (int x = 1; x <= n; x++) {
+                        for (int x = xa; x < xa + n; x++) {
                             const float uc = u[x];
-                            float v = uc + dtf * (pr[x - 1] - ls[x - 1] * uc);
+                            float v = uc + dtf * (pr[x - xa] - ls[x - xa] * uc);
                             v = v > lo ? v : lo;
                             v = v < hi ? v : hi;
                             un[x] = upd[x] ? v : uc;
@@ -321,34 +368,34 @@ void ss_heal_rd_step_explicit(ss_heal_rd_system *sys, ss_heal_rd_work *w, double
                     } else if (sys->lateral[f]) {
                         /* lateral fields: the z faces do not conduct */
 #pragma omp simd
-                        for (int x = 1; x <= n; x++) {
+                        for (int x = xa; x < xa + n; x++) {
                             const float uc = u[x];
                             const float lap = wxm[x] * (u[x - 1] - uc) + wxp[x] * (u[x + 1] - uc) +
                                               wym[x] * (u[x - (long)sy] - uc) +
                                               wyp[x] * (u[x + sy] - uc);
                             float v =
-                                uc + dtf * (mk[x - 1] * Dh * lap + pr[x - 1] - ls[x - 1] * uc);
+                                uc + dtf * (mk[x - xa] * Dh * lap + pr[x - xa] - ls[x - xa] * uc);
                             v = v > lo ? v : lo;
                             v = v < hi ? v : hi;
                             un[x] = upd[x] ? v : uc;
                         }
                     } else {
 #pragma omp simd
-                        for (int x = 1; x <= n; x++) {
+                        for (int x = xa; x < xa + n; x++) {
                             const float uc = u[x];
                             const float lap =
                                 wxm[x] * (u[x - 1] - uc) + wxp[x] * (u[x + 1] - uc) +
                                 wym[x] * (u[x - (long)sy] - uc) + wyp[x] * (u[x + sy] - uc) +
                                 wzm[x] * (u[x - (long)sz] - uc) + wzp[x] * (u[x + sz] - uc);
                             float v =
-                                uc + dtf * (mk[x - 1] * Dh * lap + pr[x - 1] - ls[x - 1] * uc);
+                                uc + dtf * (mk[x - xa] * Dh * lap + pr[x - xa] - ls[x - xa] * uc);
                             v = v > lo ? v : lo;
                             v = v < hi ? v : hi;
                             un[x] = upd[x] ? v : uc;
                         }
                     }
                     if (has_vel) {
-                        for (int x = 1; x <= n; x++) {
+                        for (int x = xa; x < xa + n; x++) {
                             if (!upd[x]) continue;
                             size_t c = base + (size_t)x;
                             float v =
@@ -360,6 +407,7 @@ void ss_heal_rd_step_explicit(ss_heal_rd_system *sys, ss_heal_rd_work *w, double
             }
         }
     }
+    if (part == RD_PART_INTERIOR) return; /* the ring follows: then the exchange */
     for (int f = 0; f < nf; f++) {
         float *t = sys->u[f];
         sys->u[f] = w->buf[f];

@@ -30,6 +30,17 @@ struct ss_heal_rd_work {
     int have_buf, have_mslot;
 };
 
+/* The explicit step in parts (the MPI driver, src/dist, overlaps its halo
+ * exchange with the interior): ALL = ss_heal_rd_step_explicit; INTERIOR =
+ * the prepare hook and every cell whose stencil does not reach the faces of
+ * the box's outer shell named in `ring` (NB_* bits: the halo still in
+ * flight), no buffer swap; RING = the remaining cells, then the swap.
+ * INTERIOR then RING computes every cell as ALL does, in the same
+ * arithmetic: the same values. */
+enum { RD_PART_ALL = 0, RD_PART_INTERIOR = 1, RD_PART_RING = 2 };
+void ss_heal_rd__step_explicit_part(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt, int part,
+                                    int ring);
+
 /* Shared helpers (explicit.c) */
 void ss_heal_rd__build_masks(const ss_heal_rd_system *sys, ss_heal_rd_work *w);
 /* Donor-cell convection of field f from src into dst over dt (dst may not

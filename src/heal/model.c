@@ -15,6 +15,8 @@
  * eschar source R(omega) acts in the top scab_mm of the exposed wound. These
  * column inputs are gathered before each reaction pass (prepare hook), so
  * rows stay independent and results bit-identical for any thread count.
+ * The keloid's invasion signal a(t) (keloid_tau) depends on the grid's day
+ * only and is set before each step, so resumes and rank counts agree.
  * docs/heal-model.md §2 lists where and why this departs from §4.1 as printed. */
 /* The hot loops are written branch-free for SIMD. At -O2 GCC vectorises
  * their compares/selects only with loop if-conversion and without treating
@@ -36,6 +38,7 @@ typedef struct model_ctx {
     float lam11, lam31, lam12, lam22, beta2, lam33, lam32, inv_u3eq, rn, inv_K, lamnn;
     float Rs, lames, lamge, lamee, gamma1, lamnrho, lamrhop, lamkrho, lampp, inv_rhomax, rhomax;
     float kscab, bed_mm, h, rho_closed, inv_rhosat;
+    float kact; /* keloid invasion signal a(t) for the current step (keloid_signal) */
     int scab, static_region;
     const uint8_t *cell;
     int nx, ny, nz;
@@ -47,6 +50,12 @@ typedef struct model_ctx {
     float scab_h;                  /* scab_mm / voxel: the scab layer in voxel levels */
     int *zt_min, *zt_max;          /* per y: range of ztop over the row's columns */
     int kdeep;                     /* levels below the surface where no surface/scab term acts */
+    /* a box of a stack in z (src/dist): ztop, zt_min, zt_max are whole-grid
+     * levels, zoff the whole-grid level of this box's z = 0, col the exchange
+     * with the boxes above and below (NULL: the columns are whole here) */
+    int zoff;
+    ss_heal_column_fn col;
+    void *col_ctx;
 } model_ctx;
 
 struct ss_heal_solver {
@@ -81,12 +90,14 @@ static inline float qwin(float u3, float g1, float ig1, float ig2) {
 /* One row of the reaction. `deep` (a constant at each call, so the compiler
  * emits two loops): no cell of the row is a surface cell or inside the scab
  * layer, so the sheet and eschar-source terms are zero there and are not
- * computed (the values written are the same as the full loop's). */
+ * computed (the values written are the same as the full loop's). `kel`
+ * (likewise): the keloid deposition is on (lamkrho > 0); without it the term
+ * is skipped (it would add exactly 0). */
 #if defined(__GNUC__)
 __attribute__((always_inline))
 #endif
 static inline void
-react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep) {
+react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep, const int kel) {
     const int n = row->n;
     const size_t col0 = (size_t)row->y * (size_t)m->nx + (size_t)row->x0;
     const int *restrict ZT = m->ztop + col0;
@@ -105,10 +116,13 @@ react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep) {
     const float ppos = pos(m->lampp), pneg = pos(-m->lampp);
     const float dyn = m->static_region ? 0.0f : 1.0f;
     const float ibeta = 1.0f / m->beta2;
-    const int z = row->z;
+    const int z = row->z + m->zoff;
     const float scab_h = m->scab_h, kscab = m->kscab, rclosed = m->rho_closed;
-    const float lamnrho = m->lamnrho, lamkrho = m->lamkrho, lamge = m->lamge, lamee = m->lamee;
+    const float lamnrho = m->lamnrho, lamge = m->lamge, lamee = m->lamee;
     const float lames = m->lames, irsat = m->inv_rhosat;
+    /* keloid factor G = a + (1 - a) clamp(rho/rho_max - 1, 0, 1), times lamkrho */
+    const float lka = m->lamkrho * m->kact, lkb = m->lamkrho * (1.0f - m->kact);
+    const float irmax = m->inv_rhomax;
     float *restrict m0 = row->m[0], *restrict m1 = row->m[1];
     float *restrict p1 = pr[0], *restrict p2 = pr[1], *restrict p3 = pr[2], *restrict p4 = pr[3];
     float *restrict p5 = pr[4], *restrict p6 = pr[5], *restrict p7 = pr[6], *restrict p8 = pr[7];
@@ -154,10 +168,14 @@ react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep) {
         p6[i] = deep ? 0.0f : me * lamge * e;
         l6[i] = deep ? 0.0f : surf * lamee;
         /* 4.1.7 scar, restricted to omega:
-         * (1-s) n ((1-u3)(1-e) lamnrho + lamkrho (1 - rho/rho_sat)+)
-         * - lamrhop rho */
+         * (1-s) n ((1-u3)(1-e) lamnrho + lamkrho G (1 - rho/rho_sat)+)
+         * - lamrhop rho; G = a + (1 - a) clamp(rho/rho_max - 1, 0, 1): tissue
+         * not yet keloid needs the invasion signal a(t) [D6] */
         const float imm = pos(1.0f - rclosed * u3); /* (1 - u3) at rho_open = 0 */
-        p7[i] = om * ns * nn * (imm * necl * lamnrho + lamkrho * pos(1.0f - rho * irsat));
+        const float kdep =
+            kel ? (lka + lkb * clampf(rho * irmax - 1.0f, 0.0f, 1.0f)) * pos(1.0f - rho * irsat)
+                : 0.0f;
+        p7[i] = om * ns * nn * (imm * necl * lamnrho + kdep);
         l7[i] = m->lamrhop;
         /* 4.1.8 plasma: Dp lap p + lampp p + C(rho)(1-p) */
         const float C = pos(rho - m->rhomax) * m->inv_rhomax;
@@ -171,15 +189,21 @@ react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep) {
 
 static void heal_react(void *vctx, const ss_heal_rd_row *row) {
     const model_ctx *m = vctx;
-    const int z = row->z, y = row->y;
+    const int z = row->z + m->zoff, y = row->y;
     /* deep row: every column's surface is above z by at least one level and
      * the scab layer (levels below the surface with wsc > 0: kf < scab_h), or
      * below z (no surface in the column at this height) */
     const int deep = z > m->zt_max[y] || m->zt_min[y] - z >= m->kdeep;
-    if (deep)
-        react_row(m, row, 1);
-    else
-        react_row(m, row, 0);
+    if (m->lamkrho > 0.0f) {
+        if (deep)
+            react_row(m, row, 1, 1);
+        else
+            react_row(m, row, 0, 1);
+    } else if (deep) {
+        react_row(m, row, 1, 0);
+    } else {
+        react_row(m, row, 0, 0);
+    }
 }
 
 static int is_tissue(uint8_t c) { return c != SS_CELL_AIR && c != SS_CELL_BOUND; }
@@ -193,13 +217,19 @@ static void find_surface(model_ctx *c) {
             if (x > 0 && y > 0 && x < nx - 1 && y < ny - 1)
                 for (int z = nz - 2; z >= 1; z--)
                     if (is_tissue(c->cell[((size_t)z * ny + y) * nx + x])) {
-                        zt = z;
+                        zt = z + c->zoff;
                         break;
                     }
             c->ztop[(size_t)y * nx + x] = zt;
         }
+    if (c->col) { /* the topmost over the z stack (levels are exact as floats) */
+        const size_t ncol = (size_t)nx * ny;
+        for (size_t i = 0; i < ncol; i++) c->ds[i] = (float)c->ztop[i];
+        c->col(c->col_ctx, SS_HEAL_COL_MAX, c->ds, ncol);
+        for (size_t i = 0; i < ncol; i++) c->ztop[i] = (int)c->ds[i];
+    }
     for (int y = 0; y < ny; y++) {
-        int lo = nz, hi = -1;
+        int lo = 1 << 30, hi = -1; /* (whole-grid levels in a stack) */
         for (int x = 1; x < nx - 1; x++) {
             const int zt = c->ztop[(size_t)y * nx + x];
             if (zt < 0) continue;
@@ -212,12 +242,35 @@ static void find_surface(model_ctx *c) {
     c->ztop_of = c->cell;
 }
 
+/* One level z of the bed sum of a row of columns: the part of voxel level
+ * k = zt - z below the surface that lies in the bed window [ds, ds + bed_mm]
+ * weights its u3 (Ur). */
+static inline void bed_level(const int *zt, const float *ds, const float *Ur, float *bed, float *ws,
+                             int nx, int z, float h, float bedmm) {
+    for (int x = 0; x < nx; x++) {
+        const int k = zt[x] - z;
+        if (k < 0) continue;
+        const float a = ds[x], b = ds[x] + bedmm;
+        const float lo = k * h > a ? k * h : a, hi = (k + 1) * h < b ? (k + 1) * h : b;
+        if (hi <= lo) continue;
+        bed[x] += (hi - lo) * Ur[x];
+        ws[x] += hi - lo;
+    }
+}
+
+static void heal_prepare_z(model_ctx *c, float *const *u);
+
 /* prepare hook: the surface epithelium and the bed's mean capillary density
  * of every column, from the current fields. Walks each y slab z-row by z-row
  * (contiguous in x) rather than column by column, so large grids stream
  * through memory; per column the sums still run in z order (deterministic). */
+
 static void heal_prepare(void *vctx, float *const *u) {
     model_ctx *c = vctx;
+    if (c->col) {
+        heal_prepare_z(c, u);
+        return;
+    }
     const int nx = c->nx, ny = c->ny;
     const size_t sz = (size_t)nx * (size_t)ny;
     const float *E = u[SS_HEAL_EPITHELIUM], *U3 = u[SS_HEAL_CAPILLARY], *S = u[SS_HEAL_ESCHAR];
@@ -252,21 +305,85 @@ static void heal_prepare(void *vctx, float *const *u) {
         if (zlo < 1) zlo = 1;
         for (int z = zhi; z >= zlo; z--) {
             const float *Ur = U3 + (size_t)z * sz + r0;
-            for (int x = 0; x < nx; x++) {
-                const int k = zt[x] - z;
-                if (k < 0) continue;
-                const float a = ds[x], b = ds[x] + bedmm;
-                const float lo = k * h > a ? k * h : a, hi = (k + 1) * h < b ? (k + 1) * h : b;
-                if (hi <= lo) continue;
-                bed[x] += (hi - lo) * Ur[x];
-                ws[x] += hi - lo;
-            }
+            bed_level(zt, ds, Ur, bed, ws, nx, z, h, bedmm);
         }
         for (int x = 0; x < nx; x++) {
             if (zt[x] < 0) continue;
             bed[x] = ws[x] > 0 ? bed[x] / ws[x] : U3[sz + r0 + x]; /* below the column: z = 1 */
         }
     }
+}
+
+/* heal_prepare on a box of a stack in z (src/dist): the same sums in the same
+ * order (top down, each level's terms as above), each continued from the box
+ * above and handed to the box below; the bottom box finishes the bed mean and
+ * sends the column values to the whole stack; the surface epithelium comes
+ * from the box that holds the surface cell. Owned levels: z = 1 .. nz - 2. */
+static void heal_prepare_z(model_ctx *c, float *const *u) {
+    const int nx = c->nx, ny = c->ny, nz = c->nz, zoff = c->zoff;
+    const size_t sz = (size_t)nx * (size_t)ny;
+    const float *E = u[SS_HEAL_EPITHELIUM], *U3 = u[SS_HEAL_CAPILLARY], *S = u[SS_HEAL_ESCHAR];
+    const float h = c->h, bedmm = c->bed_mm;
+    const int own_hi = zoff + nz - 2, own_lo = zoff + 1; /* whole-grid levels */
+    const int par = sz * (size_t)nz >= RD_PAR_MIN_CELLS;
+#pragma omp parallel for schedule(static) if (par)
+    for (size_t i = 0; i < sz; i++) {
+        const int zt = c->ztop[i];
+        c->ecol[i] = zt >= own_lo && zt <= own_hi ? E[(size_t)(zt - zoff) * sz + i] : -INFINITY;
+        c->ds[i] = c->bed[i] = c->wsum[i] = 0.0f;
+    }
+    c->col(c->col_ctx, SS_HEAL_COL_MAX, c->ecol, sz);
+    for (size_t i = 0; i < sz; i++)
+        if (c->ztop[i] < 0) c->ecol[i] = 0.0f;
+    if (c->scab) { /* the eschar thickness over each column */
+        c->col(c->col_ctx, SS_HEAL_COL_FROM_ABOVE, c->ds, sz);
+#pragma omp parallel for schedule(static) if (par)
+        for (int y = 0; y < ny; y++) {
+            const size_t r0 = (size_t)y * (size_t)nx;
+            const int *zt = c->ztop + r0;
+            float *ds = c->ds + r0;
+            int zhi = -1;
+            for (int x = 0; x < nx; x++)
+                if (zt[x] > zhi) zhi = zt[x];
+            for (int z = zhi < own_hi ? zhi : own_hi; z >= own_lo && z >= 1; z--) {
+                const float *Sr = S + (size_t)(z - zoff) * sz + r0;
+                for (int x = 0; x < nx; x++)
+                    if (zt[x] >= z) ds[x] += Sr[x] * h;
+            }
+        }
+        c->col(c->col_ctx, SS_HEAL_COL_TO_BELOW, c->ds, sz);
+        c->col(c->col_ctx, SS_HEAL_COL_FROM_BOTTOM, c->ds, sz);
+    }
+    c->col(c->col_ctx, SS_HEAL_COL_FROM_ABOVE, c->bed, sz);
+    c->col(c->col_ctx, SS_HEAL_COL_FROM_ABOVE, c->wsum, sz);
+#pragma omp parallel for schedule(static) if (par)
+    for (int y = 0; y < ny; y++) {
+        const size_t r0 = (size_t)y * (size_t)nx;
+        const int *zt = c->ztop + r0;
+        float *bed = c->bed + r0, *ds = c->ds + r0, *ws = c->wsum + r0;
+        int zhi = -1;
+        float dmax = 0.0f;
+        for (int x = 0; x < nx; x++) {
+            if (zt[x] > zhi) zhi = zt[x];
+            if (ds[x] > dmax) dmax = ds[x];
+        }
+        if (zhi < 1) continue;
+        int zlo = zhi - (int)ceilf((dmax + bedmm) / h) - 1;
+        if (zlo < 1) zlo = 1;
+        if (zlo < own_lo) zlo = own_lo;
+        for (int z = zhi < own_hi ? zhi : own_hi; z >= zlo; z--) {
+            const float *Ur = U3 + (size_t)(z - zoff) * sz + r0;
+            bed_level(zt, ds, Ur, bed, ws, nx, z, h, bedmm);
+        }
+        if (own_lo > 0) continue; /* the bottom box (global level 1 inside) finishes */
+        for (int x = 0; x < nx; x++) {
+            if (zt[x] < 0) continue;
+            bed[x] = ws[x] > 0 ? bed[x] / ws[x] : U3[(size_t)(1 - zoff) * sz + r0 + x];
+        }
+    }
+    c->col(c->col_ctx, SS_HEAL_COL_TO_BELOW, c->bed, sz);
+    c->col(c->col_ctx, SS_HEAL_COL_TO_BELOW, c->wsum, sz);
+    c->col(c->col_ctx, SS_HEAL_COL_FROM_BOTTOM, c->bed, sz);
 }
 
 static void ctx_init(model_ctx *c, const ss_heal_params *p, const ss_heal_grid *g) {
@@ -301,6 +418,7 @@ static void ctx_init(model_ctx *c, const ss_heal_params *p, const ss_heal_grid *
     c->nz = g->nz;
     c->kscab = (float)p->kscab;
     c->inv_rhosat = (float)(1.0 / p->rho_sat);
+    c->kact = 1.0f;
     c->rho_closed = (float)(1.0 - p->rho_open);
     c->bed_mm = (float)p->bed_mm;
     c->h = (float)g->dx_mm;
@@ -406,10 +524,11 @@ ss_heal_solver *ss_heal_solver_create(const ss_heal_grid *g, const ss_heal_param
 ss_heal_solver *ss_heal_solver_create_sub(const ss_heal_grid *g, const int goff[3],
                                           const int gdim[3], const ss_heal_params *p,
                                           ss_heal_scheme scheme, double dt, ss_error *err) {
-    if (!g || !goff || !gdim || goff[2] != 0 || gdim[2] != g->nz || gdim[0] < g->nx - 2 ||
-        gdim[1] < g->ny - 2) {
+    if (!g || !goff || !gdim || gdim[0] < g->nx - 2 || gdim[1] < g->ny - 2 || gdim[2] < g->nz - 2 ||
+        (scheme != SS_HEAL_EXPLICIT && (goff[2] != 0 || gdim[2] != g->nz))) {
         ss_error_set(err, SS_ERR_INPUT,
-                     "heal solver: a sub-box must span the whole grid in z and lie inside it");
+                     "heal solver: a sub-box must lie inside the grid (and span it in z with the "
+                     "split scheme, whose z line solves need whole columns)");
         return NULL;
     }
     return solver_create(g, goff, gdim, p, scheme, dt, err);
@@ -473,6 +592,7 @@ static ss_heal_solver *solver_create(const ss_heal_grid *g, const int *goff, con
         ss_error_set(err, SS_ERR_NOMEM, "heal solver: out of memory");
         return NULL;
     }
+    if (goff) s->ctx.zoff = goff[2];
     find_surface(&s->ctx);
     sys_init(&s->sys, &s->ctx, g, &s->p);
     for (int d = 0; goff && d < 3; d++) {
@@ -491,6 +611,13 @@ static ss_heal_solver *solver_create(const ss_heal_grid *g, const int *goff, con
         return NULL;
     }
     return s;
+}
+
+void ss_heal_solver_set_columns(ss_heal_solver *s, ss_heal_column_fn fn, void *ctx) {
+    if (!s) return;
+    s->ctx.col = fn;
+    s->ctx.col_ctx = ctx;
+    find_surface(&s->ctx); /* the surface over the whole stack */
 }
 
 double ss_heal_solver_dt(const ss_heal_solver *s) { return s ? s->dt : 0.0; }
@@ -521,6 +648,14 @@ void ss_heal_solver_free(ss_heal_solver *s) {
     free(s);
 }
 
+/* The keloid's invasion signal over a step from day t of length dt, at the
+ * step's midpoint: a = exp(-t_mid / keloid_tau), 1 without decay. A function
+ * of the grid's day only, so resumed runs and any rank count see the same. */
+static float keloid_signal(const ss_heal_params *p, double t, double dt) {
+    if (!(p->keloid_tau > 0)) return 1.0f;
+    return (float)exp(-(t + 0.5 * dt) / p->keloid_tau);
+}
+
 ss_status ss_heal_step_phase(ss_heal_solver *s, ss_heal_grid *g, int phase, ss_error *err) {
     if (!s || !g || s->scheme != SS_HEAL_SPLIT || phase < 0 || phase > 2 || g->velocity[0] ||
         g->velocity[1] || g->velocity[2])
@@ -531,6 +666,7 @@ ss_status ss_heal_step_phase(ss_heal_solver *s, ss_heal_grid *g, int phase, ss_e
     s->ctx.cell = g->cell;
     s->sys.cls = g->cell;
     if (s->ctx.ztop_of != g->cell) find_surface(&s->ctx);
+    s->ctx.kact = keloid_signal(&s->p, g->t_days, s->dt);
     for (int f = 0; f < SS_HEAL_NFIELDS; f++) s->sys.u[f] = g->field[f];
     ss_heal_rd__step_split_phase(&s->sys, s->w, s->dt, s->nsub, phase);
     if (phase == 2) {
@@ -547,7 +683,9 @@ float *ss_heal_solver_multipliers(ss_heal_solver *s, int slot) {
 
 int ss_heal_solver_nslots(const ss_heal_solver *s) { return s ? s->sys.nslots : 0; }
 
-ss_status ss_heal_step(ss_heal_solver *s, ss_heal_grid *g, ss_error *err) {
+/* What every step does first: check the grid, point the system at its
+ * fields and velocity, re-check the explicit limit under a velocity. */
+static ss_status step_begin(ss_heal_solver *s, ss_heal_grid *g, ss_error *err) {
     if (!s || !g) return ss_error_set(err, SS_ERR_INPUT, "heal step: no solver or grid");
     if (g->nx != s->nx || g->ny != s->ny || g->nz != s->nz)
         return ss_error_set(err, SS_ERR_INPUT,
@@ -556,6 +694,7 @@ ss_status ss_heal_step(ss_heal_solver *s, ss_heal_grid *g, ss_error *err) {
     s->ctx.cell = g->cell;
     s->sys.cls = g->cell;
     if (s->ctx.ztop_of != g->cell) find_surface(&s->ctx);
+    s->ctx.kact = keloid_signal(&s->p, g->t_days, s->dt);
     for (int f = 0; f < SS_HEAL_NFIELDS; f++) s->sys.u[f] = g->field[f];
     int has_vel = 0;
     for (int d = 0; d < 3; d++) {
@@ -577,12 +716,38 @@ ss_status ss_heal_step(ss_heal_solver *s, ss_heal_grid *g, ss_error *err) {
                                 "solver was created; create the solver with the velocity set");
         }
     }
+    return SS_OK;
+}
+
+static void step_end(ss_heal_solver *s, ss_heal_grid *g) {
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++) g->field[f] = s->sys.u[f];
+    g->t_days += s->dt;
+    g->step++;
+}
+
+ss_status ss_heal_step(ss_heal_solver *s, ss_heal_grid *g, ss_error *err) {
+    ss_status st = step_begin(s, g, err);
+    if (st) return st;
     if (s->scheme == SS_HEAL_EXPLICIT)
         ss_heal_rd_step_explicit(&s->sys, s->w, s->dt);
     else
         ss_heal_rd_step_split(&s->sys, s->w, s->dt, s->nsub);
-    for (int f = 0; f < SS_HEAL_NFIELDS; f++) g->field[f] = s->sys.u[f];
-    g->t_days += s->dt;
-    g->step++;
+    step_end(s, g);
+    return SS_OK;
+}
+
+ss_status ss_heal_step_part(ss_heal_solver *s, ss_heal_grid *g, int part, int ring, ss_error *err) {
+    if (!s || s->scheme != SS_HEAL_EXPLICIT || (part != 1 && part != 2))
+        return ss_error_set(err, SS_ERR_INPUT, "heal step part: the explicit scheme, part 1 or 2");
+    if (part == 1) {
+        ss_status st = step_begin(s, g, err);
+        if (st) return st;
+        ss_heal_rd__step_explicit_part(&s->sys, s->w, s->dt, RD_PART_INTERIOR, ring);
+        return SS_OK;
+    }
+    if (!g || g->nx != s->nx || g->ny != s->ny || g->nz != s->nz)
+        return ss_error_set(err, SS_ERR_INPUT, "heal step part: grid does not match the solver");
+    ss_heal_rd__step_explicit_part(&s->sys, s->w, s->dt, RD_PART_RING, ring);
+    step_end(s, g);
     return SS_OK;
 }

@@ -36,7 +36,11 @@ static const pdef PDEFS[] = {
      10.0, 10.0},
     {"D2", OFF(D2), "mm^2/day", DIM ": growth-factor spread of ~1 mm in a day", 0.5, 0.5, 0.5},
     {"lam12", OFF(lam12), "1/day", CAL, 5.0, 5.0, 5.0},
-    {"lam22", OFF(lam22), "1/day", DIM ": MDGF half-life ~8 h", 2.0, 2.0, 2.0},
+    {"lam22", OFF(lam22), "1/day",
+     DIM ": MDGF half-life ~8 h, range sqrt(D2/lam22) = 0.5 mm; Jin et al. 2011 (BMC Syst Biol "
+         "5:60, Table 4) use a TGF-beta decay of 15/day (half-life ~1 h), which would confine the "
+         "signal to 0.18 mm, below the voxel (docs/heal-model.md §5)",
+     2.0, 2.0, 2.0},
     {"u1_beta2", OFF(u1_beta2), "1",
      "seed §4.1.2 threshold u1^beta2; below healthy u1 = 1 so intact tissue makes no MDGF", 0.8,
      0.8, 0.8},
@@ -95,17 +99,22 @@ static const pdef PDEFS[] = {
      0.3, 0.3, 0.3},
     {"lamkrho", OFF(lamkrho), "1/day",
      "keloid only (departure from §4.1.7, docs/heal-model.md): autocrine collagen deposition of "
-     "keloid fibroblasts in the wound region, independent of vascularisation and closure",
-     0, 0, 0.2},
+     "keloid fibroblasts in the wound region, independent of vascularisation and closure; in "
+     "tissue not yet keloid (rho < rho_max) scaled by the invasion signal (keloid_tau). "
+     "Calibrated with keloid_tau: scar denser than the clean peak >= 2 mm beyond the margin by "
+     "day 60, a plateau of ~3 mm (docs/heal-model.md §6); keloid fibroblasts synthesise ~20x the "
+     "collagen of normal ones (Craig et al. 1975, Eur J Clin Invest 5:69)",
+     0, 0, 0.6},
     {"Dp", OFF(Dp), "mm^2/day",
-     DIM ": clot plasma spreads ~mm in days; keloid: calibrated with lamkrho, rho_max so the "
-         "keloid advances ~3 mm beyond the margin by day 60",
+     DIM ": clot plasma spreads ~mm in days; keloid: with lamkrho, rho_max and keloid_tau it "
+         "sets the front speed (calibrated, docs/heal-model.md §6)",
      0.05, 0.05, 0.08},
     {"lampp", OFF(lampp), "1/day",
-     "signed; negative = resorption of the clot (half-life 35 days); with it the far field relaxes "
-     "to p = 0 within sqrt(Dp/|lampp|) = 2 mm of the keloid, so the block walls do not shape it; "
-     "only used with static_region = 0",
-     -0.02, -0.02, -0.02},
+     "signed; negative = resorption of the clot (half-life 35 days; keloid 17 days); with it the "
+     "far field relaxes to p = 0 within sqrt(Dp/|lampp|) (keloid 1.4 mm) of the region, so the "
+     "block walls do not shape it (keloid: calibrated so that 30 and 50 mm blocks give the same "
+     "extent at day 365, docs/heal-model.md §6); only used with static_region = 0",
+     -0.02, -0.02, -0.04},
     {"rho_max", OFF(rho_max), "1",
      "seed §4.1.8 collagen threshold of C(rho); clean/scab: unused (static region); keloid: "
      "calibrated with lamkrho and Dp (docs/heal-model.md)",
@@ -129,6 +138,15 @@ static const pdef PDEFS[] = {
      "keloid's dense hyalinised bundles can at most fill ~0.9, so ~3 x; the keloid's autocrine "
      "deposition (lamkrho) saturates as (1 - rho/rho_sat)",
      3.0, 3.0, 3.0},
+    {"keloid_tau", OFF(keloid_tau), "day",
+     "keloid only (docs/heal-model.md §2 [D6]): e-folding time of the invasion signal (the "
+     "chronic inflammation at the keloid's leading edge, Eura et al. 2022, PRS Glob Open "
+     "10:e4374; Limandjaja et al. 2020, Front Cell Dev Biol 8:360) that converts normal dermis "
+     "at the margin into keloid; established keloid (rho > rho_max) deposits without it. "
+     "Calibrated (no published growth rate found): the front keeps advancing for ~4 months "
+     "after closure, then stops ~3 mm beyond the margin, which the default 30 mm block holds "
+     "(docs/heal-model.md §6); 0 = no decay (the front never stops)",
+     20.0, 20.0, 20.0},
 };
 #define NPDEFS ((int)(sizeof PDEFS / sizeof PDEFS[0]))
 /* keys whose value may be negative */

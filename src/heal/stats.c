@@ -69,11 +69,23 @@ static double limbs_value(const int64_t *src) {
     return ldexp(d, -LIMB_BIAS);
 }
 
+/* The tissue cells of column (x, y) at levels [z0, z1): count, field sums, scar maximum. */
+static void add_cells(ss_heal_stats_acc *a, const ss_heal_grid *g, int x, int y, int z0, int z1) {
+    const float *rho = g->field[SS_HEAL_SCAR];
+    for (int z = z0; z < z1; z++) {
+        size_t c = ss_heal_idx(g, x, y, z);
+        if (!is_tissue(g->cell[c])) continue;
+        a->n_tissue++;
+        for (int f = 0; f < SS_HEAL_NFIELDS; f++) limbs_add(a, f, g->field[f][c]);
+        if (rho[c] > a->scar_max) a->scar_max = rho[c];
+    }
+}
+
 void ss_heal_stats_acc_add(ss_heal_stats_acc *a, const ss_heal_grid *g, int x0, int x1, int y0,
                            int y1) {
     const double thr = ss_heal_open_threshold();
     const float *e = g->field[SS_HEAL_EPITHELIUM], *p = g->field[SS_HEAL_PLASMA];
-    const float *s = g->field[SS_HEAL_ESCHAR], *rho = g->field[SS_HEAL_SCAR];
+    const float *s = g->field[SS_HEAL_ESCHAR];
     if (x0 < 0) x0 = 0;
     if (y0 < 0) y0 = 0;
     if (x1 > g->nx) x1 = g->nx;
@@ -108,13 +120,48 @@ void ss_heal_stats_acc_add(ss_heal_stats_acc *a, const ss_heal_grid *g, int x0, 
                 if (region) a->n_region++;
                 if ((initial || region) && e[c0] < thr) a->n_open++;
             }
-            for (int z = 0; z < g->nz; z++) {
-                size_t c = ss_heal_idx(g, x, y, z);
-                if (!is_tissue(g->cell[c])) continue;
-                a->n_tissue++;
-                for (int f = 0; f < SS_HEAL_NFIELDS; f++) limbs_add(a, f, g->field[f][c]);
-                if (rho[c] > a->scar_max) a->scar_max = rho[c];
+            add_cells(a, g, x, y, 0, g->nz);
+        }
+    }
+    ss_heal_stats_acc_normalise(a);
+}
+
+void ss_heal_stats_acc_add_stack(ss_heal_stats_acc *a, const ss_heal_grid *g, int x0, int x1,
+                                 int y0, int y1, int zoff, int gz, ss_heal_col_state *cols,
+                                 int bottom) {
+    const double thr = ss_heal_open_threshold();
+    const float *e = g->field[SS_HEAL_EPITHELIUM], *p = g->field[SS_HEAL_PLASMA];
+    const float *s = g->field[SS_HEAL_ESCHAR];
+    for (int y = y0; y < y1; y++) {
+        for (int x = x0; x < x1; x++) {
+            /* the column scan of ss_heal_stats_acc_add, continued level by level */
+            ss_heal_col_state *cs = cols + (size_t)(y - y0) * (size_t)(x1 - x0) + (x - x0);
+            for (int z = g->nz - 2; z >= 1 && cs->phase < 2; z--) {
+                const int Z = z + zoff;
+                if (Z < 1 || Z > gz - 2) continue;
+                const size_t c = ss_heal_idx(g, x, y, z);
+                if (cs->phase == 0) {
+                    if (!is_tissue(g->cell[c])) continue;
+                    cs->phase = 1;
+                    cs->initial = g->cell[c] == SS_CELL_WOUND;
+                    cs->region = p[c] > (float)SS_HEAL_P_MIN;
+                    cs->open = e[c] < thr;
+                } else if (!is_tissue(g->cell[c])) {
+                    cs->phase = 2;
+                    break;
+                }
+                if (s[c] > cs->smax) cs->smax = s[c];
             }
+            if (bottom && cs->phase) {
+                if (cs->initial) {
+                    a->n_initial++;
+                    limbs_add(a, SS_HEAL_NFIELDS, cs->smax);
+                    a->n_wcol++;
+                }
+                if (cs->region) a->n_region++;
+                if ((cs->initial || cs->region) && cs->open) a->n_open++;
+            }
+            add_cells(a, g, x, y, 1, g->nz - 1);
         }
     }
     ss_heal_stats_acc_normalise(a);

@@ -78,6 +78,35 @@ void ss_heal_closure_update(const ss_heal_grid *g, double *closed) {
         }
 }
 
+void ss_heal_closure_scan(const ss_heal_grid *g, int zoff, int gz, float *v, float *found) {
+    const float *e = g->field[SS_HEAL_EPITHELIUM];
+    for (int y = 0; y < g->ny; y++)
+        for (int x = 0; x < g->nx; x++) {
+            const size_t k = (size_t)y * (size_t)g->nx + (size_t)x;
+            for (int z = g->nz - 2; z >= 1 && found[k] < 2; z--) {
+                const size_t i = ss_heal_idx(g, x, y, z);
+                const int Z = z + zoff;
+                if (g->cell[i] == SS_CELL_AIR ||
+                    (g->cell[i] == SS_CELL_BOUND &&
+                     (Z == 0 || Z == gz - 1 || (Z + 0.5) * g->dx_mm > g->skin_top_mm)))
+                    continue;
+                if (!found[k] || e[i] > v[k]) v[k] = e[i];
+                found[k]++;
+            }
+        }
+}
+
+void ss_heal_closure_apply(const ss_heal_grid *g, const float *v, double *closed) {
+    const float thr = (float)ss_heal_open_threshold();
+    for (size_t k = 0; k < (size_t)g->nx * (size_t)g->ny; k++) {
+        if (v[k] < 0) continue; /* air only: stays as it is */
+        if (v[k] < thr)
+            closed[k] = SS_HEAL_CLOSED_OPEN;
+        else if (closed[k] == SS_HEAL_CLOSED_OPEN)
+            closed[k] = g->t_days;
+    }
+}
+
 void ss_heal_closure_init(const ss_heal_grid *g, double *closed) {
     for (size_t i = 0; i < (size_t)g->nx * (size_t)g->ny; i++) closed[i] = SS_HEAL_CLOSED_INTACT;
     ss_heal_closure_update(g, closed);
