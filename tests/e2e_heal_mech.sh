@@ -31,7 +31,7 @@ for a in displacement velocity stress; do
 done
 grep -q 'Name="displacement"' "$T/a/fields/fields_0002.vti" || fail ".vti lacks the displacement"
 grep -q 'Name="velocity"' "$T/a/fields/fields_0002.vti" || fail ".vti lacks the velocity"
-head -1 "$T/a/area.csv" | grep -q ',outline_area_mm2,contraction,closure_share_contraction,closure_share_epithelialisation$' ||
+head -1 "$T/a/area.csv" | grep -q ',outline_area_mm2,contraction,closure_share_contraction,closure_share_epithelialisation,myofibroblast_fraction$' ||
     fail "area.csv lacks the mechanics columns"
 python3 - "$T/a.json" "$T/a/area.csv" <<'PY' || fail "summary/area values"
 import csv, json, sys

@@ -28,7 +28,10 @@ python3 "$SRC/tests/strokes_ellipse.py" 0.2 0.62 0.02 0.014 >"$T/cut.csv"
 # sanitizer runs (SKINSIM_TEST_QUICK): half the time
 D=1; H=0.5
 [ -n "${SKINSIM_TEST_QUICK:-}" ] && { D=0.5; H=0.25; }
-RUN="--mesh $HAND --wound-uv $T/cut.csv --voxel-mm 1 --mechanics --snapshot-every $H --quiet"
+# the myofibroblasts pull at once (kinetics off, docs/mech.md), so a day
+# deforms the skin enough to check the mapping onto the mesh
+printf '{"mechanics": {"tau_myo": {"value": 0, "unit": "day", "source": "e2e"}, "tau_remodel": {"value": 0, "unit": "day", "source": "e2e"}}}\n' >"$T/pull.json"
+RUN="--mesh $HAND --wound-uv $T/cut.csv --voxel-mm 1 --mechanics --params $T/pull.json --snapshot-every $H --quiet"
 
 # --- the hand, 1 day (0.5 quick), 2 threads
 "$CLI" heal $RUN --days $D --threads 2 --out "$T/a" --json >"$T/a.json" || fail "hand run failed"

@@ -467,6 +467,8 @@ static void test_free_block(void **state) {
     p.kappa = 1.0 / 3.0; /* isotropic: the same strain in every direction */
     p.k1 = 0;            /* ground matrix only: the strain is sigma / (3 K_bulk) */
     p.K_m = 1;
+    p.tau_myo = 0;     /* no differentiation kinetics: the open wound's fibroblasts pull at once */
+    p.tau_remodel = 0; /* and the rest lengths take their target in the frame */
     p.tol = 1e-9;
     p.max_substeps = 20000;
     p.tet_size_mm = 1.0;

@@ -171,6 +171,12 @@ double ss_heal_time_to_closure(const ss_heal_area_row *rows, int n, double level
  * ticks, the title, dashed 50% and 95%-closure guides. 8-bit PNG, atomic. */
 ss_status ss_heal_area_plot(const char *path, const ss_heal_area_row *rows, int n,
                             const char *title, ss_error *err);
+/* The same plot with the contraction's curves (either may be NULL; one value
+ * per row, NaN skipped): the deformed initial outline's area / its initial
+ * area and the mean myofibroblast fraction under the wound, with a legend. */
+ss_status ss_heal_area_plot_contraction(const char *path, const ss_heal_area_row *rows, int n,
+                                        const char *title, const double *outline,
+                                        const double *myofibroblasts, ss_error *err);
 
 /* ---- checkpoints ------------------------------------------------------------
  * Binary, little endian, version 1:

@@ -60,13 +60,23 @@ void ss_tetmesh_free(ss_tetmesh *m);
 
 typedef struct ss_mech_params {
     /* myofibroblast stress sigma_cell = p_cell(theta) n K_m (§4.2) */
-    double K_pas;   /* kPa, passive volumetric stiffness of the contractile element */
-    double K_act;   /* kPa, active volumetric stiffness */
-    double p_max;   /* kPa, maximal active pressure */
-    double theta1;  /* 1, shortening strain limit (< 0) */
-    double theta2;  /* 1, lengthening strain limit (> p_max / K_act) */
-    double K_m;     /* 1, enhancement factor */
-    double tau_myo; /* days, differentiation lag of the myofibroblasts (0 = none) */
+    double K_pas;  /* kPa, passive volumetric stiffness of the contractile element */
+    double K_act;  /* kPa, active volumetric stiffness */
+    double p_max;  /* kPa, maximal active pressure */
+    double theta1; /* 1, shortening strain limit (< 0) */
+    double theta2; /* 1, lengthening strain limit (> p_max / K_act) */
+    double K_m;    /* 1, enhancement factor */
+    /* myofibroblast kinetics (docs/mech.md): the fraction of the wound's
+     * fibroblasts that are proto-myofibroblasts (q) and myofibroblasts (m),
+     * dq/dt = S (1 - q - m) / tau_proto - q / tau_myo - c q / tau_apo,
+     * dm/dt = q / tau_myo - c m / tau_apo, S = g / (g + gf_half) the
+     * growth-factor (MDGF, g) stimulus, c the epithelial cover; the stress
+     * uses n m. tau_myo = 0 switches the kinetics off: m = 1 - c at once. */
+    double tau_myo;     /* days, proto-myofibroblast -> alpha-SMA myofibroblast */
+    double tau_proto;   /* days, fibroblast -> proto-myofibroblast at saturating growth factor */
+    double gf_half;     /* 1, MDGF level of the half-maximal differentiation stimulus */
+    double tau_apo;     /* days, myofibroblast apoptosis time once the wound is covered */
+    double tau_remodel; /* days, lag of the rest lengths behind the pull (0 = none) */
     /* GOH skin (§4.3): Psi = mu/2 (I1bar - 3) + K/2 (J - 1)^2 + sum_i Psi_fi */
     double mu;          /* kPa, ground matrix shear modulus */
     double K_bulk;      /* kPa, ground matrix bulk modulus */
@@ -244,6 +254,7 @@ typedef struct ss_mech_stats {
     double aspect_major_minor;       /* sqrt of the covariance eigenvalue ratio */
     int inverted_tets;               /* tets with non-positive volume now (folds) */
     double side_max_disp_mm;         /* largest displacement of a side-face node */
+    double myofibroblast_fraction;   /* mean m over the nodes under the initial wound */
 } ss_mech_stats;
 void ss_mech_stats_compute(const ss_mech *m, ss_mech_stats *st);
 /* Tets whose current signed volume is not positive (folded). */

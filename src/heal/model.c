@@ -77,7 +77,18 @@ struct ss_heal_solver {
 
 static inline float pos(float v) { return v > 0.0f ? v : 0.0f; }
 
+/* The seed's epithelial window Q(u3) (§4.1.6): rising to 1 at gamma1, then
+ * falling; it is held at its value at u3 = (1 + gamma1)/2 (one half) above
+ * that. The seed's falling branch reaches zero at the healthy density u3 = 1,
+ * which a bed compacted by wound contraction passes (the mechanics'
+ * convection concentrates the capillaries) and then only leaves by the slow
+ * logistic decay, so the epithelium stopped for good short of closure; the
+ * new epidermis keeps migrating over a fully vascularised bed, as it does
+ * over healthy granulation tissue. Runs without mechanics close before the
+ * bed passes (1 + gamma1)/2 (docs/heal-model.md, docs/mech.md). */
 static inline float qwin(float u3, float g1, float ig1, float ig2) {
+    const float hold = 0.5f * (1.0f + g1);
+    if (u3 > hold) u3 = hold;
     const float qa = u3 * ig1, qb = (1.0f - u3) * ig2;
     return pos(u3 < g1 ? qa : qb);
 }

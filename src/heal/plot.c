@@ -135,6 +135,28 @@ static void fmt_tick(char *buf, size_t n, double v, double step) {
 
 ss_status ss_heal_area_plot(const char *path, const ss_heal_area_row *rows, int n,
                             const char *title, ss_error *err) {
+    return ss_heal_area_plot_contraction(path, rows, n, title, NULL, NULL, err);
+}
+
+/* One extra curve (values per row; NaN rows skipped), clipped to the plot. */
+static void extra_curve(cairo_t *cr, const ss_heal_area_row *rows, int n, const double *v, double L,
+                        double T, double pw, double ph, double tmin, double tmax, double ytop) {
+    int started = 0;
+    for (int i = 0; i < n; i++) {
+        if (!isfinite(v[i])) continue;
+        double x = L + (rows[i].t_days - tmin) / (tmax - tmin) * pw, y = T + ph - v[i] / ytop * ph;
+        if (!started)
+            cairo_move_to(cr, x, y);
+        else
+            cairo_line_to(cr, x, y);
+        started = 1;
+    }
+    cairo_stroke(cr);
+}
+
+ss_status ss_heal_area_plot_contraction(const char *path, const ss_heal_area_row *rows, int n,
+                                        const char *title, const double *outline,
+                                        const double *myofibroblasts, ss_error *err) {
     const int W = 900, H = 560;
     const double L = 90, R = 30, T = 60, B = 70;
     cairo_surface_t *s = cairo_image_surface_create(CAIRO_FORMAT_RGB24, W, H);
@@ -229,7 +251,42 @@ ss_status ss_heal_area_plot(const char *path, const ss_heal_area_row *rows, int 
         }
         if (n == 1) cairo_rel_line_to(cr, 1, 0);
         cairo_stroke(cr);
+        if (outline) {
+            cairo_set_source_rgb(cr, 0.85, 0.37, 0.05);
+            extra_curve(cr, rows, n, outline, L, T, pw, ph, tmin, tmax, ytop);
+        }
+        if (myofibroblasts) {
+            double d2[2] = {8, 5};
+            cairo_set_dash(cr, d2, 2, 0);
+            cairo_set_source_rgb(cr, 0.15, 0.6, 0.25);
+            extra_curve(cr, rows, n, myofibroblasts, L, T, pw, ph, tmin, tmax, ytop);
+            cairo_set_dash(cr, NULL, 0, 0);
+        }
         cairo_restore(cr);
+    }
+    if (outline || myofibroblasts) { /* legend, top right */
+        static const char *lab[3] = {"open wound area", "wound outline (contraction)",
+                                     "myofibroblast fraction"};
+        static const double col[3][3] = {{0.12, 0.35, 0.75}, {0.85, 0.37, 0.05}, {0.15, 0.6, 0.25}};
+        const int have[3] = {1, outline != NULL, myofibroblasts != NULL};
+        double y = T + 18, x = L + pw - 250;
+        cairo_set_font_size(cr, 13);
+        for (int k = 0; k < 3; k++) {
+            if (!have[k]) continue;
+            cairo_set_source_rgb(cr, col[k][0], col[k][1], col[k][2]);
+            cairo_set_line_width(cr, 2.5);
+            if (k == 2) {
+                double d2[2] = {8, 5};
+                cairo_set_dash(cr, d2, 2, 0);
+            }
+            cairo_move_to(cr, x, y);
+            cairo_line_to(cr, x + 30, y);
+            cairo_stroke(cr);
+            cairo_set_dash(cr, NULL, 0, 0);
+            cairo_set_source_rgb(cr, 0, 0, 0);
+            text_at(cr, x + 38, y, lab[k], 0, 0.5);
+            y += 20;
+        }
     }
     /* labels */
     cairo_set_source_rgb(cr, 0, 0, 0);
@@ -238,7 +295,10 @@ ss_status ss_heal_area_plot(const char *path, const ss_heal_area_row *rows, int 
     cairo_save(cr);
     cairo_translate(cr, 24, T + ph / 2);
     cairo_rotate(cr, -M_PI / 2);
-    text_at(cr, 0, 0, "normalised open wound area (open / initial)", 0.5, 0);
+    text_at(cr, 0, 0,
+            outline || myofibroblasts ? "fraction of the initial wound area; myofibroblast fraction"
+                                      : "normalised open wound area (open / initial)",
+            0.5, 0);
     cairo_restore(cr);
     cairo_select_font_face(cr, FONT, CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_BOLD);
     cairo_set_font_size(cr, 18);

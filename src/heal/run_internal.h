@@ -41,6 +41,7 @@ struct ss_heal_run {
     ss_mech_suture *sutures;
     int nsutures;
     double *outline; /* per area row: the deformed initial outline's area, mm^2 */
+    double *myof;    /* per area row: mean myofibroblast fraction under the wound */
     int capoutline;
     int closed; /* 95 % closure reached; close_* hold the state then */
     double close_day;

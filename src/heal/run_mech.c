@@ -72,6 +72,25 @@ static unsigned char *b64_decode(const char *s, size_t *n) {
     return o;
 }
 
+/* Exact double arrays in the checkpoint metadata (cJSON's printing rounds
+ * to 15 digits when that reads back within an epsilon). */
+static void add_doubles(cJSON *o, const char *key, const double *v, int n) {
+    char *s = b64_encode((const unsigned char *)v, (size_t)n * sizeof(double));
+    if (s) cJSON_AddStringToObject(o, key, s);
+    free(s);
+}
+
+static int get_doubles(const cJSON *o, const char *key, double *v, int n) {
+    const cJSON *j = cJSON_GetObjectItem(o, key);
+    if (!cJSON_IsString(j)) return -1;
+    size_t len = 0;
+    unsigned char *b = b64_decode(j->valuestring, &len);
+    int ok = b && len == (size_t)n * sizeof(double);
+    if (ok) memcpy(v, b, len);
+    free(b);
+    return ok ? 0 : -1;
+}
+
 /* ---- set-up ---------------------------------------------------------------------------- */
 
 static ss_status create_mech(ss_heal_run *r, ss_error *err) {
@@ -128,8 +147,7 @@ ss_status ss_heal_run__mech_setup_resume(ss_heal_run *r, const char *dir, ss_err
     const cJSON *pj = cJSON_GetObjectItem(m, "params"), *st_b64 = cJSON_GetObjectItem(m, "state"),
                 *ol = cJSON_GetObjectItem(m, "outline"), *su = cJSON_GetObjectItem(m, "sutures"),
                 *tm = cJSON_GetObjectItem(m, "tet_mesh");
-    if (!cJSON_IsObject(pj) || !cJSON_IsString(st_b64) || !cJSON_IsArray(ol) ||
-        cJSON_GetArraySize(ol) != r->nrows)
+    if (!cJSON_IsObject(pj) || !cJSON_IsString(st_b64) || !cJSON_IsString(ol))
         return ss_error_set(err, SS_ERR_INPUT, "%s: checkpoint mechanics metadata is incomplete",
                             dir);
     ss_mech_params_default(&r->mp);
@@ -172,15 +190,16 @@ ss_status ss_heal_run__mech_setup_resume(ss_heal_run *r, const char *dir, ss_err
     if (st) return st;
     r->capoutline = r->nrows + 256;
     r->outline = malloc((size_t)r->capoutline * sizeof(double));
-    if (!r->outline) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
-    for (int i = 0; i < r->nrows; i++) {
-        const cJSON *x = cJSON_GetArrayItem(ol, i);
-        r->outline[i] = cJSON_IsNumber(x) ? x->valuedouble : NAN;
-    }
-    const cJSON *cl = cJSON_GetObjectItem(m, "closure");
-    if (cJSON_IsArray(cl) && cJSON_GetArraySize(cl) == 9) {
-        double v[9];
-        for (int k = 0; k < 9; k++) v[k] = cJSON_GetArrayItem(cl, k)->valuedouble;
+    r->myof = malloc((size_t)r->capoutline * sizeof(double));
+    if (!r->outline || !r->myof) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    if (get_doubles(m, "outline", r->outline, r->nrows) ||
+        get_doubles(m, "myofibroblasts", r->myof, r->nrows))
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "%s: checkpoint mechanics rows do not match its area rows", dir);
+    double v[9];
+    if (cJSON_GetObjectItem(m, "closure")) {
+        if (get_doubles(m, "closure", v, 9))
+            return ss_error_set(err, SS_ERR_INPUT, "%s: checkpoint closure state damaged", dir);
         r->closed = 1;
         r->close_day = v[0];
         r->close_st.outline_area_mm2 = v[1];
@@ -201,6 +220,7 @@ void ss_heal_run__mech_free(ss_heal_run *r) {
     ss_mech_free(r->mech);
     free(r->sutures);
     free(r->outline);
+    free(r->myof);
     cJSON_Delete(r->mech_aux);
 }
 
@@ -211,13 +231,16 @@ ss_status ss_heal_run__mech_row(ss_heal_run *r, ss_error *err) {
     if (r->nrows > r->capoutline) {
         int cap = r->nrows + 256;
         double *q = realloc(r->outline, (size_t)cap * sizeof *q);
-        if (!q) return ss_error_set(err, SS_ERR_NOMEM, "out of memory (area rows)");
-        r->outline = q;
+        if (q) r->outline = q;
+        double *q2 = q ? realloc(r->myof, (size_t)cap * sizeof *q2) : NULL;
+        if (!q2) return ss_error_set(err, SS_ERR_NOMEM, "out of memory (area rows)");
+        r->myof = q2;
         r->capoutline = cap;
     }
     ss_mech_stats st;
     ss_mech_stats_compute(r->mech, &st);
     r->outline[r->nrows - 1] = st.outline_area_mm2;
+    r->myof[r->nrows - 1] = st.myofibroblast_fraction;
     const ss_heal_area_row *row = &r->rows[r->nrows - 1];
     if (!r->closed && r->nrows > 1 && ss_heal_area_normalised(&row->st) <= 0.05) {
         r->closed = 1;
@@ -285,13 +308,14 @@ void ss_heal_run__mech_aux(const ss_heal_run *r, cJSON *aux) {
         free(s);
         free(buf);
     }
-    cJSON_AddItemToObject(m, "outline", cJSON_CreateDoubleArray(r->outline, r->nrows));
+    add_doubles(m, "outline", r->outline, r->nrows);
+    add_doubles(m, "myofibroblasts", r->myof, r->nrows);
     if (r->closed) {
         const ss_mech_stats *c = &r->close_st;
         double v[9] = {r->close_day,    c->outline_area_mm2,   c->initial_outline_area_mm2,
                        c->extent_x_mm,  c->extent_y_mm,        c->principal[0],
                        c->principal[1], c->aspect_major_minor, c->max_speed_mm_day};
-        cJSON_AddItemToObject(m, "closure", cJSON_CreateDoubleArray(v, 9));
+        add_doubles(m, "closure", v, 9);
     }
 }
 
@@ -308,23 +332,24 @@ static void shares(const ss_heal_run *r, int i, double *contraction, double *by_
 }
 
 int ss_heal_run__mech_columns(const ss_heal_run *r, const char *const **names, double **vals) {
-    static const char *const cols[4] = {"outline_area_mm2", "contraction",
-                                        "closure_share_contraction",
-                                        "closure_share_epithelialisation"};
+    static const char *const cols[5] = {
+        "outline_area_mm2", "contraction", "closure_share_contraction",
+        "closure_share_epithelialisation", "myofibroblast_fraction"};
     if (!r->mech) return 0;
-    double *v = malloc((size_t)r->nrows * 4 * sizeof(double) + 1);
+    double *v = malloc((size_t)r->nrows * 5 * sizeof(double) + 1);
     if (!v) return -1;
     for (int i = 0; i < r->nrows; i++) {
         double c, s;
         shares(r, i, &c, &s);
-        v[4 * i] = r->outline[i];
-        v[4 * i + 1] = c;
-        v[4 * i + 2] = s;
-        v[4 * i + 3] = 1.0 - ss_heal_area_normalised(&r->rows[i].st) > 1e-9 ? 1.0 - s : 0.0;
+        v[5 * i] = r->outline[i];
+        v[5 * i + 1] = c;
+        v[5 * i + 2] = s;
+        v[5 * i + 3] = 1.0 - ss_heal_area_normalised(&r->rows[i].st) > 1e-9 ? 1.0 - s : 0.0;
+        v[5 * i + 4] = r->myof[i];
     }
     *names = cols;
     *vals = v;
-    return 4;
+    return 5;
 }
 
 void ss_heal_run__mech_summary(const ss_heal_run *r, cJSON *j) {
@@ -369,6 +394,32 @@ void ss_heal_run__mech_summary(const ss_heal_run *r, cJSON *j) {
         cJSON_AddNumberToObject(m, "closure_share_contraction", sh);
         cJSON_AddNumberToObject(m, "closure_share_epithelialisation", 1.0 - sh);
     }
+    /* the time course: contraction of the outline by day 2, 5, 10, 15, 20, 30
+     * (the last area row at or before the day, when the run got there), and
+     * the state at the end of the run (the scar keeps contracting after the
+     * epithelium has closed, docs/mech.md) */
+    cJSON *by = cJSON_AddObjectToObject(m, "contraction_percent_by_day");
+    static const int days[] = {2, 5, 10, 15, 20, 30};
+    for (size_t d = 0; d < sizeof days / sizeof days[0]; d++) {
+        int k = -1;
+        for (int q = 0; q < r->nrows; q++)
+            if (r->rows[q].t_days <= days[d] + 1e-9) k = q;
+        if (k < 0 || r->rows[r->nrows - 1].t_days < days[d] - 1e-9) continue;
+        char key[16];
+        snprintf(key, sizeof key, "%d", days[d]);
+        cJSON_AddNumberToObject(
+            by, key, r->outline[0] > 0 ? 100.0 * (1.0 - r->outline[k] / r->outline[0]) : 0.0);
+    }
+    cJSON *end = cJSON_AddObjectToObject(m, "end");
+    cJSON_AddNumberToObject(end, "day", r->nrows ? r->rows[r->nrows - 1].t_days : 0.0);
+    cJSON_AddNumberToObject(end, "contraction_percent",
+                            now.initial_outline_area_mm2 > 0
+                                ? 100.0 *
+                                      (1.0 - now.outline_area_mm2 / now.initial_outline_area_mm2)
+                                : 0.0);
+    cJSON_AddNumberToObject(end, "aspect_ratio_y_over_x",
+                            now.extent_x_mm > 0 ? now.extent_y_mm / now.extent_x_mm : 0.0);
+    cJSON_AddNumberToObject(end, "myofibroblast_fraction", now.myofibroblast_fraction);
     cJSON *p = params_object(r);
     if (p) cJSON_AddItemToObject(m, "params", p);
 }

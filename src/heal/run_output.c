@@ -631,7 +631,17 @@ ss_status ss_heal_run__write_tables(ss_heal_run *r, double wall, cJSON **summary
     if (st) return st;
     snprintf(path, sizeof path, "%s/area.png", r->out_dir);
     snprintf(title, sizeof title, "Normalised open wound area - %s scenario", r->scenario);
-    if ((st = ss_heal_area_plot(path, r->rows, r->nrows, title, err))) return st;
+    if (r->mech) { /* the contraction's course beside the open area */
+        double *ol = malloc(((size_t)r->nrows + 1) * sizeof *ol);
+        if (!ol) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+        for (int i = 0; i < r->nrows; i++)
+            ol[i] = r->outline[0] > 0 ? r->outline[i] / r->outline[0] : NAN;
+        snprintf(title, sizeof title, "Open wound area and contraction - %s scenario", r->scenario);
+        st = ss_heal_area_plot_contraction(path, r->rows, r->nrows, title, ol, r->myof, err);
+        free(ol);
+    } else
+        st = ss_heal_area_plot(path, r->rows, r->nrows, title, err);
+    if (st) return st;
     cJSON *j = ss_heal_run__summary(r, wall);
     if (!j) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     snprintf(path, sizeof path, "%s/summary.json", r->out_dir);

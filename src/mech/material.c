@@ -48,6 +48,10 @@ static const key keys[] = {
     K(theta2, "1", 1e-9, 10),
     K(K_m, "1", 0, 1e6),
     K(tau_myo, "day", 0, 1e3),
+    K(tau_proto, "day", 1e-3, 1e3),
+    K(gf_half, "1", 1e-6, 1e3),
+    K(tau_apo, "day", 1e-3, 1e4),
+    K(tau_remodel, "day", 0, 1e3),
     K(mu, "kPa", 0, 1e7),
     K(K_bulk, "kPa", 1e-9, 1e7),
     K(k1, "kPa", 0, 1e7),
@@ -70,13 +74,17 @@ void ss_mech_params_default(ss_mech_params *p) {
     p->K_pas = 1.0;
     p->K_act = 100.0;
     p->p_max = 5.0;
-    p->theta1 = -0.6;
+    p->theta1 = -0.9;
     p->theta2 = 0.5;
-    p->K_m = 50.0;
-    p->tau_myo = 0.0;
+    p->K_m = 25.0;
+    p->tau_myo = 7.0;
+    p->tau_proto = 3.0;
+    p->gf_half = 0.2;
+    p->tau_apo = 14.0;
+    p->tau_remodel = 4.0;
     p->mu = 13.5;
     p->K_bulk = 29.0;
-    p->k1 = 1500.0;
+    p->k1 = 4000.0;
     p->k2 = 1.0;
     p->kappa = 0.0;
     p->fibre[0][0] = 1.0;

@@ -55,6 +55,8 @@ void ss_mech_free(ss_mech *m) {
     free(m->foot);
     free(m->ecm);
     free(m->myo);
+    free(m->gf);
+    free(m->cov);
     for (int d = 0; d < 3; d++) free(m->usub[d]);
     free(m->thsub);
     free(m->usub_valid);
@@ -63,7 +65,10 @@ void ss_mech_free(ss_mech *m) {
     free(m->rest_old);
     free(m->k_old);
     free(m->nmyo);
-    free(m->nlag);
+    free(m->nmf);
+    free(m->nproto);
+    free(m->ngf);
+    free(m->ncov);
     free(m->nth);
     free(m->necm);
     free(m->stress);
@@ -252,7 +257,9 @@ ss_mech *ss_mech_create(ss_heal_grid *g, const ss_heal_params *heal, const ss_me
     m->wound0 = malloc(n);
     m->ecm = malloc(n * sizeof(float));
     m->myo = malloc(n * sizeof(float));
-    if (!m->mask || !m->wound0 || !m->ecm || !m->myo) goto nomem;
+    m->gf = malloc(n * sizeof(float));
+    m->cov = malloc(n * sizeof(float));
+    if (!m->mask || !m->wound0 || !m->ecm || !m->myo || !m->gf || !m->cov) goto nomem;
     size_t ncells = 0;
     for (size_t i = 0; i < n; i++) {
         m->mask[i] = tissue(g->cell[i]);
@@ -348,8 +355,11 @@ ss_mech *ss_mech_create(ss_heal_grid *g, const ss_heal_params *heal, const ss_me
     m->k_old = malloc((size_t)nsp * sizeof(double));
     if (!m->rest_old || !m->k_old) goto nomem;
     m->nmyo = calloc((size_t)nn, sizeof(double));
-    m->nlag = calloc((size_t)nn, sizeof(double));
-    if (!m->nlag) goto nomem;
+    m->nmf = calloc((size_t)nn, sizeof(double));
+    m->nproto = calloc((size_t)nn, sizeof(double));
+    m->ngf = calloc((size_t)nn, sizeof(double));
+    m->ncov = calloc((size_t)nn, sizeof(double));
+    if (!m->nmf || !m->nproto || !m->ngf || !m->ncov) goto nomem;
     m->nth = calloc((size_t)nn, sizeof(double));
     m->necm = calloc((size_t)nn, sizeof(double));
     m->stress = calloc((size_t)nn, sizeof(double));
@@ -500,52 +510,93 @@ ss_status ss_mech_step(ss_mech *m, ss_heal_grid *g, double dt_days, ss_error *er
     /* 1. fields at the nodes */
     const float *rho = g->field[SS_HEAL_SCAR], *fib = g->field[SS_HEAL_FIBROBLAST];
     const float *epi = g->field[SS_HEAL_EPITHELIUM], *pla = g->field[SS_HEAL_PLASMA];
+    const float *mdgf = g->field[SS_HEAL_MDGF];
     const int nx = m->nx, ny = m->ny, nz = m->nz;
+    /* per block of MECH_COLS columns, z-slab by z-slab so the cells are read
+     * and written contiguously (the same per-column sums as a column walk) */
+    enum { MECH_COLS = 256 };
+    const int ncol = nx * ny;
+    const size_t slab = (size_t)ncol;
 #pragma omp parallel for schedule(static)
-    for (int col = 0; col < nx * ny; col++) {
-        /* the column's surface: its top tissue cell; open when in the wound
-         * region (initial wound or omega) and not yet covered by epithelium */
-        int top = -1, nw = 0;
-        float sum = 0.0f;
-        for (int z = nz - 1; z >= 0; z--) {
-            size_t i = (size_t)z * nx * ny + (size_t)col;
-            if (!m->mask[i]) continue;
-            if (top < 0) top = z;
-            if (m->wound0[i] || pla[i] > SS_HEAL_P_MIN) {
-                sum += fib[i];
-                nw++;
+    for (int c0 = 0; c0 < ncol; c0 += MECH_COLS) {
+        const int nb = ncol - c0 < MECH_COLS ? ncol - c0 : MECH_COLS;
+        int top[MECH_COLS], nw[MECH_COLS];
+        float sum[MECH_COLS], gsum[MECH_COLS], nmean[MECH_COLS], gmean[MECH_COLS], cover[MECH_COLS];
+        for (int k = 0; k < nb; k++) {
+            top[k] = -1;
+            nw[k] = 0;
+            sum[k] = gsum[k] = 0.0f;
+        }
+        /* the column's surface: its top tissue cell; the wound region's
+         * cells (initial wound or omega) give the mean fibroblast density
+         * and growth factor, the top cell's epithelium the cover */
+        for (int z = nz - 1; z >= 0; z--)
+            for (int k = 0; k < nb; k++) {
+                size_t i = (size_t)z * slab + (size_t)(c0 + k);
+                if (!m->mask[i]) continue;
+                if (top[k] < 0) top[k] = z;
+                if (m->wound0[i] || pla[i] > SS_HEAL_P_MIN) {
+                    sum[k] += fib[i];
+                    gsum[k] += mdgf[i];
+                    nw[k]++;
+                }
+            }
+        for (int k = 0; k < nb; k++) {
+            nmean[k] = nw[k] ? sum[k] / (float)nw[k] : 0.0f;
+            gmean[k] = nw[k] ? gsum[k] / (float)nw[k] : 0.0f;
+            cover[k] = 1.0f;
+            if (top[k] >= 0 && nw[k]) {
+                float e = epi[(size_t)top[k] * slab + (size_t)(c0 + k)];
+                cover[k] = e > 1.0f ? 1.0f : e < 0.0f ? 0.0f : e;
             }
         }
-        float open = 0.0f, nmean = nw ? sum / (float)nw : 0.0f;
-        if (top >= 0 && nw) {
-            float cover = epi[(size_t)top * nx * ny + (size_t)col];
-            open = 1.0f - (cover > 1.0f ? 1.0f : cover < 0.0f ? 0.0f : cover);
-        }
-        for (int z = 0; z < nz; z++) {
-            size_t i = (size_t)z * nx * ny + (size_t)col;
-            float e = 1.0f;
-            if (m->wound0[i]) {
-                e = (float)p->ecm_floor + rho[i];
-                if (e > 1.0f) e = 1.0f;
+        for (int z = 0; z < nz; z++)
+            for (int k = 0; k < nb; k++) {
+                size_t i = (size_t)z * slab + (size_t)(c0 + k);
+                float e = 1.0f;
+                if (m->wound0[i]) {
+                    e = (float)p->ecm_floor + rho[i];
+                    if (e > 1.0f) e = 1.0f;
+                }
+                m->ecm[i] = e;
+                m->myo[i] = m->mask[i] ? nmean[k] : 0.0f;
+                m->gf[i] = m->mask[i] ? gmean[k] : 0.0f;
+                m->cov[i] = m->mask[i] ? cover[k] : 1.0f;
             }
-            m->ecm[i] = e;
-            m->myo[i] = m->mask[i] ? nmean * open : 0.0f;
-        }
     }
     ss_mech_g2p(m->T, m->myo, m->mask, S->x, nn, m->nmyo);
     ss_mech_g2p_sub(m->T, m->thsub, m->usub_valid, S->x, nn, m->nth);
     ss_mech_g2p(m->T, m->ecm, m->mask, S->x, nn, m->necm);
-    /* myofibroblasts differentiate from the fibroblasts of the open wound
-     * (and go by apoptosis once it is covered) with the lag tau_myo: a
-     * first-order relaxation of the contracting density towards its target */
-    const double lag = p->tau_myo > 0 ? 1.0 - exp(-dt_days / p->tau_myo) : 1.0;
+    ss_mech_g2p(m->T, m->gf, m->mask, S->x, nn, m->ngf);
+    ss_mech_g2p(m->T, m->cov, m->mask, S->x, nn, m->ncov);
+    /* myofibroblast differentiation (docs/mech.md): the growth factor turns
+     * the wound's fibroblasts into proto-myofibroblasts, these mature into
+     * alpha-SMA myofibroblasts, and both go by apoptosis once the wound is
+     * covered; implicit Euler per node over the frame (stable for any frame
+     * time, keeps 0 <= q, m and q + m <= 1) */
+#pragma omp parallel for schedule(static)
     for (int i = 0; i < nn; i++) {
-        if (m->nmyo[i] < 0) m->nmyo[i] = 0;
-        m->nlag[i] += lag * (m->nmyo[i] - m->nlag[i]);
-        m->stress[i] = ss_mech_pcell(p, m->nth[i]) * m->nlag[i] * p->K_m;
+        double n_w = m->nmyo[i] > 0 ? m->nmyo[i] : 0.0;
+        double c = m->ncov[i] < 0 ? 0 : m->ncov[i] > 1 ? 1 : m->ncov[i];
+        if (p->tau_myo > 0) {
+            double gfv = m->ngf[i] > 0 ? m->ngf[i] : 0.0;
+            double a = gfv / (gfv + p->gf_half) / p->tau_proto, b = 1.0 / p->tau_myo,
+                   d = c / p->tau_apo, h = dt_days;
+            double q = m->nproto[i], f = m->nmf[i];
+            double A11 = 1 + h * (a + b + d), A12 = h * a, A21 = -h * b, A22 = 1 + h * d;
+            double r1 = q + h * a, r2 = f, det = A11 * A22 - A12 * A21;
+            double q1 = (r1 * A22 - A12 * r2) / det, f1 = (A11 * r2 - A21 * r1) / det;
+            m->nproto[i] = q1 > 0 ? q1 : 0.0;
+            m->nmf[i] = f1 < 0 ? 0.0 : f1 > 1 ? 1.0 : f1;
+        } else {
+            m->nproto[i] = 0;
+            m->nmf[i] = 1.0 - c;
+        }
+        m->stress[i] = ss_mech_pcell(p, m->nth[i]) * n_w * m->nmf[i] * p->K_m;
     }
     /* 2. rest lengths and stiffness of the tissue springs */
     const int ntis = m->ntissue;
+    const double follow = p->tau_remodel > 0 ? 1.0 - exp(-dt_days / p->tau_remodel) : 1.0;
     memcpy(m->rest_old, S->rest, (size_t)S->nsprings * sizeof(double));
     memcpy(m->k_old, S->k, (size_t)S->nsprings * sizeof(double));
 #pragma omp parallel for schedule(static)
@@ -558,7 +609,9 @@ ss_status ss_mech_step(ss_mech *m, ss_heal_grid *g, double dt_days, ss_error *er
         double psi = ss_mech_spring_energy_density(p, fabs(sig), e);
         double dl = ss_mech_shortening(p, psi);
         double r = S->l0[s] * (1.0 - (sig >= 0 ? dl : -dl));
-        if (r < S->rest[s]) S->rest[s] = r; /* the contracted state is kept */
+        /* the matrix follows the pull with the remodelling lag, and the
+         * contracted state is kept (rest lengths never lengthen) */
+        if (r < S->rest[s]) S->rest[s] += follow * (r - S->rest[s]);
         S->k[s] = m->kbase[s] * (ecm > 0 ? ecm : p->ecm_floor);
     }
     for (int i = 0; i < m->nsutures; i++)
@@ -661,6 +714,16 @@ void ss_mech_stats_compute(const ss_mech *m, ss_mech_stats *st) {
             d2 += (x[3 * i + d] - m->S->X[3 * i + d]) * (x[3 * i + d] - m->S->X[3 * i + d]);
         if (d2 > st->side_max_disp_mm * st->side_max_disp_mm) st->side_max_disp_mm = sqrt(d2);
     }
+    double msum = 0;
+    int mcount = 0;
+    for (int i = 0; i < m->mesh->nnodes; i++) {
+        int ix = (int)floor(m->S->X[3 * i] / m->dx), iy = (int)floor(m->S->X[3 * i + 1] / m->dx);
+        if (ix < 0 || iy < 0 || ix >= m->nx || iy >= m->ny || !m->foot[(size_t)iy * m->nx + ix])
+            continue;
+        msum += m->nmf[i];
+        mcount++;
+    }
+    st->myofibroblast_fraction = mcount ? msum / mcount : 0.0;
     double A = 0, cx = 0, cy = 0, sxx = 0, syy = 0, sxy = 0;
     double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
     for (int t = 0; t < m->ntri; t++) {
@@ -701,7 +764,7 @@ void ss_mech_stats_compute(const ss_mech *m, ss_mech_stats *st) {
 }
 
 size_t ss_mech_state_size(const ss_mech *m) {
-    return ((size_t)m->mesh->nnodes * 8 + (size_t)m->S->nsprings) * sizeof(double) +
+    return ((size_t)m->mesh->nnodes * 9 + (size_t)m->S->nsprings) * sizeof(double) +
            sizeof(uint64_t);
 }
 
@@ -714,8 +777,9 @@ void ss_mech_state_get(const ss_mech *m, void *buf) {
     memcpy(b, m->S->x, 3 * nn * sizeof(double));
     memcpy(b + 3 * nn * sizeof(double), m->vel, 3 * nn * sizeof(double));
     memcpy(b + 6 * nn * sizeof(double), m->stress, nn * sizeof(double));
-    memcpy(b + 7 * nn * sizeof(double), m->nlag, nn * sizeof(double));
-    memcpy(b + 8 * nn * sizeof(double), m->S->rest, (size_t)m->S->nsprings * sizeof(double));
+    memcpy(b + 7 * nn * sizeof(double), m->nmf, nn * sizeof(double));
+    memcpy(b + 8 * nn * sizeof(double), m->nproto, nn * sizeof(double));
+    memcpy(b + 9 * nn * sizeof(double), m->S->rest, (size_t)m->S->nsprings * sizeof(double));
 }
 
 ss_status ss_mech_state_set(ss_mech *m, const void *buf, size_t size, ss_error *err) {
@@ -732,8 +796,9 @@ ss_status ss_mech_state_set(ss_mech *m, const void *buf, size_t size, ss_error *
     memcpy(m->S->x, b, 3 * nn * sizeof(double));
     memcpy(m->vel, b + 3 * nn * sizeof(double), 3 * nn * sizeof(double));
     memcpy(m->stress, b + 6 * nn * sizeof(double), nn * sizeof(double));
-    memcpy(m->nlag, b + 7 * nn * sizeof(double), nn * sizeof(double));
-    memcpy(m->S->rest, b + 8 * nn * sizeof(double), (size_t)m->S->nsprings * sizeof(double));
+    memcpy(m->nmf, b + 7 * nn * sizeof(double), nn * sizeof(double));
+    memcpy(m->nproto, b + 8 * nn * sizeof(double), nn * sizeof(double));
+    memcpy(m->S->rest, b + 9 * nn * sizeof(double), (size_t)m->S->nsprings * sizeof(double));
     for (size_t i = 0; i < 3 * nn; i++)
         if (!isfinite(m->S->x[i]) || !isfinite(m->vel[i]))
             return ss_error_set(err, SS_ERR_INPUT, "mechanics state: non-finite value");

@@ -19,7 +19,8 @@ struct ss_mech {
     uint8_t *side;           /* per node: on a side face (far-field boundary) */
     uint8_t *foot;           /* per column: the initial wound's footprint */
     float *ecm;              /* rho_ecm / rho_ecm_hat per cell (scratch) */
-    float *myo;              /* myofibroblast density per cell (scratch) */
+    float *myo;              /* wound fibroblast density per cell (scratch) */
+    float *gf, *cov;         /* growth factor and epithelial cover per cell (scratch) */
     double *usub[3], *thsub; /* sub-lattice displacement and volumetric strain */
     uint8_t *usub_valid;
     float *u[3];                        /* grid displacement, mm (filled on demand) */
@@ -27,7 +28,8 @@ struct ss_mech {
     double *rest_old, *k_old;           /* the last frame's rest lengths and stiffness */
     int last_inverted, last_increments; /* folded tets after the frame, load increments */
     double *nmyo, *nth, *necm, *stress; /* per node */
-    double *nlag;                       /* per node: myofibroblasts (lagged nmyo) */
+    double *nmf, *nproto;               /* per node: myofibroblast, proto fractions */
+    double *ngf, *ncov;                 /* per node: growth factor, cover */
     double *vel;                        /* 3n, mm/day */
     double *xprev, *grad, *disp;
     int32_t *tri; /* top surface triangles (3 per) */
