@@ -473,6 +473,67 @@ static void test_grid_convergence(void **state) {
     }
 }
 
+/* The bed window of a column does not depend on the other columns of its
+ * x-row (issue #8): a column whose surface lies d levels below the row's
+ * highest surface (an uneven surface, as on a curved shell from --mesh) reads
+ * the same bed_mm of tissue below its own surface as in a flat row. One
+ * explicit step of a flat block and of the same block with one far column
+ * (outside the stencil of the column watched) raised d levels: the watched
+ * column's surface epithelium, which grows with Q(bed mean u3), is
+ * bit-identical. u3 in the watched column grows with depth, so a window cut
+ * short from below would give a smaller bed mean and a slower sheet. */
+static void test_bed_window_uneven(void **state) {
+    (void)state;
+    ss_error err;
+    ss_heal_params *p = ss_heal_params_preset("clean", &err);
+    assert_non_null(p);
+    const double dx = 0.25, top = 2.0; /* bed_mm = 1 mm: 4 levels */
+    const int nx = 14, ny = 5, nz = 20, x0 = 3, xr = 10, y0 = 2;
+    const int zs = (int)lround(top / dx) - 1; /* surface level of the flat block */
+    float ref[SS_HEAL_NFIELDS][20];
+    for (int d = 0; d <= 6; d++) {
+        ss_heal_grid *g = ss_heal_grid_create(nx, ny, nz, dx, &err);
+        assert_non_null(g);
+        assert_int_equal(ss_heal_grid_init(g, top, 0.1, NULL, p, &err), SS_OK);
+        assert_int_equal(g->cell[ss_heal_idx(g, x0, y0, zs)] != SS_CELL_AIR, 1);
+        assert_int_equal(g->cell[ss_heal_idx(g, x0, y0, zs + 1)], SS_CELL_AIR);
+        /* raise column xr by d levels (tissue as at its surface) */
+        for (int k = 1; k <= d; k++) {
+            g->cell[ss_heal_idx(g, xr, y0, zs + k)] = g->cell[ss_heal_idx(g, xr, y0, zs)];
+            for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+                g->field[f][ss_heal_idx(g, xr, y0, zs + k)] =
+                    g->field[f][ss_heal_idx(g, xr, y0, zs)];
+        }
+        /* the watched column: a thin sheet on granulation tissue whose capillary
+         * density rises with depth (0.2 in the top two levels, 0.6 below), in a
+         * wound column (the sheet is held fixed on intact epidermis) */
+        for (int z = 1; z <= zs; z++) {
+            const size_t i = ss_heal_idx(g, x0, y0, z);
+            g->field[SS_HEAL_CAPILLARY][i] = zs - z < 2 ? 0.2f : 0.6f;
+            g->field[SS_HEAL_PLASMA][i] = 1.0f;
+            g->cell[i] = SS_CELL_WOUND;
+        }
+        g->field[SS_HEAL_EPITHELIUM][ss_heal_idx(g, x0, y0, zs)] = 0.5f;
+        ss_heal_solver *s = ss_heal_solver_create(g, p, SS_HEAL_EXPLICIT, 0.0, &err);
+        assert_non_null(s);
+        assert_int_equal(ss_heal_step(s, g, &err), SS_OK);
+        for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+            for (int z = 0; z < nz; z++) {
+                const float v = g->field[f][ss_heal_idx(g, x0, y0, z)];
+                if (d == 0) {
+                    ref[f][z] = v;
+                } else if (memcmp(&v, &ref[f][z], sizeof v) != 0) {
+                    print_error("raised %d levels: field %d z %d: %.9g vs flat %.9g\n", d, f, z,
+                                (double)v, (double)ref[f][z]);
+                    fail();
+                }
+            }
+        ss_heal_solver_free(s);
+        ss_heal_grid_free(g);
+    }
+    ss_heal_params_free(p);
+}
+
 /* The scab's crust stays in its physical layer (the top scab_mm of the
  * wound, at any voxel size) instead of diffusing into the tissue below it,
  * and it forms there within the first day. */
@@ -617,7 +678,7 @@ int main(void) {
         cmocka_unit_test(test_scenarios),      cmocka_unit_test(test_fig4_convergence),
         cmocka_unit_test(test_remodelling),    cmocka_unit_test(test_keloid),
         cmocka_unit_test(test_keloid_stop),    cmocka_unit_test(test_grid_convergence),
-        cmocka_unit_test(test_scab_crust),
+        cmocka_unit_test(test_scab_crust),     cmocka_unit_test(test_bed_window_uneven),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

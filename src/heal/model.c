@@ -276,6 +276,23 @@ static inline void bed_level(const int *zt, const float *ds, const float *Ur, co
     }
 }
 
+/* The lowest level a row's bed sums must visit: each column's own window
+ * [ds, ds + bed_mm] below its own surface (one level of slack for rounding),
+ * the deepest over the row. A bound from the row's highest surface would cut
+ * the window of a column lying lower (an uneven surface, a curved shell) and
+ * make the bed depend on which columns share the row (issue #8). Levels below
+ * a column's window add nothing to it (bed_level), so the sums do not depend
+ * on the bound as long as it reaches every window. */
+static inline int bed_low(const int *zt, const float *ds, int nx, int zhi, float h, float bedmm) {
+    int zlo = zhi;
+    for (int x = 0; x < nx; x++) {
+        if (zt[x] < 0) continue;
+        const int b = zt[x] - (int)ceilf((ds[x] + bedmm) / h) - 1;
+        if (b < zlo) zlo = b;
+    }
+    return zlo;
+}
+
 /* The bed mean of a column: the granulation tissue where the window holds
  * some, else all the viable tissue in it, else u3 at the bottom (u3_1). */
 static inline float bed_mean(float bed, float ws, float bo, float wo, float u3_1) {
@@ -317,20 +334,17 @@ static void heal_prepare(void *vctx, float *const *u) {
         if (zhi < 1) continue;
         /* the eschar thickness over each column: the depth integral of s (0
          * without the scab switch, which is the only eschar source) */
-        float dmax = 0.0f;
-        if (scab) {
+        if (scab)
             for (int z = zhi; z >= 1; z--) {
                 const float *Sr = S + (size_t)z * sz + r0;
                 for (int x = 0; x < nx; x++)
                     if (zt[x] >= z) ds[x] += Sr[x] * h;
             }
-            for (int x = 0; x < nx; x++)
-                if (ds[x] > dmax) dmax = ds[x];
-        }
         /* the bed: the top bed_mm of viable tissue below the eschar; of it, the
          * granulation tissue (omega) where the column has some, so the mean
-         * does not mix in the intact dermis under a shallow wound */
-        int zlo = zhi - (int)ceilf((dmax + bedmm) / h) - 1;
+         * does not mix in the intact dermis under a shallow wound. The levels
+         * walked reach the deepest column's window (bed_low) */
+        int zlo = bed_low(zt, ds, nx, zhi, h, bedmm);
         if (zlo < 1) zlo = 1;
         for (int z = zhi; z >= zlo; z--) {
             const float *Ur = U3 + (size_t)z * sz + r0, *Pr = P + (size_t)z * sz + r0;
@@ -395,13 +409,10 @@ static void heal_prepare_z(model_ctx *c, float *const *u) {
         float *bed = c->bed + r0, *ds = c->ds + r0, *ws = c->wsum + r0;
         float *bo = c->bedo + r0, *wo = c->wso + r0;
         int zhi = -1;
-        float dmax = 0.0f;
-        for (int x = 0; x < nx; x++) {
+        for (int x = 0; x < nx; x++)
             if (zt[x] > zhi) zhi = zt[x];
-            if (ds[x] > dmax) dmax = ds[x];
-        }
         if (zhi < 1) continue;
-        int zlo = zhi - (int)ceilf((dmax + bedmm) / h) - 1;
+        int zlo = bed_low(zt, ds, nx, zhi, h, bedmm);
         if (zlo < 1) zlo = 1;
         if (zlo < own_lo) zlo = own_lo;
         for (int z = zhi < own_hi ? zhi : own_hi; z >= zlo; z--) {
