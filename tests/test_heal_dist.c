@@ -212,6 +212,70 @@ static void test_subbox_explicit(void **state) {
     ss_heal_params_free(p);
 }
 
+/* An uneven surface split in x (issue #8): one column raised 4 levels in one
+ * box, a wound column whose capillary density rises with depth in the other.
+ * Each column's bed window is its own, so the boxes step to the whole grid's
+ * bits (a bound from the row's highest surface cut the wound column's window
+ * in the whole grid but not in its box). */
+static void test_subbox_uneven(void **state) {
+    (void)state;
+    ss_error err;
+    ss_heal_params *p = ss_heal_params_preset("clean", &err);
+    assert_non_null(p);
+    const int nx = 14, ny = 5, nz = 20, zs = 7, xr = 10, gdim[3] = {14, 5, 20};
+    ss_heal_grid *G = ss_heal_grid_create(nx, ny, nz, 0.25, &err);
+    assert_non_null(G);
+    assert_int_equal(ss_heal_grid_init(G, 2.0, 0.1, NULL, p, &err), SS_OK);
+    for (int y = 1; y < ny - 1; y++) {
+        for (int k = 1; k <= 4; k++) {
+            G->cell[ss_heal_idx(G, xr, y, zs + k)] = G->cell[ss_heal_idx(G, xr, y, zs)];
+            for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+                G->field[f][ss_heal_idx(G, xr, y, zs + k)] = G->field[f][ss_heal_idx(G, xr, y, zs)];
+        }
+        for (int z = 1; z <= zs; z++) {
+            const size_t i = ss_heal_idx(G, 3, y, z);
+            G->cell[i] = SS_CELL_WOUND;
+            G->field[SS_HEAL_CAPILLARY][i] = zs - z < 2 ? 0.2f : 0.6f;
+            G->field[SS_HEAL_PLASMA][i] = 1.0f;
+        }
+        G->field[SS_HEAL_EPITHELIUM][ss_heal_idx(G, 3, y, zs)] = 0.5f;
+    }
+    ss_heal_solver *S = ss_heal_solver_create(G, p, SS_HEAL_EXPLICIT, 0, &err);
+    assert_non_null(S);
+    const double dt = ss_heal_solver_dt(S);
+    const int xs[3] = {0, 7, 14};
+    ss_heal_grid *b[2];
+    ss_heal_solver *s[2];
+    for (int i = 0; i < 2; i++) {
+        b[i] = ss_heal_grid_create(xs[i + 1] - xs[i] + 2, ny + 2, nz, 0.25, &err);
+        assert_non_null(b[i]);
+        cut(G, b[i], xs[i], 0);
+        const int goff[3] = {xs[i] - 1, -1, 0};
+        s[i] = ss_heal_solver_create_sub(b[i], goff, gdim, p, SS_HEAL_EXPLICIT, dt, &err);
+        assert_non_null(s[i]);
+    }
+    for (int n = 0; n < 3; n++) {
+        assert_int_equal(ss_heal_step(S, G, &err), SS_OK);
+        for (int i = 0; i < 2; i++) {
+            assert_int_equal(ss_heal_step(s[i], b[i], &err), SS_OK);
+            for (int z = 0; z < nz; z++)
+                for (int y = 0; y < ny; y++)
+                    for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+                        assert_memory_equal(b[i]->field[f] + ss_heal_idx(b[i], 1, y + 1, z),
+                                            G->field[f] + ss_heal_idx(G, xs[i], y, z),
+                                            (size_t)(xs[i + 1] - xs[i]) * sizeof(float));
+            cut(G, b[i], xs[i], 0);
+        }
+    }
+    for (int i = 0; i < 2; i++) {
+        ss_heal_solver_free(s[i]);
+        ss_heal_grid_free(b[i]);
+    }
+    ss_heal_solver_free(S);
+    ss_heal_grid_free(G);
+    ss_heal_params_free(p);
+}
+
 static void test_split_phases(void **state) {
     (void)state;
     ss_error err;
@@ -308,7 +372,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_stats_parts),   cmocka_unit_test(test_subbox_explicit),
         cmocka_unit_test(test_split_phases),  cmocka_unit_test(test_explicit_parts),
-        cmocka_unit_test(test_stack_columns),
+        cmocka_unit_test(test_stack_columns), cmocka_unit_test(test_subbox_uneven),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
