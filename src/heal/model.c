@@ -276,21 +276,23 @@ static inline void bed_level(const int *zt, const float *ds, const float *Ur, co
     }
 }
 
-/* The lowest level a row's bed sums must visit: each column's own window
- * [ds, ds + bed_mm] below its own surface (one level of slack for rounding),
- * the deepest over the row. A bound from the row's highest surface would cut
- * the window of a column lying lower (an uneven surface, a curved shell) and
- * make the bed depend on which columns share the row (issue #8). Levels below
- * a column's window add nothing to it (bed_level), so the sums do not depend
- * on the bound as long as it reaches every window. */
-static inline int bed_low(const int *zt, const float *ds, int nx, int zhi, float h, float bedmm) {
-    int zlo = zhi;
+/* The lowest level a row's bed sums must visit: below the row's LOWEST
+ * surface, the deepest window [ds, ds + bed_mm] of the row (one level of
+ * slack for rounding), so it reaches every column's own window. A bound from
+ * the row's highest surface cut the window of a column lying 3+ levels lower
+ * (an uneven surface, a curved shell) and made the bed depend on which columns
+ * share the row (issue #8). Levels below a column's window add nothing to it
+ * (bed_level), so the sums do not depend on the bound as long as it reaches
+ * every window (flat rows: the same levels as before). */
+static inline int bed_low(const int *zt, const float *ds, int nx, float h, float bedmm) {
+    int zmin = 1 << 30;
+    float dmax = 0.0f;
     for (int x = 0; x < nx; x++) {
         if (zt[x] < 0) continue;
-        const int b = zt[x] - (int)ceilf((ds[x] + bedmm) / h) - 1;
-        if (b < zlo) zlo = b;
+        if (zt[x] < zmin) zmin = zt[x];
+        if (ds[x] > dmax) dmax = ds[x];
     }
-    return zlo;
+    return zmin - (int)ceilf((dmax + bedmm) / h) - 1;
 }
 
 /* The bed mean of a column: the granulation tissue where the window holds
@@ -344,7 +346,7 @@ static void heal_prepare(void *vctx, float *const *u) {
          * granulation tissue (omega) where the column has some, so the mean
          * does not mix in the intact dermis under a shallow wound. The levels
          * walked reach the deepest column's window (bed_low) */
-        int zlo = bed_low(zt, ds, nx, zhi, h, bedmm);
+        int zlo = bed_low(zt, ds, nx, h, bedmm);
         if (zlo < 1) zlo = 1;
         for (int z = zhi; z >= zlo; z--) {
             const float *Ur = U3 + (size_t)z * sz + r0, *Pr = P + (size_t)z * sz + r0;
@@ -412,7 +414,7 @@ static void heal_prepare_z(model_ctx *c, float *const *u) {
         for (int x = 0; x < nx; x++)
             if (zt[x] > zhi) zhi = zt[x];
         if (zhi < 1) continue;
-        int zlo = bed_low(zt, ds, nx, zhi, h, bedmm);
+        int zlo = bed_low(zt, ds, nx, h, bedmm);
         if (zlo < 1) zlo = 1;
         if (zlo < own_lo) zlo = own_lo;
         for (int z = zhi < own_hi ? zhi : own_hi; z >= zlo; z--) {
