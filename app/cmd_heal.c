@@ -32,7 +32,7 @@ static void help(void) {
            "  --scenario NAME        clean | scab | keloid (default clean, or the\n"
            "                         \"scenario\" key of --params)\n"
            "  --params FILE.json     parameter overrides (every value with its unit, see\n"
-           "                         data/heal/params.json); applied on top of the scenario\n"
+           "                         data/heal/clean.json); applied on top of the scenario\n"
            "  --no-scab              switch off eschar (scab) formation\n"
            "  --static-region        keep the wound region fixed (no keloid growth)\n"
            "\n"

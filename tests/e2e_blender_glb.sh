@@ -15,8 +15,10 @@ HAND="$SRC/data/meshes/generic-hand-left.glb"
 T=$(mktemp -d /tmp/skinsim-e2e-blglb-XXXXXX)
 trap 'rm -rf "$T"' EXIT
 python3 "$SRC/tests/strokes_ellipse.py" 0.2 0.62 0.02 0.014 >"$T/cut.csv"
+# myofibroblasts pull at once (no differentiation delay), so day 0.2 is deformed
+printf '{"mechanics": {"tau_myo": {"value": 0, "unit": "day", "source": "e2e"}, "tau_remodel": {"value": 0, "unit": "day", "source": "e2e"}}}\n' >"$T/pull.json"
 "$CLI" heal --mesh "$HAND" --wound-uv "$T/cut.csv" --voxel-mm 1 --mechanics --days 0.2 \
-    --snapshot-every 0 --quiet --out "$T/run" || { echo "FAIL: heal run"; exit 1; }
+    --params "$T/pull.json" --snapshot-every 0 --quiet --out "$T/run" || { echo "FAIL: heal run"; exit 1; }
 unset LD_PRELOAD
 for snap in "0000 0" "0001 0.2"; do
     set -- $snap
