@@ -225,11 +225,7 @@ static ss_status write_vti(const char *path, const ss_heal_grid *g, int nvec,
         put_f64le(f, closed_day, ncol);
     }
     fprintf(f, "\n  </AppendedData>\n</VTKFile>\n");
-    if (ferror(f)) {
-        ss_atomic_abort(&af);
-        return ss_error_set(err, SS_ERR_RUNTIME, "%s: write failed: %s", path, strerror(errno));
-    }
-    return ss_atomic_commit(&af, err);
+    return commit(&af, path, err);
 }
 
 ss_status ss_heal_pvd_write(const char *path, int n, const double *t_days, const char *const *files,
