@@ -280,6 +280,18 @@ static void cylinder(double r, double len, int n, ss_mesh *m) {
 /* A wound on a finger-like cylinder: 60 degrees of arc heals whole (no
  * column cut off); 150 degrees of arc wraps too far and is refused, naming
  * the CSV and the limit. */
+/* columns of the patch holding any wound voxel: the wound's projected area in voxels */
+static int wound_columns(const ss_shell_patch *p) {
+    const size_t plane = (size_t)p->nx * p->ny;
+    int cols = 0;
+    for (size_t q = 0; q < plane; q++) {
+        int wc = 0;
+        for (int k = 0; k < p->nz; k++) wc |= p->cell[(size_t)k * plane + q] == SS_CELL_WOUND;
+        cols += wc;
+    }
+    return cols;
+}
+
 static void test_wrap(void **state) {
     (void)state;
     ss_error err;
@@ -304,14 +316,8 @@ static void test_wrap(void **state) {
             assert_non_null(p);
             assert_float_equal(p->axis[2][2], 1.0, 1e-3);
             /* every wound column: the projected arc, 10 mm x 2 r sin 30 deg */
-            int cols = 0;
-            for (size_t q = 0; q < (size_t)p->nx * p->ny; q++) {
-                int wc = 0;
-                for (int k = 0; k < p->nz; k++)
-                    wc += p->cell[(size_t)k * p->nx * p->ny + q] == SS_CELL_WOUND;
-                cols += wc > 0;
-            }
-            double area = cols * o.voxel_mm * o.voxel_mm, want = 10 * 2 * 8 * sin(M_PI / 6);
+            double area = wound_columns(p) * o.voxel_mm * o.voxel_mm,
+                   want = 10 * 2 * 8 * sin(M_PI / 6);
             assert_true(fabs(area - want) < 0.15 * want);
             ss_shell_patch_free(p);
         } else {
@@ -338,14 +344,8 @@ static void test_wrap(void **state) {
         assert_non_null(p);
         double phi = atan2(p->axis[2][2], p->axis[2][1]) * 180 / M_PI;
         assert_true(fabs(phi - 85) < 3);
-        int cols = 0;
-        for (size_t q = 0; q < (size_t)p->nx * p->ny; q++) {
-            int wc = 0;
-            for (int k = 0; k < p->nz; k++)
-                wc += p->cell[(size_t)k * p->nx * p->ny + q] == SS_CELL_WOUND;
-            cols += wc > 0;
-        }
-        double area = cols * o.voxel_mm * o.voxel_mm, want = 10 * 2 * 8 * sin(55 * M_PI / 180);
+        double area = wound_columns(p) * o.voxel_mm * o.voxel_mm,
+               want = 10 * 2 * 8 * sin(55 * M_PI / 180);
         assert_true(fabs(area - want) < 0.15 * want);
         ss_shell_patch_free(p);
     }
