@@ -392,9 +392,7 @@ ss_mech *ss_mech_create(ss_heal_grid *g, const ss_heal_params *heal, const ss_me
                 c[1] = 0.5 * (a[1] + b[1]);
             }
         }
-        int ix = (int)floor(c[0] / g->dx_mm), iy = (int)floor(c[1] / g->dx_mm);
-        if (ix >= 0 && iy >= 0 && ix < g->nx && iy < g->ny)
-            m->tri_wound[t] = foot[(size_t)iy * g->nx + ix];
+        m->tri_wound[t] = (uint8_t)ss_mech_in_foot(m, c[0], c[1]);
     }
     double w = ss_mech_kernel_width(ncells, (size_t)nn);
     int stride = (int)floor(w + 0.5);
@@ -717,9 +715,7 @@ void ss_mech_stats_compute(const ss_mech *m, ss_mech_stats *st) {
     double msum = 0;
     int mcount = 0;
     for (int i = 0; i < m->mesh->nnodes; i++) {
-        int ix = (int)floor(m->S->X[3 * i] / m->dx), iy = (int)floor(m->S->X[3 * i + 1] / m->dx);
-        if (ix < 0 || iy < 0 || ix >= m->nx || iy >= m->ny || !m->foot[(size_t)iy * m->nx + ix])
-            continue;
+        if (!ss_mech_in_foot(m, m->S->X[3 * i], m->S->X[3 * i + 1])) continue;
         msum += m->nmf[i];
         mcount++;
     }

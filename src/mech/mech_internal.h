@@ -3,6 +3,8 @@
 #ifndef SKINSIM_MECH_INTERNAL_H
 #define SKINSIM_MECH_INTERNAL_H
 
+#include <math.h>
+
 #include "skinsim/mech.h"
 
 struct ss_mech {
@@ -58,5 +60,12 @@ void ss_mech_sub_divergence(const ss_mech_transfer *t, double *const *u, const u
                             double *div);
 void ss_mech_g2p_sub(const ss_mech_transfer *t, const double *sub, const uint8_t *valid,
                      const double *pts, int np, double *out);
+
+/* 1 when the point (x, y) in mm lies over a column of the initial wound's
+ * footprint, 0 elsewhere and outside the grid */
+static inline int ss_mech_in_foot(const ss_mech *m, double x, double y) {
+    int ix = (int)floor(x / m->dx), iy = (int)floor(y / m->dx);
+    return ix >= 0 && iy >= 0 && ix < m->nx && iy < m->ny && m->foot[(size_t)iy * m->nx + ix];
+}
 
 #endif

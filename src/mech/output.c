@@ -175,11 +175,7 @@ ss_image *ss_mech_top_view(const ss_mech *m, int px, double vmax, ss_error *err)
             if (len > 0 && (mx - cx) * nx_ + (my - cy) * ny_ < 0) nx_ = -nx_, ny_ = -ny_;
             if (len > 0) {
                 const double hs = 0.5 * m->p.tet_size_mm;
-                int ix = (int)floor((mx + hs * nx_ / len) / m->dx),
-                    iy = (int)floor((my + hs * ny_ / len) / m->dx);
-                if (ix >= 0 && iy >= 0 && ix < m->nx && iy < m->ny &&
-                    m->foot[(size_t)iy * m->nx + ix])
-                    continue;
+                if (ss_mech_in_foot(m, mx + hs * nx_ / len, my + hs * ny_ / len)) continue;
             }
             put_line(img, x[3 * a] * sc, (H - x[3 * a + 1]) * sc, x[3 * b] * sc,
                      (H - x[3 * b + 1]) * sc);
