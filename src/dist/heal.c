@@ -235,94 +235,75 @@ static float *quantity(ss_heal_grid *g, ss_heal_solver *s, int q) {
     return q < SS_HEAL_NFIELDS ? g->field[q] : ss_heal_solver_multipliers(s, q - SS_HEAL_NFIELDS);
 }
 
-/* A (y slab, owned rows) -> B (x slab, all rows): every field and multiplier */
-static void transpose_ab(ss_dist_heal *d) {
-    const int nz = d->su.G[2], nq = SS_HEAL_NFIELDS + d->nslots, me = d->rank;
-    int ylo, yn, xlo, xn;
-    yslab(d, me, &ylo, &yn);
-    size_t k = 0;
-    for (int j = 0; j < d->size; j++) {
-        xslab(d, j, &xlo, &xn);
-        d->sdsp[j] = (int)k;
-        for (int q = 0; q < nq; q++) {
-            const float *u = quantity(d->g, d->s, q);
-            for (int z = 0; z < nz; z++)
-                for (int y = 0; y < yn; y++) {
-                    memcpy(d->tsend + k, u + ss_heal_idx(d->g, xlo + 1, y + 1, z),
-                           (size_t)xn * sizeof(float));
-                    k += (size_t)xn;
-                }
-        }
-        d->scnt[j] = (int)k - d->sdsp[j];
+/* The box that side A (y slab: all x, owned y) or side B (x slab: owned x,
+ * all y) exchanges with rank j: on A the x range of j's x slab and all local
+ * rows, on B all local x and the rows of j's y slab; local coordinates (the
+ * halo shifts them by one). */
+typedef struct {
+    int x0, xn, y0, yn;
+} slab_box;
+
+static slab_box side_box(const ss_dist_heal *d, int side_b, int j) {
+    slab_box b;
+    if (side_b) {
+        xslab(d, d->rank, &b.x0, &b.xn);
+        yslab(d, j, &b.y0, &b.yn);
+        b.x0 = 1;
+        b.y0 += 1;
+    } else {
+        xslab(d, j, &b.x0, &b.xn);
+        yslab(d, d->rank, &b.y0, &b.yn);
+        b.x0 += 1;
+        b.y0 = 1;
     }
-    xslab(d, me, &xlo, &xn);
-    k = 0;
-    for (int j = 0; j < d->size; j++) {
-        int jlo, jn;
-        yslab(d, j, &jlo, &jn);
-        d->rdsp[j] = (int)k;
-        d->rcnt[j] = nq * nz * jn * xn;
-        k += (size_t)d->rcnt[j];
-    }
-    MPI_Alltoallv(d->tsend, d->scnt, d->sdsp, MPI_FLOAT, d->trecv, d->rcnt, d->rdsp, MPI_FLOAT,
-                  d->cart);
-    k = 0;
-    for (int j = 0; j < d->size; j++) {
-        int jlo, jn;
-        yslab(d, j, &jlo, &jn);
-        for (int q = 0; q < nq; q++) {
-            float *u = quantity(d->gB, d->sB, q);
-            for (int z = 0; z < nz; z++)
-                for (int y = 0; y < jn; y++) {
-                    memcpy(u + ss_heal_idx(d->gB, 1, jlo + y + 1, z), d->trecv + k,
-                           (size_t)xn * sizeof(float));
-                    k += (size_t)xn;
-                }
-        }
-    }
+    return b;
 }
 
-/* B (x slab) -> A (y slab): the fields after the y sweep */
-static void transpose_ba(ss_dist_heal *d) {
-    const int nz = d->su.G[2], nq = SS_HEAL_NFIELDS, me = d->rank;
-    int xlo, xn, ylo, yn;
-    xslab(d, me, &xlo, &xn);
+/* Moves nq quantities from one side to the other in one MPI_Alltoallv: each
+ * rank packs, per partner, the x rows of the box the partner owns on the
+ * other side, and unpacks the partner's rows into its own box. A -> B moves
+ * every field and the frozen multipliers (the y sweep needs them); B -> A
+ * the fields after the y sweep. */
+static void transpose(ss_dist_heal *d, int from_b, int nq) {
+    ss_heal_grid *gs = from_b ? d->gB : d->g, *gd = from_b ? d->g : d->gB;
+    ss_heal_solver *ss = from_b ? d->sB : d->s, *sd = from_b ? d->s : d->sB;
+    const int nz = d->su.G[2];
     size_t k = 0;
     for (int j = 0; j < d->size; j++) {
-        int jlo, jn;
-        yslab(d, j, &jlo, &jn);
+        slab_box b = side_box(d, from_b, j);
         d->sdsp[j] = (int)k;
-        for (int q = 0; q < nq; q++)
+        for (int q = 0; q < nq; q++) {
+            const float *u = quantity(gs, ss, q);
             for (int z = 0; z < nz; z++)
-                for (int y = 0; y < jn; y++) {
-                    memcpy(d->tsend + k, d->gB->field[q] + ss_heal_idx(d->gB, 1, jlo + y + 1, z),
-                           (size_t)xn * sizeof(float));
-                    k += (size_t)xn;
+                for (int y = 0; y < b.yn; y++) {
+                    memcpy(d->tsend + k, u + ss_heal_idx(gs, b.x0, b.y0 + y, z),
+                           (size_t)b.xn * sizeof(float));
+                    k += (size_t)b.xn;
                 }
+        }
         d->scnt[j] = (int)k - d->sdsp[j];
     }
-    yslab(d, me, &ylo, &yn);
     k = 0;
     for (int j = 0; j < d->size; j++) {
-        int jlo, jn;
-        xslab(d, j, &jlo, &jn);
+        slab_box b = side_box(d, !from_b, j);
         d->rdsp[j] = (int)k;
-        d->rcnt[j] = nq * nz * yn * jn;
+        d->rcnt[j] = nq * nz * b.yn * b.xn;
         k += (size_t)d->rcnt[j];
     }
     MPI_Alltoallv(d->tsend, d->scnt, d->sdsp, MPI_FLOAT, d->trecv, d->rcnt, d->rdsp, MPI_FLOAT,
                   d->cart);
     k = 0;
     for (int j = 0; j < d->size; j++) {
-        int jlo, jn;
-        xslab(d, j, &jlo, &jn);
-        for (int q = 0; q < nq; q++)
+        slab_box b = side_box(d, !from_b, j);
+        for (int q = 0; q < nq; q++) {
+            float *u = quantity(gd, sd, q);
             for (int z = 0; z < nz; z++)
-                for (int y = 0; y < yn; y++) {
-                    memcpy(d->g->field[q] + ss_heal_idx(d->g, jlo + 1, y + 1, z), d->trecv + k,
-                           (size_t)jn * sizeof(float));
-                    k += (size_t)jn;
+                for (int y = 0; y < b.yn; y++) {
+                    memcpy(u + ss_heal_idx(gd, b.x0, b.y0 + y, z), d->trecv + k,
+                           (size_t)b.xn * sizeof(float));
+                    k += (size_t)b.xn;
                 }
+        }
     }
 }
 
@@ -333,11 +314,11 @@ static ss_status split_step(ss_dist_heal *d, ss_error *err) {
     double t0 = MPI_Wtime();
     ss_status st = ss_heal_step_phase(d->s, d->g, 0, err);
     double t1 = MPI_Wtime();
-    transpose_ab(d);
+    transpose(d, 0, SS_HEAL_NFIELDS + d->nslots);
     double t2 = MPI_Wtime();
     if (!st) st = ss_heal_step_phase(d->sB, d->gB, 1, err);
     double t3 = MPI_Wtime();
-    transpose_ba(d);
+    transpose(d, 1, SS_HEAL_NFIELDS);
     double t4 = MPI_Wtime();
     if (!st) st = ss_heal_step_phase(d->s, d->g, 2, err);
     double t5 = MPI_Wtime();
