@@ -53,6 +53,8 @@ typedef struct ss_dist_heal_timing {
     double compute_s, halo_s, stats_s, gather_s, halo_bytes_per_step;
     int dims[3];
     long long steps;
+    const double *rss_mb; /* peak resident memory of every rank (getrusage ru_maxrss), MB,
+                             dims[0]*dims[1]*dims[2] values; owned by the driver */
 } ss_dist_heal_timing;
 void ss_dist_heal_timing_get(const ss_dist_heal *d, ss_dist_heal_timing *t);
 void ss_dist_heal_free(ss_dist_heal *d);

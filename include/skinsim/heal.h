@@ -234,6 +234,12 @@ typedef struct ss_heal_solver ss_heal_solver;
 #define SS_HEAL_SPLIT_DEFAULT_DT_DAYS 0.05
 ss_heal_solver *ss_heal_solver_create(const ss_heal_grid *g, const ss_heal_params *p,
                                       ss_heal_scheme s, double dt_days, ss_error *err);
+/* The checks of ss_heal_solver_create without the solver: *dt_days (0 =
+ * automatic) becomes the step it would take. Reads only g's sizes, voxel and
+ * velocity, so a grid without cell and field arrays will do (the MPI
+ * driver's rank 0, which never holds the whole grid). */
+ss_status ss_heal_solver_check(const ss_heal_grid *g, const ss_heal_params *p, ss_heal_scheme s,
+                               double *dt_days, ss_error *err);
 /* The same on a sub-box of a larger grid (src/dist): g holds the box and a
  * one-cell halo around it, goff is the whole-grid index of g's cell (0,0,0),
  * gdim the whole grid's dimensions (see ss_heal_rd_system.goff). With the
