@@ -84,10 +84,6 @@ ss_status ss_heal_vti_write_vectors(const char *path, const ss_heal_grid *g, int
  * WholeExtent 0..whole. Cells and fields only. */
 ss_status ss_heal_vti_write_piece(const char *path, const ss_heal_grid *piece, const int off[3],
                                   const int whole[3], ss_error *err);
-/* The same with the closure days of the piece's columns (piece nx*ny, as
- * ss_heal_vti_write_all's closed_day; NULL = none). */
-ss_status ss_heal_vti_write_piece_all(const char *path, const ss_heal_grid *piece, const int off[3],
-                                      const int whole[3], const double *closed_day, ss_error *err);
 /* The .pvti that joins npieces such pieces: ext[i] = x0 x1 y0 y1 z0 z1 (point
  * extents), files[i] relative to the .pvti. ParaView opens it as one image. */
 ss_status ss_heal_pvti_write(const char *path, const int whole[3], double dx_mm, double t_days,

@@ -196,14 +196,11 @@ typedef struct ss_heal_run_hooks {
     /* instead of ss_heal_surface_map for the snapshot's surface pictures */
     ss_image *(*surface_map)(void *ctx, const ss_heal_grid *g, int field, ss_heal_surface_mode mode,
                              ss_error *err);
-    /* instead of ss_heal_checkpoint_save (same arguments, after sync) */
-    ss_status (*checkpoint)(void *ctx, const ss_heal_grid *g, const char *run_dir,
-                            const char *scenario, const char *params_json, int scheme,
-                            double dt_days, const char *aux, int keep, ss_error *err);
 } ss_heal_run_hooks;
 /* Sets (h) or clears (NULL) the hooks; SS_ERR_INPUT when the run has the
  * contraction mechanics (naming --mechanics). A run without its whole grid
- * (config.distributed) needs every hook; its snapshots are then the pieces
+ * (config.distributed) needs every hook and a checkpoint hook
+ * (ss_heal_run_set_checkpoint_hook, set first); its snapshots are then the pieces
  * and .pvti the snapshot hook writes (fields.pvd lists fields_NNNN.pvti), and
  * a fresh one's day-0 area row is added here, through the stats hook. */
 ss_status ss_heal_run_set_hooks(ss_heal_run *r, const ss_heal_run_hooks *h, ss_error *err);

@@ -173,11 +173,8 @@ ss_status ss_heal_run_write_checkpoint(ss_heal_run *r, ss_error *err) {
     if ((st0 = ss_heal_run__sync(r, err))) return st0;
     char *aux = ss_heal_run__aux_json(r, r->wall_prev + ss_now() - r->t0);
     if (!aux) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
-    ss_status st = r->hooks.checkpoint
-                       ? r->hooks.checkpoint(r->hooks.ctx, r->g, r->out_dir, r->scenario,
-                                             r->params_json, (int)r->scheme, r->dt, aux, 2, err)
-                       : ss_heal_checkpoint_save(r->out_dir, r->g, r->scenario, r->params_json,
-                                                 (int)r->scheme, r->dt, aux, 2, err);
+    ss_status st = ss_heal_checkpoint_save(r->out_dir, r->g, r->scenario, r->params_json,
+                                           (int)r->scheme, r->dt, aux, 2, err);
     free(aux);
     return st;
 }
@@ -378,7 +375,7 @@ ss_status ss_heal_run_set_hooks(ss_heal_run *r, const ss_heal_run_hooks *h, ss_e
                             "process; it cannot run with an external (distributed) solver");
     if (h && !r->g->cell &&
         (!h->step || !h->stats || !h->sync || !h->closure || !h->snapshot || !h->surface_map ||
-         !h->checkpoint))
+         !r->ckpt_fn))
         return ss_error_set(err, SS_ERR_INPUT,
                             "heal run: a distributed run (no whole grid) needs every hook");
     if (h)

@@ -112,13 +112,8 @@ ss_status ss_heal_vti_write_all(const char *path, const ss_heal_grid *g, int nve
 
 ss_status ss_heal_vti_write_piece(const char *path, const ss_heal_grid *piece, const int off[3],
                                   const int whole[3], ss_error *err) {
-    return ss_heal_vti_write_piece_all(path, piece, off, whole, NULL, err);
-}
-
-ss_status ss_heal_vti_write_piece_all(const char *path, const ss_heal_grid *piece, const int off[3],
-                                      const int whole[3], const double *closed_day, ss_error *err) {
     if (!piece || !piece->cell) return ss_error_set(err, SS_ERR_INPUT, "%s: no grid", path);
-    return write_vti(path, piece, 0, NULL, NULL, closed_day, off, whole, err);
+    return write_vti(path, piece, 0, NULL, NULL, NULL, off, whole, err);
 }
 
 ss_status ss_heal_pvti_write(const char *path, const int whole[3], double dx_mm, double t_days,
