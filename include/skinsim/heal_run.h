@@ -82,6 +82,8 @@ typedef struct ss_heal_run_config {
                                grid, wound and intervals then come from the checkpoint: only
                                days and checkpoint_every are taken from this config */
     uint64_t seed;          /* recorded in summary.json (the solver draws no random numbers) */
+    int checkpoint_pieces[3]; /* all > 0: checkpoints as px x py x pz pieces and a header
+                                 (ss_heal_checkpoint_save_pieces); 0 = one whole-grid file */
 
     /* ---- contraction mechanics (seed 001 §4.2-5.3, docs/mech.md; fresh runs) ---- */
     int mechanics;        /* 1: mass-spring contraction drives the convection (default 0) */
@@ -182,6 +184,13 @@ typedef struct ss_heal_run_hooks {
      * files for it, e.g. per-rank pieces) */
     ss_status (*snapshot)(void *ctx, const ss_heal_grid *g, const char *fields_dir, int index,
                           ss_error *err);
+    /* instead of the run's own checkpoint (ss_heal_checkpoint_save or, with
+     * checkpoint_pieces, ss_heal_checkpoint_save_pieces), after sync: writes
+     * the checkpoint of g's state with the run's metadata, keeping the newest
+     * `keep`, e.g. as per-rank pieces (skinsim/heal_io.h) */
+    ss_status (*checkpoint)(void *ctx, const ss_heal_grid *g, const char *run_dir,
+                            const char *scenario, const char *params_json, int scheme,
+                            double dt_days, const char *aux, int keep, ss_error *err);
 } ss_heal_run_hooks;
 /* Sets (h) or clears (NULL) the hooks; SS_ERR_INPUT when the run has the
  * contraction mechanics (naming --mechanics). */
