@@ -75,13 +75,13 @@ typedef struct ss_heal_run_config {
                                 the checkpoint's interval on resume) */
 
     /* ---- files ---- */
-    const char *out_dir;    /* run directory; NULL = in memory, no file written */
-    int force;              /* 1: replace a previous run's outputs in out_dir */
-    const char *resume_dir; /* continue the run in this directory from its newest valid
-                               checkpoint (bit-identical to an uninterrupted run); the model,
-                               grid, wound and intervals then come from the checkpoint: only
-                               days and checkpoint_every are taken from this config */
-    uint64_t seed;          /* recorded in summary.json (the solver draws no random numbers) */
+    const char *out_dir;      /* run directory; NULL = in memory, no file written */
+    int force;                /* 1: replace a previous run's outputs in out_dir */
+    const char *resume_dir;   /* continue the run in this directory from its newest valid
+                                 checkpoint (bit-identical to an uninterrupted run); the model,
+                                 grid, wound and intervals then come from the checkpoint: only
+                                 days and checkpoint_every are taken from this config */
+    uint64_t seed;            /* recorded in summary.json (the solver draws no random numbers) */
     int checkpoint_pieces[3]; /* all > 0: checkpoints as px x py x pz pieces and a header
                                  (ss_heal_checkpoint_save_pieces); 0 = one whole-grid file */
 
@@ -184,17 +184,20 @@ typedef struct ss_heal_run_hooks {
      * files for it, e.g. per-rank pieces) */
     ss_status (*snapshot)(void *ctx, const ss_heal_grid *g, const char *fields_dir, int index,
                           ss_error *err);
-    /* instead of the run's own checkpoint (ss_heal_checkpoint_save or, with
-     * checkpoint_pieces, ss_heal_checkpoint_save_pieces), after sync: writes
-     * the checkpoint of g's state with the run's metadata, keeping the newest
-     * `keep`, e.g. as per-rank pieces (skinsim/heal_io.h) */
-    ss_status (*checkpoint)(void *ctx, const ss_heal_grid *g, const char *run_dir,
-                            const char *scenario, const char *params_json, int scheme,
-                            double dt_days, const char *aux, int keep, ss_error *err);
 } ss_heal_run_hooks;
 /* Sets (h) or clears (NULL) the hooks; SS_ERR_INPUT when the run has the
  * contraction mechanics (naming --mechanics). */
 ss_status ss_heal_run_set_hooks(ss_heal_run *r, const ss_heal_run_hooks *h, ss_error *err);
+/* A checkpoint writer instead of the run's own (ss_heal_checkpoint_save or,
+ * with checkpoint_pieces, ss_heal_checkpoint_save_pieces), called after the
+ * sync hook with the run's metadata: writes the checkpoint of g's state and
+ * keeps the newest `keep`, e.g. as per-rank pieces (skinsim/heal_io.h,
+ * "checkpoints in pieces"). fn NULL = the run's own again. */
+typedef ss_status (*ss_heal_run_checkpoint_fn)(void *ctx, const ss_heal_grid *g,
+                                               const char *run_dir, const char *scenario,
+                                               const char *params_json, int scheme, double dt_days,
+                                               const char *aux, int keep, ss_error *err);
+void ss_heal_run_set_checkpoint_hook(ss_heal_run *r, ss_heal_run_checkpoint_fn fn, void *ctx);
 
 /* ---- state ---- */
 /* The grid holds all the state (fields, cells, t_days, step). A caller may

@@ -167,8 +167,15 @@ ss_status ss_heal_run_write_checkpoint(ss_heal_run *r, ss_error *err) {
     if ((st0 = ss_heal_run__sync(r, err))) return st0;
     char *aux = ss_heal_run__aux_json(r, r->wall_prev + ss_now() - r->t0);
     if (!aux) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
-    ss_status st = ss_heal_checkpoint_save(r->out_dir, r->g, r->scenario, r->params_json,
-                                           (int)r->scheme, r->dt, aux, 2, err);
+    const int *pc = r->c.checkpoint_pieces;
+    ss_status st =
+        r->ckpt_fn ? r->ckpt_fn(r->ckpt_ctx, r->g, r->out_dir, r->scenario, r->params_json,
+                                (int)r->scheme, r->dt, aux, 2, err)
+        : pc[0] > 0 && pc[1] > 0 && pc[2] > 0
+            ? ss_heal_checkpoint_save_pieces(r->out_dir, r->g, r->scenario, r->params_json,
+                                             (int)r->scheme, r->dt, aux, pc, 2, err)
+            : ss_heal_checkpoint_save(r->out_dir, r->g, r->scenario, r->params_json, (int)r->scheme,
+                                      r->dt, aux, 2, err);
     free(aux);
     return st;
 }
@@ -358,6 +365,11 @@ ss_status ss_heal_run_finish(ss_heal_run *r, char **summary_json, ss_error *err)
     }
     cJSON_Delete(summary);
     return st;
+}
+
+void ss_heal_run_set_checkpoint_hook(ss_heal_run *r, ss_heal_run_checkpoint_fn fn, void *ctx) {
+    r->ckpt_fn = fn;
+    r->ckpt_ctx = fn ? ctx : NULL;
 }
 
 ss_status ss_heal_run_set_hooks(ss_heal_run *r, const ss_heal_run_hooks *h, ss_error *err) {
