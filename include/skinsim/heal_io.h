@@ -292,7 +292,7 @@ typedef struct ss_heal_ckpt_header {
     char *scenario;            /* owned */
     char *params_json;         /* owned */
     char *aux;                 /* owned, "" when none */
-    int dims[3];               /* the writers' process grid (informative) */
+    int dims[3];               /* the writers' process grid; its product is npieces */
     int npieces;               /* 1..SS_HEAL_CKPT_MAX_PIECES */
     ss_heal_ckpt_piece *piece; /* owned, npieces; piece i is file _p<i> */
 } ss_heal_ckpt_header;

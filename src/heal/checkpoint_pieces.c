@@ -21,6 +21,7 @@
  * the SS_HEAL_CKPT_MAX_PIECES limit). */
 #define _POSIX_C_SOURCE 200809L
 #include "checkpoint_internal.h"
+#include "heal_internal.h"
 
 #include <errno.h>
 #include <math.h>
@@ -80,27 +81,31 @@ static int grid_arrays(const ss_heal_grid *g, int vel, void **a) {
 
 /* ---- tiling -------------------------------------------------------------------- */
 
-/* The boxes lie in the grid, their volumes add up to it and no two overlap:
- * then they cover it exactly once. NULL or the reason. */
-static const char *tiling_error(const int whole[3], int np, const ss_heal_ckpt_piece *p, int *bad) {
+const char *ss_heal__boxes_tile(const int whole[3], int nbox, const void *base, size_t stride,
+                                int *bad) {
+    const unsigned char *b = base;
+#define BOX(i) ((const ss_heal_box *)(const void *)(b + (size_t)(i)*stride))
     uint64_t vol = 0;
-    for (int i = 0; i < np; i++) {
+    for (int i = 0; i < nbox; i++) {
         *bad = i;
+        const ss_heal_box *p = BOX(i);
         for (int a = 0; a < 3; a++)
-            if (p[i].n[a] < 1 || p[i].lo[a] < 0 || p[i].lo[a] > whole[a] - p[i].n[a])
+            if (p->n[a] < 1 || p->lo[a] < 0 || p->lo[a] > whole[a] - p->n[a])
                 return "lies outside the grid";
-        vol += box_cells(p[i].n);
+        vol += box_cells(p->n);
     }
-    for (int i = 0; i < np; i++)
-        for (int j = i + 1; j < np; j++) {
+    for (int i = 0; i < nbox; i++)
+        for (int j = i + 1; j < nbox; j++) {
+            const ss_heal_box *p = BOX(i), *q = BOX(j);
             int sep = 0;
             for (int a = 0; a < 3 && !sep; a++)
-                sep = p[i].lo[a] + p[i].n[a] <= p[j].lo[a] || p[j].lo[a] + p[j].n[a] <= p[i].lo[a];
+                sep = p->lo[a] + p->n[a] <= q->lo[a] || q->lo[a] + q->n[a] <= p->lo[a];
             if (!sep) {
                 *bad = j;
                 return "overlaps another piece";
             }
         }
+#undef BOX
     *bad = -1;
     if (vol != (uint64_t)box_cells(whole)) return "pieces leave part of the grid uncovered";
     return NULL;
@@ -186,7 +191,7 @@ static const char *header_values_error(const ss_heal_ckpt_header *h) {
 
 static ss_status tiling_check(const char *path, const ss_heal_ckpt_header *h, ss_error *err) {
     int bad;
-    const char *why = tiling_error(h->whole, h->npieces, h->piece, &bad);
+    const char *why = ss_heal__boxes_tile(h->whole, h->npieces, h->piece, sizeof *h->piece, &bad);
     if (!why) return SS_OK;
     if (bad < 0)
         return ss_error_set(err, SS_ERR_INPUT,
