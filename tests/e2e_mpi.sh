@@ -110,7 +110,13 @@ OPTS="--grid 23x17x9 --scenario keloid --days $adapt_days --snapshot-every 10 --
 grep -q '"retried":[[:space:]]*[1-9]' "$T/adapt/summary.json" || fail "the adaptive case retries no step"
 run_np 3 heal $OPTS --out "$T/adapt-3" || fail "adaptive run on 3 ranks"
 same_run "$T/adapt" "$T/adapt-3"
-echo "ok: adaptive steps (with retries) bit-identical on 3 ranks"
+# checkpointed (in pieces, y slabs) on 2 ranks mid-way, resumed on 3
+run_np 2 heal $OPTS --days $((adapt_days / 2)) --checkpoint-every 5 --out "$T/adapt-ck" ||
+    fail "adaptive run with checkpoints on 2 ranks"
+run_np 3 heal --resume "$T/adapt-ck" --days $adapt_days --quiet || fail "adaptive resume on 3 ranks"
+cmp -s "$T/adapt/area.csv" "$T/adapt-ck/area.csv" || fail "adaptive resumed (2 -> 3 ranks) area.csv differs"
+python3 "$SRC/tests/pvti_same.py" "$T/adapt" "$T/adapt-ck" last || fail "adaptive resumed (2 -> 3 ranks) fields differ"
+echo "ok: adaptive steps (with retries) bit-identical on 3 ranks, and checkpointed on 2, resumed on 3"
 
 # --- checkpoint on 4 ranks, resume on 3: the uninterrupted single-process result
 OPTS="--scheme explicit --grid 23x17x9 --scenario scab --snapshot-every 0.3 --area-every 0.05 --quiet --threads 1"
@@ -118,12 +124,21 @@ OPTS="--scheme explicit --grid 23x17x9 --scenario scab --snapshot-every 0.3 --ar
 # (written on a 2x1x2 process grid: boxes stacked in z too)
 SKINSIM_MPI_DIMS=2x1x2 run_np 4 heal $OPTS --days 0.6 --checkpoint-every 0.3 --out "$T/cut" ||
     fail "4-rank run with checkpoints"
-ls "$T"/cut/checkpoints/*.sshc >/dev/null 2>&1 || fail "no checkpoint written on 4 ranks"
+# (in pieces: one per rank and a header, two checkpoints kept; no whole-grid file)
+ls "$T"/cut/checkpoints/ckpt_*.sshh >/dev/null 2>&1 || fail "no checkpoint header written on 4 ranks"
+[ "$(ls "$T"/cut/checkpoints/ckpt_*_p*.sshp | wc -l)" = 8 ] || fail "not 4 pieces per checkpoint"
+ls "$T"/cut/checkpoints/*.sshc >/dev/null 2>&1 && fail "a whole-grid checkpoint written on 4 ranks"
+cp -r "$T/cut" "$T/cut1"
 run_np 3 heal --resume "$T/cut" --days 0.9 --quiet || fail "resume on 3 ranks"
 cmp -s "$T/full/area.csv" "$T/cut/area.csv" || fail "resumed (4 -> 3 ranks) area.csv differs"
 # (the cut run's own last snapshot shifts the numbering: compare the newest of each)
 python3 "$SRC/tests/pvti_same.py" "$T/full" "$T/cut" last || fail "resumed (4 -> 3 ranks) final fields differ"
-echo "ok: checkpoint on 4 ranks resumes on 3 bit-identically"
+# the same pieces resumed by one process (no mpirun)
+"$CLI" heal --resume "$T/cut1" --days 0.9 --quiet || fail "resume of the pieces in one process"
+cmp -s "$T/full/area.csv" "$T/cut1/area.csv" || fail "resumed (4 ranks -> 1 process) area.csv differs"
+cmp -s "$(ls "$T"/full/fields/fields_????.vti | tail -1)" "$(ls "$T"/cut1/fields/fields_????.vti | tail -1)" ||
+    fail "resumed (4 ranks -> 1 process) final fields differ"
+echo "ok: checkpoint in pieces on 4 ranks (2x1x2) resumes on 3 ranks and in one process bit-identically"
 
 # --- the ModelMatch table: geometries shared out by rank 0, the same bytes
 TAB="--samples 2 --photons 400 --wl-min 450 --wl-max 650 --wl-step 100 --theta-i 2 --theta-r 3 --phi 3 --quiet --threads 1"
@@ -160,12 +175,20 @@ bad meshout "above.obj" 3 heal --scheme explicit --grid 23x17x9 --wound-mesh "$T
 bad mech "--mechanics" 2 heal --scheme explicit --mechanics --grid 24x20x8 --days 0.1 --out "$T/bad3"
 [ -e "$T/bad3" ] && fail "mechanics on 2 ranks: output written"
 bad missing "resume" 3 heal --resume "$T/nowhere" --quiet
-cp -r "$T/cut" "$T/dmg"
-for f in "$T"/dmg/checkpoints/*.sshc; do printf 'garbage' >"$f"; done
+rm -rf "$T/dmg" "$T/nopiece"
+SKINSIM_MPI_DIMS=2x1x2 run_np 4 heal $OPTS --days 0.6 --checkpoint-every 0.3 --out "$T/dmg" ||
+    fail "4-rank run with checkpoints (for damage)"
+cp -r "$T/dmg" "$T/nopiece"
+for f in "$T"/dmg/checkpoints/*_p000002.sshp; do printf 'garbage' >"$f"; done
 before=$(cd "$T/dmg" && find . -type f -exec md5sum {} + | sort | md5sum)
 bad damaged "checkpoint" 2 heal --resume "$T/dmg" --days 1.2 --quiet
 after=$(cd "$T/dmg" && find . -type f -exec md5sum {} + | sort | md5sum)
 [ "$before" = "$after" ] || fail "a refused resume changed the run directory"
+rm -f "$T"/nopiece/checkpoints/*_p000001.sshp
+before=$(cd "$T/nopiece" && find . -type f -exec md5sum {} + | sort | md5sum)
+bad nopiece "p000001" 3 heal --resume "$T/nopiece" --days 1.2 --quiet
+after=$(cd "$T/nopiece" && find . -type f -exec md5sum {} + | sort | md5sum)
+[ "$before" = "$after" ] || fail "a resume with a missing piece changed the run directory"
 bad other "does not run on" 2 skin --size 64 --out "$T/bad4"
 [ -e "$T/bad4" ] && fail "skin on 2 ranks: output written"
 mkdir -p "$T/adir"

@@ -75,13 +75,15 @@ typedef struct ss_heal_run_config {
                                 the checkpoint's interval on resume) */
 
     /* ---- files ---- */
-    const char *out_dir;    /* run directory; NULL = in memory, no file written */
-    int force;              /* 1: replace a previous run's outputs in out_dir */
-    const char *resume_dir; /* continue the run in this directory from its newest valid
-                               checkpoint (bit-identical to an uninterrupted run); the model,
-                               grid, wound and intervals then come from the checkpoint: only
-                               days and checkpoint_every are taken from this config */
-    uint64_t seed;          /* recorded in summary.json (the solver draws no random numbers) */
+    const char *out_dir;      /* run directory; NULL = in memory, no file written */
+    int force;                /* 1: replace a previous run's outputs in out_dir */
+    const char *resume_dir;   /* continue the run in this directory from its newest valid
+                                 checkpoint (bit-identical to an uninterrupted run); the model,
+                                 grid, wound and intervals then come from the checkpoint: only
+                                 days and checkpoint_every are taken from this config */
+    uint64_t seed;            /* recorded in summary.json (the solver draws no random numbers) */
+    int checkpoint_pieces[3]; /* all > 0: checkpoints as px x py x pz pieces and a header
+                                 (ss_heal_checkpoint_save_pieces); 0 = one whole-grid file */
 
     /* ---- contraction mechanics (seed 001 §4.2-5.3, docs/mech.md; fresh runs) ---- */
     int mechanics;        /* 1: mass-spring contraction drives the convection (default 0) */
@@ -204,6 +206,16 @@ typedef struct ss_heal_run_hooks {
  * and .pvti the snapshot hook writes (fields.pvd lists fields_NNNN.pvti), and
  * a fresh one's day-0 area row is added here, through the stats hook. */
 ss_status ss_heal_run_set_hooks(ss_heal_run *r, const ss_heal_run_hooks *h, ss_error *err);
+/* A checkpoint writer instead of the run's own (ss_heal_checkpoint_save or,
+ * with checkpoint_pieces, ss_heal_checkpoint_save_pieces), called after the
+ * sync hook with the run's metadata: writes the checkpoint of g's state and
+ * keeps the newest `keep`, e.g. as per-rank pieces (skinsim/heal_io.h,
+ * "checkpoints in pieces"). fn NULL = the run's own again. */
+typedef ss_status (*ss_heal_run_checkpoint_fn)(void *ctx, const ss_heal_grid *g,
+                                               const char *run_dir, const char *scenario,
+                                               const char *params_json, int scheme, double dt_days,
+                                               const char *aux, int keep, ss_error *err);
+void ss_heal_run_set_checkpoint_hook(ss_heal_run *r, ss_heal_run_checkpoint_fn fn, void *ctx);
 
 /* ---- distributed set-up (config.distributed; src/dist) ---- */
 /* The fresh run's wound for the boxes: per-column level ranges (2 x nx*ny,
@@ -217,6 +229,11 @@ double ss_heal_run_epidermis_mm(const ss_heal_run *r); /* for ss_heal_grid_init_
  * voxelised mesh, from the totals over the boxes (inside voxels, and those
  * under the skin surface); SS_ERR_INPUT naming the mesh. */
 ss_status ss_heal_run_wound_counted(ss_heal_run *r, size_t inside, size_t below, ss_error *err);
+/* A distributed resume from a checkpoint in pieces (skinsim/heal_io.h): its
+ * step, and in *dir the run folder, whose pieces every rank reads its box
+ * from (ss_heal_ckpt_read_box); the grid was not loaded (no arrays). -1 when
+ * the run is fresh or its checkpoint was a whole-grid file (then loaded). */
+long long ss_heal_run_resume_pieces(const ss_heal_run *r, const char **dir);
 /* Frees the grid's cell and field arrays (and the solver): from here on the
  * run holds no whole grid (a resumed distributed run, once its boxes are out). */
 void ss_heal_run_release_grid(ss_heal_run *r);

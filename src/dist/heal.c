@@ -60,9 +60,11 @@ typedef struct setup {
     double dx_mm, skin_top_mm, t_days, dt, epidermis_mm;
     unsigned long long step;
     ss_heal_params p;
-    int fresh; /* 1: every rank builds its box from the wound; 0: rank 0 scatters the
-                  checkpoint's grid */
-    int wound; /* fresh: WOUND_COLUMNS or WOUND_MESH */
+    int fresh;             /* 1: every rank builds its box from the wound; 0: rank 0 scatters the
+                              checkpoint's grid */
+    int wound;             /* fresh: WOUND_COLUMNS or WOUND_MESH */
+    long long pieces_step; /* resumed from a checkpoint in pieces: its step (every rank
+                              reads its box), else -1 */
     int mesh_nv, mesh_nt;
 } setup;
 enum { WOUND_COLUMNS = 1, WOUND_MESH };
@@ -102,6 +104,7 @@ struct ss_dist_heal {
                              run's), or */
     ss_tri_mesh mesh;     /* its closed mesh (a copy on every rank) */
     int own_wcols;
+    char ckdir[4096]; /* a resume from pieces: the run folder */
     uint64_t saved_step;
     int dirty;   /* rank 0: the run's whole grid is behind the boxes */
     int overlap; /* explicit: the halo exchange runs during the interior kernel */
@@ -142,47 +145,6 @@ static void pack_box(const ss_heal_grid *G, const int lo[3], const int n[3], int
                 const size_t gc = ss_heal_idx(G, X, Y, Z);
                 cells[c] = G->cell[gc];
                 for (int f = 0; f < SS_HEAL_NFIELDS; f++) fields[f * nl + c] = G->field[f][gc];
-            }
-}
-
-/* Owned cells only, all fields: the gather message of a box. */
-static size_t owned_count(const int n[3]) { return (size_t)n[0] * n[1] * n[2]; }
-
-static void pack_owned(const ss_heal_grid *g, const int n[3], int hz, float *buf) {
-    size_t k = 0;
-    for (int f = 0; f < SS_HEAL_NFIELDS; f++)
-        for (int z = hz; z < hz + n[2]; z++)
-            for (int y = 1; y <= n[1]; y++) {
-                memcpy(buf + k, g->field[f] + ss_heal_idx(g, 1, y, z),
-                       (size_t)n[0] * sizeof(float));
-                k += (size_t)n[0];
-            }
-}
-
-static void pack_owned_cells(const ss_heal_grid *g, const int n[3], int hz, uint8_t *buf) {
-    size_t k = 0;
-    for (int z = hz; z < hz + n[2]; z++)
-        for (int y = 1; y <= n[1]; y++) {
-            memcpy(buf + k, g->cell + ss_heal_idx(g, 1, y, z), (size_t)n[0]);
-            k += (size_t)n[0];
-        }
-}
-
-static void unpack_owned(ss_heal_grid *G, const int lo[3], const int n[3], const float *buf,
-                         const uint8_t *cells) {
-    size_t k = 0;
-    for (int z = lo[2]; z < lo[2] + n[2]; z++)
-        for (int y = 0; y < n[1]; y++) {
-            memcpy(G->cell + ss_heal_idx(G, lo[0], lo[1] + y, z), cells + k, (size_t)n[0]);
-            k += (size_t)n[0];
-        }
-    k = 0;
-    for (int f = 0; f < SS_HEAL_NFIELDS; f++)
-        for (int z = lo[2]; z < lo[2] + n[2]; z++)
-            for (int y = 0; y < n[1]; y++) {
-                memcpy(G->field[f] + ss_heal_idx(G, lo[0], lo[1] + y, z), buf + k,
-                       (size_t)n[0] * sizeof(float));
-                k += (size_t)n[0];
             }
 }
 
@@ -589,70 +551,111 @@ static ss_status do_sync(ss_dist_heal *d, ss_error *err) {
     return SS_OK;
 }
 
-/* A checkpoint of the whole grid: rank 0 gathers every box (cells and
- * fields) into a grid it allocates for the write only, writes it with the
- * single-process code and frees it. (The one place rank 0 holds the whole
- * grid: docs/scaling.md.) */
+/* Rank 0's string (a folder) on every rank, into buf of len bytes. */
+static void bcast_string(ss_dist_heal *d, const char *s, char *buf, size_t len) {
+    int n = 0;
+    if (d->rank == 0) n = (int)strlen(s) + 1;
+    MPI_Bcast(&n, 1, MPI_INT, 0, d->cart);
+    if (n > (int)len) n = (int)len;
+    if (d->rank == 0) memcpy(buf, s, (size_t)n);
+    MPI_Bcast(buf, n, MPI_CHAR, 0, d->cart);
+    buf[len - 1] = 0;
+}
+
+/* Every rank's status agreed (the worst); on rank 0, err then names what
+ * went wrong on the first rank that failed (its own message, sent over). */
+static ss_status agree_err(ss_dist_heal *d, ss_status st, ss_error *err) {
+    int v[2] = {(int)st, st ? d->rank : d->size}, m[2];
+    MPI_Allreduce(&v[0], &m[0], 1, MPI_INT, MPI_MAX, d->cart);
+    MPI_Allreduce(&v[1], &m[1], 1, MPI_INT, MPI_MIN, d->cart);
+    if (!m[0]) return SS_OK;
+    if (m[1] != 0 && m[1] < d->size) { /* another rank's message to rank 0 */
+        if (d->rank == m[1]) MPI_Send(err, (int)sizeof *err, MPI_BYTE, 0, 104, d->cart);
+        if (d->rank == 0)
+            MPI_Recv(err, (int)sizeof *err, MPI_BYTE, m[1], 104, d->cart, MPI_STATUS_IGNORE);
+    }
+    return (ss_status)m[0];
+}
+
+/* A checkpoint in pieces (skinsim/heal_io.h): every rank writes its box as
+ * piece `rank`, the statuses are agreed and the pieces' sizes and CRCs
+ * gathered, then rank 0 writes the header naming the whole grid, the process
+ * grid and the step (the checkpoint exists from that moment) and prunes the
+ * older ones. No rank holds more than its box. */
 static ss_status do_checkpoint(ss_dist_heal *d, const ss_heal_grid *hdr, const char *run_dir,
                                const char *scenario, const char *params_json, int scheme,
                                double dt_days, const char *aux, int keep, ss_error *err) {
     double t0 = MPI_Wtime();
-    ss_status st = SS_OK;
-    if (d->rank != 0) {
-        size_t cnt = owned_count(d->n) * SS_HEAL_NFIELDS;
-        float *buf = malloc(cnt * sizeof(float));
-        uint8_t *cb = malloc(owned_count(d->n));
-        if (!buf || !cb) MPI_Abort(d->cart, 3); /* rank 0 waits for this box */
-        pack_owned(d->g, d->n, d->hz, buf);
-        pack_owned_cells(d->g, d->n, d->hz, cb);
-        MPI_Send(buf, (int)cnt, MPI_FLOAT, 0, 100, d->cart);
-        MPI_Send(cb, (int)owned_count(d->n), MPI_BYTE, 0, 103, d->cart);
-        free(buf);
-        free(cb);
-        MPI_Bcast(&st, 1, MPI_INT, 0, d->cart);
-    } else {
-        ss_error e;
-        ss_error_clear(&e);
-        ss_heal_grid *G = ss_heal_grid_create(d->su.G[0], d->su.G[1], d->su.G[2], d->su.dx_mm, &e);
-        float *buf = NULL;
-        uint8_t *cb = NULL;
-        for (int r = 0; r < d->size; r++) {
-            int coords[3], lo[3], n[3];
-            MPI_Cart_coords(d->cart, r, 3, coords);
-            box_of(d, coords, lo, n);
-            size_t cnt = owned_count(n) * SS_HEAL_NFIELDS;
-            float *b = realloc(buf, cnt * sizeof(float));
-            uint8_t *c = realloc(cb, owned_count(n));
-            if (!b || !c) MPI_Abort(d->cart, 3);
-            buf = b;
-            cb = c;
-            if (r == 0) {
-                pack_owned(d->g, n, d->hz, buf);
-                pack_owned_cells(d->g, n, d->hz, cb);
-            } else {
-                MPI_Recv(buf, (int)cnt, MPI_FLOAT, r, 100, d->cart, MPI_STATUS_IGNORE);
-                MPI_Recv(cb, (int)owned_count(n), MPI_BYTE, r, 103, d->cart, MPI_STATUS_IGNORE);
-            }
-            if (G) unpack_owned(G, lo, n, buf, cb);
-        }
-        free(buf);
-        free(cb);
-        if (!G) {
-            st = ss_error_set(err, e.code ? e.code : SS_ERR_NOMEM,
-                              "checkpoint: rank 0 cannot hold the whole %dx%dx%d grid to write "
-                              "it: %s",
-                              d->su.G[0], d->su.G[1], d->su.G[2], e.msg);
+    char dir[4096] = "";
+    bcast_string(d, run_dir, dir, sizeof dir);
+    /* the run's step (an adaptive step counts its multiple of dt) and time */
+    struct {
+        unsigned long long step;
+        double t;
+    } at = {0, 0};
+    if (d->rank == 0) at.step = hdr->step, at.t = hdr->t_days;
+    MPI_Bcast(&at, (int)sizeof at, MPI_BYTE, 0, d->cart);
+    d->g->step = at.step;
+    d->g->t_days = at.t;
+    ss_error e;
+    ss_error_clear(&e);
+    ss_heal_ckpt_piece info;
+    memset(&info, 0, sizeof info);
+    const int org[3] = {d->lo[0] - 1, d->lo[1] - 1, d->lo[2] - d->hz};
+    ss_status st =
+        ss_heal_ckpt_piece_write(dir, d->rank, d->g, org, d->lo, d->n, d->su.G, &info, &e);
+    st = agree_err(d, st, &e);
+    ss_heal_ckpt_piece *all = d->rank == 0 ? malloc((size_t)d->size * sizeof *all) : NULL;
+    if (d->rank == 0 && !all) MPI_Abort(d->cart, 3);
+    MPI_Gather(&info, (int)sizeof info, MPI_BYTE, all, (int)sizeof info, MPI_BYTE, 0, d->cart);
+    if (d->rank == 0) {
+        if (st) {
+            *err = e;
         } else {
-            G->skin_top_mm = hdr->skin_top_mm;
-            G->t_days = hdr->t_days;
-            G->step = hdr->step;
-            st = ss_heal_checkpoint_save(run_dir, G, scenario, params_json, scheme, dt_days, aux,
-                                         keep, err);
-            ss_heal_grid_free(G);
+            ss_heal_ckpt_header h;
+            memset(&h, 0, sizeof h);
+            memcpy(h.whole, d->su.G, sizeof h.whole);
+            h.dx_mm = d->su.dx_mm;
+            h.skin_top_mm = hdr->skin_top_mm;
+            h.t_days = hdr->t_days;
+            h.step = hdr->step;
+            h.scheme = scheme;
+            h.dt_days = dt_days;
+            h.scenario = (char *)scenario; /* not owned here: h is not freed */
+            h.params_json = (char *)params_json;
+            h.aux = (char *)(aux ? aux : "");
+            memcpy(h.dims, d->dims, sizeof h.dims);
+            h.npieces = d->size;
+            h.piece = all;
+            st = ss_heal_ckpt_header_save(dir, &h, keep, err);
         }
-        MPI_Bcast(&st, 1, MPI_INT, 0, d->cart);
+        free(all);
     }
+    MPI_Bcast(&st, 1, MPI_INT, 0, d->cart);
     d->t_gather += MPI_Wtime() - t0;
+    return st;
+}
+
+/* A resume from a checkpoint in pieces: every rank reads its box + halo g
+ * (whole-grid origin org; cells past the grid are BOUND, zero fields) from
+ * the pieces that overlap it, whatever split wrote them. */
+static ss_status read_box(ss_dist_heal *d, const char *dir, unsigned long long step,
+                          ss_heal_grid *g, const int org[3], ss_error *err) {
+    char path[4400];
+    ss_heal_ckpt_header_path(path, sizeof path, dir, step);
+    ss_heal_ckpt_header h;
+    memset(&h, 0, sizeof h);
+    ss_status st = ss_heal_ckpt_header_read(path, &h, err);
+    if (!st && (h.whole[0] != d->su.G[0] || h.whole[1] != d->su.G[1] || h.whole[2] != d->su.G[2]))
+        st = ss_error_set(err, SS_ERR_INPUT, "%s: the grid differs from rank 0's", path);
+    if (!st) {
+        const size_t n = (size_t)g->nx * g->ny * g->nz;
+        memset(g->cell, SS_CELL_BOUND, n);
+        for (int f = 0; f < SS_HEAL_NFIELDS; f++) memset(g->field[f], 0, n * sizeof(float));
+        const int bn[3] = {g->nx, g->ny, g->nz};
+        st = ss_heal_ckpt_read_box(dir, &h, g, org, org, bn, err);
+    }
+    ss_heal_ckpt_header_free(&h);
     return st;
 }
 
@@ -750,7 +753,7 @@ static ss_status do_pieces(ss_dist_heal *d, int index, ss_error *err) {
                            (size_t)d->n[0] * sizeof(float));
             }
         const int off[3] = {d->lo[0], d->lo[1], d->lo[2]};
-        st = ss_heal_vti_write_piece_all(path, p, off, d->su.G, cb, &e);
+        st = ss_heal_vti_write_piece_all(path, p, off, d->su.G, 0, NULL, NULL, cb, &e);
         ss_heal_grid_free(p);
     }
     free(cb);
@@ -1011,8 +1014,10 @@ static ss_status split_setup(ss_dist_heal *d, ss_heal_run *r, ss_error *err) {
     if (!d->gB) return err->code ? err->code : SS_ERR_NOMEM;
     d->gB->skin_top_mm = d->su.skin_top_mm;
     int goff[3] = {xlo - 1, -1, 0};
-    if (d->su.fresh) {
-        ss_status st = build_box(d, d->gB, goff, NULL, err);
+    if (d->su.fresh || d->su.pieces_step >= 0) {
+        ss_status st = d->su.fresh ? build_box(d, d->gB, goff, NULL, err)
+                                   : read_box(d, d->ckdir, (unsigned long long)d->su.pieces_step,
+                                              d->gB, goff, err);
         if (st) return st;
     } else {
         scatter(d, r, d->gB, 1);
@@ -1143,7 +1148,8 @@ ss_status ss_dist_heal_create(ss_heal_run *r, ss_status root_st, ss_dist_heal **
         su.dt = ss_heal_run_dt(r);
         su.p = *ss_heal_run_params(r);
         su.epidermis_mm = ss_heal_run_epidermis_mm(r);
-        su.fresh = G->cell == NULL; /* config.distributed: no whole grid */
+        su.pieces_step = ss_heal_run_resume_pieces(r, NULL);
+        su.fresh = G->cell == NULL && su.pieces_step < 0; /* config.distributed */
         const ss_tri_mesh *m = ss_heal_run_wound_mesh(r);
         su.wound = m ? WOUND_MESH : WOUND_COLUMNS;
         if (m) {
@@ -1218,8 +1224,16 @@ ss_status ss_dist_heal_create(ss_heal_run *r, ss_status root_st, ss_dist_heal **
         MPI_Reduce(c2, sum, 2, MPI_UNSIGNED_LONG_LONG, MPI_SUM, 0, d->cart);
         if (rank == 0 && !st && su.wound == WOUND_MESH)
             st = ss_heal_run_wound_counted(r, (size_t)sum[0], (size_t)sum[1], err);
-        if ((st = agree(d->cart, st))) {
-            if (d->rank != 0) ss_error_set(err, st, "a rank could not build its box");
+        if ((st = agree_err(d, st, err))) {
+            ss_dist_heal_free(d);
+            return st;
+        }
+    } else if (su.pieces_step >= 0) {
+        const char *ckdir = NULL;
+        if (rank == 0) ss_heal_run_resume_pieces(r, &ckdir);
+        bcast_string(d, ckdir, d->ckdir, sizeof d->ckdir);
+        st = read_box(d, d->ckdir, (unsigned long long)su.pieces_step, d->g, goff, err);
+        if ((st = agree_err(d, st, err))) {
             ss_dist_heal_free(d);
             return st;
         }
@@ -1253,7 +1267,7 @@ ss_status ss_dist_heal_create(ss_heal_run *r, ss_status root_st, ss_dist_heal **
     }
     if (d->rank == 0) {
         /* from here on rank 0 holds no whole grid */
-        if (!su.fresh) ss_heal_run_release_grid(r);
+        if (!su.fresh && su.pieces_step < 0) ss_heal_run_release_grid(r);
         d->closed_root = (double *)ss_heal_run_closure(r);
         ss_heal_run_hooks h = {.ctx = d,
                                .step = hook_step,
@@ -1262,8 +1276,8 @@ ss_status ss_dist_heal_create(ss_heal_run *r, ss_status root_st, ss_dist_heal **
                                .sync = hook_sync,
                                .closure = hook_closure,
                                .snapshot = hook_snapshot,
-                               .surface_map = hook_surface,
-                               .checkpoint = hook_checkpoint};
+                               .surface_map = hook_surface};
+        ss_heal_run_set_checkpoint_hook(r, hook_checkpoint, d);
         /* (a fresh run's day-0 area row: the first command the others serve) */
         if ((st = ss_heal_run_set_hooks(r, &h, err))) {
             ss_dist_heal_end(d, st);

@@ -64,8 +64,10 @@ ss_status ss_heal_run__add_row(ss_heal_run *r, ss_error *err) {
     row->t_days = r->g->t_days;
     if (r->hooks.stats)
         r->hooks.stats(r->hooks.ctx, r->g, &row->st);
-    else
+    else if (r->g->cell)
         ss_heal_stats_compute(r->g, &row->st);
+    else /* distributed, rows restored from a checkpoint: filled in by the caller */
+        memset(&row->st, 0, sizeof row->st);
     return ss_heal_run__mech_row(r, err);
 }
 
@@ -107,6 +109,7 @@ ss_status ss_heal_run_create(const ss_heal_run_config *c, ss_heal_run **out, ss_
     if (!r) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     r->c = *c;
     r->resumed_from = -1;
+    r->pieces_step = -1;
     const char *dir = c->resume_dir ? c->resume_dir : c->out_dir;
     ss_status st = SS_OK;
     if (dir && !(r->out_dir = strdup(dir))) st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
@@ -173,8 +176,15 @@ ss_status ss_heal_run_write_checkpoint(ss_heal_run *r, ss_error *err) {
     if ((st0 = ss_heal_run__sync(r, err))) return st0;
     char *aux = ss_heal_run__aux_json(r, r->wall_prev + ss_now() - r->t0);
     if (!aux) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
-    ss_status st = ss_heal_checkpoint_save(r->out_dir, r->g, r->scenario, r->params_json,
-                                           (int)r->scheme, r->dt, aux, 2, err);
+    const int *pc = r->c.checkpoint_pieces;
+    ss_status st =
+        r->ckpt_fn ? r->ckpt_fn(r->ckpt_ctx, r->g, r->out_dir, r->scenario, r->params_json,
+                                (int)r->scheme, r->dt, aux, 2, err)
+        : pc[0] > 0 && pc[1] > 0 && pc[2] > 0
+            ? ss_heal_checkpoint_save_pieces(r->out_dir, r->g, r->scenario, r->params_json,
+                                             (int)r->scheme, r->dt, aux, pc, 2, err)
+            : ss_heal_checkpoint_save(r->out_dir, r->g, r->scenario, r->params_json, (int)r->scheme,
+                                      r->dt, aux, 2, err);
     free(aux);
     return st;
 }
@@ -366,6 +376,11 @@ ss_status ss_heal_run_finish(ss_heal_run *r, char **summary_json, ss_error *err)
     return st;
 }
 
+void ss_heal_run_set_checkpoint_hook(ss_heal_run *r, ss_heal_run_checkpoint_fn fn, void *ctx) {
+    r->ckpt_fn = fn;
+    r->ckpt_ctx = fn ? ctx : NULL;
+}
+
 ss_status ss_heal_run_set_hooks(ss_heal_run *r, const ss_heal_run_hooks *h, ss_error *err) {
     if (h && h->step && !h->undo)
         return ss_error_set(err, SS_ERR_INPUT, "heal run: an external step needs an undo hook");
@@ -393,6 +408,10 @@ const ss_tri_mesh *ss_heal_run_wound_mesh(const ss_heal_run *r) {
     return r->wmesh.ntris ? &r->wmesh : NULL;
 }
 double ss_heal_run_epidermis_mm(const ss_heal_run *r) { return r->epidermis_mm; }
+long long ss_heal_run_resume_pieces(const ss_heal_run *r, const char **dir) {
+    if (dir) *dir = r->pieces_step >= 0 ? r->c.resume_dir : NULL;
+    return r->pieces_step;
+}
 
 void ss_heal_run_release_grid(ss_heal_run *r) {
     if (!r || !r->g) return;

@@ -454,13 +454,48 @@ ss_status ss_heal_run__setup_fresh(ss_heal_run *r, ss_error *err) {
     return st;
 }
 
+/* A distributed resume: the newest checkpoint, a checkpoint in pieces
+ * without its grid (checked: every piece there, its size, header and CRC;
+ * the ranks read their boxes from it, ss_heal_run_resume_pieces), a
+ * whole-grid one loaded as before (the driver hands it out, then drops it). */
+static ss_status open_distributed(ss_heal_run *r, const char *dir, ss_heal_checkpoint *ck,
+                                  ss_error *err) {
+    ss_heal_ckpt_header h;
+    memset(&h, 0, sizeof h);
+    memset(ck, 0, sizeof *ck);
+    ss_status st = ss_heal_checkpoint_open_latest(dir, 1, ck, &h, r->note, sizeof r->note, err);
+    if (st || h.npieces == 0) return st;
+    if (!(ck->grid = calloc(1, sizeof *ck->grid))) {
+        ss_heal_ckpt_header_free(&h);
+        return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    }
+    ck->grid->nx = h.whole[0];
+    ck->grid->ny = h.whole[1];
+    ck->grid->nz = h.whole[2];
+    ck->grid->dx_mm = h.dx_mm;
+    ck->grid->skin_top_mm = h.skin_top_mm;
+    ck->grid->t_days = h.t_days;
+    ck->grid->step = h.step;
+    ck->scenario = h.scenario;
+    ck->params_json = h.params_json;
+    ck->aux = h.aux;
+    h.scenario = h.params_json = h.aux = NULL;
+    ck->scheme = h.scheme;
+    ck->dt_days = h.dt_days;
+    r->pieces_step = (long long)h.step;
+    ss_heal_ckpt_header_free(&h);
+    return SS_OK;
+}
+
 ss_status ss_heal_run__setup_resume(ss_heal_run *r, ss_error *err) {
     const ss_heal_run_config *c = &r->c;
     const char *dir = c->resume_dir;
     if (!(c->days >= 0 && c->days <= 1e6) || !(c->checkpoint_every <= 1e6))
         return ss_error_set(err, SS_ERR_INPUT, "--days and --checkpoint-every must be finite");
     ss_heal_checkpoint ck;
-    ss_status st = ss_heal_checkpoint_load_latest(dir, &ck, r->note, sizeof r->note, err);
+    ss_status st = c->distributed
+                       ? open_distributed(r, dir, &ck, err)
+                       : ss_heal_checkpoint_load_latest(dir, &ck, r->note, sizeof r->note, err);
     if (st) return st;
     /* a checkpoint of another run (copied in) is refused before anything is touched */
     if ((st = ss_heal_run__check_identity(dir, &ck, err))) {
@@ -478,6 +513,11 @@ ss_status ss_heal_run__setup_resume(ss_heal_run *r, ss_error *err) {
     ss_heal_checkpoint_free(&ck);
     if (st) return st;
     if (c->days != 0) r->days = c->days;
+    if (!r->g->cell && (r->mech_aux || r->shell_aux))
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "--resume %s: a run with %s cannot continue on several MPI ranks "
+                            "(it needs the whole grid in one process); resume it without mpirun",
+                            dir, r->mech_aux ? "--mechanics" : "--skin-mesh");
     r->p = ss_heal_params_parse(r->params_json, "checkpoint parameters", r->scenario, err);
     if (!r->p) return err->code ? err->code : SS_ERR_INPUT;
     st = ss_heal_run__mech_setup_resume(r, dir, err);
