@@ -173,6 +173,8 @@ ss_status ss_heal_ckpt_piece_write(const char *run_dir, int index, const ss_heal
 static const char *header_values_error(const ss_heal_ckpt_header *h) {
     for (int a = 0; a < 3; a++)
         if (h->whole[a] < 1 || h->dims[a] < 1) return "grid or process grid dimensions invalid";
+    if ((double)h->whole[0] * h->whole[1] * h->whole[2] > (double)SS_HEAL_MAX_CELLS)
+        return "grid larger than any heal grid";
     if (!(h->dx_mm > 0) || !isfinite(h->dx_mm) || !isfinite(h->t_days) ||
         !isfinite(h->skin_top_mm) || !(h->dt_days > 0) || !isfinite(h->dt_days) ||
         (h->velocity != 0 && h->velocity != 1))
@@ -373,7 +375,7 @@ static ss_status piece_stream(const char *run_dir, const ss_heal_ckpt_header *h,
         st = ss_error_set(err, SS_ERR_INPUT, __VA_ARGS__);                                         \
         goto done;                                                                                 \
     } while (0)
-    struct stat sb;
+    struct stat sb = {0};
     if (fstat(fileno(f), &sb) || (uint64_t)sb.st_size != p->bytes)
         BAD("%s: piece is %lld bytes, the checkpoint header says %llu (truncated or foreign)", path,
             (long long)sb.st_size, (unsigned long long)p->bytes);

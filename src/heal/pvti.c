@@ -85,6 +85,8 @@ static const char *pv_parse(const char *path, const char *text, pv_image *v) {
                &v->whole[2]) != 6 ||
         e0[0] || e0[1] || e0[2] || v->whole[0] < 1 || v->whole[1] < 1 || v->whole[2] < 1)
         return "bad WholeExtent";
+    if ((double)v->whole[0] * v->whole[1] * v->whole[2] > (double)SS_HEAL_MAX_CELLS)
+        return "WholeExtent larger than any heal grid";
     if (!attr(im, ime, "Spacing", buf, sizeof buf) ||
         sscanf(buf, "%lg %lg %lg", &sp[0], &sp[1], &sp[2]) != 3 || !(sp[0] > 0) || sp[1] != sp[0] ||
         sp[2] != sp[0])
