@@ -126,6 +126,9 @@ ss_heal_grid *ss_heal_vti_read(const char *path, float **displacement, double **
  * the file at fault (the .pvti or the piece). */
 ss_heal_grid *ss_heal_pvti_read(const char *path, float **displacement, double **closed_day,
                                 ss_error *err);
+/* The cheap part of those checks, without reading the pieces' data: the
+ * .pvti's XML, the tiling, and that every piece file is there and not empty. */
+ss_status ss_heal_pvti_check(const char *path, ss_error *err);
 
 /* ---- closure day per column ----------------------------------------------------
  * The day each (x, y) column's epithelial layer (ss_heal_surface_map's

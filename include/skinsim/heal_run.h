@@ -278,7 +278,9 @@ struct ss_mech *ss_heal_run_mech(ss_heal_run *r);
  * What `skinsim heal --out DIR` wrote: run.json (its "format" is
  * SS_HEAL_RUN_FORMAT; a folder of another format is refused, since what the
  * files hold and mean may differ), summary.json (scenario, grid, parameters,
- * step), fields/fields.pvd and the snapshots fields/fields_NNNN.vti it lists.
+ * step), fields/fields.pvd and the snapshots fields/fields_NNNN.vti it lists
+ * (or, where one is not there, fields_NNNN.pvti and its pieces, as a run on
+ * MPI ranks may leave them; a .pvti fields.pvd lists is read as one).
  * Read-only: nothing in DIR is changed. */
 #define SS_HEAL_RUN_FORMAT 1
 typedef struct ss_heal_saved_run ss_heal_saved_run;
@@ -303,6 +305,10 @@ int ss_heal_saved_run_find(const ss_heal_saved_run *s, double day);
  * summary.json and fields.pvd -> SS_ERR_INPUT naming the file. */
 ss_heal_grid *ss_heal_saved_run_load(const ss_heal_saved_run *s, int i, float **displacement,
                                      double **closed_day, ss_error *err);
+/* Snapshot i's files are there, without reading their data: the .vti, or
+ * the .pvti (its XML, the tiling) and every piece. SS_ERR_INPUT naming the
+ * file. A caller checks the snapshots it will need before writing anything. */
+ss_status ss_heal_saved_run_check(const ss_heal_saved_run *s, int i, ss_error *err);
 
 #ifdef __cplusplus
 }

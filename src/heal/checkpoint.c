@@ -53,13 +53,7 @@ ss_status ss_heal_checkpoint_write(const char *path, const ss_heal_grid *g, cons
     for (int f = 0; f < SS_HEAL_NFIELDS; f++) wf32s(&w, g->field[f], n);
     if (vel)
         for (int c = 0; c < 3; c++) wf32s(&w, g->velocity[c], n);
-    uint32_t crc = (uint32_t)w.crc;
-    wu32(&w, crc);
-    if (w.bad) {
-        ss_atomic_abort(&af);
-        return ss_error_set(err, SS_ERR_RUNTIME, "%s: write failed: %s", path, strerror(errno));
-    }
-    return ss_atomic_commit(&af, err);
+    return ck_finish(&w, &af, path, NULL, err);
 }
 
 /* ---- read ------------------------------------------------------------------- */
@@ -73,25 +67,39 @@ void ss_heal_checkpoint_free(ss_heal_checkpoint *c) {
     memset(c, 0, sizeof *c);
 }
 
+ss_status ss_heal__ck_load(const char *path, const char *magic, uint32_t version, size_t min_len,
+                           const char *what, const char *kind, char **data, size_t *len,
+                           ss_error *err) {
+    *data = ss_read_file(path, len, err);
+    if (!*data) return err ? err->code : SS_ERR_INPUT;
+    const unsigned char *b = (const unsigned char *)*data;
+    ss_status st = SS_OK;
+    if (*len < min_len || memcmp(b, magic, 8) != 0)
+        st = ss_error_set(err, SS_ERR_INPUT, "%s: not %s (bad magic)", path, what);
+    else if (ck_get_u32(b + 8) != version)
+        st = ss_error_set(err, SS_ERR_INPUT,
+                          "%s: %s version %u is not supported (this build reads %u)", path, kind,
+                          ck_get_u32(b + 8), version);
+    if (st) {
+        free(*data);
+        *data = NULL;
+    }
+    return st;
+}
+
 ss_status ss_heal_checkpoint_read(const char *path, ss_heal_checkpoint *out, ss_error *err) {
     memset(out, 0, sizeof *out);
     size_t len = 0;
-    char *data = ss_read_file(path, &len, err);
-    if (!data) return err ? err->code : SS_ERR_INPUT;
-    rbuf r = {(const unsigned char *)data, len, 0};
-    ss_status st = SS_OK;
+    char *data;
+    ss_status st = ss_heal__ck_load(path, CK_MAGIC, CK_VERSION, 16, "a skinsim healing checkpoint",
+                                    "checkpoint", &data, &len, err);
+    if (st) return st;
+    rbuf r = {(const unsigned char *)data, len, 12};
 #define BAD(...)                                                                                   \
     do {                                                                                           \
         st = ss_error_set(err, SS_ERR_INPUT, __VA_ARGS__);                                         \
         goto done;                                                                                 \
     } while (0)
-    if (len < 16 || memcmp(data, CK_MAGIC, 8) != 0)
-        BAD("%s: not a skinsim healing checkpoint (bad magic)", path);
-    r.pos = 8;
-    uint32_t version = ru32(&r);
-    if (version != CK_VERSION)
-        BAD("%s: checkpoint version %u is not supported (this build reads %u)", path, version,
-            CK_VERSION);
     uint32_t crc_stored;
     {
         if (len < 20) BAD("%s: truncated checkpoint", path);

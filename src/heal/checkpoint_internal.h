@@ -6,6 +6,7 @@
 #ifndef SKINSIM_CHECKPOINT_INTERNAL_H
 #define SKINSIM_CHECKPOINT_INTERNAL_H
 
+#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -119,7 +120,31 @@ static inline void rf32s(rbuf *r, float *a, size_t n) {
     r->pos += n * 4;
 }
 
-/* ---- the run directory (checkpoint.c) ------------------------------------------ */
+/* Ends a file written through w: appends the CRC-32 (into *crc if not
+ * NULL) and swaps the file in, or drops it after a write error. */
+static inline ss_status ck_finish(wbuf *w, ss_atomic_file *af, const char *path, uint32_t *crc,
+                                  ss_error *err) {
+    uint32_t c = (uint32_t)w->crc;
+    wu32(w, c);
+    if (crc) *crc = c;
+    if (w->bad) {
+        int e = errno;
+        ss_atomic_abort(af);
+        return ss_error_set(err, SS_ERR_RUNTIME, "%s: write failed: %s", path, strerror(e));
+    }
+    return ss_atomic_commit(af, err);
+}
+
+/* ---- shared by the readers (checkpoint.c) ---------------------------------------- */
+
+/* Reads a checkpoint file whole (*data, *len; caller frees) after checking
+ * its 8-byte magic, then the version word: SS_ERR_INPUT naming the path as
+ * not `what` (bad magic) or of another version of `kind`. */
+ss_status ss_heal__ck_load(const char *path, const char *magic, uint32_t version, size_t min_len,
+                           const char *what, const char *kind, char **data, size_t *len,
+                           ss_error *err);
+
+/* ---- the run directory (checkpoint_dir.c) ----------------------------------------- */
 
 /* In dir (DIR/checkpoints): keeps the newest `keep` complete checkpoints of
  * either kind (whole-grid files and piece headers) and removes the older

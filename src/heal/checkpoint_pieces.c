@@ -159,14 +159,8 @@ ss_status ss_heal_ckpt_piece_write(const char *run_dir, int index, const ss_heal
                 else
                     wf32s(&w, (const float *)arr[k] + i, (size_t)n[0]);
             }
-    uint32_t crc = (uint32_t)w.crc;
-    wu32(&w, crc);
-    if (w.bad) {
-        int e = errno;
-        ss_atomic_abort(&af);
-        return ss_error_set(err, SS_ERR_RUNTIME, "%s: write failed: %s", path, strerror(e));
-    }
-    if ((st = ss_atomic_commit(&af, err))) return st;
+    uint32_t crc;
+    if ((st = ck_finish(&w, &af, path, &crc, err))) return st;
     if (info) {
         memcpy(info->lo, lo, sizeof info->lo);
         memcpy(info->n, n, sizeof info->n);
@@ -179,6 +173,8 @@ ss_status ss_heal_ckpt_piece_write(const char *run_dir, int index, const ss_heal
 static const char *header_values_error(const ss_heal_ckpt_header *h) {
     for (int a = 0; a < 3; a++)
         if (h->whole[a] < 1 || h->dims[a] < 1) return "grid or process grid dimensions invalid";
+    if ((double)h->whole[0] * h->whole[1] * h->whole[2] > (double)SS_HEAL_MAX_CELLS)
+        return "grid larger than any heal grid";
     if (!(h->dx_mm > 0) || !isfinite(h->dx_mm) || !isfinite(h->t_days) ||
         !isfinite(h->skin_top_mm) || !(h->dt_days > 0) || !isfinite(h->dt_days) ||
         (h->velocity != 0 && h->velocity != 1))
@@ -241,14 +237,7 @@ ss_status ss_heal_ckpt_header_save(const char *run_dir, const ss_heal_ckpt_heade
         wu64(&w, p->bytes);
         wu32(&w, p->crc);
     }
-    uint32_t crc = (uint32_t)w.crc;
-    wu32(&w, crc);
-    if (w.bad) {
-        int e = errno;
-        ss_atomic_abort(&af);
-        return ss_error_set(err, SS_ERR_RUNTIME, "%s: write failed: %s", path, strerror(e));
-    }
-    if ((st = ss_atomic_commit(&af, err))) return st;
+    if ((st = ck_finish(&w, &af, path, NULL, err))) return st;
     ss_heal__ckpt_prune(dir, keep, (unsigned long long)h->step);
     return SS_OK;
 }
@@ -304,22 +293,17 @@ ss_status ss_heal_checkpoint_save_pieces(const char *run_dir, const ss_heal_grid
 ss_status ss_heal_ckpt_header_read(const char *path, ss_heal_ckpt_header *out, ss_error *err) {
     memset(out, 0, sizeof *out);
     size_t len = 0;
-    char *data = ss_read_file(path, &len, err);
-    if (!data) return err ? err->code : SS_ERR_INPUT;
-    rbuf r = {(const unsigned char *)data, len, 0};
-    ss_status st = SS_OK;
+    char *data;
+    ss_status st = ss_heal__ck_load(path, PH_MAGIC, PC_VERSION, 12,
+                                    "the header of a skinsim checkpoint in pieces",
+                                    "checkpoint header", &data, &len, err);
+    if (st) return st;
+    rbuf r = {(const unsigned char *)data, len, 12};
 #define BAD(...)                                                                                   \
     do {                                                                                           \
         st = ss_error_set(err, SS_ERR_INPUT, __VA_ARGS__);                                         \
         goto done;                                                                                 \
     } while (0)
-    if (len < 12 || memcmp(data, PH_MAGIC, 8) != 0)
-        BAD("%s: not the header of a skinsim checkpoint in pieces (bad magic)", path);
-    r.pos = 8;
-    uint32_t version = ru32(&r);
-    if (version != PC_VERSION)
-        BAD("%s: checkpoint header version %u is not supported (this build reads %u)", path,
-            version, PC_VERSION);
     if (len < PH_FIXED_BYTES + 12 + 4) BAD("%s: truncated checkpoint header", path);
     uint32_t crc_stored = ck_get_u32(r.p + len - 4);
     uint32_t crc = (uint32_t)crc32_z(crc32_z(0L, Z_NULL, 0), r.p, len - 4);
@@ -391,7 +375,7 @@ static ss_status piece_stream(const char *run_dir, const ss_heal_ckpt_header *h,
         st = ss_error_set(err, SS_ERR_INPUT, __VA_ARGS__);                                         \
         goto done;                                                                                 \
     } while (0)
-    struct stat sb;
+    struct stat sb = {0};
     if (fstat(fileno(f), &sb) || (uint64_t)sb.st_size != p->bytes)
         BAD("%s: piece is %lld bytes, the checkpoint header says %llu (truncated or foreign)", path,
             (long long)sb.st_size, (unsigned long long)p->bytes);

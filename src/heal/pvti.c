@@ -18,6 +18,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "heal_internal.h"
 #include "skinsim/heal_io.h"
@@ -64,6 +65,8 @@ typedef struct pv_image {
 static void pv_free(pv_image *v) {
     for (int i = 0; i < v->n; i++) free(v->p[i].file);
     free(v->p);
+    v->p = NULL;
+    v->n = 0;
 }
 
 /* The .pvti's own XML: NULL or why it is malformed. */
@@ -82,6 +85,8 @@ static const char *pv_parse(const char *path, const char *text, pv_image *v) {
                &v->whole[2]) != 6 ||
         e0[0] || e0[1] || e0[2] || v->whole[0] < 1 || v->whole[1] < 1 || v->whole[2] < 1)
         return "bad WholeExtent";
+    if ((double)v->whole[0] * v->whole[1] * v->whole[2] > (double)SS_HEAL_MAX_CELLS)
+        return "WholeExtent larger than any heal grid";
     if (!attr(im, ime, "Spacing", buf, sizeof buf) ||
         sscanf(buf, "%lg %lg %lg", &sp[0], &sp[1], &sp[2]) != 3 || !(sp[0] > 0) || sp[1] != sp[0] ||
         sp[2] != sp[0])
@@ -113,32 +118,48 @@ static const char *pv_parse(const char *path, const char *text, pv_image *v) {
     return NULL;
 }
 
+/* The .pvti read and checked (XML, tiling); SS_OK or an error naming it. */
+static ss_status pv_open(const char *path, pv_image *v, ss_error *err) {
+    memset(v, 0, sizeof *v);
+    char *text = ss_read_file(path, NULL, err);
+    if (!text) return err && err->code ? err->code : SS_ERR_INPUT;
+    const char *why = pv_parse(path, text, v);
+    free(text);
+    int bad = -1;
+    if (!why && (why = ss_heal__boxes_tile(v->whole, v->n, v->p, sizeof *v->p, &bad)) && bad >= 0) {
+        const ss_heal_box *b = &v->p[bad].box;
+        ss_error_set(err, SS_ERR_INPUT,
+                     "%s: the pieces do not tile the extent 0 %d 0 %d 0 %d: %s (Extent %d %d %d "
+                     "%d %d %d) %s",
+                     path, v->whole[0], v->whole[1], v->whole[2], v->p[bad].file, b->lo[0],
+                     b->lo[0] + b->n[0], b->lo[1], b->lo[1] + b->n[1], b->lo[2], b->lo[2] + b->n[2],
+                     why);
+    } else if (why) {
+        ss_error_set(err, SS_ERR_INPUT, "%s: %s", path, why);
+    }
+    if (why) pv_free(v);
+    return why ? SS_ERR_INPUT : SS_OK;
+}
+
+ss_status ss_heal_pvti_check(const char *path, ss_error *err) {
+    pv_image v;
+    ss_status st = pv_open(path, &v, err);
+    if (st) return st;
+    struct stat sb;
+    for (int i = 0; !st && i < v.n; i++)
+        if (stat(v.p[i].file, &sb) || !S_ISREG(sb.st_mode) || sb.st_size == 0)
+            st = ss_error_set(err, SS_ERR_INPUT, "%s: piece of %s is missing or empty", v.p[i].file,
+                              path);
+    pv_free(&v);
+    return st;
+}
+
 ss_heal_grid *ss_heal_pvti_read(const char *path, float **displacement, double **closed_day,
                                 ss_error *err) {
     if (displacement) *displacement = NULL;
     if (closed_day) *closed_day = NULL;
-    char *text = ss_read_file(path, NULL, err);
-    if (!text) return NULL;
-    pv_image v = {0};
-    const char *why = pv_parse(path, text, &v);
-    free(text);
-    int bad = -1;
-    if (!why && (why = ss_heal__boxes_tile(v.whole, v.n, v.p, sizeof *v.p, &bad)) && bad >= 0) {
-        const ss_heal_box *b = &v.p[bad].box;
-        ss_error_set(err, SS_ERR_INPUT,
-                     "%s: the pieces do not tile the extent 0 %d 0 %d 0 %d: %s (Extent %d %d %d "
-                     "%d %d %d) %s",
-                     path, v.whole[0], v.whole[1], v.whole[2], v.p[bad].file, b->lo[0],
-                     b->lo[0] + b->n[0], b->lo[1], b->lo[1] + b->n[1], b->lo[2], b->lo[2] + b->n[2],
-                     why);
-        pv_free(&v);
-        return NULL;
-    }
-    if (why) {
-        ss_error_set(err, SS_ERR_INPUT, "%s: %s", path, why);
-        pv_free(&v);
-        return NULL;
-    }
+    pv_image v;
+    if (pv_open(path, &v, err)) return NULL;
     ss_heal_grid *g = ss_heal_grid_create(v.whole[0], v.whole[1], v.whole[2], v.dx, err);
     const size_t ncell = (size_t)v.whole[0] * v.whole[1] * v.whole[2];
     const size_t ncol = (size_t)v.whole[0] * v.whole[1];
@@ -217,6 +238,7 @@ ss_heal_grid *ss_heal_pvti_read(const char *path, float **displacement, double *
             ok = 0;
         }
     free(cover);
+    const int npieces = v.n;
     pv_free(&v);
     if (!ok) {
         ss_heal_grid_free(g);
@@ -224,7 +246,7 @@ ss_heal_grid *ss_heal_pvti_read(const char *path, float **displacement, double *
         free(closed);
         return NULL;
     }
-    if (displacement && ndisp == v.n)
+    if (displacement && ndisp == npieces)
         *displacement = disp;
     else
         free(disp);
