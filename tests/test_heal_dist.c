@@ -516,12 +516,55 @@ static void test_surface_parts(void **state) {
     ss_heal_params_free(p);
 }
 
+/* A box written straight from a grid with a halo is the file of a grid of
+ * just those cells (the MPI driver's snapshot pieces). */
+static void test_vti_box(void **state) {
+    (void)state;
+    ss_error err;
+    ss_heal_params *p = ss_heal_params_preset("scab", &err);
+    ss_heal_grid *g = problem(p, 23, 17, 9);
+    run(g, p, SS_HEAL_EXPLICIT, 5);
+    const int box[6] = {4, 3, 1, 11, 9, 6}, off[3] = {3, 2, 0}, whole[3] = {30, 20, 9};
+    ss_heal_grid *c = ss_heal_grid_create(box[3], box[4], box[5], g->dx_mm, &err);
+    assert_non_null(c);
+    c->t_days = g->t_days;
+    double cd[11 * 9];
+    for (int z = 0; z < box[5]; z++)
+        for (int y = 0; y < box[4]; y++)
+            for (int x = 0; x < box[3]; x++) {
+                const size_t i = ss_heal_idx(c, x, y, z),
+                             j = ss_heal_idx(g, box[0] + x, box[1] + y, box[2] + z);
+                c->cell[i] = g->cell[j];
+                for (int f = 0; f < SS_HEAL_NFIELDS; f++) c->field[f][i] = g->field[f][j];
+                cd[y * box[3] + x] = x - 0.25 * y;
+            }
+    char *dir = tu_tmpdir("vtibox"), a[512], b[512];
+    snprintf(a, sizeof a, "%s/box.vti", dir);
+    snprintf(b, sizeof b, "%s/copy.vti", dir);
+    assert_int_equal(ss_heal_vti_write_box(a, g, box, off, whole, cd, &err), SS_OK);
+    assert_int_equal(ss_heal_vti_write_piece_all(b, c, off, whole, 0, NULL, NULL, cd, &err), SS_OK);
+    size_t na = 0, nb = 0;
+    char *ta = ss_read_file(a, &na, &err), *tb = ss_read_file(b, &nb, &err);
+    assert_non_null(ta);
+    assert_non_null(tb);
+    assert_int_equal(na, nb);
+    assert_memory_equal(ta, tb, na);
+    const int outside[6] = {20, 3, 1, 4, 9, 6};
+    assert_int_equal(ss_heal_vti_write_box(a, g, outside, off, whole, NULL, &err), SS_ERR_INPUT);
+    free(ta);
+    free(tb);
+    ss_heal_grid_free(c);
+    ss_heal_grid_free(g);
+    ss_heal_params_free(p);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_stats_parts),   cmocka_unit_test(test_subbox_explicit),
         cmocka_unit_test(test_split_phases),  cmocka_unit_test(test_explicit_parts),
         cmocka_unit_test(test_stack_columns), cmocka_unit_test(test_subbox_uneven),
         cmocka_unit_test(test_box_setup),     cmocka_unit_test(test_surface_parts),
+        cmocka_unit_test(test_vti_box),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

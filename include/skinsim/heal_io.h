@@ -101,6 +101,13 @@ ss_status ss_heal_vti_write_piece_all(const char *path, const ss_heal_grid *piec
                                       const int whole[3], int nvec, const char *const *names,
                                       float *const (*vecs)[3], const double *closed_day,
                                       ss_error *err);
+/* The piece of the box of g at box[0..2] (g's indices) of box[3] x box[4] x
+ * box[5] cells, written straight from g (no copy; e.g. a rank's owned cells
+ * inside its halo): the file ss_heal_vti_write_piece_all writes for a grid of
+ * just those cells, cells and fields, closed_day of the box's columns. */
+ss_status ss_heal_vti_write_box(const char *path, const ss_heal_grid *g, const int box[6],
+                                const int off[3], const int whole[3], const double *closed_day,
+                                ss_error *err);
 /* Reads a snapshot written by ss_heal_vti_write(_vectors) back into a new grid
  * (cell states, every field, t_days; skin_top_mm and step are left 0: the
  * file does not hold them). displacement: if not NULL, receives a malloc'd

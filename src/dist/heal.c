@@ -724,7 +724,6 @@ static ss_status do_pieces(ss_dist_heal *d, int index, ss_error *err) {
     if (d->rank == 0) memcpy(dir, d->pdir, (size_t)len);
     MPI_Bcast(dir, len, MPI_CHAR, 0, d->cart);
     dir[sizeof dir - 1] = 0;
-    const int nz = d->n[2];
     char path[4400];
     snprintf(path, sizeof path, "%s/fields_%04d_p%04d.vti", dir, index, d->rank);
     ss_error e;
@@ -735,27 +734,10 @@ static ss_status do_pieces(ss_dist_heal *d, int index, ss_error *err) {
     double *cb = malloc((size_t)d->n[0] * d->n[1] * sizeof(double));
     if (!cb) MPI_Abort(d->cart, 3);
     own_closed(d, cb);
-    /* the owned box as a grid of its own (allocated at least 3 wide, as grids are) */
-    ss_heal_grid *p = ss_heal_grid_create(d->n[0] < 3 ? 3 : d->n[0], d->n[1] < 3 ? 3 : d->n[1], nz,
-                                          d->su.dx_mm, &e);
-    ss_status st = p ? SS_OK : (e.code ? e.code : SS_ERR_NOMEM);
-    if (p) {
-        p->nx = d->n[0];
-        p->ny = d->n[1];
-        p->t_days = d->g->t_days;
-        for (int z = 0; z < nz; z++)
-            for (int y = 0; y < d->n[1]; y++) {
-                const size_t src = ss_heal_idx(d->g, 1, y + 1, z + d->hz);
-                const size_t dst = ss_heal_idx(p, 0, y, z);
-                memcpy(p->cell + dst, d->g->cell + src, (size_t)d->n[0]);
-                for (int f = 0; f < SS_HEAL_NFIELDS; f++)
-                    memcpy(p->field[f] + dst, d->g->field[f] + src,
-                           (size_t)d->n[0] * sizeof(float));
-            }
-        const int off[3] = {d->lo[0], d->lo[1], d->lo[2]};
-        st = ss_heal_vti_write_piece_all(path, p, off, d->su.G, 0, NULL, NULL, cb, &e);
-        ss_heal_grid_free(p);
-    }
+    /* the owned box, written straight from the box + halo */
+    const int box[6] = {1, 1, d->hz, d->n[0], d->n[1], d->n[2]};
+    const int off[3] = {d->lo[0], d->lo[1], d->lo[2]};
+    ss_status st = ss_heal_vti_write_box(path, d->g, box, off, d->su.G, cb, &e);
     free(cb);
     int v = (int)st, vmax = 0;
     MPI_Allreduce(&v, &vmax, 1, MPI_INT, MPI_MAX, d->cart);
