@@ -13,23 +13,29 @@
  * runs on x slabs, reached by two MPI_Alltoallv transposes per step, so every
  * Thomas line solve runs whole, as in one process (no halo needed).
  *
- * Rank 0 also holds the run object (skinsim/heal_run.h) with the whole grid:
- * it validates the input, writes every output with the single-process code
- * and drives the others through a command channel (one broadcast per step,
- * area row, gather or snapshot). Its hooks replace the run's step (all ranks
+ * No rank holds the whole grid. Rank 0 holds the run object
+ * (skinsim/heal_run.h) created with config.distributed: it validates every
+ * input with the single-process code but allocates no grid; the wound goes
+ * to every rank as per-column level ranges (or the mesh, voxelised per box)
+ * and every rank builds its own box + halo (ss_heal_grid_init_box), the
+ * mesh's checks being made on the reduced counts. Rank 0 drives the others
+ * through a command channel (one broadcast per step, area row, sync, surface
+ * map, snapshot or checkpoint). Its hooks replace the run's step (all ranks
  * step; an adaptive run's rejected step is undone on all ranks, its largest
  * change is a max-reduction), its statistics (exact fixed-point partial sums
- * reduced with integer additions, ss_heal_stats_acc) and its snapshot/
- * checkpoint reads (the boxes are gathered into the whole grid first); after
- * each snapshot every rank also writes its box as a .vti piece, joined by a
- * .pvti. The kernels compute every cell from the same neighbours in the same
- * arithmetic as one process, so fields, area.csv, snapshots and checkpoints
- * are bit-identical for any rank count and process grid, and a checkpoint
- * (always of the whole grid) resumes on any rank count. Gave up: rank 0 keeps
- * the whole grid (set-up, gathered outputs and checkpoints), so its memory is
- * that of a single-process run; the column chain of a z stack is sequential
- * (Pz - 1 hops per step); the mechanics stay single-process (an error names
- * --mechanics). */
+ * reduced with integer additions, ss_heal_stats_acc), its surface maps (a
+ * top-down scan down each stack, the bottom boxes' columns gathered: nx*ny
+ * floats), its snapshots (every rank writes its box as a .vti piece with the
+ * closure days of its columns, straight from the box; rank 0 the .pvti) and
+ * its checkpoints (every rank writes its piece, rank 0 the header once all
+ * agree; a resume reads each rank's box from the pieces of any split). The
+ * kernels compute every cell from the same neighbours in the same arithmetic
+ * as one process, so fields, area.csv, the pieces and checkpoints are
+ * bit-identical to one process for any rank count and process grid. Gave up:
+ * the column chain of a z stack is sequential (Pz - 1 hops per step); the
+ * mechanics and runs on a skin mesh stay single-process (an error names
+ * --mechanics / --skin-mesh); a whole-grid checkpoint (of a single process)
+ * is loaded on rank 0 once to resume on MPI. */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <mpi.h>
