@@ -368,6 +368,7 @@ static ss_status piece_stream(const char *run_dir, const ss_heal_ckpt_header *h,
         return ss_error_set(err, SS_ERR_INPUT,
                             "%s: piece %d of %d of the checkpoint of step %llu is missing (%s)",
                             path, i, h->npieces, (unsigned long long)h->step, strerror(errno));
+    setvbuf(f, NULL, _IOFBF, (size_t)1 << 20); /* rows are small: read in large blocks */
     ss_status st = SS_OK;
     unsigned char *row = NULL;
 #define BAD(...)                                                                                   \
