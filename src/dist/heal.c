@@ -1257,6 +1257,7 @@ ss_status ss_dist_heal_create(ss_heal_run *r, ss_status root_st, ss_dist_heal **
         /* from here on rank 0 holds no whole grid */
         if (!su.fresh && su.pieces_step < 0) ss_heal_run_release_grid(r);
         d->closed_root = (double *)ss_heal_run_closure(r);
+        d->dirty = su.fresh; /* the ranks' day-0 closure days are not here yet */
         ss_heal_run_hooks h = {.ctx = d,
                                .step = hook_step,
                                .undo = hook_undo,
@@ -1345,6 +1346,7 @@ void ss_dist_heal_end(ss_dist_heal *d, ss_status st) {
     send_cmd(d, CMD_END, (int)st);
     reduce_timing(d);
     ss_heal_run_set_hooks(d->run, NULL, NULL);
+    ss_heal_run_set_checkpoint_hook(d->run, NULL, NULL);
 }
 
 void ss_dist_heal_timing_get(const ss_dist_heal *d, ss_dist_heal_timing *t) { *t = d->tmax; }
