@@ -172,6 +172,8 @@ printf 'v 0 0 20\nv 1 0 20\nv 0 1 20\nv 0 0 21\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4
 bad meshout "above.obj" 3 heal --scheme explicit --grid 23x17x9 --wound-mesh "$T/above.obj" --days 0.1 \
     --out "$T/bad8"
 [ -e "$T/bad8" ] && fail "mesh outside the block on 3 ranks: output written"
+bad skinmesh "--mesh cannot run" 2 heal --mesh "$T/none.glb" --wound-uv "$T/s.csv" --days 0.1 --out "$T/bad9"
+[ -e "$T/bad9" ] && fail "a run on a skin mesh on 2 ranks: output written"
 bad mech "--mechanics" 2 heal --scheme explicit --mechanics --grid 24x20x8 --days 0.1 --out "$T/bad3"
 [ -e "$T/bad3" ] && fail "mechanics on 2 ranks: output written"
 bad missing "resume" 3 heal --resume "$T/nowhere" --quiet

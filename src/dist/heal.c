@@ -34,7 +34,7 @@
  * bit-identical to one process for any rank count and process grid. Gave up:
  * the column chain of a z stack is sequential (Pz - 1 hops per step); the
  * mechanics and runs on a skin mesh stay single-process (an error names
- * --mechanics / --skin-mesh); a whole-grid checkpoint (of a single process)
+ * --mechanics / --mesh); a whole-grid checkpoint (of a single process)
  * is loaded on rank 0 once to resume on MPI. */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
@@ -1038,7 +1038,7 @@ static ss_status check_root(ss_heal_run *r, int size, int dims[3], ss_error *err
     const ss_heal_grid *G = ss_heal_run_grid(r);
     if (ss_heal_run_shell(r))
         return ss_error_set(err, SS_ERR_INPUT,
-                            "--skin-mesh cannot run on %d MPI ranks: the patch of skin and its "
+                            "--mesh cannot run on %d MPI ranks: the patch of skin and its "
                             "surface outputs need the whole grid in one process (run it without "
                             "mpirun)",
                             size);

@@ -409,7 +409,7 @@ ss_status ss_heal_run__setup_fresh(ss_heal_run *r, ss_error *err) {
                           "mpirun, or with -np 1)");
     if (!st && c->distributed && ss_heal_run__shell_wanted(c))
         st = ss_error_set(err, SS_ERR_INPUT,
-                          "--skin-mesh cannot run on several MPI ranks: the patch of skin and "
+                          "--mesh cannot run on several MPI ranks: the patch of skin and "
                           "its surface outputs need the whole grid in one process (run it "
                           "without mpirun)");
     if (!st) st = setup_params(r, err);
@@ -517,7 +517,7 @@ ss_status ss_heal_run__setup_resume(ss_heal_run *r, ss_error *err) {
         return ss_error_set(err, SS_ERR_INPUT,
                             "--resume %s: a run with %s cannot continue on several MPI ranks "
                             "(it needs the whole grid in one process); resume it without mpirun",
-                            dir, r->mech_aux ? "--mechanics" : "--skin-mesh");
+                            dir, r->mech_aux ? "--mechanics" : "--mesh");
     r->p = ss_heal_params_parse(r->params_json, "checkpoint parameters", r->scenario, err);
     if (!r->p) return err->code ? err->code : SS_ERR_INPUT;
     st = ss_heal_run__mech_setup_resume(r, dir, err);
