@@ -191,6 +191,10 @@ ss_status ss_heal_run_write_checkpoint(ss_heal_run *r, ss_error *err) {
     if (!r->out_dir) return ss_error_set(err, SS_ERR_INPUT, "heal run: no output directory");
     ss_status st0 = start_output(r, err);
     if (st0) return st0;
+    if (!r->g->cell && !r->ckpt_fn)
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "heal run: a distributed run (config.distributed) writes "
+                            "checkpoints only through the MPI driver's hook");
     if ((st0 = ss_heal_run__sync(r, err))) return st0;
     char *aux = ss_heal_run__aux_json(r, r->wall_prev + ss_now() - r->t0);
     if (!aux) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
@@ -332,6 +336,10 @@ static ss_status solver_step(ss_heal_run *r, long long limit, ss_error *err) {
 }
 
 static ss_status run_step(ss_heal_run *r, long long limit, ss_error *err) {
+    if (!r->g->cell && !r->hooks.step)
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "heal run: a distributed run (config.distributed) steps only "
+                            "through the MPI driver's hooks");
     if (ss_heal_run_done(r))
         return ss_error_set(err, SS_ERR_INPUT, "heal run: already at its end (day %g)",
                             ss_heal_run_end_day(r));
