@@ -553,6 +553,7 @@ static void test_vti_box(void **state) {
     assert_int_equal(ss_heal_vti_write_box(a, g, outside, off, whole, NULL, &err), SS_ERR_INPUT);
     free(ta);
     free(tb);
+    free(dir);
     ss_heal_grid_free(c);
     ss_heal_grid_free(g);
     ss_heal_params_free(p);
