@@ -150,15 +150,29 @@ ss_status ss_heal_ckpt_piece_write(const char *run_dir, int index, const ss_heal
     wu32(&w, (uint32_t)vel);
     void *arr[SS_HEAL_NFIELDS + 4];
     int na = grid_arrays(g, vel, arr);
+    /* a z plane of the box at a time (its x rows gathered), so the CRC and
+     * stdio see large blocks */
+    const size_t row = (size_t)n[0], plane = row * (size_t)n[1];
+    float *buf = malloc(plane * sizeof *buf);
+    if (!buf) {
+        ss_atomic_abort(&af);
+        return ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", path);
+    }
     for (int k = 0; k < na; k++)
-        for (int z = 0; z < n[2]; z++)
+        for (int z = 0; z < n[2]; z++) {
             for (int y = 0; y < n[1]; y++) {
                 size_t i = ss_heal_idx(g, lo[0] - org[0], lo[1] - org[1] + y, lo[2] - org[2] + z);
                 if (k == 0)
-                    wraw(&w, g->cell + i, (size_t)n[0]);
+                    memcpy((unsigned char *)buf + (size_t)y * row, g->cell + i, row);
                 else
-                    wf32s(&w, (const float *)arr[k] + i, (size_t)n[0]);
+                    memcpy(buf + (size_t)y * row, (const float *)arr[k] + i, row * sizeof *buf);
             }
+            if (k == 0)
+                wraw(&w, buf, plane);
+            else
+                wf32s(&w, buf, plane);
+        }
+    free(buf);
     uint32_t crc;
     if ((st = ck_finish(&w, &af, path, &crc, err))) return st;
     if (info) {
