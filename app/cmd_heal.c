@@ -306,6 +306,11 @@ static void print_dist_timing(const opts *o, void *dist) {
             "%.3f s, statistics %.3f s, gathers %.3f s (slowest rank); halo %.0f bytes/step\n",
             t.dims[0] * t.dims[1] * t.dims[2], t.dims[0], t.dims[1], t.dims[2], t.steps,
             t.compute_s, t.halo_s, t.stats_s, t.gather_s, t.halo_bytes_per_step);
+    if (t.mech_bytes_per_step > 0)
+        fprintf(stderr,
+                "skinsim heal: mechanics on rank 0: gather + scatter %.3f s in all, %.0f "
+                "bytes/step\n",
+                t.mech_s, t.mech_bytes_per_step);
     fprintf(stderr, "skinsim heal: peak memory per rank (MB):");
     for (int i = 0; t.rss_mb && i < t.dims[0] * t.dims[1] * t.dims[2]; i++)
         fprintf(stderr, " %.1f", t.rss_mb[i]);

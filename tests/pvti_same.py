@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Assembles the per-rank pieces of every fields_NNNN.pvti of an MPI run folder
 and checks them against the single-process run's fields_NNNN.vti: every cell
-array (cell_state and the eight fields) and the closed_day field array equal
+array (cell_state, the eight fields and, with the mechanics, the velocity and
+displacement vectors; the .pvti lists each) and the closed_day field array equal
 byte for byte, the pieces tile the grid exactly once, and the MPI run wrote no
 whole-grid .vti (tests/e2e_mpi.sh, docs/scaling.md).
 usage: pvti_same.py REF_RUN MPI_RUN [last]   (last: only the newest of each)"""
@@ -13,16 +14,19 @@ def read(path):  # extent, {name: (itemsize, bytes)}, closed_day bytes or None
     m = re.search(rb'<Piece Extent="([^"]+)"', head)
     ext = [int(v) for v in m.group(1).split()]
     arrays = {}
-    for typ, name, off in re.findall(rb'<DataArray type="(\w+)" Name="(\w+)"[^>]*format="appended" offset="(\d+)"', head):
+    for typ, name, nc, off in re.findall(rb'<DataArray type="(\w+)" Name="(\w+)"(?: NumberOfComponents="(\d+)")?[^>]*format="appended" offset="(\d+)"', head):
         off = int(off)
         n = struct.unpack('<Q', raw[off:off + 8])[0]
-        arrays[name.decode()] = ({b'UInt8': 1, b'Float32': 4, b'Float64': 8}[typ], raw[off + 8:off + 8 + n])
+        isz = {b'UInt8': 1, b'Float32': 4, b'Float64': 8}[typ] * (int(nc) if nc else 1)
+        arrays[name.decode()] = (isz, raw[off + 8:off + 8 + n])
     return ext, arrays
 def check(whole_path, pvti_path):
     wext, whole = read(whole_path)
     NX, NY, NZ = wext[1], wext[3], wext[5]
     pv = open(pvti_path).read()
     pieces = re.findall(r'<Piece Extent="([^"]+)" Source="([^"]+)"', pv)
+    listed = set(re.findall(r'<PDataArray type="\w+" Name="(\w+)"', pv))
+    assert listed == set(whole) - {'closed_day'}, (pvti_path, sorted(listed), sorted(whole))
     asm = {k: bytearray(len(v[1])) for k, v in whole.items()}
     cells = bytearray(NX * NY * NZ)
     cols = {}

@@ -390,11 +390,19 @@ static void test_run_distributed(void **state) {
     assert_int_equal(ss_heal_run_set_hooks(r, &h, &err), SS_ERR_INPUT);
     ss_heal_run_free(r);
     ss_heal_run_free(whole);
-    /* what needs the whole grid is refused by name */
+    /* the mechanics wait for a grid of what they read (the MPI driver's, on
+     * rank 0): hooks without mech_in / mech_out and a grid of another size
+     * are refused by name */
     c.mechanics = 1;
-    assert_int_equal(ss_heal_run_create(&c, &r, &err), SS_ERR_INPUT);
+    assert_int_equal(ss_heal_run_create(&c, &r, &err), SS_OK);
+    assert_true(ss_heal_run_mech_pending(r));
+    assert_null(ss_heal_run_mech(r));
+    assert_int_equal(ss_heal_run_set_hooks(r, &h, &err), SS_ERR_INPUT);
     assert_non_null(strstr(err.msg, "--mechanics"));
-    assert_null(r);
+    ss_heal_grid *small = ss_heal_grid_create(3, 3, 3, 0.5, &err);
+    assert_non_null(small);
+    assert_int_equal(ss_heal_run_mech_attach(r, small, &err), SS_ERR_INPUT); /* frees small */
+    assert_true(ss_heal_run_mech_pending(r));
     ss_heal_run_free(r);
 }
 

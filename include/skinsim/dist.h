@@ -59,6 +59,10 @@ typedef struct ss_dist_heal_timing {
     long long steps;
     const double *rss_mb; /* peak resident memory of every rank (getrusage ru_maxrss), MB,
                              dims[0]*dims[1]*dims[2] values; owned by the driver */
+    /* --mechanics (on rank 0): the gather of the fields they read and the
+     * scatter of their velocity, seconds in all (rank 0) and bytes moved per
+     * coupling step (rank 0's own box not counted) */
+    double mech_s, mech_bytes_per_step;
 } ss_dist_heal_timing;
 void ss_dist_heal_timing_get(const ss_dist_heal *d, ss_dist_heal_timing *t);
 void ss_dist_heal_free(ss_dist_heal *d);

@@ -89,6 +89,11 @@ ss_status ss_heal_vti_write_piece(const char *path, const ss_heal_grid *piece, c
 ss_status ss_heal_pvti_write(const char *path, const int whole[3], double dx_mm, double t_days,
                              int npieces, const int (*ext)[6], const char *const *files,
                              ss_error *err);
+/* The same with nvec Float32 3-vector cell arrays (names[i]) in every piece. */
+ss_status ss_heal_pvti_write_vectors(const char *path, const int whole[3], double dx_mm,
+                                     double t_days, int npieces, const int (*ext)[6],
+                                     const char *const *files, int nvec, const char *const *names,
+                                     ss_error *err);
 /* The same with nvec 3-component cell arrays (as ss_heal_vti_write_vectors,
  * each of piece->nx*ny*nz floats) and, if closed_day is not NULL, the closure
  * days of the piece's own columns (piece->nx * piece->ny, index y*nx + x of
@@ -108,6 +113,13 @@ ss_status ss_heal_vti_write_piece_all(const char *path, const ss_heal_grid *piec
 ss_status ss_heal_vti_write_box(const char *path, const ss_heal_grid *g, const int box[6],
                                 const int off[3], const int whole[3], const double *closed_day,
                                 ss_error *err);
+/* The same with the grid's velocity (when g has one) and nvec 3-vectors over
+ * g (names[i], vecs[i][0..2]) on the box, e.g. a rank's piece of a run with
+ * the contraction mechanics (velocity, displacement). */
+ss_status ss_heal_vti_write_box_vectors(const char *path, const ss_heal_grid *g, const int box[6],
+                                        const int off[3], const int whole[3], int nvec,
+                                        const char *const *names, float *const (*vecs)[3],
+                                        const double *closed_day, ss_error *err);
 /* Reads a snapshot written by ss_heal_vti_write(_vectors) back into a new grid
  * (cell states, every field, t_days; skin_top_mm and step are left 0: the
  * file does not hold them). displacement: if not NULL, receives a malloc'd

@@ -173,7 +173,8 @@ ss_status ss_heal_run_write_checkpoint(ss_heal_run *r, ss_error *err);
  * ss_heal_stats_compute for every area row, sync before anything reads g's
  * fields (snapshots, checkpoints) so it can bring them up to date, and
  * snapshot after each snapshot's .vti. NULL
- * members keep the run's own behaviour. Not with the contraction mechanics. */
+ * members keep the run's own behaviour. With the contraction mechanics only
+ * on a distributed run, with mech_in and mech_out. */
 typedef struct ss_heal_run_hooks {
     void *ctx;
     /* one step of dt_days (the run's step or, adaptive, a multiple of it):
@@ -198,6 +199,12 @@ typedef struct ss_heal_run_hooks {
     /* instead of ss_heal_surface_map for the snapshot's surface pictures */
     ss_image *(*surface_map)(void *ctx, const ss_heal_grid *g, int field, ss_heal_surface_mode mode,
                              ss_error *err);
+    /* the contraction mechanics on a run without its whole grid (the MPI
+     * driver): before each mechanics step, fill the mechanics grid mg
+     * (ss_heal_run_mech_attach) with the fields the mechanics reads; after it
+     * (velocity capped), hand mg's velocity to the solver */
+    void (*mech_in)(void *ctx, ss_heal_grid *mg);
+    void (*mech_out)(void *ctx, const ss_heal_grid *mg);
 } ss_heal_run_hooks;
 /* Sets (h) or clears (NULL) the hooks; SS_ERR_INPUT when the run has the
  * contraction mechanics (naming --mechanics). A run without its whole grid
@@ -273,6 +280,16 @@ const struct ss_shell_patch *ss_heal_run_shell(const ss_heal_run *r);
 const struct ss_mesh *ss_heal_run_skin_mesh(const ss_heal_run *r);
 /* The contraction mechanics of the run (skinsim/mech.h), NULL when off. */
 struct ss_mech *ss_heal_run_mech(ss_heal_run *r);
+/* A distributed run (config.distributed) with the contraction mechanics
+ * creates them only once a grid holds the cells and fields they read: 1 while
+ * they wait for ss_heal_run_mech_attach. */
+int ss_heal_run_mech_pending(const ss_heal_run *r);
+/* Creates the pending mechanics (fresh, or restored from the checkpoint's
+ * metadata) on mg, a grid of the run's size with its cell states and the
+ * fields SCAR, FIBROBLAST, EPITHELIUM, PLASMA and MDGF (and, resumed, the
+ * checkpoint's velocity); the run owns mg from here (also on error) and steps
+ * the mechanics on it, through the mech_in / mech_out hooks. */
+ss_status ss_heal_run_mech_attach(ss_heal_run *r, ss_heal_grid *mg, ss_error *err);
 
 /* ---- a finished run folder, read back (`skinsim wound --heal DIR`) ----------------
  * What `skinsim heal --out DIR` wrote: run.json (its "format" is

@@ -44,6 +44,7 @@
 #include <string.h>
 
 #include "skinsim/dist.h"
+#include "skinsim/mech.h"
 
 enum {
     CMD_STEP = 1,
@@ -54,6 +55,8 @@ enum {
     CMD_PIECES,
     CMD_SURFACE,
     CMD_CKPT,
+    CMD_MECH_IN,
+    CMD_MECH_OUT,
     CMD_END
 };
 enum { FACE_XM, FACE_XP, FACE_YM, FACE_YP, FACE_ZM, FACE_ZP, NFACES };
@@ -72,6 +75,7 @@ typedef struct setup {
     long long pieces_step; /* resumed from a checkpoint in pieces: its step (every rank
                               reads its box), else -1 */
     int mesh_nv, mesh_nt;
+    int mech; /* --mechanics: they run on rank 0 (mech_setup) */
 } setup;
 enum { WOUND_COLUMNS = 1, WOUND_MESH };
 
@@ -115,6 +119,13 @@ struct ss_dist_heal {
     int dirty;   /* rank 0: the run's whole grid is behind the boxes */
     int overlap; /* explicit: the halo exchange runs during the interior kernel */
     double t_compute, t_halo, t_stats, t_gather;
+    /* --mechanics: rank 0's grid of what they read (the run owns it), the
+     * box they read and write (whole-grid lo x y z, hi x y z), the
+     * displacement of the box + halo for the snapshot pieces */
+    ss_heal_grid *mg;
+    int bb[6];
+    float *disp[3];
+    double t_mech, mech_bytes;
     long long steps;
     ss_dist_heal_timing tmax; /* rank 0, after end */
 };
@@ -583,6 +594,245 @@ static ss_status agree_err(ss_dist_heal *d, ss_status st, ss_error *err) {
     return (ss_status)m[0];
 }
 
+/* ---- the contraction mechanics on rank 0 --------------------------------------- */
+
+/* The box [alo, alo + an) cut to bb: its origin lo and size n; the cell count. */
+static size_t clip_box(const int alo[3], const int an[3], const int bb[6], int lo[3], int n[3]) {
+    size_t c = 1;
+    for (int a = 0; a < 3; a++) {
+        const int l = alo[a] > bb[a] ? alo[a] : bb[a];
+        const int h = alo[a] + an[a] < bb[3 + a] ? alo[a] + an[a] : bb[3 + a];
+        lo[a] = l;
+        n[a] = h > l ? h - l : 0;
+        c *= (size_t)n[a];
+    }
+    return c;
+}
+
+/* Copies the region (whole-grid origin lo, size n) of na float arrays of g
+ * (whole-grid index of g's cell (0,0,0): org) to buf (unpack 0) or back. */
+static void region_io(const ss_heal_grid *g, const int org[3], float *const *arr, int na,
+                      const int lo[3], const int n[3], float *buf, int unpack) {
+    size_t k = 0;
+    for (int q = 0; q < na; q++)
+        for (int z = 0; z < n[2]; z++)
+            for (int y = 0; y < n[1]; y++) {
+                float *p =
+                    arr[q] + ss_heal_idx(g, lo[0] - org[0], lo[1] + y - org[1], lo[2] + z - org[2]);
+                if (unpack)
+                    memcpy(p, buf + k, (size_t)n[0] * sizeof(float));
+                else
+                    memcpy(buf + k, p, (size_t)n[0] * sizeof(float));
+                k += (size_t)n[0];
+            }
+}
+
+static void cells_io(const ss_heal_grid *g, const int org[3], const int lo[3], const int n[3],
+                     uint8_t *buf, int unpack) {
+    size_t k = 0;
+    for (int z = 0; z < n[2]; z++)
+        for (int y = 0; y < n[1]; y++) {
+            uint8_t *p =
+                g->cell + ss_heal_idx(g, lo[0] - org[0], lo[1] + y - org[1], lo[2] + z - org[2]);
+            if (unpack)
+                memcpy(p, buf + k, (size_t)n[0]);
+            else
+                memcpy(buf + k, p, (size_t)n[0]);
+            k += (size_t)n[0];
+        }
+}
+
+/* The fields the mechanics read (mech.c: at tissue cells only) */
+static const int mech_fields[] = {SS_HEAL_SCAR, SS_HEAL_FIBROBLAST, SS_HEAL_EPITHELIUM,
+                                  SS_HEAL_PLASMA, SS_HEAL_MDGF};
+enum { NMF = (int)(sizeof mech_fields / sizeof mech_fields[0]) };
+
+static void arrays_of(ss_heal_grid *g, int vel, float **a) {
+    for (int i = 0; i < (vel ? 3 : NMF); i++)
+        a[i] = vel ? g->velocity[i] : g->field[mech_fields[i]];
+}
+
+/* Rank 0's mechanics grid gets, inside bb, the owned cells of every box:
+ * the fields the mechanics read (vel 0) or the velocity (vel 1), and with
+ * cells the cell states. Returns the bytes rank 0 received. */
+static double mech_gather(ss_dist_heal *d, int vel, int cells) {
+    const double t0 = MPI_Wtime();
+    const int na = vel ? 3 : NMF;
+    const int org[3] = {d->lo[0] - 1, d->lo[1] - 1, d->lo[2] - d->hz}, zero[3] = {0, 0, 0};
+    float *a[NMF];
+    double bytes = 0;
+    int lo[3], n[3];
+    if (d->rank != 0) {
+        const size_t c = clip_box(d->lo, d->n, d->bb, lo, n);
+        if (c) {
+            float *buf = malloc(c * (size_t)na * sizeof(float) + c);
+            if (!buf) MPI_Abort(d->cart, 3);
+            arrays_of(d->g, vel, a);
+            region_io(d->g, org, a, na, lo, n, buf, 0);
+            if (cells) cells_io(d->g, org, lo, n, (uint8_t *)(buf + c * (size_t)na), 0);
+            MPI_Send(buf, (int)(c * (size_t)na * sizeof(float) + (cells ? c : 0)), MPI_BYTE, 0, 40,
+                     d->cart);
+            free(buf);
+        }
+    } else {
+        for (int r = 0; r < d->size; r++) {
+            int coords[3], blo[3], bn[3];
+            MPI_Cart_coords(d->cart, r, 3, coords);
+            box_of(d, coords, blo, bn);
+            const size_t c = clip_box(blo, bn, d->bb, lo, n);
+            if (!c) continue;
+            float *buf = malloc(c * (size_t)na * sizeof(float) + c);
+            if (!buf) MPI_Abort(d->cart, 3);
+            const int len = (int)(c * (size_t)na * sizeof(float) + (cells ? c : 0));
+            if (r == 0) {
+                arrays_of(d->g, vel, a);
+                region_io(d->g, org, a, na, lo, n, buf, 0);
+                if (cells) cells_io(d->g, org, lo, n, (uint8_t *)(buf + c * (size_t)na), 0);
+            } else {
+                MPI_Recv(buf, len, MPI_BYTE, r, 40, d->cart, MPI_STATUS_IGNORE);
+                bytes += len;
+            }
+            arrays_of(d->mg, vel, a);
+            region_io(d->mg, zero, a, na, lo, n, buf, 1);
+            if (cells) cells_io(d->mg, zero, lo, n, (uint8_t *)(buf + c * (size_t)na), 1);
+            free(buf);
+        }
+    }
+    d->t_mech += MPI_Wtime() - t0;
+    return bytes;
+}
+
+/* Rank 0 hands out 3-vectors of its mechanics grid inside bb: the velocity
+ * (into every box + halo: the convection reads the halo) or (own 1) the
+ * displacement of the owned cells, into d->disp. Returns the bytes sent. */
+static double mech_scatter(ss_dist_heal *d, float *const *src, int own) {
+    const double t0 = MPI_Wtime();
+    double bytes = 0;
+    int lo[3], n[3];
+    const int zero[3] = {0, 0, 0};
+    for (int r = d->rank == 0 ? d->size - 1 : d->rank; r >= (d->rank == 0 ? 0 : d->rank); r--) {
+        int coords[3], blo[3], bn[3];
+        MPI_Cart_coords(d->cart, r, 3, coords);
+        box_of(d, coords, blo, bn);
+        const int hz = d->hz, org[3] = {blo[0] - 1, blo[1] - 1, blo[2] - hz};
+        const int alo[3] = {blo[0] - 1, blo[1] - 1, blo[2] - hz},
+                  an[3] = {bn[0] + 2, bn[1] + 2, bn[2] + 2 * hz};
+        const size_t c = own ? clip_box(blo, bn, d->bb, lo, n) : clip_box(alo, an, d->bb, lo, n);
+        if (!c) continue;
+        float *buf = malloc(3 * c * sizeof(float));
+        if (!buf) MPI_Abort(d->cart, 3);
+        float *dst[3] = {own ? d->disp[0] : d->g->velocity[0], own ? d->disp[1] : d->g->velocity[1],
+                         own ? d->disp[2] : d->g->velocity[2]};
+        if (d->rank == 0) {
+            region_io(d->mg, zero, src, 3, lo, n, buf, 0);
+            if (r == 0) {
+                region_io(d->g, org, dst, 3, lo, n, buf, 1);
+            } else {
+                MPI_Send(buf, (int)(3 * c), MPI_FLOAT, r, 41, d->cart);
+                bytes += 12.0 * (double)c;
+            }
+        } else {
+            MPI_Recv(buf, (int)(3 * c), MPI_FLOAT, 0, 41, d->cart, MPI_STATUS_IGNORE);
+            region_io(d->g, org, dst, 3, lo, n, buf, 1);
+        }
+        free(buf);
+    }
+    d->t_mech += MPI_Wtime() - t0;
+    return bytes;
+}
+
+static void do_mech_in(ss_dist_heal *d) { mech_gather(d, 0, 0); }
+static void do_mech_out(ss_dist_heal *d) {
+    mech_scatter(d, d->rank == 0 ? d->mg->velocity : NULL, 0);
+}
+
+/* The mechanics set up on rank 0: every box gets a velocity (zero, or the
+ * checkpoint's), rank 0 a grid of the run's size with the cell states of
+ * every box (and a resumed run's velocity), on which the run creates them
+ * (ss_heal_run_mech_attach); their box (the tissue's bounding box: the
+ * mechanics read the fields and write the velocity at tissue cells only) is
+ * shared, the first velocity handed out. */
+static ss_status mech_setup(ss_dist_heal *d, ss_heal_run *r, ss_error *err) {
+    const size_t nl = (size_t)d->g->nx * d->g->ny * d->g->nz;
+    for (int c = 0; c < 3; c++)
+        if (!d->g->velocity[c] && !(d->g->velocity[c] = calloc(nl, sizeof(float))))
+            MPI_Abort(d->cart, 3);
+    ss_status st = SS_OK;
+    for (int a = 0; a < 3; a++) {
+        d->bb[a] = 0;
+        d->bb[3 + a] = d->su.G[a];
+    }
+    if (d->rank == 0) {
+        d->mg = ss_heal_grid_create(d->su.G[0], d->su.G[1], d->su.G[2], d->su.dx_mm, err);
+        if (!d->mg) MPI_Abort(d->cart, 3);
+        d->mg->skin_top_mm = d->su.skin_top_mm;
+        for (int c = 0; c < 3; c++)
+            if (!(d->mg->velocity[c] =
+                      calloc((size_t)d->su.G[0] * d->su.G[1] * d->su.G[2], sizeof(float))))
+                MPI_Abort(d->cart, 3);
+    }
+    mech_gather(d, 0, 1);
+    if (!d->su.fresh) { /* the checkpoint's velocity: the boxes' (pieces) or rank 0's grid */
+        ss_heal_grid *G = d->rank == 0 ? ss_heal_run_grid(r) : NULL;
+        int whole = d->rank == 0 && G->velocity[0] && G->velocity[1] && G->velocity[2];
+        MPI_Bcast(&whole, 1, MPI_INT, 0, d->cart);
+        if (!whole) mech_gather(d, 1, 0);
+        for (int c = 0; whole && d->rank == 0 && c < 3; c++) {
+            free(d->mg->velocity[c]);
+            d->mg->velocity[c] = G->velocity[c];
+            G->velocity[c] = NULL;
+        }
+    }
+    if (d->rank == 0) {
+        ss_heal_grid *mg = d->mg;
+        st = ss_heal_run_mech_attach(r, mg, err); /* the run owns mg from here */
+        if (st) d->mg = NULL;
+        /* the tissue's bounding box */
+        int lo[3] = {d->su.G[0], d->su.G[1], d->su.G[2]}, hi[3] = {0, 0, 0};
+        for (int z = 0; !st && z < d->su.G[2]; z++)
+            for (int y = 0; y < d->su.G[1]; y++)
+                for (int x = 0; x < d->su.G[0]; x++) {
+                    const uint8_t c = d->mg->cell[ss_heal_idx(d->mg, x, y, z)];
+                    if (c != SS_CELL_EPIDERMIS && c != SS_CELL_DERMIS && c != SS_CELL_WOUND)
+                        continue;
+                    const int v[3] = {x, y, z};
+                    for (int a = 0; a < 3; a++) {
+                        if (v[a] < lo[a]) lo[a] = v[a];
+                        if (v[a] + 1 > hi[a]) hi[a] = v[a] + 1;
+                    }
+                }
+        for (int a = 0; a < 3; a++) {
+            d->bb[a] = lo[a];
+            d->bb[3 + a] = hi[a] > lo[a] ? hi[a] : lo[a];
+        }
+    }
+    if ((st = agree_err(d, st, err))) return st;
+    MPI_Bcast(d->bb, 6, MPI_INT, 0, d->cart);
+    for (int c = 0; d->rank == 0 && c < 3; c++)
+        if (!(d->disp[c] = calloc(nl, sizeof(float)))) MPI_Abort(d->cart, 3);
+    for (int c = 0; d->rank != 0 && c < 3; c++)
+        if (!(d->disp[c] = calloc(nl, sizeof(float)))) MPI_Abort(d->cart, 3);
+    d->t_mech = 0;
+    do_mech_out(d);
+    /* the bytes of one coupling step (rank 0's box not counted), for the timing */
+    if (d->rank == 0) {
+        int lo[3], n[3];
+        double b = 0;
+        for (int q = 1; q < d->size; q++) {
+            int coords[3], blo[3], bn[3];
+            MPI_Cart_coords(d->cart, q, 3, coords);
+            box_of(d, coords, blo, bn);
+            b += 4.0 * NMF * (double)clip_box(blo, bn, d->bb, lo, n);
+            const int alo[3] = {blo[0] - 1, blo[1] - 1, blo[2] - d->hz},
+                      an[3] = {bn[0] + 2, bn[1] + 2, bn[2] + 2 * d->hz};
+            b += 12.0 * (double)clip_box(alo, an, d->bb, lo, n);
+        }
+        d->mech_bytes = b;
+    }
+    d->t_mech = 0;
+    return SS_OK;
+}
+
 /* A checkpoint in pieces (skinsim/heal_io.h): every rank writes its box as
  * piece `rank`, the statuses are agreed and the pieces' sizes and CRCs
  * gathered, then rank 0 writes the header naming the whole grid, the process
@@ -740,10 +990,21 @@ static ss_status do_pieces(ss_dist_heal *d, int index, ss_error *err) {
     double *cb = malloc((size_t)d->n[0] * d->n[1] * sizeof(double));
     if (!cb) MPI_Abort(d->cart, 3);
     own_closed(d, cb);
+    /* the mechanics' displacement of the owned cells, from rank 0 (the
+     * velocity is the box's own) */
+    static const char *const vnames[2] = {"velocity", "displacement"};
+    if (d->su.mech) {
+        float *const *u = NULL;
+        if (d->rank == 0 && !(u = ss_mech_grid_displacement(ss_heal_run_mech(d->run))))
+            MPI_Abort(d->cart, 3);
+        mech_scatter(d, u, 1);
+    }
+    float *const vec[1][3] = {{d->disp[0], d->disp[1], d->disp[2]}};
     /* the owned box, written straight from the box + halo */
     const int box[6] = {1, 1, d->hz, d->n[0], d->n[1], d->n[2]};
     const int off[3] = {d->lo[0], d->lo[1], d->lo[2]};
-    ss_status st = ss_heal_vti_write_box(path, d->g, box, off, d->su.G, cb, &e);
+    ss_status st = ss_heal_vti_write_box_vectors(path, d->g, box, off, d->su.G, d->su.mech ? 1 : 0,
+                                                 vnames + 1, vec, cb, &e);
     free(cb);
     int v = (int)st, vmax = 0;
     MPI_Allreduce(&v, &vmax, 1, MPI_INT, MPI_MAX, d->cart);
@@ -769,8 +1030,9 @@ static ss_status do_pieces(ss_dist_heal *d, int index, ss_error *err) {
                 snprintf(files[q], 32, "fields_%04d_p%04d.vti", index, q);
             }
             snprintf(path, sizeof path, "%s/fields_%04d.pvti", dir, index);
-            vmax = ss_heal_pvti_write(path, d->su.G, d->su.dx_mm, d->g->t_days, d->size,
-                                      (const int(*)[6])ext, (const char *const *)files, err);
+            vmax = ss_heal_pvti_write_vectors(path, d->su.G, d->su.dx_mm, d->g->t_days, d->size,
+                                              (const int(*)[6])ext, (const char *const *)files,
+                                              d->su.mech ? 2 : 0, vnames, err);
         }
         free(ext);
         free(files);
@@ -852,6 +1114,20 @@ static ss_status hook_snapshot(void *ctx, const ss_heal_grid *G, const char *fie
     d->pdir = fields_dir;
     send_cmd(d, CMD_PIECES, index);
     return do_pieces(d, index, err);
+}
+
+static void hook_mech_in(void *ctx, ss_heal_grid *mg) {
+    ss_dist_heal *d = ctx;
+    (void)mg;
+    send_cmd(d, CMD_MECH_IN, 0);
+    do_mech_in(d);
+}
+
+static void hook_mech_out(void *ctx, const ss_heal_grid *mg) {
+    ss_dist_heal *d = ctx;
+    (void)mg;
+    send_cmd(d, CMD_MECH_OUT, 0);
+    do_mech_out(d);
 }
 
 /* ---- set-up ----------------------------------------------------------------------- */
@@ -1042,11 +1318,13 @@ static ss_status check_root(ss_heal_run *r, int size, int dims[3], ss_error *err
                             "surface outputs need the whole grid in one process (run it without "
                             "mpirun)",
                             size);
-    if (ss_heal_run_mech(r))
+    if ((ss_heal_run_mech(r) || ss_heal_run_mech_pending(r)) &&
+        ss_heal_run_scheme(r) != SS_HEAL_EXPLICIT)
         return ss_error_set(err, SS_ERR_INPUT,
-                            "--mechanics cannot run on %d MPI ranks: the contraction mechanics "
-                            "needs the whole grid in one process (run it without mpirun, or "
-                            "with -np 1)",
+                            "--mechanics on %d MPI ranks needs --scheme explicit: the split "
+                            "scheme's distributed sweeps (y and x slabs) carry no convection "
+                            "for the mechanics' velocity (run it with --scheme explicit, or "
+                            "without mpirun)",
                             size);
     /* the process grid the user asked for: SKINSIM_MPI_DIMS=PXxPYxPZ (0 = any) */
     const char *ask = getenv("SKINSIM_MPI_DIMS");
@@ -1138,6 +1416,7 @@ ss_status ss_dist_heal_create(ss_heal_run *r, ss_status root_st, ss_dist_heal **
         su.epidermis_mm = ss_heal_run_epidermis_mm(r);
         su.pieces_step = ss_heal_run_resume_pieces(r, NULL);
         su.fresh = G->cell == NULL && su.pieces_step < 0; /* config.distributed */
+        su.mech = ss_heal_run_mech_pending(r);
         const ss_tri_mesh *m = ss_heal_run_wound_mesh(r);
         su.wound = m ? WOUND_MESH : WOUND_COLUMNS;
         if (m) {
@@ -1235,6 +1514,11 @@ ss_status ss_dist_heal_create(ss_heal_run *r, ss_status root_st, ss_dist_heal **
     } else {
         scatter_closed(d, r);
     }
+    /* the mechanics on rank 0 (before the solver: the boxes' velocity) */
+    if (su.mech && (st = mech_setup(d, r, err))) {
+        ss_dist_heal_free(d);
+        return st;
+    }
     d->s =
         ss_heal_solver_create_sub(d->g, goff, su.G, &su.p, (ss_heal_scheme)su.scheme, su.dt, err);
     st = d->s ? SS_OK : (err->code ? err->code : SS_ERR_RUNTIME);
@@ -1265,7 +1549,9 @@ ss_status ss_dist_heal_create(ss_heal_run *r, ss_status root_st, ss_dist_heal **
                                .sync = hook_sync,
                                .closure = hook_closure,
                                .snapshot = hook_snapshot,
-                               .surface_map = hook_surface};
+                               .surface_map = hook_surface,
+                               .mech_in = su.mech ? hook_mech_in : NULL,
+                               .mech_out = su.mech ? hook_mech_out : NULL};
         ss_heal_run_set_checkpoint_hook(r, hook_checkpoint, d);
         /* (a fresh run's day-0 area row: the first command the others serve) */
         if ((st = ss_heal_run_set_hooks(r, &h, err))) {
@@ -1279,12 +1565,12 @@ ss_status ss_dist_heal_create(ss_heal_run *r, ss_status root_st, ss_dist_heal **
 }
 
 static void reduce_timing(ss_dist_heal *d) {
-    double t[5] = {d->t_compute, d->t_halo, d->t_stats, d->t_gather, 0}, m[5];
+    double t[6] = {d->t_compute, d->t_halo, d->t_stats, d->t_gather, 0, d->t_mech}, m[6];
     size_t fb = 0;
     for (int f = 0; f < NFACES; f++)
         if (d->nbr[f] != MPI_PROC_NULL) fb += (size_t)d->fcount[f] * sizeof(float);
     t[4] = d->split ? d->tbytes : (double)fb;
-    MPI_Reduce(t, m, 5, MPI_DOUBLE, MPI_MAX, 0, d->cart);
+    MPI_Reduce(t, m, 6, MPI_DOUBLE, MPI_MAX, 0, d->cart);
     struct rusage ru;
     double rss = getrusage(RUSAGE_SELF, &ru) == 0 ? (double)ru.ru_maxrss / 1024.0 : 0.0;
     if (d->rank == 0 && !d->rss_mb && !(d->rss_mb = malloc((size_t)d->size * sizeof(double))))
@@ -1296,6 +1582,9 @@ static void reduce_timing(ss_dist_heal *d) {
         d->tmax.stats_s = m[2];
         d->tmax.gather_s = m[3];
         d->tmax.halo_bytes_per_step = m[4];
+        d->tmax.mech_s = d->t_mech; /* rank 0's: it waits for every gather */
+        d->tmax.mech_bytes_per_step = d->mech_bytes;
+        (void)m[5];
         memcpy(d->tmax.dims, d->dims, sizeof d->dims);
         d->tmax.steps = d->steps;
         d->tmax.rss_mb = d->rss_mb;
@@ -1333,6 +1622,12 @@ ss_status ss_dist_heal_serve(ss_dist_heal *d, ss_error *err) {
         case CMD_PIECES:
             do_pieces(d, m[1], err);
             break;
+        case CMD_MECH_IN:
+            do_mech_in(d);
+            break;
+        case CMD_MECH_OUT:
+            do_mech_out(d);
+            break;
         default: /* CMD_END */
             reduce_timing(d);
             if (m[1]) return ss_error_set(err, (ss_status)m[1], "rank 0 stopped the run");
@@ -1361,6 +1656,7 @@ void ss_dist_heal_free(ss_dist_heal *d) {
     ss_heal_grid_free(d->g);
     ss_heal_solver_free(d->sB);
     for (int f = 0; f < SS_HEAL_NFIELDS; f++) free(d->backup[f]);
+    for (int c = 0; c < 3; c++) free(d->disp[c]);
     free(d->closed);
     ss_heal_grid_free(d->gB);
     free(d->tsend);

@@ -216,8 +216,7 @@ ss_status ss_heal_run_write_checkpoint(ss_heal_run *r, ss_error *err) {
  * is capped at what the step admits, 95 % of the CFL budget that diffusion and
  * reaction leave (docs/mech.md). The split scheme sub-cycles its convection
  * and needs no cap. */
-static void cap_velocity(ss_heal_run *r) {
-    ss_heal_grid *g = r->g;
+static void cap_velocity(ss_heal_run *r, ss_heal_grid *g) {
     if (r->scheme != SS_HEAL_EXPLICIT || ss_heal_stable_dt(g, r->p, SS_HEAL_EXPLICIT) >= r->dt)
         return;
     float *v[3] = {g->velocity[0], g->velocity[1], g->velocity[2]};
@@ -253,7 +252,8 @@ static long long min_ll(long long a, long long b) { return a < b ? a : b; }
 void ss_heal_run__adapt_init(ss_heal_run *r) {
     r->mult = 1;
     r->mult_max = 1;
-    if (r->adapt_tol > 0 && r->scheme == SS_HEAL_SPLIT && !r->mech && r->dt > 0) {
+    if (r->adapt_tol > 0 && r->scheme == SS_HEAL_SPLIT && !r->mech && !r->mech_pending &&
+        r->dt > 0) {
         r->mult_max = (long long)floor(SS_HEAL_SPLIT_LATE_MAX_DT_DAYS / r->dt * (1.0 + 1e-12));
         if (r->mult_max < 1) r->mult_max = 1;
     }
@@ -346,7 +346,20 @@ static ss_status run_step(ss_heal_run *r, long long limit, ss_error *err) {
     ss_status st = start_output(r, err);
     const long long k0 = (long long)r->g->step;
     if (!st) st = solver_step(r, limit, err);
-    if (!st && r->mech && !(st = ss_mech_step(r->mech, r->g, r->dt, err))) cap_velocity(r);
+    if (!st && r->mech) {
+        /* distributed: the mechanics step on rank 0's grid of what they read
+         * (the hooks gather it and hand the velocity back) */
+        ss_heal_grid *mg = r->mg ? r->mg : r->g;
+        if (r->mg) {
+            mg->t_days = r->g->t_days;
+            mg->step = r->g->step;
+            r->hooks.mech_in(r->hooks.ctx, mg);
+        }
+        if (!(st = ss_mech_step(r->mech, mg, r->dt, err))) {
+            cap_velocity(r, mg);
+            if (r->mg) r->hooks.mech_out(r->hooks.ctx, mg);
+        }
+    }
     if (st) return st;
     if (r->hooks.closure)
         r->hooks.closure(r->hooks.ctx, r->g, r->closed_day);
@@ -410,10 +423,11 @@ void ss_heal_run_set_checkpoint_hook(ss_heal_run *r, ss_heal_run_checkpoint_fn f
 ss_status ss_heal_run_set_hooks(ss_heal_run *r, const ss_heal_run_hooks *h, ss_error *err) {
     if (h && h->step && !h->undo)
         return ss_error_set(err, SS_ERR_INPUT, "heal run: an external step needs an undo hook");
-    if (h && r->mech)
+    if (h && (r->mech || r->mech_pending) && (!r->mg || !h->mech_in || !h->mech_out))
         return ss_error_set(err, SS_ERR_INPUT,
-                            "--mechanics: the contraction mechanics needs the whole grid in one "
-                            "process; it cannot run with an external (distributed) solver");
+                            "--mechanics: an external (distributed) solver needs the mechanics "
+                            "attached to a grid of their own (ss_heal_run_mech_attach) and the "
+                            "mech_in and mech_out hooks");
     if (h && !r->g->cell &&
         (!h->step || !h->stats || !h->sync || !h->closure || !h->snapshot || !h->surface_map ||
          !r->ckpt_fn))

@@ -37,6 +37,8 @@ struct ss_heal_run {
     cJSON *wound; /* description for summary.json */
     /* contraction mechanics (run_mech.c); mech NULL when off */
     ss_mech *mech;
+    ss_heal_grid *mg; /* distributed: the grid the mechanics read and write (rank 0) */
+    int mech_pending; /* distributed: the mechanics wait for ss_heal_run_mech_attach */
     ss_mech_params mp;
     ss_mech_suture *sutures;
     int nsutures;

@@ -93,11 +93,11 @@ static int get_doubles(const cJSON *o, const char *key, double *v, int n) {
 
 /* ---- set-up ---------------------------------------------------------------------------- */
 
-static ss_status create_mech(ss_heal_run *r, ss_error *err) {
+static ss_status create_mech(ss_heal_run *r, ss_heal_grid *g, ss_error *err) {
     ss_tetmesh *mesh = NULL;
     if (r->c.tet_mesh && !(mesh = ss_tetmesh_read(r->c.tet_mesh, err)))
         return err->code ? err->code : SS_ERR_INPUT;
-    r->mech = ss_mech_create(r->g, r->p, &r->mp, mesh, r->sutures, r->nsutures, err);
+    r->mech = ss_mech_create(g, r->p, &r->mp, mesh, r->sutures, r->nsutures, err);
     ss_tetmesh_free(mesh);
     if (!r->mech) return err->code ? err->code : SS_ERR_INPUT;
     return SS_OK;
@@ -138,12 +138,47 @@ ss_status ss_heal_run__mech_setup_fresh(ss_heal_run *r, ss_error *err) {
     if ((st = ss_mech_params_check(&r->mp, err))) return st;
     if (c->sutures && !(r->sutures = ss_mech_sutures_read(c->sutures, &r->nsutures, err)))
         return err->code ? err->code : SS_ERR_INPUT;
-    return create_mech(r, err);
+    if (c->tet_mesh && !r->g->cell) { /* read it now: its errors are input errors */
+        ss_tetmesh *mesh = ss_tetmesh_read(c->tet_mesh, err);
+        if (!mesh) return err->code ? err->code : SS_ERR_INPUT;
+        ss_tetmesh_free(mesh);
+    }
+    if (!r->g->cell) { /* distributed: created on the grid the driver attaches */
+        r->mech_pending = 1;
+        return SS_OK;
+    }
+    return create_mech(r, r->g, err);
 }
 
+static ss_status mech_resume_on(ss_heal_run *r, ss_heal_grid *g, const char *dir, ss_error *err);
+
 ss_status ss_heal_run__mech_setup_resume(ss_heal_run *r, const char *dir, ss_error *err) {
+    if (!r->mech_aux) return SS_OK;
+    if (r->c.distributed) { /* created on the grid the driver attaches */
+        r->mech_pending = 1;
+        return SS_OK;
+    }
+    return mech_resume_on(r, r->g, dir, err);
+}
+
+int ss_heal_run_mech_pending(const ss_heal_run *r) { return r && r->mech_pending; }
+
+ss_status ss_heal_run_mech_attach(ss_heal_run *r, ss_heal_grid *mg, ss_error *err) {
+    if (!r->mech_pending || !mg || mg->nx != r->g->nx || mg->ny != r->g->ny || mg->nz != r->g->nz ||
+        !mg->cell) {
+        ss_heal_grid_free(mg);
+        return ss_error_set(err, SS_ERR_INPUT, "heal run: no pending mechanics for this grid");
+    }
+    r->mg = mg;
+    r->mech_pending = 0;
+    mg->t_days = r->g->t_days;
+    mg->step = r->g->step;
+    if (r->mech_aux) return mech_resume_on(r, mg, r->out_dir, err);
+    return create_mech(r, mg, err);
+}
+
+static ss_status mech_resume_on(ss_heal_run *r, ss_heal_grid *g, const char *dir, ss_error *err) {
     cJSON *m = r->mech_aux;
-    if (!m) return SS_OK;
     const cJSON *pj = cJSON_GetObjectItem(m, "params"), *st_b64 = cJSON_GetObjectItem(m, "state"),
                 *ol = cJSON_GetObjectItem(m, "outline"), *su = cJSON_GetObjectItem(m, "sutures"),
                 *tm = cJSON_GetObjectItem(m, "tet_mesh");
@@ -178,7 +213,7 @@ ss_status ss_heal_run__mech_setup_resume(ss_heal_run *r, const char *dir, ss_err
         }
     }
     if (cJSON_IsString(tm)) r->c.tet_mesh = tm->valuestring; /* used during create only */
-    st = create_mech(r, err);
+    st = create_mech(r, g, err);
     r->c.tet_mesh = NULL;
     if (st) return st;
     size_t n = 0;
@@ -186,7 +221,7 @@ ss_status ss_heal_run__mech_setup_resume(ss_heal_run *r, const char *dir, ss_err
     if (!buf) return ss_error_set(err, SS_ERR_INPUT, "%s: checkpoint mechanics state damaged", dir);
     st = ss_mech_state_set(r->mech, buf, n, err);
     free(buf);
-    if (!st) st = ss_mech_state_apply(r->mech, r->g, err);
+    if (!st) st = ss_mech_state_apply(r->mech, g, err);
     if (st) return st;
     r->capoutline = r->nrows + 256;
     r->outline = malloc((size_t)r->capoutline * sizeof(double));
@@ -218,6 +253,7 @@ ss_status ss_heal_run__mech_setup_resume(ss_heal_run *r, const char *dir, ss_err
 
 void ss_heal_run__mech_free(ss_heal_run *r) {
     ss_mech_free(r->mech);
+    ss_heal_grid_free(r->mg);
     free(r->sutures);
     free(r->outline);
     free(r->myof);

@@ -402,11 +402,6 @@ ss_status ss_heal_run_wound_counted(ss_heal_run *r, size_t inside, size_t below,
 ss_status ss_heal_run__setup_fresh(ss_heal_run *r, ss_error *err) {
     const ss_heal_run_config *c = &r->c;
     ss_status st = check_config(c, err);
-    if (!st && c->distributed && c->mechanics)
-        st = ss_error_set(err, SS_ERR_INPUT,
-                          "--mechanics cannot run on several MPI ranks: the contraction "
-                          "mechanics needs the whole grid in one process (run it without "
-                          "mpirun, or with -np 1)");
     if (!st && c->distributed && ss_heal_run__shell_wanted(c))
         st = ss_error_set(err, SS_ERR_INPUT,
                           "--mesh cannot run on several MPI ranks: the patch of skin and "
@@ -513,11 +508,11 @@ ss_status ss_heal_run__setup_resume(ss_heal_run *r, ss_error *err) {
     ss_heal_checkpoint_free(&ck);
     if (st) return st;
     if (c->days != 0) r->days = c->days;
-    if (!r->g->cell && (r->mech_aux || r->shell_aux))
+    if (c->distributed && r->shell_aux)
         return ss_error_set(err, SS_ERR_INPUT,
-                            "--resume %s: a run with %s cannot continue on several MPI ranks "
+                            "--resume %s: a run with --mesh cannot continue on several MPI ranks "
                             "(it needs the whole grid in one process); resume it without mpirun",
-                            dir, r->mech_aux ? "--mechanics" : "--mesh");
+                            dir);
     r->p = ss_heal_params_parse(r->params_json, "checkpoint parameters", r->scenario, err);
     if (!r->p) return err->code ? err->code : SS_ERR_INPUT;
     st = ss_heal_run__mech_setup_resume(r, dir, err);

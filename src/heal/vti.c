@@ -86,6 +86,22 @@ static ss_status write_vti(const char *path, const ss_heal_grid *g, const int bo
                            const double *closed_day, const int off[3], const int whole[3],
                            ss_error *err);
 
+/* The vector v (3 arrays over g) on g's box bx (x0 y0 z0 nx ny nz), row by row. */
+static void put_vec3_box(FILE *f, const ss_heal_grid *g, float *const v[3], const int bx[6]) {
+    put_u64le(f, (uint64_t)(12 * (size_t)bx[3] * bx[4] * bx[5]));
+    float buf[3 * 256];
+    for (int z = 0; z < bx[5]; z++)
+        for (int y = 0; y < bx[4]; y++) {
+            const size_t r = ss_heal_idx(g, bx[0], bx[1] + y, bx[2] + z);
+            for (int i = 0; i < bx[3]; i += 256) {
+                int m = bx[3] - i < 256 ? bx[3] - i : 256;
+                for (int j = 0; j < m; j++)
+                    for (int c = 0; c < 3; c++) buf[3 * j + c] = v[c][r + (size_t)(i + j)];
+                put_f32le(f, buf, 3 * (size_t)m);
+            }
+        }
+}
+
 ss_status ss_heal_vti_write_vectors(const char *path, const ss_heal_grid *g, int nvec,
                                     const char *const *names, float *const (*vecs)[3],
                                     ss_error *err) {
@@ -134,9 +150,28 @@ ss_status ss_heal_vti_write_box(const char *path, const ss_heal_grid *g, const i
     return write_vti(path, g, box, 0, NULL, NULL, closed_day, off, whole, err);
 }
 
+ss_status ss_heal_vti_write_box_vectors(const char *path, const ss_heal_grid *g, const int box[6],
+                                        const int off[3], const int whole[3], int nvec,
+                                        const char *const *names, float *const (*vecs)[3],
+                                        const double *closed_day, ss_error *err) {
+    if (!g || !g->cell || !box || box[0] < 0 || box[1] < 0 || box[2] < 0 || box[3] < 1 ||
+        box[4] < 1 || box[5] < 1 || box[0] + box[3] > g->nx || box[1] + box[4] > g->ny ||
+        box[2] + box[5] > g->nz || nvec < 0 || (nvec && (!names || !vecs)))
+        return ss_error_set(err, SS_ERR_INPUT, "%s: no grid, or the box is not inside it", path);
+    return write_vti(path, g, box, nvec, names, vecs, closed_day, off, whole, err);
+}
+
 ss_status ss_heal_pvti_write(const char *path, const int whole[3], double dx_mm, double t_days,
                              int npieces, const int (*ext)[6], const char *const *files,
                              ss_error *err) {
+    return ss_heal_pvti_write_vectors(path, whole, dx_mm, t_days, npieces, ext, files, 0, NULL,
+                                      err);
+}
+
+ss_status ss_heal_pvti_write_vectors(const char *path, const int whole[3], double dx_mm,
+                                     double t_days, int npieces, const int (*ext)[6],
+                                     const char *const *files, int nvec, const char *const *names,
+                                     ss_error *err) {
     ss_atomic_file af;
     ss_status st = ss_atomic_open(&af, path, err);
     if (st) return st;
@@ -152,6 +187,9 @@ ss_status ss_heal_pvti_write(const char *path, const int whole[3], double dx_mm,
                "      <PDataArray type=\"UInt8\" Name=\"cell_state\"/>\n");
     for (int k = 0; k < SS_HEAL_NFIELDS; k++)
         fprintf(f, "      <PDataArray type=\"Float32\" Name=\"%s\"/>\n", ss_heal_field_name(k));
+    for (int v = 0; v < nvec; v++)
+        fprintf(f, "      <PDataArray type=\"Float32\" Name=\"%s\" NumberOfComponents=\"3\"/>\n",
+                names[v]);
     fprintf(f, "    </PCellData>\n");
     for (int i = 0; i < npieces; i++) {
         fprintf(f, "    <Piece Extent=\"%d %d %d %d %d %d\" Source=\"", ext[i][0], ext[i][1],
@@ -174,9 +212,6 @@ static ss_status write_vti(const char *path, const ss_heal_grid *g, const int bo
     /* the cells written: g's box x0 y0 z0 nx ny nz (box), or all of g */
     const int bx[6] = {box ? box[0] : 0,     box ? box[1] : 0,     box ? box[2] : 0,
                        box ? box[3] : g->nx, box ? box[4] : g->ny, box ? box[5] : g->nz};
-    if (box && (vel || nvec))
-        return ss_error_set(err, SS_ERR_INPUT, "%s: a box of a grid is written without vectors",
-                            path);
     size_t n = (size_t)bx[3] * (size_t)bx[4] * (size_t)bx[5];
     ss_atomic_file af;
     ss_status st = ss_atomic_open(&af, path, err);
@@ -249,8 +284,12 @@ static ss_status write_vti(const char *path, const ss_heal_grid *g, const int bo
                 put_f32le(f, g->field[k] + ss_heal_idx(g, bx[0], bx[1] + y, bx[2] + z),
                           (size_t)bx[3]);
     }
-    if (vel) put_vec3(f, g->velocity, n);
-    for (int v = 0; v < nvec; v++) put_vec3(f, vecs[v], n);
+    if (vel && !box) put_vec3(f, g->velocity, n);
+    if (vel && box) put_vec3_box(f, g, g->velocity, bx);
+    for (int v = 0; v < nvec; v++) {
+        if (!box) put_vec3(f, vecs[v], n);
+        if (box) put_vec3_box(f, g, vecs[v], bx);
+    }
     if (closed_day) {
         put_u64le(f, (uint64_t)(8 * ncol));
         put_f64le(f, closed_day, ncol);
