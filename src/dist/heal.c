@@ -881,6 +881,7 @@ static ss_status do_checkpoint(ss_dist_heal *d, const ss_heal_grid *hdr, const c
             h.params_json = (char *)params_json;
             h.aux = (char *)(aux ? aux : "");
             memcpy(h.dims, d->dims, sizeof h.dims);
+            h.velocity = d->su.mech; /* every box has the mechanics' velocity */
             h.npieces = d->size;
             h.piece = all;
             st = ss_heal_ckpt_header_save(dir, &h, keep, err);
