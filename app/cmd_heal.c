@@ -306,7 +306,7 @@ static void print_dist_timing(const opts *o, void *dist) {
             "%.3f s, statistics %.3f s, gathers %.3f s (slowest rank); halo %.0f bytes/step\n",
             t.dims[0] * t.dims[1] * t.dims[2], t.dims[0], t.dims[1], t.dims[2], t.steps,
             t.compute_s, t.halo_s, t.stats_s, t.gather_s, t.halo_bytes_per_step);
-    if (t.mech_bytes_per_step > 0)
+    if (t.mech_s > 0 || t.mech_bytes_per_step > 0)
         fprintf(stderr,
                 "skinsim heal: mechanics on rank 0: gather + scatter %.3f s in all, %.0f "
                 "bytes/step\n",
@@ -401,8 +401,10 @@ int cmd_heal(int argc, char **argv) {
     ss_threads_set(o.threads);
 #ifdef SKINSIM_HAVE_MPI
     /* one rank under mpirun takes the distributed path too when it can (a
-     * fresh run without mechanics), so its times are reported alike */
-    if (ss_dist_size() > 1 || (ss_dist_active() && !o.c.resume_dir && !o.c.mechanics))
+     * fresh run; with mechanics only on the explicit scheme), so its times
+     * are reported alike */
+    if (ss_dist_size() > 1 ||
+        (ss_dist_active() && !o.c.resume_dir && (!o.c.mechanics || o.c.scheme == SS_HEAL_EXPLICIT)))
         return heal_mpi(&o, &err);
 #endif
 

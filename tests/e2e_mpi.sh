@@ -10,8 +10,10 @@
 # on a grid that divides by the rank counts and one that does not, and
 # with boxes stacked in z (SKINSIM_MPI_DIMS=1x1x2 and 2x1x2); a run
 # checkpointed on a 2x1x2 process grid resumes on 3 ranks to the uninterrupted
-# single-process result; bad input (too many ranks for the grid with either
-# scheme, z boxes too thin, a bad SKINSIM_MPI_DIMS, the mechanics, a missing
+# single-process result; the contraction mechanics (on rank 0) on 1, 2, 3 and
+# 2x1x2 ranks and resumed across rank counts; bad input (too many ranks for
+# the grid with either scheme, z boxes too thin, a bad SKINSIM_MPI_DIMS, the
+# mechanics with the split scheme, a missing
 # or damaged checkpoint) exits 2 on every rank with
 # nothing written; `optics table` on 2 and 4 ranks writes the bytes of the
 # single-process table. Skips (77) without mpirun or without an MPI build.
@@ -139,6 +141,53 @@ cmp -s "$T/full/area.csv" "$T/cut1/area.csv" || fail "resumed (4 ranks -> 1 proc
 cmp -s "$(ls "$T"/full/fields/fields_????.vti | tail -1)" "$(ls "$T"/cut1/fields/fields_????.vti | tail -1)" ||
     fail "resumed (4 ranks -> 1 process) final fields differ"
 echo "ok: checkpoint in pieces on 4 ranks (2x1x2) resumes on 3 ranks and in one process bit-identically"
+
+# --- the contraction mechanics (--mechanics, the explicit scheme) on rank 0:
+# the fields they read gathered from the boxes each step, their velocity
+# handed back to every box + halo; every output (pieces with velocity and
+# displacement, mesh .vtu, velocity views, area.csv columns, summary block)
+# the single-process run's; on 1, 2 and 3 ranks and with z split (2x1x2); and a
+# run checkpointed mid-way resumed on another rank count (pieces 2 -> 3
+# ranks, a single-process checkpoint -> 2x1x2, pieces -> one process)
+MECH="--grid 23x17x9 --scheme explicit --mechanics --snapshot-every 0.5 --area-every 0.25 --quiet --threads 1"
+mech_same() { # single-process run $1, MPI run $2: the mechanics' own outputs
+    for f in "$1"/fields/mesh_*.vtu "$1"/fields/mesh.pvd "$1"/surface/velocity_*.png; do
+        cmp -s "$f" "$2/${f#$1/}" || fail "$2/${f#$1/} differs from the single-process run"
+    done
+}
+equal_on_ranks mech "1 2 3" $MECH --days 1.5
+SKINSIM_MPI_DIMS=2x1x2 run_np 4 heal $MECH --days 1.5 --out "$T/mech-z" || fail "mechanics run on 2x1x2"
+same_run "$T/mech" "$T/mech-z"
+for d in mech-2 mech-3 mech-z; do mech_same "$T/mech" "$T/$d"; done
+grep -q 'Name="displacement"' "$T/mech-2/fields/fields_0003_p0001.vti" || fail "a piece lacks the displacement"
+python3 - "$T/mech/fields/fields_0003.vti" <<'PY' || fail "the mechanics' velocity is zero: the test would not see the coupling"
+import re, struct, sys
+b = open(sys.argv[1], 'rb').read()
+head, raw = b.split(b'<AppendedData encoding="raw">', 1)
+raw = raw[raw.index(b'_') + 1:]
+off = int(re.search(rb'Name="velocity"[^>]*offset="(\d+)"', head).group(1))
+n = struct.unpack('<Q', raw[off:off + 8])[0]
+v = struct.unpack('<%df' % (n // 4), raw[off + 8:off + 8 + n])
+assert max(abs(x) for x in v) > 1e-3, max(abs(x) for x in v)
+PY
+run_np 2 heal $MECH --days 1 --checkpoint-every 0.5 --out "$T/mech-ck" || fail "mechanics run with checkpoints on 2 ranks"
+cp -r "$T/mech-ck" "$T/mech-ck1"
+run_np 3 heal --resume "$T/mech-ck" --days 1.5 --quiet || fail "mechanics resume on 3 ranks"
+cmp -s "$T/mech/area.csv" "$T/mech-ck/area.csv" || fail "mechanics resumed (2 -> 3 ranks) area.csv differs"
+python3 "$SRC/tests/pvti_same.py" "$T/mech" "$T/mech-ck" last || fail "mechanics resumed (2 -> 3 ranks) fields differ"
+mech_same "$T/mech" "$T/mech-ck"
+"$CLI" heal --resume "$T/mech-ck1" --days 1.5 --quiet || fail "mechanics pieces resumed in one process"
+cmp -s "$T/mech/area.csv" "$T/mech-ck1/area.csv" || fail "mechanics resumed (2 ranks -> 1 process) area.csv differs"
+cmp -s "$T/mech/fields/fields_0003.vti" "$T/mech-ck1/fields/fields_0003.vti" ||
+    fail "mechanics resumed (2 ranks -> 1 process) final fields differ"
+"$CLI" heal $MECH --days 1 --checkpoint-every 0.5 --out "$T/mech-w" || fail "single-process mechanics run with checkpoints"
+SKINSIM_MPI_DIMS=2x1x2 run_np 4 heal --resume "$T/mech-w" --days 1.5 --quiet || fail "mechanics resume on 2x1x2"
+cmp -s "$T/mech/area.csv" "$T/mech-w/area.csv" || fail "mechanics resumed (1 process -> 2x1x2) area.csv differs"
+mkdir -p "$T/mech-wp/fields"
+cp "$T"/mech-w/fields/*.pvti "$T"/mech-w/fields/*_p0*.vti "$T/mech-wp/fields/"
+python3 "$SRC/tests/pvti_same.py" "$T/mech" "$T/mech-wp" last || fail "mechanics resumed (1 process -> 2x1x2) fields differ"
+mech_same "$T/mech" "$T/mech-w"
+echo "ok: --mechanics bit-identical on 1, 2, 3 and 2x1x2 ranks; checkpoints resume across rank counts"
 
 # --- the ModelMatch table: geometries shared out by rank 0, the same bytes
 TAB="--samples 2 --photons 400 --wl-min 450 --wl-max 650 --wl-step 100 --theta-i 2 --theta-r 3 --phi 3 --quiet --threads 1"
