@@ -205,6 +205,10 @@ typedef struct ss_heal_run_hooks {
      * (velocity capped), hand mg's velocity to the solver */
     void (*mech_in)(void *ctx, ss_heal_grid *mg);
     void (*mech_out)(void *ctx, const ss_heal_grid *mg);
+    /* a run on a skin mesh (--mesh) without its whole grid: the fields at
+     * each column's top tissue cell (top: ss_heal_run_shell_tops) into vals,
+     * nx*ny x SS_HEAL_NFIELDS (columns without one: untouched) */
+    void (*columns)(void *ctx, const int32_t *top, float *vals);
 } ss_heal_run_hooks;
 /* Sets (h) or clears (NULL) the hooks; SS_ERR_INPUT when the run has the
  * contraction mechanics (naming --mechanics). A run without its whole grid
@@ -284,6 +288,9 @@ struct ss_mech *ss_heal_run_mech(ss_heal_run *r);
  * creates them only once a grid holds the cells and fields they read: 1 while
  * they wait for ss_heal_run_mech_attach. */
 int ss_heal_run_mech_pending(const ss_heal_run *r);
+/* A distributed run on a skin mesh: the level of each column's top tissue
+ * cell (nx*ny, -1 = none; the surface the mesh's vertices show), else NULL. */
+const int32_t *ss_heal_run_shell_tops(const ss_heal_run *r);
 /* Creates the pending mechanics (fresh, or restored from the checkpoint's
  * metadata) on mg, a grid of the run's size with its cell states and the
  * fields SCAR, FIBROBLAST, EPITHELIUM, PLASMA and MDGF (and, resumed, the

@@ -108,6 +108,15 @@ ss_status ss_shell_patch_grid_init(const ss_shell_patch *p, ss_heal_grid *g,
 #define SS_SHELL_VERTEX_STRIDE (SS_HEAL_NFIELDS + 3)
 void ss_shell_vertex_fields(const ss_shell_patch *p, const ss_mesh *skin, const ss_heal_grid *g,
                             const ss_heal_params *hp, float *const *disp, float *out);
+/* The same without the grid (a run on MPI ranks): top[ncol] the level of
+ * each column's top tissue cell or -1 (ss_shell_column_tops), tv the fields
+ * there (ncol x SS_HEAL_NFIELDS), td the displacement there (ncol x 3, or
+ * NULL); ncol = p->nx * p->ny. */
+void ss_shell_vertex_fields_top(const ss_shell_patch *p, const ss_mesh *skin,
+                                const ss_heal_params *hp, const int32_t *top, const float *tv,
+                                const float *td, float *out);
+/* The level of every column's top tissue cell (or -1) of a patch grid's cells. */
+void ss_shell_column_tops(const ss_shell_patch *p, const uint8_t *cell, int32_t *top);
 /* The mesh as a VTK XML UnstructuredGrid of triangles, points moved by the
  * displacement (mm), point data displacement (mm), every heal field and the
  * open-wound flag (epithelium < 0.5 on the wound region). Atomic. */

@@ -57,6 +57,7 @@ enum {
     CMD_CKPT,
     CMD_MECH_IN,
     CMD_MECH_OUT,
+    CMD_COLUMNS,
     CMD_END
 };
 enum { FACE_XM, FACE_XP, FACE_YM, FACE_YP, FACE_ZM, FACE_ZP, NFACES };
@@ -75,7 +76,8 @@ typedef struct setup {
     long long pieces_step; /* resumed from a checkpoint in pieces: its step (every rank
                               reads its box), else -1 */
     int mesh_nv, mesh_nt;
-    int mech; /* --mechanics: they run on rank 0 (mech_setup) */
+    int mech;  /* --mechanics: they run on rank 0 (mech_setup) */
+    int shell; /* --mesh: the surface outputs read the columns' top cells */
 } setup;
 enum { WOUND_COLUMNS = 1, WOUND_MESH };
 
@@ -126,6 +128,7 @@ struct ss_dist_heal {
     int bb[6];
     float *disp[3];
     double t_mech, mech_bytes;
+    int32_t *top; /* --mesh: each column's top tissue level (whole grid, nx*ny) */
     long long steps;
     ss_dist_heal_timing tmax; /* rank 0, after end */
 };
@@ -833,6 +836,51 @@ static ss_status mech_setup(ss_dist_heal *d, ss_heal_run *r, ss_error *err) {
     return SS_OK;
 }
 
+/* A run on a skin mesh: the fields at each column's top tissue cell (d->top)
+ * go to rank 0 (vals: nx*ny x NFIELDS) from the box that owns that cell, in
+ * column order: nx*ny x NFIELDS floats at most, never the grid. */
+static void do_columns(ss_dist_heal *d, float *vals) {
+    const double t0 = MPI_Wtime();
+    const int GX = d->su.G[0];
+    for (int r = d->rank == 0 ? 0 : d->rank; r < (d->rank == 0 ? d->size : d->rank + 1); r++) {
+        int coords[3], lo[3], n[3];
+        MPI_Cart_coords(d->cart, r, 3, coords);
+        box_of(d, coords, lo, n);
+        size_t cnt = 0;
+        for (int y = lo[1]; y < lo[1] + n[1]; y++)
+            for (int x = lo[0]; x < lo[0] + n[0]; x++) {
+                const int k = d->top[(size_t)y * GX + x];
+                cnt += k >= lo[2] && k < lo[2] + n[2];
+            }
+        if (!cnt) continue;
+        float *buf = malloc(cnt * SS_HEAL_NFIELDS * sizeof(float));
+        if (!buf) MPI_Abort(d->cart, 3);
+        if (r == d->rank) /* this rank's own: pack */
+            for (size_t y = 0, m = 0; y < (size_t)n[1]; y++)
+                for (int x = 0; x < n[0]; x++) {
+                    const int k = d->top[(size_t)(lo[1] + (int)y) * GX + lo[0] + x];
+                    if (k < lo[2] || k >= lo[2] + n[2]) continue;
+                    const size_t i = ss_heal_idx(d->g, x + 1, (int)y + 1, k - lo[2] + d->hz);
+                    for (int f = 0; f < SS_HEAL_NFIELDS; f++) buf[m++] = d->g->field[f][i];
+                }
+        if (d->rank != 0) MPI_Send(buf, (int)(cnt * SS_HEAL_NFIELDS), MPI_FLOAT, 0, 42, d->cart);
+        if (d->rank == 0 && r != 0)
+            MPI_Recv(buf, (int)(cnt * SS_HEAL_NFIELDS), MPI_FLOAT, r, 42, d->cart,
+                     MPI_STATUS_IGNORE);
+        if (d->rank == 0) /* unpack in the same column order */
+            for (int y = lo[1], m = 0; y < lo[1] + n[1]; y++)
+                for (int x = lo[0]; x < lo[0] + n[0]; x++) {
+                    const size_t c = (size_t)y * GX + x;
+                    const int k = d->top[c];
+                    if (k < lo[2] || k >= lo[2] + n[2]) continue;
+                    for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+                        vals[c * SS_HEAL_NFIELDS + (size_t)f] = buf[m++];
+                }
+        free(buf);
+    }
+    d->t_gather += MPI_Wtime() - t0;
+}
+
 /* A checkpoint in pieces (skinsim/heal_io.h): every rank writes its box as
  * piece `rank`, the statuses are agreed and the pieces' sizes and CRCs
  * gathered, then rank 0 writes the header naming the whole grid, the process
@@ -1117,6 +1165,13 @@ static ss_status hook_snapshot(void *ctx, const ss_heal_grid *G, const char *fie
     return do_pieces(d, index, err);
 }
 
+static void hook_columns(void *ctx, const int32_t *top, float *vals) {
+    ss_dist_heal *d = ctx;
+    (void)top; /* the same as d->top */
+    send_cmd(d, CMD_COLUMNS, 0);
+    do_columns(d, vals);
+}
+
 static void hook_mech_in(void *ctx, ss_heal_grid *mg) {
     ss_dist_heal *d = ctx;
     (void)mg;
@@ -1313,12 +1368,6 @@ static ss_status split_setup(ss_dist_heal *d, ss_heal_run *r, ss_error *err) {
 /* Rank 0: what the distributed solver cannot do, as an input error. */
 static ss_status check_root(ss_heal_run *r, int size, int dims[3], ss_error *err) {
     const ss_heal_grid *G = ss_heal_run_grid(r);
-    if (ss_heal_run_shell(r))
-        return ss_error_set(err, SS_ERR_INPUT,
-                            "--mesh cannot run on %d MPI ranks: the patch of skin and its "
-                            "surface outputs need the whole grid in one process (run it without "
-                            "mpirun)",
-                            size);
     if ((ss_heal_run_mech(r) || ss_heal_run_mech_pending(r)) &&
         ss_heal_run_scheme(r) != SS_HEAL_EXPLICIT)
         return ss_error_set(err, SS_ERR_INPUT,
@@ -1418,6 +1467,7 @@ ss_status ss_dist_heal_create(ss_heal_run *r, ss_status root_st, ss_dist_heal **
         su.pieces_step = ss_heal_run_resume_pieces(r, NULL);
         su.fresh = G->cell == NULL && su.pieces_step < 0; /* config.distributed */
         su.mech = ss_heal_run_mech_pending(r);
+        su.shell = ss_heal_run_shell(r) != NULL;
         const ss_tri_mesh *m = ss_heal_run_wound_mesh(r);
         su.wound = m ? WOUND_MESH : WOUND_COLUMNS;
         if (m) {
@@ -1515,6 +1565,13 @@ ss_status ss_dist_heal_create(ss_heal_run *r, ss_status root_st, ss_dist_heal **
     } else {
         scatter_closed(d, r);
     }
+    /* a skin mesh: the columns' top levels on every rank (2D) */
+    if (su.shell) {
+        const size_t nc = (size_t)su.G[0] * su.G[1];
+        if (!(d->top = malloc(nc * sizeof *d->top))) MPI_Abort(d->cart, 3);
+        if (rank == 0) memcpy(d->top, ss_heal_run_shell_tops(r), nc * sizeof *d->top);
+        MPI_Bcast(d->top, (int)nc, MPI_INT32_T, 0, d->cart);
+    }
     /* the mechanics on rank 0 (before the solver: the boxes' velocity) */
     if (su.mech && (st = mech_setup(d, r, err))) {
         ss_dist_heal_free(d);
@@ -1552,7 +1609,8 @@ ss_status ss_dist_heal_create(ss_heal_run *r, ss_status root_st, ss_dist_heal **
                                .snapshot = hook_snapshot,
                                .surface_map = hook_surface,
                                .mech_in = su.mech ? hook_mech_in : NULL,
-                               .mech_out = su.mech ? hook_mech_out : NULL};
+                               .mech_out = su.mech ? hook_mech_out : NULL,
+                               .columns = su.shell ? hook_columns : NULL};
         ss_heal_run_set_checkpoint_hook(r, hook_checkpoint, d);
         /* (a fresh run's day-0 area row: the first command the others serve) */
         if ((st = ss_heal_run_set_hooks(r, &h, err))) {
@@ -1629,6 +1687,9 @@ ss_status ss_dist_heal_serve(ss_dist_heal *d, ss_error *err) {
         case CMD_MECH_OUT:
             do_mech_out(d);
             break;
+        case CMD_COLUMNS:
+            do_columns(d, NULL);
+            break;
         default: /* CMD_END */
             reduce_timing(d);
             if (m[1]) return ss_error_set(err, (ss_status)m[1], "rank 0 stopped the run");
@@ -1658,6 +1719,7 @@ void ss_dist_heal_free(ss_dist_heal *d) {
     ss_heal_solver_free(d->sB);
     for (int f = 0; f < SS_HEAL_NFIELDS; f++) free(d->backup[f]);
     for (int c = 0; c < 3; c++) free(d->disp[c]);
+    free(d->top);
     free(d->closed);
     ss_heal_grid_free(d->gB);
     free(d->tsend);

@@ -145,7 +145,7 @@ ss_status ss_heal_run_create(const ss_heal_run_config *c, ss_heal_run **out, ss_
     }
     if (!st && r->out_dir) st = ss_heal_run__outputs_open(r, err);
     /* day 0 (distributed: when the hooks are set, ss_heal_run_set_hooks) */
-    if (!st && !c->resume_dir && r->g->cell) st = ss_heal_run__add_row(r, err);
+    if (!st && !c->resume_dir && !c->distributed) st = ss_heal_run__add_row(r, err);
     if (st) {
         ss_heal_run_free(r);
         return st;

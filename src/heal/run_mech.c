@@ -143,7 +143,7 @@ ss_status ss_heal_run__mech_setup_fresh(ss_heal_run *r, ss_error *err) {
         if (!mesh) return err->code ? err->code : SS_ERR_INPUT;
         ss_tetmesh_free(mesh);
     }
-    if (!r->g->cell) { /* distributed: created on the grid the driver attaches */
+    if (!r->g->cell || c->distributed) { /* created on the grid the MPI driver attaches */
         r->mech_pending = 1;
         return SS_OK;
     }

@@ -402,11 +402,6 @@ ss_status ss_heal_run_wound_counted(ss_heal_run *r, size_t inside, size_t below,
 ss_status ss_heal_run__setup_fresh(ss_heal_run *r, ss_error *err) {
     const ss_heal_run_config *c = &r->c;
     ss_status st = check_config(c, err);
-    if (!st && c->distributed && ss_heal_run__shell_wanted(c))
-        st = ss_error_set(err, SS_ERR_INPUT,
-                          "--mesh cannot run on several MPI ranks: the patch of skin and "
-                          "its surface outputs need the whole grid in one process (run it "
-                          "without mpirun)");
     if (!st) st = setup_params(r, err);
     if (!st && ss_heal_run__shell_wanted(c)) { /* a patch of skin on a mesh */
         r->days = c->days != 0 ? c->days : SS_HEAL_RUN_DEFAULT_DAYS;
@@ -508,11 +503,6 @@ ss_status ss_heal_run__setup_resume(ss_heal_run *r, ss_error *err) {
     ss_heal_checkpoint_free(&ck);
     if (st) return st;
     if (c->days != 0) r->days = c->days;
-    if (c->distributed && r->shell_aux)
-        return ss_error_set(err, SS_ERR_INPUT,
-                            "--resume %s: a run with --mesh cannot continue on several MPI ranks "
-                            "(it needs the whole grid in one process); resume it without mpirun",
-                            dir);
     r->p = ss_heal_params_parse(r->params_json, "checkpoint parameters", r->scenario, err);
     if (!r->p) return err->code ? err->code : SS_ERR_INPUT;
     st = ss_heal_run__mech_setup_resume(r, dir, err);

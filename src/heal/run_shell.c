@@ -73,6 +73,8 @@ static ss_status build(ss_heal_run *r, ss_error *err) {
     return SS_OK;
 }
 
+static ss_status shell_tops(ss_heal_run *r, ss_error *err);
+
 ss_status ss_heal_run__shell_setup_fresh(ss_heal_run *r, ss_error *err) {
     const ss_heal_run_config *c = &r->c;
     if (!c->skin_mesh)
@@ -114,6 +116,9 @@ ss_status ss_heal_run__shell_setup_fresh(ss_heal_run *r, ss_error *err) {
     r->g = ss_heal_grid_create(p->nx, p->ny, p->nz, p->dx_mm, err);
     if (!r->g) return err->code ? err->code : SS_ERR_NOMEM;
     if ((st = ss_shell_patch_grid_init(p, r->g, r->p, err))) return st;
+    /* distributed: rank 0 builds the patch's grid once, hands the ranks their
+     * boxes and drops it; the column tops stay for the surface outputs */
+    if (c->distributed && (st = shell_tops(r, err))) return st;
     r->wound = cJSON_CreateObject();
     if (!r->wound) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     cJSON_AddStringToObject(r->wound, "skin_mesh", r->skin_path);
@@ -148,7 +153,7 @@ ss_status ss_heal_run__shell_setup_resume(ss_heal_run *r, ss_error *err) {
                             "%s: the skin patch no longer matches the checkpoint's grid (did the "
                             "mesh or the wound file change?)",
                             r->skin_path);
-    return SS_OK;
+    return r->c.distributed ? shell_tops(r, err) : SS_OK;
 }
 
 void ss_heal_run__shell_aux(const ss_heal_run *r, cJSON *aux) {
@@ -161,11 +166,51 @@ void ss_heal_run__shell_aux(const ss_heal_run *r, cJSON *aux) {
     cJSON_AddNumberToObject(a, "concave_k", r->shell_concave);
 }
 
+/* A distributed run: the column tops from the patch's cells (rank 0's whole
+ * grid while it has one, or a grid of the patch built for the purpose). */
+static ss_status shell_tops(ss_heal_run *r, ss_error *err) {
+    const ss_shell_patch *p = r->shell;
+    if (!(r->shell_top = malloc((size_t)p->nx * p->ny * sizeof(int32_t))))
+        return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    if (r->g->cell) {
+        ss_shell_column_tops(p, r->g->cell, r->shell_top);
+        return SS_OK;
+    }
+    ss_heal_grid *g = ss_heal_grid_create(p->nx, p->ny, p->nz, p->dx_mm, err);
+    if (!g) return err->code ? err->code : SS_ERR_NOMEM;
+    ss_status st = ss_shell_patch_grid_init(p, g, r->p, err);
+    if (!st) ss_shell_column_tops(p, g->cell, r->shell_top);
+    ss_heal_grid_free(g);
+    return st;
+}
+
+const int32_t *ss_heal_run_shell_tops(const ss_heal_run *r) { return r->shell_top; }
+
 ss_status ss_heal_run__shell_snapshot(ss_heal_run *r, int idx, ss_error *err) {
     if (!r->shell) return SS_OK;
     float *const *u = r->mech ? ss_mech_grid_displacement(r->mech) : NULL;
     if (r->mech && !u) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
-    ss_shell_vertex_fields(r->shell, &r->surf, r->g, r->p, u, r->vfields);
+    if (r->g->cell) {
+        ss_shell_vertex_fields(r->shell, &r->surf, r->g, r->p, u, r->vfields);
+    } else { /* distributed: the values at the columns' tops from the ranks */
+        const ss_shell_patch *p = r->shell;
+        const size_t ncol = (size_t)p->nx * p->ny;
+        float *tv = calloc(ncol * SS_HEAL_NFIELDS, sizeof(float));
+        float *td = u ? calloc(3 * ncol, sizeof(float)) : NULL;
+        if (!tv || (u && !td) || !r->hooks.columns || !r->shell_top) {
+            free(tv);
+            free(td);
+            return ss_error_set(err, SS_ERR_NOMEM, "out of memory (surface columns)");
+        }
+        r->hooks.columns(r->hooks.ctx, r->shell_top, tv);
+        for (size_t c = 0; td && c < ncol; c++)
+            if (r->shell_top[c] >= 0)
+                for (int d = 0; d < 3; d++)
+                    td[3 * c + (size_t)d] = u[d][(size_t)r->shell_top[c] * ncol + c];
+        ss_shell_vertex_fields_top(p, &r->surf, r->p, r->shell_top, tv, td, r->vfields);
+        free(tv);
+        free(td);
+    }
     char path[4400];
     snprintf(path, sizeof path, "%s/surface/skin_%04d.vtu", r->out_dir, idx);
     ss_status st =
@@ -203,6 +248,7 @@ void ss_heal_run__shell_free(ss_heal_run *r) {
     free(r->skin_path);
     free(r->wound_path);
     free(r->vfields);
+    free(r->shell_top);
     cJSON_Delete(r->shell_aux);
 }
 

@@ -695,12 +695,29 @@ ss_status ss_shell_patch_grid_init(const ss_shell_patch *p, ss_heal_grid *g,
 
 /* ---- mapping back (§5.4) -------------------------------------------------------------- */
 
-void ss_shell_vertex_fields(const ss_shell_patch *p, const ss_mesh *skin, const ss_heal_grid *g,
-                            const ss_heal_params *hp, float *const *disp, float *out) {
+/* The top tissue cell of column (i, j): its level (1 .. nz-2), or -1. */
+static int column_top(const ss_shell_patch *p, const uint8_t *cell, int i, int j) {
+    for (int k = p->nz - 2; k >= 1; k--) {
+        uint8_t c = cell[((size_t)k * p->ny + j) * p->nx + i];
+        if (c == SS_CELL_EPIDERMIS || c == SS_CELL_DERMIS || c == SS_CELL_WOUND) return k;
+    }
+    return -1;
+}
+
+void ss_shell_column_tops(const ss_shell_patch *p, const uint8_t *cell, int32_t *top) {
+    for (int j = 0; j < p->ny; j++)
+        for (int i = 0; i < p->nx; i++) top[(size_t)j * p->nx + i] = column_top(p, cell, i, j);
+}
+
+/* The vertex fields from the grid g (and disp over it), or from the values
+ * at the columns' top cells (top, tv: ncol x NFIELDS, td: ncol x 3). */
+static void vertex_fields(const ss_shell_patch *p, const ss_mesh *skin, const ss_heal_grid *g,
+                          const ss_heal_params *hp, float *const *disp, const int32_t *tops,
+                          const float *tv, const float *td, float *out) {
     float hv[SS_HEAL_NFIELDS];
     ss_heal_params_healthy(hp, hv);
     hv[SS_HEAL_EPITHELIUM] = 1.0f;
-    const int nx = p->nx, ny = p->ny, nz = p->nz;
+    const int nx = p->nx, ny = p->ny;
 #pragma omp parallel for schedule(static)
     for (int v = 0; v < skin->nvertices; v++) {
         float *o = out + (size_t)v * SS_SHELL_VERTEX_STRIDE;
@@ -715,20 +732,32 @@ void ss_shell_vertex_fields(const ss_shell_patch *p, const ss_mesh *skin, const 
         if (i < 1 || j < 1 || i >= nx - 1 || j >= ny - 1) continue;
         size_t col = (size_t)j * nx + i;
         if (isnan(p->surf_z[col]) || fabs(q[2] - p->surf_z[col]) > 2 * p->dx_mm) continue;
-        int top = -1;
-        for (int k = nz - 2; k >= 1 && top < 0; k--) {
-            uint8_t c = g->cell[((size_t)k * ny + j) * nx + i];
-            if (c == SS_CELL_EPIDERMIS || c == SS_CELL_DERMIS || c == SS_CELL_WOUND) top = k;
-        }
+        int top = g ? column_top(p, g->cell, i, j) : tops[col];
         if (top < 0) continue;
         size_t idx = ((size_t)top * ny + j) * nx + i;
-        for (int f = 0; f < SS_HEAL_NFIELDS; f++) o[f] = g->field[f][idx];
-        if (disp)
+        float u[3] = {0, 0, 0};
+        for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+            o[f] = g ? g->field[f][idx] : tv[col * SS_HEAL_NFIELDS + (size_t)f];
+        if (g && disp)
+            for (int d = 0; d < 3; d++) u[d] = disp[d][idx];
+        if (!g && td)
+            for (int d = 0; d < 3; d++) u[d] = td[3 * col + (size_t)d];
+        if (disp || td)
             for (int d = 0; d < 3; d++)
                 o[SS_HEAL_NFIELDS + d] =
-                    (float)((disp[0][idx] * p->axis[0][d] + disp[1][idx] * p->axis[1][d] +
-                             disp[2][idx] * p->axis[2][d]));
+                    (float)((u[0] * p->axis[0][d] + u[1] * p->axis[1][d] + u[2] * p->axis[2][d]));
     }
+}
+
+void ss_shell_vertex_fields(const ss_shell_patch *p, const ss_mesh *skin, const ss_heal_grid *g,
+                            const ss_heal_params *hp, float *const *disp, float *out) {
+    vertex_fields(p, skin, g, hp, disp, NULL, NULL, NULL, out);
+}
+
+void ss_shell_vertex_fields_top(const ss_shell_patch *p, const ss_mesh *skin,
+                                const ss_heal_params *hp, const int32_t *top, const float *tv,
+                                const float *td, float *out) {
+    vertex_fields(p, skin, NULL, hp, NULL, top, tv, td, out);
 }
 
 ss_status ss_shell_surface_vtu_write(const ss_shell_patch *p, const ss_mesh *skin, const float *vf,
