@@ -116,9 +116,11 @@ typedef struct ss_heal_run_config {
                         is kept for the boxes (ss_heal_run_wound_columns / _mesh); a
                         resumed one loads the checkpoint's grid, which the driver hands out
                         and then drops (ss_heal_run_release_grid). No solver is made (only
-                        its step checks). Not with mechanics or skin_mesh (SS_ERR_INPUT
-                        naming the option). The driver's hooks then do everything that
-                        needs the fields. */
+                        its step checks). With mechanics they wait for the driver's grid
+                        (ss_heal_run_mech_attach); with skin_mesh rank 0 builds the
+                        patch's grid once, as for a resume, and keeps its column tops
+                        (ss_heal_run_shell_tops). The driver's hooks then do everything
+                        that needs the fields. */
 } ss_heal_run_config;
 
 /* The defaults listed above (every other field 0 / NULL). */

@@ -31,11 +31,20 @@
  * agree; a resume reads each rank's box from the pieces of any split). The
  * kernels compute every cell from the same neighbours in the same arithmetic
  * as one process, so fields, area.csv, the pieces and checkpoints are
- * bit-identical to one process for any rank count and process grid. Gave up:
- * the column chain of a z stack is sequential (Pz - 1 hops per step); the
- * mechanics and runs on a skin mesh stay single-process (an error names
- * --mechanics / --mesh); a whole-grid checkpoint (of a single process)
- * is loaded on rank 0 once to resume on MPI. */
+ * bit-identical to one process for any rank count and process grid.
+ * The contraction mechanics (--mechanics) run on rank 0, unchanged, on a grid
+ * of the whole block's size (ss_heal_run_mech_attach): each step the boxes
+ * send it the five fields the mechanics read, inside the tissue's bounding
+ * box, and it sends every box + halo the velocity they wrote (mech_in /
+ * mech_out hooks); snapshots scatter the displacement of the owned cells into
+ * the pieces. A run on a skin mesh (--mesh) builds its patch's grid on rank 0
+ * once and scatters it; its surface outputs read each column's top tissue
+ * cell from the box that owns it (2D). Gave up: the column chain of a z stack
+ * is sequential (Pz - 1 hops per step); the mechanics are serial on rank 0
+ * (its memory bounds them; docs/scaling.md "Mechanics on MPI") and need the
+ * explicit scheme (the distributed split sweeps carry no convection); a
+ * whole-grid checkpoint (of a single process) or a skin patch is loaded on
+ * rank 0 once. */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <mpi.h>
