@@ -213,7 +213,8 @@ typedef struct ss_heal_run_hooks {
     void (*columns)(void *ctx, const int32_t *top, float *vals);
 } ss_heal_run_hooks;
 /* Sets (h) or clears (NULL) the hooks; SS_ERR_INPUT when the run has the
- * contraction mechanics (naming --mechanics). A run without its whole grid
+ * contraction mechanics but no grid of their own (ss_heal_run_mech_attach) or
+ * h lacks mech_in / mech_out (naming --mechanics). A run without its whole grid
  * (config.distributed) needs every hook and a checkpoint hook
  * (ss_heal_run_set_checkpoint_hook, set first); its snapshots are then the pieces
  * and .pvti the snapshot hook writes (fields.pvd lists fields_NNNN.pvti), and
