@@ -310,6 +310,91 @@ static void test_split_phases(void **state) {
     ss_heal_params_free(p);
 }
 
+/* The split phases with a velocity (the mechanics' convection, which the MPI
+ * driver runs on y slabs): bit-identical to ss_heal_step, the convection
+ * hook asked for the largest speed once per step and for the halo before
+ * each of the nc donor-cell subcycles, with the current fields. */
+typedef struct {
+    int nspeed, nhalo;
+    double speed;
+    float *const *u;
+    const ss_heal_grid *g;
+} conv_log;
+
+static void conv_hook(void *ctx, int op, float *const *u, double *speed) {
+    conv_log *l = ctx;
+    if (op == SS_HEAL_CONV_SPEED) {
+        l->nspeed++;
+        l->speed = *speed;
+    } else {
+        l->nhalo++;
+        assert_null(speed);
+        assert_non_null(u[SS_HEAL_NFIELDS - 1]);
+    }
+}
+
+static void add_velocity(ss_heal_grid *g) {
+    const size_t n = (size_t)g->nx * g->ny * g->nz;
+    for (int d = 0; d < 3; d++) {
+        g->velocity[d] = calloc(n, sizeof(float));
+        assert_non_null(g->velocity[d]);
+    }
+    for (int z = 1; z < g->nz - 1; z++)
+        for (int y = 1; y < g->ny - 1; y++)
+            for (int x = 1; x < g->nx - 1; x++) {
+                const size_t c = ss_heal_idx(g, x, y, z);
+                g->velocity[0][c] = (float)(20.0 * sin(0.7 * x + 0.3 * y));
+                g->velocity[1][c] = (float)(12.0 * cos(0.5 * y - 0.2 * z));
+                g->velocity[2][c] = (float)(-3.0 * sin(0.9 * z + 0.1 * x));
+            }
+}
+
+static void test_split_phases_velocity(void **state) {
+    (void)state;
+    ss_error err;
+    ss_heal_params *p = ss_heal_params_preset("scab", &err);
+    ss_heal_grid *a = problem(p, 20, 16, 9), *b = problem(p, 20, 16, 9);
+    add_velocity(a);
+    add_velocity(b);
+    ss_heal_solver *sa = ss_heal_solver_create(a, p, SS_HEAL_SPLIT, 0, &err);
+    ss_heal_solver *sb = ss_heal_solver_create(b, p, SS_HEAL_SPLIT, 0, &err);
+    assert_non_null(sa);
+    assert_non_null(sb);
+    conv_log l = {0};
+    ss_heal_solver_set_convection(sb, conv_hook, &l);
+    const int steps = 6;
+    for (int n = 0; n < steps; n++) {
+        assert_int_equal(ss_heal_step(sa, a, &err), SS_OK);
+        for (int ph = 0; ph < 3; ph++) assert_int_equal(ss_heal_step_phase(sb, b, ph, &err), SS_OK);
+    }
+    const size_t nc = (size_t)a->nx * a->ny * a->nz;
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+        assert_memory_equal(a->field[f], b->field[f], nc * sizeof(float));
+    /* the subcycles: ceil(dt max|v| / h / 0.9) > 1 per step, one halo call each */
+    const int sub = (int)ceil(ss_heal_solver_dt(sb) * l.speed / b->dx_mm / 0.9);
+    assert_true(sub > 1);
+    assert_int_equal(l.nspeed, steps);
+    assert_int_equal(l.nhalo, steps * sub);
+    /* the convection moved something: the same run without velocity differs */
+    ss_heal_grid *c = problem(p, 20, 16, 9);
+    ss_heal_solver *sc = ss_heal_solver_create(c, p, SS_HEAL_SPLIT, 0, &err);
+    for (int n = 0; n < steps; n++) assert_int_equal(ss_heal_step(sc, c, &err), SS_OK);
+    int differ = 0;
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+        differ |= memcmp(a->field[f], c->field[f], nc * sizeof(float)) != 0;
+    assert_true(differ);
+    /* a velocity the solver was not created with: refused */
+    add_velocity(c);
+    assert_int_equal(ss_heal_step_phase(sc, c, 0, &err), SS_ERR_INPUT);
+    ss_heal_solver_free(sc);
+    ss_heal_grid_free(c);
+    ss_heal_solver_free(sa);
+    ss_heal_solver_free(sb);
+    ss_heal_grid_free(a);
+    ss_heal_grid_free(b);
+    ss_heal_params_free(p);
+}
+
 /* The explicit step in two parts (the MPI driver's overlap of the halo
  * exchange): part 1 never reads the outer shell (it holds garbage meanwhile,
  * as a halo in flight), and parts 1 + 2 give ss_heal_step's bits. */
@@ -561,11 +646,11 @@ static void test_vti_box(void **state) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_stats_parts),   cmocka_unit_test(test_subbox_explicit),
-        cmocka_unit_test(test_split_phases),  cmocka_unit_test(test_explicit_parts),
-        cmocka_unit_test(test_stack_columns), cmocka_unit_test(test_subbox_uneven),
-        cmocka_unit_test(test_box_setup),     cmocka_unit_test(test_surface_parts),
-        cmocka_unit_test(test_vti_box),
+        cmocka_unit_test(test_stats_parts),    cmocka_unit_test(test_subbox_explicit),
+        cmocka_unit_test(test_split_phases),   cmocka_unit_test(test_split_phases_velocity),
+        cmocka_unit_test(test_explicit_parts), cmocka_unit_test(test_stack_columns),
+        cmocka_unit_test(test_subbox_uneven),  cmocka_unit_test(test_box_setup),
+        cmocka_unit_test(test_surface_parts),  cmocka_unit_test(test_vti_box),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -263,6 +263,18 @@ ss_heal_solver *ss_heal_solver_create_sub(const ss_heal_grid *g, const int goff[
 enum { SS_HEAL_COL_MAX, SS_HEAL_COL_FROM_ABOVE, SS_HEAL_COL_TO_BELOW, SS_HEAL_COL_FROM_BOTTOM };
 typedef void (*ss_heal_column_fn)(void *ctx, int op, float *buf, size_t n);
 void ss_heal_solver_set_columns(ss_heal_solver *s, ss_heal_column_fn fn, void *ctx);
+/* The split step's convection on a box that is one of several (the MPI
+ * driver, src/dist), called collectively on every box: SS_HEAL_CONV_SPEED:
+ * *speed (this box's ss_heal_rd_max_speed) becomes the largest over all
+ * boxes, so every box takes the same subcycles; SS_HEAL_CONV_HALO: before
+ * each donor-cell subcycle, refresh the halo of the current fields u (the
+ * neighbours' values of their owned cells). */
+enum { SS_HEAL_CONV_SPEED, SS_HEAL_CONV_HALO };
+typedef void (*ss_heal_conv_fn)(void *ctx, int op, float *const *u, double *speed);
+/* The convection sync of a split box that is one of several (see
+ * ss_heal_conv_fn): phase 0 calls fn for the global largest speed and before
+ * every donor-cell subcycle, so the boxes convect as one process does. */
+void ss_heal_solver_set_convection(ss_heal_solver *s, ss_heal_conv_fn fn, void *ctx);
 double ss_heal_solver_dt(const ss_heal_solver *s);
 /* Changes the step (adaptive stepping). EXPLICIT: up to the stability limit;
  * SPLIT: up to SS_HEAL_SPLIT_LATE_MAX_DT_DAYS, for the slow phases once the
@@ -274,10 +286,11 @@ ss_status ss_heal_solver_set_dt(ss_heal_solver *s, double dt_days, ss_error *err
 ss_status ss_heal_step(ss_heal_solver *s, ss_heal_grid *g, ss_error *err);
 void ss_heal_solver_free(ss_heal_solver *s);
 /* The split step in three phases (the MPI driver, src/dist, runs the y sweep
- * on another decomposition): 0 = first reaction half and the x sweep, 1 = the
- * y sweep, 2 = the z sweep and the second reaction half, then t_days += dt and
- * step++. Phases 0, 1, 2 in turn are ss_heal_step exactly. SS_ERR_INPUT for
- * the explicit scheme or a velocity field. */
+ * on another decomposition): 0 = first reaction half, the convection (with a
+ * velocity) and the x sweep, 1 = the y sweep, 2 = the z sweep and the second
+ * reaction half, then t_days += dt and step++. Phases 0, 1, 2 in turn are
+ * ss_heal_step exactly. SS_ERR_INPUT for the explicit scheme or a velocity the
+ * solver was not created with (phases 1 and 2 do not read it). */
 ss_status ss_heal_step_phase(ss_heal_solver *s, ss_heal_grid *g, int phase, ss_error *err);
 /* The explicit step in two parts (the MPI driver, src/dist, exchanges its
  * halo meanwhile): part 1 computes every cell whose stencil does not reach
@@ -461,6 +474,9 @@ typedef struct ss_heal_rd_system {
      * must then write m = clamp(1 - u_f, 0, 1) into the slot, which the
      * explicit scheme recomputes from field f at the neighbours. */
     uint8_t mface[SS_HEAL_RD_MAXSLOT];
+    /* a sub-box's convection sync (split scheme); NULL = this grid is the whole problem */
+    ss_heal_conv_fn conv;
+    void *conv_ctx;
 } ss_heal_rd_system;
 
 typedef struct ss_heal_rd_work ss_heal_rd_work;

@@ -11,7 +11,13 @@
  * communicator), as do the column statistics and the closure days. Split
  * scheme: the boxes are y slabs (x lines and z columns whole) and the y sweep
  * runs on x slabs, reached by two MPI_Alltoallv transposes per step, so every
- * Thomas line solve runs whole, as in one process (no halo needed).
+ * Thomas line solve runs whole, as in one process (no halo needed). With a
+ * velocity (the mechanics') phase 0 convects on the y slabs
+ * (ss_heal_solver_set_convection, split_conv): the subcycle count from the
+ * largest speed of any slab (a max-reduction), and before each donor-cell
+ * subcycle the one-row y faces of the current fields are exchanged (x lines
+ * and z columns are whole on a slab), so every cell reads what one process
+ * reads.
  *
  * No rank holds the whole grid. Rank 0 holds the run object
  * (skinsim/heal_run.h) created with config.distributed: it validates every
@@ -41,8 +47,7 @@
  * once and scatters it; its surface outputs read each column's top tissue
  * cell from the box that owns it (2D). Gave up: the column chain of a z stack
  * is sequential (Pz - 1 hops per step); the mechanics are serial on rank 0
- * (its memory bounds them; docs/scaling.md "Mechanics on MPI") and need the
- * explicit scheme (the distributed split sweeps carry no convection); a
+ * (its memory bounds them; docs/scaling.md "Mechanics on MPI"); a
  * whole-grid checkpoint (of a single process) or a skin patch is loaded on
  * rank 0 once. */
 #define _POSIX_C_SOURCE 200809L
@@ -101,6 +106,7 @@ struct ss_dist_heal {
     int zabove, zbelow, zroot; /* in zcomm: the boxes above and below, the bottom box */
     float *colbuf;             /* the column scans down the stack */
     double t_col;              /* the column exchange's time (in the kernel's) */
+    double t_conv;             /* split: the convection's halo exchanges (in the kernel's) */
     ss_heal_grid *g;           /* box + halo (x, y; z when split) */
     ss_heal_solver *s;
     float *sbuf[NFACES], *rbuf[NFACES];
@@ -336,13 +342,35 @@ static void transpose(ss_dist_heal *d, int from_b, int nq) {
     }
 }
 
+/* The split scheme's convection (ss_heal_solver_set_convection) on the y
+ * slabs: the subcycles from the largest speed of any slab, and before each
+ * donor-cell subcycle the y faces of the current fields (the one-cell halo
+ * the donor cell reads across a slab boundary; x lines and z columns are
+ * whole on a y slab). */
+static void split_conv(void *ctx, int op, float *const *u, double *speed) {
+    ss_dist_heal *d = ctx;
+    const double t0 = MPI_Wtime();
+    if (op == SS_HEAL_CONV_SPEED) {
+        double m = *speed;
+        MPI_Allreduce(&m, speed, 1, MPI_DOUBLE, MPI_MAX, d->cart);
+    } else {
+        /* the step swaps the fields with its buffers: the halo goes to the current ones */
+        for (int f = 0; f < SS_HEAL_NFIELDS; f++) d->g->field[f] = u[f];
+        const int yf = 1 << FACE_YM | 1 << FACE_YP;
+        MPI_Request rq[2 * NFACES];
+        halo_finish(d, rq, halo_post(d, rq, yf), yf);
+    }
+    d->t_conv += MPI_Wtime() - t0;
+}
+
 /* One split step: x sweep on the y slabs, y sweep on the x slabs, z sweep back
  * on the y slabs (columns and x lines are whole on a y slab, y lines on an x
- * slab: every line is solved whole, as in one process). */
+ * slab: every line is solved whole, as in one process). With the mechanics'
+ * velocity, phase 0 convects on the y slabs first (split_conv). */
 static ss_status split_step(ss_dist_heal *d, ss_error *err) {
-    double t0 = MPI_Wtime();
+    double t0 = MPI_Wtime(), c0 = d->t_conv;
     ss_status st = ss_heal_step_phase(d->s, d->g, 0, err);
-    double t1 = MPI_Wtime();
+    double t1 = MPI_Wtime(), tc = d->t_conv - c0;
     transpose(d, 0, SS_HEAL_NFIELDS + d->nslots);
     double t2 = MPI_Wtime();
     if (!st) st = ss_heal_step_phase(d->sB, d->gB, 1, err);
@@ -351,8 +379,8 @@ static ss_status split_step(ss_dist_heal *d, ss_error *err) {
     double t4 = MPI_Wtime();
     if (!st) st = ss_heal_step_phase(d->s, d->g, 2, err);
     double t5 = MPI_Wtime();
-    d->t_compute += (t1 - t0) + (t3 - t2) + (t5 - t4);
-    d->t_halo += (t2 - t1) + (t4 - t3);
+    d->t_compute += (t1 - t0 - tc) + (t3 - t2) + (t5 - t4);
+    d->t_halo += (t2 - t1) + (t4 - t3) + tc;
     d->steps++;
     return st;
 }
@@ -1377,14 +1405,6 @@ static ss_status split_setup(ss_dist_heal *d, ss_heal_run *r, ss_error *err) {
 /* Rank 0: what the distributed solver cannot do, as an input error. */
 static ss_status check_root(ss_heal_run *r, int size, int dims[3], ss_error *err) {
     const ss_heal_grid *G = ss_heal_run_grid(r);
-    if ((ss_heal_run_mech(r) || ss_heal_run_mech_pending(r)) &&
-        ss_heal_run_scheme(r) != SS_HEAL_EXPLICIT)
-        return ss_error_set(err, SS_ERR_INPUT,
-                            "--mechanics on %d MPI ranks needs --scheme explicit: the split "
-                            "scheme's distributed sweeps (y and x slabs) carry no convection "
-                            "for the mechanics' velocity (run it with --scheme explicit, or "
-                            "without mpirun)",
-                            size);
     /* the process grid the user asked for: SKINSIM_MPI_DIMS=PXxPYxPZ (0 = any) */
     const char *ask = getenv("SKINSIM_MPI_DIMS");
     int want[3] = {0, 0, 1}; /* default: columns stay whole (z is split only on request) */
@@ -1599,6 +1619,7 @@ ss_status ss_dist_heal_create(ss_heal_run *r, ss_status root_st, ss_dist_heal **
     const char *ov = getenv("SKINSIM_DIST_OVERLAP");
     d->overlap = !(ov && strcmp(ov, "0") == 0);
     if (d->split) st = split_setup(d, r, err);
+    if (d->split) ss_heal_solver_set_convection(d->s, split_conv, d);
     if ((st = agree(d->cart, st))) {
         if (d->rank != 0) ss_error_set(err, st, "a rank could not set up its x slab");
         ss_dist_heal_free(d);

@@ -679,6 +679,12 @@ void ss_heal_solver_set_columns(ss_heal_solver *s, ss_heal_column_fn fn, void *c
     find_surface(&s->ctx); /* the surface over the whole stack */
 }
 
+void ss_heal_solver_set_convection(ss_heal_solver *s, ss_heal_conv_fn fn, void *ctx) {
+    if (!s) return;
+    s->sys.conv = fn;
+    s->sys.conv_ctx = ctx;
+}
+
 double ss_heal_solver_dt(const ss_heal_solver *s) { return s ? s->dt : 0.0; }
 
 ss_status ss_heal_solver_set_dt(ss_heal_solver *s, double dt, ss_error *err) {
@@ -718,10 +724,12 @@ static float keloid_signal(const ss_heal_params *p, double t, double dt) {
 }
 
 ss_status ss_heal_step_phase(ss_heal_solver *s, ss_heal_grid *g, int phase, ss_error *err) {
-    if (!s || !g || s->scheme != SS_HEAL_SPLIT || phase < 0 || phase > 2 || g->velocity[0] ||
-        g->velocity[1] || g->velocity[2])
+    const int has_vel = g && (g->velocity[0] || g->velocity[1] || g->velocity[2]);
+    if (!s || !g || s->scheme != SS_HEAL_SPLIT || phase < 0 || phase > 2 ||
+        (has_vel && !s->w->have_buf))
         return ss_error_set(err, SS_ERR_INPUT,
-                            "heal step phase: the split scheme without velocity, phase 0..2");
+                            "heal step phase: the split scheme, phase 0..2, a velocity only on "
+                            "a solver created with it");
     if (g->nx != s->nx || g->ny != s->ny || g->nz != s->nz)
         return ss_error_set(err, SS_ERR_INPUT, "heal step phase: grid does not match the solver");
     s->ctx.cell = g->cell;
@@ -729,7 +737,10 @@ ss_status ss_heal_step_phase(ss_heal_solver *s, ss_heal_grid *g, int phase, ss_e
     if (s->ctx.ztop_of != g->cell) find_surface(&s->ctx);
     s->ctx.kact = keloid_signal(&s->p, g->t_days, s->dt);
     for (int f = 0; f < SS_HEAL_NFIELDS; f++) s->sys.u[f] = g->field[f];
+    for (int d = 0; d < 3; d++) s->sys.velocity[d] = g->velocity[d];
     ss_heal_rd__step_split_phase(&s->sys, s->w, s->dt, s->nsub, phase);
+    /* the convection swaps the fields with the work buffers */
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++) g->field[f] = s->sys.u[f];
     if (phase == 2) {
         g->t_days += s->dt;
         g->step++;

@@ -318,11 +318,15 @@ void ss_heal_rd__step_split_phase(ss_heal_rd_system *sys, ss_heal_rd_work *w, do
         const int has_vel = sys->velocity[0] || sys->velocity[1] || sys->velocity[2];
         if (has_vel && w->have_buf) {
             double speed = ss_heal_rd_max_speed(sys);
+            if (sys->conv) sys->conv(sys->conv_ctx, SS_HEAL_CONV_SPEED, sys->u, &speed);
             int nc = (int)ceil(dt * speed / sys->h_mm / 0.9);
             if (nc < 1) nc = 1;
             double h = dt / nc;
-            for (int f = 0; f < sys->nfields; f++) {
-                for (int s = 0; s < nc; s++) {
+            /* the fields convect independently (the velocity is fixed over the
+             * step): subcycle by subcycle, each box's halo refreshed first */
+            for (int s = 0; s < nc; s++) {
+                if (sys->conv) sys->conv(sys->conv_ctx, SS_HEAL_CONV_HALO, sys->u, NULL);
+                for (int f = 0; f < sys->nfields; f++) {
                     ss_heal_rd__convect(sys, w, f, sys->u[f], w->buf[f], h);
                     float *t = sys->u[f];
                     sys->u[f] = w->buf[f];
