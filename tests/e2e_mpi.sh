@@ -12,7 +12,7 @@
 # checkpointed on a 2x1x2 process grid resumes on 3 ranks to the uninterrupted
 # single-process result; the contraction mechanics (on rank 0) on 1, 2, 3 and
 # 2x1x2 ranks and resumed across rank counts, and with the split scheme (its
-# convection on the y slabs) on 2 and 3 ranks; a run on a skin mesh (--mesh,
+# convection on the y slabs) on 2 and 3 ranks and resumed 2 -> 3; a run on a skin mesh (--mesh,
 # with mechanics) on 3 and 2x1x2 ranks and resumed 2 -> 3; bad input (too many ranks for
 # the grid with either scheme, z boxes too thin, a bad SKINSIM_MPI_DIMS, a
 # missing skin mesh, a missing
@@ -206,6 +206,13 @@ msplit_counts="2 3"
 equal_on_ranks mech-split "$msplit_counts" $MSPLIT
 for n in $msplit_counts; do mech_same "$T/mech-split" "$T/mech-split-$n"; done
 vel_nonzero "$T/mech-split/fields/fields_0002.vti"
+run_np 2 heal ${MSPLIT/--days 1/--days 0.5} --checkpoint-every 0.5 --out "$T/mech-split-ck" ||
+    fail "split mechanics run with checkpoints on 2 ranks"
+run_np 3 heal --resume "$T/mech-split-ck" --days 1 --quiet || fail "split mechanics resume on 3 ranks"
+cmp -s "$T/mech-split/area.csv" "$T/mech-split-ck/area.csv" || fail "split mechanics resumed (2 -> 3 ranks) area.csv differs"
+python3 "$SRC/tests/pvti_same.py" "$T/mech-split" "$T/mech-split-ck" last ||
+    fail "split mechanics resumed (2 -> 3 ranks) fields differ"
+echo "ok: --mechanics with the split scheme bit-identical on $msplit_counts ranks and resumed 2 -> 3"
 
 # --- a patch of skin on a mesh (--mesh, the hand) with the mechanics: rank 0
 # builds the patch's grid once and hands out the boxes; the skin surface
