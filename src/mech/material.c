@@ -63,6 +63,7 @@ static const key keys[] = {
     K(anchor_side, "kPa/mm", 0, 1e6),
     K(k_suture, "mN/mm", 0, 1e9),
     K(max_shorten, "1", 0, 0.9),
+    K(j_min, "1", 0, 0.9),
     K(tol, "1", 1e-9, 0.1),
     {"max_substeps", "1", offsetof(ss_mech_params, max_substeps), 1, 1e6, 1},
 };
@@ -95,6 +96,7 @@ void ss_mech_params_default(ss_mech_params *p) {
     p->anchor_side = 2.0;
     p->k_suture = 1.0;
     p->max_shorten = 0.5;
+    p->j_min = 0.2;
     p->tol = 1e-4;
     p->max_substeps = 400;
 }

@@ -293,6 +293,7 @@ ss_mech *ss_mech_create(ss_heal_grid *g, const ss_heal_params *heal, const ss_me
                                               p->tet_size_mm, err)))
         goto fail;
     if (!(m->S = ss_springs_create(m->mesh, 9.0 * p->K_bulk, err))) goto fail;
+    if (ss_springs_set_barrier(m->S, m->mesh, p->K_bulk, p->j_min, err) != SS_OK) goto fail;
     const int nn = m->mesh->nnodes, ns = m->S->nsprings;
     if (!(m->side = calloc((size_t)nn, 1))) goto nomem;
     if (boundary(m, g, err) != SS_OK) goto fail;
