@@ -75,6 +75,7 @@ typedef struct ss_mech_params {
     double tau_myo;     /* days, proto-myofibroblast -> alpha-SMA myofibroblast */
     double tau_proto;   /* days, fibroblast -> proto-myofibroblast at saturating growth factor */
     double gf_half;     /* 1, MDGF level of the half-maximal differentiation stimulus */
+    double rho_myo;     /* 1, wound collagen at which maturation runs at half rate (0 = ungated) */
     double tau_apo;     /* days, myofibroblast apoptosis time once the wound is covered */
     double tau_remodel; /* days, lag of the rest lengths behind the pull (0 = none) */
     /* GOH skin (§4.3): Psi = mu/2 (I1bar - 3) + K/2 (J - 1)^2 + sum_i Psi_fi */
