@@ -168,7 +168,9 @@ typedef struct ss_springs {
     int32_t *tet, *tet_edge, *ntet_start, *ntet;
     double *tvol0, *tvol_rest, *tcoef, *tpart;
     uint8_t *tskip;
-    double kvol, jmin; /* kPa, barrier modulus; J below which it acts */
+    double *xref, bar_safe; /* positions of the last tet pass; how far nodes may move from them
+                               before a tet can reach jmin (0: pass at the next evaluation) */
+    double kvol, jmin;      /* kPa, barrier modulus; J below which it acts */
 } ss_springs;
 
 /* Springs on the unique tet edges; stiffness k = modulus * vol / l0^2 (vol =

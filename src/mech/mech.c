@@ -515,6 +515,7 @@ ss_status ss_mech_step(ss_mech *m, ss_heal_grid *g, double dt_days, ss_error *er
     const float *epi = g->field[SS_HEAL_EPITHELIUM], *pla = g->field[SS_HEAL_PLASMA];
     const float *mdgf = g->field[SS_HEAL_MDGF];
     const int nx = m->nx, ny = m->ny, nz = m->nz;
+    const int gate = p->tau_myo > 0 && p->rho_myo > 0; /* the maturation needs the collagen */
     /* per block of MECH_COLS columns, z-slab by z-slab so the cells are read
      * and written contiguously (the same per-column sums as a column walk) */
     enum { MECH_COLS = 256 };
@@ -567,7 +568,7 @@ ss_status ss_mech_step(ss_mech *m, ss_heal_grid *g, double dt_days, ss_error *er
                 m->ecm[i] = e;
                 m->myo[i] = m->mask[i] ? nmean[k] : 0.0f;
                 m->gf[i] = m->mask[i] ? gmean[k] : 0.0f;
-                m->rhoc[i] = m->mask[i] ? rmean[k] : 0.0f;
+                if (gate) m->rhoc[i] = m->mask[i] ? rmean[k] : 0.0f;
                 m->cov[i] = m->mask[i] ? cover[k] : 1.0f;
             }
     }
@@ -576,7 +577,7 @@ ss_status ss_mech_step(ss_mech *m, ss_heal_grid *g, double dt_days, ss_error *er
     ss_mech_g2p(m->T, m->ecm, m->mask, S->x, nn, m->necm);
     ss_mech_g2p(m->T, m->gf, m->mask, S->x, nn, m->ngf);
     ss_mech_g2p(m->T, m->cov, m->mask, S->x, nn, m->ncov);
-    if (p->tau_myo > 0 && p->rho_myo > 0) ss_mech_g2p(m->T, m->rhoc, m->mask, S->x, nn, m->nrho);
+    if (gate) ss_mech_g2p(m->T, m->rhoc, m->mask, S->x, nn, m->nrho);
         /* myofibroblast differentiation (docs/mech.md): the growth factor turns
          * the wound's fibroblasts into proto-myofibroblasts, these mature into
          * alpha-SMA myofibroblasts, and both go by apoptosis once the wound is

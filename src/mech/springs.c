@@ -61,6 +61,7 @@ void ss_springs_free(ss_springs *s) {
     free(s->tcoef);
     free(s->tpart);
     free(s->tskip);
+    free(s->xref);
     free(s);
 }
 
@@ -254,9 +255,10 @@ ss_status ss_springs_set_barrier(ss_springs *s, const ss_tetmesh *m, double kvol
     s->tcoef = calloc((size_t)nt, sizeof(double));
     s->tpart = calloc((size_t)nb + 1, sizeof(double));
     s->tskip = calloc((size_t)nt, 1);
+    s->xref = malloc(3 * (size_t)s->nnodes * sizeof(double) + 1);
     int32_t *fill = malloc((size_t)s->nnodes * sizeof(int32_t) + 1);
     if (!keys || !s->tet || !s->tet_edge || !s->ntet_start || !s->ntet || !s->tvol0 ||
-        !s->tvol_rest || !s->tcoef || !s->tpart || !s->tskip || !fill) {
+        !s->tvol_rest || !s->tcoef || !s->tpart || !s->tskip || !s->xref || !fill) {
         free(keys);
         free(fill);
         return ss_error_set(err, SS_ERR_NOMEM, "springs: out of memory");
@@ -304,6 +306,7 @@ void ss_springs_barrier_update(ss_springs *s) {
         s->tvol_rest[t] = s->tvol0[t] * sqrt(r);
         s->tskip[t] = !(s->tvol0[t] > 0) || !(tet_vol(s->tet + 4 * (size_t)t, s->x) > 0);
     }
+    s->bar_safe = 0; /* the rest volumes changed: the next force evaluation makes a full pass */
     s->fvalid = 0;
 }
 
@@ -327,14 +330,32 @@ static double barrier_pass(ss_springs *s, const double *x, int *active) {
     const int nt = s->ntets, nb = (nt + BLOCK - 1) / BLOCK;
     const double jm = s->jmin, kv = s->kvol;
     int act = 0;
-#pragma omp parallel for schedule(static) reduction(+ : act)
+    double safe = INFINITY;
+#pragma omp parallel for schedule(static) reduction(+ : act) reduction(min : safe)
     for (int b = 0; b < nb; b++) {
         double u = 0;
         int hi = (b + 1) * BLOCK < nt ? (b + 1) * BLOCK : nt;
         for (int t = b * BLOCK; t < hi; t++) {
-            double vr = s->tvol_rest[t], V = tet_vol(s->tet + 4 * (size_t)t, x), db;
-            if (s->tskip[t] || V >= jm * vr) {
+            const int32_t *q = s->tet + 4 * (size_t)t;
+            double vr = s->tvol_rest[t], V = tet_vol(q, x), db;
+            if (s->tskip[t]) continue;
+            if (V >= jm * vr) {
                 if (s->tcoef[t] != 0) s->tcoef[t] = 0;
+                /* how far every node may move before the tet can reach
+                 * jmin: V is multilinear in the edge vectors from node 0,
+                 * each at most L long and moved by at most 2 d, so
+                 * |dV| <= ((L + 2 d)^3 - L^3) / 6 */
+                double L2 = 0;
+                for (int a = 0; a < 4; a++)
+                    for (int c = a + 1; c < 4; c++) {
+                        const double *pa = x + 3 * (size_t)q[a], *pc = x + 3 * (size_t)q[c];
+                        double e2 = (pa[0] - pc[0]) * (pa[0] - pc[0]) +
+                                    (pa[1] - pc[1]) * (pa[1] - pc[1]) +
+                                    (pa[2] - pc[2]) * (pa[2] - pc[2]);
+                        if (e2 > L2) L2 = e2;
+                    }
+                double L = sqrt(L2), d = 0.5 * (cbrt(6 * (V - jm * vr) + L * L * L) - L);
+                if (d < safe) safe = d;
                 continue;
             }
             u += kv * vr * barrier(V / vr, jm, &db);
@@ -344,6 +365,10 @@ static double barrier_pass(ss_springs *s, const double *x, int *active) {
         s->tpart[b] = u;
     }
     *active = act;
+    /* below jmin nowhere while no node is farther than safe from x (with a
+     * margin for rounding): forces_at may skip the pass until then */
+    s->bar_safe = act ? 0 : 0.99 * safe;
+    memcpy(s->xref, x, 3 * (size_t)s->nnodes * sizeof(double));
     double u = 0;
     for (int b = 0; b < nb; b++) u += s->tpart[b];
     return u;
@@ -410,9 +435,25 @@ static double block_sum(const double *partial, int nb) {
 /* Forces at x into f (3n) and the potential energy. */
 static double forces_at(ss_springs *s, const double *x, double *f, double *partial) {
     const int n = s->nnodes, nb = (n + BLOCK - 1) / BLOCK;
-    int bar;
-    const double ub = barrier_pass(s, x, &bar);
-    if (!(ub < INFINITY)) return INFINITY; /* a tet folds: never accepted */
+    int bar = 0;
+    double ub = 0;
+    if (s->ntets && s->jmin > 0) {
+        /* the tet pass only when a node has moved far enough from where the
+         * last pass found every tet above jmin to bring one down to it
+         * (exact: skipped passes would find no tet below jmin) */
+        double far = 0;
+        if (s->bar_safe > 0) {
+#pragma omp parallel for schedule(static) reduction(max : far)
+            for (int i = 0; i < n; i++) {
+                const double *a = x + 3 * (size_t)i, *r = s->xref + 3 * (size_t)i;
+                double d2 = (a[0] - r[0]) * (a[0] - r[0]) + (a[1] - r[1]) * (a[1] - r[1]) +
+                            (a[2] - r[2]) * (a[2] - r[2]);
+                if (d2 > far) far = d2;
+            }
+        }
+        if (!(s->bar_safe > 0) || sqrt(far) >= s->bar_safe) ub = barrier_pass(s, x, &bar);
+        if (!(ub < INFINITY)) return INFINITY; /* a tet folds: never accepted */
+    }
 #pragma omp parallel for schedule(static)
     for (int b = 0; b < nb; b++) {
         double u = 0;
