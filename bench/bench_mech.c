@@ -22,7 +22,8 @@
  * The load's k1 and max_shorten stay at 4000 kPa and 0.5 (the values of
  * the first measurements; the defaults are now 40000 and 0.8, a stiffer
  * load for which --default-load asks). Every tet carries the volume
- * barrier (j_min): the 99360-tet grid folded 144 tets without it.
+ * barrier (j_min): the 99360-tet grid folded 144 tets without it, 0 with
+ * it (docs/mech.md, Performance).
  * Usage: bench_mech [--skip-large] [--default-load] [--frames N] [--threads "1 2"]
  * Figures only; nothing is asserted. Targets: 34185 tets <= 50 ms/frame on 2
  * cores; coupled frame >= 5x faster than 1.32 s. */
