@@ -590,6 +590,7 @@ class ss_heal_run_config(ctypes.Structure):
         ("force", c_int),
         ("resume_dir", c_char_p),
         ("seed", c_uint64),
+        ("checkpoint_pieces", c_int * 3),
         ("mechanics", c_int),
         ("fibres", c_char_p),
         ("kappa", c_double),
@@ -602,6 +603,7 @@ class ss_heal_run_config(ctypes.Structure):
         ("skin_thickness_mm", c_double),
         ("voxel_mm", c_double),
         ("mesh_units_mm", c_double),
+        ("distributed", c_int),  # the MPI driver's rank 0 only (src/dist)
     ]
 
 
