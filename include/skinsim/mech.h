@@ -75,6 +75,7 @@ typedef struct ss_mech_params {
     double tau_myo;     /* days, proto-myofibroblast -> alpha-SMA myofibroblast */
     double tau_proto;   /* days, fibroblast -> proto-myofibroblast at saturating growth factor */
     double gf_half;     /* 1, MDGF level of the half-maximal differentiation stimulus */
+    double rho_myo;     /* 1, wound collagen at which maturation runs at half rate (0 = ungated) */
     double tau_apo;     /* days, myofibroblast apoptosis time once the wound is covered */
     double tau_remodel; /* days, lag of the rest lengths behind the pull (0 = none) */
     /* GOH skin (§4.3): Psi = mu/2 (I1bar - 3) + K/2 (J - 1)^2 + sum_i Psi_fi */
@@ -92,6 +93,7 @@ typedef struct ss_mech_params {
     double anchor_side; /* kPa/mm, far-field stiffness of the side faces (skin beyond) */
     double k_suture;    /* mN/mm, suture spring stiffness */
     double max_shorten; /* 1, largest relative rest-length change per spring */
+    double j_min;       /* 1, volume ratio below which the tet barrier acts (0 = none) */
     double tol;         /* 1, convergence: max residual displacement / edge length */
     int max_substeps;   /* sub-steps per frame at most */
 } ss_mech_params;
@@ -158,6 +160,17 @@ typedef struct ss_springs {
     double *f, *f2, *x2, *unode, U;
     double mean_l0; /* cached mean reference edge length */
     int fvalid;
+    /* volume barrier (ss_springs_set_barrier; ntets = 0: none): per tet its
+     * nodes, its six edge springs, reference and rest volume, the barrier's
+     * dE/dV at the last force evaluation, and a flag for tets already folded
+     * when a relaxation starts (left out); node -> tets (CSR) */
+    int ntets;
+    int32_t *tet, *tet_edge, *ntet_start, *ntet;
+    double *tvol0, *tvol_rest, *tcoef, *tpart;
+    uint8_t *tskip;
+    double *xref, bar_safe; /* positions of the last tet pass; how far nodes may move from them
+                               before a tet can reach jmin (0: pass at the next evaluation) */
+    double kvol, jmin;      /* kPa, barrier modulus; J below which it acts */
 } ss_springs;
 
 /* Springs on the unique tet edges; stiffness k = modulus * vol / l0^2 (vol =
@@ -166,10 +179,26 @@ ss_springs *ss_springs_create(const ss_tetmesh *m, double modulus_kpa, ss_error 
 void ss_springs_free(ss_springs *s);
 /* Adds a spring (sutures); rest length and stiffness given. Rebuilds the CSR. */
 ss_status ss_springs_add(ss_springs *s, int a, int b, double rest, double k, ss_error *err);
+/* Inversion-resistant volume term: every tet of m (the mesh the springs were
+ * made from) gets the energy kvol V_r b(J), J = V / V_r its volume over its
+ * rest volume V_r = V_0 sqrt(prod of its six edges' rest / l0) (exact for a
+ * uniform shrink), b(J) = -(J - jmin)^2 ln(J / jmin) for 0 < J < jmin and
+ * 0 above (the smooth log barrier of incremental potential contact, Li et
+ * al. 2020, ACM Trans Graph 39:49): zero where the tet keeps more than jmin
+ * of its rest volume, infinite as it flattens, so no accepted sub-step
+ * folds a tet (a tet folded when ss_springs_relax starts is left out).
+ * Edge springs alone do not resist a tet turning inside out. Call before
+ * ss_springs_add. jmin = 0 removes it. */
+ss_status ss_springs_set_barrier(ss_springs *s, const ss_tetmesh *m, double kvol, double jmin,
+                                 ss_error *err);
+/* Rest volumes and folded-tet flags from the current rest lengths and
+ * positions (ss_springs_relax calls it; after changing rest from outside,
+ * before ss_springs_forces or ss_springs_energy). */
+void ss_springs_barrier_update(ss_springs *s);
 /* Recomputes fictitious masses after stiffness changes. */
 void ss_springs_update_mass(ss_springs *s);
 /* Total force on every node (3n, mN) and the potential energy (uJ). */
-double ss_springs_forces(const ss_springs *s, double *f);
+double ss_springs_forces(ss_springs *s, double *f);
 double ss_springs_energy(const ss_springs *s);
 double ss_springs_kinetic(const ss_springs *s);
 /* One damped sub-step (semi-implicit Euler with fictitious masses, velocity

@@ -50,6 +50,7 @@ static const key keys[] = {
     K(tau_myo, "day", 0, 1e3),
     K(tau_proto, "day", 1e-3, 1e3),
     K(gf_half, "1", 1e-6, 1e3),
+    K(rho_myo, "1", 0, 1e3),
     K(tau_apo, "day", 1e-3, 1e4),
     K(tau_remodel, "day", 0, 1e3),
     K(mu, "kPa", 0, 1e7),
@@ -63,6 +64,7 @@ static const key keys[] = {
     K(anchor_side, "kPa/mm", 0, 1e6),
     K(k_suture, "mN/mm", 0, 1e9),
     K(max_shorten, "1", 0, 0.9),
+    K(j_min, "1", 0, 0.9),
     K(tol, "1", 1e-9, 0.1),
     {"max_substeps", "1", offsetof(ss_mech_params, max_substeps), 1, 1e6, 1},
 };
@@ -80,11 +82,12 @@ void ss_mech_params_default(ss_mech_params *p) {
     p->tau_myo = 7.0;
     p->tau_proto = 3.0;
     p->gf_half = 0.2;
+    p->rho_myo = 0.3;
     p->tau_apo = 14.0;
     p->tau_remodel = 4.0;
     p->mu = 13.5;
     p->K_bulk = 29.0;
-    p->k1 = 4000.0;
+    p->k1 = 40000.0;
     p->k2 = 1.0;
     p->kappa = 0.0;
     p->fibre[0][0] = 1.0;
@@ -94,7 +97,8 @@ void ss_mech_params_default(ss_mech_params *p) {
     p->anchor = 0.1;
     p->anchor_side = 2.0;
     p->k_suture = 1.0;
-    p->max_shorten = 0.5;
+    p->max_shorten = 0.8;
+    p->j_min = 0.2;
     p->tol = 1e-4;
     p->max_substeps = 400;
 }

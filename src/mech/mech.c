@@ -57,6 +57,8 @@ void ss_mech_free(ss_mech *m) {
     free(m->myo);
     free(m->gf);
     free(m->cov);
+    free(m->rhoc);
+    free(m->nrho);
     for (int d = 0; d < 3; d++) free(m->usub[d]);
     free(m->thsub);
     free(m->usub_valid);
@@ -259,7 +261,8 @@ ss_mech *ss_mech_create(ss_heal_grid *g, const ss_heal_params *heal, const ss_me
     m->myo = malloc(n * sizeof(float));
     m->gf = malloc(n * sizeof(float));
     m->cov = malloc(n * sizeof(float));
-    if (!m->mask || !m->wound0 || !m->ecm || !m->myo || !m->gf || !m->cov) goto nomem;
+    m->rhoc = malloc(n * sizeof(float));
+    if (!m->mask || !m->wound0 || !m->ecm || !m->myo || !m->gf || !m->cov || !m->rhoc) goto nomem;
     size_t ncells = 0;
     for (size_t i = 0; i < n; i++) {
         m->mask[i] = tissue(g->cell[i]);
@@ -293,6 +296,7 @@ ss_mech *ss_mech_create(ss_heal_grid *g, const ss_heal_params *heal, const ss_me
                                               p->tet_size_mm, err)))
         goto fail;
     if (!(m->S = ss_springs_create(m->mesh, 9.0 * p->K_bulk, err))) goto fail;
+    if (ss_springs_set_barrier(m->S, m->mesh, p->K_bulk, p->j_min, err) != SS_OK) goto fail;
     const int nn = m->mesh->nnodes, ns = m->S->nsprings;
     if (!(m->side = calloc((size_t)nn, 1))) goto nomem;
     if (boundary(m, g, err) != SS_OK) goto fail;
@@ -359,7 +363,8 @@ ss_mech *ss_mech_create(ss_heal_grid *g, const ss_heal_params *heal, const ss_me
     m->nproto = calloc((size_t)nn, sizeof(double));
     m->ngf = calloc((size_t)nn, sizeof(double));
     m->ncov = calloc((size_t)nn, sizeof(double));
-    if (!m->nmf || !m->nproto || !m->ngf || !m->ncov) goto nomem;
+    m->nrho = calloc((size_t)nn, sizeof(double));
+    if (!m->nmf || !m->nproto || !m->ngf || !m->ncov || !m->nrho) goto nomem;
     m->nth = calloc((size_t)nn, sizeof(double));
     m->necm = calloc((size_t)nn, sizeof(double));
     m->stress = calloc((size_t)nn, sizeof(double));
@@ -510,6 +515,7 @@ ss_status ss_mech_step(ss_mech *m, ss_heal_grid *g, double dt_days, ss_error *er
     const float *epi = g->field[SS_HEAL_EPITHELIUM], *pla = g->field[SS_HEAL_PLASMA];
     const float *mdgf = g->field[SS_HEAL_MDGF];
     const int nx = m->nx, ny = m->ny, nz = m->nz;
+    const int gate = p->tau_myo > 0 && p->rho_myo > 0; /* the maturation needs the collagen */
     /* per block of MECH_COLS columns, z-slab by z-slab so the cells are read
      * and written contiguously (the same per-column sums as a column walk) */
     enum { MECH_COLS = 256 };
@@ -519,11 +525,12 @@ ss_status ss_mech_step(ss_mech *m, ss_heal_grid *g, double dt_days, ss_error *er
     for (int c0 = 0; c0 < ncol; c0 += MECH_COLS) {
         const int nb = ncol - c0 < MECH_COLS ? ncol - c0 : MECH_COLS;
         int top[MECH_COLS], nw[MECH_COLS];
-        float sum[MECH_COLS], gsum[MECH_COLS], nmean[MECH_COLS], gmean[MECH_COLS], cover[MECH_COLS];
+        float sum[MECH_COLS], gsum[MECH_COLS], rsum[MECH_COLS], nmean[MECH_COLS], gmean[MECH_COLS],
+            rmean[MECH_COLS], cover[MECH_COLS];
         for (int k = 0; k < nb; k++) {
             top[k] = -1;
             nw[k] = 0;
-            sum[k] = gsum[k] = 0.0f;
+            sum[k] = gsum[k] = rsum[k] = 0.0f;
         }
         /* the column's surface: its top tissue cell; the wound region's
          * cells (initial wound or omega) give the mean fibroblast density
@@ -536,12 +543,14 @@ ss_status ss_mech_step(ss_mech *m, ss_heal_grid *g, double dt_days, ss_error *er
                 if (m->wound0[i] || pla[i] > SS_HEAL_P_MIN) {
                     sum[k] += fib[i];
                     gsum[k] += mdgf[i];
+                    rsum[k] += rho[i];
                     nw[k]++;
                 }
             }
         for (int k = 0; k < nb; k++) {
             nmean[k] = nw[k] ? sum[k] / (float)nw[k] : 0.0f;
             gmean[k] = nw[k] ? gsum[k] / (float)nw[k] : 0.0f;
+            rmean[k] = nw[k] ? rsum[k] / (float)nw[k] : 0.0f;
             cover[k] = 1.0f;
             if (top[k] >= 0 && nw[k]) {
                 float e = epi[(size_t)top[k] * slab + (size_t)(c0 + k)];
@@ -559,6 +568,7 @@ ss_status ss_mech_step(ss_mech *m, ss_heal_grid *g, double dt_days, ss_error *er
                 m->ecm[i] = e;
                 m->myo[i] = m->mask[i] ? nmean[k] : 0.0f;
                 m->gf[i] = m->mask[i] ? gmean[k] : 0.0f;
+                if (gate) m->rhoc[i] = m->mask[i] ? rmean[k] : 0.0f;
                 m->cov[i] = m->mask[i] ? cover[k] : 1.0f;
             }
     }
@@ -567,18 +577,23 @@ ss_status ss_mech_step(ss_mech *m, ss_heal_grid *g, double dt_days, ss_error *er
     ss_mech_g2p(m->T, m->ecm, m->mask, S->x, nn, m->necm);
     ss_mech_g2p(m->T, m->gf, m->mask, S->x, nn, m->ngf);
     ss_mech_g2p(m->T, m->cov, m->mask, S->x, nn, m->ncov);
-    /* myofibroblast differentiation (docs/mech.md): the growth factor turns
-     * the wound's fibroblasts into proto-myofibroblasts, these mature into
-     * alpha-SMA myofibroblasts, and both go by apoptosis once the wound is
-     * covered; implicit Euler per node over the frame (stable for any frame
-     * time, keeps 0 <= q, m and q + m <= 1) */
+    if (gate) ss_mech_g2p(m->T, m->rhoc, m->mask, S->x, nn, m->nrho);
+        /* myofibroblast differentiation (docs/mech.md): the growth factor turns
+         * the wound's fibroblasts into proto-myofibroblasts, these mature into
+         * alpha-SMA myofibroblasts, and both go by apoptosis once the wound is
+         * covered; implicit Euler per node over the frame (stable for any frame
+         * time, keeps 0 <= q, m and q + m <= 1) */
 #pragma omp parallel for schedule(static)
     for (int i = 0; i < nn; i++) {
         double n_w = m->nmyo[i] > 0 ? m->nmyo[i] : 0.0;
         double c = m->ncov[i] < 0 ? 0 : m->ncov[i] > 1 ? 1 : m->ncov[i];
         if (p->tau_myo > 0) {
             double gfv = m->ngf[i] > 0 ? m->ngf[i] : 0.0;
-            double a = gfv / (gfv + p->gf_half) / p->tau_proto, b = 1.0 / p->tau_myo,
+            /* maturation needs a matrix that resists the pull: the wound
+             * matrix's collagen r against rho_myo (Hill, exponent 2) */
+            double r = m->nrho[i] > 0 ? m->nrho[i] : 0.0,
+                   mat = p->rho_myo > 0 ? r * r / (r * r + p->rho_myo * p->rho_myo) : 1.0;
+            double a = gfv / (gfv + p->gf_half) / p->tau_proto, b = mat / p->tau_myo,
                    d = c / p->tau_apo, h = dt_days;
             double q = m->nproto[i], f = m->nmf[i];
             double A11 = 1 + h * (a + b + d), A12 = h * a, A21 = -h * b, A22 = 1 + h * d;

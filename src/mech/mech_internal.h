@@ -23,6 +23,7 @@ struct ss_mech {
     float *ecm;              /* rho_ecm / rho_ecm_hat per cell (scratch) */
     float *myo;              /* wound fibroblast density per cell (scratch) */
     float *gf, *cov;         /* growth factor and epithelial cover per cell (scratch) */
+    float *rhoc;             /* the wound matrix's collagen per cell (scratch) */
     double *usub[3], *thsub; /* sub-lattice displacement and volumetric strain */
     uint8_t *usub_valid;
     float *u[3];                        /* grid displacement, mm (filled on demand) */
@@ -31,7 +32,7 @@ struct ss_mech {
     int last_inverted, last_increments; /* folded tets after the frame, load increments */
     double *nmyo, *nth, *necm, *stress; /* per node */
     double *nmf, *nproto;               /* per node: myofibroblast, proto fractions */
-    double *ngf, *ncov;                 /* per node: growth factor, cover */
+    double *ngf, *ncov, *nrho;          /* per node: growth factor, cover, wound collagen */
     double *vel;                        /* 3n, mm/day */
     double *xprev, *grad, *disp;
     int32_t *tri; /* top surface triangles (3 per) */

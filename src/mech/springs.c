@@ -20,6 +20,9 @@
 
 #include "skinsim/mech.h"
 
+/* nodes (or tets) per block of the fixed-order sums */
+#define BLOCK 1024
+
 typedef struct edge_share {
     uint64_t key;
     double vol;
@@ -49,6 +52,16 @@ void ss_springs_free(ss_springs *s) {
     free(s->f2);
     free(s->x2);
     free(s->unode);
+    free(s->tet);
+    free(s->tet_edge);
+    free(s->ntet_start);
+    free(s->ntet);
+    free(s->tvol0);
+    free(s->tvol_rest);
+    free(s->tcoef);
+    free(s->tpart);
+    free(s->tskip);
+    free(s->xref);
     free(s);
 }
 
@@ -205,6 +218,184 @@ ss_status ss_springs_add(ss_springs *s, int a, int b, double rest, double k, ss_
     return st;
 }
 
+static int cmp_key(const void *a, const void *b) {
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* Signed volume of the tet q at positions x. */
+static inline double tet_vol(const int32_t *q, const double *x) {
+    const double *a = x + 3 * (size_t)q[0], *b = x + 3 * (size_t)q[1], *c = x + 3 * (size_t)q[2],
+                 *d = x + 3 * (size_t)q[3];
+    double u0 = b[0] - a[0], u1 = b[1] - a[1], u2 = b[2] - a[2];
+    double v0 = c[0] - a[0], v1 = c[1] - a[1], v2 = c[2] - a[2];
+    double w0 = d[0] - a[0], w1 = d[1] - a[1], w2 = d[2] - a[2];
+    return (u0 * (v1 * w2 - v2 * w1) - u1 * (v0 * w2 - v2 * w0) + u2 * (v0 * w1 - v1 * w0)) / 6.0;
+}
+
+ss_status ss_springs_set_barrier(ss_springs *s, const ss_tetmesh *m, double kvol, double jmin,
+                                 ss_error *err) {
+    static const int E6[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+    if (!(jmin >= 0 && jmin < 1) || !(kvol >= 0))
+        return ss_error_set(err, SS_ERR_INPUT, "springs: bad volume barrier (%g, %g)", kvol, jmin);
+    if (!m || m->nnodes != s->nnodes)
+        return ss_error_set(err, SS_ERR_INPUT, "springs: barrier mesh does not match");
+    s->jmin = jmin;
+    s->kvol = kvol;
+    if (jmin == 0 || kvol == 0 || s->ntets) return SS_OK;
+    const int nt = m->ntets, ns = s->nsprings;
+    const int nb = (nt + BLOCK - 1) / BLOCK;
+    uint64_t *keys = malloc((size_t)ns * sizeof *keys + 1);
+    s->tet = malloc(4 * (size_t)nt * sizeof(int32_t));
+    s->tet_edge = malloc(6 * (size_t)nt * sizeof(int32_t));
+    s->ntet_start = calloc((size_t)s->nnodes + 1, sizeof(int32_t));
+    s->ntet = malloc(4 * (size_t)nt * sizeof(int32_t));
+    s->tvol0 = malloc((size_t)nt * sizeof(double));
+    s->tvol_rest = malloc((size_t)nt * sizeof(double));
+    s->tcoef = calloc((size_t)nt, sizeof(double));
+    s->tpart = calloc((size_t)nb + 1, sizeof(double));
+    s->tskip = calloc((size_t)nt, 1);
+    s->xref = malloc(3 * (size_t)s->nnodes * sizeof(double) + 1);
+    int32_t *fill = malloc((size_t)s->nnodes * sizeof(int32_t) + 1);
+    if (!keys || !s->tet || !s->tet_edge || !s->ntet_start || !s->ntet || !s->tvol0 ||
+        !s->tvol_rest || !s->tcoef || !s->tpart || !s->tskip || !s->xref || !fill) {
+        free(keys);
+        free(fill);
+        return ss_error_set(err, SS_ERR_NOMEM, "springs: out of memory");
+    }
+    /* the springs of the mesh's edges are sorted by (low node, high node) */
+    for (int i = 0; i < ns; i++)
+        keys[i] = ((uint64_t)(uint32_t)s->e[2 * i] << 32) | (uint32_t)s->e[2 * i + 1];
+    memcpy(s->tet, m->tet, 4 * (size_t)nt * sizeof(int32_t));
+    for (int t = 0; t < nt; t++) {
+        const int32_t *q = m->tet + 4 * t;
+        for (int k = 0; k < 6; k++) {
+            uint32_t i = (uint32_t)q[E6[k][0]], j = (uint32_t)q[E6[k][1]];
+            uint64_t key = i < j ? ((uint64_t)i << 32) | j : ((uint64_t)j << 32) | i;
+            const uint64_t *hit = bsearch(&key, keys, (size_t)ns, sizeof *keys, cmp_key);
+            if (!hit) {
+                free(keys);
+                free(fill);
+                return ss_error_set(err, SS_ERR_INPUT, "springs: tet %d edge without spring", t);
+            }
+            s->tet_edge[6 * (size_t)t + k] = (int32_t)(hit - keys);
+        }
+        s->tvol0[t] = s->tvol_rest[t] = tet_vol(q, s->X);
+        for (int k = 0; k < 4; k++) s->ntet_start[q[k] + 1]++;
+    }
+    free(keys);
+    for (int i = 0; i < s->nnodes; i++) s->ntet_start[i + 1] += s->ntet_start[i];
+    memcpy(fill, s->ntet_start, (size_t)s->nnodes * sizeof(int32_t));
+    for (int t = 0; t < nt; t++)
+        for (int k = 0; k < 4; k++) s->ntet[fill[m->tet[4 * t + k]]++] = t;
+    free(fill);
+    s->ntets = nt;
+    ss_springs_barrier_update(s);
+    return SS_OK;
+}
+
+void ss_springs_barrier_update(ss_springs *s) {
+    if (!s->ntets) return;
+#pragma omp parallel for schedule(static)
+    for (int t = 0; t < s->ntets; t++) {
+        double r = 1;
+        for (int k = 0; k < 6; k++) {
+            int sp = s->tet_edge[6 * (size_t)t + k];
+            r *= s->rest[sp] / s->l0[sp];
+        }
+        s->tvol_rest[t] = s->tvol0[t] * sqrt(r);
+        s->tskip[t] = !(s->tvol0[t] > 0) || !(tet_vol(s->tet + 4 * (size_t)t, s->x) > 0);
+    }
+    s->bar_safe = 0; /* the rest volumes changed: the next force evaluation makes a full pass */
+    s->fvalid = 0;
+}
+
+/* The barrier b(J) = -(J - jmin)^2 ln(J / jmin) for 0 < J < jmin, and
+ * db/dJ; inf for J <= 0. */
+static inline double barrier(double J, double jmin, double *db) {
+    *db = 0;
+    if (J >= jmin) return 0;
+    if (!(J > 0)) return INFINITY;
+    double d = J - jmin, l = log(J / jmin);
+    *db = -2 * d * l - d * d / J;
+    return -d * d * l;
+}
+
+/* Barrier pass over the tets at x: dE/dV per tet into tcoef, the energy
+ * (summed in fixed blocks of tets) returned, inf once a tet folds; *active:
+ * the number of tets where it acts (0: no barrier force to gather). */
+static double barrier_pass(ss_springs *s, const double *x, int *active) {
+    *active = 0;
+    if (!s->ntets || !(s->jmin > 0)) return 0;
+    const int nt = s->ntets, nb = (nt + BLOCK - 1) / BLOCK;
+    const double jm = s->jmin, kv = s->kvol;
+    int act = 0;
+    double safe = INFINITY;
+#pragma omp parallel for schedule(static) reduction(+ : act) reduction(min : safe)
+    for (int b = 0; b < nb; b++) {
+        double u = 0;
+        int hi = (b + 1) * BLOCK < nt ? (b + 1) * BLOCK : nt;
+        for (int t = b * BLOCK; t < hi; t++) {
+            const int32_t *q = s->tet + 4 * (size_t)t;
+            double vr = s->tvol_rest[t], V = tet_vol(q, x), db;
+            if (s->tskip[t]) continue;
+            if (V >= jm * vr) {
+                if (s->tcoef[t] != 0) s->tcoef[t] = 0;
+                /* how far every node may move before the tet can reach
+                 * jmin: V is multilinear in the edge vectors from node 0,
+                 * each at most L long and moved by at most 2 d, so
+                 * |dV| <= ((L + 2 d)^3 - L^3) / 6 */
+                double L2 = 0;
+                for (int a = 0; a < 4; a++)
+                    for (int c = a + 1; c < 4; c++) {
+                        const double *pa = x + 3 * (size_t)q[a], *pc = x + 3 * (size_t)q[c];
+                        double e2 = (pa[0] - pc[0]) * (pa[0] - pc[0]) +
+                                    (pa[1] - pc[1]) * (pa[1] - pc[1]) +
+                                    (pa[2] - pc[2]) * (pa[2] - pc[2]);
+                        if (e2 > L2) L2 = e2;
+                    }
+                double L = sqrt(L2), d = 0.5 * (cbrt(6 * (V - jm * vr) + L * L * L) - L);
+                if (d < safe) safe = d;
+                continue;
+            }
+            u += kv * vr * barrier(V / vr, jm, &db);
+            s->tcoef[t] = kv * db; /* dE/dV = kv vr b'(J) / vr */
+            act++;
+        }
+        s->tpart[b] = u;
+    }
+    *active = act;
+    /* below jmin nowhere while no node is farther than safe from x (with a
+     * margin for rounding): forces_at may skip the pass until then */
+    s->bar_safe = act ? 0 : 0.99 * safe;
+    memcpy(s->xref, x, 3 * (size_t)s->nnodes * sizeof(double));
+    double u = 0;
+    for (int b = 0; b < nb; b++) u += s->tpart[b];
+    return u;
+}
+
+/* Adds the barrier force -dE/dV dV/dx_i of node i's active tets to f. */
+static inline void barrier_force(const ss_springs *s, const double *x, int i, double f[3]) {
+    for (int a = s->ntet_start[i]; a < s->ntet_start[i + 1]; a++) {
+        int t = s->ntet[a];
+        double c = s->tcoef[t];
+        if (c == 0) continue;
+        const int32_t *q = s->tet + 4 * (size_t)t;
+        int k = q[0] == i ? 0 : q[1] == i ? 1 : q[2] == i ? 2 : 3;
+        /* V = (x1 - x0) . ((x2 - x0) x (x3 - x0)) / 6 is linear in each node:
+         * dV/dx_k = (x_b - x_a) x (x_c - x_a) / 6 over the opposite face
+         * (a, b, c) taken so that the tet (k, a, b, c) is positive */
+        static const int opp[4][3] = {{1, 3, 2}, {0, 2, 3}, {0, 3, 1}, {0, 1, 2}};
+        const double *pa = x + 3 * (size_t)q[opp[k][0]], *pb = x + 3 * (size_t)q[opp[k][1]],
+                     *pc = x + 3 * (size_t)q[opp[k][2]];
+        double u0 = pb[0] - pa[0], u1 = pb[1] - pa[1], u2 = pb[2] - pa[2];
+        double v0 = pc[0] - pa[0], v1 = pc[1] - pa[1], v2 = pc[2] - pa[2];
+        f[0] -= c * (u1 * v2 - u2 * v1) / 6.0;
+        f[1] -= c * (u2 * v0 - u0 * v2) / 6.0;
+        f[2] -= c * (u0 * v1 - u1 * v0) / 6.0;
+    }
+}
+
 /* Force on node i at positions x (gathered over its springs, in spring
  * order); returns the node's share of the energy (half of each spring's,
  * all of its anchor's). */
@@ -235,7 +426,6 @@ static inline double node_force(const ss_springs *s, const double *x, int i, dou
 
 /* Sums in fixed blocks of nodes, then the blocks in order: the same bits on
  * any thread count, with the work spread over the threads. */
-#define BLOCK 1024
 static double block_sum(const double *partial, int nb) {
     double t = 0;
     for (int b = 0; b < nb; b++) t += partial[b];
@@ -243,21 +433,48 @@ static double block_sum(const double *partial, int nb) {
 }
 
 /* Forces at x into f (3n) and the potential energy. */
-static double forces_at(const ss_springs *s, const double *x, double *f, double *partial) {
+static double forces_at(ss_springs *s, const double *x, double *f, double *partial) {
     const int n = s->nnodes, nb = (n + BLOCK - 1) / BLOCK;
+    int bar = 0;
+    double ub = 0;
+    if (s->ntets && s->jmin > 0) {
+        /* the tet pass only when a node has moved far enough from where the
+         * last pass found every tet above jmin to bring one down to it
+         * (exact: skipped passes would find no tet below jmin) */
+        double far = 0;
+        if (s->bar_safe > 0) {
+#pragma omp parallel for schedule(static) reduction(max : far)
+            for (int i = 0; i < n; i++) {
+                const double *a = x + 3 * (size_t)i, *r = s->xref + 3 * (size_t)i;
+                double d2 = (a[0] - r[0]) * (a[0] - r[0]) + (a[1] - r[1]) * (a[1] - r[1]) +
+                            (a[2] - r[2]) * (a[2] - r[2]);
+                if (d2 > far) far = d2;
+            }
+        }
+        if (!(s->bar_safe > 0) || sqrt(far) >= s->bar_safe) ub = barrier_pass(s, x, &bar);
+        if (!(ub < INFINITY)) return INFINITY; /* a tet folds: never accepted */
+    }
 #pragma omp parallel for schedule(static)
     for (int b = 0; b < nb; b++) {
         double u = 0;
         int hi = (b + 1) * BLOCK < n ? (b + 1) * BLOCK : n;
-        for (int i = b * BLOCK; i < hi; i++) u += node_force(s, x, i, f + 3 * (size_t)i);
+        for (int i = b * BLOCK; i < hi; i++) {
+            u += node_force(s, x, i, f + 3 * (size_t)i);
+            if (bar) barrier_force(s, x, i, f + 3 * (size_t)i);
+        }
         partial[b] = u;
     }
-    return block_sum(partial, nb);
+    return block_sum(partial, nb) + ub;
 }
 
-double ss_springs_forces(const ss_springs *s, double *f) {
+double ss_springs_forces(ss_springs *s, double *f) {
+    int bar;
+    barrier_pass(s, s->x, &bar);
 #pragma omp parallel for schedule(static)
-    for (int i = 0; i < s->nnodes; i++) node_force(s, s->x, i, f + 3 * (size_t)i);
+    for (int i = 0; i < s->nnodes; i++) {
+        node_force(s, s->x, i, f + 3 * (size_t)i);
+        if (bar) barrier_force(s, s->x, i, f + 3 * (size_t)i);
+    }
     return ss_springs_energy(s);
 }
 
@@ -275,6 +492,11 @@ double ss_springs_energy(const ss_springs *s) {
         for (int d = 0; d < 3; d++)
             d2 += (s->x[3 * i + d] - s->X[3 * i + d]) * (s->x[3 * i + d] - s->X[3 * i + d]);
         u += 0.5 * s->anchor[i] * d2;
+    }
+    for (int t = 0; t < (s->jmin > 0 ? s->ntets : 0); t++) {
+        double vr = s->tvol_rest[t], db;
+        if (!s->tskip[t])
+            u += s->kvol * vr * barrier(tet_vol(s->tet + 4 * (size_t)t, s->x) / vr, s->jmin, &db);
     }
     return u;
 }
@@ -392,6 +614,7 @@ double ss_springs_substep(ss_springs *s) {
 
 int ss_springs_relax(ss_springs *s, double tol, int max_steps, int *converged) {
     int it = 0, ok = 0;
+    ss_springs_barrier_update(s);
     s->fvalid = 0;
     while (it < max_steps) {
         double d = ss_springs_substep(s);
