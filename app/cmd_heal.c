@@ -104,10 +104,13 @@ static void help(void) {
            "                         and last only)\n"
            "  --area-every DAYS      area.csv row interval (default 0.01, at least 1 step)\n"
            "  --checkpoint-every DAYS  write a checkpoint at this interval (default off)\n"
+           "  --checkpoint-pieces PXxPYxPZ  write each checkpoint as PX x PY x PZ box\n"
+           "                         pieces and a header (as MPI ranks do; default one\n"
+           "                         file); --resume reads either kind\n"
            "  --resume DIR           continue the run in DIR from its newest valid\n"
            "                         checkpoint (bit-identical to an uninterrupted run);\n"
            "                         may be combined with --days, --checkpoint-every,\n"
-           "                         --threads, --quiet, --json\n"
+           "                         --checkpoint-pieces, --threads, --quiet, --json\n"
            "\n"
            "Output\n"
            "  --out DIR              output directory (default heal-out)\n"
@@ -128,7 +131,8 @@ static void help(void) {
            "  fields/fields.pvd      ParaView collection, time = days (time slider)\n"
            "  surface/<f>_NNNN.png   top views of epithelium, capillary (surface value),\n"
            "                         eschar, scar (column maximum)\n"
-           "  checkpoints/ckpt_*.sshc  with --checkpoint-every (newest 2 kept)\n"
+           "  checkpoints/ckpt_*.sshc  with --checkpoint-every (newest 2 kept; with\n"
+           "                         --checkpoint-pieces ckpt_*.sshh + ckpt_*_p*.sshp)\n"
            "  with --mechanics: fields/mesh_NNNN.vtu + mesh.pvd (deformed tets:\n"
            "                         displacement, velocity, stress), displacement in the\n"
            "                         .vti, surface/velocity_NNNN.png (Fig. 7 top view),\n"
@@ -148,6 +152,25 @@ typedef struct opts {
 } opts;
 
 /* ---- argument parsing -------------------------------------------------------------- */
+
+/* --checkpoint-pieces PXxPYxPZ: three counts >= 1 (the run checks them
+ * against the grid). */
+static ss_status parse_pieces(const char *s, int d[3], ss_error *err) {
+    const char *p = s;
+    char *end = NULL;
+    for (int k = 0; k < 3; k++) {
+        long v = strtol(p, &end, 10);
+        if (end == p || v < 1 || v > SS_HEAL_CKPT_MAX_PIECES || (k < 2 && *end != 'x') ||
+            (k == 2 && *end))
+            return ss_error_set(err, SS_ERR_INPUT,
+                                "--checkpoint-pieces: '%s' is not PXxPYxPZ with counts of at "
+                                "least 1",
+                                s);
+        d[k] = (int)v;
+        p = end + 1;
+    }
+    return SS_OK;
+}
 
 static int parse_args(int argc, char **argv, opts *o, ss_error *err) {
     memset(o, 0, sizeof *o);
@@ -191,6 +214,9 @@ static int parse_args(int argc, char **argv, opts *o, ss_error *err) {
             st = cli_parse_double(a, v, 0, 1e6, &c->area_every, err);
         } else if (!strcmp(a, "--checkpoint-every")) {
             st = cli_parse_double(a, v, 0, 1e6, &c->checkpoint_every, err);
+            resume_ok = 1;
+        } else if (!strcmp(a, "--checkpoint-pieces")) {
+            st = parse_pieces(v, c->checkpoint_pieces, err);
             resume_ok = 1;
         } else if (!strcmp(a, "--resume")) {
             c->resume_dir = v;
@@ -357,7 +383,8 @@ int cmd_heal(int argc, char **argv) {
     if (o.c.resume_dir && o.nonresume_opts) {
         ss_error_set(&err, SS_ERR_INPUT,
                      "--resume continues a run with its own settings; only --days, "
-                     "--checkpoint-every, --threads, --quiet and --json may be given");
+                     "--checkpoint-every, --checkpoint-pieces, --threads, --quiet and "
+                     "--json may be given");
         return cli_fail(CMD, &err);
     }
     ss_threads_set(o.threads);

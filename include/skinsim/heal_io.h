@@ -84,6 +84,18 @@ ss_status ss_heal_vti_write_piece(const char *path, const ss_heal_grid *piece, c
 ss_status ss_heal_pvti_write(const char *path, const int whole[3], double dx_mm, double t_days,
                              int npieces, const int (*ext)[6], const char *const *files,
                              ss_error *err);
+/* The same with nvec 3-component cell arrays (as ss_heal_vti_write_vectors,
+ * each of piece->nx*ny*nz floats) and, if closed_day is not NULL, the closure
+ * days of the piece's own columns (piece->nx * piece->ny, index y*nx + x of
+ * the piece) as a Float64 FieldData array `closed_day`. A snapshot made only
+ * of pieces feeds ss_heal_pvti_read (and so `skinsim wound --heal`) only if
+ * its pieces carry closed_day: every column of the whole grid must be in at
+ * least one piece that has it (e.g. every piece, or the z = 0 box of each
+ * stack). */
+ss_status ss_heal_vti_write_piece_all(const char *path, const ss_heal_grid *piece, const int off[3],
+                                      const int whole[3], int nvec, const char *const *names,
+                                      float *const (*vecs)[3], const double *closed_day,
+                                      ss_error *err);
 /* Reads a snapshot written by ss_heal_vti_write(_vectors) back into a new grid
  * (cell states, every field, t_days; skin_top_mm and step are left 0: the
  * file does not hold them). displacement: if not NULL, receives a malloc'd
@@ -94,6 +106,24 @@ ss_status ss_heal_pvti_write(const char *path, const int whole[3], double dx_mm,
  * file. */
 ss_heal_grid *ss_heal_vti_read(const char *path, float **displacement, double **closed_day,
                                ss_error *err);
+
+/* Reads a parallel image written by ss_heal_pvti_write and its .vti pieces
+ * (ss_heal_vti_write_piece / _piece_all; Source paths relative to the .pvti)
+ * into one whole grid: the same grid, displacement and closed_day as
+ * ss_heal_vti_read gives for the gathered snapshot of the same state.
+ * displacement is set only when every piece has a `displacement` array;
+ * closed_day when the pieces that carry one cover every column (pieces that
+ * share a column must agree on it). Checked before the grid is returned: the
+ * .pvti's XML (PImageData, WholeExtent, Spacing, one Piece per Source), each
+ * piece (the vti reader's checks, its WholeExtent, Spacing and TimeValue equal
+ * to the .pvti's and the other pieces'), and that the pieces tile the whole
+ * extent exactly (no gap, no overlap). Failures -> NULL, SS_ERR_INPUT naming
+ * the file at fault (the .pvti or the piece). */
+ss_heal_grid *ss_heal_pvti_read(const char *path, float **displacement, double **closed_day,
+                                ss_error *err);
+/* The cheap part of those checks, without reading the pieces' data: the
+ * .pvti's XML, the tiling, and that every piece file is there and not empty. */
+ss_status ss_heal_pvti_check(const char *path, ss_error *err);
 
 /* ---- closure day per column ----------------------------------------------------
  * The day each (x, y) column's epithelial layer (ss_heal_surface_map's
@@ -204,7 +234,9 @@ ss_status ss_heal_checkpoint_write(const char *path, const ss_heal_grid *g, cons
 ss_status ss_heal_checkpoint_read(const char *path, ss_heal_checkpoint *out, ss_error *err);
 void ss_heal_checkpoint_free(ss_heal_checkpoint *c);
 /* Checkpoints of a run directory live in DIR/checkpoints/ as
- * ckpt_<step, 12 digits>.sshc. Loads the newest one that verifies (temporary
+ * ckpt_<step, 12 digits>.sshc, or in pieces (ckpt_<step>.sshh and its
+ * ckpt_<step>_p<i>.sshp, below: read as one box). Loads the newest one of
+ * either kind that verifies (temporary
  * files from interrupted writes are ignored, corrupt ones skipped; the
  * skipped names go into `note` if not NULL). SS_ERR_INPUT if none loads. */
 ss_status ss_heal_checkpoint_load_latest(const char *run_dir, ss_heal_checkpoint *out, char *note,
@@ -215,6 +247,131 @@ ss_status ss_heal_checkpoint_load_latest(const char *run_dir, ss_heal_checkpoint
 ss_status ss_heal_checkpoint_save(const char *run_dir, const ss_heal_grid *g, const char *scenario,
                                   const char *params_json, int scheme, double dt_days,
                                   const char *aux, int keep, ss_error *err);
+
+/* ---- checkpoints in pieces (docs/heal-outputs.md "Checkpoints in pieces") -----
+ * A checkpoint of a grid cut into boxes (the MPI driver's ranks, or
+ * ss_heal_checkpoint_save_pieces in one process), so no process ever holds
+ * the whole grid to write or read it. In DIR/checkpoints/:
+ *   ckpt_<step, 12 digits>_p<piece, 6 digits>.sshp   one box of every array
+ *   ckpt_<step, 12 digits>.sshh                      the header, written last
+ * A piece (little endian, version 1): "SSHEALPC" u32 version, i32 whole nx ny
+ * nz, nfields, lo[3], n[3] (the box in whole-grid cell indices), u64 step,
+ * f64 t_days, u32 velocity_present, then the box's cell array (n0*n1*n2
+ * bytes, index (z*n1 + y)*n0 + x), nfields Float32 arrays, 3 velocity arrays
+ * if present, and a trailing u32 CRC-32 over everything before it.
+ * The header ("SSHEALPH", version 1): everything a whole-grid checkpoint's
+ * header holds (nx ny nz nfields, dx skin_top t_days, step, scheme, dt,
+ * velocity_present, scenario, params JSON, aux), the process grid dims[3],
+ * npieces and per piece lo[3], n[3], u64 file bytes, u32 CRC; then its own
+ * CRC-32. Each file is written to a temporary name and renamed; the header is
+ * written by one writer after every piece is in place, so a checkpoint is
+ * complete exactly when its header exists. Pieces may come from any split:
+ * any set of boxes that tiles the grid exactly.
+ *
+ * On MPI (src/dist), writing: every rank ss_heal_ckpt_piece_write(dir, rank,
+ * its box + halo grid, org, its lo and n, whole, &info); the statuses are
+ * reduced and the infos gathered (plain bytes) to rank 0, which fills the
+ * header (whole grid, dx, skin top, t, step, scheme, dt, scenario, params
+ * JSON, aux, dims, pieces) and calls ss_heal_ckpt_header_save. Resuming (any
+ * rank count): rank 0 ss_heal_checkpoint_open_latest (a whole-grid checkpoint
+ * comes back loaded, as before); for a piece one it broadcasts the step, every
+ * rank ss_heal_ckpt_header_read(ss_heal_ckpt_header_path(dir, step)) and
+ * ss_heal_ckpt_read_box of its box + halo, and the statuses are reduced before
+ * anything is written. Single process: ss_heal_checkpoint_load_latest reads
+ * both kinds; `skinsim heal --checkpoint-pieces PXxPYxPZ` writes pieces. */
+#define SS_HEAL_CKPT_MAX_PIECES 16384
+typedef struct ss_heal_ckpt_piece {
+    int lo[3], n[3]; /* the box, whole-grid cell indices */
+    uint64_t bytes;  /* the piece file's size */
+    uint32_t crc;    /* its CRC-32 (the file's last four bytes) */
+} ss_heal_ckpt_piece;
+typedef struct ss_heal_ckpt_header {
+    int whole[3]; /* nx ny nz */
+    double dx_mm, skin_top_mm, t_days;
+    uint64_t step;
+    int scheme;
+    double dt_days;
+    int velocity;              /* 1: the pieces hold the three velocity arrays */
+    char *scenario;            /* owned */
+    char *params_json;         /* owned */
+    char *aux;                 /* owned, "" when none */
+    int dims[3];               /* the writers' process grid; its product is npieces */
+    int npieces;               /* 1..SS_HEAL_CKPT_MAX_PIECES */
+    ss_heal_ckpt_piece *piece; /* owned, npieces; piece i is file _p<i> */
+} ss_heal_ckpt_header;
+void ss_heal_ckpt_header_free(ss_heal_ckpt_header *h); /* frees the members, zeroes h */
+
+/* DIR/checkpoints/ckpt_<step>.sshh and ..._p<index>.sshp into buf. */
+void ss_heal_ckpt_header_path(char *buf, size_t len, const char *run_dir, uint64_t step);
+void ss_heal_ckpt_piece_path(char *buf, size_t len, const char *run_dir, uint64_t step, int index);
+
+/* Box `c` (coords) of a dims process grid over whole: the block split of the
+ * MPI driver, lo = whole * c / dims (integer division), so sizes differ by
+ * at most one. */
+void ss_heal_ckpt_split(const int whole[3], const int dims[3], const int coords[3], int lo[3],
+                        int n[3]);
+
+/* Writes piece `index` of the checkpoint of step g->step: the box lo..lo+n
+ * (whole-grid indices, inside whole) of every array of g, a grid whose cell
+ * (0,0,0) is whole-grid cell org (a box with its halo: org = lo - 1; the whole
+ * grid: org = 0). The box must lie inside g. Creates DIR/checkpoints if
+ * needed; atomic. *info receives the box, bytes and CRC for the header (the
+ * MPI driver gathers them to the header's writer). Needs no other process. */
+ss_status ss_heal_ckpt_piece_write(const char *run_dir, int index, const ss_heal_grid *g,
+                                   const int org[3], const int lo[3], const int n[3],
+                                   const int whole[3], ss_heal_ckpt_piece *info, ss_error *err);
+/* Writes the header (after every piece of h->step is written) and then, like
+ * ss_heal_checkpoint_save, keeps only the newest `keep` (>= 2) checkpoints of
+ * either kind in DIR/checkpoints, removing older headers, whole-grid files,
+ * pieces of no kept checkpoint (up to h->step) and temporaries of killed
+ * writes. Refuses (SS_ERR_INPUT) a header whose pieces do not tile the grid. */
+ss_status ss_heal_ckpt_header_save(const char *run_dir, const ss_heal_ckpt_header *h, int keep,
+                                   ss_error *err);
+/* Reads and verifies a header file: magic, version, its CRC, values, and that
+ * its pieces tile the whole grid exactly. SS_ERR_INPUT naming the path. */
+ss_status ss_heal_ckpt_header_read(const char *path, ss_heal_ckpt_header *out, ss_error *err);
+/* Every piece of h is there, has the header's size and its own header agrees
+ * with h (whole dims, nfields, box, step, t_days, velocity); with verify_crc
+ * each is also read whole (streamed, constant memory) and its CRC checked
+ * against the file's and the header's. SS_ERR_INPUT naming the piece file.
+ * The MPI driver's rank 0 runs this before a distributed resume. */
+ss_status ss_heal_ckpt_pieces_check(const char *run_dir, const ss_heal_ckpt_header *h,
+                                    int verify_crc, ss_error *err);
+/* Reads the box lo..lo+n (whole-grid indices; clipped to the whole grid, e.g.
+ * a box with its halo) of every array into g, whose cell (0,0,0) is the
+ * whole-grid cell org (g's cells outside the clipped box are left as they
+ * are). Only the pieces overlapping the box are opened; each is checked
+ * (its header against h, its size, its CRC over every byte, streamed) as it
+ * is read, so on an error g's box holds garbage: SS_ERR_INPUT naming the
+ * piece file. Sets g->t_days, step and skin_top_mm from h; with h->velocity,
+ * g's missing velocity arrays are allocated (g's size), without it g's
+ * velocity arrays (if any) get zeros in the box. */
+ss_status ss_heal_ckpt_read_box(const char *run_dir, const ss_heal_ckpt_header *h, ss_heal_grid *g,
+                                const int org[3], const int lo[3], const int n[3], ss_error *err);
+
+/* One process: g (the whole grid) as a checkpoint of dims[0] x dims[1] x
+ * dims[2] pieces (ss_heal_ckpt_split) and its header, then pruned to the
+ * newest keep as ss_heal_ckpt_header_save does. */
+ss_status ss_heal_checkpoint_save_pieces(const char *run_dir, const ss_heal_grid *g,
+                                         const char *scenario, const char *params_json, int scheme,
+                                         double dt_days, const char *aux, const int dims[3],
+                                         int keep, ss_error *err);
+/* The piece checkpoint of `step` in run_dir read whole (the box = the grid)
+ * into *out (header, pieces check, then every piece), as
+ * ss_heal_checkpoint_read gives for a whole-grid checkpoint of that state. */
+ss_status ss_heal_checkpoint_read_pieces(const char *run_dir, uint64_t step,
+                                         ss_heal_checkpoint *out, ss_error *err);
+/* The newest usable checkpoint of run_dir of either kind, without reading a
+ * piece checkpoint's grid: a whole-grid one is read into *whole (whole->grid
+ * set, pieces->npieces 0); for a piece one *pieces gets its header after
+ * ss_heal_ckpt_pieces_check(verify_crc) passed (whole->grid NULL). Newer
+ * checkpoints that fail are skipped (named in note); SS_ERR_INPUT if none is
+ * usable. A resume on any number of ranks: each reads its box with
+ * ss_heal_ckpt_read_box. ss_heal_checkpoint_load_latest is this plus, for a
+ * piece checkpoint, the whole grid read as one box. */
+ss_status ss_heal_checkpoint_open_latest(const char *run_dir, int verify_crc,
+                                         ss_heal_checkpoint *whole, ss_heal_ckpt_header *pieces,
+                                         char *note, size_t note_len, ss_error *err);
 
 #ifdef __cplusplus
 }

@@ -75,13 +75,15 @@ typedef struct ss_heal_run_config {
                                 the checkpoint's interval on resume) */
 
     /* ---- files ---- */
-    const char *out_dir;    /* run directory; NULL = in memory, no file written */
-    int force;              /* 1: replace a previous run's outputs in out_dir */
-    const char *resume_dir; /* continue the run in this directory from its newest valid
-                               checkpoint (bit-identical to an uninterrupted run); the model,
-                               grid, wound and intervals then come from the checkpoint: only
-                               days and checkpoint_every are taken from this config */
-    uint64_t seed;          /* recorded in summary.json (the solver draws no random numbers) */
+    const char *out_dir;      /* run directory; NULL = in memory, no file written */
+    int force;                /* 1: replace a previous run's outputs in out_dir */
+    const char *resume_dir;   /* continue the run in this directory from its newest valid
+                                 checkpoint (bit-identical to an uninterrupted run); the model,
+                                 grid, wound and intervals then come from the checkpoint: only
+                                 days and checkpoint_every are taken from this config */
+    uint64_t seed;            /* recorded in summary.json (the solver draws no random numbers) */
+    int checkpoint_pieces[3]; /* all > 0: checkpoints as px x py x pz pieces and a header
+                                 (ss_heal_checkpoint_save_pieces); 0 = one whole-grid file */
 
     /* ---- contraction mechanics (seed 001 §4.2-5.3, docs/mech.md; fresh runs) ---- */
     int mechanics;        /* 1: mass-spring contraction drives the convection (default 0) */
@@ -186,6 +188,16 @@ typedef struct ss_heal_run_hooks {
 /* Sets (h) or clears (NULL) the hooks; SS_ERR_INPUT when the run has the
  * contraction mechanics (naming --mechanics). */
 ss_status ss_heal_run_set_hooks(ss_heal_run *r, const ss_heal_run_hooks *h, ss_error *err);
+/* A checkpoint writer instead of the run's own (ss_heal_checkpoint_save or,
+ * with checkpoint_pieces, ss_heal_checkpoint_save_pieces), called after the
+ * sync hook with the run's metadata: writes the checkpoint of g's state and
+ * keeps the newest `keep`, e.g. as per-rank pieces (skinsim/heal_io.h,
+ * "checkpoints in pieces"). fn NULL = the run's own again. */
+typedef ss_status (*ss_heal_run_checkpoint_fn)(void *ctx, const ss_heal_grid *g,
+                                               const char *run_dir, const char *scenario,
+                                               const char *params_json, int scheme, double dt_days,
+                                               const char *aux, int keep, ss_error *err);
+void ss_heal_run_set_checkpoint_hook(ss_heal_run *r, ss_heal_run_checkpoint_fn fn, void *ctx);
 
 /* ---- state ---- */
 /* The grid holds all the state (fields, cells, t_days, step). A caller may
@@ -227,7 +239,9 @@ struct ss_mech *ss_heal_run_mech(ss_heal_run *r);
  * What `skinsim heal --out DIR` wrote: run.json (its "format" is
  * SS_HEAL_RUN_FORMAT; a folder of another format is refused, since what the
  * files hold and mean may differ), summary.json (scenario, grid, parameters,
- * step), fields/fields.pvd and the snapshots fields/fields_NNNN.vti it lists.
+ * step), fields/fields.pvd and the snapshots fields/fields_NNNN.vti it lists
+ * (or, where one is not there, fields_NNNN.pvti and its pieces, as a run on
+ * MPI ranks may leave them; a .pvti fields.pvd lists is read as one).
  * Read-only: nothing in DIR is changed. */
 #define SS_HEAL_RUN_FORMAT 1
 typedef struct ss_heal_saved_run ss_heal_saved_run;
@@ -252,6 +266,10 @@ int ss_heal_saved_run_find(const ss_heal_saved_run *s, double day);
  * summary.json and fields.pvd -> SS_ERR_INPUT naming the file. */
 ss_heal_grid *ss_heal_saved_run_load(const ss_heal_saved_run *s, int i, float **displacement,
                                      double **closed_day, ss_error *err);
+/* Snapshot i's files are there, without reading their data: the .vti, or
+ * the .pvti (its XML, the tiling) and every piece. SS_ERR_INPUT naming the
+ * file. A caller checks the snapshots it will need before writing anything. */
+ss_status ss_heal_saved_run_check(const ss_heal_saved_run *s, int i, ss_error *err);
 
 #ifdef __cplusplus
 }

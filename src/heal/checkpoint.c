@@ -3,111 +3,19 @@
  * versioned little-endian binary file closed by a zlib CRC-32, written to a
  * temporary name and renamed, so `skinsim heal --resume` continues
  * bit-identically and a killed write never damages the previous checkpoint.
- * Serves the run-control part of seed 001 §5.1 (long simulations). */
+ * Serves the run-control part of seed 001 §5.1 (long simulations). The same
+ * state cut into per-box pieces is checkpoint_pieces.c; the run directory's
+ * checkpoints of both kinds (newest, pruning) are checkpoint_dir.c. */
 #define _POSIX_C_SOURCE 200809L
-#include "skinsim/heal_io.h"
+#include "checkpoint_internal.h"
 
-#include <dirent.h>
 #include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
-#include <zlib.h>
 
 #define CK_MAGIC "SSHEALCK"
 #define CK_VERSION 1u
-#define CK_EXT ".sshc"
-
-/* ---- little-endian buffer helpers ------------------------------------------ */
-
-typedef struct wbuf {
-    FILE *fp;
-    uLong crc;
-    int bad;
-} wbuf;
-
-static void wraw(wbuf *w, const void *p, size_t n) {
-    if (!n) return;
-    w->crc = crc32_z(w->crc, (const Bytef *)p, n);
-    if (fwrite(p, 1, n, w->fp) != n) w->bad = 1;
-}
-static void wu32(wbuf *w, uint32_t v) {
-    unsigned char b[4] = {(unsigned char)v, (unsigned char)(v >> 8), (unsigned char)(v >> 16),
-                          (unsigned char)(v >> 24)};
-    wraw(w, b, 4);
-}
-static void wu64(wbuf *w, uint64_t v) {
-    wu32(w, (uint32_t)v);
-    wu32(w, (uint32_t)(v >> 32));
-}
-static void wf64(wbuf *w, double d) {
-    uint64_t v;
-    memcpy(&v, &d, 8);
-    wu64(w, v);
-}
-static void wstr(wbuf *w, const char *s) {
-    size_t n = s ? strlen(s) : 0;
-    wu32(w, (uint32_t)n);
-    wraw(w, s, n);
-}
-/* Float arrays: written as IEEE little-endian words. */
-static void wf32s(wbuf *w, const float *a, size_t n) {
-    static const uint32_t one = 1;
-    if (*(const unsigned char *)&one == 1) {
-        wraw(w, a, n * 4);
-        return;
-    }
-    for (size_t i = 0; i < n; i++) {
-        uint32_t v;
-        memcpy(&v, &a[i], 4);
-        wu32(w, v);
-    }
-}
-
-typedef struct rbuf {
-    const unsigned char *p;
-    size_t len, pos;
-} rbuf;
-static int rneed(rbuf *r, size_t n) { return r->len - r->pos >= n; }
-static uint32_t ru32(rbuf *r) {
-    const unsigned char *b = r->p + r->pos;
-    r->pos += 4;
-    return (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24;
-}
-static uint64_t ru64(rbuf *r) {
-    uint64_t lo = ru32(r);
-    return lo | (uint64_t)ru32(r) << 32;
-}
-static double rf64(rbuf *r) {
-    uint64_t v = ru64(r);
-    double d;
-    memcpy(&d, &v, 8);
-    return d;
-}
-static char *rstr(rbuf *r) {
-    if (!rneed(r, 4)) return NULL;
-    uint32_t n = ru32(r);
-    if (!rneed(r, n)) return NULL;
-    char *s = malloc((size_t)n + 1);
-    if (!s) return NULL;
-    memcpy(s, r->p + r->pos, n);
-    s[n] = '\0';
-    r->pos += n;
-    return s;
-}
-static void rf32s(rbuf *r, float *a, size_t n) {
-    static const uint32_t one = 1;
-    if (*(const unsigned char *)&one == 1) {
-        memcpy(a, r->p + r->pos, n * 4);
-        r->pos += n * 4;
-        return;
-    }
-    for (size_t i = 0; i < n; i++) {
-        uint32_t v = ru32(r);
-        memcpy(&a[i], &v, 4);
-    }
-}
 
 /* ---- write ------------------------------------------------------------------ */
 
@@ -145,13 +53,7 @@ ss_status ss_heal_checkpoint_write(const char *path, const ss_heal_grid *g, cons
     for (int f = 0; f < SS_HEAL_NFIELDS; f++) wf32s(&w, g->field[f], n);
     if (vel)
         for (int c = 0; c < 3; c++) wf32s(&w, g->velocity[c], n);
-    uint32_t crc = (uint32_t)w.crc;
-    wu32(&w, crc);
-    if (w.bad) {
-        ss_atomic_abort(&af);
-        return ss_error_set(err, SS_ERR_RUNTIME, "%s: write failed: %s", path, strerror(errno));
-    }
-    return ss_atomic_commit(&af, err);
+    return ck_finish(&w, &af, path, NULL, err);
 }
 
 /* ---- read ------------------------------------------------------------------- */
@@ -165,25 +67,39 @@ void ss_heal_checkpoint_free(ss_heal_checkpoint *c) {
     memset(c, 0, sizeof *c);
 }
 
+ss_status ss_heal__ck_load(const char *path, const char *magic, uint32_t version, size_t min_len,
+                           const char *what, const char *kind, char **data, size_t *len,
+                           ss_error *err) {
+    *data = ss_read_file(path, len, err);
+    if (!*data) return err ? err->code : SS_ERR_INPUT;
+    const unsigned char *b = (const unsigned char *)*data;
+    ss_status st = SS_OK;
+    if (*len < min_len || memcmp(b, magic, 8) != 0)
+        st = ss_error_set(err, SS_ERR_INPUT, "%s: not %s (bad magic)", path, what);
+    else if (ck_get_u32(b + 8) != version)
+        st = ss_error_set(err, SS_ERR_INPUT,
+                          "%s: %s version %u is not supported (this build reads %u)", path, kind,
+                          ck_get_u32(b + 8), version);
+    if (st) {
+        free(*data);
+        *data = NULL;
+    }
+    return st;
+}
+
 ss_status ss_heal_checkpoint_read(const char *path, ss_heal_checkpoint *out, ss_error *err) {
     memset(out, 0, sizeof *out);
     size_t len = 0;
-    char *data = ss_read_file(path, &len, err);
-    if (!data) return err ? err->code : SS_ERR_INPUT;
-    rbuf r = {(const unsigned char *)data, len, 0};
-    ss_status st = SS_OK;
+    char *data;
+    ss_status st = ss_heal__ck_load(path, CK_MAGIC, CK_VERSION, 16, "a skinsim healing checkpoint",
+                                    "checkpoint", &data, &len, err);
+    if (st) return st;
+    rbuf r = {(const unsigned char *)data, len, 12};
 #define BAD(...)                                                                                   \
     do {                                                                                           \
         st = ss_error_set(err, SS_ERR_INPUT, __VA_ARGS__);                                         \
         goto done;                                                                                 \
     } while (0)
-    if (len < 16 || memcmp(data, CK_MAGIC, 8) != 0)
-        BAD("%s: not a skinsim healing checkpoint (bad magic)", path);
-    r.pos = 8;
-    uint32_t version = ru32(&r);
-    if (version != CK_VERSION)
-        BAD("%s: checkpoint version %u is not supported (this build reads %u)", path, version,
-            CK_VERSION);
     uint32_t crc_stored;
     {
         if (len < 20) BAD("%s: truncated checkpoint", path);
@@ -249,110 +165,4 @@ done:
     free(data);
     if (st) ss_heal_checkpoint_free(out);
     return st;
-}
-
-/* ---- run directory ------------------------------------------------------------ */
-
-static int is_ckpt_name(const char *s, unsigned long long *step) {
-    size_t l = strlen(s);
-    if (l != 5 + 12 + strlen(CK_EXT) || strncmp(s, "ckpt_", 5) != 0 || strcmp(s + 17, CK_EXT))
-        return 0;
-    unsigned long long v = 0;
-    for (int i = 5; i < 17; i++) {
-        if (s[i] < '0' || s[i] > '9') return 0;
-        v = v * 10 + (unsigned long long)(s[i] - '0');
-    }
-    *step = v;
-    return 1;
-}
-
-static int cmp_desc(const void *a, const void *b) {
-    unsigned long long x = *(const unsigned long long *)a, y = *(const unsigned long long *)b;
-    return x < y ? 1 : x > y ? -1 : 0;
-}
-
-/* Steps of the checkpoints in dir, newest first; *n entries, malloc'd. */
-static unsigned long long *list_ckpts(const char *dir, int *n) {
-    *n = 0;
-    DIR *d = opendir(dir);
-    if (!d) return NULL;
-    int cap = 16;
-    unsigned long long *s = malloc((size_t)cap * sizeof *s);
-    struct dirent *e;
-    while (s && (e = readdir(d))) {
-        unsigned long long v;
-        if (!is_ckpt_name(e->d_name, &v)) continue;
-        if (*n == cap) {
-            cap *= 2;
-            unsigned long long *t = realloc(s, (size_t)cap * sizeof *s);
-            if (!t) break;
-            s = t;
-        }
-        s[(*n)++] = v;
-    }
-    closedir(d);
-    if (s) qsort(s, (size_t)*n, sizeof *s, cmp_desc);
-    return s;
-}
-
-ss_status ss_heal_checkpoint_load_latest(const char *run_dir, ss_heal_checkpoint *out, char *note,
-                                         size_t note_len, ss_error *err) {
-    char dir[4096], path[4400];
-    if (note && note_len) note[0] = '\0';
-    snprintf(dir, sizeof dir, "%s/checkpoints", run_dir);
-    int n;
-    unsigned long long *steps = list_ckpts(dir, &n);
-    if (!n) {
-        free(steps);
-        return ss_error_set(err, SS_ERR_INPUT, "%s: no checkpoint to resume from (%s/ckpt_*%s)",
-                            run_dir, dir, CK_EXT);
-    }
-    ss_error e1;
-    ss_error_clear(&e1);
-    for (int i = 0; i < n; i++) {
-        snprintf(path, sizeof path, "%s/ckpt_%012llu%s", dir, steps[i], CK_EXT);
-        ss_error e;
-        ss_error_clear(&e);
-        if (ss_heal_checkpoint_read(path, out, &e) == SS_OK) {
-            free(steps);
-            return SS_OK;
-        }
-        if (!e1.code) e1 = e;
-        if (note && note_len) {
-            size_t l = strlen(note);
-            snprintf(note + l, note_len - l, "%sskipped %s", l ? "; " : "", e.msg);
-        }
-    }
-    free(steps);
-    return ss_error_set(err, SS_ERR_INPUT, "%s: no usable checkpoint (%s)", run_dir, e1.msg);
-}
-
-ss_status ss_heal_checkpoint_save(const char *run_dir, const ss_heal_grid *g, const char *scenario,
-                                  const char *params_json, int scheme, double dt_days,
-                                  const char *aux, int keep, ss_error *err) {
-    char dir[4096], path[4400];
-    snprintf(dir, sizeof dir, "%s/checkpoints", run_dir);
-    ss_status st = ss_mkdir_p(dir, err);
-    if (st) return st;
-    snprintf(path, sizeof path, "%s/ckpt_%012llu%s", dir, (unsigned long long)g->step, CK_EXT);
-    st = ss_heal_checkpoint_write(path, g, scenario, params_json, scheme, dt_days, aux, err);
-    if (st) return st;
-    if (keep < 2) keep = 2;
-    int n;
-    unsigned long long *steps = list_ckpts(dir, &n);
-    for (int i = keep; i < n; i++) {
-        snprintf(path, sizeof path, "%s/ckpt_%012llu%s", dir, steps[i], CK_EXT);
-        unlink(path);
-    }
-    free(steps);
-    /* temporary files left by writes that were killed (ours just committed) */
-    DIR *d = opendir(dir);
-    struct dirent *e;
-    while (d && (e = readdir(d))) {
-        if (strncmp(e->d_name, "ckpt_", 5) || !strstr(e->d_name, CK_EXT ".tmp.")) continue;
-        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
-        unlink(path);
-    }
-    if (d) closedir(d);
-    return SS_OK;
 }

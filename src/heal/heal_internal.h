@@ -53,6 +53,24 @@ void ss_heal_rd__convect(const ss_heal_rd_system *sys, const ss_heal_rd_work *w,
 void ss_heal_rd__step_split_phase(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt, int nsub,
                                   int phase);
 
+/* ---- I/O shared between files ---- */
+/* A box of whole-grid cells: lo[3], n[3]. */
+typedef struct ss_heal_box {
+    int lo[3], n[3];
+} ss_heal_box;
+/* NULL when the nbox boxes tile the whole grid exactly (each inside it, no
+ * two overlapping, their volumes adding up to it), else why not with *bad the
+ * offending box (-1: a gap). Boxes are read from base with a stride of
+ * `stride` bytes (each element begins with an ss_heal_box). Quadratic in
+ * nbox. (checkpoint_pieces.c) */
+const char *ss_heal__boxes_tile(const int whole[3], int nbox, const void *base, size_t stride,
+                                int *bad);
+/* A .vti piece of a parallel image (vti.c): the grid of its Piece Extent
+ * (allocated at least 3 wide, nx ny nz set to the piece's), whole from its
+ * WholeExtent and off from its Piece Extent; otherwise as ss_heal_vti_read. */
+ss_heal_grid *ss_heal__vti_read_piece(const char *path, int whole[3], int off[3],
+                                      float **displacement, double **closed_day, ss_error *err);
+
 /* clamp without the libm call fminf/fmaxf need without -ffast-math */
 static inline float clampf(float v, float lo, float hi) {
     v = v > lo ? v : lo;

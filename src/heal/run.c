@@ -98,6 +98,23 @@ static ss_status set_end(ss_heal_run *r, ss_error *err) {
     return SS_OK;
 }
 
+/* --checkpoint-pieces: 1 to the grid's cells per axis, at most
+ * SS_HEAL_CKPT_MAX_PIECES pieces in all; none (all 0) is the whole-grid file. */
+static ss_status check_ckpt_pieces(const ss_heal_run *r, ss_error *err) {
+    const int *d = r->c.checkpoint_pieces, n[3] = {r->g->nx, r->g->ny, r->g->nz};
+    if (!d[0] && !d[1] && !d[2]) return SS_OK;
+    for (int a = 0; a < 3; a++)
+        if (d[a] < 1 || d[a] > n[a])
+            return ss_error_set(err, SS_ERR_INPUT,
+                                "--checkpoint-pieces %dx%dx%d: need 1 to %d, %d and %d pieces per "
+                                "axis for the %dx%dx%d grid",
+                                d[0], d[1], d[2], n[0], n[1], n[2], n[0], n[1], n[2]);
+    if ((long long)d[0] * d[1] * d[2] > SS_HEAL_CKPT_MAX_PIECES)
+        return ss_error_set(err, SS_ERR_INPUT, "--checkpoint-pieces %dx%dx%d: more than %d pieces",
+                            d[0], d[1], d[2], SS_HEAL_CKPT_MAX_PIECES);
+    return SS_OK;
+}
+
 ss_status ss_heal_run_create(const ss_heal_run_config *c, ss_heal_run **out, ss_error *err) {
     *out = NULL;
     if (!c) return ss_error_set(err, SS_ERR_INPUT, "heal run: no config");
@@ -111,6 +128,7 @@ ss_status ss_heal_run_create(const ss_heal_run_config *c, ss_heal_run **out, ss_
     if (!st)
         st = c->resume_dir ? ss_heal_run__setup_resume(r, err) : ss_heal_run__setup_fresh(r, err);
     if (!st) st = set_end(r, err);
+    if (!st) st = check_ckpt_pieces(r, err);
     if (!st && !r->closed_day) { /* fresh, or a checkpoint from before the closure days */
         if (!(r->closed_day = malloc((size_t)r->g->nx * (size_t)r->g->ny * sizeof *r->closed_day)))
             st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
@@ -167,8 +185,15 @@ ss_status ss_heal_run_write_checkpoint(ss_heal_run *r, ss_error *err) {
     if ((st0 = ss_heal_run__sync(r, err))) return st0;
     char *aux = ss_heal_run__aux_json(r, r->wall_prev + ss_now() - r->t0);
     if (!aux) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
-    ss_status st = ss_heal_checkpoint_save(r->out_dir, r->g, r->scenario, r->params_json,
-                                           (int)r->scheme, r->dt, aux, 2, err);
+    const int *pc = r->c.checkpoint_pieces;
+    ss_status st =
+        r->ckpt_fn ? r->ckpt_fn(r->ckpt_ctx, r->g, r->out_dir, r->scenario, r->params_json,
+                                (int)r->scheme, r->dt, aux, 2, err)
+        : pc[0] > 0 && pc[1] > 0 && pc[2] > 0
+            ? ss_heal_checkpoint_save_pieces(r->out_dir, r->g, r->scenario, r->params_json,
+                                             (int)r->scheme, r->dt, aux, pc, 2, err)
+            : ss_heal_checkpoint_save(r->out_dir, r->g, r->scenario, r->params_json, (int)r->scheme,
+                                      r->dt, aux, 2, err);
     free(aux);
     return st;
 }
@@ -358,6 +383,11 @@ ss_status ss_heal_run_finish(ss_heal_run *r, char **summary_json, ss_error *err)
     }
     cJSON_Delete(summary);
     return st;
+}
+
+void ss_heal_run_set_checkpoint_hook(ss_heal_run *r, ss_heal_run_checkpoint_fn fn, void *ctx) {
+    r->ckpt_fn = fn;
+    r->ckpt_ctx = fn ? ctx : NULL;
 }
 
 ss_status ss_heal_run_set_hooks(ss_heal_run *r, const ss_heal_run_hooks *h, ss_error *err) {

@@ -63,6 +63,9 @@ struct ss_heal_run {
     float *vfields;          /* per surf vertex, SS_SHELL_VERTEX_STRIDE floats */
     cJSON *shell_aux;        /* the checkpoint's "shell" object while resuming */
     ss_heal_run_hooks hooks; /* an external solver (src/dist); members NULL = none */
+    ss_heal_run_checkpoint_fn
+        ckpt_fn; /* a checkpoint writer instead of the run's own; NULL = none */
+    void *ckpt_ctx;
 };
 /* Brings r->g's fields up to date when an external solver steps it. */
 ss_status ss_heal_run__sync(ss_heal_run *r, ss_error *err);

@@ -5,8 +5,9 @@
  * of this format (run.json "format", written since format 1), with a
  * summary.json that gives the scenario, grid, parameters and step, and a
  * fields.pvd that lists the snapshots in time order. A snapshot is read on
- * demand (ss_heal_vti_read) and checked against the summary's grid and the
- * day fields.pvd gives it.
+ * demand (ss_heal_vti_read, or ss_heal_pvti_read when a run on MPI ranks left
+ * fields_NNNN.pvti and its pieces instead of the gathered fields_NNNN.vti) and
+ * checked against the summary's grid and the day fields.pvd gives it.
  *
  * Design: what the snapshots hold is the full state of the species fields
  * and cell states at their days, which is all a consumer of the surface
@@ -208,6 +209,44 @@ int ss_heal_saved_run_find(const ss_heal_saved_run *s, double day) {
     return -1;
 }
 
+/* The file of a snapshot: the .vti fields.pvd names or, when it is not
+ * there (a run on MPI ranks that wrote pieces only), the .pvti of the same
+ * name joining its pieces; a .pvti named in fields.pvd is one. path is
+ * changed to the file to read; 1 = a .pvti, 0 = a .vti, -1 = neither is
+ * there (err names both). */
+static int snapshot_file(char *path, size_t len, ss_error *err) {
+    size_t l = strlen(path);
+    struct stat sb;
+    if (l > 5 && !strcmp(path + l - 5, ".pvti")) return 1;
+    if (l > 4 && l + 2 < len && !strcmp(path + l - 4, ".vti") && stat(path, &sb) != 0) {
+        char vti[4800];
+        snprintf(vti, sizeof vti, "%s", path);
+        memcpy(path + l - 4, ".pvti", 6);
+        if (stat(path, &sb) == 0) return 1;
+        ss_error_set(err, SS_ERR_INPUT, "%s: the snapshot is missing (and so is %s)", vti, path);
+        return -1;
+    }
+    return 0;
+}
+
+ss_status ss_heal_saved_run_check(const ss_heal_saved_run *s, int i, ss_error *err) {
+    if (i < 0 || i >= s->n)
+        return ss_error_set(err, SS_ERR_INPUT, "--heal %s: no snapshot %d", s->dir, i);
+    char path[4800];
+    snprintf(path, sizeof path, "%s/fields/%s", s->dir, s->file[i]);
+    struct stat sb;
+    switch (snapshot_file(path, sizeof path, err)) {
+    case 1:
+        return ss_heal_pvti_check(path, err);
+    case 0:
+        if (stat(path, &sb) || !S_ISREG(sb.st_mode))
+            return ss_error_set(err, SS_ERR_INPUT, "%s: the snapshot is missing", path);
+        return SS_OK;
+    default:
+        return SS_ERR_INPUT;
+    }
+}
+
 ss_heal_grid *ss_heal_saved_run_load(const ss_heal_saved_run *s, int i, float **displacement,
                                      double **closed_day, ss_error *err) {
     if (displacement) *displacement = NULL;
@@ -219,7 +258,10 @@ ss_heal_grid *ss_heal_saved_run_load(const ss_heal_saved_run *s, int i, float **
     }
     char path[4800];
     snprintf(path, sizeof path, "%s/fields/%s", s->dir, s->file[i]);
-    ss_heal_grid *g = ss_heal_vti_read(path, displacement, &closed, err);
+    int kind = snapshot_file(path, sizeof path, err);
+    if (kind < 0) return NULL;
+    ss_heal_grid *g = kind ? ss_heal_pvti_read(path, displacement, &closed, err)
+                           : ss_heal_vti_read(path, displacement, &closed, err);
     if (!g) return NULL;
     if (!closed)
         ss_error_set(err, SS_ERR_INPUT,

@@ -398,14 +398,28 @@ ss_status ss_heal_run__check_identity(const char *dir, const ss_heal_checkpoint 
     ss_status st = SS_OK;
     while (!st && d && (e = readdir(d))) {
         size_t n = strlen(e->d_name);
-        if (strncmp(e->d_name, "ckpt_", 5) || n < 6 || strcmp(e->d_name + n - 5, ".sshc")) continue;
+        int head = n >= 6 && !strcmp(e->d_name + n - 5, ".sshh"); /* of a checkpoint in pieces */
+        if (strncmp(e->d_name, "ckpt_", 5) || n < 6 ||
+            (!head && strcmp(e->d_name + n - 5, ".sshc")))
+            continue;
         char file[4700];
         snprintf(file, sizeof file, "%s/%s", path, e->d_name);
         ss_heal_checkpoint ck;
         ss_error e2;
-        if (ss_heal_checkpoint_read(file, &ck, &e2)) continue; /* damaged: skipped as before */
-        checkpoint_identity(&ck, &have);
-        ss_heal_checkpoint_free(&ck);
+        if (head) { /* its header says whose it is */
+            ss_heal_ckpt_header h;
+            if (ss_heal_ckpt_header_read(file, &h, &e2)) continue;
+            ss_heal_grid gh = {0};
+            gh.nx = h.whole[0], gh.ny = h.whole[1], gh.nz = h.whole[2];
+            gh.dx_mm = h.dx_mm, gh.skin_top_mm = h.skin_top_mm;
+            ck = (ss_heal_checkpoint){&gh, h.scenario, h.params_json, h.aux, h.scheme, h.dt_days};
+            checkpoint_identity(&ck, &have);
+            ss_heal_ckpt_header_free(&h);
+        } else {
+            if (ss_heal_checkpoint_read(file, &ck, &e2)) continue; /* damaged: skipped as before */
+            checkpoint_identity(&ck, &have);
+            ss_heal_checkpoint_free(&ck);
+        }
         if (strcmp(have.run_id, want.run_id)) {
             describe(&have, a, sizeof a);
             describe(&want, b, sizeof b);

@@ -116,6 +116,14 @@ ss_status ss_heal_vti_write_piece(const char *path, const ss_heal_grid *piece, c
     return write_vti(path, piece, 0, NULL, NULL, NULL, off, whole, err);
 }
 
+ss_status ss_heal_vti_write_piece_all(const char *path, const ss_heal_grid *piece, const int off[3],
+                                      const int whole[3], int nvec, const char *const *names,
+                                      float *const (*vecs)[3], const double *closed_day,
+                                      ss_error *err) {
+    if (!piece || !piece->cell) return ss_error_set(err, SS_ERR_INPUT, "%s: no grid", path);
+    return write_vti(path, piece, nvec, names, vecs, closed_day, off, whole, err);
+}
+
 ss_status ss_heal_pvti_write(const char *path, const int whole[3], double dx_mm, double t_days,
                              int npieces, const int (*ext)[6], const char *const *files,
                              ss_error *err) {
@@ -288,8 +296,11 @@ static const unsigned char *vti_block(const unsigned char *data, size_t avail, u
     return data + off + 8;
 }
 
-ss_heal_grid *ss_heal_vti_read(const char *path, float **displacement, double **closed_day,
-                               ss_error *err) {
+/* A snapshot or, piece, a piece of a parallel image: the grid of its Piece
+ * Extent (off..off+n in whole-grid cells, whole from WholeExtent); a whole
+ * file must have its piece span the WholeExtent. */
+static ss_heal_grid *read_vti(const char *path, int piece, int whole[3], int off[3],
+                              float **displacement, double **closed_day, ss_error *err) {
     if (displacement) *displacement = NULL;
     if (closed_day) *closed_day = NULL;
     double *closed = NULL;
@@ -301,27 +312,41 @@ ss_heal_grid *ss_heal_vti_read(const char *path, float **displacement, double **
     const char *why = NULL;
     char *app = strstr(text, "<AppendedData encoding=\"raw\">");
     char *us = app ? strchr(app, '_') : NULL;
-    int n[3] = {0, 0, 0}, e0[3];
+    int n[3] = {0, 0, 0}, e0[3], *W = whole, pe[6];
     double sp[3] = {0, 0, 0};
-    const char *we = strstr(text, "WholeExtent=\"");
+    const char *we = strstr(text, "WholeExtent=\""), *pex = strstr(text, "<Piece Extent=\"");
     const char *spc = strstr(text, "Spacing=\"");
     const char *tv = strstr(text, "Name=\"TimeValue\"");
     if (!app || !us || !we || !spc || !tv || we > app || spc > app || tv > app)
         why = "not a skinsim heal snapshot (no extent, spacing, time or appended data)";
-    else if (sscanf(we + 13, "%d %d %d %d %d %d", &e0[0], &n[0], &e0[1], &n[1], &e0[2], &n[2]) !=
+    else if (sscanf(we + 13, "%d %d %d %d %d %d", &e0[0], &W[0], &e0[1], &W[1], &e0[2], &W[2]) !=
                  6 ||
-             e0[0] || e0[1] || e0[2] || n[0] < 1 || n[1] < 1 || n[2] < 1)
+             e0[0] || e0[1] || e0[2] || W[0] < 1 || W[1] < 1 || W[2] < 1)
         why = "bad WholeExtent";
-    else if (sscanf(spc + 9, "%lg %lg %lg", &sp[0], &sp[1], &sp[2]) != 3 || !(sp[0] > 0) ||
-             sp[1] != sp[0] || sp[2] != sp[0])
+    else if (!pex || pex > app ||
+             sscanf(pex + 15, "%d %d %d %d %d %d", &pe[0], &pe[1], &pe[2], &pe[3], &pe[4],
+                    &pe[5]) != 6)
+        why = "no Piece Extent";
+    for (int a = 0; !why && a < 3; a++) {
+        off[a] = pe[2 * a], n[a] = pe[2 * a + 1] - pe[2 * a];
+        if (off[a] < 0 || n[a] < 1 || off[a] > W[a] - n[a] || (!piece && n[a] != W[a]))
+            why = piece ? "Piece Extent not inside the WholeExtent"
+                        : "Piece Extent is not the WholeExtent (a piece of a .pvti?)";
+    }
+    if (!why && (sscanf(spc + 9, "%lg %lg %lg", &sp[0], &sp[1], &sp[2]) != 3 || !(sp[0] > 0) ||
+                 sp[1] != sp[0] || sp[2] != sp[0]))
         why = "bad Spacing (the heal grid has cubic voxels)";
     double t = 0;
     const char *tvv = tv ? strchr(tv, '>') : NULL;
     if (!why && (!tvv || sscanf(tvv + 1, "%lg", &t) != 1 || !(t >= 0))) why = "bad TimeValue";
-    if (!why && !(g = ss_heal_grid_create(n[0], n[1], n[2], sp[0], err))) {
+    /* a piece may be thinner than a grid can be: allocated at least 3 wide */
+    if (!why &&
+        !(g = ss_heal_grid_create(piece && n[0] < 3 ? 3 : n[0], piece && n[1] < 3 ? 3 : n[1],
+                                  piece && n[2] < 3 ? 3 : n[2], sp[0], err))) {
         free(text);
         return NULL;
     }
+    if (g) g->nx = n[0], g->ny = n[1], g->nz = n[2];
     const unsigned char *data = (const unsigned char *)us + 1;
     size_t avail = len - (size_t)(us + 1 - text);
     size_t ncell = (size_t)n[0] * (size_t)n[1] * (size_t)n[2];
@@ -402,4 +427,15 @@ ss_heal_grid *ss_heal_vti_read(const char *path, float **displacement, double **
     if (displacement) *displacement = disp;
     if (closed_day) *closed_day = closed;
     return g;
+}
+
+ss_heal_grid *ss_heal_vti_read(const char *path, float **displacement, double **closed_day,
+                               ss_error *err) {
+    int whole[3], off[3];
+    return read_vti(path, 0, whole, off, displacement, closed_day, err);
+}
+
+ss_heal_grid *ss_heal__vti_read_piece(const char *path, int whole[3], int off[3],
+                                      float **displacement, double **closed_day, ss_error *err) {
+    return read_vti(path, 1, whole, off, displacement, closed_day, err);
 }

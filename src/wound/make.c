@@ -188,6 +188,10 @@ static ss_status open_saved(job *j, ss_error *err) {
                                     : end,
                                 end);
     }
+    for (int i = 0; i < c->ndays; i++) { /* their files, before anything is written */
+        ss_status st2 = ss_heal_saved_run_check(s, ss_heal_saved_run_find(s, c->days[i]), err);
+        if (st2) return st2;
+    }
     if (ss_heal_saved_run_snapshot_day(s, 0) > 1e-3 * ss_heal_saved_run_dt(s))
         return ss_error_set(err, SS_ERR_INPUT, "--heal %s: its first snapshot is not day 0",
                             c->heal_dir);

@@ -240,6 +240,39 @@ int main(int argc, char **argv) {
         free(c);
         free(b);
     }
+    /* ---- the header of a checkpoint in pieces; a .pvti ---- */
+    if (g && pj) {
+        char *dir = target_path("ckpt_pieces", "run");
+        const int dims[3] = {2, 1, 2};
+        if (ss_heal_checkpoint_save_pieces(dir, g, "clean", pj, 1, 0.01, "{}", dims, 2, &err) ==
+            SS_OK) {
+            char hp[4400];
+            ss_heal_ckpt_header_path(hp, sizeof hp, dir, g->step);
+            seed_copy("ckpt_pieces", "two_by_two", hp, -1);
+            size_t len;
+            char *b = slurp(hp, &len);
+            seed("ckpt_pieces", "truncated", b, len - 7);
+            memset(b + 12, 0x7f, 4); /* nx = 2^31 - 1, resealed */
+            reseal(b, len);
+            seed("ckpt_pieces", "huge_nx", b, len);
+            free(b);
+        }
+        ss_remove_tree(dir); /* the pieces themselves are no seeds */
+        free(dir);
+    }
+    seed_text(
+        "pvti", "three",
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"PImageData\" version=\"1.0\" "
+        "byte_order=\"LittleEndian\" header_type=\"UInt64\">\n  <PImageData "
+        "WholeExtent=\"0 6 0 4 0 3\" GhostLevel=\"0\" Origin=\"0 0 0\" Spacing=\"0.5 0.5 "
+        "0.5\">\n    <PCellData Scalars=\"cell_state\">\n      <PDataArray type=\"UInt8\" "
+        "Name=\"cell_state\"/>\n    </PCellData>\n    <Piece Extent=\"0 3 0 4 0 3\" "
+        "Source=\"a&amp;b.vti\"/>\n    <Piece Extent=\"3 6 0 2 0 3\" Source=\"b.vti\"/>\n "
+        "   <Piece Extent=\"3 6 2 4 0 3\" Source=\"/tmp/c.vti\"/>\n  </PImageData>\n</VTKFile>\n");
+    seed_text("pvti", "overlap",
+              "<VTKFile type=\"PImageData\"><PImageData WholeExtent=\"0 2147483647 0 4 0 3\" "
+              "Spacing=\"1 1 1\"><Piece Extent=\"0 3 0 4 0 3\" Source=\"a.vti\"/><Piece "
+              "Extent=\"-2 3 0 4 0 3\" Source=\"\"/></PImageData></VTKFile>");
     ss_heal_grid_free(g);
 
     /* ---- parameter JSON ---- */

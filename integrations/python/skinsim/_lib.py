@@ -590,6 +590,7 @@ class ss_heal_run_config(ctypes.Structure):
         ("force", c_int),
         ("resume_dir", c_char_p),
         ("seed", c_uint64),
+        ("checkpoint_pieces", c_int * 3),
         ("mechanics", c_int),
         ("fibres", c_char_p),
         ("kappa", c_double),
