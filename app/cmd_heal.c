@@ -306,6 +306,10 @@ static void print_dist_timing(const opts *o, void *dist) {
             "%.3f s, statistics %.3f s, gathers %.3f s (slowest rank); halo %.0f bytes/step\n",
             t.dims[0] * t.dims[1] * t.dims[2], t.dims[0], t.dims[1], t.dims[2], t.steps,
             t.compute_s, t.halo_s, t.stats_s, t.gather_s, t.halo_bytes_per_step);
+    fprintf(stderr, "skinsim heal: peak memory per rank (MB):");
+    for (int i = 0; t.rss_mb && i < t.dims[0] * t.dims[1] * t.dims[2]; i++)
+        fprintf(stderr, " %.1f", t.rss_mb[i]);
+    fprintf(stderr, "\n");
 #else
     (void)o;
     (void)dist;
@@ -352,7 +356,9 @@ static int run_steps(const opts *o, ss_heal_run *r, ss_error *err, void *dist) {
  * others step their boxes (src/dist/heal.c); every rank exits with rank 0's code. */
 static int heal_mpi(const opts *o, ss_error *err) {
     ss_heal_run *r = NULL;
-    ss_status cst = ss_dist_rank() == 0 ? ss_heal_run_create(&o->c, &r, err) : SS_OK;
+    ss_heal_run_config c = o->c;
+    c.distributed = 1; /* rank 0 never holds the whole grid (a checkpoint write aside) */
+    ss_status cst = ss_dist_rank() == 0 ? ss_heal_run_create(&c, &r, err) : SS_OK;
     ss_dist_heal *d = NULL;
     ss_status st = ss_dist_heal_create(r, cst, &d, err);
     int rc;

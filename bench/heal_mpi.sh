@@ -10,6 +10,10 @@
 # exchange and the interior kernel (SKINSIM_DIST_OVERLAP=0: the exchange
 # completes before the kernel, as before the overlap) and with boxes stacked in
 # z (SKINSIM_MPI_DIMS=1x1x2 and 2x1x2).
+# Then the peak memory (getrusage ru_maxrss) of every rank on the strong grid,
+# with a snapshot (pieces, surface maps) and a checkpoint (pieces) written, next
+# to the single process: rank 0 holds its box only, not the whole grid.
+# MEM_ONLY=1 runs just that table.
 # Usage: bench/heal_mpi.sh [BUILD_DIR] [STEPS] [REPEAT] [THREADS] [SCHEME]
 # mpirun runs as root here only with --allow-run-as-root (DESIGN.md).
 set -eu
@@ -61,6 +65,45 @@ row() { # kind np grid base_step
     echo "| $1 | $2 | $3 | $5 | $6 | $step | $rate | $eff | $9 |"
 }
 
+# peak memory: one process (no mpirun), then 1, 2 and 4 ranks (MB per rank)
+mem() {
+    rm -rf "$tmp/mem"
+    python3 - "$B" "$scheme" "$dt" "$tmp/mem" "$threads" <<'PY'
+import resource, subprocess, sys
+b, scheme, dt, out, th = sys.argv[1:]
+subprocess.run([b, 'heal', '--scheme', scheme, '--grid', '160x124x159', '--dt', dt, '--days',
+                str(3 * float(dt)), '--snapshot-every', '0', '--checkpoint-every', dt,
+                '--threads', th, '--quiet', '--out', out], check=True)
+print('%.1f' % (resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024))
+PY
+}
+memrow() { # np
+    rm -rf "$tmp/mem"
+    mpirun --oversubscribe --allow-run-as-root -np "$1" "$B" heal --scheme "$scheme" \
+        --grid 160x124x159 --dt $dt --days "$(python3 -c "print(3 * $dt)")" --snapshot-every 0 \
+        --checkpoint-every $dt --threads "$threads" --out "$tmp/mem" 2>"$tmp/err" >/dev/null ||
+        { cat "$tmp/err" >&2; exit 1; }
+    grep "peak memory per rank" "$tmp/err" | sed 's/.*(MB): //'
+}
+memtable() {
+    echo "peak memory (MB), scheme $scheme, 160x124x159 (3.15e6 voxels), a snapshot and a checkpoint written"
+    echo "| run | rank 0 | other ranks |"
+    echo "|---|---|---|"
+    echo "| one process (no mpirun) | $(mem) | - |"
+    for np in 1 2 4; do
+        set -- $(memrow $np)
+        r0=$1
+        shift
+        echo "| $np rank(s) | $r0 | $* |"
+    done
+}
+if [ -n "${MEM_ONLY:-}" ]; then
+    echo "load before: $(uptime)"
+    memtable
+    echo "load after: $(uptime)"
+    exit 0
+fi
+
 echo "load before: $(uptime)"
 echo "scheme $scheme, $steps steps, $threads thread(s) per rank, best of $repeat"
 echo "| scaling | ranks | grid | kernel s/step | halo s/step | step s | species-cell updates/s | efficiency | halo (transpose) bytes/rank/step |"
@@ -80,4 +123,5 @@ row weak 1 80x62x159 0 >"$tmp/base" && cat "$tmp/base"
 wbase=$(awk -F'|' '{print $7}' "$tmp/base")
 row weak 2 160x62x159 "$wbase"
 row weak 4 160x124x159 "$wbase"
+memtable
 echo "load after: $(uptime)"

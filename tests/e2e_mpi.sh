@@ -1,9 +1,13 @@
 #!/usr/bin/env bash
 # End-to-end test of skinsim on MPI (docs/scaling.md): `skinsim heal` on 1, 2,
 # 3 and 4 ranks (mpirun --oversubscribe on this 2-core machine) writes the same
-# bytes as the single-process run: area.csv, every VTK snapshot, fields.pvd,
-# run.json, the surface maps and summary.json (less its wall time and thread
-# count), on a grid that divides by the rank counts and one that does not, and
+# bytes as the single-process run: area.csv, run.json, the surface maps and
+# summary.json (less its wall time and thread count); its snapshots are per-rank
+# pieces joined by fields_NNNN.pvti (no whole-grid .vti), which assembled
+# (tests/pvti_same.py) equal the single-process fields_NNNN.vti array by array,
+# and fields.pvd lists them; every rank builds its own box from the wound (the
+# built-in square, strokes, a mesh voxelised per box);
+# on a grid that divides by the rank counts and one that does not, and
 # with boxes stacked in z (SKINSIM_MPI_DIMS=1x1x2 and 2x1x2); a run
 # checkpointed on a 2x1x2 process grid resumes on 3 ranks to the uninterrupted
 # single-process result; bad input (too many ranks for the grid with either
@@ -14,6 +18,7 @@
 # usage: e2e_mpi.sh <skinsim> <source dir>
 set -u
 CLI=$1
+SRC=${2:-$(dirname "$0")/..}
 command -v mpirun >/dev/null || { echo "skip: no mpirun"; exit 77; }
 "$CLI" --version | grep -q "with MPI" || { echo "skip: skinsim built without MPI"; exit 77; }
 T=$(mktemp -d /tmp/skinsim-e2e-mpi-XXXXXX)
@@ -27,17 +32,18 @@ export ASAN_OPTIONS="${ASAN_OPTIONS:-}:detect_leaks=0"
 MPIRUN="mpirun --oversubscribe --allow-run-as-root --mca btl self,vader --mca mpi_yield_when_idle 1"
 run_np() { local n=$1; shift; $MPIRUN -np "$n" "$CLI" "$@"; }
 
-# compares every output of run dir $1 with $2
+# compares every output of run dir $1 with $2 (an MPI run: pieces + .pvti)
 same_run() {
-    for f in area.csv run.json fields/fields.pvd; do
+    for f in area.csv run.json; do
         cmp -s "$1/$f" "$2/$f" || fail "$2/$f differs from the single-process run"
     done
-    for f in "$1"/fields/*.vti "$1"/surface/*.png; do
+    cmp -s "$1/fields/fields.pvd" <(sed 's/\.pvti"/.vti"/' "$2/fields/fields.pvd") ||
+        fail "$2/fields/fields.pvd does not list the snapshots of the single-process run as .pvti"
+    for f in "$1"/surface/*.png; do
         cmp -s "$f" "$2/${f#$1/}" || fail "$2/${f#$1/} differs from the single-process run"
     done
-    # (more than one rank also writes per-rank pieces: fields_NNNN_pRRRR.vti + .pvti)
-    [ "$(ls "$1"/fields/fields_????.vti | wc -l)" = "$(ls "$2"/fields/fields_????.vti | wc -l)" ] ||
-        fail "$2: snapshot count"
+    python3 "$SRC/tests/pvti_same.py" "$1" "$2" ||
+        fail "$2: the assembled pieces differ from the single-process snapshots"
     diff <(grep -v -e wall_time_s -e '"threads"' "$1/summary.json") \
         <(grep -v -e wall_time_s -e '"threads"' "$2/summary.json") >/dev/null ||
         fail "$2/summary.json differs from the single-process run"
@@ -73,50 +79,26 @@ for dims in 1x1x2 2x1x2; do
 done
 echo "ok: heal bit-identical with z split (process grids 1x1x2, 2x1x2)"
 
-# --- per-rank pieces: fields_NNNN.pvti joins one .vti per rank, which together
-# hold exactly the gathered snapshot
-pieces_ok() { python3 - "$1" <<'PY' || fail "$1: the .pvti pieces do not make up the gathered snapshot"
-import re, struct, sys
-def read(path):  # extent, [(itemsize, bytes)] of the appended arrays
-    b = open(path, 'rb').read()
-    head, raw = b.split(b'<AppendedData encoding="raw">', 1)
-    raw = raw[raw.index(b'_') + 1:]
-    ext = [int(v) for v in re.search(rb'<Piece Extent="([^"]+)"', head).group(1).split()]
-    arrays, pos = [], 0
-    for typ in re.findall(rb'<DataArray type="(\w+)" Name="\w+" format="appended"', head):
-        n = struct.unpack('<Q', raw[pos:pos + 8])[0]
-        arrays.append((1 if typ == b'UInt8' else 4, raw[pos + 8:pos + 8 + n]))
-        pos += 8 + n
-    return ext, arrays
-d = sys.argv[1]
-wext, whole = read(d + '/fields_0001.vti')
-NX, NY, NZ = wext[1], wext[3], wext[5]
-pv = open(d + '/fields_0001.pvti').read()
-pieces = re.findall(r'<Piece Extent="([^"]+)" Source="([^"]+)"', pv)
-assert len(pieces) == 4, pieces
-cover = {}
-for ext_s, src in pieces:
-    ext, arrs = read(d + '/' + src)
-    assert [int(v) for v in ext_s.split()] == ext, (ext_s, ext)
-    x0, x1, y0, y1, z0, z1 = ext
-    w = x1 - x0
-    for (isz, a), (_, full) in zip(arrs, whole):
-        k = 0
-        for z in range(z0, z1):
-            for y in range(y0, y1):
-                o = ((z * NY + y) * NX + x0) * isz
-                assert a[k:k + w * isz] == full[o:o + w * isz], (src, z, y)
-                k += w * isz
-    for z in range(z0, z1):
-        for y in range(y0, y1):
-            for x in range(x0, x1):
-                cover[(x, y, z)] = cover.get((x, y, z), 0) + 1
-assert len(cover) == NX * NY * NZ and set(cover.values()) == {1}, "pieces overlap or leave gaps"
-PY
-}
-pieces_ok "$T/explicit-23x17x9-4/fields"
-pieces_ok "$T/zsplit-2x1x2/fields"
-echo "ok: per-rank .vti pieces + .pvti equal the gathered snapshot (x-y and x-z splits)"
+# --- every rank builds its box from the wound: strokes (per-column ranges,
+# with z split too) and a closed mesh voxelised per box
+printf 'u,v,stroke_id\n0.3,0.3,0\n0.7,0.35,0\n0.6,0.7,0\n0.35,0.6,0\n' >"$T/s.csv"
+printf 'v 3 3 1.6\nv 8 3 1.6\nv 8 7 1.6\nv 3 7 1.6\nv 3 3 3.4\nv 8 3 3.4\nv 8 7 3.4\nv 3 7 3.4\n%s\n' \
+    'f 1 4 3 2
+f 5 6 7 8
+f 1 2 6 5
+f 2 3 7 6
+f 3 4 8 7
+f 4 1 5 8' >"$T/cube.obj"
+SHORT="--grid 23x17x9 --scheme explicit --scenario scab --days 0.3 --snapshot-every 0.3 --area-every 0.05 --quiet --threads 1"
+"$CLI" heal $SHORT --stroke "$T/s.csv" --out "$T/stroke" || fail "single-process stroke run"
+SKINSIM_MPI_DIMS=2x1x2 run_np 4 heal $SHORT --stroke "$T/s.csv" --out "$T/stroke-4" ||
+    fail "stroke run on 2x1x2"
+same_run "$T/stroke" "$T/stroke-4"
+"$CLI" heal $SHORT --wound-mesh "$T/cube.obj" --out "$T/mesh" || fail "single-process mesh run"
+SKINSIM_MPI_DIMS=1x2x2 run_np 4 heal $SHORT --wound-mesh "$T/cube.obj" --out "$T/mesh-4" ||
+    fail "mesh run on 1x2x2"
+same_run "$T/mesh" "$T/mesh-4"
+echo "ok: boxes built per rank from strokes and a mesh, bit-identical (2x1x2, 1x2x2)"
 
 # --- the split scheme (the default): y sweeps on x slabs, reached by transposes
 equal_on_ranks split-23x17x9 "1 2 3 4" --grid 23x17x9 --scenario scab --days 1 --snapshot-every 0.5 \
@@ -128,7 +110,13 @@ OPTS="--grid 23x17x9 --scenario keloid --days $adapt_days --snapshot-every 10 --
 grep -q '"retried":[[:space:]]*[1-9]' "$T/adapt/summary.json" || fail "the adaptive case retries no step"
 run_np 3 heal $OPTS --out "$T/adapt-3" || fail "adaptive run on 3 ranks"
 same_run "$T/adapt" "$T/adapt-3"
-echo "ok: adaptive steps (with retries) bit-identical on 3 ranks"
+# checkpointed (in pieces, y slabs) on 2 ranks mid-way, resumed on 3
+run_np 2 heal $OPTS --days $((adapt_days / 2)) --checkpoint-every 5 --out "$T/adapt-ck" ||
+    fail "adaptive run with checkpoints on 2 ranks"
+run_np 3 heal --resume "$T/adapt-ck" --days $adapt_days --quiet || fail "adaptive resume on 3 ranks"
+cmp -s "$T/adapt/area.csv" "$T/adapt-ck/area.csv" || fail "adaptive resumed (2 -> 3 ranks) area.csv differs"
+python3 "$SRC/tests/pvti_same.py" "$T/adapt" "$T/adapt-ck" last || fail "adaptive resumed (2 -> 3 ranks) fields differ"
+echo "ok: adaptive steps (with retries) bit-identical on 3 ranks, and checkpointed on 2, resumed on 3"
 
 # --- checkpoint on 4 ranks, resume on 3: the uninterrupted single-process result
 OPTS="--scheme explicit --grid 23x17x9 --scenario scab --snapshot-every 0.3 --area-every 0.05 --quiet --threads 1"
@@ -136,13 +124,21 @@ OPTS="--scheme explicit --grid 23x17x9 --scenario scab --snapshot-every 0.3 --ar
 # (written on a 2x1x2 process grid: boxes stacked in z too)
 SKINSIM_MPI_DIMS=2x1x2 run_np 4 heal $OPTS --days 0.6 --checkpoint-every 0.3 --out "$T/cut" ||
     fail "4-rank run with checkpoints"
-ls "$T"/cut/checkpoints/*.sshc >/dev/null 2>&1 || fail "no checkpoint written on 4 ranks"
+# (in pieces: one per rank and a header, two checkpoints kept; no whole-grid file)
+ls "$T"/cut/checkpoints/ckpt_*.sshh >/dev/null 2>&1 || fail "no checkpoint header written on 4 ranks"
+[ "$(ls "$T"/cut/checkpoints/ckpt_*_p*.sshp | wc -l)" = 8 ] || fail "not 4 pieces per checkpoint"
+ls "$T"/cut/checkpoints/*.sshc >/dev/null 2>&1 && fail "a whole-grid checkpoint written on 4 ranks"
+cp -r "$T/cut" "$T/cut1"
 run_np 3 heal --resume "$T/cut" --days 0.9 --quiet || fail "resume on 3 ranks"
 cmp -s "$T/full/area.csv" "$T/cut/area.csv" || fail "resumed (4 -> 3 ranks) area.csv differs"
 # (the cut run's own last snapshot shifts the numbering: compare the newest of each)
-cmp -s "$(ls "$T"/full/fields/fields_????.vti | tail -1)" "$(ls "$T"/cut/fields/fields_????.vti | tail -1)" ||
-    fail "resumed (4 -> 3 ranks) final fields differ"
-echo "ok: checkpoint on 4 ranks resumes on 3 bit-identically"
+python3 "$SRC/tests/pvti_same.py" "$T/full" "$T/cut" last || fail "resumed (4 -> 3 ranks) final fields differ"
+# the same pieces resumed by one process (no mpirun)
+"$CLI" heal --resume "$T/cut1" --days 0.9 --quiet || fail "resume of the pieces in one process"
+cmp -s "$T/full/area.csv" "$T/cut1/area.csv" || fail "resumed (4 ranks -> 1 process) area.csv differs"
+cmp -s "$(ls "$T"/full/fields/fields_????.vti | tail -1)" "$(ls "$T"/cut1/fields/fields_????.vti | tail -1)" ||
+    fail "resumed (4 ranks -> 1 process) final fields differ"
+echo "ok: checkpoint in pieces on 4 ranks (2x1x2) resumes on 3 ranks and in one process bit-identically"
 
 # --- the ModelMatch table: geometries shared out by rank 0, the same bytes
 TAB="--samples 2 --photons 400 --wl-min 450 --wl-max 650 --wl-step 100 --theta-i 2 --theta-r 3 --phi 3 --quiet --threads 1"
@@ -172,15 +168,29 @@ SKINSIM_MPI_DIMS=1x1x2 bad zsplit "split scheme" 2 heal --grid 23x17x9 --days 0.
 SKINSIM_MPI_DIMS=2x2 bad dims "SKINSIM_MPI_DIMS" 4 heal --scheme explicit --grid 23x17x9 \
     --days 0.1 --out "$T/bad7"
 [ -e "$T/bad6" ] || [ -e "$T/bad7" ] && fail "bad process grid: output written"
+printf 'v 0 0 20\nv 1 0 20\nv 0 1 20\nv 0 0 21\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n' >"$T/above.obj"
+bad meshout "above.obj" 3 heal --scheme explicit --grid 23x17x9 --wound-mesh "$T/above.obj" --days 0.1 \
+    --out "$T/bad8"
+[ -e "$T/bad8" ] && fail "mesh outside the block on 3 ranks: output written"
+bad skinmesh "--mesh cannot run" 2 heal --mesh "$T/none.glb" --wound-uv "$T/s.csv" --days 0.1 --out "$T/bad9"
+[ -e "$T/bad9" ] && fail "a run on a skin mesh on 2 ranks: output written"
 bad mech "--mechanics" 2 heal --scheme explicit --mechanics --grid 24x20x8 --days 0.1 --out "$T/bad3"
 [ -e "$T/bad3" ] && fail "mechanics on 2 ranks: output written"
 bad missing "resume" 3 heal --resume "$T/nowhere" --quiet
-cp -r "$T/cut" "$T/dmg"
-for f in "$T"/dmg/checkpoints/*.sshc; do printf 'garbage' >"$f"; done
+rm -rf "$T/dmg" "$T/nopiece"
+SKINSIM_MPI_DIMS=2x1x2 run_np 4 heal $OPTS --days 0.6 --checkpoint-every 0.3 --out "$T/dmg" ||
+    fail "4-rank run with checkpoints (for damage)"
+cp -r "$T/dmg" "$T/nopiece"
+for f in "$T"/dmg/checkpoints/*_p000002.sshp; do printf 'garbage' >"$f"; done
 before=$(cd "$T/dmg" && find . -type f -exec md5sum {} + | sort | md5sum)
 bad damaged "checkpoint" 2 heal --resume "$T/dmg" --days 1.2 --quiet
 after=$(cd "$T/dmg" && find . -type f -exec md5sum {} + | sort | md5sum)
 [ "$before" = "$after" ] || fail "a refused resume changed the run directory"
+rm -f "$T"/nopiece/checkpoints/*_p000001.sshp
+before=$(cd "$T/nopiece" && find . -type f -exec md5sum {} + | sort | md5sum)
+bad nopiece "p000001" 3 heal --resume "$T/nopiece" --days 1.2 --quiet
+after=$(cd "$T/nopiece" && find . -type f -exec md5sum {} + | sort | md5sum)
+[ "$before" = "$after" ] || fail "a resume with a missing piece changed the run directory"
 bad other "does not run on" 2 skin --size 64 --out "$T/bad4"
 [ -e "$T/bad4" ] && fail "skin on 2 ranks: output written"
 mkdir -p "$T/adir"

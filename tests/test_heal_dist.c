@@ -3,7 +3,10 @@
  * and merged (and are exact where a float sum is not); the sub-box solver
  * (ss_heal_solver_create_sub) steps a box with a one-cell halo to the same
  * bits as the whole grid, and the split step in phases and the explicit step
- * in parts equal ss_heal_step. */
+ * in parts equal ss_heal_step; every rank's set-up of its own box
+ * (ss_heal_grid_init_box from the wound's column ranges or a mesh voxelised
+ * over the box) gives the whole grid's cells and fields there, and the
+ * surface maps scanned in parts equal ss_heal_surface_map. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -368,11 +371,201 @@ static void test_explicit_parts(void **state) {
     ss_heal_params_free(p);
 }
 
+/* a closed box mesh from (x0, y0, z0) to (x1, y1, z1), mm */
+static void cube(ss_tri_mesh *m, const double a[3], const double b[3]) {
+    static const int T[36] = {0, 3, 2, 0, 2, 1, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4,
+                              1, 2, 6, 1, 6, 5, 2, 3, 7, 2, 7, 6, 3, 0, 4, 3, 4, 7};
+    memset(m, 0, sizeof *m);
+    m->nverts = 8;
+    m->ntris = 12;
+    m->v = malloc(24 * sizeof *m->v);
+    m->tri = malloc(36 * sizeof *m->tri);
+    assert_non_null(m->v);
+    assert_non_null(m->tri);
+    for (int k = 0; k < 8; k++) {
+        m->v[3 * k] = (k == 1 || k == 2 || k == 5 || k == 6) ? b[0] : a[0];
+        m->v[3 * k + 1] = (k == 2 || k == 3 || k == 6 || k == 7) ? b[1] : a[1];
+        m->v[3 * k + 2] = k >= 4 ? b[2] : a[2];
+    }
+    memcpy(m->tri, T, sizeof T);
+}
+
+/* The box at lo (whole-grid cell of the box's (0,0,0); may be -1 or reach
+ * past the grid: a halo) of size n, built from mask m (n cells), equals G's
+ * cells and fields inside the grid and is BOUND with zero fields outside. */
+static void check_box(const ss_heal_grid *G, const ss_heal_params *p, const int lo[3],
+                      const int n[3], const uint8_t *m, double top) {
+    ss_error err;
+    ss_heal_grid *b = ss_heal_grid_create(n[0], n[1], n[2], G->dx_mm, &err);
+    assert_non_null(b);
+    const int gd[3] = {G->nx, G->ny, G->nz};
+    assert_int_equal(ss_heal_grid_init_box(b, lo, gd, top, 0.1, m, p, &err), SS_OK);
+    for (int z = 0; z < n[2]; z++)
+        for (int y = 0; y < n[1]; y++)
+            for (int x = 0; x < n[0]; x++) {
+                const int X = x + lo[0], Y = y + lo[1], Z = z + lo[2];
+                const size_t c = ss_heal_idx(b, x, y, z);
+                if (X < 0 || Y < 0 || Z < 0 || X >= G->nx || Y >= G->ny || Z >= G->nz) {
+                    assert_int_equal(b->cell[c], SS_CELL_BOUND);
+                    for (int f = 0; f < SS_HEAL_NFIELDS; f++) assert_true(b->field[f][c] == 0.0f);
+                    continue;
+                }
+                const size_t C = ss_heal_idx(G, X, Y, Z);
+                assert_int_equal(b->cell[c], G->cell[C]);
+                for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+                    assert_memory_equal(&b->field[f][c], &G->field[f][C], sizeof(float));
+            }
+    ss_heal_grid_free(b);
+}
+
+static void test_box_setup(void **state) {
+    (void)state;
+    ss_error err;
+    ss_heal_params *p = ss_heal_params_preset("scab", &err);
+    const int gd[3] = {23, 17, 9};
+    const double top = 3.5;
+    /* boxes with halos, past the grid's edges too, and one of the whole grid */
+    const int boxes[][6] = {{-1, -1, 0, 13, 10, 9},
+                            {10, 7, -1, 15, 12, 7},
+                            {5, -1, 3, 3, 19, 7},
+                            {21, 15, 7, 3, 3, 3},
+                            {-1, -1, -1, 25, 19, 11}};
+    /* the built-in square: column ranges expanded per box */
+    ss_heal_grid *G = ss_heal_grid_create(gd[0], gd[1], gd[2], 0.5, &err);
+    uint8_t *w = ss_heal_wound_box(G, top, 6.0, 4.0, 1.0, &err);
+    assert_non_null(w);
+    assert_int_equal(ss_heal_grid_init(G, top, 0.1, w, p, &err), SS_OK);
+    int32_t *cols = ss_heal_wound_columns_box(gd[0], gd[1], gd[2], 0.5, top, 6.0, 4.0, 1.0, &err);
+    assert_non_null(cols);
+    for (size_t b = 0; b < sizeof boxes / sizeof *boxes; b++) {
+        uint8_t *m = ss_heal_wound_columns_expand(cols, gd, boxes[b], boxes[b] + 3, &err);
+        assert_non_null(m);
+        check_box(G, p, boxes[b], boxes[b] + 3, m, top);
+        free(m);
+    }
+    free(cols);
+    free(w);
+    /* a mesh voxelised per box: the same voxels, the counts add up */
+    ss_tri_mesh mesh;
+    const double a[3] = {2.2, 1.9, 1.6}, bb[3] = {8.1, 6.3, 3.4};
+    cube(&mesh, a, bb);
+    size_t all = 0;
+    w = ss_heal_voxelise_mesh(&mesh, gd[0], gd[1], gd[2], 0.5, &all, &err);
+    assert_non_null(w);
+    assert_true(all > 0);
+    assert_int_equal(ss_heal_grid_init(G, top, 0.1, w, p, &err), SS_OK);
+    size_t parts = 0;
+    for (int zb = 0; zb < 2; zb++) /* 4 boxes that tile the grid: their counts add up */
+        for (int xb = 0; xb < 2; xb++) {
+            const int lo[3] = {xb ? 9 : 0, 0, zb ? 4 : 0},
+                      n[3] = {xb ? gd[0] - 9 : 9, gd[1], zb ? gd[2] - 4 : 4};
+            size_t c = 0;
+            uint8_t *m = ss_heal_voxelise_mesh_box(&mesh, gd, lo, n, 0.5, &c, &err);
+            assert_non_null(m);
+            parts += c;
+            free(m);
+        }
+    assert_int_equal(parts, all);
+    for (size_t b = 0; b < sizeof boxes / sizeof *boxes; b++) {
+        size_t c;
+        uint8_t *m = ss_heal_voxelise_mesh_box(&mesh, gd, boxes[b], boxes[b] + 3, 0.5, &c, &err);
+        assert_non_null(m);
+        check_box(G, p, boxes[b], boxes[b] + 3, m, top);
+        free(m);
+    }
+    free(w);
+    ss_tri_mesh_free(&mesh);
+    /* an empty box runs only the checks: a skin surface too high is refused */
+    ss_heal_grid probe = *G;
+    probe.nx = probe.ny = probe.nz = 0;
+    const int zero[3] = {0, 0, 0};
+    assert_int_equal(ss_heal_grid_init_box(&probe, zero, gd, 4.4, 0.1, NULL, p, &err),
+                     SS_ERR_INPUT);
+    assert_int_equal(ss_heal_grid_init_box(&probe, zero, gd, top, 0.1, NULL, p, &err), SS_OK);
+    ss_heal_grid_free(G);
+    ss_heal_params_free(p);
+}
+
+static void test_surface_parts(void **state) {
+    (void)state;
+    ss_error err;
+    ss_heal_params *p = ss_heal_params_preset("scab", &err);
+    ss_heal_grid *g = problem(p, 23, 17, 9);
+    run(g, p, SS_HEAL_EXPLICIT, 40);
+    const size_t nc = (size_t)g->nx * g->ny;
+    float *vf = malloc(2 * nc * sizeof *vf), *img = malloc(nc * sizeof *img);
+    assert_non_null(vf);
+    assert_non_null(img);
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++)
+        for (int mode = SS_SURFACE_TOP; mode <= SS_SURFACE_LAYER; mode++) {
+            ss_image *whole = ss_heal_surface_map(g, f, (ss_heal_surface_mode)mode, &err);
+            assert_non_null(whole);
+            /* three slices of levels, top down, as a stack of boxes scans them */
+            memset(vf, 0, 2 * nc * sizeof *vf);
+            const int cut[4] = {9, 7, 3, 0};
+            for (int k = 0; k < 3; k++)
+                ss_heal_surface_scan(g, f, (ss_heal_surface_mode)mode, cut[k + 1], cut[k], 0, g->nz,
+                                     vf, vf + nc);
+            ss_heal_surface_image(vf, g->nx, g->ny, img);
+            assert_memory_equal(img, whole->data, nc * sizeof *img);
+            ss_image_free(whole);
+        }
+    free(vf);
+    free(img);
+    ss_heal_grid_free(g);
+    ss_heal_params_free(p);
+}
+
+/* A box written straight from a grid with a halo is the file of a grid of
+ * just those cells (the MPI driver's snapshot pieces). */
+static void test_vti_box(void **state) {
+    (void)state;
+    ss_error err;
+    ss_heal_params *p = ss_heal_params_preset("scab", &err);
+    ss_heal_grid *g = problem(p, 23, 17, 9);
+    run(g, p, SS_HEAL_EXPLICIT, 5);
+    const int box[6] = {4, 3, 1, 11, 9, 6}, off[3] = {3, 2, 0}, whole[3] = {30, 20, 9};
+    ss_heal_grid *c = ss_heal_grid_create(box[3], box[4], box[5], g->dx_mm, &err);
+    assert_non_null(c);
+    c->t_days = g->t_days;
+    double cd[11 * 9];
+    for (int z = 0; z < box[5]; z++)
+        for (int y = 0; y < box[4]; y++)
+            for (int x = 0; x < box[3]; x++) {
+                const size_t i = ss_heal_idx(c, x, y, z),
+                             j = ss_heal_idx(g, box[0] + x, box[1] + y, box[2] + z);
+                c->cell[i] = g->cell[j];
+                for (int f = 0; f < SS_HEAL_NFIELDS; f++) c->field[f][i] = g->field[f][j];
+                cd[y * box[3] + x] = x - 0.25 * y;
+            }
+    char *dir = tu_tmpdir("vtibox"), a[512], b[512];
+    snprintf(a, sizeof a, "%s/box.vti", dir);
+    snprintf(b, sizeof b, "%s/copy.vti", dir);
+    assert_int_equal(ss_heal_vti_write_box(a, g, box, off, whole, cd, &err), SS_OK);
+    assert_int_equal(ss_heal_vti_write_piece_all(b, c, off, whole, 0, NULL, NULL, cd, &err), SS_OK);
+    size_t na = 0, nb = 0;
+    char *ta = ss_read_file(a, &na, &err), *tb = ss_read_file(b, &nb, &err);
+    assert_non_null(ta);
+    assert_non_null(tb);
+    assert_int_equal(na, nb);
+    assert_memory_equal(ta, tb, na);
+    const int outside[6] = {20, 3, 1, 4, 9, 6};
+    assert_int_equal(ss_heal_vti_write_box(a, g, outside, off, whole, NULL, &err), SS_ERR_INPUT);
+    free(ta);
+    free(tb);
+    free(dir);
+    ss_heal_grid_free(c);
+    ss_heal_grid_free(g);
+    ss_heal_params_free(p);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_stats_parts),   cmocka_unit_test(test_subbox_explicit),
         cmocka_unit_test(test_split_phases),  cmocka_unit_test(test_explicit_parts),
         cmocka_unit_test(test_stack_columns), cmocka_unit_test(test_subbox_uneven),
+        cmocka_unit_test(test_box_setup),     cmocka_unit_test(test_surface_parts),
+        cmocka_unit_test(test_vti_box),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -4,7 +4,8 @@
  * config ends bit-identical to an uninterrupted one, with the same area curve;
  * an in-memory footprint gives the same wound as the same mask from a file;
  * bad configs are input errors that write nothing; stepping outside the run
- * is refused. */
+ * is refused; a distributed run (the MPI driver's rank 0) makes no grid but
+ * the same geometry, step and wound, and cannot step without the driver. */
 #define _POSIX_C_SOURCE 200809L
 #include "testutil.h"
 
@@ -350,11 +351,58 @@ static void test_run_bad_config(void **state) {
     free(dir);
 }
 
+static void test_run_distributed(void **state) {
+    (void)state;
+    ss_error err;
+    ss_heal_run_config c;
+    small_config(&c);
+    c.scheme = SS_HEAL_EXPLICIT;
+    ss_heal_run *whole = NULL, *r = NULL;
+    assert_int_equal(ss_heal_run_create(&c, &whole, &err), SS_OK);
+    c.distributed = 1;
+    assert_int_equal(ss_heal_run_create(&c, &r, &err), SS_OK);
+    const ss_heal_grid *g = ss_heal_run_grid(r), *G = ss_heal_run_grid(whole);
+    assert_null(g->cell);
+    assert_null(g->field[0]);
+    assert_int_equal(g->nx, G->nx);
+    assert_int_equal(g->nz, G->nz);
+    assert_true(g->skin_top_mm == G->skin_top_mm);
+    assert_true(ss_heal_run_dt(r) == ss_heal_run_dt(whole));
+    assert_true(ss_heal_run_epidermis_mm(r) == c.epidermis_mm);
+    /* the wound's column ranges expand to the whole run's wound cells */
+    const int32_t *cols = ss_heal_run_wound_columns(r);
+    assert_non_null(cols);
+    assert_null(ss_heal_run_wound_mesh(r));
+    for (int y = 0; y < G->ny; y++)
+        for (int x = 1; x < G->nx - 1; x++)
+            for (int z = 1; z < G->nz - 1; z++) {
+                const size_t k = (size_t)y * G->nx + x;
+                const int in = z >= cols[2 * k] && z < cols[2 * k + 1];
+                if (y > 0 && y < G->ny - 1)
+                    assert_int_equal(in, G->cell[ss_heal_idx(G, x, y, z)] == SS_CELL_WOUND);
+            }
+    /* no area row, no step, no checkpoint without the driver's hooks */
+    int n = -1;
+    ss_heal_run_area(r, &n);
+    assert_int_equal(n, 0);
+    assert_int_equal(ss_heal_run_step(r, &err), SS_ERR_INPUT);
+    ss_heal_run_hooks h = {0};
+    assert_int_equal(ss_heal_run_set_hooks(r, &h, &err), SS_ERR_INPUT);
+    ss_heal_run_free(r);
+    ss_heal_run_free(whole);
+    /* what needs the whole grid is refused by name */
+    c.mechanics = 1;
+    assert_int_equal(ss_heal_run_create(&c, &r, &err), SS_ERR_INPUT);
+    assert_non_null(strstr(err.msg, "--mechanics"));
+    assert_null(r);
+    ss_heal_run_free(r);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_run_matches_solver), cmocka_unit_test(test_run_resume),
         cmocka_unit_test(test_run_adaptive),       cmocka_unit_test(test_run_footprint),
-        cmocka_unit_test(test_run_bad_config),
+        cmocka_unit_test(test_run_bad_config),     cmocka_unit_test(test_run_distributed),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

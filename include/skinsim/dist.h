@@ -33,13 +33,17 @@ int ss_dist_active(void); /* 1 when ss_dist_init initialised MPI (under mpirun) 
 
 /* ---- healing on MPI ---- */
 typedef struct ss_dist_heal ss_dist_heal;
-/* Collective. Rank 0 passes its run (created, so every input is validated)
- * or NULL with root_st the status of its create; the other ranks pass NULL
- * and SS_OK. Rank 0 checks what the distributed solver needs (no mechanics,
- * at least one column per rank in x and y), decomposes the grid, hands every rank its box with a
- * one-cell halo and hooks the run (ss_heal_run_set_hooks) so its steps, area rows and
- * snapshot/checkpoint gathers run on all ranks. Every rank returns the same
- * status; messages on rank 0 name the input. */
+/* Collective. Rank 0 passes its run, created with config.distributed (every
+ * input validated, no whole grid made; a resume may have loaded a whole-grid
+ * checkpoint, which is handed out and then dropped), or NULL with root_st the
+ * status of its create; the other ranks pass NULL and SS_OK. Rank 0 checks
+ * what the distributed solver needs (no mechanics, no skin mesh, at least one
+ * column per rank in x and y), decomposes the grid, every rank builds its box
+ * with a one-cell halo (from the wound, or from the checkpoint's pieces), and
+ * rank 0 hooks the run (ss_heal_run_set_hooks, ss_heal_run_set_checkpoint_hook)
+ * so its steps, area rows, surface maps, snapshot pieces and checkpoint
+ * pieces run on all ranks. Every rank returns the same status; messages on
+ * rank 0 name the input (another rank's set-up error is sent to rank 0). */
 ss_status ss_dist_heal_create(ss_heal_run *r, ss_status root_st, ss_dist_heal **out, ss_error *err);
 /* Ranks other than 0: carry out rank 0's commands until it ends the run;
  * returns rank 0's final status. */
@@ -53,6 +57,8 @@ typedef struct ss_dist_heal_timing {
     double compute_s, halo_s, stats_s, gather_s, halo_bytes_per_step;
     int dims[3];
     long long steps;
+    const double *rss_mb; /* peak resident memory of every rank (getrusage ru_maxrss), MB,
+                             dims[0]*dims[1]*dims[2] values; owned by the driver */
 } ss_dist_heal_timing;
 void ss_dist_heal_timing_get(const ss_dist_heal *d, ss_dist_heal_timing *t);
 void ss_dist_heal_free(ss_dist_heal *d);

@@ -170,6 +170,30 @@ static inline size_t ss_heal_idx(const ss_heal_grid *g, int x, int y, int z) {
  * layer on top of the skin, in mm). wound3d NULL = no wound. */
 ss_status ss_heal_grid_init(ss_heal_grid *g, double skin_top_mm, double epidermis_mm,
                             const uint8_t *wound3d, const ss_heal_params *p, ss_error *err);
+/* The same on a box of a larger grid (the MPI driver's boxes, docs/scaling.md):
+ * g's cell (x, y, z) is the whole grid's (x + goff[0], y + goff[1], z +
+ * goff[2]) of a gdim[0] x gdim[1] x gdim[2] grid, wound3d is g's own box of
+ * the whole-grid mask (NULL = no wound). Every cell gets exactly the state
+ * and fields ss_heal_grid_init gives it in the whole grid; cells outside the
+ * whole grid (a halo past its edge) are BOUND with zero fields. */
+ss_status ss_heal_grid_init_box(ss_heal_grid *g, const int goff[3], const int gdim[3],
+                                double skin_top_mm, double epidermis_mm, const uint8_t *wound3d,
+                                const ss_heal_params *p, ss_error *err);
+/* The wound of a footprint or the built-in box as per-column level ranges:
+ * 2 x nx*ny int32 (column y*nx + x: first wound level, one past the last;
+ * equal = no wound), 1/nz of the 3D mask, so the MPI driver can hand it to
+ * every rank. Arguments and errors as ss_heal_wound_from_footprint and
+ * ss_heal_wound_box below (which expand these over the whole grid). */
+int32_t *ss_heal_wound_columns_footprint(int nx, int ny, int nz, double dx_mm, double skin_top_mm,
+                                         const ss_image *footprint, double depth_mm,
+                                         const ss_image *depth_mm_img, ss_error *err);
+int32_t *ss_heal_wound_columns_box(int nx, int ny, int nz, double dx_mm, double skin_top_mm,
+                                   double side_x_mm, double side_y_mm, double depth_mm,
+                                   ss_error *err);
+/* The n[0] x n[1] x n[2] mask of the box at whole-grid index lo (may reach
+ * past the grid by a halo: 0 there) from column ranges of a gdim grid. */
+uint8_t *ss_heal_wound_columns_expand(const int32_t *cols, const int gdim[3], const int lo[3],
+                                      const int n[3], ss_error *err);
 /* A footprint (1-channel image, value > 0.5 = wound, mapped onto x,y over the
  * whole grid, image row 0 at y = ny-1) cut to depth_mm (or the per-pixel depth
  * of depth_mm_img, 1 channel in mm, if non-NULL) below the surface; returns the
@@ -210,6 +234,12 @@ typedef struct ss_heal_solver ss_heal_solver;
 #define SS_HEAL_SPLIT_DEFAULT_DT_DAYS 0.05
 ss_heal_solver *ss_heal_solver_create(const ss_heal_grid *g, const ss_heal_params *p,
                                       ss_heal_scheme s, double dt_days, ss_error *err);
+/* The checks of ss_heal_solver_create without the solver: *dt_days (0 =
+ * automatic) becomes the step it would take. Reads only g's sizes, voxel and
+ * velocity, so a grid without cell and field arrays will do (the MPI
+ * driver's rank 0, which never holds the whole grid). */
+ss_status ss_heal_solver_check(const ss_heal_grid *g, const ss_heal_params *p, ss_heal_scheme s,
+                               double *dt_days, ss_error *err);
 /* The same on a sub-box of a larger grid (src/dist): g holds the box and a
  * one-cell halo around it, goff is the whole-grid index of g's cell (0,0,0),
  * gdim the whole grid's dimensions (see ss_heal_rd_system.goff). With the

@@ -59,6 +59,11 @@ ss_status ss_tri_mesh_check_closed(const ss_tri_mesh *m, const char *name, ss_er
  * array or NULL with err set. Runs in parallel over columns; deterministic. */
 uint8_t *ss_heal_voxelise_mesh(const ss_tri_mesh *m, int nx, int ny, int nz, double dx_mm,
                                size_t *count, ss_error *err);
+/* The same for the box of bn[0] x bn[1] x bn[2] voxels at whole-grid index
+ * lo of a gdim grid (the MPI driver's boxes; voxels past the grid are 0):
+ * every voxel as in the whole-grid mask, *count the inside voxels of the box. */
+uint8_t *ss_heal_voxelise_mesh_box(const ss_tri_mesh *m, const int gdim[3], const int lo[3],
+                                   const int bn[3], double dx_mm, size_t *count, ss_error *err);
 
 /* ---- VTK output -------------------------------------------------------------
  * VTK XML ImageData, one piece, cell data (one value per voxel), appended raw
@@ -96,6 +101,13 @@ ss_status ss_heal_vti_write_piece_all(const char *path, const ss_heal_grid *piec
                                       const int whole[3], int nvec, const char *const *names,
                                       float *const (*vecs)[3], const double *closed_day,
                                       ss_error *err);
+/* The piece of the box of g at box[0..2] (g's indices) of box[3] x box[4] x
+ * box[5] cells, written straight from g (no copy; e.g. a rank's owned cells
+ * inside its halo): the file ss_heal_vti_write_piece_all writes for a grid of
+ * just those cells, cells and fields, closed_day of the box's columns. */
+ss_status ss_heal_vti_write_box(const char *path, const ss_heal_grid *g, const int box[6],
+                                const int off[3], const int whole[3], const double *closed_day,
+                                ss_error *err);
 /* Reads a snapshot written by ss_heal_vti_write(_vectors) back into a new grid
  * (cell states, every field, t_days; skin_top_mm and step are left 0: the
  * file does not hold them). displacement: if not NULL, receives a malloc'd
@@ -173,6 +185,14 @@ typedef enum ss_heal_surface_mode {
  * air only are 0. */
 ss_image *ss_heal_surface_map(const ss_heal_grid *g, int field, ss_heal_surface_mode mode,
                               ss_error *err);
+/* The map in parts (the MPI driver: boxes stacked in z, zoff and gz as in
+ * ss_heal_closure_scan): continues each column's top-down search over g's
+ * levels z1-1 down to z0 (v = found = 0 before the top box; nx*ny each, grid
+ * order); after the bottom box v holds the map's values, which
+ * ss_heal_surface_image turns into the image rows (row 0 = y = ny-1). */
+void ss_heal_surface_scan(const ss_heal_grid *g, int field, ss_heal_surface_mode mode, int z0,
+                          int z1, int zoff, int gz, float *v, float *found);
+void ss_heal_surface_image(const float *v, int nx, int ny, float *out);
 /* Colour-mapped picture of a map (viridis, vmin..vmax; nearest-neighbour
  * upscaled so the map is at least ~360 px wide) with a title and a labelled
  * colour bar, written as an 8-bit RGB PNG, atomically. */

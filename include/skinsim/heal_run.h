@@ -108,6 +108,17 @@ typedef struct ss_heal_run_config {
     double skin_thickness_mm; /* with skin_mesh: skin shell under the surface; 0 = 3 mm */
     double voxel_mm;          /* with skin_mesh: voxel edge; 0 = 0.5 mm */
     double mesh_units_mm;     /* with skin_mesh: one mesh unit in mm; 0 = glTF 1000, OBJ 1 */
+
+    /* ---- distributed (rank 0 of the MPI driver, src/dist; docs/scaling.md) ---- */
+    int distributed; /* 1: every input is checked as usual, but no whole grid is made: a
+                        fresh run's grid (ss_heal_run_grid) has its sizes, voxel, skin
+                        surface, time and step and no cell or field arrays, and the wound
+                        is kept for the boxes (ss_heal_run_wound_columns / _mesh); a
+                        resumed one loads the checkpoint's grid, which the driver hands out
+                        and then drops (ss_heal_run_release_grid). No solver is made (only
+                        its step checks). Not with mechanics or skin_mesh (SS_ERR_INPUT
+                        naming the option). The driver's hooks then do everything that
+                        needs the fields. */
 } ss_heal_run_config;
 
 /* The defaults listed above (every other field 0 / NULL). */
@@ -184,9 +195,16 @@ typedef struct ss_heal_run_hooks {
      * files for it, e.g. per-rank pieces) */
     ss_status (*snapshot)(void *ctx, const ss_heal_grid *g, const char *fields_dir, int index,
                           ss_error *err);
+    /* instead of ss_heal_surface_map for the snapshot's surface pictures */
+    ss_image *(*surface_map)(void *ctx, const ss_heal_grid *g, int field, ss_heal_surface_mode mode,
+                             ss_error *err);
 } ss_heal_run_hooks;
 /* Sets (h) or clears (NULL) the hooks; SS_ERR_INPUT when the run has the
- * contraction mechanics (naming --mechanics). */
+ * contraction mechanics (naming --mechanics). A run without its whole grid
+ * (config.distributed) needs every hook and a checkpoint hook
+ * (ss_heal_run_set_checkpoint_hook, set first); its snapshots are then the pieces
+ * and .pvti the snapshot hook writes (fields.pvd lists fields_NNNN.pvti), and
+ * a fresh one's day-0 area row is added here, through the stats hook. */
 ss_status ss_heal_run_set_hooks(ss_heal_run *r, const ss_heal_run_hooks *h, ss_error *err);
 /* A checkpoint writer instead of the run's own (ss_heal_checkpoint_save or,
  * with checkpoint_pieces, ss_heal_checkpoint_save_pieces), called after the
@@ -198,6 +216,27 @@ typedef ss_status (*ss_heal_run_checkpoint_fn)(void *ctx, const ss_heal_grid *g,
                                                const char *params_json, int scheme, double dt_days,
                                                const char *aux, int keep, ss_error *err);
 void ss_heal_run_set_checkpoint_hook(ss_heal_run *r, ss_heal_run_checkpoint_fn fn, void *ctx);
+
+/* ---- distributed set-up (config.distributed; src/dist) ---- */
+/* The fresh run's wound for the boxes: per-column level ranges (2 x nx*ny,
+ * ss_heal_wound_columns_footprint) of a mask, strokes, footprint, depth image
+ * or the built-in square, or (NULL columns) the closed wound mesh, which the
+ * boxes voxelise (ss_heal_voxelise_mesh_box). Both NULL on a resumed run. */
+const int32_t *ss_heal_run_wound_columns(const ss_heal_run *r);
+const ss_tri_mesh *ss_heal_run_wound_mesh(const ss_heal_run *r);
+double ss_heal_run_epidermis_mm(const ss_heal_run *r); /* for ss_heal_grid_init_box */
+/* With a wound mesh: the checks the single-process set-up makes on the
+ * voxelised mesh, from the totals over the boxes (inside voxels, and those
+ * under the skin surface); SS_ERR_INPUT naming the mesh. */
+ss_status ss_heal_run_wound_counted(ss_heal_run *r, size_t inside, size_t below, ss_error *err);
+/* A distributed resume from a checkpoint in pieces (skinsim/heal_io.h): its
+ * step, and in *dir the run folder, whose pieces every rank reads its box
+ * from (ss_heal_ckpt_read_box); the grid was not loaded (no arrays). -1 when
+ * the run is fresh or its checkpoint was a whole-grid file (then loaded). */
+long long ss_heal_run_resume_pieces(const ss_heal_run *r, const char **dir);
+/* Frees the grid's cell and field arrays (and the solver): from here on the
+ * run holds no whole grid (a resumed distributed run, once its boxes are out). */
+void ss_heal_run_release_grid(ss_heal_run *r);
 
 /* ---- state ---- */
 /* The grid holds all the state (fields, cells, t_days, step). A caller may

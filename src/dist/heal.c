@@ -13,31 +13,49 @@
  * runs on x slabs, reached by two MPI_Alltoallv transposes per step, so every
  * Thomas line solve runs whole, as in one process (no halo needed).
  *
- * Rank 0 also holds the run object (skinsim/heal_run.h) with the whole grid:
- * it validates the input, writes every output with the single-process code
- * and drives the others through a command channel (one broadcast per step,
- * area row, gather or snapshot). Its hooks replace the run's step (all ranks
+ * No rank holds the whole grid. Rank 0 holds the run object
+ * (skinsim/heal_run.h) created with config.distributed: it validates every
+ * input with the single-process code but allocates no grid; the wound goes
+ * to every rank as per-column level ranges (or the mesh, voxelised per box)
+ * and every rank builds its own box + halo (ss_heal_grid_init_box), the
+ * mesh's checks being made on the reduced counts. Rank 0 drives the others
+ * through a command channel (one broadcast per step, area row, sync, surface
+ * map, snapshot or checkpoint). Its hooks replace the run's step (all ranks
  * step; an adaptive run's rejected step is undone on all ranks, its largest
  * change is a max-reduction), its statistics (exact fixed-point partial sums
- * reduced with integer additions, ss_heal_stats_acc) and its snapshot/
- * checkpoint reads (the boxes are gathered into the whole grid first); after
- * each snapshot every rank also writes its box as a .vti piece, joined by a
- * .pvti. The kernels compute every cell from the same neighbours in the same
- * arithmetic as one process, so fields, area.csv, snapshots and checkpoints
- * are bit-identical for any rank count and process grid, and a checkpoint
- * (always of the whole grid) resumes on any rank count. Gave up: rank 0 keeps
- * the whole grid (set-up, gathered outputs and checkpoints), so its memory is
- * that of a single-process run; the column chain of a z stack is sequential
- * (Pz - 1 hops per step); the mechanics stay single-process (an error names
- * --mechanics). */
+ * reduced with integer additions, ss_heal_stats_acc), its surface maps (a
+ * top-down scan down each stack, the bottom boxes' columns gathered: nx*ny
+ * floats), its snapshots (every rank writes its box as a .vti piece with the
+ * closure days of its columns, straight from the box; rank 0 the .pvti) and
+ * its checkpoints (every rank writes its piece, rank 0 the header once all
+ * agree; a resume reads each rank's box from the pieces of any split). The
+ * kernels compute every cell from the same neighbours in the same arithmetic
+ * as one process, so fields, area.csv, the pieces and checkpoints are
+ * bit-identical to one process for any rank count and process grid. Gave up:
+ * the column chain of a z stack is sequential (Pz - 1 hops per step); the
+ * mechanics and runs on a skin mesh stay single-process (an error names
+ * --mechanics / --mesh); a whole-grid checkpoint (of a single process)
+ * is loaded on rank 0 once to resume on MPI. */
+#define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <mpi.h>
+#include <sys/resource.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "skinsim/dist.h"
 
-enum { CMD_STEP = 1, CMD_UNDO, CMD_CLOSURE, CMD_STATS, CMD_SYNC, CMD_PIECES, CMD_END };
+enum {
+    CMD_STEP = 1,
+    CMD_UNDO,
+    CMD_CLOSURE,
+    CMD_STATS,
+    CMD_SYNC,
+    CMD_PIECES,
+    CMD_SURFACE,
+    CMD_CKPT,
+    CMD_END
+};
 enum { FACE_XM, FACE_XP, FACE_YM, FACE_YP, FACE_ZM, FACE_ZP, NFACES };
 
 /* What rank 0 tells every rank about the run before the boxes are sent. */
@@ -45,10 +63,17 @@ typedef struct setup {
     int G[3];
     int dims[3];
     int scheme;
-    double dx_mm, skin_top_mm, t_days, dt;
+    double dx_mm, skin_top_mm, t_days, dt, epidermis_mm;
     unsigned long long step;
     ss_heal_params p;
+    int fresh;             /* 1: every rank builds its box from the wound; 0: rank 0 scatters the
+                              checkpoint's grid */
+    int wound;             /* fresh: WOUND_COLUMNS or WOUND_MESH */
+    long long pieces_step; /* resumed from a checkpoint in pieces: its step (every rank
+                              reads its box), else -1 */
+    int mesh_nv, mesh_nt;
 } setup;
+enum { WOUND_COLUMNS = 1, WOUND_MESH };
 
 struct ss_dist_heal {
     MPI_Comm cart;
@@ -78,8 +103,14 @@ struct ss_dist_heal {
     double next_dt;                 /* rank 0: the step being broadcast */
     float *backup[SS_HEAL_NFIELDS]; /* adaptive steps: the fields before the step */
     double saved_t;
-    double *closed;      /* closure day per column of the box + halo (heal_io.h) */
-    double *closed_root; /* rank 0: the run's closure days, filled by the gather */
+    double *closed;       /* closure day per column of the box + halo (heal_io.h) */
+    double *closed_root;  /* rank 0: the run's closure days, filled by the sync */
+    double *rss_mb;       /* rank 0, after end: every rank's peak resident memory, MB */
+    const int32_t *wcols; /* set-up of a fresh run: the wound's column ranges (rank 0: the
+                             run's), or */
+    ss_tri_mesh mesh;     /* its closed mesh (a copy on every rank) */
+    int own_wcols;
+    char ckdir[4096]; /* a resume from pieces: the run folder */
     uint64_t saved_step;
     int dirty;   /* rank 0: the run's whole grid is behind the boxes */
     int overlap; /* explicit: the halo exchange runs during the interior kernel */
@@ -120,31 +151,6 @@ static void pack_box(const ss_heal_grid *G, const int lo[3], const int n[3], int
                 const size_t gc = ss_heal_idx(G, X, Y, Z);
                 cells[c] = G->cell[gc];
                 for (int f = 0; f < SS_HEAL_NFIELDS; f++) fields[f * nl + c] = G->field[f][gc];
-            }
-}
-
-/* Owned cells only, all fields: the gather message of a box. */
-static size_t owned_count(const int n[3]) { return (size_t)n[0] * n[1] * n[2]; }
-
-static void pack_owned(const ss_heal_grid *g, const int n[3], int hz, float *buf) {
-    size_t k = 0;
-    for (int f = 0; f < SS_HEAL_NFIELDS; f++)
-        for (int z = hz; z < hz + n[2]; z++)
-            for (int y = 1; y <= n[1]; y++) {
-                memcpy(buf + k, g->field[f] + ss_heal_idx(g, 1, y, z),
-                       (size_t)n[0] * sizeof(float));
-                k += (size_t)n[0];
-            }
-}
-
-static void unpack_owned(ss_heal_grid *G, const int lo[3], const int n[3], const float *buf) {
-    size_t k = 0;
-    for (int f = 0; f < SS_HEAL_NFIELDS; f++)
-        for (int z = lo[2]; z < lo[2] + n[2]; z++)
-            for (int y = 0; y < n[1]; y++) {
-                memcpy(G->field[f] + ss_heal_idx(G, lo[0], lo[1] + y, z), buf + k,
-                       (size_t)n[0] * sizeof(float));
-                k += (size_t)n[0];
             }
 }
 
@@ -506,65 +512,209 @@ static void do_stats(ss_dist_heal *d, ss_heal_stats *st) {
     d->t_stats += MPI_Wtime() - t0;
 }
 
-static ss_status do_gather(ss_dist_heal *d, ss_error *err) {
+/* The closure days of a box's own columns (kept by the bottom box of each
+ * stack in z) into cb, n[0] x n[1]. */
+static void own_closed(const ss_dist_heal *d, double *cb) {
+    for (int y = 0; y < d->n[1]; y++)
+        memcpy(cb + (size_t)y * d->n[0], d->closed + (size_t)(y + 1) * d->g->nx + 1,
+               (size_t)d->n[0] * sizeof(double));
+}
+
+/* Rank 0's copy of the closure days (the run's, for its checkpoints): the
+ * bottom box of every stack sends those of its columns, 1/nz of the grid. */
+static ss_status do_sync(ss_dist_heal *d, ss_error *err) {
     double t0 = MPI_Wtime();
-    ss_status st = SS_OK;
+    (void)err;
     if (d->rank != 0) {
-        size_t cnt = owned_count(d->n) * SS_HEAL_NFIELDS;
-        float *buf = malloc(cnt * sizeof(float));
-        if (!buf) MPI_Abort(d->cart, 3); /* rank 0 waits for this box */
-        pack_owned(d->g, d->n, d->hz, buf);
-        MPI_Send(buf, (int)cnt, MPI_FLOAT, 0, 100, d->cart);
-        free(buf);
-        if (d->coords[2] != 0) { /* the bottom box of the stack keeps the closure days */
-            d->t_gather += MPI_Wtime() - t0;
-            return SS_OK;
+        if (d->coords[2] == 0) {
+            double *cb = malloc((size_t)d->n[0] * d->n[1] * sizeof(double));
+            if (!cb) MPI_Abort(d->cart, 3);
+            own_closed(d, cb);
+            MPI_Send(cb, d->n[0] * d->n[1], MPI_DOUBLE, 0, 101, d->cart);
+            free(cb);
         }
-        double *cb = malloc((size_t)d->n[0] * d->n[1] * sizeof(double));
-        if (!cb) MPI_Abort(d->cart, 3);
-        for (int y = 0; y < d->n[1]; y++)
-            memcpy(cb + (size_t)y * d->n[0], d->closed + (size_t)(y + 1) * d->g->nx + 1,
-                   (size_t)d->n[0] * sizeof(double));
-        MPI_Send(cb, d->n[0] * d->n[1], MPI_DOUBLE, 0, 101, d->cart);
-        free(cb);
     } else {
-        ss_heal_grid *G = ss_heal_run_grid(d->run);
-        float *buf = NULL;
+        const int GX = d->su.G[0];
         for (int r = 0; r < d->size; r++) {
             int coords[3], lo[3], n[3];
             MPI_Cart_coords(d->cart, r, 3, coords);
+            if (coords[2] != 0) continue;
             box_of(d, coords, lo, n);
-            size_t cnt = owned_count(n) * SS_HEAL_NFIELDS;
-            float *b = realloc(buf, cnt * sizeof(float));
-            if (!b) MPI_Abort(d->cart, 3);
-            buf = b;
-            if (r == 0)
-                pack_owned(d->g, n, d->hz, buf);
-            else
-                MPI_Recv(buf, (int)cnt, MPI_FLOAT, r, 100, d->cart, MPI_STATUS_IGNORE);
-            unpack_owned(G, lo, n, buf);
-            if (coords[2] != 0) continue; /* the bottom box of a stack sends the days */
-            /* the closure days of the box's columns */
             double *cb = malloc((size_t)n[0] * n[1] * sizeof(double));
             if (!cb) MPI_Abort(d->cart, 3);
             if (r == 0)
-                for (int y = 0; y < n[1]; y++)
-                    memcpy(cb + (size_t)y * n[0], d->closed + (size_t)(y + 1) * d->g->nx + 1,
-                           (size_t)n[0] * sizeof(double));
+                own_closed(d, cb);
             else
                 MPI_Recv(cb, n[0] * n[1], MPI_DOUBLE, r, 101, d->cart, MPI_STATUS_IGNORE);
-            if (d->closed_root)
-                for (int y = 0; y < n[1]; y++)
-                    memcpy(d->closed_root + (size_t)(lo[1] + y) * G->nx + lo[0],
-                           cb + (size_t)y * n[0], (size_t)n[0] * sizeof(double));
+            for (int y = 0; y < n[1]; y++)
+                memcpy(d->closed_root + (size_t)(lo[1] + y) * GX + lo[0], cb + (size_t)y * n[0],
+                       (size_t)n[0] * sizeof(double));
             free(cb);
         }
-        free(buf);
         d->dirty = 0;
     }
-    (void)err;
+    d->t_gather += MPI_Wtime() - t0;
+    return SS_OK;
+}
+
+/* Rank 0's string (a folder) on every rank, into buf of len bytes. */
+static void bcast_string(ss_dist_heal *d, const char *s, char *buf, size_t len) {
+    int n = 0;
+    if (d->rank == 0) n = (int)strlen(s) + 1;
+    MPI_Bcast(&n, 1, MPI_INT, 0, d->cart);
+    if (n > (int)len) n = (int)len;
+    if (d->rank == 0) memcpy(buf, s, (size_t)n);
+    MPI_Bcast(buf, n, MPI_CHAR, 0, d->cart);
+    buf[len - 1] = 0;
+}
+
+/* Every rank's status agreed (the worst); on rank 0, err then names what
+ * went wrong on the first rank that failed (its own message, sent over). */
+static ss_status agree_err(ss_dist_heal *d, ss_status st, ss_error *err) {
+    int v[2] = {(int)st, st ? d->rank : d->size}, m[2];
+    MPI_Allreduce(&v[0], &m[0], 1, MPI_INT, MPI_MAX, d->cart);
+    MPI_Allreduce(&v[1], &m[1], 1, MPI_INT, MPI_MIN, d->cart);
+    if (!m[0]) return SS_OK;
+    if (m[1] != 0 && m[1] < d->size) { /* another rank's message to rank 0 */
+        if (d->rank == m[1]) MPI_Send(err, (int)sizeof *err, MPI_BYTE, 0, 104, d->cart);
+        if (d->rank == 0)
+            MPI_Recv(err, (int)sizeof *err, MPI_BYTE, m[1], 104, d->cart, MPI_STATUS_IGNORE);
+    }
+    return (ss_status)m[0];
+}
+
+/* A checkpoint in pieces (skinsim/heal_io.h): every rank writes its box as
+ * piece `rank`, the statuses are agreed and the pieces' sizes and CRCs
+ * gathered, then rank 0 writes the header naming the whole grid, the process
+ * grid and the step (the checkpoint exists from that moment) and prunes the
+ * older ones. No rank holds more than its box. */
+static ss_status do_checkpoint(ss_dist_heal *d, const ss_heal_grid *hdr, const char *run_dir,
+                               const char *scenario, const char *params_json, int scheme,
+                               double dt_days, const char *aux, int keep, ss_error *err) {
+    double t0 = MPI_Wtime();
+    char dir[4096] = "";
+    bcast_string(d, run_dir, dir, sizeof dir);
+    /* the run's step (an adaptive step counts its multiple of dt) and time */
+    struct {
+        unsigned long long step;
+        double t;
+    } at = {0, 0};
+    if (d->rank == 0) at.step = hdr->step, at.t = hdr->t_days;
+    MPI_Bcast(&at, (int)sizeof at, MPI_BYTE, 0, d->cart);
+    d->g->step = at.step;
+    d->g->t_days = at.t;
+    ss_error e;
+    ss_error_clear(&e);
+    ss_heal_ckpt_piece info;
+    memset(&info, 0, sizeof info);
+    const int org[3] = {d->lo[0] - 1, d->lo[1] - 1, d->lo[2] - d->hz};
+    ss_status st =
+        ss_heal_ckpt_piece_write(dir, d->rank, d->g, org, d->lo, d->n, d->su.G, &info, &e);
+    st = agree_err(d, st, &e);
+    ss_heal_ckpt_piece *all = d->rank == 0 ? malloc((size_t)d->size * sizeof *all) : NULL;
+    if (d->rank == 0 && !all) MPI_Abort(d->cart, 3);
+    MPI_Gather(&info, (int)sizeof info, MPI_BYTE, all, (int)sizeof info, MPI_BYTE, 0, d->cart);
+    if (d->rank == 0) {
+        if (st) {
+            *err = e;
+        } else {
+            ss_heal_ckpt_header h;
+            memset(&h, 0, sizeof h);
+            memcpy(h.whole, d->su.G, sizeof h.whole);
+            h.dx_mm = d->su.dx_mm;
+            h.skin_top_mm = hdr->skin_top_mm;
+            h.t_days = hdr->t_days;
+            h.step = hdr->step;
+            h.scheme = scheme;
+            h.dt_days = dt_days;
+            h.scenario = (char *)scenario; /* not owned here: h is not freed */
+            h.params_json = (char *)params_json;
+            h.aux = (char *)(aux ? aux : "");
+            memcpy(h.dims, d->dims, sizeof h.dims);
+            h.npieces = d->size;
+            h.piece = all;
+            st = ss_heal_ckpt_header_save(dir, &h, keep, err);
+        }
+        free(all);
+    }
+    MPI_Bcast(&st, 1, MPI_INT, 0, d->cart);
     d->t_gather += MPI_Wtime() - t0;
     return st;
+}
+
+/* A resume from a checkpoint in pieces: every rank reads its box + halo g
+ * (whole-grid origin org; cells past the grid are BOUND, zero fields) from
+ * the pieces that overlap it, whatever split wrote them. */
+static ss_status read_box(ss_dist_heal *d, const char *dir, unsigned long long step,
+                          ss_heal_grid *g, const int org[3], ss_error *err) {
+    char path[4400];
+    ss_heal_ckpt_header_path(path, sizeof path, dir, step);
+    ss_heal_ckpt_header h;
+    memset(&h, 0, sizeof h);
+    ss_status st = ss_heal_ckpt_header_read(path, &h, err);
+    if (!st && (h.whole[0] != d->su.G[0] || h.whole[1] != d->su.G[1] || h.whole[2] != d->su.G[2]))
+        st = ss_error_set(err, SS_ERR_INPUT, "%s: the grid differs from rank 0's", path);
+    if (!st) {
+        const size_t n = (size_t)g->nx * g->ny * g->nz;
+        memset(g->cell, SS_CELL_BOUND, n);
+        for (int f = 0; f < SS_HEAL_NFIELDS; f++) memset(g->field[f], 0, n * sizeof(float));
+        const int bn[3] = {g->nx, g->ny, g->nz};
+        st = ss_heal_ckpt_read_box(dir, &h, g, org, org, bn, err);
+    }
+    ss_heal_ckpt_header_free(&h);
+    return st;
+}
+
+/* A surface map (ss_heal_surface_map) from the boxes: each stack in z scans
+ * its columns top down, box by box (ss_heal_surface_scan), the bottom box
+ * sends the values of its own columns to rank 0, which sets the picture's
+ * rows: nx*ny floats move, never the grid. */
+static ss_image *do_surface(ss_dist_heal *d, int field, ss_heal_surface_mode mode, ss_error *err) {
+    double t0 = MPI_Wtime();
+    const size_t nc = (size_t)d->g->nx * d->g->ny;
+    float *vf = calloc(2 * nc, sizeof(float));
+    if (!vf) MPI_Abort(d->cart, 3);
+    if (d->hz) {
+        zchain(d, vf, 2 * nc * sizeof(float), 0);
+        ss_heal_surface_scan(d->g, field, mode, 1, d->g->nz - 1, d->lo[2] - 1, d->su.G[2], vf,
+                             vf + nc);
+        zchain(d, vf, 2 * nc * sizeof(float), 1);
+    } else {
+        ss_heal_surface_scan(d->g, field, mode, 0, d->g->nz, 0, d->su.G[2], vf, vf + nc);
+    }
+    /* the own columns of the bottom boxes */
+    float *own = malloc((size_t)d->n[0] * d->n[1] * sizeof(float));
+    if (!own) MPI_Abort(d->cart, 3);
+    for (int y = 0; y < d->n[1]; y++)
+        memcpy(own + (size_t)y * d->n[0], vf + (size_t)(y + 1) * d->g->nx + 1,
+               (size_t)d->n[0] * sizeof(float));
+    free(vf);
+    ss_image *img = NULL;
+    if (d->rank != 0) {
+        if (d->coords[2] == 0) MPI_Send(own, d->n[0] * d->n[1], MPI_FLOAT, 0, 102, d->cart);
+    } else {
+        const int GX = d->su.G[0], GY = d->su.G[1];
+        float *map = malloc((size_t)GX * GY * sizeof(float));
+        if (!map) MPI_Abort(d->cart, 3);
+        for (int r = 0; r < d->size; r++) {
+            int coords[3], lo[3], n[3];
+            MPI_Cart_coords(d->cart, r, 3, coords);
+            if (coords[2] != 0) continue;
+            box_of(d, coords, lo, n);
+            float *b = r == 0 ? own : malloc((size_t)n[0] * n[1] * sizeof(float));
+            if (!b) MPI_Abort(d->cart, 3);
+            if (r != 0) MPI_Recv(b, n[0] * n[1], MPI_FLOAT, r, 102, d->cart, MPI_STATUS_IGNORE);
+            for (int y = 0; y < n[1]; y++)
+                memcpy(map + (size_t)(lo[1] + y) * GX + lo[0], b + (size_t)y * n[0],
+                       (size_t)n[0] * sizeof(float));
+            if (r != 0) free(b);
+        }
+        if ((img = ss_image_create(GX, GY, 1, err))) ss_heal_surface_image(map, GX, GY, img->data);
+        free(map);
+    }
+    free(own);
+    d->t_gather += MPI_Wtime() - t0;
+    return img;
 }
 
 /* Every rank writes its owned box as fields_dir/fields_NNNN_pRRRR.vti and
@@ -580,32 +730,21 @@ static ss_status do_pieces(ss_dist_heal *d, int index, ss_error *err) {
     if (d->rank == 0) memcpy(dir, d->pdir, (size_t)len);
     MPI_Bcast(dir, len, MPI_CHAR, 0, d->cart);
     dir[sizeof dir - 1] = 0;
-    const int nz = d->n[2];
     char path[4400];
     snprintf(path, sizeof path, "%s/fields_%04d_p%04d.vti", dir, index, d->rank);
     ss_error e;
     ss_error_clear(&e);
-    /* the owned box as a grid of its own (allocated at least 3 wide, as grids are) */
-    ss_heal_grid *p = ss_heal_grid_create(d->n[0] < 3 ? 3 : d->n[0], d->n[1] < 3 ? 3 : d->n[1], nz,
-                                          d->su.dx_mm, &e);
-    ss_status st = p ? SS_OK : (e.code ? e.code : SS_ERR_NOMEM);
-    if (p) {
-        p->nx = d->n[0];
-        p->ny = d->n[1];
-        p->t_days = d->g->t_days;
-        for (int z = 0; z < nz; z++)
-            for (int y = 0; y < d->n[1]; y++) {
-                const size_t src = ss_heal_idx(d->g, 1, y + 1, z + d->hz);
-                const size_t dst = ss_heal_idx(p, 0, y, z);
-                memcpy(p->cell + dst, d->g->cell + src, (size_t)d->n[0]);
-                for (int f = 0; f < SS_HEAL_NFIELDS; f++)
-                    memcpy(p->field[f] + dst, d->g->field[f] + src,
-                           (size_t)d->n[0] * sizeof(float));
-            }
-        const int off[3] = {d->lo[0], d->lo[1], d->lo[2]};
-        st = ss_heal_vti_write_piece(path, p, off, d->su.G, &e);
-        ss_heal_grid_free(p);
-    }
+    /* the closure days of the box's columns (with z split the bottom box of
+     * the stack has them: every box of the stack writes them in its piece) */
+    if (d->hz) MPI_Bcast(d->closed, d->g->nx * d->g->ny, MPI_DOUBLE, d->zroot, d->zcomm);
+    double *cb = malloc((size_t)d->n[0] * d->n[1] * sizeof(double));
+    if (!cb) MPI_Abort(d->cart, 3);
+    own_closed(d, cb);
+    /* the owned box, written straight from the box + halo */
+    const int box[6] = {1, 1, d->hz, d->n[0], d->n[1], d->n[2]};
+    const int off[3] = {d->lo[0], d->lo[1], d->lo[2]};
+    ss_status st = ss_heal_vti_write_box(path, d->g, box, off, d->su.G, cb, &e);
+    free(cb);
     int v = (int)st, vmax = 0;
     MPI_Allreduce(&v, &vmax, 1, MPI_INT, MPI_MAX, d->cart);
     if (d->rank == 0 && vmax) {
@@ -687,14 +826,29 @@ static ss_status hook_sync(void *ctx, ss_heal_grid *G, ss_error *err) {
     (void)G;
     if (!d->dirty) return SS_OK;
     send_cmd(d, CMD_SYNC, 0);
-    return do_gather(d, err);
+    return do_sync(d, err);
+}
+
+static ss_image *hook_surface(void *ctx, const ss_heal_grid *G, int field,
+                              ss_heal_surface_mode mode, ss_error *err) {
+    ss_dist_heal *d = ctx;
+    (void)G;
+    send_cmd(d, CMD_SURFACE, field | (int)mode << 8);
+    return do_surface(d, field, mode, err);
+}
+
+static ss_status hook_checkpoint(void *ctx, const ss_heal_grid *G, const char *run_dir,
+                                 const char *scenario, const char *params_json, int scheme,
+                                 double dt_days, const char *aux, int keep, ss_error *err) {
+    ss_dist_heal *d = ctx;
+    send_cmd(d, CMD_CKPT, 0);
+    return do_checkpoint(d, G, run_dir, scenario, params_json, scheme, dt_days, aux, keep, err);
 }
 
 static ss_status hook_snapshot(void *ctx, const ss_heal_grid *G, const char *fields_dir, int index,
                                ss_error *err) {
     ss_dist_heal *d = ctx;
     (void)G;
-    if (d->size < 2) return SS_OK; /* one rank: the .vti is the piece */
     d->pdir = fields_dir;
     send_cmd(d, CMD_PIECES, index);
     return do_pieces(d, index, err);
@@ -776,8 +930,69 @@ static void scatter_closed(ss_dist_heal *d, ss_heal_run *r) {
     }
 }
 
-/* The split scheme's x slab of every rank (cells and fields from rank 0's
- * whole grid, like the y slabs) and the transpose buffers. */
+/* A fresh run: the box g whose cell (0,0,0) is the whole grid's goff, built
+ * by this rank from the wound (its mask from the column ranges or the mesh
+ * voxelised over the box) with ss_heal_grid_init_box: the cells and fields
+ * the whole grid has there. cnt (if not NULL): += the wound voxels of the
+ * owned cells, and those under the skin surface (the mesh's checks). */
+static ss_status build_box(ss_dist_heal *d, ss_heal_grid *g, const int goff[3], size_t cnt[2],
+                           ss_error *err) {
+    const int bn[3] = {g->nx, g->ny, g->nz};
+    size_t all = 0;
+    uint8_t *m =
+        d->su.wound == WOUND_MESH
+            ? ss_heal_voxelise_mesh_box(&d->mesh, d->su.G, goff, bn, d->su.dx_mm, &all, err)
+            : ss_heal_wound_columns_expand(d->wcols, d->su.G, goff, bn, err);
+    if (!m) return err->code ? err->code : SS_ERR_NOMEM;
+    for (int z = d->hz; cnt && z < d->hz + d->n[2]; z++)
+        for (int y = 1; y <= d->n[1]; y++)
+            for (int x = 1; x <= d->n[0]; x++)
+                if (m[ss_heal_idx(g, x, y, z)]) {
+                    cnt[0]++;
+                    cnt[1] += (z + goff[2] + 0.5) * d->su.dx_mm < d->su.skin_top_mm;
+                }
+    ss_status st = ss_heal_grid_init_box(g, goff, d->su.G, d->su.skin_top_mm, d->su.epidermis_mm, m,
+                                         &d->su.p, err);
+    free(m);
+    return st;
+}
+
+/* Every rank gets the wound of a fresh run from rank 0: the column ranges
+ * (2 x nx*ny int32) or the mesh. */
+static ss_status share_wound(ss_dist_heal *d, ss_heal_run *r, ss_error *err) {
+    ss_status st = SS_OK;
+    if (d->su.wound == WOUND_COLUMNS) {
+        const size_t nc = 2 * (size_t)d->su.G[0] * d->su.G[1];
+        int32_t *c = NULL;
+        if (d->rank == 0) {
+            d->wcols = ss_heal_run_wound_columns(r);
+        } else {
+            if (!(c = malloc(nc * sizeof *c))) MPI_Abort(d->cart, 3);
+            d->wcols = c;
+            d->own_wcols = 1;
+        }
+        MPI_Bcast((void *)d->wcols, (int)nc, MPI_INT32_T, 0, d->cart);
+        return st;
+    }
+    ss_tri_mesh *m = &d->mesh;
+    m->nverts = d->su.mesh_nv;
+    m->ntris = d->su.mesh_nt;
+    m->v = malloc((size_t)m->nverts * 3 * sizeof *m->v);
+    m->tri = malloc((size_t)m->ntris * 3 * sizeof *m->tri);
+    if (!m->v || !m->tri) MPI_Abort(d->cart, 3);
+    if (d->rank == 0) {
+        const ss_tri_mesh *w = ss_heal_run_wound_mesh(r);
+        memcpy(m->v, w->v, (size_t)m->nverts * 3 * sizeof *m->v);
+        memcpy(m->tri, w->tri, (size_t)m->ntris * 3 * sizeof *m->tri);
+    }
+    MPI_Bcast(m->v, 3 * m->nverts, MPI_DOUBLE, 0, d->cart);
+    MPI_Bcast(m->tri, 3 * m->ntris, MPI_INT, 0, d->cart);
+    (void)err;
+    return st;
+}
+
+/* The split scheme's x slab of every rank (built like the y slabs, or from
+ * rank 0's whole grid on a resume) and the transpose buffers. */
 static ss_status split_setup(ss_dist_heal *d, ss_heal_run *r, ss_error *err) {
     const int nz = d->su.G[2];
     int xlo, xn;
@@ -786,8 +1001,15 @@ static ss_status split_setup(ss_dist_heal *d, ss_heal_run *r, ss_error *err) {
     d->gB = ss_heal_grid_create(xn + 2, d->su.G[1] + 2, nz, d->su.dx_mm, err);
     if (!d->gB) return err->code ? err->code : SS_ERR_NOMEM;
     d->gB->skin_top_mm = d->su.skin_top_mm;
-    scatter(d, r, d->gB, 1);
     int goff[3] = {xlo - 1, -1, 0};
+    if (d->su.fresh || d->su.pieces_step >= 0) {
+        ss_status st = d->su.fresh ? build_box(d, d->gB, goff, NULL, err)
+                                   : read_box(d, d->ckdir, (unsigned long long)d->su.pieces_step,
+                                              d->gB, goff, err);
+        if (st) return st;
+    } else {
+        scatter(d, r, d->gB, 1);
+    }
     d->sB = ss_heal_solver_create_sub(d->gB, goff, d->su.G, &d->su.p, SS_HEAL_SPLIT, d->su.dt, err);
     if (!d->sB) return err->code ? err->code : SS_ERR_RUNTIME;
     /* the largest message set: A's owned rows or B's owned columns, all quantities */
@@ -814,6 +1036,12 @@ static ss_status split_setup(ss_dist_heal *d, ss_heal_run *r, ss_error *err) {
 /* Rank 0: what the distributed solver cannot do, as an input error. */
 static ss_status check_root(ss_heal_run *r, int size, int dims[3], ss_error *err) {
     const ss_heal_grid *G = ss_heal_run_grid(r);
+    if (ss_heal_run_shell(r))
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "--mesh cannot run on %d MPI ranks: the patch of skin and its "
+                            "surface outputs need the whole grid in one process (run it without "
+                            "mpirun)",
+                            size);
     if (ss_heal_run_mech(r))
         return ss_error_set(err, SS_ERR_INPUT,
                             "--mechanics cannot run on %d MPI ranks: the contraction mechanics "
@@ -907,6 +1135,15 @@ ss_status ss_dist_heal_create(ss_heal_run *r, ss_status root_st, ss_dist_heal **
         su.step = G->step;
         su.dt = ss_heal_run_dt(r);
         su.p = *ss_heal_run_params(r);
+        su.epidermis_mm = ss_heal_run_epidermis_mm(r);
+        su.pieces_step = ss_heal_run_resume_pieces(r, NULL);
+        su.fresh = G->cell == NULL && su.pieces_step < 0; /* config.distributed */
+        const ss_tri_mesh *m = ss_heal_run_wound_mesh(r);
+        su.wound = m ? WOUND_MESH : WOUND_COLUMNS;
+        if (m) {
+            su.mesh_nv = m->nverts;
+            su.mesh_nt = m->ntris;
+        }
     }
     MPI_Bcast(&su, (int)sizeof su, MPI_BYTE, 0, MPI_COMM_WORLD);
 
@@ -962,12 +1199,42 @@ ss_status ss_dist_heal_create(ss_heal_run *r, ss_status root_st, ss_dist_heal **
         return st;
     }
 
-    scatter(d, r, d->g, 0); /* every rank its box + halo */
-    if ((d->closed = malloc((size_t)nxl * nyl * sizeof(double))))
-        scatter_closed(d, r);
-    else
-        MPI_Abort(d->cart, 3);
+    /* every rank its box + halo: built from the wound (fresh), or cut from
+     * the checkpoint's grid on rank 0 */
     int goff[3] = {d->lo[0] - 1, d->lo[1] - 1, d->lo[2] - d->hz};
+    if (su.fresh) {
+        size_t cnt[2] = {0, 0};
+        unsigned long long c2[2], sum[2] = {0, 0};
+        st = share_wound(d, r, err);
+        if (!st) st = build_box(d, d->g, goff, cnt, err);
+        c2[0] = cnt[0];
+        c2[1] = cnt[1];
+        MPI_Reduce(c2, sum, 2, MPI_UNSIGNED_LONG_LONG, MPI_SUM, 0, d->cart);
+        if (rank == 0 && !st && su.wound == WOUND_MESH)
+            st = ss_heal_run_wound_counted(r, (size_t)sum[0], (size_t)sum[1], err);
+        if ((st = agree_err(d, st, err))) {
+            ss_dist_heal_free(d);
+            return st;
+        }
+    } else if (su.pieces_step >= 0) {
+        const char *ckdir = NULL;
+        if (rank == 0) ss_heal_run_resume_pieces(r, &ckdir);
+        bcast_string(d, ckdir, d->ckdir, sizeof d->ckdir);
+        st = read_box(d, d->ckdir, (unsigned long long)su.pieces_step, d->g, goff, err);
+        if ((st = agree_err(d, st, err))) {
+            ss_dist_heal_free(d);
+            return st;
+        }
+    } else {
+        scatter(d, r, d->g, 0);
+    }
+    if (!(d->closed = malloc((size_t)nxl * nyl * sizeof(double)))) MPI_Abort(d->cart, 3);
+    if (su.fresh) { /* ss_heal_closure_init, down each stack */
+        for (size_t k = 0; k < (size_t)nxl * nyl; k++) d->closed[k] = SS_HEAL_CLOSED_INTACT;
+        do_closure(d);
+    } else {
+        scatter_closed(d, r);
+    }
     d->s =
         ss_heal_solver_create_sub(d->g, goff, su.G, &su.p, (ss_heal_scheme)su.scheme, su.dt, err);
     st = d->s ? SS_OK : (err->code ? err->code : SS_ERR_RUNTIME);
@@ -987,9 +1254,25 @@ ss_status ss_dist_heal_create(ss_heal_run *r, ss_status root_st, ss_dist_heal **
         return st;
     }
     if (d->rank == 0) {
-        ss_heal_run_hooks h = {d,         hook_step,    hook_undo,    hook_stats,
-                               hook_sync, hook_closure, hook_snapshot};
-        ss_heal_run_set_hooks(r, &h, err);
+        /* from here on rank 0 holds no whole grid */
+        if (!su.fresh && su.pieces_step < 0) ss_heal_run_release_grid(r);
+        d->closed_root = (double *)ss_heal_run_closure(r);
+        d->dirty = su.fresh; /* the ranks' day-0 closure days are not here yet */
+        ss_heal_run_hooks h = {.ctx = d,
+                               .step = hook_step,
+                               .undo = hook_undo,
+                               .stats = hook_stats,
+                               .sync = hook_sync,
+                               .closure = hook_closure,
+                               .snapshot = hook_snapshot,
+                               .surface_map = hook_surface};
+        ss_heal_run_set_checkpoint_hook(r, hook_checkpoint, d);
+        /* (a fresh run's day-0 area row: the first command the others serve) */
+        if ((st = ss_heal_run_set_hooks(r, &h, err))) {
+            ss_dist_heal_end(d, st);
+            ss_dist_heal_free(d);
+            return st;
+        }
     }
     *out = d;
     return SS_OK;
@@ -1002,6 +1285,11 @@ static void reduce_timing(ss_dist_heal *d) {
         if (d->nbr[f] != MPI_PROC_NULL) fb += (size_t)d->fcount[f] * sizeof(float);
     t[4] = d->split ? d->tbytes : (double)fb;
     MPI_Reduce(t, m, 5, MPI_DOUBLE, MPI_MAX, 0, d->cart);
+    struct rusage ru;
+    double rss = getrusage(RUSAGE_SELF, &ru) == 0 ? (double)ru.ru_maxrss / 1024.0 : 0.0;
+    if (d->rank == 0 && !d->rss_mb && !(d->rss_mb = malloc((size_t)d->size * sizeof(double))))
+        MPI_Abort(d->cart, 3);
+    MPI_Gather(&rss, 1, MPI_DOUBLE, d->rss_mb, 1, MPI_DOUBLE, 0, d->cart);
     if (d->rank == 0) {
         d->tmax.compute_s = m[0];
         d->tmax.halo_s = m[1];
@@ -1010,6 +1298,7 @@ static void reduce_timing(ss_dist_heal *d) {
         d->tmax.halo_bytes_per_step = m[4];
         memcpy(d->tmax.dims, d->dims, sizeof d->dims);
         d->tmax.steps = d->steps;
+        d->tmax.rss_mb = d->rss_mb;
     }
 }
 
@@ -1033,7 +1322,13 @@ ss_status ss_dist_heal_serve(ss_dist_heal *d, ss_error *err) {
             break;
         }
         case CMD_SYNC:
-            do_gather(d, err);
+            do_sync(d, err);
+            break;
+        case CMD_SURFACE:
+            do_surface(d, m[1] & 0xff, (ss_heal_surface_mode)(m[1] >> 8), err);
+            break;
+        case CMD_CKPT:
+            do_checkpoint(d, NULL, NULL, NULL, NULL, 0, 0, NULL, 0, err);
             break;
         case CMD_PIECES:
             do_pieces(d, m[1], err);
@@ -1051,6 +1346,7 @@ void ss_dist_heal_end(ss_dist_heal *d, ss_status st) {
     send_cmd(d, CMD_END, (int)st);
     reduce_timing(d);
     ss_heal_run_set_hooks(d->run, NULL, NULL);
+    ss_heal_run_set_checkpoint_hook(d->run, NULL, NULL);
 }
 
 void ss_dist_heal_timing_get(const ss_dist_heal *d, ss_dist_heal_timing *t) { *t = d->tmax; }
@@ -1071,6 +1367,9 @@ void ss_dist_heal_free(ss_dist_heal *d) {
     free(d->trecv);
     free(d->scnt);
     free(d->colbuf);
+    free(d->rss_mb);
+    if (d->own_wcols) free((void *)d->wcols);
+    ss_tri_mesh_free(&d->mesh);
     if (d->zcomm != MPI_COMM_NULL && d->zcomm) MPI_Comm_free(&d->zcomm);
     if (d->cart != MPI_COMM_NULL && d->cart) MPI_Comm_free(&d->cart);
     free(d);

@@ -85,24 +85,28 @@ void ss_heal_grid_free(ss_heal_grid *g) {
     free(g);
 }
 
-/* Number of voxel layers whose centre lies below height_mm. */
-static int layers_below(const ss_heal_grid *g, double height_mm) {
-    int k = (int)floor(height_mm / g->dx_mm + 0.5);
-    return k < 0 ? 0 : (k > g->nz ? g->nz : k);
-}
-
 ss_status ss_heal_grid_init(ss_heal_grid *g, double skin_top_mm, double epidermis_mm,
                             const uint8_t *wound3d, const ss_heal_params *p, ss_error *err) {
-    if (!g || !p) return ss_error_set(err, SS_ERR_INPUT, "heal grid init: no grid or params");
-    const int nx = g->nx, ny = g->ny, nz = g->nz;
-    /* top = number of skin layers (z < top are skin) */
-    int top = layers_below(g, skin_top_mm);
-    if (!(skin_top_mm > 0) || top < 4 || top > nz - 2)
+    if (!g) return ss_error_set(err, SS_ERR_INPUT, "heal grid init: no grid or params");
+    const int goff[3] = {0, 0, 0}, gdim[3] = {g->nx, g->ny, g->nz};
+    return ss_heal_grid_init_box(g, goff, gdim, skin_top_mm, epidermis_mm, wound3d, p, err);
+}
+
+ss_status ss_heal_grid_init_box(ss_heal_grid *g, const int goff[3], const int gdim[3],
+                                double skin_top_mm, double epidermis_mm, const uint8_t *wound3d,
+                                const ss_heal_params *p, ss_error *err) {
+    if (!g || !p || !goff || !gdim)
+        return ss_error_set(err, SS_ERR_INPUT, "heal grid init: no grid or params");
+    const int nx = g->nx, ny = g->ny, nz = g->nz, GX = gdim[0], GY = gdim[1], GZ = gdim[2];
+    /* top = number of skin layers of the whole grid (Z < top are skin) */
+    int top = (int)floor(skin_top_mm / g->dx_mm + 0.5);
+    top = top < 0 ? 0 : (top > GZ ? GZ : top);
+    if (!(skin_top_mm > 0) || top < 4 || top > GZ - 2)
         return ss_error_set(err, SS_ERR_INPUT,
                             "heal grid init: skin top %g mm must leave >= 3 tissue voxels above "
                             "the bottom bound and >= 1 air voxel below the top bound (grid "
                             "height %g mm, voxel %g mm)",
-                            skin_top_mm, nz * g->dx_mm, g->dx_mm);
+                            skin_top_mm, GZ * g->dx_mm, g->dx_mm);
     if (!(epidermis_mm >= 0) || epidermis_mm > skin_top_mm)
         return ss_error_set(err, SS_ERR_INPUT,
                             "heal grid init: epidermis thickness %g mm must be in 0..%g mm",
@@ -120,25 +124,28 @@ ss_status ss_heal_grid_init(ss_heal_grid *g, double skin_top_mm, double epidermi
     for (int z = 0; z < nz; z++) {
         for (int y = 0; y < ny; y++) {
             for (int x = 0; x < nx; x++) {
+                const int X = x + goff[0], Y = y + goff[1], Z = z + goff[2];
                 size_t c = ss_heal_idx(g, x, y, z);
                 uint8_t s;
-                if (x == 0 || y == 0 || z == 0 || x == nx - 1 || y == ny - 1 || z == nz - 1)
+                const int outside = X < 0 || Y < 0 || Z < 0 || X >= GX || Y >= GY || Z >= GZ;
+                if (outside || X == 0 || Y == 0 || Z == 0 || X == GX - 1 || Y == GY - 1 ||
+                    Z == GZ - 1)
                     s = SS_CELL_BOUND;
-                else if (z >= top)
+                else if (Z >= top)
                     s = SS_CELL_AIR;
                 else if (wound3d && wound3d[c])
                     s = SS_CELL_WOUND;
-                else if (z >= top - nepi)
+                else if (Z >= top - nepi)
                     s = SS_CELL_EPIDERMIS;
                 else
                     s = SS_CELL_DERMIS;
                 g->cell[c] = s;
                 float v[SS_HEAL_NFIELDS] = {0};
-                if (s == SS_CELL_EPIDERMIS || s == SS_CELL_DERMIS ||
-                    (s == SS_CELL_BOUND && z > 0 && z < top)) {
+                if (!outside && (s == SS_CELL_EPIDERMIS || s == SS_CELL_DERMIS ||
+                                 (s == SS_CELL_BOUND && Z > 0 && Z < top))) {
                     for (int f = 0; f < SS_HEAL_NFIELDS; f++) v[f] = hv[f];
                     /* the intact epidermis (§5.1's layer on top of the skin, in mm) */
-                    if (z >= top - nepi) v[SS_HEAL_EPITHELIUM] = 1.0f;
+                    if (Z >= top - nepi) v[SS_HEAL_EPITHELIUM] = 1.0f;
                 } else if (s == SS_CELL_WOUND) {
                     v[SS_HEAL_OXYGEN] = (float)p->u1_wound;
                     v[SS_HEAL_PLASMA] = 1.0f;
@@ -150,10 +157,12 @@ ss_status ss_heal_grid_init(ss_heal_grid *g, double skin_top_mm, double epidermi
     return SS_OK;
 }
 
-uint8_t *ss_heal_wound_from_footprint(const ss_heal_grid *g, double skin_top_mm,
-                                      const ss_image *footprint, double depth_mm,
-                                      const ss_image *depth_mm_img, ss_error *err) {
-    if (!g || !footprint || !footprint->data || footprint->width < 1 || footprint->height < 1) {
+/* ---- the wound as per-column depth ranges ------------------------------------------- */
+
+int32_t *ss_heal_wound_columns_footprint(int nx, int ny, int nz, double dx_mm, double skin_top_mm,
+                                         const ss_image *footprint, double depth_mm,
+                                         const ss_image *depth_mm_img, ss_error *err) {
+    if (!footprint || !footprint->data || footprint->width < 1 || footprint->height < 1) {
         ss_error_set(err, SS_ERR_INPUT, "wound footprint: no image");
         return NULL;
     }
@@ -165,21 +174,20 @@ uint8_t *ss_heal_wound_from_footprint(const ss_heal_grid *g, double skin_top_mm,
         ss_error_set(err, SS_ERR_INPUT, "wound depth image: empty");
         return NULL;
     }
-    if (!(skin_top_mm > 0) || skin_top_mm > g->nz * g->dx_mm) {
+    if (!(skin_top_mm > 0) || skin_top_mm > nz * dx_mm) {
         ss_error_set(err, SS_ERR_INPUT, "wound footprint: skin top %g mm outside the grid (0..%g)",
-                     skin_top_mm, g->nz * g->dx_mm);
+                     skin_top_mm, nz * dx_mm);
         return NULL;
     }
-    size_t n = (size_t)g->nx * (size_t)g->ny * (size_t)g->nz;
-    uint8_t *m = calloc(n, 1);
-    if (!m) {
+    int32_t *cols = calloc(2 * (size_t)nx * (size_t)ny, sizeof *cols);
+    if (!cols) {
         ss_error_set(err, SS_ERR_NOMEM, "wound footprint: out of memory");
         return NULL;
     }
-    for (int y = 0; y < g->ny; y++) {
-        for (int x = 0; x < g->nx; x++) {
+    for (int y = 0; y < ny; y++) {
+        for (int x = 0; x < nx; x++) {
             /* voxel centre -> image pixel (row 0 at the far +y edge) */
-            double u = (x + 0.5) / g->nx, v = 1.0 - (y + 0.5) / g->ny;
+            double u = (x + 0.5) / nx, v = 1.0 - (y + 0.5) / ny;
             int px = (int)(u * footprint->width), py = (int)(v * footprint->height);
             if (px >= footprint->width) px = footprint->width - 1;
             if (py >= footprint->height) py = footprint->height - 1;
@@ -191,50 +199,119 @@ uint8_t *ss_heal_wound_from_footprint(const ss_heal_grid *g, double skin_top_mm,
                 if (qy >= depth_mm_img->height) qy = depth_mm_img->height - 1;
                 d = ss_image_px(depth_mm_img, qx, qy)[0];
                 if (!(d >= 0) || !isfinite(d)) {
-                    free(m);
+                    free(cols);
                     ss_error_set(err, SS_ERR_INPUT,
                                  "wound depth image: pixel (%d,%d) = %g mm is not a depth >= 0", qx,
                                  qy, d);
                     return NULL;
                 }
             }
+            /* the levels whose centre lies in [top - d, top): one run per column */
             double bottom = skin_top_mm - d;
-            for (int z = 0; z < g->nz; z++) {
-                double zc = (z + 0.5) * g->dx_mm;
-                if (zc < skin_top_mm && zc >= bottom) m[ss_heal_idx(g, x, y, z)] = 1;
+            int32_t *c = cols + 2 * ((size_t)y * (size_t)nx + (size_t)x), lo = -1, hi = -1;
+            for (int z = 0; z < nz; z++) {
+                double zc = (z + 0.5) * dx_mm;
+                if (zc < skin_top_mm && zc >= bottom) {
+                    if (lo < 0) lo = z;
+                    hi = z + 1;
+                }
             }
+            if (lo >= 0) c[0] = lo, c[1] = hi;
         }
     }
-    return m;
+    return cols;
 }
 
-uint8_t *ss_heal_wound_box(const ss_heal_grid *g, double skin_top_mm, double side_x_mm,
-                           double side_y_mm, double depth_mm, ss_error *err) {
-    if (!g || !(side_x_mm > 0) || !(side_y_mm > 0) || !(depth_mm > 0)) {
+int32_t *ss_heal_wound_columns_box(int nx, int ny, int nz, double dx_mm, double skin_top_mm,
+                                   double side_x_mm, double side_y_mm, double depth_mm,
+                                   ss_error *err) {
+    if (!(side_x_mm > 0) || !(side_y_mm > 0) || !(depth_mm > 0)) {
         ss_error_set(err, SS_ERR_INPUT, "wound box: sides %g x %g mm and depth %g mm must be > 0",
                      side_x_mm, side_y_mm, depth_mm);
         return NULL;
     }
-    size_t n = (size_t)g->nx * (size_t)g->ny * (size_t)g->nz;
-    uint8_t *m = calloc(n, 1);
-    if (!m) {
+    int32_t *cols = calloc(2 * (size_t)nx * (size_t)ny, sizeof *cols);
+    if (!cols) {
         ss_error_set(err, SS_ERR_NOMEM, "wound box: out of memory");
         return NULL;
     }
-    double cx = 0.5 * g->nx * g->dx_mm, cy = 0.5 * g->ny * g->dx_mm;
-    for (int z = 0; z < g->nz; z++) {
-        double zc = (z + 0.5) * g->dx_mm;
-        if (!(zc < skin_top_mm && zc >= skin_top_mm - depth_mm)) continue;
-        for (int y = 0; y < g->ny; y++) {
-            double yc = (y + 0.5) * g->dx_mm;
-            if (fabs(yc - cy) >= 0.5 * side_y_mm) continue;
-            for (int x = 0; x < g->nx; x++) {
-                double xc = (x + 0.5) * g->dx_mm;
-                if (fabs(xc - cx) < 0.5 * side_x_mm) m[ss_heal_idx(g, x, y, z)] = 1;
+    int lo = -1, hi = -1;
+    for (int z = 0; z < nz; z++) {
+        double zc = (z + 0.5) * dx_mm;
+        if (zc < skin_top_mm && zc >= skin_top_mm - depth_mm) {
+            if (lo < 0) lo = z;
+            hi = z + 1;
+        }
+    }
+    double cx = 0.5 * nx * dx_mm, cy = 0.5 * ny * dx_mm;
+    for (int y = 0; lo >= 0 && y < ny; y++) {
+        double yc = (y + 0.5) * dx_mm;
+        if (fabs(yc - cy) >= 0.5 * side_y_mm) continue;
+        for (int x = 0; x < nx; x++) {
+            double xc = (x + 0.5) * dx_mm;
+            if (fabs(xc - cx) < 0.5 * side_x_mm) {
+                cols[2 * ((size_t)y * (size_t)nx + (size_t)x)] = lo;
+                cols[2 * ((size_t)y * (size_t)nx + (size_t)x) + 1] = hi;
             }
         }
     }
+    return cols;
+}
+
+uint8_t *ss_heal_wound_columns_expand(const int32_t *cols, const int gdim[3], const int lo[3],
+                                      const int n[3], ss_error *err) {
+    uint8_t *m = calloc((size_t)n[0] * (size_t)n[1] * (size_t)n[2], 1);
+    if (!m) {
+        ss_error_set(err, SS_ERR_NOMEM, "wound mask: out of memory");
+        return NULL;
+    }
+    for (int y = 0; y < n[1]; y++)
+        for (int x = 0; x < n[0]; x++) {
+            const int X = x + lo[0], Y = y + lo[1];
+            if (X < 0 || Y < 0 || X >= gdim[0] || Y >= gdim[1]) continue;
+            const int32_t *c = cols + 2 * ((size_t)Y * (size_t)gdim[0] + (size_t)X);
+            for (int Z = c[0]; Z < c[1]; Z++) {
+                const int z = Z - lo[2];
+                if (z >= 0 && z < n[2])
+                    m[((size_t)z * (size_t)n[1] + (size_t)y) * (size_t)n[0] + (size_t)x] = 1;
+            }
+        }
     return m;
+}
+
+/* A whole-grid mask from column ranges (NULL in, NULL out: err is set). */
+static uint8_t *whole_mask(const ss_heal_grid *g, int32_t *cols, ss_error *err) {
+    if (!cols) return NULL;
+    const int gdim[3] = {g->nx, g->ny, g->nz}, lo[3] = {0, 0, 0};
+    uint8_t *m = ss_heal_wound_columns_expand(cols, gdim, lo, gdim, err);
+    free(cols);
+    return m;
+}
+
+uint8_t *ss_heal_wound_from_footprint(const ss_heal_grid *g, double skin_top_mm,
+                                      const ss_image *footprint, double depth_mm,
+                                      const ss_image *depth_mm_img, ss_error *err) {
+    if (!g) {
+        ss_error_set(err, SS_ERR_INPUT, "wound footprint: no image");
+        return NULL;
+    }
+    return whole_mask(g,
+                      ss_heal_wound_columns_footprint(g->nx, g->ny, g->nz, g->dx_mm, skin_top_mm,
+                                                      footprint, depth_mm, depth_mm_img, err),
+                      err);
+}
+
+uint8_t *ss_heal_wound_box(const ss_heal_grid *g, double skin_top_mm, double side_x_mm,
+                           double side_y_mm, double depth_mm, ss_error *err) {
+    if (!g) {
+        ss_error_set(err, SS_ERR_INPUT, "wound box: sides %g x %g mm and depth %g mm must be > 0",
+                     side_x_mm, side_y_mm, depth_mm);
+        return NULL;
+    }
+    return whole_mask(g,
+                      ss_heal_wound_columns_box(g->nx, g->ny, g->nz, g->dx_mm, skin_top_mm,
+                                                side_x_mm, side_y_mm, depth_mm, err),
+                      err);
 }
 
 int ss_heal_in_region(const ss_heal_grid *g, const ss_heal_params *p, size_t idx) {

@@ -660,6 +660,35 @@ static ss_heal_solver *solver_create(const ss_heal_grid *g, const int *goff, con
                                      const ss_heal_params *p, ss_heal_scheme scheme, double dt,
                                      ss_error *err);
 
+ss_status ss_heal_solver_check(const ss_heal_grid *g, const ss_heal_params *p,
+                               ss_heal_scheme scheme, double *dt_days, ss_error *err) {
+    if (!g || !p || !dt_days)
+        return ss_error_set(err, SS_ERR_INPUT, "heal solver: no grid or parameters");
+    if (scheme != SS_HEAL_EXPLICIT && scheme != SS_HEAL_SPLIT)
+        return ss_error_set(err, SS_ERR_INPUT, "heal solver: unknown scheme %d", (int)scheme);
+    ss_status st = check_params(p, err);
+    if (st) return st;
+    double dt = *dt_days;
+    if (!(dt >= 0) || !isfinite(dt))
+        return ss_error_set(err, SS_ERR_INPUT, "heal solver: time step %g days must be >= 0", dt);
+    double limit = ss_heal_stable_dt(g, p, scheme);
+    if (dt == 0) dt = scheme == SS_HEAL_EXPLICIT ? 0.9 * limit : SS_HEAL_SPLIT_DEFAULT_DT_DAYS;
+    if (dt > limit * (1.0 + 1e-12)) {
+        if (scheme == SS_HEAL_EXPLICIT)
+            return ss_error_set(err, SS_ERR_INPUT,
+                                "heal solver: time step %g days exceeds the explicit stability "
+                                "limit %g days (voxel %g mm; limit = 1 / (6 D_max / h^2 + max "
+                                "reaction rate + |v|/h)); use --dt <= %g or the split scheme",
+                                dt, limit, g->dx_mm, limit);
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "heal solver: time step %g days exceeds the split scheme's accuracy "
+                            "limit %g days",
+                            dt, limit);
+    }
+    *dt_days = dt;
+    return SS_OK;
+}
+
 ss_heal_solver *ss_heal_solver_create(const ss_heal_grid *g, const ss_heal_params *p,
                                       ss_heal_scheme scheme, double dt, ss_error *err) {
     return solver_create(g, NULL, NULL, p, scheme, dt, err);
@@ -681,35 +710,7 @@ ss_heal_solver *ss_heal_solver_create_sub(const ss_heal_grid *g, const int goff[
 static ss_heal_solver *solver_create(const ss_heal_grid *g, const int *goff, const int *gdim,
                                      const ss_heal_params *p, ss_heal_scheme scheme, double dt,
                                      ss_error *err) {
-    if (!g || !p) {
-        ss_error_set(err, SS_ERR_INPUT, "heal solver: no grid or parameters");
-        return NULL;
-    }
-    if (scheme != SS_HEAL_EXPLICIT && scheme != SS_HEAL_SPLIT) {
-        ss_error_set(err, SS_ERR_INPUT, "heal solver: unknown scheme %d", (int)scheme);
-        return NULL;
-    }
-    if (check_params(p, err) != SS_OK) return NULL;
-    if (!(dt >= 0) || !isfinite(dt)) {
-        ss_error_set(err, SS_ERR_INPUT, "heal solver: time step %g days must be >= 0", dt);
-        return NULL;
-    }
-    double limit = ss_heal_stable_dt(g, p, scheme);
-    if (dt == 0) dt = scheme == SS_HEAL_EXPLICIT ? 0.9 * limit : SS_HEAL_SPLIT_DEFAULT_DT_DAYS;
-    if (dt > limit * (1.0 + 1e-12)) {
-        if (scheme == SS_HEAL_EXPLICIT)
-            ss_error_set(err, SS_ERR_INPUT,
-                         "heal solver: time step %g days exceeds the explicit stability limit "
-                         "%g days (voxel %g mm; limit = 1 / (6 D_max / h^2 + max reaction rate "
-                         "+ |v|/h)); use --dt <= %g or the split scheme",
-                         dt, limit, g->dx_mm, limit);
-        else
-            ss_error_set(err, SS_ERR_INPUT,
-                         "heal solver: time step %g days exceeds the split scheme's accuracy "
-                         "limit %g days",
-                         dt, limit);
-        return NULL;
-    }
+    if (ss_heal_solver_check(g, p, scheme, &dt, err)) return NULL;
     ss_heal_solver *s = calloc(1, sizeof *s);
     if (!s) {
         ss_error_set(err, SS_ERR_NOMEM, "heal solver: out of memory");

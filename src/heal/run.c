@@ -47,6 +47,8 @@ void ss_heal_run_free(ss_heal_run *r) {
     ss_heal_run__mech_free(r);
     for (int f = 0; f < SS_HEAL_NFIELDS; f++) free(r->backup[f]);
     ss_heal_run__shell_free(r);
+    free(r->wcols);
+    ss_tri_mesh_free(&r->wmesh);
     free(r);
 }
 
@@ -62,8 +64,10 @@ ss_status ss_heal_run__add_row(ss_heal_run *r, ss_error *err) {
     row->t_days = r->g->t_days;
     if (r->hooks.stats)
         r->hooks.stats(r->hooks.ctx, r->g, &row->st);
-    else
+    else if (r->g->cell)
         ss_heal_stats_compute(r->g, &row->st);
+    else /* distributed, rows restored from a checkpoint: filled in by the caller */
+        memset(&row->st, 0, sizeof row->st);
     return ss_heal_run__mech_row(r, err);
 }
 
@@ -122,6 +126,7 @@ ss_status ss_heal_run_create(const ss_heal_run_config *c, ss_heal_run **out, ss_
     if (!r) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     r->c = *c;
     r->resumed_from = -1;
+    r->pieces_step = -1;
     const char *dir = c->resume_dir ? c->resume_dir : c->out_dir;
     ss_status st = SS_OK;
     if (dir && !(r->out_dir = strdup(dir))) st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
@@ -130,13 +135,17 @@ ss_status ss_heal_run_create(const ss_heal_run_config *c, ss_heal_run **out, ss_
     if (!st) st = set_end(r, err);
     if (!st) st = check_ckpt_pieces(r, err);
     if (!st && !r->closed_day) { /* fresh, or a checkpoint from before the closure days */
-        if (!(r->closed_day = malloc((size_t)r->g->nx * (size_t)r->g->ny * sizeof *r->closed_day)))
+        const size_t ncol = (size_t)r->g->nx * (size_t)r->g->ny;
+        if (!(r->closed_day = malloc(ncol * sizeof *r->closed_day)))
             st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
-        else
+        else if (r->g->cell)
             ss_heal_closure_init(r->g, r->closed_day);
+        else /* distributed: the ranks keep them, the sync hook brings them here */
+            for (size_t k = 0; k < ncol; k++) r->closed_day[k] = SS_HEAL_CLOSED_INTACT;
     }
     if (!st && r->out_dir) st = ss_heal_run__outputs_open(r, err);
-    if (!st && !c->resume_dir) st = ss_heal_run__add_row(r, err); /* day 0 */
+    /* day 0 (distributed: when the hooks are set, ss_heal_run_set_hooks) */
+    if (!st && !c->resume_dir && r->g->cell) st = ss_heal_run__add_row(r, err);
     if (st) {
         ss_heal_run_free(r);
         return st;
@@ -182,6 +191,10 @@ ss_status ss_heal_run_write_checkpoint(ss_heal_run *r, ss_error *err) {
     if (!r->out_dir) return ss_error_set(err, SS_ERR_INPUT, "heal run: no output directory");
     ss_status st0 = start_output(r, err);
     if (st0) return st0;
+    if (!r->g->cell && !r->ckpt_fn)
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "heal run: a distributed run (config.distributed) writes "
+                            "checkpoints only through the MPI driver's hook");
     if ((st0 = ss_heal_run__sync(r, err))) return st0;
     char *aux = ss_heal_run__aux_json(r, r->wall_prev + ss_now() - r->t0);
     if (!aux) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
@@ -323,6 +336,10 @@ static ss_status solver_step(ss_heal_run *r, long long limit, ss_error *err) {
 }
 
 static ss_status run_step(ss_heal_run *r, long long limit, ss_error *err) {
+    if (!r->g->cell && !r->hooks.step)
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "heal run: a distributed run (config.distributed) steps only "
+                            "through the MPI driver's hooks");
     if (ss_heal_run_done(r))
         return ss_error_set(err, SS_ERR_INPUT, "heal run: already at its end (day %g)",
                             ss_heal_run_end_day(r));
@@ -397,11 +414,43 @@ ss_status ss_heal_run_set_hooks(ss_heal_run *r, const ss_heal_run_hooks *h, ss_e
         return ss_error_set(err, SS_ERR_INPUT,
                             "--mechanics: the contraction mechanics needs the whole grid in one "
                             "process; it cannot run with an external (distributed) solver");
+    if (h && !r->g->cell &&
+        (!h->step || !h->stats || !h->sync || !h->closure || !h->snapshot || !h->surface_map ||
+         !r->ckpt_fn))
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "heal run: a distributed run (no whole grid) needs every hook");
     if (h)
         r->hooks = *h;
     else
         memset(&r->hooks, 0, sizeof r->hooks);
+    /* a distributed fresh run's day-0 area row comes from the ranks' boxes */
+    if (h && !r->g->cell && r->resumed_from < 0 && r->nrows == 0)
+        return ss_heal_run__add_row(r, err);
     return SS_OK;
+}
+
+const int32_t *ss_heal_run_wound_columns(const ss_heal_run *r) { return r->wcols; }
+const ss_tri_mesh *ss_heal_run_wound_mesh(const ss_heal_run *r) {
+    return r->wmesh.ntris ? &r->wmesh : NULL;
+}
+double ss_heal_run_epidermis_mm(const ss_heal_run *r) { return r->epidermis_mm; }
+long long ss_heal_run_resume_pieces(const ss_heal_run *r, const char **dir) {
+    if (dir) *dir = r->pieces_step >= 0 ? r->c.resume_dir : NULL;
+    return r->pieces_step;
+}
+
+void ss_heal_run_release_grid(ss_heal_run *r) {
+    if (!r || !r->g) return;
+    ss_heal_solver_free(r->s);
+    r->s = NULL;
+    free(r->g->cell);
+    r->g->cell = NULL;
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++) {
+        free(r->g->field[f]);
+        r->g->field[f] = NULL;
+        free(r->backup[f]);
+        r->backup[f] = NULL;
+    }
 }
 
 ss_status ss_heal_run__sync(ss_heal_run *r, ss_error *err) {

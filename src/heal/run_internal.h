@@ -63,6 +63,13 @@ struct ss_heal_run {
     float *vfields;          /* per surf vertex, SS_SHELL_VERTEX_STRIDE floats */
     cJSON *shell_aux;        /* the checkpoint's "shell" object while resuming */
     ss_heal_run_hooks hooks; /* an external solver (src/dist); members NULL = none */
+    /* distributed (c.distributed): g has sizes, time and step but no arrays
+     * (cell NULL) once the boxes are out; the wound the boxes are built from */
+    double epidermis_mm;
+    int32_t *wcols;        /* per-column level ranges (ss_heal_wound_columns_*), or */
+    ss_tri_mesh wmesh;     /* the closed wound mesh (ntris 0 = none) */
+    long long pieces_step; /* resumed from a checkpoint in pieces, not loaded: its step;
+                              else -1 */
     ss_heal_run_checkpoint_fn
         ckpt_fn; /* a checkpoint writer instead of the run's own; NULL = none */
     void *ckpt_ctx;

@@ -457,7 +457,10 @@ static ss_status write_surface_maps(ss_heal_run *r, int idx, ss_error *err) {
                  {SS_HEAL_SCAR, SS_SURFACE_MAX, "column max", "(density)"}};
     char path[4400], title[256];
     for (int k = 0; k < 4; k++) {
-        ss_image *m = ss_heal_surface_map(r->g, maps[k].field, maps[k].mode, err);
+        ss_image *m =
+            r->hooks.surface_map
+                ? r->hooks.surface_map(r->hooks.ctx, r->g, maps[k].field, maps[k].mode, err)
+                : ss_heal_surface_map(r->g, maps[k].field, maps[k].mode, err);
         if (!m) return err->code;
         const char *name = ss_heal_field_name(maps[k].field);
         snprintf(title, sizeof title, "%s (%s), day %.2f - %s", name, maps[k].how, r->g->t_days,
@@ -499,11 +502,17 @@ ss_status ss_heal_run__snapshot(ss_heal_run *r, ss_error *err) {
     if (st0) return st0;
     char rel[64], path[4400];
     int idx = r->nsnap;
+    /* distributed (no whole grid): the ranks write their pieces and the .pvti
+     * that joins them (the snapshot hook below) */
+    const int pieces = !r->g->cell;
     /* a resumed run may redo snapshots the killed run wrote after its checkpoint */
-    snprintf(rel, sizeof rel, "fields_%04d.vti", idx);
+    snprintf(rel, sizeof rel, pieces ? "fields_%04d.pvti" : "fields_%04d.vti", idx);
     snprintf(path, sizeof path, "%s/fields/%s", r->out_dir, rel);
     ss_status st;
-    if (r->mech) { /* the displacement next to the velocity */
+    if (pieces) {
+        st = r->hooks.snapshot ? SS_OK
+                               : ss_error_set(err, SS_ERR_INPUT, "heal run: no grid to write");
+    } else if (r->mech) { /* the displacement next to the velocity */
         float *const *u = ss_mech_grid_displacement(r->mech);
         if (!u) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
         const char *name = "displacement";

@@ -256,6 +256,22 @@ static const char *wound_source_name(const ss_heal_run_config *c) {
                                 : "--wound-depth-mm";
 }
 
+static ss_status wound_uncovered(const ss_heal_run_config *c, const geometry *gm, ss_error *err) {
+    return ss_error_set(err, SS_ERR_INPUT,
+                        "%s: the wound covers no voxel under the skin surface (%g mm) of the "
+                        "%gx%gx%g mm block with %g mm voxels%s",
+                        wound_source_name(c), gm->top, gm->X, gm->Y, gm->Z, gm->dx,
+                        c->wound_mesh ? "; mesh coordinates are mm from the block corner, z up"
+                                      : "; make it larger or deeper");
+}
+
+static ss_status mesh_outside(const ss_heal_run_config *c, const geometry *gm, ss_error *err) {
+    return ss_error_set(err, SS_ERR_INPUT,
+                        "%s: no voxel centre of the %gx%gx%g mm block lies inside the mesh "
+                        "(coordinates are mm from the block corner, z up)",
+                        c->wound_mesh, gm->X, gm->Y, gm->Z);
+}
+
 /* The nx*ny*nz wound mask (1 = wound voxel) on r->g; NULL with err set. */
 static uint8_t *wound_volume(ss_heal_run *r, const geometry *gm, const wound_inputs *w,
                              ss_error *err) {
@@ -265,10 +281,7 @@ static uint8_t *wound_volume(ss_heal_run *r, const geometry *gm, const wound_inp
         size_t cnt = 0;
         w3 = ss_heal_voxelise_mesh(&w->mesh, gm->n[0], gm->n[1], gm->n[2], gm->dx, &cnt, err);
         if (w3 && cnt == 0) {
-            ss_error_set(err, SS_ERR_INPUT,
-                         "%s: no voxel centre of the %gx%gx%g mm block lies inside the mesh "
-                         "(coordinates are mm from the block corner, z up)",
-                         c->wound_mesh, gm->X, gm->Y, gm->Z);
+            mesh_outside(c, gm, err);
             free(w3);
             return NULL;
         }
@@ -288,12 +301,7 @@ static uint8_t *wound_volume(ss_heal_run *r, const geometry *gm, const wound_inp
     for (size_t i = 0; i < plane * (size_t)gm->n[2]; i++)
         below += w3[i] && ((double)(i / plane) + 0.5) * gm->dx < gm->top;
     if (!below) {
-        ss_error_set(err, SS_ERR_INPUT,
-                     "%s: the wound covers no voxel under the skin surface (%g mm) of the "
-                     "%gx%gx%g mm block with %g mm voxels%s",
-                     wound_source_name(c), gm->top, gm->X, gm->Y, gm->Z, gm->dx,
-                     c->wound_mesh ? "; mesh coordinates are mm from the block corner, z up"
-                                   : "; make it larger or deeper");
+        wound_uncovered(c, gm, err);
         free(w3);
         return NULL;
     }
@@ -310,9 +318,16 @@ static long long every_steps(double days, double dt) {
 
 static ss_status setup_solver(ss_heal_run *r, ss_error *err) {
     const ss_heal_run_config *c = &r->c;
-    r->s = ss_heal_solver_create(r->g, r->p, r->scheme, c->dt_days, err);
-    if (!r->s) return err->code ? err->code : SS_ERR_INPUT;
-    r->dt = ss_heal_solver_dt(r->s);
+    if (c->distributed) { /* the MPI driver's ranks step the boxes */
+        double dt = c->dt_days;
+        ss_status st = ss_heal_solver_check(r->g, r->p, r->scheme, &dt, err);
+        if (st) return st;
+        r->dt = dt;
+    } else {
+        r->s = ss_heal_solver_create(r->g, r->p, r->scheme, c->dt_days, err);
+        if (!r->s) return err->code ? err->code : SS_ERR_INPUT;
+        r->dt = ss_heal_solver_dt(r->s);
+    }
     r->snap_every = every_steps(c->snapshot_every, r->dt);
     r->area_every = llround(c->area_every / r->dt);
     if (r->area_every < 1) r->area_every = 1;
@@ -324,9 +339,79 @@ static ss_status setup_solver(ss_heal_run *r, ss_error *err) {
     return SS_OK;
 }
 
+/* ---- distributed set-up (the MPI driver): no whole grid ------------------------------ */
+
+static geometry geometry_of(const ss_heal_grid *g) {
+    geometry gm = {
+        {g->nx, g->ny, g->nz}, g->dx_mm, g->skin_top_mm, g->nx * g->dx_mm, g->ny * g->dx_mm,
+        g->nz * g->dx_mm,      0};
+    return gm;
+}
+
+/* The grid's sizes without its arrays, the checks of ss_heal_grid_init, and
+ * the wound for the boxes: per-column level ranges (1/nz of the mask), or the
+ * mesh, which every rank voxelises over its own box (its checks follow in
+ * ss_heal_run_wound_counted). */
+static ss_status setup_distributed(ss_heal_run *r, const geometry *gm, wound_inputs *w,
+                                   ss_error *err) {
+    const ss_heal_run_config *c = &r->c;
+    if (!(r->g = calloc(1, sizeof *r->g))) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    r->g->nx = gm->n[0];
+    r->g->ny = gm->n[1];
+    r->g->nz = gm->n[2];
+    r->g->dx_mm = gm->dx;
+    ss_heal_grid probe = *r->g; /* an empty box: only the checks run */
+    probe.nx = probe.ny = probe.nz = 0;
+    const int zero[3] = {0, 0, 0};
+    ss_status st =
+        ss_heal_grid_init_box(&probe, zero, gm->n, gm->top, c->epidermis_mm, NULL, r->p, err);
+    if (st) return st;
+    r->g->skin_top_mm = gm->top;
+    r->epidermis_mm = c->epidermis_mm;
+    if (c->wound_mesh) {
+        r->wmesh = w->mesh;
+        memset(&w->mesh, 0, sizeof w->mesh);
+        return SS_OK;
+    }
+    if (w->fp) {
+        r->wcols = ss_heal_wound_columns_footprint(gm->n[0], gm->n[1], gm->n[2], gm->dx, gm->top,
+                                                   w->fp, gm->depth, w->dimg, err);
+    } else {
+        double side = SS_HEAL_DEFAULT_WOUND_MM, lim = (gm->X < gm->Y ? gm->X : gm->Y) * 2.0 / 3.0;
+        if (side > lim) side = lim;
+        r->wcols = ss_heal_wound_columns_box(gm->n[0], gm->n[1], gm->n[2], gm->dx, gm->top, side,
+                                             side, gm->depth, err);
+        cJSON_AddStringToObject(r->wound, "builtin", "centred square");
+        cJSON_AddNumberToObject(r->wound, "side_mm", side);
+    }
+    if (!r->wcols) return err->code ? err->code : SS_ERR_RUNTIME;
+    /* every level of a range lies under the skin surface */
+    for (size_t k = 0; k < (size_t)gm->n[0] * (size_t)gm->n[1]; k++)
+        if (r->wcols[2 * k + 1] > r->wcols[2 * k]) return SS_OK;
+    return wound_uncovered(c, gm, err);
+}
+
+ss_status ss_heal_run_wound_counted(ss_heal_run *r, size_t inside, size_t below, ss_error *err) {
+    if (!r->c.wound_mesh) return SS_OK;
+    const geometry gm = geometry_of(r->g);
+    if (inside == 0) return mesh_outside(&r->c, &gm, err);
+    cJSON_AddNumberToObject(r->wound, "voxels", (double)inside);
+    return below ? SS_OK : wound_uncovered(&r->c, &gm, err);
+}
+
 ss_status ss_heal_run__setup_fresh(ss_heal_run *r, ss_error *err) {
     const ss_heal_run_config *c = &r->c;
     ss_status st = check_config(c, err);
+    if (!st && c->distributed && c->mechanics)
+        st = ss_error_set(err, SS_ERR_INPUT,
+                          "--mechanics cannot run on several MPI ranks: the contraction "
+                          "mechanics needs the whole grid in one process (run it without "
+                          "mpirun, or with -np 1)");
+    if (!st && c->distributed && ss_heal_run__shell_wanted(c))
+        st = ss_error_set(err, SS_ERR_INPUT,
+                          "--mesh cannot run on several MPI ranks: the patch of skin and "
+                          "its surface outputs need the whole grid in one process (run it "
+                          "without mpirun)");
     if (!st) st = setup_params(r, err);
     if (!st && ss_heal_run__shell_wanted(c)) { /* a patch of skin on a mesh */
         r->days = c->days != 0 ? c->days : SS_HEAL_RUN_DEFAULT_DAYS;
@@ -349,6 +434,13 @@ ss_status ss_heal_run__setup_fresh(ss_heal_run *r, ss_error *err) {
     if (!st) st = read_wound_depth(r, &gm, &w, err);
     if (!st && !c->wound_mesh) cJSON_AddNumberToObject(r->wound, "depth_mm", gm.depth);
     uint8_t *w3 = NULL;
+    if (!st && c->distributed) {
+        st = setup_distributed(r, &gm, &w, err);
+        wound_inputs_free(&w);
+        if (!st) st = ss_heal_run__mech_setup_fresh(r, err); /* its option checks */
+        if (!st) st = setup_solver(r, err);
+        return st;
+    }
     if (!st) {
         r->g = ss_heal_grid_create(gm.n[0], gm.n[1], gm.n[2], gm.dx, err);
         if (!r->g) st = err->code ? err->code : SS_ERR_NOMEM;
@@ -362,13 +454,48 @@ ss_status ss_heal_run__setup_fresh(ss_heal_run *r, ss_error *err) {
     return st;
 }
 
+/* A distributed resume: the newest checkpoint, a checkpoint in pieces
+ * without its grid (checked: every piece there, its size, header and CRC;
+ * the ranks read their boxes from it, ss_heal_run_resume_pieces), a
+ * whole-grid one loaded as before (the driver hands it out, then drops it). */
+static ss_status open_distributed(ss_heal_run *r, const char *dir, ss_heal_checkpoint *ck,
+                                  ss_error *err) {
+    ss_heal_ckpt_header h;
+    memset(&h, 0, sizeof h);
+    memset(ck, 0, sizeof *ck);
+    ss_status st = ss_heal_checkpoint_open_latest(dir, 1, ck, &h, r->note, sizeof r->note, err);
+    if (st || h.npieces == 0) return st;
+    if (!(ck->grid = calloc(1, sizeof *ck->grid))) {
+        ss_heal_ckpt_header_free(&h);
+        return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    }
+    ck->grid->nx = h.whole[0];
+    ck->grid->ny = h.whole[1];
+    ck->grid->nz = h.whole[2];
+    ck->grid->dx_mm = h.dx_mm;
+    ck->grid->skin_top_mm = h.skin_top_mm;
+    ck->grid->t_days = h.t_days;
+    ck->grid->step = h.step;
+    ck->scenario = h.scenario;
+    ck->params_json = h.params_json;
+    ck->aux = h.aux;
+    h.scenario = h.params_json = h.aux = NULL;
+    ck->scheme = h.scheme;
+    ck->dt_days = h.dt_days;
+    r->pieces_step = (long long)h.step;
+    ss_heal_ckpt_header_free(&h);
+    return SS_OK;
+}
+
 ss_status ss_heal_run__setup_resume(ss_heal_run *r, ss_error *err) {
     const ss_heal_run_config *c = &r->c;
     const char *dir = c->resume_dir;
     if (!(c->days >= 0 && c->days <= 1e6) || !(c->checkpoint_every <= 1e6))
         return ss_error_set(err, SS_ERR_INPUT, "--days and --checkpoint-every must be finite");
     ss_heal_checkpoint ck;
-    ss_status st = ss_heal_checkpoint_load_latest(dir, &ck, r->note, sizeof r->note, err);
+    ss_status st = c->distributed
+                       ? open_distributed(r, dir, &ck, err)
+                       : ss_heal_checkpoint_load_latest(dir, &ck, r->note, sizeof r->note, err);
     if (st) return st;
     /* a checkpoint of another run (copied in) is refused before anything is touched */
     if ((st = ss_heal_run__check_identity(dir, &ck, err))) {
@@ -386,14 +513,25 @@ ss_status ss_heal_run__setup_resume(ss_heal_run *r, ss_error *err) {
     ss_heal_checkpoint_free(&ck);
     if (st) return st;
     if (c->days != 0) r->days = c->days;
+    if (!r->g->cell && (r->mech_aux || r->shell_aux))
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "--resume %s: a run with %s cannot continue on several MPI ranks "
+                            "(it needs the whole grid in one process); resume it without mpirun",
+                            dir, r->mech_aux ? "--mechanics" : "--mesh");
     r->p = ss_heal_params_parse(r->params_json, "checkpoint parameters", r->scenario, err);
     if (!r->p) return err->code ? err->code : SS_ERR_INPUT;
     st = ss_heal_run__mech_setup_resume(r, dir, err);
     if (!st) st = ss_heal_run__shell_setup_resume(r, err);
     if (st) return st;
-    r->s = ss_heal_solver_create(r->g, r->p, r->scheme, r->dt, err);
-    if (!r->s) return err->code ? err->code : SS_ERR_INPUT;
-    if (ss_heal_solver_dt(r->s) != r->dt)
+    double dt = r->dt;
+    if (c->distributed) { /* the MPI driver's ranks step the boxes */
+        if ((st = ss_heal_solver_check(r->g, r->p, r->scheme, &dt, err))) return st;
+    } else {
+        r->s = ss_heal_solver_create(r->g, r->p, r->scheme, r->dt, err);
+        if (!r->s) return err->code ? err->code : SS_ERR_INPUT;
+        dt = ss_heal_solver_dt(r->s);
+    }
+    if (dt != r->dt)
         return ss_error_set(err, SS_ERR_INPUT, "%s: solver refused the checkpoint's dt %.17g", dir,
                             r->dt);
     if (c->checkpoint_every >= 0) r->ckpt_every = every_steps(c->checkpoint_every, r->dt);

@@ -4,7 +4,35 @@
  * top/bottom boundary layers and side boundary cells above the skin surface are skipped. These are
  * the 2D views the seed maps onto the undeformed mesh for shading (seed 001 §5.4); rendered to PNG
  * by plot.c. */
+#include <stdlib.h>
+#include <string.h>
+
 #include "skinsim/heal_io.h"
+
+void ss_heal_surface_scan(const ss_heal_grid *g, int field, ss_heal_surface_mode mode, int z0,
+                          int z1, int zoff, int gz, float *v, float *found) {
+    const int nx = g->nx, ny = g->ny;
+    const float *a = g->field[field];
+    const int stop = mode == SS_SURFACE_TOP ? 1 : mode == SS_SURFACE_LAYER ? 2 : 0;
+#pragma omp parallel for schedule(static)
+    for (int y = 0; y < ny; y++) {
+        for (int x = 0; x < nx; x++) {
+            const size_t k = (size_t)y * (size_t)nx + (size_t)x;
+            for (int z = z1 - 1; z >= z0 && !(stop && found[k] >= stop); z--) {
+                const size_t i = ss_heal_idx(g, x, y, z);
+                const int Z = z + zoff;
+                /* skip air and boundary cells that are not tissue: the top and
+                 * bottom layers and side boundary cells above the skin surface */
+                if (g->cell[i] == SS_CELL_AIR ||
+                    (g->cell[i] == SS_CELL_BOUND &&
+                     (Z == 0 || Z == gz - 1 || (Z + 0.5) * g->dx_mm > g->skin_top_mm)))
+                    continue;
+                if (!found[k] || a[i] > v[k]) v[k] = a[i];
+                found[k]++;
+            }
+        }
+    }
+}
 
 ss_image *ss_heal_surface_map(const ss_heal_grid *g, int field, ss_heal_surface_mode mode,
                               ss_error *err) {
@@ -12,35 +40,26 @@ ss_image *ss_heal_surface_map(const ss_heal_grid *g, int field, ss_heal_surface_
         ss_error_set(err, SS_ERR_INPUT, "surface map: invalid field %d", field);
         return NULL;
     }
-    ss_image *img = ss_image_create(g->nx, g->ny, 1, err);
-    if (!img) return NULL;
-    const int nx = g->nx, ny = g->ny, nz = g->nz;
-    const float *a = g->field[field];
-#pragma omp parallel for schedule(static)
-    for (int y = 0; y < ny; y++) {
-        for (int x = 0; x < nx; x++) {
-            float v = 0;
-            int found = 0;
-            for (int z = nz - 1; z >= 0; z--) {
-                size_t i = ((size_t)z * (size_t)ny + (size_t)y) * (size_t)nx + (size_t)x;
-                /* skip air and boundary cells that are not tissue: the top and
-                 * bottom layers and side boundary cells above the skin surface */
-                if (g->cell[i] == SS_CELL_AIR ||
-                    (g->cell[i] == SS_CELL_BOUND &&
-                     (z == 0 || z == nz - 1 || (z + 0.5) * g->dx_mm > g->skin_top_mm)))
-                    continue;
-                if (mode == SS_SURFACE_TOP) {
-                    v = a[i];
-                    break;
-                }
-                if (!found || a[i] > v) v = a[i];
-                found++;
-                if (mode == SS_SURFACE_LAYER && found == 2) break;
-            }
-            img->data[(size_t)(ny - 1 - y) * (size_t)nx + (size_t)x] = v;
-        }
+    const int nx = g->nx, ny = g->ny;
+    const size_t nc = (size_t)nx * (size_t)ny;
+    ss_image *img = ss_image_create(nx, ny, 1, err);
+    float *vf = calloc(2 * nc, sizeof *vf);
+    if (!img || !vf) {
+        ss_image_free(img);
+        free(vf);
+        if (img) ss_error_set(err, SS_ERR_NOMEM, "surface map: out of memory");
+        return NULL;
     }
+    ss_heal_surface_scan(g, field, mode, 0, g->nz, 0, g->nz, vf, vf + nc);
+    ss_heal_surface_image(vf, nx, ny, img->data);
+    free(vf);
     return img;
+}
+
+void ss_heal_surface_image(const float *v, int nx, int ny, float *out) {
+    for (int y = 0; y < ny; y++)
+        memcpy(out + (size_t)(ny - 1 - y) * (size_t)nx, v + (size_t)y * (size_t)nx,
+               (size_t)nx * sizeof *out);
 }
 
 /* ---- closure day per column ---------------------------------------------------------- */

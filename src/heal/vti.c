@@ -81,7 +81,7 @@ static void put_vec3(FILE *f, float *const v[3], size_t n) {
     }
 }
 
-static ss_status write_vti(const char *path, const ss_heal_grid *g, int nvec,
+static ss_status write_vti(const char *path, const ss_heal_grid *g, const int box[6], int nvec,
                            const char *const *names, float *const (*vecs)[3],
                            const double *closed_day, const int off[3], const int whole[3],
                            ss_error *err);
@@ -107,13 +107,13 @@ ss_status ss_heal_vti_write_all(const char *path, const ss_heal_grid *g, int nve
                                 const double *closed_day, ss_error *err) {
     if (!g || !g->cell) return ss_error_set(err, SS_ERR_INPUT, "%s: no grid", path);
     const int off[3] = {0, 0, 0}, whole[3] = {g->nx, g->ny, g->nz};
-    return write_vti(path, g, nvec, names, vecs, closed_day, off, whole, err);
+    return write_vti(path, g, NULL, nvec, names, vecs, closed_day, off, whole, err);
 }
 
 ss_status ss_heal_vti_write_piece(const char *path, const ss_heal_grid *piece, const int off[3],
                                   const int whole[3], ss_error *err) {
     if (!piece || !piece->cell) return ss_error_set(err, SS_ERR_INPUT, "%s: no grid", path);
-    return write_vti(path, piece, 0, NULL, NULL, NULL, off, whole, err);
+    return write_vti(path, piece, NULL, 0, NULL, NULL, NULL, off, whole, err);
 }
 
 ss_status ss_heal_vti_write_piece_all(const char *path, const ss_heal_grid *piece, const int off[3],
@@ -121,7 +121,17 @@ ss_status ss_heal_vti_write_piece_all(const char *path, const ss_heal_grid *piec
                                       float *const (*vecs)[3], const double *closed_day,
                                       ss_error *err) {
     if (!piece || !piece->cell) return ss_error_set(err, SS_ERR_INPUT, "%s: no grid", path);
-    return write_vti(path, piece, nvec, names, vecs, closed_day, off, whole, err);
+    return write_vti(path, piece, NULL, nvec, names, vecs, closed_day, off, whole, err);
+}
+
+ss_status ss_heal_vti_write_box(const char *path, const ss_heal_grid *g, const int box[6],
+                                const int off[3], const int whole[3], const double *closed_day,
+                                ss_error *err) {
+    if (!g || !g->cell || !box || box[0] < 0 || box[1] < 0 || box[2] < 0 || box[3] < 1 ||
+        box[4] < 1 || box[5] < 1 || box[0] + box[3] > g->nx || box[1] + box[4] > g->ny ||
+        box[2] + box[5] > g->nz)
+        return ss_error_set(err, SS_ERR_INPUT, "%s: no grid, or the box is not inside it", path);
+    return write_vti(path, g, box, 0, NULL, NULL, closed_day, off, whole, err);
 }
 
 ss_status ss_heal_pvti_write(const char *path, const int whole[3], double dx_mm, double t_days,
@@ -156,12 +166,18 @@ ss_status ss_heal_pvti_write(const char *path, const int whole[3], double dx_mm,
 
 /* The grid g as the piece of a larger image whose cell (0,0,0) is at off and
  * whose dimensions are whole (the plain file: off 0, whole = g's). */
-static ss_status write_vti(const char *path, const ss_heal_grid *g, int nvec,
+static ss_status write_vti(const char *path, const ss_heal_grid *g, const int box[6], int nvec,
                            const char *const *names, float *const (*vecs)[3],
                            const double *closed_day, const int org[3], const int whole[3],
                            ss_error *err) {
     int vel = g->velocity[0] && g->velocity[1] && g->velocity[2];
-    size_t n = (size_t)g->nx * (size_t)g->ny * (size_t)g->nz;
+    /* the cells written: g's box x0 y0 z0 nx ny nz (box), or all of g */
+    const int bx[6] = {box ? box[0] : 0,     box ? box[1] : 0,     box ? box[2] : 0,
+                       box ? box[3] : g->nx, box ? box[4] : g->ny, box ? box[5] : g->nz};
+    if (box && (vel || nvec))
+        return ss_error_set(err, SS_ERR_INPUT, "%s: a box of a grid is written without vectors",
+                            path);
+    size_t n = (size_t)bx[3] * (size_t)bx[4] * (size_t)bx[5];
     ss_atomic_file af;
     ss_status st = ss_atomic_open(&af, path, err);
     if (st) return st;
@@ -179,7 +195,7 @@ static ss_status write_vti(const char *path, const ss_heal_grid *g, int nvec,
             "format=\"ascii\">%.17g</DataArray>\n",
             g->t_days);
     /* the closure days go after every cell array in the appended data */
-    size_t ncol = (size_t)g->nx * (size_t)g->ny;
+    size_t ncol = (size_t)bx[3] * (size_t)bx[4];
     uint64_t coff = 8 + n + SS_HEAL_NFIELDS * (8 + 4 * (uint64_t)n) +
                     (uint64_t)(vel + nvec) * (8 + 12 * (uint64_t)n);
     if (closed_day)
@@ -188,8 +204,8 @@ static ss_status write_vti(const char *path, const ss_heal_grid *g, int nvec,
                 "format=\"appended\" offset=\"%llu\"/>\n",
                 ncol, (unsigned long long)coff);
     fprintf(f, "    </FieldData>\n");
-    fprintf(f, "    <Piece Extent=\"%d %d %d %d %d %d\">\n", org[0], org[0] + g->nx, org[1],
-            org[1] + g->ny, org[2], org[2] + g->nz);
+    fprintf(f, "    <Piece Extent=\"%d %d %d %d %d %d\">\n", org[0], org[0] + bx[3], org[1],
+            org[1] + bx[4], org[2], org[2] + bx[5]);
     fprintf(f, "      <CellData Scalars=\"cell_state\">\n");
     uint64_t off = 0;
     fprintf(f,
@@ -221,10 +237,17 @@ static ss_status write_vti(const char *path, const ss_heal_grid *g, int nvec,
     fprintf(f, "      </CellData>\n    </Piece>\n  </ImageData>\n"
                "  <AppendedData encoding=\"raw\">\n   _");
     put_u64le(f, (uint64_t)n);
-    fwrite(g->cell, 1, n, f);
+    if (!box) fwrite(g->cell, 1, n, f);
+    for (int z = 0; box && z < bx[5]; z++) /* a box: row by row */
+        for (int y = 0; y < bx[4]; y++)
+            fwrite(g->cell + ss_heal_idx(g, bx[0], bx[1] + y, bx[2] + z), 1, (size_t)bx[3], f);
     for (int k = 0; k < SS_HEAL_NFIELDS; k++) {
         put_u64le(f, (uint64_t)(4 * n));
-        put_f32le(f, g->field[k], n);
+        if (!box) put_f32le(f, g->field[k], n);
+        for (int z = 0; box && z < bx[5]; z++)
+            for (int y = 0; y < bx[4]; y++)
+                put_f32le(f, g->field[k] + ss_heal_idx(g, bx[0], bx[1] + y, bx[2] + z),
+                          (size_t)bx[3]);
     }
     if (vel) put_vec3(f, g->velocity, n);
     for (int v = 0; v < nvec; v++) put_vec3(f, vecs[v], n);

@@ -305,13 +305,25 @@ static int cmp_double(const void *a, const void *b) {
 
 uint8_t *ss_heal_voxelise_mesh(const ss_tri_mesh *m, int nx, int ny, int nz, double dx_mm,
                                size_t *count, ss_error *err) {
+    const int gdim[3] = {nx, ny, nz}, lo[3] = {0, 0, 0};
+    return ss_heal_voxelise_mesh_box(m, gdim, lo, gdim, dx_mm, count, err);
+}
+
+uint8_t *ss_heal_voxelise_mesh_box(const ss_tri_mesh *m, const int gdim[3], const int lo[3],
+                                   const int bn[3], double dx_mm, size_t *count, ss_error *err) {
     if (count) *count = 0;
-    if (nx < 1 || ny < 1 || nz < 1 || !(dx_mm > 0) || !isfinite(dx_mm)) {
+    const int nx = gdim[0], ny = gdim[1], nz = gdim[2];
+    if (nx < 1 || ny < 1 || nz < 1 || bn[0] < 1 || bn[1] < 1 || bn[2] < 1 || !(dx_mm > 0) ||
+        !isfinite(dx_mm)) {
         ss_error_set(err, SS_ERR_INPUT, "voxelise: invalid grid %dx%dx%d, dx %g mm", nx, ny, nz,
                      dx_mm);
         return NULL;
     }
-    size_t n = (size_t)nx * (size_t)ny * (size_t)nz;
+    /* the box's columns and levels inside the grid (whole-grid indices) */
+    const int x0 = lo[0] > 0 ? lo[0] : 0, x1 = lo[0] + bn[0] < nx ? lo[0] + bn[0] : nx;
+    const int ya = lo[1] > 0 ? lo[1] : 0, yb = lo[1] + bn[1] < ny ? lo[1] + bn[1] : ny;
+    const int z0 = lo[2] > 0 ? lo[2] : 0, z1 = lo[2] + bn[2] < nz ? lo[2] + bn[2] : nz;
+    size_t n = (size_t)bn[0] * (size_t)bn[1] * (size_t)bn[2];
     uint8_t *vox = calloc(n, 1);
     /* Bin triangles by grid row (y) so each column tests only nearby triangles. */
     int *rowcount = calloc((size_t)ny + 1, sizeof(int));
@@ -335,8 +347,8 @@ uint8_t *ss_heal_voxelise_mesh(const ss_tri_mesh *m, int nx, int ny, int nz, dou
         }                                                                                          \
         lo = (int)ceil((y0 - oy) / dx_mm - 0.5);                                                   \
         hi = (int)floor((y1 - oy) / dx_mm - 0.5);                                                  \
-        if (lo < 0) lo = 0;                                                                        \
-        if (hi > ny - 1) hi = ny - 1;                                                              \
+        if (lo < ya) lo = ya;                                                                      \
+        if (hi > yb - 1) hi = yb - 1;                                                              \
     } while (0)
     for (int t = 0; t < ntri; t++) {
         int lo, hi;
@@ -370,10 +382,10 @@ uint8_t *ss_heal_voxelise_mesh(const ss_tri_mesh *m, int nx, int ny, int nz, dou
         double *hits = malloc((size_t)cap * sizeof *hits);
         if (!hits) oom = 1;
 #pragma omp for schedule(dynamic, 1)
-        for (int y = 0; y < ny; y++) {
+        for (int y = ya; y < yb; y++) {
             if (!hits) continue;
             double py = (y + 0.5) * dx_mm + oy;
-            for (int x = 0; x < nx; x++) {
+            for (int x = x0; x < x1; x++) {
                 double px = (x + 0.5) * dx_mm + ox;
                 int nh = 0;
                 for (int r = rowcount[y]; r < rowcount[y + 1]; r++) {
@@ -402,11 +414,13 @@ uint8_t *ss_heal_voxelise_mesh(const ss_tri_mesh *m, int nx, int ny, int nz, dou
                 if (nh < 2) continue;
                 qsort(hits, (size_t)nh, sizeof *hits, cmp_double);
                 int h = 0;
-                for (int z = 0; z < nz; z++) {
+                for (int z = z0; z < z1; z++) {
                     double pz = (z + 0.5) * dx_mm;
                     while (h < nh && hits[h] < pz) h++;
                     if (h & 1) {
-                        vox[((size_t)z * (size_t)ny + (size_t)y) * (size_t)nx + (size_t)x] = 1;
+                        vox[((size_t)(z - lo[2]) * (size_t)bn[1] + (size_t)(y - lo[1])) *
+                                (size_t)bn[0] +
+                            (size_t)(x - lo[0])] = 1;
                         inside++;
                     }
                 }
