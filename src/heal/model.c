@@ -52,10 +52,13 @@ typedef struct model_ctx {
     int *ztop;
     float *ecol, *bed, *ds;   /* ds: the column's eschar thickness (mm) */
     float *wsum, *bedo, *wso; /* prepare's scratch */
-    const uint8_t *ztop_of;   /* the cell array ztop was computed from */
-    float scab_h;             /* scab_mm / voxel: the scab layer in voxel levels */
-    int *zt_min, *zt_max;     /* per y: range of ztop over the row's columns */
-    int kdeep;                /* levels below the surface where no surface/scab term acts */
+    float *cu, *cs, *co, *ch; /* the bed walk's carry: the level above (bed_level) */
+    float *kfix;              /* De/h^2 x the surface cell's faces to intact epidermis [D8] */
+    float De;
+    const uint8_t *ztop_of; /* the cell array ztop was computed from */
+    float scab_h;           /* scab_mm / voxel: the scab layer in voxel levels */
+    int *zt_min, *zt_max;   /* per y: range of ztop over the row's columns */
+    int kdeep;              /* levels below the surface where no surface/scab term acts */
     /* a box of a stack in z (src/dist): ztop, zt_min, zt_max are whole-grid
      * levels, zoff the whole-grid level of this box's z = 0, col the exchange
      * with the boxes above and below (NULL: the columns are whole here) */
@@ -108,7 +111,7 @@ react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep, const i
     const size_t col0 = (size_t)row->y * (size_t)m->nx + (size_t)row->x0;
     const int *restrict ZT = m->ztop + col0;
     const float *restrict EC = m->ecol + col0, *restrict BED = m->bed + col0;
-    const float *restrict DS = m->ds + col0;
+    const float *restrict DS = m->ds + col0, *restrict KF = m->kfix + col0;
     const float
         *restrict U1 = row->u[SS_HEAL_OXYGEN],
                   *restrict U2 = row->u[SS_HEAL_MDGF], *restrict U3 = row->u[SS_HEAL_CAPILLARY],
@@ -174,10 +177,13 @@ react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep, const i
         p5[i] = X * wsc;
         l5[i] = deep ? lames * ecl : X + lames * ecl;
         /* 4.1.6 epithelium, on the surface only:
-         * (1 - kscab s) Q(u3_bed)(De lap_xy e + lamge e) - lamee e */
+         * (1 - kscab s) Q(u3_bed)(De lap_xy e + lamge e) - lamee e; the
+         * intact epidermis holds e = 1 at the margin, the face of its cell,
+         * half a voxel nearer than its centre: KF (1 - e) adds the other
+         * half of such a face's conductance [D8] */
         const float me = deep ? 0.0f : surf * pos(1.0f - kscab * s) * qwin(BED[i], g1, ig1, ig2);
-        p6[i] = deep ? 0.0f : me * lamge * e;
-        l6[i] = deep ? 0.0f : surf * lamee;
+        p6[i] = deep ? 0.0f : me * (lamge * e + KF[i]);
+        l6[i] = deep ? 0.0f : surf * lamee + me * KF[i];
         /* 4.1.7 scar, restricted to omega:
          * (1-s) n ((1-u3)(1-e) lamnrho + lamkrho G (1 - rho/rho_sat)+)
          * - lamrhop rho; G = a + (1 - a) clamp(rho/rho_max - 1, 0, 1): tissue
@@ -250,29 +256,99 @@ static void find_surface(model_ctx *c) {
         c->zt_min[y] = lo;
         c->zt_max[y] = hi;
     }
+    /* the margin [D8]: lateral faces of a surface cell with intact epidermis
+     * (the Dirichlet e = 1 of the sheet) at the same level */
+    const float kf = c->De / (c->h * c->h);
+    for (int y = 0; y < ny; y++)
+        for (int x = 0; x < nx; x++) {
+            const size_t i = (size_t)y * nx + x;
+            const int zl = c->ztop[i] - c->zoff;
+            c->kfix[i] = 0.0f;
+            if (c->ztop[i] < 0 || zl < 1 || zl > nz - 2 || x < 1 || y < 1 || x > nx - 2 ||
+                y > ny - 2)
+                continue;
+            const uint8_t *cz = c->cell + (size_t)zl * ny * nx;
+            if (cz[i] == SS_CELL_EPIDERMIS) continue;
+            const int nb = (cz[i - 1] == SS_CELL_EPIDERMIS) + (cz[i + 1] == SS_CELL_EPIDERMIS) +
+                           (cz[i - nx] == SS_CELL_EPIDERMIS) + (cz[i + nx] == SS_CELL_EPIDERMIS);
+            c->kfix[i] = kf * (float)nb;
+        }
     c->ztop_of = c->cell;
 }
 
-/* One level z of the bed sum of a row of columns: the part of voxel level
- * k = zt - z below the surface that lies in the bed window [ds, ds + bed_mm]
- * weights its u3 (Ur); bo, wo sum the granulation tissue (omega: plasma Pr
- * above SS_HEAL_P_MIN) of the window alone. */
-static inline void bed_level(const int *zt, const float *ds, const float *Ur, const float *Pr,
-                             float *bed, float *ws, float *bo, float *wo, int nx, int z, float h,
-                             float bedmm) {
+/* The bed reads u3 through its piecewise-linear interpolant in depth, not
+ * the voxel means (docs/heal-model.md [D8]): u3 is one continuous field (the
+ * capillary network of the dermis grows on into the clot), so between two
+ * voxel centres it is taken linear, the value at their face being the mean
+ * of the two, weighted by the face's conductance min(1 - s) of [D6] (under a
+ * full crust the face insulates: constant towards it); at a wall (air, the
+ * bound, no level) it is constant. A voxel in the window contributes the
+ * integral of the interpolant over its part of the window. As h -> 0 this is
+ * the mean of the field; at h = 0.5 mm it keeps the capillaries at the wound
+ * floor, half a voxel below the bed voxel's centre, that the voxel mean
+ * misses (the granulation layer under the default crust is one voxel).
+ * One segment [d0, d1] of depth (values v0, v1 at its ends, linear) of a
+ * voxel whose granulation flag is om: its part in the window [a, b]. */
+static inline void bed_seg(float d0, float d1, float v0, float v1, float om, float a, float b,
+                           float *bed, float *ws, float *bo, float *wo) {
+    const float lo = d0 > a ? d0 : a, hi = d1 < b ? d1 : b;
+    if (!(hi > lo)) return;
+    const float v = v0 + (v1 - v0) * (0.5f * (lo + hi) - d0) / (d1 - d0);
+    *bed += (hi - lo) * v;
+    *ws += hi - lo;
+    if (om > 0.0f) {
+        *bo += (hi - lo) * v;
+        *wo += hi - lo;
+    }
+}
+
+/* One level z of the bed sum of a row of columns, walking down: voxel
+ * k = zt - z below the surface. The carry (cu, cs, co, ch: u3, s, omega flag
+ * and presence of voxel k - 1, the level above) is handed from level to level
+ * (and from box to box in a z stack). Level z adds the lower half of voxel
+ * k - 1 and the upper half of voxel k, each clipped to the bed window
+ * [ds, ds + bed_mm]; bo, wo sum the granulation tissue (omega: plasma Pr above
+ * SS_HEAL_P_MIN) of the window alone. Cr: the level's cell classes. */
+static inline void bed_level(const int *zt, const float *ds, const float *Ur, const float *Sr,
+                             const float *Pr, const uint8_t *Cr, float *bed, float *ws, float *bo,
+                             float *wo, float *cu, float *cs, float *co, float *ch, int nx, int z,
+                             float h, float bedmm) {
     const float pmin = (float)SS_HEAL_P_MIN;
     for (int x = 0; x < nx; x++) {
         const int k = zt[x] - z;
         if (k < 0) continue;
         const float a = ds[x], b = ds[x] + bedmm;
-        const float lo = k * h > a ? k * h : a, hi = (k + 1) * h < b ? (k + 1) * h : b;
-        if (hi <= lo) continue;
-        bed[x] += (hi - lo) * Ur[x];
-        ws[x] += hi - lo;
-        if (Pr[x] > pmin) {
-            bo[x] += (hi - lo) * Ur[x];
-            wo[x] += hi - lo;
+        const int tis = Cr[x] != SS_CELL_AIR && Cr[x] != SS_CELL_BOUND;
+        const float u = Ur[x], sk = Sr[x], om = (float)(Pr[x] > pmin);
+        const float top = k * h, mid = top + 0.5f * h;
+        float fk = u; /* the interpolant at voxel k's top face, seen from k */
+        if (ch[x] > 0.0f) {
+            const float mk = clampf(1.0f - sk, 0.0f, 1.0f), mp = clampf(1.0f - cs[x], 0.0f, 1.0f);
+            const float mf = tis ? (mk < mp ? mk : mp) : 0.0f, f = 0.5f * (cu[x] + u);
+            const float fp = cu[x] + mf * (f - cu[x]); /* seen from k - 1 */
+            bed_seg(top - 0.5f * h, top, cu[x], fp, co[x], a, b, &bed[x], &ws[x], &bo[x], &wo[x]);
+            fk = u + mf * (f - u);
         }
+        ch[x] = (float)tis;
+        if (!tis) continue;
+        bed_seg(top, mid, fk, u, om, a, b, &bed[x], &ws[x], &bo[x], &wo[x]);
+        cu[x] = u;
+        cs[x] = sk;
+        co[x] = om;
+    }
+}
+
+/* The end of a column's walk: the lower half of its last voxel, constant
+ * (the bound below, or no more window). */
+static inline void bed_flush(const int *zt, const float *ds, float *bed, float *ws, float *bo,
+                             float *wo, const float *cu, const float *co, const float *ch, int nx,
+                             int zlast, float h, float bedmm) {
+    for (int x = 0; x < nx; x++) {
+        const int k = zt[x] - zlast;
+        if (k < 0 || !(ch[x] > 0.0f)) continue;
+        const float bot = (k + 1) * h;
+        bed_seg(bot - 0.5f * h, bot, cu[x], cu[x], co[x], ds[x], ds[x] + bedmm, &bed[x], &ws[x],
+                &bo[x], &wo[x]);
     }
 }
 
@@ -327,10 +403,12 @@ static void heal_prepare(void *vctx, float *const *u) {
         const int *zt = c->ztop + r0;
         float *ec = c->ecol + r0, *bed = c->bed + r0, *ds = c->ds + r0, *ws = c->wsum + r0;
         float *bo = c->bedo + r0, *wo = c->wso + r0;
+        float *cu = c->cu + r0, *cs = c->cs + r0, *co = c->co + r0, *ch = c->ch + r0;
         int zhi = -1;
         for (int x = 0; x < nx; x++) {
             ec[x] = zt[x] >= 0 ? E[(size_t)zt[x] * sz + r0 + x] : 0.0f;
             ds[x] = bed[x] = ws[x] = bo[x] = wo[x] = 0.0f;
+            cu[x] = cs[x] = co[x] = ch[x] = 0.0f;
             if (zt[x] > zhi) zhi = zt[x];
         }
         if (zhi < 1) continue;
@@ -349,9 +427,11 @@ static void heal_prepare(void *vctx, float *const *u) {
         int zlo = bed_low(zt, ds, nx, h, bedmm);
         if (zlo < 1) zlo = 1;
         for (int z = zhi; z >= zlo; z--) {
-            const float *Ur = U3 + (size_t)z * sz + r0, *Pr = P + (size_t)z * sz + r0;
-            bed_level(zt, ds, Ur, Pr, bed, ws, bo, wo, nx, z, h, bedmm);
+            const size_t o = (size_t)z * sz + r0;
+            bed_level(zt, ds, U3 + o, S + o, P + o, c->cell + o, bed, ws, bo, wo, cu, cs, co, ch,
+                      nx, z, h, bedmm);
         }
+        bed_flush(zt, ds, bed, ws, bo, wo, cu, co, ch, nx, zlo, h, bedmm);
         for (int x = 0; x < nx; x++) {
             if (zt[x] < 0) continue;
             bed[x] = bed_mean(bed[x], ws[x], bo[x], wo[x], U3[sz + r0 + x]); /* z = 1 */
@@ -377,6 +457,7 @@ static void heal_prepare_z(model_ctx *c, float *const *u) {
         const int zt = c->ztop[i];
         c->ecol[i] = zt >= own_lo && zt <= own_hi ? E[(size_t)(zt - zoff) * sz + i] : -INFINITY;
         c->ds[i] = c->bed[i] = c->wsum[i] = c->bedo[i] = c->wso[i] = 0.0f;
+        c->cu[i] = c->cs[i] = c->co[i] = c->ch[i] = 0.0f;
     }
     c->col(c->col_ctx, SS_HEAL_COL_MAX, c->ecol, sz);
     for (size_t i = 0; i < sz; i++)
@@ -404,25 +485,30 @@ static void heal_prepare_z(model_ctx *c, float *const *u) {
     c->col(c->col_ctx, SS_HEAL_COL_FROM_ABOVE, c->wsum, sz);
     c->col(c->col_ctx, SS_HEAL_COL_FROM_ABOVE, c->bedo, sz);
     c->col(c->col_ctx, SS_HEAL_COL_FROM_ABOVE, c->wso, sz);
+    float *carry[4] = {c->cu, c->cs, c->co, c->ch};
+    for (int k = 0; k < 4; k++) c->col(c->col_ctx, SS_HEAL_COL_FROM_ABOVE, carry[k], sz);
 #pragma omp parallel for schedule(static) if (par)
     for (int y = 0; y < ny; y++) {
         const size_t r0 = (size_t)y * (size_t)nx;
         const int *zt = c->ztop + r0;
         float *bed = c->bed + r0, *ds = c->ds + r0, *ws = c->wsum + r0;
         float *bo = c->bedo + r0, *wo = c->wso + r0;
+        float *cu = c->cu + r0, *cs = c->cs + r0, *co = c->co + r0, *ch = c->ch + r0;
         int zhi = -1;
         for (int x = 0; x < nx; x++)
             if (zt[x] > zhi) zhi = zt[x];
         if (zhi < 1) continue;
         int zlo = bed_low(zt, ds, nx, h, bedmm);
         if (zlo < 1) zlo = 1;
+        const int zend = zlo; /* the whole column's last level (bed_flush) */
         if (zlo < own_lo) zlo = own_lo;
         for (int z = zhi < own_hi ? zhi : own_hi; z >= zlo; z--) {
-            const float *Ur = U3 + (size_t)(z - zoff) * sz + r0;
-            const float *Pr = P + (size_t)(z - zoff) * sz + r0;
-            bed_level(zt, ds, Ur, Pr, bed, ws, bo, wo, nx, z, h, bedmm);
+            const size_t o = (size_t)(z - zoff) * sz + r0;
+            bed_level(zt, ds, U3 + o, S + o, P + o, c->cell + o, bed, ws, bo, wo, cu, cs, co, ch,
+                      nx, z, h, bedmm);
         }
         if (own_lo > 0) continue; /* the bottom box (global level 1 inside) finishes */
+        bed_flush(zt, ds, bed, ws, bo, wo, cu, co, ch, nx, zend, h, bedmm);
         for (int x = 0; x < nx; x++) {
             if (zt[x] < 0) continue;
             bed[x] = bed_mean(bed[x], ws[x], bo[x], wo[x], U3[(size_t)(1 - zoff) * sz + r0 + x]);
@@ -432,6 +518,7 @@ static void heal_prepare_z(model_ctx *c, float *const *u) {
     c->col(c->col_ctx, SS_HEAL_COL_TO_BELOW, c->wsum, sz);
     c->col(c->col_ctx, SS_HEAL_COL_TO_BELOW, c->bedo, sz);
     c->col(c->col_ctx, SS_HEAL_COL_TO_BELOW, c->wso, sz);
+    for (int k = 0; k < 4; k++) c->col(c->col_ctx, SS_HEAL_COL_TO_BELOW, carry[k], sz);
     c->col(c->col_ctx, SS_HEAL_COL_FROM_BOTTOM, c->bed, sz);
 }
 
@@ -473,6 +560,7 @@ static void ctx_init(model_ctx *c, const ss_heal_params *p, const ss_heal_grid *
     c->rho_closed = (float)(1.0 - p->rho_open);
     c->bed_mm = (float)p->bed_mm;
     c->h = (float)g->dx_mm;
+    c->De = (float)p->De;
     c->scab_h = (float)(p->scab_mm / g->dx_mm);
     /* wsc = 0 once kf >= scab_h; without the scab switch R = 0 everywhere */
     c->kdeep = 1;
@@ -643,10 +731,16 @@ static ss_heal_solver *solver_create(const ss_heal_grid *g, const int *goff, con
     s->ctx.wsum = calloc(ncol, sizeof(float));
     s->ctx.bedo = calloc(ncol, sizeof(float));
     s->ctx.wso = calloc(ncol, sizeof(float));
+    s->ctx.cu = calloc(ncol, sizeof(float));
+    s->ctx.cs = calloc(ncol, sizeof(float));
+    s->ctx.co = calloc(ncol, sizeof(float));
+    s->ctx.ch = calloc(ncol, sizeof(float));
+    s->ctx.kfix = calloc(ncol, sizeof(float));
     s->ctx.zt_min = malloc((size_t)g->ny * sizeof(int));
     s->ctx.zt_max = malloc((size_t)g->ny * sizeof(int));
     if (!s->ctx.ztop || !s->ctx.ecol || !s->ctx.bed || !s->ctx.ds || !s->ctx.wsum || !s->ctx.bedo ||
-        !s->ctx.wso || !s->ctx.zt_min || !s->ctx.zt_max) {
+        !s->ctx.wso || !s->ctx.cu || !s->ctx.cs || !s->ctx.co || !s->ctx.ch || !s->ctx.kfix ||
+        !s->ctx.zt_min || !s->ctx.zt_max) {
         ss_heal_solver_free(s);
         ss_error_set(err, SS_ERR_NOMEM, "heal solver: out of memory");
         return NULL;
@@ -710,6 +804,11 @@ void ss_heal_solver_free(ss_heal_solver *s) {
     free(s->ctx.wsum);
     free(s->ctx.bedo);
     free(s->ctx.wso);
+    free(s->ctx.cu);
+    free(s->ctx.cs);
+    free(s->ctx.co);
+    free(s->ctx.ch);
+    free(s->ctx.kfix);
     free(s->ctx.zt_min);
     free(s->ctx.zt_max);
     free(s);
