@@ -87,7 +87,7 @@ void ss_mech_params_default(ss_mech_params *p) {
     p->tau_remodel = 4.0;
     p->mu = 13.5;
     p->K_bulk = 29.0;
-    p->k1 = 40000.0;
+    p->k1 = 90000.0;
     p->k2 = 1.0;
     p->kappa = 0.0;
     p->fibre[0][0] = 1.0;
@@ -95,7 +95,7 @@ void ss_mech_params_default(ss_mech_params *p) {
     p->ecm_floor = 0.5;
     p->tet_size_mm = 1.0;
     p->anchor = 0.1;
-    p->anchor_side = 2.0;
+    p->anchor_side = 1.6;
     p->k_suture = 1.0;
     p->max_shorten = 0.8;
     p->j_min = 0.2;
