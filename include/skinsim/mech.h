@@ -168,8 +168,17 @@ typedef struct ss_springs {
     int32_t *tet, *tet_edge, *ntet_start, *ntet;
     double *tvol0, *tvol_rest, *tcoef, *tpart;
     uint8_t *tskip;
-    double *xref, bar_safe; /* positions of the last tet pass; how far nodes may move from them
-                               before a tet can reach jmin (0: pass at the next evaluation) */
+    /* the last full tet pass (bar_valid 0: make one at the next force
+     * evaluation): its positions; per node how far it may move from them
+     * before a tet off the near list can reach jmin; the tets near jmin (in
+     * tet order, marked 1 in tmark), always evaluated; per-tet distances
+     * and per-node flags (scratch) */
+    double *xref, *nsafe, *tdist;
+    int32_t *tnear;
+    uint8_t *tmark, *nflag;
+    int nnear, bar_valid;
+    int bar_full_always; /* every evaluation makes the full pass (tests: the reference) */
+    long bar_passes[2];  /* full and near passes made (statistics) */
     double kvol, jmin;      /* kPa, barrier modulus; J below which it acts */
 } ss_springs;
 

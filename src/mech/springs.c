@@ -62,6 +62,11 @@ void ss_springs_free(ss_springs *s) {
     free(s->tpart);
     free(s->tskip);
     free(s->xref);
+    free(s->tdist);
+    free(s->tnear);
+    free(s->nsafe);
+    free(s->tmark);
+    free(s->nflag);
     free(s);
 }
 
@@ -256,9 +261,15 @@ ss_status ss_springs_set_barrier(ss_springs *s, const ss_tetmesh *m, double kvol
     s->tpart = calloc((size_t)nb + 1, sizeof(double));
     s->tskip = calloc((size_t)nt, 1);
     s->xref = malloc(3 * (size_t)s->nnodes * sizeof(double) + 1);
+    s->tdist = malloc((size_t)nt * sizeof(double) + 1);
+    s->tnear = malloc((size_t)nt * sizeof(int32_t) + 1);
+    s->nsafe = malloc((size_t)s->nnodes * sizeof(double) + 1);
+    s->tmark = calloc((size_t)nt + 1, 1);
+    s->nflag = calloc((size_t)s->nnodes + 1, 1);
     int32_t *fill = malloc((size_t)s->nnodes * sizeof(int32_t) + 1);
     if (!keys || !s->tet || !s->tet_edge || !s->ntet_start || !s->ntet || !s->tvol0 ||
-        !s->tvol_rest || !s->tcoef || !s->tpart || !s->tskip || !s->xref || !fill) {
+        !s->tvol_rest || !s->tcoef || !s->tpart || !s->tskip || !s->xref || !s->tdist ||
+        !s->tnear || !s->nsafe || !s->tmark || !s->nflag || !fill) {
         free(keys);
         free(fill);
         return ss_error_set(err, SS_ERR_NOMEM, "springs: out of memory");
@@ -306,7 +317,7 @@ void ss_springs_barrier_update(ss_springs *s) {
         s->tvol_rest[t] = s->tvol0[t] * sqrt(r);
         s->tskip[t] = !(s->tvol0[t] > 0) || !(tet_vol(s->tet + 4 * (size_t)t, s->x) > 0);
     }
-    s->bar_safe = 0; /* the rest volumes changed: the next force evaluation makes a full pass */
+    s->bar_valid = 0; /* the rest volumes changed: the next force evaluation makes a full pass */
     s->fvalid = 0;
 }
 
@@ -321,57 +332,184 @@ static inline double barrier(double J, double jmin, double *db) {
     return -d * d * l;
 }
 
-/* Barrier pass over the tets at x: dE/dV per tet into tcoef, the energy
- * (summed in fixed blocks of tets) returned, inf once a tet folds; *active:
- * the number of tets where it acts (0: no barrier force to gather). */
+/* One tet's barrier at x: its energy (dE/dV into tcoef) when J < jmin
+ * (*dist = -1); otherwise 0, and *dist = how far every node may move
+ * before the tet can reach jmin (when asked for; inf if not): V is
+ * multilinear in the edge vectors from node 0, each at most L long and
+ * moved by at most 2 d, so |dV| <= ((L + 2 d)^3 - L^3) / 6. */
+static inline double tet_barrier(ss_springs *s, const double *x, int t, int want_dist,
+                                 double *dist) {
+    const int32_t *q = s->tet + 4 * (size_t)t;
+    const double jm = s->jmin, vr = s->tvol_rest[t], V = tet_vol(q, x);
+    if (V < jm * vr) {
+        double db, u = s->kvol * vr * barrier(V / vr, jm, &db);
+        s->tcoef[t] = s->kvol * db; /* dE/dV = kv vr b'(J) / vr */
+        *dist = -1;
+        return u;
+    }
+    if (s->tcoef[t] != 0) s->tcoef[t] = 0;
+    *dist = INFINITY;
+    if (want_dist) {
+        double L2 = 0;
+        for (int a = 0; a < 4; a++)
+            for (int c = a + 1; c < 4; c++) {
+                const double *pa = x + 3 * (size_t)q[a], *pc = x + 3 * (size_t)q[c];
+                double e2 = (pa[0] - pc[0]) * (pa[0] - pc[0]) + (pa[1] - pc[1]) * (pa[1] - pc[1]) +
+                            (pa[2] - pc[2]) * (pa[2] - pc[2]);
+                if (e2 > L2) L2 = e2;
+            }
+        /* the d with f(d) = L^2 d + 2 L d^2 + 4/3 d^3 = V - jm vr, from
+         * below without a cube root: f(d) / d grows with d, so d =
+         * S / (f(d1) / d1) at d1 = S / L^2 >= d gives f(d) <= S */
+        double S = V - jm * vr, d1 = S / L2, L = sqrt(L2);
+        *dist = S / (L2 + 2 * L * d1 + (4.0 / 3.0) * d1 * d1);
+    }
+    return 0;
+}
+
+/* The radius of the near list: the largest power of two R such that at
+ * most cap tets lie nearer jmin than R (those at 0, under it, always do),
+ * from a histogram of the distances' binary exponents. */
+static double near_radius(const double *dist, int nt, int cap) {
+    enum { EMIN = -64, EMAX = 63 };
+    int count[EMAX - EMIN + 1] = {0}, zero = 0;
+    double dmin = INFINITY;
+    for (int t = 0; t < nt; t++) {
+        double d = dist[t];
+        if (d <= 0) { /* below jmin, or at it */
+            zero++;
+            continue;
+        }
+        if (!(d < INFINITY)) continue;
+        int e = ilogb(d);
+        count[(e < EMIN ? EMIN : e > EMAX ? EMAX : e) - EMIN]++;
+        if (d < dmin) dmin = d;
+    }
+    if (!(dmin < INFINITY)) return INFINITY; /* no tet can reach jmin: the list stays as is */
+    double r = dmin;                         /* the zeros alone when one exponent holds too many */
+    for (int e = EMIN, n = zero; e <= EMAX; e++) {
+        n += count[e - EMIN];
+        if (n > cap) break;
+        if (count[e - EMIN]) r = ldexp(1.0, e + 1);
+    }
+    return r;
+}
+
+/* Full barrier pass over the tets at x: dE/dV per tet into tcoef, the
+ * energy (summed in fixed blocks of tets) returned, inf once a tet folds;
+ * *active: the number of tets where it acts (0: no barrier force to
+ * gather). It also lists the tets near jmin and gives every node how far
+ * it may move before one of its other tets can reach jmin (near_pass). */
 static double barrier_pass(ss_springs *s, const double *x, int *active) {
     *active = 0;
     if (!s->ntets || !(s->jmin > 0)) return 0;
     const int nt = s->ntets, nb = (nt + BLOCK - 1) / BLOCK;
-    const double jm = s->jmin, kv = s->kvol;
     int act = 0;
-    double safe = INFINITY;
-#pragma omp parallel for schedule(static) reduction(+ : act) reduction(min : safe)
+#pragma omp parallel for schedule(static) reduction(+ : act)
     for (int b = 0; b < nb; b++) {
         double u = 0;
         int hi = (b + 1) * BLOCK < nt ? (b + 1) * BLOCK : nt;
         for (int t = b * BLOCK; t < hi; t++) {
-            const int32_t *q = s->tet + 4 * (size_t)t;
-            double vr = s->tvol_rest[t], V = tet_vol(q, x), db;
-            if (s->tskip[t]) continue;
-            if (V >= jm * vr) {
-                if (s->tcoef[t] != 0) s->tcoef[t] = 0;
-                /* how far every node may move before the tet can reach
-                 * jmin: V is multilinear in the edge vectors from node 0,
-                 * each at most L long and moved by at most 2 d, so
-                 * |dV| <= ((L + 2 d)^3 - L^3) / 6 */
-                double L2 = 0;
-                for (int a = 0; a < 4; a++)
-                    for (int c = a + 1; c < 4; c++) {
-                        const double *pa = x + 3 * (size_t)q[a], *pc = x + 3 * (size_t)q[c];
-                        double e2 = (pa[0] - pc[0]) * (pa[0] - pc[0]) +
-                                    (pa[1] - pc[1]) * (pa[1] - pc[1]) +
-                                    (pa[2] - pc[2]) * (pa[2] - pc[2]);
-                        if (e2 > L2) L2 = e2;
-                    }
-                double L = sqrt(L2), d = 0.5 * (cbrt(6 * (V - jm * vr) + L * L * L) - L);
-                if (d < safe) safe = d;
+            if (s->tskip[t]) {
+                s->tcoef[t] = 0;
+                s->tdist[t] = INFINITY;
                 continue;
             }
-            u += kv * vr * barrier(V / vr, jm, &db);
-            s->tcoef[t] = kv * db; /* dE/dV = kv vr b'(J) / vr */
-            act++;
+            double ut = tet_barrier(s, x, t, 1, s->tdist + t);
+            if (s->tdist[t] < 0) {
+                u += ut;
+                act++;
+            }
         }
         s->tpart[b] = u;
     }
     *active = act;
-    /* below jmin nowhere while no node is farther than safe from x (with a
-     * margin for rounding): forces_at may skip the pass until then */
-    s->bar_safe = act ? 0 : 0.99 * safe;
+    double r = near_radius(s->tdist, nt, nt / 32 > 64 ? nt / 32 : 64);
+    s->nnear = 0;
+    for (int t = 0; t < nt; t++) {
+        s->tmark[t] = s->tdist[t] < r;
+        if (s->tmark[t]) s->tnear[s->nnear++] = t;
+    }
+#pragma omp parallel for schedule(static)
+    for (int i = 0; i < s->nnodes; i++) {
+        double m = INFINITY;
+        for (int a = s->ntet_start[i]; a < s->ntet_start[i + 1]; a++) {
+            int t = s->ntet[a];
+            if (!s->tmark[t] && s->tdist[t] < m) m = s->tdist[t];
+        }
+        s->nsafe[i] = 0.99 * m; /* (a margin for the rounding of the distances) */
+    }
     memcpy(s->xref, x, 3 * (size_t)s->nnodes * sizeof(double));
+    s->bar_valid = 1;
+    s->bar_passes[0]++;
     double u = 0;
     for (int b = 0; b < nb; b++) u += s->tpart[b];
     return u;
+}
+
+/* The barrier pass over the near list and the tets of the nflagged nodes
+ * that have moved nsafe from the last full pass: any other tet has all four
+ * nodes closer than its distance to jmin, so its term is zero (exact). A
+ * flagged tet found below jmin joins the near list. The blocks sum in the
+ * order of the full pass: the same bits. */
+static double near_pass(ss_springs *s, const double *x, int nflagged, int *active) {
+    const int nb = (s->ntets + BLOCK - 1) / BLOCK;
+    int act = 0;
+    s->bar_passes[1]++;
+    memset(s->tpart, 0, (size_t)nb * sizeof(double));
+    if (!nflagged) {
+        for (int i = 0; i < s->nnear; i++) {
+            int t = s->tnear[i];
+            double dist, ut = tet_barrier(s, x, t, 0, &dist);
+            if (dist < 0) {
+                s->tpart[t / BLOCK] += ut;
+                act++;
+            }
+        }
+    } else {
+        for (int i = 0; i < s->nnodes; i++)
+            if (s->nflag[i])
+                for (int a = s->ntet_start[i]; a < s->ntet_start[i + 1]; a++) {
+                    int t = s->ntet[a];
+                    if (!s->tmark[t] && !s->tskip[t]) s->tmark[t] = 2;
+                }
+        s->nnear = 0;
+        for (int t = 0; t < s->ntets; t++) {
+            if (!s->tmark[t]) continue;
+            double dist, ut = tet_barrier(s, x, t, 0, &dist);
+            if (dist < 0) {
+                s->tpart[t / BLOCK] += ut;
+                act++;
+                s->tmark[t] = 1; /* stays evaluated: its tcoef is set */
+            } else if (s->tmark[t] == 2) {
+                s->tmark[t] = 0; /* (tet_barrier zeroed its tcoef) */
+            }
+            if (s->tmark[t]) s->tnear[s->nnear++] = t;
+        }
+    }
+    *active = act;
+    double u = 0;
+    for (int b = 0; b < nb; b++) u += s->tpart[b];
+    return u;
+}
+
+/* The barrier's energy at x, with dE/dV of every tet below jmin in tcoef:
+ * the full pass when none is valid or many nodes have moved off their safe
+ * distance, else the near pass. */
+static double barrier_at(ss_springs *s, const double *x, int *active) {
+    const int n = s->nnodes;
+    if (!s->bar_valid || s->bar_full_always) return barrier_pass(s, x, active);
+    int nflagged = 0;
+#pragma omp parallel for schedule(static) reduction(+ : nflagged)
+    for (int i = 0; i < n; i++) {
+        const double *a = x + 3 * (size_t)i, *r = s->xref + 3 * (size_t)i;
+        double d2 = (a[0] - r[0]) * (a[0] - r[0]) + (a[1] - r[1]) * (a[1] - r[1]) +
+                    (a[2] - r[2]) * (a[2] - r[2]);
+        s->nflag[i] = !(d2 < s->nsafe[i] * s->nsafe[i]);
+        nflagged += s->nflag[i];
+    }
+    if (nflagged > n / 16) return barrier_pass(s, x, active);
+    return near_pass(s, x, nflagged, active);
 }
 
 /* Adds the barrier force -dE/dV dV/dx_i of node i's active tets to f. */
@@ -438,20 +576,7 @@ static double forces_at(ss_springs *s, const double *x, double *f, double *parti
     int bar = 0;
     double ub = 0;
     if (s->ntets && s->jmin > 0) {
-        /* the tet pass only when a node has moved far enough from where the
-         * last pass found every tet above jmin to bring one down to it
-         * (exact: skipped passes would find no tet below jmin) */
-        double far = 0;
-        if (s->bar_safe > 0) {
-#pragma omp parallel for schedule(static) reduction(max : far)
-            for (int i = 0; i < n; i++) {
-                const double *a = x + 3 * (size_t)i, *r = s->xref + 3 * (size_t)i;
-                double d2 = (a[0] - r[0]) * (a[0] - r[0]) + (a[1] - r[1]) * (a[1] - r[1]) +
-                            (a[2] - r[2]) * (a[2] - r[2]);
-                if (d2 > far) far = d2;
-            }
-        }
-        if (!(s->bar_safe > 0) || sqrt(far) >= s->bar_safe) ub = barrier_pass(s, x, &bar);
+        ub = barrier_at(s, x, &bar);
         if (!(ub < INFINITY)) return INFINITY; /* a tet folds: never accepted */
     }
 #pragma omp parallel for schedule(static)
