@@ -444,9 +444,10 @@ static void test_keloid_stop(void **state) {
  * default wound's mid-line cross-section (the same 0.5 mm crust over 0.5 mm
  * of granulation tissue, skin surface 3 mm up, 4 mm high) at a fraction of
  * its cost. Times to 50 % and 95 % closure by two measures: the column test
- * of ss_heal_stats (open while the surface coverage < 0.5) and the uncovered
- * area, the integral of 1 - e over the wound (e is the covered fraction of a
- * column's bed). On a strip the column test flips a whole row of columns at
+ * (ss_heal_stats' open_columns_mm2: open while the surface coverage < 0.5)
+ * and the uncovered area (its open_area_mm2, the CLI's closure statistic:
+ * the integral of 1 - e over the wound, e the covered fraction of a column's
+ * bed; checked against the sum over the wound's surface cells here). On a strip the column test flips a whole row of columns at
  * once (steps of h / wound_mm in area), so its times carry a quantisation
  * of about h/2 of front travel; the uncovered area is smooth. */
 typedef struct strip_times {
@@ -491,7 +492,10 @@ static strip_times strip_course(const char *scen, double dx, double wound_mm, do
                 unc += 1.0 - g->field[SS_HEAL_EPITHELIUM][i];
                 n++;
             }
-        const double a = st.open_area_mm2 / a0, u = unc / n, t = g->t_days;
+        /* the library's open area is the uncovered area; its column count
+         * the column test */
+        const double a = st.open_columns_mm2 / a0, u = unc / n, t = g->t_days;
+        assert_true(fabs(st.open_area_mm2 / a0 - u) < 1e-6);
         if (r.t50 < 0 && a <= 0.5) r.t50 = cross_at(tp, ap, t, a, 0.5);
         if (r.t95 < 0 && a <= 0.05) r.t95 = cross_at(tp, ap, t, a, 0.05);
         if (r.u50 < 0 && u <= 0.5) r.u50 = cross_at(tp, up, t, u, 0.5);

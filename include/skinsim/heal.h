@@ -309,7 +309,9 @@ int ss_heal_solver_nslots(const ss_heal_solver *s);
 /* ---- diagnostics ---------------------------------------------------------------- */
 
 typedef struct ss_heal_stats {
-    double open_area_mm2;               /* columns whose surface epithelium < threshold */
+    double open_area_mm2;               /* the uncovered area: the sum over the wound's
+                                           columns (initial or in omega) of 1 - e of the
+                                           surface cell (e the covered fraction), x dx^2 */
     double wound_region_area_mm2;       /* columns whose surface cell is in omega */
     double initial_area_mm2;            /* columns that had a WOUND cell at the surface */
     double field_mean[SS_HEAL_NFIELDS]; /* over tissue cells (not AIR/BOUND) */
@@ -318,18 +320,23 @@ typedef struct ss_heal_stats {
     double scar_volume_mm3;             /* integral of rho over the tissue (mm^3 of
                                            normal-dermis-equivalent scar collagen) */
     double scar_max;                    /* largest rho of any tissue cell */
+    double open_columns_mm2;            /* those columns whose e < threshold (whole
+                                           columns: the closure-day map's test) */
 } ss_heal_stats;
-/* Epithelium level below which the surface counts as open: 0.5. */
+/* Epithelium level below which a column counts as open: 0.5. */
 double ss_heal_open_threshold(void);
 void ss_heal_stats_compute(const ss_heal_grid *g, ss_heal_stats *st);
 /* The same in parts (the MPI driver's reductions): sums of float values are
  * kept exactly (fixed-point limbs), so the result does not depend on how the
  * columns are split or in which order the parts are merged. */
 #define SS_HEAL_ACC_LIMBS 12
+#define SS_HEAL_ACC_ESCHAR SS_HEAL_NFIELDS        /* sum[]: the eschar column maxima */
+#define SS_HEAL_ACC_DEFICIT (SS_HEAL_NFIELDS + 1) /* sum[]: 1 - e of the open-test columns */
+#define SS_HEAL_ACC_SUMS (SS_HEAL_NFIELDS + 2)
 typedef struct ss_heal_stats_acc {
     int64_t n_initial, n_region, n_open, n_wcol, n_tissue, n_nonfinite;
-    int64_t sum[SS_HEAL_NFIELDS + 1][SS_HEAL_ACC_LIMBS]; /* fields, then the eschar
-                                                            column maxima */
+    int64_t sum[SS_HEAL_ACC_SUMS][SS_HEAL_ACC_LIMBS]; /* fields, the eschar column
+                                                         maxima, the uncovered fractions */
     int64_t adds;    /* additions since the limbs were last normalised */
     double scar_max; /* largest rho */
 } ss_heal_stats_acc;
@@ -347,7 +354,7 @@ void ss_heal_stats_acc_merge(ss_heal_stats_acc *a, const ss_heal_stats_acc *b);
  * column of the range, row-major, zeroed for the top box) and are added by
  * the bottom box (bottom = 1). Over the stack: ss_heal_stats_acc_add's sums. */
 typedef struct ss_heal_col_state {
-    float smax;
+    float smax, deficit; /* eschar maximum; 1 - e of the surface cell */
     uint8_t phase, initial, region,
         open; /* phase 0 above the surface, 1 in the tissue run, 2 past it */
 } ss_heal_col_state;

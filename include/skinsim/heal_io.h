@@ -219,7 +219,9 @@ typedef struct ss_heal_area_row {
 /* Normalised open area: open / initial (0 when the initial area is 0). */
 double ss_heal_area_normalised(const ss_heal_stats *st);
 /* CSV: header `t_days,open_area_mm2,normalised_area,wound_region_area_mm2,
- * mean_<field>...`, one row per entry. Atomic. */
+ * mean_<field>...,open_columns_mm2`, one row per entry (open_area_mm2 the
+ * uncovered area, open_columns_mm2 the columns under the threshold: see
+ * ss_heal_stats). Atomic. */
 ss_status ss_heal_area_csv_write(const char *path, const ss_heal_area_row *rows, int n,
                                  ss_error *err);
 /* The same with ncols more columns (names[c], vals[i * ncols + c] for row i). */

@@ -539,7 +539,7 @@ static void do_stats(ss_dist_heal *d, ss_heal_stats *st) {
         ss_heal_stats_acc_add(&a, d->g, 1, d->g->nx - 1, 1, d->g->ny - 1);
     }
     /* integer parts: counts and limbs (normalised, so sums cannot overflow) */
-    enum { NI = 6 + (SS_HEAL_NFIELDS + 1) * SS_HEAL_ACC_LIMBS };
+    enum { NI = 6 + SS_HEAL_ACC_SUMS * SS_HEAL_ACC_LIMBS };
     int64_t in[NI], out[NI];
     int64_t cnt[6] = {a.n_initial, a.n_region, a.n_open, a.n_wcol, a.n_tissue, a.n_nonfinite};
     memcpy(in, cnt, sizeof cnt);
@@ -1544,7 +1544,9 @@ ss_status ss_dist_heal_create(ss_heal_run *r, ss_status root_st, ss_dist_heal **
     d->fcount[FACE_YM] = d->fcount[FACE_YP] = SS_HEAL_NFIELDS * nxl * nz;
     d->fcount[FACE_ZM] = d->fcount[FACE_ZP] = SS_HEAL_NFIELDS * nxl * nyl;
     /* the column scans down the stack: 2 floats or one ss_heal_col_state per column */
-    if (d->hz && !(d->colbuf = malloc((size_t)nxl * nyl * 2 * sizeof(float))))
+    const size_t colsz = sizeof(ss_heal_col_state) > 2 * sizeof(float) ? sizeof(ss_heal_col_state)
+                                                                       : 2 * sizeof(float);
+    if (d->hz && !(d->colbuf = malloc((size_t)nxl * nyl * colsz)))
         st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     for (int f = 0; f < NFACES && d->g; f++) {
         d->sbuf[f] = malloc((size_t)d->fcount[f] * sizeof(float));

@@ -33,7 +33,8 @@
  * checkpoints written before these three existed have only the first ones;
  * they read as 0). */
 #define ROW_VALUES_OLD (4 + SS_HEAL_NFIELDS)
-#define ROW_VALUES (7 + SS_HEAL_NFIELDS)
+#define ROW_VALUES_7 (7 + SS_HEAL_NFIELDS) /* before the open column count */
+#define ROW_VALUES (8 + SS_HEAL_NFIELDS)
 
 char *ss_heal_run__aux_json(const ss_heal_run *r, double wall) {
     cJSON *j = cJSON_CreateObject();
@@ -59,6 +60,7 @@ char *ss_heal_run__aux_json(const ss_heal_run *r, double wall) {
         v[4 + SS_HEAL_NFIELDS] = row->st.eschar_wound_mean;
         v[5 + SS_HEAL_NFIELDS] = row->st.scar_volume_mm3;
         v[6 + SS_HEAL_NFIELDS] = row->st.scar_max;
+        v[7 + SS_HEAL_NFIELDS] = row->st.open_columns_mm2;
         cJSON_AddItemToArray(a, cJSON_CreateDoubleArray(v, ROW_VALUES));
     }
     cJSON *sn = cJSON_AddArrayToObject(j, "snapshots");
@@ -87,7 +89,7 @@ static ss_status restore_rows(ss_heal_run *r, const cJSON *area, const char *dir
     const cJSON *e;
     cJSON_ArrayForEach(e, area) {
         const int nv = cJSON_GetArraySize(e);
-        if (nv != ROW_VALUES && nv != ROW_VALUES_OLD)
+        if (nv != ROW_VALUES && nv != ROW_VALUES_7 && nv != ROW_VALUES_OLD)
             return ss_error_set(err, SS_ERR_INPUT, "%s: checkpoint area rows malformed", dir);
         double v[ROW_VALUES] = {0};
         for (int k = 0; k < nv; k++) {
@@ -107,6 +109,7 @@ static ss_status restore_rows(ss_heal_run *r, const cJSON *area, const char *dir
         row->st.eschar_wound_mean = v[4 + SS_HEAL_NFIELDS];
         row->st.scar_volume_mm3 = v[5 + SS_HEAL_NFIELDS];
         row->st.scar_max = v[6 + SS_HEAL_NFIELDS];
+        row->st.open_columns_mm2 = v[7 + SS_HEAL_NFIELDS];
     }
     return SS_OK;
 }
@@ -606,7 +609,10 @@ cJSON *ss_heal_run__summary(const ss_heal_run *r, double wall) {
         cJSON_AddNumberToObject(j, "initial_area_mm2", s0->initial_area_mm2);
         cJSON_AddNumberToObject(j, "final_open_area_mm2", s1->open_area_mm2);
         cJSON_AddNumberToObject(j, "final_normalised_area", ss_heal_area_normalised(s1));
+        cJSON_AddNumberToObject(j, "final_open_columns_mm2", s1->open_columns_mm2);
     }
+    /* how the open area is measured (the closure times follow it) */
+    cJSON_AddStringToObject(j, "open_area", "uncovered: sum of 1 - e over the wound surface");
     cJSON_AddNumberToObject(j, "open_threshold", ss_heal_open_threshold());
     add_course(j, r);
     cJSON_AddNumberToObject(j, "wall_time_s", wall);

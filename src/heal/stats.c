@@ -20,6 +20,11 @@
 
 static int is_tissue(uint8_t c) { return c != SS_CELL_AIR && c != SS_CELL_BOUND; }
 
+/* The uncovered fraction 1 - e of a surface cell, in [0, 1] (e is the covered
+ * fraction of the column's bed: a sub-voxel measure of the open area, smooth
+ * as the front crosses a column, where the threshold flips whole columns). */
+static float uncovered(float e) { return e >= 1.0f ? 0.0f : e <= 0.0f ? 1.0f : 1.0f - e; }
+
 void ss_heal_stats_acc_init(ss_heal_stats_acc *a) { memset(a, 0, sizeof *a); }
 
 static void limbs_normalise(int64_t *l) {
@@ -32,7 +37,7 @@ static void limbs_normalise(int64_t *l) {
 }
 
 void ss_heal_stats_acc_normalise(ss_heal_stats_acc *a) {
-    for (int k = 0; k <= SS_HEAL_NFIELDS; k++) limbs_normalise(a->sum[k]);
+    for (int k = 0; k < SS_HEAL_ACC_SUMS; k++) limbs_normalise(a->sum[k]);
     a->adds = 0;
 }
 
@@ -114,11 +119,14 @@ void ss_heal_stats_acc_add(ss_heal_stats_acc *a, const ss_heal_grid *g, int x0, 
                         if (!is_tissue(g->cell[c])) break;
                         if (s[c] > smax) smax = s[c];
                     }
-                    limbs_add(a, SS_HEAL_NFIELDS, smax);
+                    limbs_add(a, SS_HEAL_ACC_ESCHAR, smax);
                     a->n_wcol++;
                 }
                 if (region) a->n_region++;
-                if ((initial || region) && e[c0] < thr) a->n_open++;
+                if (initial || region) {
+                    a->n_open += e[c0] < thr;
+                    limbs_add(a, SS_HEAL_ACC_DEFICIT, uncovered(e[c0]));
+                }
             }
             add_cells(a, g, x, y, 0, g->nz);
         }
@@ -146,6 +154,7 @@ void ss_heal_stats_acc_add_stack(ss_heal_stats_acc *a, const ss_heal_grid *g, in
                     cs->initial = g->cell[c] == SS_CELL_WOUND;
                     cs->region = p[c] > (float)SS_HEAL_P_MIN;
                     cs->open = e[c] < thr;
+                    cs->deficit = uncovered(e[c]);
                 } else if (!is_tissue(g->cell[c])) {
                     cs->phase = 2;
                     break;
@@ -155,11 +164,14 @@ void ss_heal_stats_acc_add_stack(ss_heal_stats_acc *a, const ss_heal_grid *g, in
             if (bottom && cs->phase) {
                 if (cs->initial) {
                     a->n_initial++;
-                    limbs_add(a, SS_HEAL_NFIELDS, cs->smax);
+                    limbs_add(a, SS_HEAL_ACC_ESCHAR, cs->smax);
                     a->n_wcol++;
                 }
                 if (cs->region) a->n_region++;
-                if ((cs->initial || cs->region) && cs->open) a->n_open++;
+                if (cs->initial || cs->region) {
+                    a->n_open += cs->open;
+                    limbs_add(a, SS_HEAL_ACC_DEFICIT, cs->deficit);
+                }
             }
             add_cells(a, g, x, y, 1, g->nz - 1);
         }
@@ -174,7 +186,7 @@ void ss_heal_stats_acc_merge(ss_heal_stats_acc *a, const ss_heal_stats_acc *b) {
     a->n_wcol += b->n_wcol;
     a->n_tissue += b->n_tissue;
     a->n_nonfinite += b->n_nonfinite;
-    for (int k = 0; k <= SS_HEAL_NFIELDS; k++)
+    for (int k = 0; k < SS_HEAL_ACC_SUMS; k++)
         for (int i = 0; i < SS_HEAL_ACC_LIMBS; i++) a->sum[k][i] += b->sum[k][i];
     if (b->scar_max > a->scar_max) a->scar_max = b->scar_max;
     ss_heal_stats_acc_normalise(a);
@@ -185,8 +197,9 @@ void ss_heal_stats_acc_finish(const ss_heal_stats_acc *a, double dx_mm, ss_heal_
     const double area = dx_mm * dx_mm;
     st->initial_area_mm2 = (double)a->n_initial * area;
     st->wound_region_area_mm2 = (double)a->n_region * area;
-    st->open_area_mm2 = (double)a->n_open * area;
-    const double esum = limbs_value(a->sum[SS_HEAL_NFIELDS]);
+    st->open_columns_mm2 = (double)a->n_open * area;
+    st->open_area_mm2 = limbs_value(a->sum[SS_HEAL_ACC_DEFICIT]) * area;
+    const double esum = limbs_value(a->sum[SS_HEAL_ACC_ESCHAR]);
     st->eschar_wound_mean = a->n_wcol ? esum / (double)a->n_wcol : 0.0;
     for (int f = 0; f < SS_HEAL_NFIELDS; f++)
         st->field_mean[f] = a->n_tissue ? limbs_value(a->sum[f]) / (double)a->n_tissue : 0.0;
@@ -194,7 +207,7 @@ void ss_heal_stats_acc_finish(const ss_heal_stats_acc *a, double dx_mm, ss_heal_
     st->scar_max = a->scar_max;
     if (a->n_nonfinite) { /* a blown-up field shows as NaN, never as a plausible figure */
         for (int f = 0; f < SS_HEAL_NFIELDS; f++) st->field_mean[f] = NAN;
-        st->scar_volume_mm3 = st->eschar_wound_mean = NAN;
+        st->scar_volume_mm3 = st->eschar_wound_mean = st->open_area_mm2 = NAN;
     }
 }
 

@@ -541,6 +541,7 @@ class ss_heal_stats(ctypes.Structure):
         ("eschar_wound_mean", c_double),
         ("scar_volume_mm3", c_double),
         ("scar_max", c_double),
+        ("open_columns_mm2", c_double),
     ]
 
 
