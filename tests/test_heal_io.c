@@ -21,12 +21,6 @@
 #define M_PI 3.14159265358979323846
 #endif
 
-static char *join(const char *dir, const char *name) {
-    size_t n = strlen(dir) + strlen(name) + 2;
-    char *p = malloc(n);
-    snprintf(p, n, "%s/%s", dir, name);
-    return p;
-}
 
 static void write_text(const char *path, const char *text) {
     FILE *f = fopen(path, "wb");
@@ -35,43 +29,7 @@ static void write_text(const char *path, const char *text) {
     fclose(f);
 }
 
-/* A grid with deterministic pseudo-random content in every array. */
-static ss_heal_grid *random_grid(int nx, int ny, int nz, uint64_t seed) {
-    ss_error err;
-    ss_heal_grid *g = ss_heal_grid_create(nx, ny, nz, 0.25, &err);
-    assert_non_null(g);
-    size_t n = (size_t)nx * ny * nz;
-    for (size_t i = 0; i < n; i++) g->cell[i] = (uint8_t)(ss_rng_u32(seed, 99, i) % 5);
-    for (int f = 0; f < SS_HEAL_NFIELDS; f++)
-        for (size_t i = 0; i < n; i++)
-            g->field[f][i] = (float)ss_rng_uniform(seed, (uint64_t)f, i) * 2.0f - 0.5f;
-    for (int c = 0; c < 3; c++) /* velocities (mm/day) as the mechanics will set them */
-        if ((g->velocity[c] = malloc(n * sizeof(float))))
-            for (size_t i = 0; i < n; i++)
-                g->velocity[c][i] = (float)ss_rng_uniform(seed, 10 + (uint64_t)c, i);
-    g->skin_top_mm = 1.75;
-    g->t_days = 1.2345678901234567;
-    g->step = 987654321ULL;
-    return g;
-}
 
-static void assert_grids_equal(const ss_heal_grid *a, const ss_heal_grid *b) {
-    assert_int_equal(a->nx, b->nx);
-    assert_int_equal(a->ny, b->ny);
-    assert_int_equal(a->nz, b->nz);
-    assert_true(a->dx_mm == b->dx_mm);
-    assert_true(a->skin_top_mm == b->skin_top_mm);
-    assert_true(a->t_days == b->t_days);
-    assert_true(a->step == b->step);
-    size_t n = (size_t)a->nx * a->ny * a->nz;
-    assert_memory_equal(a->cell, b->cell, n);
-    for (int f = 0; f < SS_HEAL_NFIELDS; f++)
-        assert_memory_equal(a->field[f], b->field[f], n * sizeof(float));
-    for (int c = 0; c < 3; c++) {
-        assert_true(!a->velocity[c] == !b->velocity[c]);
-        if (a->velocity[c]) assert_memory_equal(a->velocity[c], b->velocity[c], n * sizeof(float));
-    }
-}
 
 /* ---- VTI ------------------------------------------------------------------------ */
 
@@ -114,9 +72,9 @@ static uint64_t get_u64le(const unsigned char *b) {
 static void test_vti_roundtrip(void **state) {
     (void)state;
     char *dir = tu_tmpdir("vti");
-    char *path = join(dir, "g.vti");
+    char *path = tu_join(dir, "g.vti");
     int nx = 7, ny = 5, nz = 4;
-    ss_heal_grid *g = random_grid(nx, ny, nz, 3);
+    ss_heal_grid *g = tu_heal_grid_noisy(nx, ny, nz, 0.25, 3, 1);
     ss_error err;
     assert_int_equal(ss_heal_vti_write(path, g, &err), SS_OK);
     size_t len;
@@ -194,7 +152,7 @@ static void test_vti_roundtrip(void **state) {
         for (int f = 0; f < SS_HEAL_NFIELDS; f++)
             assert_memory_equal(h->field[f], g->field[f], 4 * n);
         ss_heal_grid_free(h);
-        char *pv = join(dir, "v.vti");
+        char *pv = tu_join(dir, "v.vti");
         const char *name = "displacement";
         float *const vec[1][3] = {{g->field[0], g->field[1], g->field[2]}};
         double *closed = malloc(sizeof *closed * (size_t)nx * ny), *cback = NULL;
@@ -229,7 +187,7 @@ static void test_vti_roundtrip(void **state) {
     }
 
     /* pvd collection */
-    char *pvd = join(dir, "f.pvd");
+    char *pvd = tu_join(dir, "f.pvd");
     double t[2] = {0, 2.5};
     const char *files[2] = {"a.vti", "b&c.vti"};
     assert_int_equal(ss_heal_pvd_write(pvd, 2, t, files, &err), SS_OK);
@@ -252,7 +210,7 @@ static void test_checkpoint_roundtrip_and_corruption(void **state) {
     (void)state;
     char *dir = tu_tmpdir("ckpt");
     ss_error err;
-    ss_heal_grid *g = random_grid(9, 6, 5, 11);
+    ss_heal_grid *g = tu_heal_grid_noisy(9, 6, 5, 0.25, 11, 1);
     const char *pj = "{\"scenario\": \"clean\"}";
     assert_int_equal(
         ss_heal_checkpoint_save(dir, g, "keloid", pj, SS_HEAL_SPLIT, 0.0125, "{\"x\":1}", 2, &err),
@@ -261,7 +219,7 @@ static void test_checkpoint_roundtrip_and_corruption(void **state) {
     char note[1024];
     assert_int_equal(ss_heal_checkpoint_load_latest(dir, &ck, note, sizeof note, &err), SS_OK);
     assert_string_equal(note, "");
-    assert_grids_equal(g, ck.grid);
+    tu_assert_heal_grids_equal(g, ck.grid);
     assert_string_equal(ck.scenario, "keloid");
     assert_string_equal(ck.params_json, pj);
     assert_string_equal(ck.aux, "{\"x\":1}");
@@ -277,7 +235,7 @@ static void test_checkpoint_roundtrip_and_corruption(void **state) {
         ss_heal_checkpoint_save(dir, g, "keloid", pj, SS_HEAL_SPLIT, 0.0125, "", 2, &err), SS_OK);
     char name[128];
     snprintf(name, sizeof name, "checkpoints/ckpt_%012llu.sshc", (unsigned long long)g->step);
-    char *newest = join(dir, name);
+    char *newest = tu_join(dir, name);
     size_t len;
     char *bytes = ss_read_file(newest, &len, &err);
     assert_non_null(bytes);
@@ -286,7 +244,7 @@ static void test_checkpoint_roundtrip_and_corruption(void **state) {
     assert_true(ck.grid->field[SS_HEAL_SCAR][3] == 42.0f);
     ss_heal_checkpoint_free(&ck);
     /* a write interrupted after the temporary file: a leftover .tmp is ignored */
-    char *tmp = join(dir, "checkpoints/ckpt_999999999999.sshc.tmp.abc123");
+    char *tmp = tu_join(dir, "checkpoints/ckpt_999999999999.sshc.tmp.abc123");
     FILE *f = fopen(tmp, "wb");
     fwrite(bytes, 1, len / 2, f);
     fclose(f);
@@ -320,7 +278,7 @@ static void test_checkpoint_roundtrip_and_corruption(void **state) {
     g->step = old_step + 20;
     assert_int_equal(
         ss_heal_checkpoint_save(dir, g, "keloid", pj, SS_HEAL_SPLIT, 0.0125, "", 2, &err), SS_OK);
-    char *cdir = join(dir, "checkpoints");
+    char *cdir = tu_join(dir, "checkpoints");
     assert_int_equal(tu_count_entries(cdir), 2);
     assert_int_not_equal(access(tmp, F_OK), 0);
     free(cdir);
@@ -394,7 +352,7 @@ static void test_resume_bit_identical(void **state) {
         assert_true(ss_heal_solver_dt(s) == dt);
         for (int k = ksplit; k < nsteps; k++)
             assert_int_equal(ss_heal_step(s, ck.grid, &err), SS_OK);
-        assert_grids_equal(a, ck.grid);
+        tu_assert_heal_grids_equal(a, ck.grid);
         ss_heal_solver_free(s);
         ss_heal_params_free(p3);
         ss_heal_checkpoint_free(&ck);
@@ -606,7 +564,7 @@ static void test_obj_sphere(void **state) {
 static void test_footprint_mask(void **state) {
     (void)state;
     char *dir = tu_tmpdir("mask");
-    char *path = join(dir, "mask.png");
+    char *path = tu_join(dir, "mask.png");
     ss_error err;
     ss_image *img = ss_image_create(40, 30, 1, &err);
     size_t want = 0;
@@ -650,7 +608,7 @@ static void test_footprint_mask(void **state) {
     assert_float_equal(ss_image_px(d, 13, 5)[0], 2.0 * 13 / 39.0, 1e-4);
     ss_image_free(d);
     /* depth image: EXR values are mm, unscaled; a negative depth is refused */
-    char *exr = join(dir, "depth.exr");
+    char *exr = tu_join(dir, "depth.exr");
     for (int i = 0; i < 40 * 30; i++) img->data[i] = 0.1f * (float)(i % 40);
     assert_int_equal(ss_exr_write(exr, img, 0, &err), SS_OK);
     d = ss_heal_depth_image_read(exr, 2.0, &err);
@@ -778,7 +736,7 @@ static void test_surface_and_area(void **state) {
     assert_null(ss_heal_surface_map(g, SS_HEAL_NFIELDS, SS_SURFACE_TOP, &err));
 
     char *dir = tu_tmpdir("area");
-    char *png = join(dir, "s.png");
+    char *png = tu_join(dir, "s.png");
     assert_int_equal(ss_heal_surface_png(png, mx, 0, 30, "scar", "(density)", 0.5, &err), SS_OK);
     ss_image *back = ss_png_read(png, SS_ENC_LINEAR, &err);
     assert_non_null(back);
@@ -797,7 +755,7 @@ static void test_surface_and_area(void **state) {
     assert_float_equal(ss_heal_time_to_closure(rows, 11, 0.5), 5.0, 1e-12);
     assert_float_equal(ss_heal_time_to_closure(rows, 11, 0.05), 9.5, 1e-12);
     assert_true(ss_heal_time_to_closure(rows, 5, 0.05) < 0);
-    char *csv = join(dir, "area.csv");
+    char *csv = tu_join(dir, "area.csv");
     assert_int_equal(ss_heal_area_csv_write(csv, rows, 11, &err), SS_OK);
     char *text = ss_read_file(csv, NULL, &err);
     assert_non_null(text);
@@ -831,7 +789,7 @@ static void test_surface_and_area(void **state) {
 static void test_cli_mask_and_depth_image(void **state) {
     (void)state;
     char *dir = tu_tmpdir("cli");
-    char *mask = join(dir, "mask.png"), *depth = join(dir, "depth.png"), *out = join(dir, "out");
+    char *mask = tu_join(dir, "mask.png"), *depth = tu_join(dir, "depth.png"), *out = tu_join(dir, "out");
     ss_error err;
     ss_image *m = ss_image_create(40, 32, 1, &err), *d = ss_image_create(40, 32, 1, &err);
     for (int y = 0; y < 32; y++)
@@ -843,7 +801,7 @@ static void test_cli_mask_and_depth_image(void **state) {
     assert_int_equal(ss_png_write(depth, d, 16, SS_ENC_LINEAR, &err), SS_OK);
     ss_image_free(m);
     ss_image_free(d);
-    char args[4096], *sum = join(dir, "stdout.json");
+    char args[4096], *sum = tu_join(dir, "stdout.json");
     snprintf(args, sizeof args,
              "heal --grid 20x16x8 --days 0.1 --wound-mask '%s' --wound-depth-image '%s' "
              "--wound-depth-mm 2 --out '%s' --json",
@@ -855,7 +813,7 @@ static void test_cli_mask_and_depth_image(void **state) {
     assert_non_null(strstr(text, "\"initial_area_mm2\":\t20,"));
     free(text);
     /* wound voxels: 40 columns 1 layer deep (0.5 mm) + 40 columns 4 layers (2 mm) */
-    char *vti = join(out, "fields/fields_0000.vti");
+    char *vti = tu_join(out, "fields/fields_0000.vti");
     size_t len;
     char *data = ss_read_file(vti, &len, &err);
     assert_non_null(data);
@@ -871,7 +829,7 @@ static void test_cli_mask_and_depth_image(void **state) {
     assert_int_equal(wound, 200);
     free(data);
     /* the same mask with a depth reaching the bottom is refused, nothing written */
-    char *out2 = join(dir, "out2");
+    char *out2 = tu_join(dir, "out2");
     snprintf(args, sizeof args,
              "heal --grid 20x16x8 --days 0.1 --wound-mask '%s' --wound-depth-image '%s' "
              "--wound-depth-mm 3.5 --out '%s'",

@@ -20,51 +20,8 @@
 #include "skinsim/heal.h"
 #include "skinsim/heal_io.h"
 
-static char *join(const char *dir, const char *name) {
-    size_t n = strlen(dir) + strlen(name) + 2;
-    char *p = malloc(n);
-    snprintf(p, n, "%s/%s", dir, name);
-    return p;
-}
 
-/* Every array filled from the counter-based generator (seed); with vel the
- * three velocity arrays too. */
-static ss_heal_grid *noisy_grid(int nx, int ny, int nz, uint64_t seed, int vel) {
-    ss_error err;
-    ss_heal_grid *g = ss_heal_grid_create(nx, ny, nz, 0.3, &err);
-    assert_non_null(g);
-    size_t n = (size_t)nx * ny * nz;
-    for (size_t i = 0; i < n; i++) g->cell[i] = (uint8_t)(ss_rng_u32(seed, 7, i) % 5);
-    for (int f = 0; f < SS_HEAL_NFIELDS; f++)
-        for (size_t i = 0; i < n; i++)
-            g->field[f][i] = (float)ss_rng_uniform(seed, 20 + (uint64_t)f, i) * 3.0f - 1.0f;
-    for (int c = 0; vel && c < 3; c++) {
-        g->velocity[c] = malloc(n * sizeof(float));
-        assert_non_null(g->velocity[c]);
-        for (size_t i = 0; i < n; i++)
-            g->velocity[c][i] = (float)ss_rng_uniform(seed, 40 + (uint64_t)c, i) - 0.5f;
-    }
-    g->skin_top_mm = 1.65;
-    g->t_days = 3.3333333333333335;
-    g->step = 1234;
-    return g;
-}
 
-static void assert_same_state(const ss_heal_grid *a, const ss_heal_grid *b) {
-    assert_int_equal(a->nx, b->nx);
-    assert_int_equal(a->ny, b->ny);
-    assert_int_equal(a->nz, b->nz);
-    assert_true(a->dx_mm == b->dx_mm && a->skin_top_mm == b->skin_top_mm);
-    assert_true(a->t_days == b->t_days && a->step == b->step);
-    size_t n = (size_t)a->nx * a->ny * a->nz;
-    assert_memory_equal(a->cell, b->cell, n);
-    for (int f = 0; f < SS_HEAL_NFIELDS; f++)
-        assert_memory_equal(a->field[f], b->field[f], n * sizeof(float));
-    for (int c = 0; c < 3; c++) {
-        assert_true(!a->velocity[c] == !b->velocity[c]);
-        if (a->velocity[c]) assert_memory_equal(a->velocity[c], b->velocity[c], n * sizeof(float));
-    }
-}
 
 static const int SPLITS[][3] = {{1, 1, 1}, {2, 1, 1}, {2, 2, 1}, {1, 1, 3}, {3, 2, 2}};
 #define NSPLITS ((int)(sizeof SPLITS / sizeof SPLITS[0]))
@@ -117,7 +74,7 @@ static void test_pieces_any_split(void **state) {
     (void)state;
     ss_error err;
     for (int vel = 0; vel < 2; vel++) {
-        ss_heal_grid *g = noisy_grid(13, 11, 7, 5 + (uint64_t)vel, vel);
+        ss_heal_grid *g = tu_heal_grid_noisy(13, 11, 7, 0.3, 5 + (uint64_t)vel, vel);
         /* the whole-grid checkpoint of the same state, the reference */
         char *wdir = tu_tmpdir("pieces-whole");
         assert_int_equal(ss_heal_checkpoint_save(wdir, g, "scab", PJ, SS_HEAL_EXPLICIT, 0.002,
@@ -136,8 +93,8 @@ static void test_pieces_any_split(void **state) {
             assert_int_equal(ss_heal_checkpoint_load_latest(dir, &ck, note, sizeof note, &err),
                              SS_OK);
             assert_string_equal(note, "");
-            assert_same_state(g, ck.grid);
-            assert_same_state(ref.grid, ck.grid);
+            tu_assert_heal_grids_equal(g, ck.grid);
+            tu_assert_heal_grids_equal(ref.grid, ck.grid);
             assert_string_equal(ck.scenario, "scab");
             assert_string_equal(ck.params_json, PJ);
             assert_string_equal(ck.aux, "{\"a\":1}");
@@ -201,7 +158,7 @@ static void expect_refused(const char *dir, uint64_t step, const char *file, con
 static void test_pieces_corruption(void **state) {
     (void)state;
     ss_error err;
-    ss_heal_grid *g = noisy_grid(12, 10, 6, 9, 0);
+    ss_heal_grid *g = tu_heal_grid_noisy(12, 10, 6, 0.3, 9, 0);
     const int d2[3] = {2, 1, 1}, d1[3] = {1, 1, 1};
     char *dir = tu_tmpdir("pieces-bad");
     assert_int_equal(
@@ -258,10 +215,12 @@ static void test_pieces_corruption(void **state) {
     char q1[4400];
     ss_heal_ckpt_piece_path(q1, sizeof q1, dir, s + 5, 1);
     copy_file(q1, p1);
-    expect_refused(dir, s, p1, "step 1239");
+    char other[64];
+    snprintf(other, sizeof other, "step %llu", (unsigned long long)(s + 5));
+    expect_refused(dir, s, p1, other);
     copy_file(save, p1);
     /* a piece of another grid (same box size: the 6x10x6 grid as one piece) */
-    ss_heal_grid *g6 = noisy_grid(6, 10, 6, 2, 0);
+    ss_heal_grid *g6 = tu_heal_grid_noisy(6, 10, 6, 0.3, 2, 0);
     char *dir6 = tu_tmpdir("pieces-6");
     assert_int_equal(
         ss_heal_checkpoint_save_pieces(dir6, g6, "scab", PJ, SS_HEAL_SPLIT, 0.05, "", d1, 2, &err),
@@ -340,7 +299,7 @@ static void test_pieces_corruption(void **state) {
                                                         "", d2, 2, &err),
                          SS_OK);
     }
-    char *cdir = join(ldir, "checkpoints");
+    char *cdir = tu_join(ldir, "checkpoints");
     assert_int_equal(tu_count_entries(cdir), 2 + 4);
     assert_int_not_equal(access(lp, F_OK), 0);
     free(cdir);
@@ -399,7 +358,7 @@ static void write_pvti_n(const char *dir, int index, const ss_heal_grid *g, cons
                 const char *name = "displacement";
                 files[i] = malloc(64);
                 snprintf(files[i], 64, "fields_%04d_p%04d.vti", index, i);
-                char *path = join(dir, files[i]);
+                char *path = tu_join(dir, files[i]);
                 if (bare)
                     assert_int_equal(ss_heal_vti_write_piece(path, p, lo, whole, &err), SS_OK);
                 else
@@ -415,8 +374,8 @@ static void write_pvti_n(const char *dir, int index, const ss_heal_grid *g, cons
             }
     char pvname[64];
     snprintf(pvname, sizeof pvname, "fields_%04d.pvti", index);
-    char *pv = join(dir, pvname);
-    assert_int_equal(ss_heal_pvti_write(pv, whole, g->dx_mm, g->t_days, np, (const int(*)[6])ext,
+    char *pv = tu_join(dir, pvname);
+    assert_int_equal(ss_heal_pvti_write(pv, whole, g->dx_mm, np, (const int(*)[6])ext,
                                         (const char *const *)files, &err),
                      SS_OK);
     for (i = 0; i < np; i++) free(files[i]);
@@ -433,14 +392,14 @@ static void write_pvti(const char *dir, const ss_heal_grid *g, const int d[3], c
 static void test_pvti_roundtrip(void **state) {
     (void)state;
     ss_error err;
-    ss_heal_grid *g = noisy_grid(11, 9, 6, 21, 0);
+    ss_heal_grid *g = tu_heal_grid_noisy(11, 9, 6, 0.3, 21, 0);
     size_t n = (size_t)g->nx * g->ny * g->nz, ncol = (size_t)g->nx * g->ny;
     float *disp = malloc(3 * n * sizeof *disp);
     double *closed = malloc(ncol * sizeof *closed);
     for (size_t i = 0; i < 3 * n; i++) disp[i] = (float)ss_rng_uniform(77, 1, i);
     for (size_t i = 0; i < ncol; i++) closed[i] = i % 3 ? -1.0 : 0.25 * (double)i;
     char *dir = tu_tmpdir("pvti");
-    char *gathered = join(dir, "fields_0003.vti");
+    char *gathered = tu_join(dir, "fields_0003.vti");
     const char *name = "displacement";
     float *const vec[1][3] = {{disp, disp + n, disp + 2 * n}};
     assert_int_equal(ss_heal_vti_write_all(gathered, g, 1, &name, vec, closed, &err), SS_OK);
@@ -452,12 +411,12 @@ static void test_pvti_roundtrip(void **state) {
     for (int s = 0; s < 5; s++) {
         char *sub = tu_tmpdir("pvti-split");
         write_pvti(sub, g, splits[s], disp, closed, 0);
-        char *pv = join(sub, "fields_0003.pvti");
+        char *pv = tu_join(sub, "fields_0003.pvti");
         float *pd = NULL;
         double *pc = NULL;
         ss_heal_grid *h = ss_heal_pvti_read(pv, &pd, &pc, &err);
         if (!h) fail_msg("%s", err.msg);
-        assert_same_state(ref, h);
+        tu_assert_heal_grids_equal(ref, h);
         assert_non_null(pd);
         assert_non_null(pc);
         assert_memory_equal(pd, rd, 3 * n * sizeof *pd);
@@ -471,17 +430,17 @@ static void test_pvti_roundtrip(void **state) {
     }
     /* pieces without displacement or closure days: the fields only */
     write_pvti(dir, g, splits[2], disp, closed, 1);
-    char *pv = join(dir, "fields_0003.pvti");
+    char *pv = tu_join(dir, "fields_0003.pvti");
     float *pd = (float *)1;
     double *pc = (double *)1;
     ss_heal_grid *h = ss_heal_pvti_read(pv, &pd, &pc, &err);
     assert_non_null(h);
     assert_null(pd);
     assert_null(pc);
-    assert_same_state(ref, h);
+    tu_assert_heal_grids_equal(ref, h);
     ss_heal_grid_free(h);
     /* the gathered reader refuses a piece, the pvti reader the gathered .vti */
-    char *p1 = join(dir, "fields_0003_p0001.vti");
+    char *p1 = tu_join(dir, "fields_0003_p0001.vti");
     assert_null(ss_heal_vti_read(p1, NULL, NULL, &err));
     assert_non_null(strstr(err.msg, "Piece Extent"));
     assert_null(ss_heal_pvti_read(gathered, NULL, NULL, &err));
@@ -491,7 +450,7 @@ static void test_pvti_roundtrip(void **state) {
     size_t len;
     char *text = ss_read_file(pv, &len, &err);
     assert_non_null(text);
-    char *save = join(dir, "save.vti");
+    char *save = tu_join(dir, "save.vti");
     copy_file(p1, save);
     assert_int_equal(unlink(p1), 0); /* missing piece */
     assert_null(ss_heal_pvti_read(pv, NULL, NULL, &err));
@@ -548,7 +507,7 @@ static void assert_same_files(const char *a, const char *b) {
     int n = 0;
     while ((e = readdir(d))) {
         if (e->d_name[0] == '.') continue;
-        char *fa = join(a, e->d_name), *fb = join(b, e->d_name);
+        char *fa = tu_join(a, e->d_name), *fb = tu_join(b, e->d_name);
         size_t la, lb;
         ss_error err;
         char *ca = ss_read_file(fa, &la, &err), *cb = ss_read_file(fb, &lb, &err);
@@ -581,7 +540,7 @@ static void test_wound_heal_from_pvti(void **state) {
     for (int i = 0; i < 3; i++) {
         char name[64];
         snprintf(name, sizeof name, "p/fields/fields_%04d.vti", i);
-        char *vti = join(dir, name), *fdir = join(dir, "p/fields");
+        char *vti = tu_join(dir, name), *fdir = tu_join(dir, "p/fields");
         float *disp = NULL;
         double *closed = NULL;
         ss_error err;
@@ -601,21 +560,21 @@ static void test_wound_heal_from_pvti(void **state) {
     assert_int_equal(tu_run_cli(cmd, NULL, NULL), 0);
     snprintf(cmd, sizeof cmd, "wound --heal '%s/p' %s --out '%s/wb'", dir, wopt, dir);
     assert_int_equal(tu_run_cli(cmd, NULL, NULL), 0);
-    char *fa = join(dir, "wa/frames"), *fb = join(dir, "wb/frames");
+    char *fa = tu_join(dir, "wa/frames"), *fb = tu_join(dir, "wb/frames");
     assert_same_files(fa, fb);
     free(fa);
     free(fb);
     /* a piece missing: exit 2 naming it, nothing written */
-    char *piece = join(dir, "p/fields/fields_0001_p0002.vti");
+    char *piece = tu_join(dir, "p/fields/fields_0001_p0002.vti");
     assert_int_equal(unlink(piece), 0);
-    char *errf = join(dir, "err.txt");
+    char *errf = tu_join(dir, "err.txt");
     snprintf(cmd, sizeof cmd, "wound --heal '%s/p' %s --out '%s/wc'", dir, wopt, dir);
     assert_int_equal(tu_run_cli(cmd, NULL, errf), 2);
     ss_error err;
     char *msg = ss_read_file(errf, NULL, &err);
     assert_non_null(msg);
     if (!strstr(msg, "fields_0001_p0002.vti")) fail_msg("error does not name the piece: %s", msg);
-    char *wc = join(dir, "wc");
+    char *wc = tu_join(dir, "wc");
     assert_int_not_equal(access(wc, F_OK), 0);
     free(wc);
     free(msg);

@@ -447,9 +447,9 @@ static void test_keloid_stop(void **state) {
  * (ss_heal_stats' open_columns_mm2: open while the surface coverage < 0.5)
  * and the uncovered area (its open_area_mm2, the CLI's closure statistic:
  * the integral of 1 - e over the wound, e the covered fraction of a column's
- * bed; checked against the sum over the wound's surface cells here). On a strip the column test flips a whole row of columns at
- * once (steps of h / wound_mm in area), so its times carry a quantisation
- * of about h/2 of front travel; the uncovered area is smooth. */
+ * bed; checked against the sum over the wound's surface cells here). On a strip the column test
+ * flips a whole row of columns at once (steps of h / wound_mm in area), so its times carry a
+ * quantisation of about h/2 of front travel; the uncovered area is smooth. */
 typedef struct strip_times {
     double t50, t95, u50, u95;
 } strip_times;

@@ -715,8 +715,8 @@ static void test_barrier_near_pass(void **state) {
         for (int i = 0; i < s[k]->nsprings; i++) {
             const double *a = s[k]->X + 3 * s[k]->e[2 * i], *b = s[k]->X + 3 * s[k]->e[2 * i + 1];
             /* vertical edges of the left third want a twentieth of their length */
-            if (fabs(a[2] - b[2]) > 0.5 && fabs(a[0] - b[0]) < 1e-9 &&
-                fabs(a[1] - b[1]) < 1e-9 && a[0] < 4.5)
+            if (fabs(a[2] - b[2]) > 0.5 && fabs(a[0] - b[0]) < 1e-9 && fabs(a[1] - b[1]) < 1e-9 &&
+                a[0] < 4.5)
                 s[k]->rest[i] = 0.05 * s[k]->l0[i];
         }
         for (int i = 0; i < s[k]->nnodes; i++)

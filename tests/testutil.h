@@ -23,5 +23,16 @@ int tu_file_exists(const char *path);
 int tu_count_entries(const char *dir);
 /* 1 under SKINSIM_TEST_QUICK (sanitizer runs): tests use smaller problems. */
 int tu_quick(void);
+/* dir/name (malloc'd). */
+char *tu_join(const char *dir, const char *name);
+
+/* A healing grid of voxel dx_mm with every array filled from the
+ * counter-based generator (seed): cell states 0-4, fields in [-1, 2), with
+ * vel the three velocity arrays too; odd skin top, time and step, so that a
+ * writer/reader pair that drops a bit shows. */
+struct ss_heal_grid *tu_heal_grid_noisy(int nx, int ny, int nz, double dx_mm, uint64_t seed,
+                                        int vel);
+/* Asserts that two healing grids hold the same state, bit for bit. */
+void tu_assert_heal_grids_equal(const struct ss_heal_grid *a, const struct ss_heal_grid *b);
 
 #endif

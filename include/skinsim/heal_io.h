@@ -85,15 +85,14 @@ ss_status ss_heal_vti_write_vectors(const char *path, const ss_heal_grid *g, int
 ss_status ss_heal_vti_write_piece(const char *path, const ss_heal_grid *piece, const int off[3],
                                   const int whole[3], ss_error *err);
 /* The .pvti that joins npieces such pieces: ext[i] = x0 x1 y0 y1 z0 z1 (point
- * extents), files[i] relative to the .pvti. ParaView opens it as one image. */
-ss_status ss_heal_pvti_write(const char *path, const int whole[3], double dx_mm, double t_days,
-                             int npieces, const int (*ext)[6], const char *const *files,
-                             ss_error *err);
+ * extents), files[i] relative to the .pvti. ParaView opens it as one image
+ * (its time is the one fields.pvd gives it). */
+ss_status ss_heal_pvti_write(const char *path, const int whole[3], double dx_mm, int npieces,
+                             const int (*ext)[6], const char *const *files, ss_error *err);
 /* The same with nvec Float32 3-vector cell arrays (names[i]) in every piece. */
 ss_status ss_heal_pvti_write_vectors(const char *path, const int whole[3], double dx_mm,
-                                     double t_days, int npieces, const int (*ext)[6],
-                                     const char *const *files, int nvec, const char *const *names,
-                                     ss_error *err);
+                                     int npieces, const int (*ext)[6], const char *const *files,
+                                     int nvec, const char *const *names, ss_error *err);
 /* The same with nvec 3-component cell arrays (as ss_heal_vti_write_vectors,
  * each of piece->nx*ny*nz floats) and, if closed_day is not NULL, the closure
  * days of the piece's own columns (piece->nx * piece->ny, index y*nx + x of

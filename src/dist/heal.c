@@ -1116,7 +1116,7 @@ static ss_status do_pieces(ss_dist_heal *d, int index, ss_error *err) {
                 snprintf(files[q], 32, "fields_%04d_p%04d.vti", index, q);
             }
             snprintf(path, sizeof path, "%s/fields_%04d.pvti", dir, index);
-            vmax = ss_heal_pvti_write_vectors(path, d->su.G, d->su.dx_mm, d->g->t_days, d->size,
+            vmax = ss_heal_pvti_write_vectors(path, d->su.G, d->su.dx_mm, d->size,
                                               (const int(*)[6])ext, (const char *const *)files,
                                               d->su.mech ? 2 : 0, vnames, err);
         }

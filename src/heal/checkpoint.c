@@ -68,8 +68,8 @@ void ss_heal_checkpoint_free(ss_heal_checkpoint *c) {
 }
 
 ss_status ss_heal__ck_load(const char *path, const char *magic, uint32_t version, size_t min_len,
-                           const char *what, const char *kind, char **data, size_t *len,
-                           ss_error *err) {
+                           size_t crc_len, const char *what, const char *kind, char **data,
+                           size_t *len, ss_error *err) {
     *data = ss_read_file(path, len, err);
     if (!*data) return err ? err->code : SS_ERR_INPUT;
     const unsigned char *b = (const unsigned char *)*data;
@@ -80,6 +80,16 @@ ss_status ss_heal__ck_load(const char *path, const char *magic, uint32_t version
         st = ss_error_set(err, SS_ERR_INPUT,
                           "%s: %s version %u is not supported (this build reads %u)", path, kind,
                           ck_get_u32(b + 8), version);
+    else if (*len < crc_len)
+        st = ss_error_set(err, SS_ERR_INPUT, "%s: truncated %s", path, kind);
+    if (!st) {
+        uint32_t stored = ck_get_u32(b + *len - 4);
+        uint32_t crc = (uint32_t)crc32_z(crc32_z(0L, Z_NULL, 0), b, *len - 4);
+        if (crc != stored)
+            st = ss_error_set(err, SS_ERR_INPUT,
+                              "%s: %s is truncated or corrupt (CRC-32 %08x, expected %08x)", path,
+                              kind, crc, stored);
+    }
     if (st) {
         free(*data);
         *data = NULL;
@@ -91,8 +101,8 @@ ss_status ss_heal_checkpoint_read(const char *path, ss_heal_checkpoint *out, ss_
     memset(out, 0, sizeof *out);
     size_t len = 0;
     char *data;
-    ss_status st = ss_heal__ck_load(path, CK_MAGIC, CK_VERSION, 16, "a skinsim healing checkpoint",
-                                    "checkpoint", &data, &len, err);
+    ss_status st = ss_heal__ck_load(path, CK_MAGIC, CK_VERSION, 16, 20,
+                                    "a skinsim healing checkpoint", "checkpoint", &data, &len, err);
     if (st) return st;
     rbuf r = {(const unsigned char *)data, len, 12};
 #define BAD(...)                                                                                   \
@@ -100,17 +110,6 @@ ss_status ss_heal_checkpoint_read(const char *path, ss_heal_checkpoint *out, ss_
         st = ss_error_set(err, SS_ERR_INPUT, __VA_ARGS__);                                         \
         goto done;                                                                                 \
     } while (0)
-    uint32_t crc_stored;
-    {
-        if (len < 20) BAD("%s: truncated checkpoint", path);
-        const unsigned char *b = r.p + len - 4;
-        crc_stored =
-            (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24;
-        uint32_t crc = (uint32_t)crc32_z(crc32_z(0L, Z_NULL, 0), r.p, len - 4);
-        if (crc != crc_stored)
-            BAD("%s: checkpoint is truncated or corrupt (CRC-32 %08x, expected %08x)", path, crc,
-                crc_stored);
-    }
     r.len = len - 4;
     uint32_t hdr = ru32(&r);
     if (hdr != 4 * 4 + 3 * 8 + 8 + 4 + 8 + 4 || !rneed(&r, hdr))

@@ -138,11 +138,13 @@ static inline ss_status ck_finish(wbuf *w, ss_atomic_file *af, const char *path,
 /* ---- shared by the readers (checkpoint.c) ---------------------------------------- */
 
 /* Reads a checkpoint file whole (*data, *len; caller frees) after checking
- * its 8-byte magic, then the version word: SS_ERR_INPUT naming the path as
- * not `what` (bad magic) or of another version of `kind`. */
+ * its 8-byte magic, the version word, then its closing CRC-32 (over all but
+ * its last 4 bytes, the file at least crc_len long): SS_ERR_INPUT naming the
+ * path as not `what` (bad magic), of another version of `kind`, or a
+ * truncated or corrupt `kind`. */
 ss_status ss_heal__ck_load(const char *path, const char *magic, uint32_t version, size_t min_len,
-                           const char *what, const char *kind, char **data, size_t *len,
-                           ss_error *err);
+                           size_t crc_len, const char *what, const char *kind, char **data,
+                           size_t *len, ss_error *err);
 
 /* ---- the run directory (checkpoint_dir.c) ----------------------------------------- */
 

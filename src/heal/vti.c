@@ -161,17 +161,14 @@ ss_status ss_heal_vti_write_box_vectors(const char *path, const ss_heal_grid *g,
     return write_vti(path, g, box, nvec, names, vecs, closed_day, off, whole, err);
 }
 
-ss_status ss_heal_pvti_write(const char *path, const int whole[3], double dx_mm, double t_days,
-                             int npieces, const int (*ext)[6], const char *const *files,
-                             ss_error *err) {
-    return ss_heal_pvti_write_vectors(path, whole, dx_mm, t_days, npieces, ext, files, 0, NULL,
-                                      err);
+ss_status ss_heal_pvti_write(const char *path, const int whole[3], double dx_mm, int npieces,
+                             const int (*ext)[6], const char *const *files, ss_error *err) {
+    return ss_heal_pvti_write_vectors(path, whole, dx_mm, npieces, ext, files, 0, NULL, err);
 }
 
 ss_status ss_heal_pvti_write_vectors(const char *path, const int whole[3], double dx_mm,
-                                     double t_days, int npieces, const int (*ext)[6],
-                                     const char *const *files, int nvec, const char *const *names,
-                                     ss_error *err) {
+                                     int npieces, const int (*ext)[6], const char *const *files,
+                                     int nvec, const char *const *names, ss_error *err) {
     ss_atomic_file af;
     ss_status st = ss_atomic_open(&af, path, err);
     if (st) return st;
@@ -198,7 +195,6 @@ ss_status ss_heal_pvti_write_vectors(const char *path, const int whole[3], doubl
         fprintf(f, "\"/>\n");
     }
     fprintf(f, "  </PImageData>\n</VTKFile>\n");
-    (void)t_days;
     return commit(&af, path, err);
 }
 
