@@ -7,8 +7,8 @@
 # whole-grid .vti), which assembled (tests/pvti_same.py) equal the
 # single-process fields_NNNN.vti array by array, and fields.pvd lists them;
 # every rank builds its own box from the wound (the built-in square,
-# strokes, a mesh voxelised per box); on a grid that divides by the rank
-# counts and one that does not, and with boxes stacked in z
+# strokes, a mesh voxelised per box); on the default wound and grid, on a
+# grid that divides by the rank counts and one that does not, and with boxes stacked in z
 # (SKINSIM_MPI_DIMS=1x1x2 and 2x1x2); adaptive steps with rejected steps; a
 # run checkpointed on a 2x1x2 process grid resumes on 3 ranks and in one
 # process to the uninterrupted single-process result; bad input (too many
@@ -31,6 +31,9 @@ EXPL="--scheme explicit --scenario scab --days 0.6 --snapshot-every 0.3 --area-e
 [ -n "${SKINSIM_TEST_QUICK:-}" ] && adapt_days=30 ||
     equal_on_ranks explicit-24x20x8 "2 4" --grid 24x20x8 $EXPL
 equal_on_ranks explicit-23x17x9 "1 2 3 4" --grid 23x17x9 $EXPL
+# the default wound on the default grid (60 x 60 x 8), both schemes
+equal_on_ranks default "1 2 3 4" --days 1 --snapshot-every 0.5 --area-every 0.05 --quiet --threads 1
+equal_on_ranks default-explicit "2 4" --scheme explicit --days 0.3 --snapshot-every 0.15 --quiet --threads 1
 
 # --- z split too (SKINSIM_MPI_DIMS; the explicit scheme): boxes stacked in z,
 # the column values of the epithelium handed down the stack; 9 levels in 2
