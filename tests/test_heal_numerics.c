@@ -324,6 +324,102 @@ static void test_insulating_layer(void **state) {
         }
 }
 
+/* The crust rule [D9]: with mface_closed = 0.5 a porous crust layer (q =
+ * 0.8 everywhere in it) takes nothing from the tissue below and the mass
+ * there is kept; without the rule (mface_closed 0) the same layer soaks u
+ * up through faces of conductance 0.2, as does a layer that is no longer
+ * crust (q = 0.3) with the rule. Both schemes; the reaction writes the same
+ * multiplier the explicit scheme computes from q at the neighbours. */
+static float crust_closed;
+static void crust_react(void *vctx, const ss_heal_rd_row *row) {
+    (void)vctx;
+    for (int i = 0; i < row->n; i++) {
+        for (int f = 0; f < 2; f++) row->prod[f][i] = row->loss[f][i] = 0.0f;
+        const float q = row->u[0][i];
+        row->m[0][i] = crust_closed > 0.0f && q > crust_closed ? 0.0f
+                       : q < 0.0f                              ? 1.0f
+                       : q > 1.0f                              ? 0.0f
+                                                               : 1.0f - q;
+    }
+}
+
+static void test_crust_layer(void **state) {
+    (void)state;
+    const int nx = 10, ny = 8, nz = 12;
+    const size_t n = (size_t)nx * ny * nz;
+    const float cases[3][2] = {{0.8f, 0.5f}, {0.8f, 0.0f}, {0.3f, 0.5f}}; /* q, closed */
+    for (int split = 0; split < 2; split++)
+        for (int k = 0; k < 3; k++) {
+            ss_heal_rd_system s;
+            memset(&s, 0, sizeof s);
+            s.nx = nx;
+            s.ny = ny;
+            s.nz = nz;
+            s.h_mm = 0.25;
+            s.nfields = 2;
+            float *q = calloc(n, sizeof(float)), *u = calloc(n, sizeof(float));
+            assert_true(q && u);
+            double below0 = 0.0;
+            for (int z = 1; z < nz - 1; z++)
+                for (int y = 1; y < ny - 1; y++)
+                    for (int x = 1; x < nx - 1; x++) {
+                        const size_t c = ((size_t)z * ny + y) * nx + x;
+                        if (z >= nz - 4) {
+                            q[c] = cases[k][0];
+                        } else {
+                            u[c] = 1.0f;
+                            below0 += u[c];
+                        }
+                    }
+            s.u[0] = q;
+            s.u[1] = u;
+            s.D[1] = 0.4;
+            s.mslot[0] = -1;
+            s.mslot[1] = 0;
+            s.nslots = 1;
+            s.mface[0] = 1;
+            s.mface_closed = crust_closed = cases[k][1];
+            s.lo[0] = s.lo[1] = 0.0f;
+            s.hi[0] = s.hi[1] = INFINITY;
+            s.mmax = 1.0;
+            s.react = crust_react;
+            ss_error err;
+            ss_heal_rd_work *w = ss_heal_rd_work_create(&s, &err);
+            assert_non_null(w);
+            const double dt = split ? 0.05 : 0.9 * ss_heal_rd_explicit_dt(&s);
+            const int steps = (int)lround(1.0 / dt);
+            for (int i = 0; i < steps; i++) {
+                if (split)
+                    ss_heal_rd_step_split(&s, w, dt, 1);
+                else
+                    ss_heal_rd_step_explicit(&s, w, dt);
+            }
+            double below = 0.0, layer = 0.0;
+            for (int z = 1; z < nz - 1; z++)
+                for (int y = 1; y < ny - 1; y++)
+                    for (int x = 1; x < nx - 1; x++) {
+                        const size_t c = ((size_t)z * ny + y) * nx + x;
+                        if (z >= nz - 4)
+                            layer += s.u[1][c];
+                        else
+                            below += s.u[1][c];
+                    }
+            print_message("%s, crust q %.1f, closed above %.1f: in the layer %.4g, below %+.2e\n",
+                          split ? "split" : "explicit", cases[k][0], cases[k][1], layer,
+                          (below - below0) / below0);
+            if (k == 0) {
+                assert_true(layer == 0.0); /* closed: nothing soaks in */
+                assert_true(fabs(below - below0) / below0 < 2e-5);
+            } else {
+                assert_true(layer > 0.01 * below0 / (nz - 6)); /* it soaks u up */
+                assert_true(fabs(below + layer - below0) / below0 < 2e-5); /* conserved */
+            }
+            ss_heal_rd_work_free(w);
+            free(s.u[0]);
+            free(s.u[1]);
+        }
+}
+
 /* A blob carried by a uniform velocity: mass conserved, centroid moves v t. */
 static void test_convection_blob(void **state) {
     (void)state;
@@ -394,6 +490,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_fisher_travelling_wave), cmocka_unit_test(test_fisher_bramson),
         cmocka_unit_test(test_diffusion_mass),         cmocka_unit_test(test_insulating_layer),
+        cmocka_unit_test(test_crust_layer),
         cmocka_unit_test(test_convection_blob),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -106,6 +106,10 @@ typedef struct ss_heal_params {
 
 /* omega = [p > SS_HEAL_P_MIN] (plasma is normalised to 1 in the fresh clot). */
 #define SS_HEAL_P_MIN 0.5
+/* A voxel whose eschar s exceeds this is crust: closed to oxygen, MDGF,
+ * capillaries and fibroblasts (no tissue grows into a scab; docs/heal-model.md
+ * [D9]). At or below it the faces conduct min(1 - s) ([D6]). */
+#define SS_HEAL_CRUST_CLOSED 0.5
 /* Healthy far-field values implied by the parameters (steady state of §4.1
  * in intact tissue): u3 = u3_eq, u1 = lam31 u3_eq / lam11, u2 = 0,
  * n = K (1 - lamnn / (rn u1)) (0 if negative), s = rho = p = 0. */
@@ -481,6 +485,10 @@ typedef struct ss_heal_rd_system {
      * must then write m = clamp(1 - u_f, 0, 1) into the slot, which the
      * explicit scheme recomputes from field f at the neighbours. */
     uint8_t mface[SS_HEAL_RD_MAXSLOT];
+    /* > 0: a cell whose u_f of a face slot exceeds it has m = 0 (its faces
+     * closed: a voxel that is mostly crust, [D9]); the reaction must write
+     * the same into the slot. 0: m = clamp(1 - u_f, 0, 1) everywhere. */
+    float mface_closed;
     /* a sub-box's convection sync (split scheme); NULL = this grid is the whole problem */
     ss_heal_conv_fn conv;
     void *conv_ctx;

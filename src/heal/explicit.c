@@ -362,15 +362,16 @@ void ss_heal_rd__step_explicit_part(ss_heal_rd_system *sys, ss_heal_rd_work *w, 
                 }
                 if (fslot >= 0) {
                     const float *restrict q = sys->u[ff] + base;
+                    const float qc = sys->mface_closed > 0.0f ? sys->mface_closed : INFINITY;
 #pragma omp simd
                     for (int x = xa; x < xa + n; x++) {
-                        const float mc = clampf(1.0f - q[x], 0.0f, 1.0f);
-                        const float ml = clampf(1.0f - q[x - 1], 0.0f, 1.0f);
-                        const float mr = clampf(1.0f - q[x + 1], 0.0f, 1.0f);
-                        const float ms = clampf(1.0f - q[x - (long)sy], 0.0f, 1.0f);
-                        const float mn = clampf(1.0f - q[x + sy], 0.0f, 1.0f);
-                        const float md = clampf(1.0f - q[x - (long)sz], 0.0f, 1.0f);
-                        const float mu = clampf(1.0f - q[x + sz], 0.0f, 1.0f);
+                        const float mc = face_m(q[x], qc);
+                        const float ml = face_m(q[x - 1], qc);
+                        const float mr = face_m(q[x + 1], qc);
+                        const float ms = face_m(q[x - (long)sy], qc);
+                        const float mn = face_m(q[x + sy], qc);
+                        const float md = face_m(q[x - (long)sz], qc);
+                        const float mu = face_m(q[x + sz], qc);
                         cxm[x] = wxm[x] * (mc < ml ? mc : ml);
                         cxp[x] = wxp[x] * (mc < mr ? mc : mr);
                         cym[x] = wym[x] * (mc < ms ? mc : ms);

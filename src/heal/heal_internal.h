@@ -77,4 +77,11 @@ static inline float clampf(float v, float lo, float hi) {
     return v < hi ? v : hi;
 }
 
+/* A face slot's multiplier of a cell from its field value u: 1 - u in
+ * [0, 1], 0 above `closed` (ss_heal_rd_system.mface_closed; inf: never). The
+ * explicit scheme and the model's reaction (for the split scheme) share it. */
+static inline float face_m(float u, float closed) {
+    return u > closed ? 0.0f : clampf(1.0f - u, 0.0f, 1.0f);
+}
+
 #endif

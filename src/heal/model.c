@@ -57,6 +57,7 @@ typedef struct model_ctx {
     float De;
     const uint8_t *ztop_of; /* the cell array ztop was computed from */
     float scab_h;           /* scab_mm / voxel: the scab layer in voxel levels */
+    float crust;            /* s above which a voxel is crust, closed to u1..n [D9] (inf: none) */
     int *zt_min, *zt_max;   /* per y: range of ztop over the row's columns */
     int kdeep;              /* levels below the surface where no surface/scab term acts */
     /* a box of a stack in z (src/dist): ztop, zt_min, zt_max are whole-grid
@@ -127,7 +128,7 @@ react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep, const i
     const float dyn = m->static_region ? 0.0f : 1.0f;
     const float ibeta = 1.0f / m->beta2;
     const int z = row->z + m->zoff;
-    const float scab_h = m->scab_h, kscab = m->kscab, rclosed = m->rho_closed;
+    const float scab_h = m->scab_h, kscab = m->kscab, rclosed = m->rho_closed, crust = m->crust;
     const float lamnrho = m->lamnrho, lamge = m->lamge, lamee = m->lamee;
     const float lames = m->lames, irsat = m->inv_rhosat;
     /* keloid factor G = a + (1 - a) clamp(rho/rho_max - 1, 0, 1), times lamkrho */
@@ -198,7 +199,7 @@ react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep, const i
         const float C = pos(rho - m->rhomax) * m->inv_rhomax;
         p8[i] = dyn * (C + ppos * p);
         l8[i] = dyn * (C + pneg);
-        m0[i] = ns;
+        m0[i] = face_m(s, crust);
         m1[i] = me;
         (void)e;
     }
@@ -562,6 +563,7 @@ static void ctx_init(model_ctx *c, const ss_heal_params *p, const ss_heal_grid *
     c->h = (float)g->dx_mm;
     c->De = (float)p->De;
     c->scab_h = (float)(p->scab_mm / g->dx_mm);
+    c->crust = p->scab ? (float)SS_HEAL_CRUST_CLOSED : INFINITY;
     /* wsc = 0 once kf >= scab_h; without the scab switch R = 0 everywhere */
     c->kdeep = 1;
     if (p->scab && p->Rs != 0.0) {
@@ -625,7 +627,10 @@ static void sys_init(ss_heal_rd_system *s, model_ctx *c, const ss_heal_grid *g,
     /* the crust insulates the tissue below it instead of draining it: u1..n
      * diffuse through faces of conductance min(1 - s) (without the scab
      * switch s = 0 and the two forms are the same) */
-    if (p->scab) s->mface[0] = SS_HEAL_ESCHAR + 1;
+    if (p->scab) {
+        s->mface[0] = SS_HEAL_ESCHAR + 1;
+        s->mface_closed = (float)SS_HEAL_CRUST_CLOSED; /* [D9] */
+    }
     s->hi[SS_HEAL_ESCHAR] = s->hi[SS_HEAL_EPITHELIUM] = s->hi[SS_HEAL_PLASMA] = 1.0f;
     for (int d = 0; d < 3; d++) s->velocity[d] = g->velocity[d];
     s->react = heal_react;
