@@ -237,11 +237,77 @@ static void test_diffusion_mass(void **state) {
     }
 }
 
-/* An insulating layer (the scab's crust): a field q marks the layer (q = 1)
- * and a field u diffuses with the multiplier m = 1 - q. As face
- * conductances (mface) the layer is a no-flux wall: u keeps its mass and
- * the layer takes none; as the seed's cell multiplier (m_i D lap u) the
- * layer's frozen zeros drain u. Both schemes. */
+/* Layer problems (the scab's crust): field 0 is q, the layer marker (q =
+ * qlayer in the top nlayer levels under the top wall, 0 below), field 1 a
+ * field u that diffuses (D 0.4) with the multiplier slot 0 written by react
+ * from q; u is set below the layer by ubelow(z). Returns the mass below. */
+static double layer_setup(ss_heal_rd_system *s, int nx, int ny, int nz, int nlayer, float qlayer,
+                          double (*ubelow)(int z), ss_heal_reaction_fn react) {
+    const size_t n = (size_t)nx * ny * nz;
+    memset(s, 0, sizeof *s);
+    s->nx = nx;
+    s->ny = ny;
+    s->nz = nz;
+    s->h_mm = 0.25;
+    s->nfields = 2;
+    float *q = calloc(n, sizeof(float)), *u = calloc(n, sizeof(float));
+    assert_true(q && u);
+    double below0 = 0.0;
+    for (int z = 1; z < nz - 1; z++)
+        for (int y = 1; y < ny - 1; y++)
+            for (int x = 1; x < nx - 1; x++) {
+                const size_t c = ((size_t)z * ny + y) * nx + x;
+                if (z >= nz - 1 - nlayer) {
+                    q[c] = qlayer;
+                } else {
+                    u[c] = (float)ubelow(z);
+                    below0 += u[c];
+                }
+            }
+    s->u[0] = q;
+    s->u[1] = u;
+    s->D[1] = 0.4;
+    s->mslot[0] = -1;
+    s->mslot[1] = 0;
+    s->nslots = 1;
+    s->lo[0] = s->lo[1] = 0.0f;
+    s->hi[0] = s->hi[1] = INFINITY;
+    s->mmax = 1.0;
+    s->react = react;
+    return below0;
+}
+
+/* Steps a layer problem for `days` with either scheme; the mass of u below
+ * the layer and in it, after; frees the fields. */
+static void layer_run(ss_heal_rd_system *s, int split, double days, int nlayer, double *below,
+                      double *layer) {
+    ss_error err;
+    ss_heal_rd_work *w = ss_heal_rd_work_create(s, &err);
+    assert_non_null(w);
+    const double dt = split ? 0.05 : 0.9 * ss_heal_rd_explicit_dt(s);
+    const int steps = (int)lround(days / dt);
+    for (int k = 0; k < steps; k++) {
+        if (split)
+            ss_heal_rd_step_split(s, w, dt, 1);
+        else
+            ss_heal_rd_step_explicit(s, w, dt);
+    }
+    *below = *layer = 0.0;
+    for (int z = 1; z < s->nz - 1; z++)
+        for (int y = 1; y < s->ny - 1; y++)
+            for (int x = 1; x < s->nx - 1; x++) {
+                const size_t c = ((size_t)z * s->ny + y) * s->nx + x;
+                *(z >= s->nz - 1 - nlayer ? layer : below) += s->u[1][c];
+            }
+    ss_heal_rd_work_free(w);
+    free(s->u[0]);
+    free(s->u[1]);
+}
+
+/* An insulating layer: q = 1 in it and m = 1 - q. As face conductances
+ * (mface) the layer is a no-flux wall: u keeps its mass and the layer takes
+ * none; as the seed's cell multiplier (m_i D lap u) the layer's frozen zeros
+ * drain u. Both schemes. */
 static void ins_react(void *vctx, const ss_heal_rd_row *row) {
     (void)vctx;
     for (int i = 0; i < row->n; i++) {
@@ -251,65 +317,17 @@ static void ins_react(void *vctx, const ss_heal_rd_row *row) {
     }
 }
 
+static double bump(int z) { return 0.2 + exp(-((z - 7.0) * (z - 7.0)) / 4.0); }
+
 static void test_insulating_layer(void **state) {
     (void)state;
-    const int nx = 12, ny = 10, nz = 14;
-    const size_t n = (size_t)nx * ny * nz;
     for (int split = 0; split < 2; split++)
         for (int face = 0; face < 2; face++) {
             ss_heal_rd_system s;
-            memset(&s, 0, sizeof s);
-            s.nx = nx;
-            s.ny = ny;
-            s.nz = nz;
-            s.h_mm = 0.25;
-            s.nfields = 2;
-            float *q = calloc(n, sizeof(float)), *u = calloc(n, sizeof(float));
-            assert_true(q && u);
-            double below0 = 0.0;
-            for (int z = 1; z < nz - 1; z++)
-                for (int y = 1; y < ny - 1; y++)
-                    for (int x = 1; x < nx - 1; x++) {
-                        const size_t c = ((size_t)z * ny + y) * nx + x;
-                        if (z >= nz - 5) {
-                            q[c] = 1.0f; /* the layer: four cells under the top wall */
-                        } else {
-                            u[c] = (float)(0.2 + exp(-((z - 7.0) * (z - 7.0)) / 4.0));
-                            below0 += u[c];
-                        }
-                    }
-            s.u[0] = q;
-            s.u[1] = u;
-            s.D[1] = 0.4;
-            s.mslot[0] = -1;
-            s.mslot[1] = 0;
-            s.nslots = 1;
+            const double below0 = layer_setup(&s, 12, 10, 14, 4, 1.0f, bump, ins_react);
             s.mface[0] = face ? 1 : 0; /* field 0 + 1 */
-            s.lo[0] = s.lo[1] = 0.0f;
-            s.hi[0] = s.hi[1] = INFINITY;
-            s.mmax = 1.0;
-            s.react = ins_react;
-            ss_error err;
-            ss_heal_rd_work *w = ss_heal_rd_work_create(&s, &err);
-            assert_non_null(w);
-            const double dt = split ? 0.05 : 0.9 * ss_heal_rd_explicit_dt(&s);
-            const int steps = (int)lround(4.0 / dt);
-            for (int k = 0; k < steps; k++) {
-                if (split)
-                    ss_heal_rd_step_split(&s, w, dt, 1);
-                else
-                    ss_heal_rd_step_explicit(&s, w, dt);
-            }
-            double below = 0.0, layer = 0.0;
-            for (int z = 1; z < nz - 1; z++)
-                for (int y = 1; y < ny - 1; y++)
-                    for (int x = 1; x < nx - 1; x++) {
-                        const size_t c = ((size_t)z * ny + y) * nx + x;
-                        if (z >= nz - 5)
-                            layer += s.u[1][c];
-                        else
-                            below += s.u[1][c];
-                    }
+            double below, layer;
+            layer_run(&s, split, 4.0, 4, &below, &layer);
             const double rel = (below - below0) / below0;
             print_message("%s, %s multiplier: mass under the layer %+.2e (rel), in it %.3g\n",
                           split ? "split" : "explicit", face ? "face" : "cell", rel, layer);
@@ -318,9 +336,6 @@ static void test_insulating_layer(void **state) {
                 assert_true(fabs(rel) < 2e-5); /* insulated: conserved */
             else
                 assert_true(rel < -0.01); /* the seed's cell form drains it */
-            ss_heal_rd_work_free(w);
-            free(s.u[0]);
-            free(s.u[1]);
         }
 }
 
@@ -343,67 +358,22 @@ static void crust_react(void *vctx, const ss_heal_rd_row *row) {
     }
 }
 
+static double one(int z) {
+    (void)z;
+    return 1.0;
+}
+
 static void test_crust_layer(void **state) {
     (void)state;
-    const int nx = 10, ny = 8, nz = 12;
-    const size_t n = (size_t)nx * ny * nz;
     const float cases[3][2] = {{0.8f, 0.5f}, {0.8f, 0.0f}, {0.3f, 0.5f}}; /* q, closed */
     for (int split = 0; split < 2; split++)
         for (int k = 0; k < 3; k++) {
             ss_heal_rd_system s;
-            memset(&s, 0, sizeof s);
-            s.nx = nx;
-            s.ny = ny;
-            s.nz = nz;
-            s.h_mm = 0.25;
-            s.nfields = 2;
-            float *q = calloc(n, sizeof(float)), *u = calloc(n, sizeof(float));
-            assert_true(q && u);
-            double below0 = 0.0;
-            for (int z = 1; z < nz - 1; z++)
-                for (int y = 1; y < ny - 1; y++)
-                    for (int x = 1; x < nx - 1; x++) {
-                        const size_t c = ((size_t)z * ny + y) * nx + x;
-                        if (z >= nz - 4) {
-                            q[c] = cases[k][0];
-                        } else {
-                            u[c] = 1.0f;
-                            below0 += u[c];
-                        }
-                    }
-            s.u[0] = q;
-            s.u[1] = u;
-            s.D[1] = 0.4;
-            s.mslot[0] = -1;
-            s.mslot[1] = 0;
-            s.nslots = 1;
+            const double below0 = layer_setup(&s, 10, 8, 12, 3, cases[k][0], one, crust_react);
             s.mface[0] = 1;
             s.mface_closed = crust_closed = cases[k][1];
-            s.lo[0] = s.lo[1] = 0.0f;
-            s.hi[0] = s.hi[1] = INFINITY;
-            s.mmax = 1.0;
-            s.react = crust_react;
-            ss_error err;
-            ss_heal_rd_work *w = ss_heal_rd_work_create(&s, &err);
-            assert_non_null(w);
-            const double dt = split ? 0.05 : 0.9 * ss_heal_rd_explicit_dt(&s);
-            const int steps = (int)lround(1.0 / dt);
-            for (int i = 0; i < steps; i++) {
-                if (split)
-                    ss_heal_rd_step_split(&s, w, dt, 1);
-                else
-                    ss_heal_rd_step_explicit(&s, w, dt);
-            }
-            double below = 0.0, layer = 0.0;
-            for (int z = 1; z < nz - 1; z++)
-                for (int y = 1; y < ny - 1; y++)
-                    for (int x = 1; x < nx - 1; x++) {
-                        const size_t c = ((size_t)z * ny + y) * nx + x;
-                        if (z >= nz - 4)
-                            layer += s.u[1][c];
-                        else
-                            below += s.u[1][c];
-                    }
+            double below, layer;
+            layer_run(&s, split, 1.0, 3, &below, &layer);
             print_message("%s, crust q %.1f, closed above %.1f: in the layer %.4g, below %+.2e\n",
                           split ? "split" : "explicit", cases[k][0], cases[k][1], layer,
                           (below - below0) / below0);
@@ -411,12 +381,9 @@ static void test_crust_layer(void **state) {
                 assert_true(layer == 0.0); /* closed: nothing soaks in */
                 assert_true(fabs(below - below0) / below0 < 2e-5);
             } else {
-                assert_true(layer > 0.01 * below0 / (nz - 6)); /* it soaks u up */
+                assert_true(layer > 0.002 * below0);                       /* it soaks u up */
                 assert_true(fabs(below + layer - below0) / below0 < 2e-5); /* conserved */
             }
-            ss_heal_rd_work_free(w);
-            free(s.u[0]);
-            free(s.u[1]);
         }
 }
 
@@ -488,8 +455,10 @@ static void test_convection_blob(void **state) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_fisher_travelling_wave), cmocka_unit_test(test_fisher_bramson),
-        cmocka_unit_test(test_diffusion_mass),         cmocka_unit_test(test_insulating_layer),
+        cmocka_unit_test(test_fisher_travelling_wave),
+        cmocka_unit_test(test_fisher_bramson),
+        cmocka_unit_test(test_diffusion_mass),
+        cmocka_unit_test(test_insulating_layer),
         cmocka_unit_test(test_crust_layer),
         cmocka_unit_test(test_convection_blob),
     };
