@@ -21,15 +21,12 @@
 #define M_PI 3.14159265358979323846
 #endif
 
-
 static void write_text(const char *path, const char *text) {
     FILE *f = fopen(path, "wb");
     assert_non_null(f);
     fputs(text, f);
     fclose(f);
 }
-
-
 
 /* ---- VTI ------------------------------------------------------------------------ */
 
@@ -789,7 +786,8 @@ static void test_surface_and_area(void **state) {
 static void test_cli_mask_and_depth_image(void **state) {
     (void)state;
     char *dir = tu_tmpdir("cli");
-    char *mask = tu_join(dir, "mask.png"), *depth = tu_join(dir, "depth.png"), *out = tu_join(dir, "out");
+    char *mask = tu_join(dir, "mask.png"), *depth = tu_join(dir, "depth.png"),
+         *out = tu_join(dir, "out");
     ss_error err;
     ss_image *m = ss_image_create(40, 32, 1, &err), *d = ss_image_create(40, 32, 1, &err);
     for (int y = 0; y < 32; y++)

@@ -20,9 +20,6 @@
 #include "skinsim/heal.h"
 #include "skinsim/heal_io.h"
 
-
-
-
 static const int SPLITS[][3] = {{1, 1, 1}, {2, 1, 1}, {2, 2, 1}, {1, 1, 3}, {3, 2, 2}};
 #define NSPLITS ((int)(sizeof SPLITS / sizeof SPLITS[0]))
 static const char *PJ = "{\"scenario\": \"scab\"}";

@@ -694,11 +694,6 @@ static int folds_under_load(double h, double jmin, double *contr) {
     return folds;
 }
 
-/* A finer mesh under the same load keeps every tet unfolded, and contracts
- * the wound as the coarse one does (within 3 points of outline area): the
- * mechanics converge with the tet size instead of folding at the wound's
- * corners. Without the volume barrier (j_min = 0) the fine mesh folds
- * (several hundred tets in the first frame), the coarse one does not. */
 /* The barrier's near pass (only the tets near jmin and those of nodes that
  * moved off their safe distance) against the full pass at every force
  * evaluation: the same positions, bit for bit, after a relaxation in which
@@ -740,6 +735,11 @@ static void test_barrier_near_pass(void **state) {
     ss_tetmesh_free(m);
 }
 
+/* A finer mesh under the same load keeps every tet unfolded, and contracts
+ * the wound as the coarse one does (within 3 points of outline area): the
+ * mechanics converge with the tet size instead of folding at the wound's
+ * corners. Without the volume barrier (j_min = 0) the fine mesh folds
+ * (several hundred tets in the first frame), the coarse one does not. */
 static void test_fine_mesh_no_folds(void **state) {
     (void)state;
     omp_set_num_threads(1);

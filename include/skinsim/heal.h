@@ -358,9 +358,8 @@ void ss_heal_stats_acc_merge(ss_heal_stats_acc *a, const ss_heal_stats_acc *b);
  * column of the range, row-major, zeroed for the top box) and are added by
  * the bottom box (bottom = 1). Over the stack: ss_heal_stats_acc_add's sums. */
 typedef struct ss_heal_col_state {
-    float smax, deficit; /* eschar maximum; 1 - e of the surface cell */
-    uint8_t phase, initial, region,
-        open; /* phase 0 above the surface, 1 in the tissue run, 2 past it */
+    float smax, esurf;              /* eschar maximum; e of the surface cell */
+    uint8_t phase, initial, region; /* phase 0 above the surface, 1 in the tissue run, 2 past it */
 } ss_heal_col_state;
 void ss_heal_stats_acc_add_stack(ss_heal_stats_acc *a, const ss_heal_grid *g, int x0, int x1,
                                  int y0, int y1, int zoff, int gz, ss_heal_col_state *cols,

@@ -179,7 +179,7 @@ typedef struct ss_springs {
     int nnear, bar_valid;
     int bar_full_always; /* every evaluation makes the full pass (tests: the reference) */
     long bar_passes[2];  /* full and near passes made (statistics) */
-    double kvol, jmin;      /* kPa, barrier modulus; J below which it acts */
+    double kvol, jmin;   /* kPa, barrier modulus; J below which it acts */
 } ss_springs;
 
 /* Springs on the unique tet edges; stiffness k = modulus * vol / l0^2 (vol =

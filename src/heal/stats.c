@@ -86,9 +86,24 @@ static void add_cells(ss_heal_stats_acc *a, const ss_heal_grid *g, int x, int y,
     }
 }
 
+/* A column's figures from its surface cell: wound column (initial: a WOUND
+ * voxel at the surface at t = 0) with the eschar maximum below it, in omega
+ * (region), and for either the open test and the uncovered fraction of e. */
+static void add_column(ss_heal_stats_acc *a, int initial, int region, float smax, float e) {
+    if (initial) {
+        a->n_initial++;
+        limbs_add(a, SS_HEAL_ACC_ESCHAR, smax);
+        a->n_wcol++;
+    }
+    if (region) a->n_region++;
+    if (initial || region) {
+        a->n_open += e < (float)ss_heal_open_threshold();
+        limbs_add(a, SS_HEAL_ACC_DEFICIT, uncovered(e));
+    }
+}
+
 void ss_heal_stats_acc_add(ss_heal_stats_acc *a, const ss_heal_grid *g, int x0, int x1, int y0,
                            int y1) {
-    const double thr = ss_heal_open_threshold();
     const float *e = g->field[SS_HEAL_EPITHELIUM], *p = g->field[SS_HEAL_PLASMA];
     const float *s = g->field[SS_HEAL_ESCHAR];
     if (x0 < 0) x0 = 0;
@@ -100,7 +115,8 @@ void ss_heal_stats_acc_add(ss_heal_stats_acc *a, const ss_heal_grid *g, int x0, 
             /* columns: the epithelium is a sheet on the tissue surface, so a
              * column of the wound (a WOUND voxel at the surface at t = 0, or in
              * omega now) is open while the epithelial coverage of its surface
-             * cell is below thr. The outermost shell is BOUND: no surface. */
+             * cell is below the threshold (add_column). The outermost shell is
+             * BOUND: no surface. */
             int ztop = -1;
             for (int z = g->nz - 2; z >= 1; z--)
                 if (is_tissue(g->cell[ss_heal_idx(g, x, y, z)])) {
@@ -109,24 +125,14 @@ void ss_heal_stats_acc_add(ss_heal_stats_acc *a, const ss_heal_grid *g, int x0, 
                 }
             if (ztop >= 0) {
                 size_t c0 = ss_heal_idx(g, x, y, ztop);
-                int initial = g->cell[c0] == SS_CELL_WOUND;
-                int region = p[c0] > (float)SS_HEAL_P_MIN;
-                if (initial) {
-                    a->n_initial++;
-                    float smax = 0;
-                    for (int z = ztop; z >= 1; z--) {
-                        size_t c = ss_heal_idx(g, x, y, z);
-                        if (!is_tissue(g->cell[c])) break;
-                        if (s[c] > smax) smax = s[c];
-                    }
-                    limbs_add(a, SS_HEAL_ACC_ESCHAR, smax);
-                    a->n_wcol++;
+                const int initial = g->cell[c0] == SS_CELL_WOUND;
+                float smax = 0;
+                for (int z = ztop; initial && z >= 1; z--) {
+                    size_t c = ss_heal_idx(g, x, y, z);
+                    if (!is_tissue(g->cell[c])) break;
+                    if (s[c] > smax) smax = s[c];
                 }
-                if (region) a->n_region++;
-                if (initial || region) {
-                    a->n_open += e[c0] < thr;
-                    limbs_add(a, SS_HEAL_ACC_DEFICIT, uncovered(e[c0]));
-                }
+                add_column(a, initial, p[c0] > (float)SS_HEAL_P_MIN, smax, e[c0]);
             }
             add_cells(a, g, x, y, 0, g->nz);
         }
@@ -137,7 +143,6 @@ void ss_heal_stats_acc_add(ss_heal_stats_acc *a, const ss_heal_grid *g, int x0, 
 void ss_heal_stats_acc_add_stack(ss_heal_stats_acc *a, const ss_heal_grid *g, int x0, int x1,
                                  int y0, int y1, int zoff, int gz, ss_heal_col_state *cols,
                                  int bottom) {
-    const double thr = ss_heal_open_threshold();
     const float *e = g->field[SS_HEAL_EPITHELIUM], *p = g->field[SS_HEAL_PLASMA];
     const float *s = g->field[SS_HEAL_ESCHAR];
     for (int y = y0; y < y1; y++) {
@@ -153,26 +158,14 @@ void ss_heal_stats_acc_add_stack(ss_heal_stats_acc *a, const ss_heal_grid *g, in
                     cs->phase = 1;
                     cs->initial = g->cell[c] == SS_CELL_WOUND;
                     cs->region = p[c] > (float)SS_HEAL_P_MIN;
-                    cs->open = e[c] < thr;
-                    cs->deficit = uncovered(e[c]);
+                    cs->esurf = e[c];
                 } else if (!is_tissue(g->cell[c])) {
                     cs->phase = 2;
                     break;
                 }
                 if (s[c] > cs->smax) cs->smax = s[c];
             }
-            if (bottom && cs->phase) {
-                if (cs->initial) {
-                    a->n_initial++;
-                    limbs_add(a, SS_HEAL_ACC_ESCHAR, cs->smax);
-                    a->n_wcol++;
-                }
-                if (cs->region) a->n_region++;
-                if (cs->initial || cs->region) {
-                    a->n_open += cs->open;
-                    limbs_add(a, SS_HEAL_ACC_DEFICIT, cs->deficit);
-                }
-            }
+            if (bottom && cs->phase) add_column(a, cs->initial, cs->region, cs->smax, cs->esurf);
             add_cells(a, g, x, y, 1, g->nz - 1);
         }
     }
