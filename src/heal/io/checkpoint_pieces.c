@@ -21,7 +21,7 @@
  * the SS_HEAL_CKPT_MAX_PIECES limit). */
 #define _POSIX_C_SOURCE 200809L
 #include "checkpoint_internal.h"
-#include "heal_internal.h"
+#include "../solver/heal_internal.h"
 
 #include <errno.h>
 #include <math.h>

@@ -20,7 +20,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
-#include "heal_internal.h"
+#include "../solver/heal_internal.h"
 #include "skinsim/heal_io.h"
 
 /* The value of attribute name="..." inside the tag tag..end, unescaped, in
