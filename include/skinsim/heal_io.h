@@ -1,6 +1,6 @@
 /* skinsim heal_io: getting wounds into the healing grid and results out of it.
- * Inputs: footprint masks (PNG/EXR), painted stroke CSV files, closed OBJ meshes
- * voxelised by ray parity as in seed 001 §5.1. Outputs: VTK XML ImageData (.vti)
+ * Inputs: footprint masks (PNG/EXR), closed meshes (read by geom: strokes and
+ * OBJ) voxelised by ray parity as in seed 001 §5.1. Outputs: VTK XML ImageData (.vti)
  * snapshots with a ParaView .pvd time collection, top-view surface maps, the
  * normalised wound-area curve of seed 001 Fig. 4 (CSV + cairo plot), and
  * versioned, CRC-checked, atomically written checkpoints for exact resume.
@@ -11,6 +11,7 @@
 #include "skinsim/core.h"
 #include "skinsim/geom.h"
 #include "skinsim/heal.h"
+#include "skinsim/mesh.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -31,23 +32,9 @@ ss_image *ss_heal_footprint_read(const char *path, ss_error *err);
  * an input error. */
 ss_image *ss_heal_depth_image_read(const char *path, double max_depth_mm, ss_error *err);
 
-/* ---- meshes (OBJ) -----------------------------------------------------------
- * A small OBJ reader: `v x y z [w]`, `f` with `i`, `i/t`, `i//n`, `i/t/n` forms,
- * negative (relative) indices, polygons triangulated as fans; other statements
- * (vt, vn, o, g, s, usemtl, mtllib, l) are ignored. Errors name file and line. */
-typedef struct ss_tri_mesh {
-    int nverts, ntris;
-    double *v; /* 3*nverts, x y z */
-    int *tri;  /* 3*ntris vertex indices (0-based) */
-    int *line; /* ntris: OBJ line of the face each triangle came from */
-} ss_tri_mesh;
-ss_status ss_obj_read(const char *path, ss_tri_mesh *out, ss_error *err);
-ss_status ss_obj_parse(const char *text, const char *name, ss_tri_mesh *out, ss_error *err);
-void ss_tri_mesh_free(ss_tri_mesh *m);
-/* Closed = every undirected edge is used by an even, non-zero number of
- * triangles and no triangle is degenerate (repeated vertex). Otherwise
- * SS_ERR_INPUT naming `name` and the OBJ line of an offending face. */
-ss_status ss_tri_mesh_check_closed(const ss_tri_mesh *m, const char *name, ss_error *err);
+/* ---- meshes ------------------------------------------------------------------
+ * Wound meshes are read by geom's OBJ reader (ss_obj_read, ss_tri_mesh in
+ * skinsim/mesh.h). */
 
 /* Voxelises a closed mesh (coordinates in mm in the grid frame: x, y along the
  * grid, z up, origin at the grid corner) into an nx*ny*nz 0/1 array indexed

@@ -50,6 +50,26 @@ ss_status ss_mesh_from_arrays(const float *positions, const float *normals, cons
                               const char *name, ss_mesh *out, ss_error *err);
 void ss_mesh_free(ss_mesh *m); /* frees the arrays and zeroes the struct */
 
+/* ---- wound meshes: the strict OBJ dialect (src/geom/mesh_obj.c) ---------------
+ * Closed meshes in double precision (the healing grid's --wound-mesh):
+ * `v x y z [w]`, `f` with `i`, `i/t`, `i//n`, `i/t/n` forms, negative
+ * (relative) indices, polygons triangulated as fans; other statements (vt, vn,
+ * o, g, s, usemtl, mtllib, l) are ignored, unknown ones refused. Errors name
+ * file and line. */
+typedef struct ss_tri_mesh {
+    int nverts, ntris;
+    double *v; /* 3*nverts, x y z */
+    int *tri;  /* 3*ntris vertex indices (0-based) */
+    int *line; /* ntris: OBJ line of the face each triangle came from */
+} ss_tri_mesh;
+ss_status ss_obj_read(const char *path, ss_tri_mesh *out, ss_error *err);
+ss_status ss_obj_parse(const char *text, const char *name, ss_tri_mesh *out, ss_error *err);
+void ss_tri_mesh_free(ss_tri_mesh *m);
+/* Closed = every undirected edge is used by an even, non-zero number of
+ * triangles and no triangle is degenerate (repeated vertex). Otherwise
+ * SS_ERR_INPUT naming `name` and the OBJ line of an offending face. */
+ss_status ss_tri_mesh_check_closed(const ss_tri_mesh *m, const char *name, ss_error *err);
+
 /* UV islands: triangles joined through corners with identical UV coordinates
  * form one island. island[t] (ntriangles entries, caller-allocated) gets
  * 0..n-1, numbered in order of each island's first triangle. Returns n, or

@@ -11,15 +11,43 @@
  *
  * Errors name the file and line: a number that does not parse or is not
  * finite, an index of 0 or out of range, a face with fewer than 3 corners,
- * a line longer than 64 KiB, no faces at all. */
+ * a line longer than 64 KiB, no faces at all.
+ *
+ * The one OBJ reader of skinsim: it also reads the healing grid's wound
+ * meshes (ss_obj_parse into an ss_tri_mesh, a stricter dialect, described
+ * above its code) and checks them closed. Both dialects share the line
+ * scanner; they keep their own rules because a render mesh must load
+ * whatever an exporter wrote while a wound mesh is refused at a typo. */
 #include "skinsim/mesh.h"
 
+#include <ctype.h>
 #include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 ss_status ss_mesh_load_obj(const char *path, ss_mesh *out, ss_error *err);
+
+/* The line scanner both dialects read with: the next line, its number and
+ * whether it overflowed the buffer; the line trimmed and cut at '#'. */
+typedef struct obj_lines {
+    const char *p; /* the rest of the text */
+    char *buf;
+    size_t cap;
+    long lineno;
+    int too_long;
+} obj_lines;
+
+static char *obj_next_line(obj_lines *L) {
+    L->p = ss_text_next_line(L->p, L->buf, L->cap, &L->too_long);
+    if (!L->p) return NULL;
+    L->lineno++;
+    if (L->too_long) return L->buf;
+    char *s = ss_text_trim(L->buf);
+    char *hash = strchr(s, '#');
+    if (hash) *hash = '\0';
+    return s;
+}
 
 typedef struct fvec {
     float *v;
@@ -230,20 +258,15 @@ ss_status ss_mesh_load_obj(const char *path, ss_mesh *out, ss_error *err) {
     enum { LINE_MAX_BYTES = 65536 };
     char *line = malloc(LINE_MAX_BYTES);
     ss_status st = line ? SS_OK : ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", path);
-    long lineno = 0;
-    const char *p = text;
+    obj_lines L = {text, line, LINE_MAX_BYTES, 0, 0};
     while (st == SS_OK) {
-        int too_long = 0;
-        p = ss_text_next_line(p, line, LINE_MAX_BYTES, &too_long);
-        if (!p) break;
-        lineno++;
-        if (too_long) {
+        char *l = obj_next_line(&L);
+        if (!l) break;
+        const long lineno = L.lineno;
+        if (L.too_long) {
             st = ss_error_set(err, SS_ERR_INPUT, "%s:%ld: line too long", path, lineno);
             break;
         }
-        char *l = ss_text_trim(line);
-        char *hash = strchr(l, '#');
-        if (hash) *hash = '\0';
         float v[3];
         int n;
         if (!strncmp(l, "v ", 2) || !strncmp(l, "v\t", 2)) {
@@ -284,5 +307,222 @@ ss_status ss_mesh_load_obj(const char *path, ss_mesh *out, ss_error *err) {
             ss_mesh_from_arrays(s.vpos.v, s.all_nrm ? s.vnrm.v : NULL, s.all_tex ? s.vtex.v : NULL,
                                 (int)(s.vpos.n / 3), s.tris.v, (int)(s.tris.n / 3), path, out, err);
     obj_state_free(&s);
+    return st;
+}
+
+/* ---- the wound-mesh dialect (ss_tri_mesh) -------------------------------------------
+ * Positions in double precision (a wound mesh is voxelised at 0.5 mm in a
+ * block of a few cm: float would do, but the voxel parity test of
+ * ss_heal_voxelise_mesh was validated on doubles), each triangle remembers its
+ * OBJ line for the closedness errors, faces may name vertices defined after
+ * them (checked at the end), and any statement outside v/f and the ignored
+ * list is an error: a wound mesh is a hand-written or exported closed
+ * surface, and a typo in it should not pass silently. */
+
+void ss_tri_mesh_free(ss_tri_mesh *m) {
+    if (!m) return;
+    free(m->v);
+    free(m->tri);
+    free(m->line);
+    memset(m, 0, sizeof *m);
+}
+
+ss_status ss_obj_parse(const char *text, const char *name, ss_tri_mesh *out, ss_error *err) {
+    memset(out, 0, sizeof *out);
+    int vcap = 1024, tcap = 1024, nv = 0, nt = 0, lineno = 0;
+    double *V = malloc((size_t)vcap * 3 * sizeof *V);
+    int *T = malloc((size_t)tcap * 3 * sizeof *T), *TL = malloc((size_t)tcap * sizeof *TL);
+    int fcap = 64, *face = malloc((size_t)fcap * sizeof *face);
+    char line[8192];
+    obj_lines L = {text, line, sizeof line, 0, 0};
+    ss_status st = SS_OK;
+#define FAIL(code, ...)                                                                            \
+    do {                                                                                           \
+        st = ss_error_set(err, code, __VA_ARGS__);                                                 \
+        goto fail;                                                                                 \
+    } while (0)
+    if (!V || !T || !TL || !face) FAIL(SS_ERR_NOMEM, "%s: out of memory", name);
+    if (!strncmp(L.p, "\xEF\xBB\xBF", 3)) L.p += 3; /* UTF-8 byte order mark */
+    for (char *s; (s = obj_next_line(&L));) {
+        lineno = (int)L.lineno;
+        if (L.too_long) FAIL(SS_ERR_INPUT, "%s:%d: line too long", name, lineno);
+        if (!*s) continue;
+        char *save = NULL, *kw = strtok_r(s, " \t", &save);
+        if (!strcmp(kw, "v")) {
+            double c[3];
+            for (int k = 0; k < 3; k++) {
+                char *tok = strtok_r(NULL, " \t", &save);
+                if (!tok) FAIL(SS_ERR_INPUT, "%s:%d: vertex needs 3 coordinates", name, lineno);
+                int r = ss_text_parse_number(tok, &c[k]);
+                if (r)
+                    FAIL(SS_ERR_INPUT, "%s:%d: vertex coordinate '%s' is %s", name, lineno, tok,
+                         r == 2 ? "not finite" : "not a number");
+            }
+            if (nv == vcap) {
+                vcap *= 2;
+                double *q = realloc(V, (size_t)vcap * 3 * sizeof *V);
+                if (!q) FAIL(SS_ERR_NOMEM, "%s: out of memory", name);
+                V = q;
+            }
+            memcpy(V + 3 * (size_t)nv, c, sizeof c);
+            nv++;
+        } else if (!strcmp(kw, "f")) {
+            int nfv = 0;
+            for (char *tok; (tok = strtok_r(NULL, " \t", &save));) {
+                char *end;
+                errno = 0;
+                long idx = strtol(tok, &end, 10);
+                if (end == tok || (*end && *end != '/') || errno == ERANGE)
+                    FAIL(SS_ERR_INPUT, "%s:%d: bad face vertex '%s'", name, lineno, tok);
+                if (*end == '/') { /* i/t, i//n, i/t/n: check the rest is numeric */
+                    for (char *q = end; *q; q++)
+                        if (!(*q == '/' || *q == '-' || isdigit((unsigned char)*q)))
+                            FAIL(SS_ERR_INPUT, "%s:%d: bad face vertex '%s'", name, lineno, tok);
+                }
+                if (idx < 0) idx = nv + idx + 1; /* relative: -1 is the last vertex */
+                if (idx < 1 || idx > INT32_MAX)
+                    FAIL(SS_ERR_INPUT,
+                         "%s:%d: face vertex '%s' does not refer to a vertex defined "
+                         "before it",
+                         name, lineno, tok);
+                if (nfv == fcap) {
+                    fcap *= 2;
+                    int *q = realloc(face, (size_t)fcap * sizeof *face);
+                    if (!q) FAIL(SS_ERR_NOMEM, "%s: out of memory", name);
+                    face = q;
+                }
+                face[nfv++] = (int)(idx - 1);
+            }
+            if (nfv < 3)
+                FAIL(SS_ERR_INPUT, "%s:%d: face has %d vertices, needs at least 3", name, lineno,
+                     nfv);
+            for (int k = 1; k + 1 < nfv; k++) {
+                if (nt == tcap) {
+                    tcap *= 2;
+                    int *q = realloc(T, (size_t)tcap * 3 * sizeof *T);
+                    if (!q) FAIL(SS_ERR_NOMEM, "%s: out of memory", name);
+                    T = q;
+                    q = realloc(TL, (size_t)tcap * sizeof *TL);
+                    if (!q) FAIL(SS_ERR_NOMEM, "%s: out of memory", name);
+                    TL = q;
+                }
+                T[3 * nt] = face[0];
+                T[3 * nt + 1] = face[k];
+                T[3 * nt + 2] = face[k + 1];
+                TL[nt] = lineno;
+                nt++;
+            }
+        } else if (!strcmp(kw, "vt") || !strcmp(kw, "vn") || !strcmp(kw, "vp") ||
+                   !strcmp(kw, "o") || !strcmp(kw, "g") || !strcmp(kw, "s") ||
+                   !strcmp(kw, "usemtl") || !strcmp(kw, "mtllib") || !strcmp(kw, "l") ||
+                   !strcmp(kw, "p")) {
+            continue;
+        } else {
+            FAIL(SS_ERR_INPUT, "%s:%d: unknown OBJ statement '%s'", name, lineno, kw);
+        }
+    }
+    for (int i = 0; i < nt; i++)
+        for (int k = 0; k < 3; k++)
+            if (T[3 * i + k] >= nv)
+                FAIL(SS_ERR_INPUT, "%s:%d: face refers to vertex %d but the file has %d", name,
+                     TL[i], T[3 * i + k] + 1, nv);
+    if (nt == 0) FAIL(SS_ERR_INPUT, "%s: no faces", name);
+#undef FAIL
+    free(face);
+    out->nverts = nv;
+    out->ntris = nt;
+    out->v = V;
+    out->tri = T;
+    out->line = TL;
+    return SS_OK;
+fail:
+    free(V);
+    free(T);
+    free(TL);
+    free(face);
+    return st;
+}
+
+ss_status ss_obj_read(const char *path, ss_tri_mesh *out, ss_error *err) {
+    memset(out, 0, sizeof *out);
+    char *text = ss_read_file(path, NULL, err);
+    if (!text) return err ? err->code : SS_ERR_INPUT;
+    ss_status st = ss_obj_parse(text, path, out, err);
+    free(text);
+    return st;
+}
+
+/* ---- closedness --------------------------------------------------------------------- */
+
+static const double *cmp_base;
+/* (qsort has no context argument; the comparator reads the vertex array through a
+ * file-static pointer set just before the call, in one thread.) */
+static int cmp_vert(const void *a, const void *b) {
+    const double *p = cmp_base + 3 * (size_t) * (const int *)a;
+    const double *q = cmp_base + 3 * (size_t) * (const int *)b;
+    for (int k = 0; k < 3; k++)
+        if (p[k] != q[k]) return p[k] < q[k] ? -1 : 1;
+    return 0;
+}
+
+typedef struct edge {
+    int a, b, tri;
+} edge;
+static int cmp_edge(const void *x, const void *y) {
+    const edge *p = x, *q = y;
+    if (p->a != q->a) return p->a < q->a ? -1 : 1;
+    if (p->b != q->b) return p->b < q->b ? -1 : 1;
+    return 0;
+}
+
+ss_status ss_tri_mesh_check_closed(const ss_tri_mesh *m, const char *name, ss_error *err) {
+    int nv = m->nverts, nt = m->ntris;
+    int *order = malloc((size_t)nv * sizeof *order), *weld = malloc((size_t)nv * sizeof *weld);
+    edge *e = malloc((size_t)nt * 3 * sizeof *e);
+    ss_status st = SS_OK;
+    if (!order || !weld || !e) {
+        st = ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", name);
+        goto done;
+    }
+    /* Weld vertices with identical coordinates (exporters often split them). */
+    for (int i = 0; i < nv; i++) order[i] = i;
+    cmp_base = m->v;
+    qsort(order, (size_t)nv, sizeof *order, cmp_vert);
+    for (int i = 0; i < nv; i++)
+        weld[order[i]] =
+            (i > 0 && cmp_vert(&order[i - 1], &order[i]) == 0) ? weld[order[i - 1]] : order[i];
+    for (int t = 0; t < nt; t++) {
+        int a = weld[m->tri[3 * t]], b = weld[m->tri[3 * t + 1]], c = weld[m->tri[3 * t + 2]];
+        if (a == b || b == c || a == c) {
+            st = ss_error_set(err, SS_ERR_INPUT,
+                              "%s:%d: degenerate face (a vertex is repeated); the wound mesh "
+                              "must be a closed surface",
+                              name, m->line[t]);
+            goto done;
+        }
+        int v3[3] = {a, b, c};
+        for (int k = 0; k < 3; k++) {
+            int p = v3[k], q = v3[(k + 1) % 3];
+            e[3 * t + k] = (edge){p < q ? p : q, p < q ? q : p, t};
+        }
+    }
+    qsort(e, (size_t)nt * 3, sizeof *e, cmp_edge);
+    for (size_t i = 0; i < (size_t)nt * 3;) {
+        size_t j = i;
+        while (j < (size_t)nt * 3 && e[j].a == e[i].a && e[j].b == e[i].b) j++;
+        if ((j - i) % 2) {
+            st = ss_error_set(err, SS_ERR_INPUT,
+                              "%s:%d: the mesh is not closed: the edge between vertices %d and "
+                              "%d belongs to %zu face%s (needs an even number, normally 2)",
+                              name, m->line[e[i].tri], e[i].a + 1, e[i].b + 1, j - i,
+                              j - i == 1 ? "" : "s");
+            goto done;
+        }
+        i = j;
+    }
+done:
+    free(order);
+    free(weld);
+    free(e);
     return st;
 }
