@@ -87,6 +87,14 @@ rm -rf "$T/c"
 mkdir -p "$T/mine"; echo precious >"$T/mine/notes.txt"
 expect2 "not a finished" abrasion --size 32 --times 1 --out "$T/mine"
 check '[ "$(cat "$T/mine/notes.txt")" = precious ]' "a foreign folder was touched"
+# heal into it: not a heal run, so neither --resume nor --force is offered
+expect2 "not a 'skinsim heal' run folder" heal --days 0.1 --grid 10x10x6 --out "$T/mine"
+check '! grep -q -- "--force" "$W/err.txt"' "heal suggests --force for a folder it then refuses"
+# the finished output of another command: the message names whose it is
+"$CLI" abrasion --size 32 --times 1 --out "$T/abr" --quiet || bad "abrasion into a new folder"
+expect2 "is a finished 'skinsim abrasion' output folder, not a 'skinsim skin' one" \
+    skin --size 16 --out "$T/abr"
+rm -rf "$T/abr"
 # an input inside the output folder would be lost with the old folder
 printf '0.2,0.2\n0.5,0.2\n0.4,0.6\n' >"$T/a/strokes.csv"
 expect2 "overwrite the input" abrasion --stroke "$T/a/strokes.csv" --size 32 --times 1 --out "$T/a"

@@ -123,7 +123,9 @@ static void test_folder_replaced_whole(void **state) {
     /* a folder that is not this command's finished output is never replaced */
     ss_outputs *o = ss_outputs_create("other", &err);
     assert_int_equal(ss_outputs_add(o, "--out", d, SS_OUTPUT_DIR, 0, &err), SS_ERR_INPUT);
-    assert_non_null(strstr(err.msg, "not a finished"));
+    /* ... and the message names the command whose output it is */
+    assert_non_null(strstr(err.msg, "is a finished 'skinsim test' output folder, not a "
+                                    "'skinsim other' one"));
     ss_outputs_free(o);
     char *m = path_in(d, SS_OUTPUT_MARKER);
     unlink(m);

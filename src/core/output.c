@@ -215,6 +215,28 @@ static int marker_says(const char *dir, const char *name, const char *owner) {
     return strcmp(buf, want) == 0;
 }
 
+/* The command a finished folder's marker names ("abrasion"), into buf; 0 when
+ * the folder has no readable marker of the form "skinsim <command>\n". */
+static int marker_owner(const char *dir, char *buf, size_t n) {
+    char *m = join(dir, SS_OUTPUT_MARKER);
+    if (!m) return 0;
+    int fd = open(m, O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOFOLLOW);
+    free(m);
+    if (fd < 0) return 0;
+    char text[128] = {0};
+    struct stat st;
+    ssize_t r = fstat(fd, &st) == 0 && S_ISREG(st.st_mode) ? read(fd, text, sizeof text - 1) : -1;
+    close(fd);
+    size_t len = r > 0 ? strlen(text) : 0;
+    if (len < 10 || strncmp(text, "skinsim ", 8) || text[len - 1] != '\n') return 0;
+    text[len - 1] = '\0';
+    for (const char *c = text + 8; *c; c++)
+        if (!((*c >= 'a' && *c <= 'z') || *c == '-' || *c == '_')) return 0;
+    if (strlen(text + 8) >= n) return 0;
+    memcpy(buf, text + 8, strlen(text + 8) + 1);
+    return 1;
+}
+
 int ss_output_dir_is_complete(const char *dir, const char *owner) {
     return marker_says(dir, SS_OUTPUT_MARKER, owner);
 }
@@ -365,6 +387,12 @@ static ss_status check_target(const ss_outputs *o, out_entry *e, ss_error *err) 
                 return OUTMSG(e, "%s", "is the root folder; give a folder of its own");
             int ours = ss_output_dir_is_complete(e->real, o->owner) ||
                        ss_output_dir_is_unfinished(e->real, o->owner) || dir_is_empty(e->real);
+            char other[64];
+            if (!ours && marker_owner(e->real, other, sizeof other))
+                return OUTMSG(e,
+                              "is a finished 'skinsim %s' output folder, not a 'skinsim %s' one, "
+                              "so it is not replaced; choose another folder",
+                              other, o->owner);
             if (!ours)
                 return OUTMSG(e,
                               "exists and is not a finished 'skinsim %s' output folder (no %s "

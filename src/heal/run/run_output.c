@@ -248,8 +248,15 @@ ss_status ss_heal_run__outputs_open(ss_heal_run *r, ss_error *err) {
     if (!c->resume_dir && exists && !c->force) {
         char probe[4400];
         snprintf(probe, sizeof probe, "%s/checkpoints", dir);
-        int unfinished = ss_output_dir_is_unfinished(dir, "heal") ||
-                         (!ss_output_dir_is_complete(dir, "heal") && file_exists(probe));
+        int complete = ss_output_dir_is_complete(dir, "heal");
+        int unfinished =
+            ss_output_dir_is_unfinished(dir, "heal") || (!complete && file_exists(probe));
+        if (!complete && !unfinished) /* not a heal run: neither --resume nor --force takes it */
+            return ss_error_set(err, SS_ERR_INPUT,
+                                "--out %s: exists and is not a 'skinsim heal' run folder (no "
+                                "finished or unfinished run of this command is in it), so it is "
+                                "not replaced; choose another --out",
+                                dir);
         return ss_error_set(
             err, SS_ERR_INPUT,
             "%s holds %s; use --resume %s to continue it, --force to replace "
