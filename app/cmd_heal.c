@@ -1,6 +1,6 @@
 /* skinsim heal: the physically based wound-healing simulation of seed 001
  * (§4.1 biochemistry on the §5.1 grid) from the command line. It parses the
- * options into an ss_heal_run_config, and the run object (src/heal/run*.c,
+ * options into an ss_heal_run_config, and the run object (src/heal/run/run*.c,
  * skinsim/heal_run.h) does the rest: validates every input before anything is
  * written, builds the wound, steps, and writes the area curve of Fig. 4 (CSV +
  * plot), VTK snapshots with a ParaView time collection, top-view surface maps,
@@ -361,7 +361,7 @@ static int run_steps(const opts *o, ss_heal_run *r, ss_error *err, void *dist) {
 
 #ifdef SKINSIM_HAVE_MPI
 /* Several MPI ranks: rank 0 creates (validates) the run and drives it, the
- * others step their boxes (src/dist/heal.c); every rank exits with rank 0's code. */
+ * others step their boxes (src/mpi/heal.c); every rank exits with rank 0's code. */
 static int heal_mpi(const opts *o, ss_error *err) {
     ss_heal_run *r = NULL;
     ss_heal_run_config c = o->c;

@@ -478,7 +478,7 @@ int cmd_optics_table(int argc, char **argv) {
         ss_mm_table_free(t);
         return 0;
     }
-    /* Under MPI (several ranks) every rank builds with rank 0 (src/dist/table.c):
+    /* Under MPI (several ranks) every rank builds with rank 0 (src/mpi/table.c):
      * each calls table_build exactly once, rank 0 with its verdict on the output. */
     int dist = 0, rank0 = 1;
 #ifdef SKINSIM_HAVE_MPI

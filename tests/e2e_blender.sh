@@ -15,7 +15,7 @@ command -v blender >/dev/null || { echo "SKIP: blender is not installed"; exit 7
 blender -b --factory-startup --python-expr "import bpy" >/dev/null 2>&1 \
   || { echo "SKIP: blender cannot start here"; exit 77; }
 MESH="${SKINSIM_TEST_MESH:-}"
-for m in "$SRC/data/meshes/generic-hand-left.glb" "$SRC/../shared/data/meshes/generic-hand-left.glb"; do
+for m in "$SRC/data/meshes/generic-hand-left.glb"; do
   [ -z "$MESH" ] && [ -f "$m" ] && MESH="$m"
 done
 [ -n "$MESH" ] && [ -f "$MESH" ] || { echo "SKIP: hand mesh not found (set SKINSIM_TEST_MESH)"; exit 77; }

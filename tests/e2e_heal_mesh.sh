@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # End-to-end test of `skinsim heal --mesh` (seed 001 §5.1, §5.4): the hand of
-# ../shared/data/meshes (or data/meshes) with a wound painted as UV strokes on
+# data/meshes with a wound painted as UV strokes on
 # the back of the hand runs with the mechanics on a coarse patch, writes the
 # fields mapped onto the mesh (surface/skin_*.vtu + skin.pvd) and the
 # skin_mesh block of summary.json; a checkpointed run resumed on another thread
@@ -16,12 +16,8 @@ SRC=$2
 T=$(mktemp -d /tmp/skinsim-e2e-mesh-XXXXXX)
 trap 'rm -rf "$T"' EXIT
 fail() { echo "FAIL: $*" >&2; exit 1; }
-HAND=""
-for h in "$SRC/data/meshes/generic-hand-left.glb" "$SRC/../shared/data/meshes/generic-hand-left.glb" \
-         "$SRC/../../shared/data/meshes/generic-hand-left.glb" /work/shared/data/meshes/generic-hand-left.glb; do
-    [ -f "$h" ] && { HAND=$h; break; }
-done
-[ -n "$HAND" ] || { echo "no hand mesh: skipped"; exit 77; }
+HAND="$SRC/data/meshes/generic-hand-left.glb" # shipped with the repository
+[ -f "$HAND" ] || fail "$HAND is missing"
 
 # an ellipse of strokes on the back of the hand (UV island lower left)
 python3 "$SRC/tests/strokes_ellipse.py" 0.2 0.62 0.02 0.014 >"$T/cut.csv"

@@ -91,11 +91,8 @@ echo "ok: --mechanics with the split scheme bit-identical on $msplit_counts rank
 # outputs (skin_NNNN.vtu / .glb) take the fields at each column's top tissue
 # cell from the box that owns it; on 3 ranks and 2x1x2, and checkpointed on 2
 # ranks, resumed on 3 (skipped without the hand mesh)
-HAND=""
-for h in "$SRC/data/meshes/generic-hand-left.glb" "$SRC/../shared/data/meshes/generic-hand-left.glb" \
-         "$SRC/../../shared/data/meshes/generic-hand-left.glb" /work/shared/data/meshes/generic-hand-left.glb; do
-    [ -f "$h" ] && { HAND=$h; break; }
-done
+HAND="$SRC/data/meshes/generic-hand-left.glb" # shipped with the repository
+[ -f "$HAND" ] || HAND=""
 if [ -n "$HAND" ]; then
     python3 "$SRC/tests/strokes_ellipse.py" 0.2 0.62 0.02 0.014 >"$T/cut.csv"
     printf '{"mechanics": {"tau_myo": {"value": 0, "unit": "day", "source": "e2e"}, "tau_remodel": {"value": 0, "unit": "day", "source": "e2e"}}}\n' >"$T/pull.json"

@@ -1,4 +1,4 @@
-/* Numerics of the generic reaction-diffusion core (src/heal/explicit.c,
+/* Numerics of the generic reaction-diffusion core (src/heal/solver/explicit.c,
  * split.c), the same code path the healing model uses: Fisher-KPP travelling
  * wave against the exact solution, Bramson front position from a step, mass
  * conservation of pure diffusion (both schemes), an insulating layer (face

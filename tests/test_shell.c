@@ -1,4 +1,4 @@
-/* Skin on a closed surface (seed 001 §5.1, §5.4; src/heal/shell.c) on a
+/* Skin on a closed surface (seed 001 §5.1, §5.4; src/shell/shell.c) on a
  * 40 mm cube whose faces each have their own UV island (a 3 x 2 atlas):
  * - closedness: the cube passes; without a triangle it is open; two
  *   overlapping cubes are closed but intersect themselves;

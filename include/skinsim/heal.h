@@ -244,7 +244,7 @@ ss_heal_solver *ss_heal_solver_create(const ss_heal_grid *g, const ss_heal_param
  * driver's rank 0, which never holds the whole grid). */
 ss_status ss_heal_solver_check(const ss_heal_grid *g, const ss_heal_params *p, ss_heal_scheme s,
                                double *dt_days, ss_error *err);
-/* The same on a sub-box of a larger grid (src/dist): g holds the box and a
+/* The same on a sub-box of a larger grid (src/mpi): g holds the box and a
  * one-cell halo around it, goff is the whole-grid index of g's cell (0,0,0),
  * gdim the whole grid's dimensions (see ss_heal_rd_system.goff). With the
  * split scheme the box spans the whole grid in z; an explicit box that does
@@ -268,7 +268,7 @@ enum { SS_HEAL_COL_MAX, SS_HEAL_COL_FROM_ABOVE, SS_HEAL_COL_TO_BELOW, SS_HEAL_CO
 typedef void (*ss_heal_column_fn)(void *ctx, int op, float *buf, size_t n);
 void ss_heal_solver_set_columns(ss_heal_solver *s, ss_heal_column_fn fn, void *ctx);
 /* The split step's convection on a box that is one of several (the MPI
- * driver, src/dist), called collectively on every box: SS_HEAL_CONV_SPEED:
+ * driver, src/mpi), called collectively on every box: SS_HEAL_CONV_SPEED:
  * *speed (this box's ss_heal_rd_max_speed) becomes the largest over all
  * boxes, so every box takes the same subcycles; SS_HEAL_CONV_HALO: before
  * each donor-cell subcycle, refresh the halo of the current fields u (the
@@ -289,14 +289,14 @@ ss_status ss_heal_solver_set_dt(ss_heal_solver *s, double dt_days, ss_error *err
  * t_days, step); the solver holds only params, dt and scratch memory. */
 ss_status ss_heal_step(ss_heal_solver *s, ss_heal_grid *g, ss_error *err);
 void ss_heal_solver_free(ss_heal_solver *s);
-/* The split step in three phases (the MPI driver, src/dist, runs the y sweep
+/* The split step in three phases (the MPI driver, src/mpi, runs the y sweep
  * on another decomposition): 0 = first reaction half, the convection (with a
  * velocity) and the x sweep, 1 = the y sweep, 2 = the z sweep and the second
  * reaction half, then t_days += dt and step++. Phases 0, 1, 2 in turn are
  * ss_heal_step exactly. SS_ERR_INPUT for the explicit scheme or a velocity the
  * solver was not created with (phases 1 and 2 do not read it). */
 ss_status ss_heal_step_phase(ss_heal_solver *s, ss_heal_grid *g, int phase, ss_error *err);
-/* The explicit step in two parts (the MPI driver, src/dist, exchanges its
+/* The explicit step in two parts (the MPI driver, src/mpi, exchanges its
  * halo meanwhile): part 1 computes every cell whose stencil does not reach
  * the faces of the grid's outer shell named in `ring` (bits 1, 2, 4, 8, 16,
  * 32: -x, +x, -y, +y, -z, +z), part 2 the rest (the cells next to those
@@ -350,7 +350,7 @@ void ss_heal_stats_acc_add(ss_heal_stats_acc *a, const ss_heal_grid *g, int x0, 
                            int y1);
 /* a += b (limb by limb; both normalised after). */
 void ss_heal_stats_acc_merge(ss_heal_stats_acc *a, const ss_heal_stats_acc *b);
-/* The same on a box that is one of a stack in z (src/dist): g is the box
+/* The same on a box that is one of a stack in z (src/mpi): g is the box
  * with a one-cell halo, zoff the whole-grid level of its z = 0, gz the whole
  * grid's depth. Adds the tissue cells of the owned levels (z = 1 .. nz - 2)
  * of columns [x0, x1) x [y0, y1); the column figures (surface cell, eschar
@@ -471,7 +471,7 @@ typedef struct ss_heal_rd_system {
     uint8_t lateral[SS_HEAL_RD_MAXF]; /* 1 = field diffuses along x and y only */
     double mmax;                      /* bound on every multiplier m (for the stability limit) */
     double rate_max;                  /* bound on every loss_f (1/day), explicit positivity limit */
-    /* A sub-box of a larger grid (the MPI driver, src/dist): gdim are the whole
+    /* A sub-box of a larger grid (the MPI driver, src/mpi): gdim are the whole
      * grid's dimensions and goff the whole-grid index of this grid's cell
      * (0,0,0); all 0 = this grid is the whole problem. The outermost shell of
      * the whole grid is the wall shell; this grid's own outermost shell is a

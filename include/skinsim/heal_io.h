@@ -149,7 +149,7 @@ void ss_heal_closure_init(const ss_heal_grid *g, double *closed);
 /* After a step: open columns become OPEN; an OPEN column now at or above the
  * threshold closed at g->t_days. Columns of air only are left alone. */
 void ss_heal_closure_update(const ss_heal_grid *g, double *closed);
-/* The same on a box that is one of a stack in z (src/dist; zoff, gz as in
+/* The same on a box that is one of a stack in z (src/mpi; zoff, gz as in
  * ss_heal_stats_acc_add_stack): scan continues the search for the column's
  * two topmost tissue cells over the owned levels (v = -1, found = 0 for the
  * top box; nx*ny each, grid order); the bottom box then applies the result. */
@@ -288,7 +288,7 @@ ss_status ss_heal_checkpoint_save(const char *run_dir, const ss_heal_grid *g, co
  * complete exactly when its header exists. Pieces may come from any split:
  * any set of boxes that tiles the grid exactly.
  *
- * On MPI (src/dist), writing: every rank ss_heal_ckpt_piece_write(dir, rank,
+ * On MPI (src/mpi), writing: every rank ss_heal_ckpt_piece_write(dir, rank,
  * its box + halo grid, org, its lo and n, whole, &info); the statuses are
  * reduced and the infos gathered (plain bytes) to rank 0, which fills the
  * header (whole grid, dx, skin top, t, step, scheme, dt, scenario, params

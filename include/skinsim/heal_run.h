@@ -109,7 +109,7 @@ typedef struct ss_heal_run_config {
     double voxel_mm;          /* with skin_mesh: voxel edge; 0 = 0.5 mm */
     double mesh_units_mm;     /* with skin_mesh: one mesh unit in mm; 0 = glTF 1000, OBJ 1 */
 
-    /* ---- distributed (rank 0 of the MPI driver, src/dist; docs/scaling.md) ---- */
+    /* ---- distributed (rank 0 of the MPI driver, src/mpi; docs/scaling.md) ---- */
     int distributed; /* 1: every input is checked as usual, but no whole grid is made: a
                         fresh run's grid (ss_heal_run_grid) has its sizes, voxel, skin
                         surface, time and step and no cell or field arrays, and the wound
@@ -169,7 +169,7 @@ ss_status ss_heal_run_write_snapshot(ss_heal_run *r, ss_error *err);
  * newest two kept) from which ss_heal_run_create resumes; needs out_dir. */
 ss_status ss_heal_run_write_checkpoint(ss_heal_run *r, ss_error *err);
 
-/* ---- an external solver (the MPI driver, src/dist) ---- */
+/* ---- an external solver (the MPI driver, src/mpi) ---- */
 /* With hooks set, the run calls step instead of ss_heal_step (g's fields may
  * then be stale; an adaptive run's rejected step is taken back with undo), stats instead of
  * ss_heal_stats_compute for every area row, sync before anything reads g's
@@ -231,7 +231,7 @@ typedef ss_status (*ss_heal_run_checkpoint_fn)(void *ctx, const ss_heal_grid *g,
                                                const char *aux, int keep, ss_error *err);
 void ss_heal_run_set_checkpoint_hook(ss_heal_run *r, ss_heal_run_checkpoint_fn fn, void *ctx);
 
-/* ---- distributed set-up (config.distributed; src/dist) ---- */
+/* ---- distributed set-up (config.distributed; src/mpi) ---- */
 /* The fresh run's wound for the boxes: per-column level ranges (2 x nx*ny,
  * ss_heal_wound_columns_footprint) of a mask, strokes, footprint, depth image
  * or the built-in square, or (NULL columns) the closed wound mesh, which the

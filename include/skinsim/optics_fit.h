@@ -237,7 +237,7 @@ void ss_mm_radial_albedo(const double *radial_rgb, int bins, double max_cm, doub
 
 /* Fills every entry of t (axes set by ss_mm_table_create). */
 ss_status ss_mm_table_build(ss_mm_table *t, const ss_mm_build_options *o, ss_error *err);
-/* The same in parts (the MPI driver shares them out, src/dist): a geometry is
+/* The same in parts (the MPI driver shares them out, src/mpi): a geometry is
  * one pair of layer thicknesses (axes 4 and 5, gi = isc * nsamples[5] + iep),
  * whose photon paths are traced once for all its absorption sets (axes 0-3,
  * entry a of the geometry at axis indices a = ((i0 n1 + i1) n2 + i2) n3 + i3).

@@ -604,7 +604,7 @@ class ss_heal_run_config(ctypes.Structure):
         ("skin_thickness_mm", c_double),
         ("voxel_mm", c_double),
         ("mesh_units_mm", c_double),
-        ("distributed", c_int),  # the MPI driver's rank 0 only (src/dist)
+        ("distributed", c_int),  # the MPI driver's rank 0 only (src/mpi)
     ]
 
 

@@ -65,7 +65,7 @@ struct ss_heal_run {
     float *vfields;          /* per surf vertex, SS_SHELL_VERTEX_STRIDE floats */
     cJSON *shell_aux;        /* the checkpoint's "shell" object while resuming */
     int32_t *shell_top;      /* distributed: each column's top tissue level (or -1) */
-    ss_heal_run_hooks hooks; /* an external solver (src/dist); members NULL = none */
+    ss_heal_run_hooks hooks; /* an external solver (src/mpi); members NULL = none */
     /* distributed (c.distributed): g has sizes, time and step but no arrays
      * (cell NULL) once the boxes are out; the wound the boxes are built from */
     double epidermis_mm;

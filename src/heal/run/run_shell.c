@@ -1,5 +1,5 @@
 /* A heal run on a real body (seed 001 §5.1, §5.4; the geometry is
- * src/heal/shell.c, skinsim/shell.h): the skin mesh and the wound (UV strokes
+ * src/shell/shell.c, skinsim/shell.h): the skin mesh and the wound (UV strokes
  * or a closed wound mesh) are read and checked, the healing grid is the
  * shell's patch around the wound, and every snapshot maps the fields and the
  * mechanics' displacement back onto the undeformed mesh, refined around the

@@ -28,7 +28,7 @@ void ss_heal_rd__build_masks(const ss_heal_rd_system *sys, ss_heal_rd_work *w) {
     const int nx = sys->nx, ny = sys->ny, nz = sys->nz;
     const size_t sy = (size_t)nx, sz = (size_t)nx * (size_t)ny;
     const int par = (size_t)nx * (size_t)ny * (size_t)nz >= RD_PAR_MIN_CELLS;
-    /* a sub-box (src/dist): walls and neighbour bits by whole-grid index */
+    /* a sub-box (src/mpi): walls and neighbour bits by whole-grid index */
     const int ox = sys->goff[0], oy = sys->goff[1], oz = sys->goff[2];
     const int gx = sys->gdim[0] ? sys->gdim[0] : nx, gy = sys->gdim[1] ? sys->gdim[1] : ny;
     const int gz = sys->gdim[2] ? sys->gdim[2] : nz;

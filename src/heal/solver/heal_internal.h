@@ -30,7 +30,7 @@ struct ss_heal_rd_work {
     int have_buf, have_mslot;
 };
 
-/* The explicit step in parts (the MPI driver, src/dist, overlaps its halo
+/* The explicit step in parts (the MPI driver, src/mpi, overlaps its halo
  * exchange with the interior): ALL = ss_heal_rd_step_explicit; INTERIOR =
  * the prepare hook and every cell whose stencil does not reach the faces of
  * the box's outer shell named in `ring` (NB_* bits: the halo still in

@@ -60,7 +60,7 @@ typedef struct model_ctx {
     float crust;            /* s above which a voxel is crust, closed to u1..n [D9] (inf: none) */
     int *zt_min, *zt_max;   /* per y: range of ztop over the row's columns */
     int kdeep;              /* levels below the surface where no surface/scab term acts */
-    /* a box of a stack in z (src/dist): ztop, zt_min, zt_max are whole-grid
+    /* a box of a stack in z (src/mpi): ztop, zt_min, zt_max are whole-grid
      * levels, zoff the whole-grid level of this box's z = 0, col the exchange
      * with the boxes above and below (NULL: the columns are whole here) */
     int zoff;
@@ -440,7 +440,7 @@ static void heal_prepare(void *vctx, float *const *u) {
     }
 }
 
-/* heal_prepare on a box of a stack in z (src/dist): the same sums in the same
+/* heal_prepare on a box of a stack in z (src/mpi): the same sums in the same
  * order (top down, each level's terms as above), each continued from the box
  * above and handed to the box below; the bottom box finishes the bed mean and
  * sends the column values to the whole stack; the surface epithelium comes

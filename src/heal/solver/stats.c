@@ -3,7 +3,7 @@
  * integers and sums of float values are kept as fixed-point integers
  * (limbs of 32 bits covering every float from the smallest subnormal up, with
  * room for 2^40 terms), so a sum does not depend on the order of its terms.
- * The MPI driver (src/dist) adds its sub-box on each rank and reduces the
+ * The MPI driver (src/mpi) adds its sub-box on each rank and reduces the
  * limbs with integer sums: the figures are bit-identical to a single-process
  * run on any number of ranks. The conversion to double is deterministic (a
  * Horner pass over the limbs, a few units in the last place of the exact sum). */
