@@ -122,3 +122,80 @@ const char *cli_option_value(int argc, char **argv, int *i, ss_error *err) {
     }
     return argv[++*i];
 }
+
+/* ---- "did you mean" ------------------------------------------------------------
+ * The options a command knows are the "--name" words of its own --help text,
+ * so the suggestion can never name an option the help does not show, and no
+ * second list of options has to be kept in step with the parser. */
+
+char *cli_help_text(void (*help)(FILE *)) {
+    char *text = NULL;
+    size_t len = 0;
+    FILE *m = open_memstream(&text, &len);
+    if (!m) return NULL;
+    help(m);
+    if (fclose(m) != 0) {
+        free(text);
+        return NULL;
+    }
+    return text;
+}
+
+/* Levenshtein distance of a[0..na) and b[0..nb), at most 63 characters each. */
+static int edit_distance(const char *a, size_t na, const char *b, size_t nb) {
+    int row[64];
+    for (size_t j = 0; j <= nb; j++) row[j] = (int)j;
+    for (size_t i = 1; i <= na; i++) {
+        int diag = row[0];
+        row[0] = (int)i;
+        for (size_t j = 1; j <= nb; j++) {
+            int up = row[j];
+            int best = diag + (a[i - 1] != b[j - 1]);
+            if (up + 1 < best) best = up + 1;
+            if (row[j - 1] + 1 < best) best = row[j - 1] + 1;
+            row[j] = best;
+            diag = up;
+        }
+    }
+    return row[nb];
+}
+
+const char *cli_suggest(const char *bad, const char *help_text, char *buf, size_t n) {
+    if (n) buf[0] = '\0';
+    if (!bad || !help_text || n < 32 || strncmp(bad, "--", 2)) return buf;
+    size_t nb = strcspn(bad, "="); /* --name=value: the name */
+    if (nb > 63) return buf;
+    size_t best_len = 0;
+    const char *best = NULL;
+    int best_d = nb >= 12 ? 4 : 3; /* a suggestion is at most 2 edits away, 3 for long names */
+    for (const char *p = help_text; (p = strstr(p, "--"));) {
+        int starts = p == help_text || strchr(" \t\n(,[|", p[-1]);
+        size_t k = 2;
+        while ((p[k] >= 'a' && p[k] <= 'z') || (p[k] >= '0' && p[k] <= '9') || p[k] == '-') k++;
+        if (starts && k > 2 && k <= 63 && p[k - 1] != '-') {
+            int d = edit_distance(bad, nb, p, k);
+            if (d == 0) return buf; /* a known option (given without its value) */
+            if (d < best_d) best_d = d, best = p, best_len = k;
+        }
+        p += k;
+    }
+    if (best) snprintf(buf, n, " (did you mean '%.*s'?)", (int)best_len, best);
+    return buf;
+}
+
+int cli_unknown_option(const char *cmd, const char *opt, void (*help)(FILE *)) {
+    char *text = cli_help_text(help), sug[128];
+    int rc =
+        cli_usage_error(cmd, "unknown option '%s'%s", opt, cli_suggest(opt, text, sug, sizeof sug));
+    free(text);
+    return rc;
+}
+
+ss_status cli_unknown_option_set(ss_error *err, const char *what, const char *opt,
+                                 void (*help)(FILE *)) {
+    char *text = cli_help_text(help), sug[128];
+    ss_status st = ss_error_set(err, SS_ERR_INPUT, "%s '%s'%s", what, opt,
+                                cli_suggest(opt, text, sug, sizeof sug));
+    free(text);
+    return st;
+}

@@ -3,6 +3,8 @@
 #ifndef SKINSIM_CLI_H
 #define SKINSIM_CLI_H
 
+#include <stdio.h>
+
 #include "skinsim/core.h"
 
 /* One subcommand: name, one-line summary, entry point returning the exit code. */
@@ -37,6 +39,21 @@ int cli_usage_error(const char *cmd, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)))
 #endif
     ;
+
+/* "Did you mean": the text a help function prints (malloc'd, NULL on
+ * failure), and the option of that text nearest to a misspelt one by edit
+ * distance (at most 2 edits; 3 for names of 12 characters or more), written
+ * into buf as " (did you mean '--photons'?)"; buf is "" when none is near or
+ * bad is an option of the text (given without its value). Returns buf. */
+char *cli_help_text(void (*help)(FILE *));
+const char *cli_suggest(const char *bad, const char *help_text, char *buf, size_t n);
+
+/* The usage error for an option the command does not know (exit 2), with the
+ * suggestion from its help; the _set form puts "<what> '<opt>' (did you mean
+ * ...)" into err instead, for parsers that report through an ss_error. */
+int cli_unknown_option(const char *cmd, const char *opt, void (*help)(FILE *));
+ss_status cli_unknown_option_set(ss_error *err, const char *what, const char *opt,
+                                 void (*help)(FILE *));
 
 /* Strict number parsing: the whole string must be a finite number within
  * [lo, hi]; on failure err names the option and the value. */

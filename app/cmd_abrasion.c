@@ -19,8 +19,9 @@
 
 static const char *CMD = "abrasion";
 
-static void help(void) {
-    printf(
+static void help(FILE *f) {
+    fprintf(
+        f,
         "usage: skinsim abrasion [options]\n\n"
         "Renders the abrasion-healing timeline (seed 000): five key positions\n"
         "(vasoconstriction, vasodilation, scab_forming, scab, maturation) from a wound\n"
@@ -57,7 +58,8 @@ static void help(void) {
         "8-bit; height 16-bit (0.5 = skin surface, 0..1 spans -0.5..+0.5 mm); normal\n"
         "8-bit, tangent space, OpenGL convention (+Y up).\n\n"
         "Example:\n"
-        "  skinsim abrasion --stroke knee.csv --size 1024 --times 0,1,5,30 --out knee\n");
+        "  skinsim abrasion --stroke data/examples/knee.csv --size 1024 --times 0,1,5,30 --out "
+        "knee\n");
 }
 
 typedef struct opts {
@@ -139,7 +141,7 @@ static int parse(int argc, char **argv, opts *o, ss_error *err) {
             o->json = 1;
             break;
         case 'h':
-            help();
+            help(stdout);
             return -1;
         case 'H':
             if (!strcmp(optarg, "convex"))
@@ -169,8 +171,8 @@ static int parse(int argc, char **argv, opts *o, ss_error *err) {
             st = cli_parse_u64("--seed", optarg, &o->seed, err);
             break;
         default:
-            st = ss_error_set(err, SS_ERR_INPUT, "unknown or incomplete option '%s'",
-                              argv[optind - 1]);
+            st =
+                cli_unknown_option_set(err, "unknown or incomplete option", argv[optind - 1], help);
         }
     }
     if (!st && optind < argc)
@@ -178,6 +180,11 @@ static int parse(int argc, char **argv, opts *o, ss_error *err) {
     if (!st && o->stroke && o->mask)
         st = ss_error_set(err, SS_ERR_INPUT, "give --stroke or --mask, not both");
     if (!st) st = cli_parse_double_list("--times", times, 0.0, 1e5, &o->times, &o->ntimes, err);
+    for (int i = 1; !st && i < o->ntimes; i++)
+        if (o->times[i] < o->times[i - 1])
+            st = ss_error_set(err, SS_ERR_INPUT,
+                              "--times: list them in increasing order (%g after %g)", o->times[i],
+                              o->times[i - 1]);
     /* each time names its files t<days>_*: two times with one name would
      * write the same files twice */
     for (int i = 0; !st && i < o->ntimes; i++)

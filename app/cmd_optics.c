@@ -30,7 +30,7 @@ typedef struct common_opts {
     const char *out;
 } common_opts;
 
-static const char *COMMON_HELP =
+static const char COMMON_HELP[] =
     "Biological parameters (seed 003 §5.2; defaults: a light skin):\n"
     "  --melanin F              epidermal melanosome volume fraction 0..1 (0.015;\n"
     "                           light skin 0.01-0.06, dark 0.2-0.45)\n"
@@ -42,15 +42,22 @@ static const char *COMMON_HELP =
     "  --bilirubin-g-per-l X    bilirubin in blood, g/L (0.003)\n"
     "  --betacarotene-g-per-l X beta-carotene in tissue, g/L (0.00021)\n"
     "Monte Carlo:\n"
-    "  --photons N              photon packets per wavelength (20000)\n"
+    "  --photons N              photon packets per %s (%llu)\n"
     "  --seed S                 random seed; the same seed gives identical output\n"
     "                           for any thread count (1)\n"
     "  --threads N              worker threads (default $SKINSIM_THREADS or all cores)\n"
     "  --roughness S            Trowbridge-Reitz surface roughness sigma, 0 = smooth\n"
     "                           (0.75, BioSpec)\n"
     "  --stochastic             absorb-or-scatter packets (seed §4.4) instead of weights\n"
-    "  --wl-min NM --wl-max NM --wl-step NM   wavelengths, nm (380, 780, 10)\n"
+    "  --wl-min NM --wl-max NM --wl-step NM   wavelengths, nm (380, 780, %g)\n"
     "  --quiet                  no progress output\n";
+
+/* The options every transport subcommand shares, with this subcommand's own
+ * defaults (one default per option: what is printed is what runs). */
+static void common_help(FILE *f, const char *photons_per, const ss_spectrum_options *defaults) {
+    fprintf(f, COMMON_HELP, photons_per, (unsigned long long)defaults->mc.photons,
+            defaults->wl_step_nm);
+}
 
 /* Returns 1 if argv[*i] was a common option (consumed), 0 if not, -1 on error. */
 static int parse_common(const char *cmd, int argc, char **argv, int *i, common_opts *c, int *rc) {
@@ -118,28 +125,31 @@ static int common_finish(const char *cmd, common_opts *c) {
 
 /* ---- spectrum ------------------------------------------------------------------ */
 static void spectrum_help(FILE *f) {
-    fprintf(f,
-            "usage: skinsim optics spectrum [options]\n\n"
-            "Monte Carlo diffuse reflectance spectrum of the four-layer skin model (stratum\n"
-            "corneum, epidermis, papillary and reticular dermis over white fat) at normal\n"
-            "incidence, and its colour: CIE 1931 XYZ under D65 -> linear sRGB albedo.\n"
-            "Prints a table (wavelength_nm reflectance std_error), or with --json:\n"
-            "  {\"srgb_linear\": [r,g,b], \"wavelength_nm\": [...], \"reflectance\": [...],\n"
-            "   \"specular\": s, \"std_error\": e}\n"
-            "(std_error: the largest standard error over the wavelengths; reflectance\n"
-            "excludes the specular surface reflection, which is reported separately).\n\n"
-            "  --out FILE.csv           also write wavelength_nm,reflectance,std_error\n"
-            "  --json                   machine-readable summary on stdout\n"
-            "  --radial-out FILE.csv    also write the radial subsurface profile Rd(r) per\n"
-            "                           linear-sRGB channel (seed §4.7.1), columns\n"
-            "                           r_min_cm,r_max_cm,rd_r,rd_g,rd_b in 1/cm^2 (a separate\n"
-            "                           Monte Carlo run with the same options)\n"
-            "  --radial-bins N          radial bins (50)\n"
-            "  --radial-max-cm X        radial extent, cm (0.5)\n"
-            "  --radial-distance D      net (default): entry-to-exit distance; path: the\n"
-            "                           seed's D, the horizontal path length summed over\n"
-            "                           every segment (seed §4.7.1)\n\n%s",
-            COMMON_HELP);
+    fprintf(f, "usage: skinsim optics spectrum [options]\n\n"
+               "Monte Carlo diffuse reflectance spectrum of the four-layer skin model (stratum\n"
+               "corneum, epidermis, papillary and reticular dermis over white fat) at normal\n"
+               "incidence, and its colour: CIE 1931 XYZ under D65 -> linear sRGB albedo.\n"
+               "Prints a table (wavelength_nm reflectance std_error), or with --json:\n"
+               "  {\"srgb_linear\": [r,g,b], \"wavelength_nm\": [...], \"reflectance\": [...],\n"
+               "   \"specular\": s, \"std_error\": e}\n"
+               "(std_error: the largest standard error over the wavelengths; reflectance\n"
+               "excludes the specular surface reflection, which is reported separately).\n\n"
+               "  --out FILE.csv           also write wavelength_nm,reflectance,std_error\n"
+               "  --json                   machine-readable summary on stdout\n"
+               "  --radial-out FILE.csv    also write the radial subsurface profile Rd(r) per\n"
+               "                           linear-sRGB channel (seed §4.7.1), columns\n"
+               "                           r_min_cm,r_max_cm,rd_r,rd_g,rd_b in 1/cm^2 (a separate\n"
+               "                           Monte Carlo run with the same options)\n"
+               "  --radial-bins N          radial bins (50)\n"
+               "  --radial-max-cm X        radial extent, cm (0.5)\n"
+               "  --radial-distance D      net (default): entry-to-exit distance; path: the\n"
+               "                           seed's D, the horizontal path length summed over\n"
+               "                           every segment (seed §4.7.1)\n\n");
+    ss_spectrum_options d;
+    ss_spectrum_options_default(&d);
+    common_help(f, "wavelength", &d);
+    fprintf(f, "\nExample:\n"
+               "  skinsim optics spectrum --melanin 0.08 --blood 0.02 --oxygenation 0.7 --json\n");
 }
 
 /* The radial profile Rd(r) per channel as CSV at path. */
@@ -217,7 +227,7 @@ static int optics_spectrum(int argc, char **argv) {
             i++;
             continue;
         }
-        return cli_usage_error(cmd, "unknown option '%s'", argv[i]);
+        return cli_unknown_option(cmd, argv[i], spectrum_help);
     }
     if ((rc = common_finish(cmd, &c))) return rc;
     c.spec.mc.radial_distance = rdist;
@@ -281,20 +291,22 @@ static int optics_spectrum(int argc, char **argv) {
 
 /* ---- brdf ------------------------------------------------------------------------- */
 static void brdf_help(FILE *f) {
-    fprintf(f,
-            "usage: skinsim optics brdf --out FILE.csv [options]\n\n"
-            "Sampled BRDF of skin per linear-sRGB channel (seed 003 §4.5.2), one Monte Carlo\n"
-            "run per incidence bin and wavelength. Bins: theta uniform over [0, 90) degrees\n"
-            "(centres (k+0.5)*90/n), dphi = |phi_r - phi_i| folded into [0, 180] degrees with\n"
-            "the mirror direction at 180. f_r = escaping weight / (solid angle * cos theta_r),\n"
-            "in 1/sr; the specular surface reflection is included.\n"
-            "CSV columns: theta_i_deg,theta_r_deg,dphi_deg,f_r,f_g,f_b (bin centres).\n\n"
-            "  --out FILE.csv           output file (required)\n"
-            "  --theta-i N              incidence bins (8)\n"
-            "  --theta-r N              exit zenith bins (16)\n"
-            "  --phi N                  azimuth-difference bins (16)\n"
-            "  (--photons is per incidence bin and wavelength; default here 20000)\n\n%s",
-            COMMON_HELP);
+    fprintf(f, "usage: skinsim optics brdf --out FILE.csv [options]\n\n"
+               "Sampled BRDF of skin per linear-sRGB channel (seed 003 §4.5.2), one Monte Carlo\n"
+               "run per incidence bin and wavelength. Bins: theta uniform over [0, 90) degrees\n"
+               "(centres (k+0.5)*90/n), dphi = |phi_r - phi_i| folded into [0, 180] degrees with\n"
+               "the mirror direction at 180. f_r = escaping weight / (solid angle * cos theta_r),\n"
+               "in 1/sr; the specular surface reflection is included.\n"
+               "CSV columns: theta_i_deg,theta_r_deg,dphi_deg,f_r,f_g,f_b (bin centres).\n\n"
+               "  --out FILE.csv           output file (required)\n"
+               "  --theta-i N              incidence bins (8)\n"
+               "  --theta-r N              exit zenith bins (16)\n"
+               "  --phi N                  azimuth-difference bins (16)\n\n");
+    ss_spectrum_options d;
+    ss_spectrum_options_default(&d);
+    common_help(f, "incidence bin and wavelength", &d);
+    fprintf(f, "\nExample:\n"
+               "  skinsim optics brdf --out brdf.csv --melanin 0.03 --theta-i 4 --photons 5000\n");
 }
 
 static int optics_brdf(int argc, char **argv) {
@@ -317,7 +329,7 @@ static int optics_brdf(int argc, char **argv) {
                     : !strcmp(argv[i], "--theta-r") ? &ntr
                     : !strcmp(argv[i], "--phi")     ? &nph
                                                     : NULL;
-        if (!dst) return cli_usage_error(cmd, "unknown option '%s'", argv[i]);
+        if (!dst) return cli_unknown_option(cmd, argv[i], brdf_help);
         if (i + 1 >= argc) return cli_usage_error(cmd, "%s needs a value", argv[i]);
         if (cli_parse_int(argv[i], argv[i + 1], 1, 256, dst, &e)) return cli_fail(cmd, &e);
         i++;
@@ -377,7 +389,9 @@ static void mci_help(FILE *f) {
                "outputs appear together at the end, each whole.\n"
                "  --seed S      random seed (1)\n  --threads N   worker threads\n"
                "  --json        print a summary of each run on stdout\n"
-               "  --allow-outside-paths   let the .mci name outputs anywhere\n");
+               "  --allow-outside-paths   let the .mci name outputs anywhere\n\n"
+               "Example (the .mco lands next to the .mci):\n"
+               "  cp data/examples/sample.mci . && skinsim optics mci sample.mci\n");
 }
 
 static int optics_mci(int argc, char **argv) {
@@ -404,7 +418,7 @@ static int optics_mci(int argc, char **argv) {
         else if (!strcmp(argv[i], "--quiet"))
             ;
         else if (argv[i][0] == '-')
-            return cli_usage_error(cmd, "unknown option '%s'", argv[i]);
+            return cli_unknown_option(cmd, argv[i], mci_help);
         else if (!file)
             file = argv[i];
         else
@@ -479,21 +493,31 @@ static int optics_mci(int argc, char **argv) {
 }
 
 /* ---- swatch -------------------------------------------------------------------------- */
+/* The swatch traces one photon set per wavelength for every cell: fewer
+ * photons and wavelengths than a single spectrum by default. */
+static void swatch_defaults(ss_spectrum_options *d) {
+    ss_spectrum_options_default(d);
+    d->wl_step_nm = 20;
+    d->mc.photons = 10000;
+}
+
 static void swatch_help(FILE *f) {
-    fprintf(f,
-            "usage: skinsim optics swatch --out FILE.png [options]\n\n"
-            "A labelled grid of skin colours: melanin (columns) x blood (rows), each cell\n"
-            "the linear-sRGB albedo of the Monte Carlo reflectance spectrum (D65, CIE 1931),\n"
-            "written as an 8-bit sRGB PNG. Photon paths are traced once per wavelength without\n"
-            "absorption and reweighted for every cell (exact for fixed layer geometry).\n\n"
-            "  --out FILE.png           output image (required)\n"
-            "  --melanin-list A,B,...   column values (0.01,0.03,0.06,0.12,0.2,0.3,0.43)\n"
-            "  --blood-list A,B,...     row values (0.002,0.005,0.01,0.02,0.04)\n"
-            "  --cell PX                cell size in pixels (96)\n"
-            "  --json                   print the colours as JSON\n"
-            "  (--melanin and --blood are replaced by the lists; defaults here:\n"
-            "   --photons 10000 --wl-step 20)\n\n%s",
-            COMMON_HELP);
+    fprintf(f, "usage: skinsim optics swatch --out FILE.png [options]\n\n"
+               "A labelled grid of skin colours: melanin (columns) x blood (rows), each cell\n"
+               "the linear-sRGB albedo of the Monte Carlo reflectance spectrum (D65, CIE 1931),\n"
+               "written as an 8-bit sRGB PNG. Photon paths are traced once per wavelength without\n"
+               "absorption and reweighted for every cell (exact for fixed layer geometry).\n\n"
+               "  --out FILE.png           output image (required)\n"
+               "  --melanin-list A,B,...   column values (0.01,0.03,0.06,0.12,0.2,0.3,0.43)\n"
+               "  --blood-list A,B,...     row values (0.002,0.005,0.01,0.02,0.04)\n"
+               "  --cell PX                cell size in pixels (96)\n"
+               "  --json                   print the colours as JSON\n"
+               "  (--melanin and --blood are replaced by the lists)\n\n");
+    ss_spectrum_options d;
+    swatch_defaults(&d);
+    common_help(f, "wavelength", &d);
+    fprintf(f, "\nExample:\n"
+               "  skinsim optics swatch --out swatch.png\n");
 }
 
 static void srgb8(const double lin[3], double out[3]) {
@@ -509,8 +533,7 @@ static int optics_swatch(int argc, char **argv) {
     const char *cmd = "optics swatch";
     common_opts c;
     common_init(&c);
-    c.spec.wl_step_nm = 20;
-    c.spec.mc.photons = 10000;
+    swatch_defaults(&c.spec);
     int rc = 0;
     double mel_def[] = {0.01, 0.03, 0.06, 0.12, 0.2, 0.3, 0.43};
     double bl_def[] = {0.002, 0.005, 0.01, 0.02, 0.04};
@@ -559,7 +582,7 @@ static int optics_swatch(int argc, char **argv) {
                 goto out;
             }
         } else {
-            rc = cli_usage_error(cmd, "unknown option '%s'", argv[i]);
+            rc = cli_unknown_option(cmd, argv[i], swatch_help);
             goto out;
         }
     }
@@ -707,6 +730,7 @@ static void optics_help(FILE *f) {
     fprintf(f, "  fit        fit a render BRDF to the sampled skin BRDF\n");
     fprintf(f, "  table      precomputed ModelMatch table\n");
     fprintf(f, "  match      biological parameters for a target skin colour (sRGB or L*a*b*)\n");
+    fprintf(f, "\nExample:\n  skinsim optics swatch --out swatch.png\n");
 }
 
 int cmd_optics(int argc, char **argv) {

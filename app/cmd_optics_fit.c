@@ -245,6 +245,15 @@ static void fit_help(FILE *f, const fit_cli *c) {
             BIO_HELP);
     fprintf(f, MC_HELP, (unsigned long long)c->build.spectrum.mc.photons,
             c->build.spectrum.wl_min_nm, c->build.spectrum.wl_max_nm, c->build.spectrum.wl_step_nm);
+    fprintf(f, "\nExample:\n  skinsim optics fit --melanin 0.05 --fast --json\n");
+}
+
+/* The help texts with their defaults, for "did you mean" (cli_suggest). */
+static void fit_help_options(FILE *f) {
+    fit_cli c;
+    init_cli(&c);
+    c.build.spectrum.mc.photons = 20000;
+    fit_help(f, &c);
 }
 
 int cmd_optics_fit(int argc, char **argv) {
@@ -264,7 +273,7 @@ int cmd_optics_fit(int argc, char **argv) {
         if (!strcmp(argv[i], "--fast"))
             c.fast = 1;
         else
-            return cli_usage_error(cmd, "unknown option '%s'", argv[i]);
+            return cli_unknown_option(cmd, argv[i], fit_help_options);
     }
     if ((rc = finish_shared(cmd, &c))) return rc;
     ss_error e;
@@ -383,6 +392,9 @@ static void table_help(FILE *f, const fit_cli *c) {
             BIO_HELP);
     fprintf(f, MC_HELP, (unsigned long long)c->build.spectrum.mc.photons,
             c->build.spectrum.wl_min_nm, c->build.spectrum.wl_max_nm, c->build.spectrum.wl_step_nm);
+    fprintf(f, "\nExample (render parameters for one skin from the shipped table):\n"
+               "  skinsim optics table --lookup data/modelmatch_default.sstab --melanin 0.05 "
+               "--blood 0.01\n");
 }
 
 /* --axis NAME=V1,V2,...: explicit sample values for one table axis. */
@@ -419,6 +431,12 @@ static int parse_axis(const char *cmd, const char *arg, fit_cli *c) {
     return 0;
 }
 
+static void table_help_options(FILE *f) {
+    fit_cli c;
+    init_cli(&c);
+    table_help(f, &c);
+}
+
 int cmd_optics_table(int argc, char **argv) {
     const char *cmd = "optics table";
     fit_cli c;
@@ -449,7 +467,7 @@ int cmd_optics_table(int argc, char **argv) {
             if (cli_parse_int("--samples", argv[++i], 1, 9, &c.samples, &e))
                 return cli_fail(cmd, &e);
         } else
-            return cli_usage_error(cmd, "unknown option '%s'", argv[i]);
+            return cli_unknown_option(cmd, argv[i], table_help_options);
     }
     if (c.out && c.lookup) return cli_usage_error(cmd, "--out and --lookup exclude each other");
     if (!c.out && !c.lookup) return cli_usage_error(cmd, "--out FILE or --lookup FILE is required");

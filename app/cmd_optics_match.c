@@ -32,7 +32,8 @@ static void match_help(FILE *f) {
                "  --geometry G      sci (default): albedo + surface reflectance (specular\n"
                "                    component included); sce: the albedo alone\n"
                "  --json            print JSON\n"
-               "  --quiet           accepted for symmetry (no progress output)\n");
+               "  --quiet           accepted for symmetry (no progress output)\n\n"
+               "Example:\n  skinsim optics match --srgb 194,150,130\n");
 }
 
 static int parse3(const char *cmd, const char *opt, const char *s, double lo, double hi,
@@ -116,7 +117,7 @@ int cmd_optics_match(int argc, char **argv) {
         } else if (!strcmp(a, "--quiet")) {
             /* nothing to silence */
         } else
-            return cli_usage_error(cmd, "unknown option '%s'", a);
+            return cli_unknown_option(cmd, a, match_help);
     }
     if (have_srgb == have_lab) return cli_usage_error(cmd, "give exactly one of --srgb or --lab");
     if (ss_threads_check_env(&e)) return cli_fail(cmd, &e);

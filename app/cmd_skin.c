@@ -17,54 +17,55 @@
 
 static const char *CMD = "skin";
 
-static void help(void) {
-    printf("usage: skinsim skin [options]\n\n"
-           "Procedural skin textures (seed 003 §4.8, §5): cysts, moles, freckles, wrinkles\n"
-           "and hair follicles scattered by probability fields over a baseline skin, lips\n"
-           "from a field, turned into biological parameters per texel and through the\n"
-           "ModelMatch table into render maps. Lengths in mm; see docs/skin.md.\n\n"
-           "Skin:\n"
-           "  --preset NAME         forearm (default: counts per cm^2 of a forearm, 5 cm)\n"
-           "                        or seed (the seed's 5000 cysts, 700 moles, 3000\n"
-           "                        freckles, 170000 follicles, 1000 wrinkles on 20 cm)\n"
-           "  --count TYPE=N        features of a type: cysts, moles, freckles, wrinkles,\n"
-           "                        follicles (repeatable; N >= 0)\n"
-           "  --field TYPE=FILE     greyscale probability field (PNG or EXR, any size,\n"
-           "                        stretched over the texture; colour images are read as\n"
-           "                        luminance) for a feature type, or lips=FILE (lip\n"
-           "                        weight), or vectors=FILE (RGB wrinkle vector field:\n"
-           "                        R,G direction with 0.5 = 0, B length)\n"
-           "  --param NAME=V        a distribution constant, e.g. moles.r_sigma=1.5\n"
-           "                        (--list-params prints them with their values)\n"
-           "  --base NAME=LO        low end of a baseline parameter: melanin, pheomelanin,\n"
-           "                        blood, oxygenation, sc (cm), epidermis (cm)\n"
-           "  --features-in FILE    render this features.csv instead of generating\n"
-           "  --sampler NAME        alias (default, exact and fast) or rejection (the\n"
-           "                        seed's ChoosePoint loop; same distribution)\n"
-           "  --no-wrap             features do not wrap around the edges (for meshes\n"
-           "                        with UV islands); default: the texture is a torus\n"
-           "                        and the maps tile seamlessly\n\n"
-           "Output:\n"
-           "  --size N              texture side in texels (default 2048, 8..16384)\n"
-           "  --world-size-cm X     side of the texture on the body (default: preset's)\n"
-           "  --table FILE          ModelMatch table (default data/modelmatch_default.sstab)\n"
-           "  --normal-convention C opengl (default, +Y up) or directx (green flipped)\n"
-           "  --seed S              random seed (default 1); bit-identical for any threads\n"
-           "  --gltf                also write skin.gltf: the material on a square of the\n"
-           "                        world size\n"
-           "  --mesh FILE           with --gltf: the material on this mesh's UVs instead\n"
-           "                        (OBJ, glTF or GLB, e.g. data/meshes/generic-hand-left.glb;\n"
-           "                        --no-wrap suits UV islands)\n"
-           "  --out DIR             output folder (default skin-out)\n"
-           "  --threads N, --quiet, --json, --list-params, --help\n\n"
-           "Writes DIR/base_color.png (sRGB), roughness.png, specular.png (GGX, linear\n"
-           "8-bit), height.png (16-bit; 0..1 spans skin.json's height_min_mm..max_mm),\n"
-           "normal.png, bio.exr (float channels: melanin, pheomelanin_ratio, blood,\n"
-           "oxygenation, sc_thickness_cm, epidermis_thickness_cm, height_mm,\n"
-           "extra.R/G/B/A), features.csv, contact_sheet.png and skin.json.\n\n"
-           "Example:\n"
-           "  skinsim skin --preset seed --field follicles=data/skin_face/follicles.png \\\n"
-           "      --field lips=data/skin_face/lips.png --out face\n");
+static void help(FILE *f) {
+    fprintf(f,
+            "usage: skinsim skin [options]\n\n"
+            "Procedural skin textures (seed 003 §4.8, §5): cysts, moles, freckles, wrinkles\n"
+            "and hair follicles scattered by probability fields over a baseline skin, lips\n"
+            "from a field, turned into biological parameters per texel and through the\n"
+            "ModelMatch table into render maps. Lengths in mm; see docs/skin.md.\n\n"
+            "Skin:\n"
+            "  --preset NAME         forearm (default: counts per cm^2 of a forearm, 5 cm)\n"
+            "                        or seed (the seed's 5000 cysts, 700 moles, 3000\n"
+            "                        freckles, 170000 follicles, 1000 wrinkles on 20 cm)\n"
+            "  --count TYPE=N        features of a type: cysts, moles, freckles, wrinkles,\n"
+            "                        follicles (repeatable; N >= 0)\n"
+            "  --field TYPE=FILE     greyscale probability field (PNG or EXR, any size,\n"
+            "                        stretched over the texture; colour images are read as\n"
+            "                        luminance) for a feature type, or lips=FILE (lip\n"
+            "                        weight), or vectors=FILE (RGB wrinkle vector field:\n"
+            "                        R,G direction with 0.5 = 0, B length)\n"
+            "  --param NAME=V        a distribution constant, e.g. moles.r_sigma=1.5\n"
+            "                        (--list-params prints them with their values)\n"
+            "  --base NAME=LO        low end of a baseline parameter: melanin, pheomelanin,\n"
+            "                        blood, oxygenation, sc (cm), epidermis (cm)\n"
+            "  --features-in FILE    render this features.csv instead of generating\n"
+            "  --sampler NAME        alias (default, exact and fast) or rejection (the\n"
+            "                        seed's ChoosePoint loop; same distribution)\n"
+            "  --no-wrap             features do not wrap around the edges (for meshes\n"
+            "                        with UV islands); default: the texture is a torus\n"
+            "                        and the maps tile seamlessly\n\n"
+            "Output:\n"
+            "  --size N              texture side in texels (default 2048, 8..16384)\n"
+            "  --world-size-cm X     side of the texture on the body (default: preset's)\n"
+            "  --table FILE          ModelMatch table (default data/modelmatch_default.sstab)\n"
+            "  --normal-convention C opengl (default, +Y up) or directx (green flipped)\n"
+            "  --seed S              random seed (default 1); bit-identical for any threads\n"
+            "  --gltf                also write skin.gltf: the material on a square of the\n"
+            "                        world size\n"
+            "  --mesh FILE           with --gltf: the material on this mesh's UVs instead\n"
+            "                        (OBJ, glTF or GLB, e.g. data/meshes/generic-hand-left.glb;\n"
+            "                        --no-wrap suits UV islands)\n"
+            "  --out DIR             output folder (default skin-out)\n"
+            "  --threads N, --quiet, --json, --list-params, --help\n\n"
+            "Writes DIR/base_color.png (sRGB), roughness.png, specular.png (GGX, linear\n"
+            "8-bit), height.png (16-bit; 0..1 spans skin.json's height_min_mm..max_mm),\n"
+            "normal.png, bio.exr (float channels: melanin, pheomelanin_ratio, blood,\n"
+            "oxygenation, sc_thickness_cm, epidermis_thickness_cm, height_mm,\n"
+            "extra.R/G/B/A), features.csv, contact_sheet.png and skin.json.\n\n"
+            "Example:\n"
+            "  skinsim skin --preset seed --field follicles=data/skin_face/follicles.png \\\n"
+            "      --field lips=data/skin_face/lips.png --out face\n");
 }
 
 #define MAX_FIELDS 16
@@ -221,11 +222,11 @@ static int parse(int argc, char **argv, opts *o, ss_error *err) {
             o->list_params = 1;
             break;
         case 'h':
-            help();
+            help(stdout);
             return -1;
         default:
-            st = ss_error_set(err, SS_ERR_INPUT, "unknown or incomplete option '%s'",
-                              argv[optind - 1]);
+            st =
+                cli_unknown_option_set(err, "unknown or incomplete option", argv[optind - 1], help);
         }
     }
     if (!st && optind < argc)

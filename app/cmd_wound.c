@@ -12,65 +12,69 @@
 
 #define CMD "wound"
 
-static void help(void) {
-    printf("usage: skinsim wound [options]\n"
-           "\n"
-           "Simulates the healing of a wound (as `skinsim heal`) and turns the tissue at\n"
-           "the skin surface into skin textures on every requested day: epithelium,\n"
-           "capillaries, oxygen, eschar (scab), scar and the wound region become\n"
-           "biological parameters (melanin, blood, oxygenation, layer thicknesses), the\n"
-           "ModelMatch table turns them into base colour and roughness, a dried-blood\n"
-           "layer colours the scab, and the wound depth (seed 001 §5.4), scab and keloid\n"
-           "give the height. See docs/wound.md.\n"
-           "\n"
-           "Healing problem: the options of `skinsim heal` (see skinsim heal --help):\n"
-           "  --scenario clean|scab|keloid, --params FILE.json, --no-scab, --static-region,\n"
-           "  --grid NXxNYxNZ, --size-mm X,Y,Z (square in x, y: the texture covers the\n"
-           "  block), --stroke CSV, --concave-k K, --wound-mask PNG, --wound-mesh OBJ,\n"
-           "  --wound-depth-mm D, --wound-depth-image F, --skin-top-mm, --epidermis-mm,\n"
-           "  --dt DAYS, --scheme explicit|split, --adapt-tol X\n"
-           "  --mesh M --wound-uv CSV  on a body (as skinsim heal): the textures cover the\n"
-           "                         mesh's UV layout and each day's glTF is the mesh\n"
-           "  --heal DIR             instead: render a finished `skinsim heal --out DIR` run\n"
-           "                         (no heal options then; every day must be one of its\n"
-           "                         snapshot days, see its --snapshot-every)\n"
-           "\n"
-           "Textures\n"
-           "  --days LIST            output days, increasing (default 0,1,3,7,14,28,90,365);\n"
-           "                         the simulation runs to the last\n"
-           "  --size N               texture side in pixels (default 1024, 16..16384); the\n"
-           "                         texture covers the heal block (default 30 x 30 mm)\n"
-           "  --skin FILE.exr        base skin as bio-parameter maps (channels: melanin,\n"
-           "                         pheomelanin, blood, oxygenation, sc_cm, epidermis_cm,\n"
-           "                         height_mm); default: a built-in light skin with mottling\n"
-           "  --recipe FILE.json     mapping overrides {\"recipe\": {\"bed_blood\": {\"value\":\n"
-           "                         0.04, \"unit\": \"1\"}, ...}} (keys and units in\n"
-           "                         docs/wound.md)\n"
-           "  --table FILE.sstab     ModelMatch table (default data/modelmatch_default.sstab)\n"
-           "  --exr                  also write every map as half-float EXR (height in mm)\n"
-           "  --no-compare           skip compare_abrasion.png\n"
-           "  --mechanics            couple the contraction mechanics (seed 001 §4.2-5.3, as\n"
-           "                         skinsim heal --mechanics) and draw its displacement\n"
-           "\n"
-           "Output\n"
-           "  --out DIR              output directory (default wound-out)\n"
-           "  --threads N            OpenMP threads (default $SKINSIM_THREADS or all)\n"
-           "  --seed N               base skin noise and Monte Carlo seed (default 1)\n"
-           "  --quiet                no progress bar or text summary\n"
-           "  --json                 print the summary (timeline.json) on stdout\n"
-           "\n"
-           "Files written in DIR:\n"
-           "  frames/t<day>_base_color.png   sRGB 8-bit\n"
-           "  frames/t<day>_roughness.png    GGX perceptual roughness, 8-bit linear\n"
-           "  frames/t<day>_height.png       16-bit, 0.5 = skin surface, 0..1 spans\n"
-           "                                 -2..+2 mm (recipe height_range)\n"
-           "  frames/t<day>_normal.png       tangent space, OpenGL (+Y up)\n"
-           "  frames/t<day>.gltf             the day on a square of the block's size\n"
-           "  contact_sheet.png              base colour per day\n"
-           "  compare_abrasion.png           the same wound through `skinsim abrasion`\n"
-           "  timeline.json                  frames and files in the abrasion timeline\n"
-           "                                 format, recipe, timings\n"
-           "Exit codes: 0 ok, 1 runtime failure, 2 bad input (nothing is written then).\n");
+static void help(FILE *f) {
+    fprintf(f,
+            "usage: skinsim wound [options]\n"
+            "\n"
+            "Simulates the healing of a wound (as `skinsim heal`) and turns the tissue at\n"
+            "the skin surface into skin textures on every requested day: epithelium,\n"
+            "capillaries, oxygen, eschar (scab), scar and the wound region become\n"
+            "biological parameters (melanin, blood, oxygenation, layer thicknesses), the\n"
+            "ModelMatch table turns them into base colour and roughness, a dried-blood\n"
+            "layer colours the scab, and the wound depth (seed 001 §5.4), scab and keloid\n"
+            "give the height. See docs/wound.md.\n"
+            "\n"
+            "Healing problem: the options of `skinsim heal` (see skinsim heal --help):\n"
+            "  --scenario clean|scab|keloid, --params FILE.json, --no-scab, --static-region,\n"
+            "  --grid NXxNYxNZ, --size-mm X,Y,Z (square in x, y: the texture covers the\n"
+            "  block), --stroke CSV, --concave-k K, --wound-mask PNG, --wound-mesh OBJ,\n"
+            "  --wound-depth-mm D, --wound-depth-image F, --skin-top-mm, --epidermis-mm,\n"
+            "  --dt DAYS, --scheme explicit|split, --adapt-tol X\n"
+            "  --mesh M --wound-uv CSV  on a body (as skinsim heal): the textures cover the\n"
+            "                         mesh's UV layout and each day's glTF is the mesh\n"
+            "  --heal DIR             instead: render a finished `skinsim heal --out DIR` run\n"
+            "                         (no heal options then; every day must be one of its\n"
+            "                         snapshot days, see its --snapshot-every)\n"
+            "\n"
+            "Textures\n"
+            "  --days LIST            output days, increasing (default 0,1,3,7,14,28,90,365);\n"
+            "                         the simulation runs to the last\n"
+            "  --size N               texture side in pixels (default 1024, 16..16384); the\n"
+            "                         texture covers the heal block (default 30 x 30 mm)\n"
+            "  --skin FILE.exr|FOLDER base skin as bio-parameter maps (channels: melanin,\n"
+            "                         pheomelanin, blood, oxygenation, sc_cm, epidermis_cm,\n"
+            "                         height_mm), or a `skinsim skin` folder (its bio.exr);\n"
+            "                         default: a built-in light skin with mottling\n"
+            "  --recipe FILE.json     mapping overrides {\"recipe\": {\"bed_blood\": {\"value\":\n"
+            "                         0.04, \"unit\": \"1\"}, ...}} (keys and units in\n"
+            "                         docs/wound.md)\n"
+            "  --table FILE.sstab     ModelMatch table (default data/modelmatch_default.sstab)\n"
+            "  --exr                  also write every map as half-float EXR (height in mm)\n"
+            "  --no-compare           skip compare_abrasion.png\n"
+            "  --mechanics            couple the contraction mechanics (seed 001 §4.2-5.3, as\n"
+            "                         skinsim heal --mechanics) and draw its displacement\n"
+            "\n"
+            "Output\n"
+            "  --out DIR              output directory (default wound-out)\n"
+            "  --threads N            OpenMP threads (default $SKINSIM_THREADS or all)\n"
+            "  --seed N               base skin noise and Monte Carlo seed (default 1)\n"
+            "  --quiet                no progress bar or text summary\n"
+            "  --json                 print the summary (timeline.json) on stdout\n"
+            "\n"
+            "Files written in DIR:\n"
+            "  frames/t<day>_base_color.png   sRGB 8-bit\n"
+            "  frames/t<day>_roughness.png    GGX perceptual roughness, 8-bit linear\n"
+            "  frames/t<day>_height.png       16-bit, 0.5 = skin surface, 0..1 spans\n"
+            "                                 -2..+2 mm (recipe height_range)\n"
+            "  frames/t<day>_normal.png       tangent space, OpenGL (+Y up)\n"
+            "  frames/t<day>.gltf             the day on a square of the block's size\n"
+            "  contact_sheet.png              base colour per day\n"
+            "  compare_abrasion.png           the same wound through `skinsim abrasion`\n"
+            "  timeline.json                  frames and files in the abrasion timeline\n"
+            "                                 format, recipe, timings\n"
+            "Exit codes: 0 ok, 1 runtime failure, 2 bad input (nothing is written then).\n\n"
+            "Example:\n"
+            "  skinsim wound --scenario scab --days 0,3,7,14 --size 256 --out wound-out\n");
 }
 
 typedef struct opts {
@@ -137,7 +141,7 @@ static int parse_args(int argc, char **argv, opts *o, ss_error *err) {
         } else if (!strcmp(a, "--seed")) {
             st = cli_parse_u64(a, v, &c->seed, err);
         } else {
-            ss_error_set(err, SS_ERR_INPUT, "unknown option '%s'", a);
+            cli_unknown_option_set(err, "unknown option", a, help);
             return -1;
         }
         if (st) return -1;
@@ -155,7 +159,7 @@ int cmd_wound(int argc, char **argv) {
     opts o;
     int pa = parse_args(argc, argv, &o, &err);
     if (pa == 1) {
-        help();
+        help(stdout);
         free(o.days);
         return 0;
     }

@@ -77,7 +77,9 @@ static void help(void) {
            "Controls: drag rotates, shift-drag or right/middle drag pans, wheel zooms;\n"
            "P paint mode (drag paints), Z or Ctrl+Z undo, C clear, G generate,\n"
            "Space play/pause, Left/Right previous/next key, S save strokes, H hide/show\n"
-           "strokes, R reset view.\n");
+           "strokes, R reset view.\n\n"
+           "Example (scrub a `skinsim abrasion --out abrasion-out` result):\n"
+           "  skinsim view --load abrasion-out\n");
 }
 
 static int parse_size(const char *s, int *w, int *h, ss_error *err) {
