@@ -197,18 +197,25 @@ static int dir_is_empty(const char *path) {
 
 /* ---- markers ---------------------------------------------------------------- */
 
-/* 1 when dir/name is a regular file reading "skinsim <owner>\n". */
-static int marker_says(const char *dir, const char *name, const char *owner) {
+/* Reads dir/name (a regular file, not followed through a link) into buf, at
+ * most n - 1 bytes, NUL-terminated; -1 when it is not there or not readable. */
+static ssize_t marker_read(const char *dir, const char *name, char *buf, size_t n) {
     char *m = join(dir, name);
-    if (!m) return 0;
+    if (!m) return -1;
     int fd = open(m, O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOFOLLOW);
     free(m);
-    if (fd < 0) return 0;
-    char buf[128] = {0};
+    if (fd < 0) return -1;
+    memset(buf, 0, n);
     struct stat st;
-    ssize_t n = fstat(fd, &st) == 0 && S_ISREG(st.st_mode) ? read(fd, buf, sizeof buf - 1) : -1;
+    ssize_t r = fstat(fd, &st) == 0 && S_ISREG(st.st_mode) ? read(fd, buf, n - 1) : -1;
     close(fd);
-    if (n < 0) return 0;
+    return r;
+}
+
+/* 1 when dir/name is a regular file reading "skinsim <owner>\n". */
+static int marker_says(const char *dir, const char *name, const char *owner) {
+    char buf[128];
+    if (marker_read(dir, name, buf, sizeof buf) < 0) return 0;
     if (!owner) return 1;
     char want[100];
     snprintf(want, sizeof want, "skinsim %s\n", owner);
@@ -218,15 +225,8 @@ static int marker_says(const char *dir, const char *name, const char *owner) {
 /* The command a finished folder's marker names ("abrasion"), into buf; 0 when
  * the folder has no readable marker of the form "skinsim <command>\n". */
 static int marker_owner(const char *dir, char *buf, size_t n) {
-    char *m = join(dir, SS_OUTPUT_MARKER);
-    if (!m) return 0;
-    int fd = open(m, O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOFOLLOW);
-    free(m);
-    if (fd < 0) return 0;
-    char text[128] = {0};
-    struct stat st;
-    ssize_t r = fstat(fd, &st) == 0 && S_ISREG(st.st_mode) ? read(fd, text, sizeof text - 1) : -1;
-    close(fd);
+    char text[128];
+    ssize_t r = marker_read(dir, SS_OUTPUT_MARKER, text, sizeof text);
     size_t len = r > 0 ? strlen(text) : 0;
     if (len < 10 || strncmp(text, "skinsim ", 8) || text[len - 1] != '\n') return 0;
     text[len - 1] = '\0';
