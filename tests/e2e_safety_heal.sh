@@ -117,6 +117,28 @@ rc=$?
 check '[ $rc -eq 2 ] && grep -q "named pipe" "$W/err.txt"' "a pipe as checkpoint piece: rc $rc ($(cat "$W/err.txt"))"
 rm -rf "$T/p"
 
+# ---- wound --heal: its folder checked before work, never written into (issue 21) ----
+"$CLI" heal $SMALL --days 2 --out "$T/wh"
+sums "$T/wh" >"$W/wh.sums"
+expect2 "inside the input folder" wound --heal "$T/wh" --days 0,2 --size 32 --out "$T/wh/new" --quiet
+check '[ "$(sums "$T/wh")" = "$(cat "$W/wh.sums")" ] && [ ! -e "$T/wh/new" ]' "wound --out inside --heal: written into"
+"$CLI" heal --grid 24x24x6 --size-mm 12,12,3 --quiet --days 2 --out "$T/wg"
+snap="$T/wc/fields/fields_0002.vti"
+for how in truncated garbage extent grid; do
+  rm -rf "$T/wc"; cp -r "$T/wh" "$T/wc"
+  case $how in
+    truncated) head -c 3000 "$T/wh/fields/fields_0002.vti" >"$snap" ;;
+    garbage) head -c 3000 /dev/urandom >"$snap" ;;
+    extent) sed -i '0,/WholeExtent="0 20 0 20/s//WholeExtent="0 2000000 0 2000000/' "$snap" ;;
+    grid) cp "$T/wg/fields/fields_0002.vti" "$snap" ;;
+  esac
+  expect2 "fields_0002.vti" wound --heal "$T/wc" --days 0,1,2 --size 32 --out "$T/wout" --quiet
+  check '[ ! -e "$T/wout" ]' "a $how snapshot: wound wrote $T/wout"
+done
+rm -rf "$T/wh" "$T/wg" "$T/wc"
+expect2 "out of range" heal $SMALL --days 1 --threads 0 --out "$T/t0"
+check '[ ! -e "$T/t0" ]' "heal --threads 0 wrote"
+
 # ---- two runs into one new folder at once ---------------------------------------
 "$CLI" heal $SMALL --days 40 --out "$T/two" & pid=$!
 await "$T/two.skinsim-lock" || bad "no lock file"

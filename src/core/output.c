@@ -82,6 +82,7 @@ typedef struct in_entry {
     char *user, *real;
     dev_t dev;
     ino_t ino;
+    int dir; /* an input folder (wound --heal DIR): no output may lie inside it */
 } in_entry;
 
 struct ss_outputs {
@@ -307,7 +308,14 @@ static int clash_with_input(const ss_outputs *o, const out_entry *e, const in_en
     struct stat st;
     if (in->ino && stat(e->real, &st) == 0 && st.st_dev == in->dev && st.st_ino == in->ino)
         return 1;
-    return e->kind != SS_OUTPUT_FILE && path_within(in->real, e->real);
+    return (e->kind != SS_OUTPUT_FILE && path_within(in->real, e->real)) ||
+           (in->dir && path_within(e->real, in->real));
+}
+
+static const char *clash_words(const out_entry *e, const in_entry *in) {
+    return in->dir && path_within(e->real, in->real) && strcmp(e->real, in->real)
+               ? "it lies inside the input folder"
+               : "it would overwrite the input";
 }
 
 ss_status ss_outputs_input(ss_outputs *o, const char *path, ss_error *err) {
@@ -331,12 +339,14 @@ ss_status ss_outputs_input(ss_outputs *o, const char *path, ss_error *err) {
     in->real = real;
     in->dev = st.st_dev;
     in->ino = st.st_ino;
+    in->dir = S_ISDIR(st.st_mode);
     char sb[200], sb2[200];
     for (int i = 0; i < o->nout; i++)
         if (clash_with_input(o, &o->out[i], in))
-            return ss_error_set(err, SS_ERR_INPUT, "%s%s%s: it would overwrite the input %s",
+            return ss_error_set(err, SS_ERR_INPUT, "%s%s%s: %s %s",
                                 o->out[i].label ? o->out[i].label : "", o->out[i].label ? " " : "",
-                                shown(o->out[i].user, sb), shown(path, sb2));
+                                shown(o->out[i].user, sb), clash_words(&o->out[i], in),
+                                shown(path, sb2));
     return SS_OK;
 }
 
@@ -478,7 +488,7 @@ ss_status ss_outputs_add(ss_outputs *o, const char *label, const char *path, ss_
     }
     for (int i = 0; i < o->nin && !s; i++)
         if (clash_with_input(o, e, &o->in[i]))
-            s = OUTMSG(e, "it would overwrite the input %s", shown(o->in[i].user, sb2));
+            s = OUTMSG(e, "%s %s", clash_words(e, &o->in[i]), shown(o->in[i].user, sb2));
     if (s) pop_entry(o);
     return s;
 }
