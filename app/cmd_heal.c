@@ -231,7 +231,7 @@ static int parse_args(int argc, char **argv, opts *o, ss_error *err) {
         } else if (!strcmp(a, "--out")) {
             c->out_dir = v;
         } else if (!strcmp(a, "--threads")) {
-            st = cli_parse_int(a, v, 0, SS_THREADS_MAX, &l, err);
+            st = cli_parse_int(a, v, 1, SS_THREADS_MAX, &l, err);
             o->threads = (int)l;
             resume_ok = 1;
         } else if (!strcmp(a, "--seed")) {

@@ -41,20 +41,18 @@ grep -q "$(basename "$newest")" "$T/b2.err" || fail "the skipped piece is not na
 cmp -s "$T/a/fields/fields_0002.vti" "$T/b2/fields/fields_0002.vti" ||
     fail "resumed past a damaged piece: final state differs"
 
-# --- a folder with both kinds: whole-grid checkpoints at day 0.5 and 1, the
-# one at day 1 replaced by the pieces of run b's: the newest (the pieces) is
-# used; the resumed run writes whole-grid checkpoints (no --checkpoint-pieces)
-# and pruning keeps the newest two of either kind
-"$CLI" heal $SMALL --days 1 --checkpoint-every 0.5 --out "$T/c" || fail "whole-checkpoint run failed"
-step1=$(ls "$T"/c/checkpoints/ckpt_*.sshc | tail -1)
-step1=$(basename "$step1" .sshc)
-rm "$T/c/checkpoints/$step1.sshc"
-cp "$T/b3/checkpoints/$step1".sshh "$T/b3/checkpoints/$step1"_p*.sshp "$T/c/checkpoints/" ||
-    fail "run b has no piece checkpoint $step1"
+# --- a folder with both kinds: a whole-grid checkpoint at day 0.5, then (the
+# run resumed with --checkpoint-pieces) pieces at day 1, all of the run's own
+# (a copy of another run's would be refused: docs/reliability.md): the newest
+# (the pieces) is used; the resumed run writes whole-grid checkpoints (no
+# --checkpoint-pieces) and pruning keeps the newest two of either kind
+"$CLI" heal $SMALL --days 0.5 --checkpoint-every 0.5 --out "$T/c" || fail "whole-checkpoint run failed"
+"$CLI" heal --resume "$T/c" --days 1 --checkpoint-pieces 2x2x1 --quiet || fail "piece-checkpoint resume failed"
+[ "$(count "$T"/c/checkpoints/*.sshh)" -eq 1 ] || fail "no piece checkpoint at day 1: $(ls "$T"/c/checkpoints)"
 cp -r "$T/c" "$T/c2"
 "$CLI" heal --resume "$T/c" --days 2 --quiet || fail "resume of the mixed folder failed"
-cmp -s "$T/a/fields/fields_0002.vti" "$T/c/fields/fields_0002.vti" ||
-    fail "mixed whole/piece checkpoints: final state differs"
+# (its state is not compared with run a's: the stop at day 0.5 lands the
+# adaptive steps differently)
 [ "$(count "$T"/c/checkpoints/*)" -eq 2 ] && [ "$(count "$T"/c/checkpoints/*.sshc)" -eq 2 ] ||
     fail "pruning should leave the newest 2 (whole-grid) checkpoints: $(ls "$T"/c/checkpoints)"
 # its pieces truncated: the whole-grid one of day 0.5 is used
@@ -62,8 +60,7 @@ p=$(ls "$T"/c2/checkpoints/*_p000003.sshp)
 head -c 700 "$p" >"$p.cut" && mv "$p.cut" "$p"
 "$CLI" heal --resume "$T/c2" --days 2 >/dev/null 2>"$T/c2.err" || fail "resume past truncated pieces failed"
 grep -q "$(basename "$p")" "$T/c2.err" || fail "the truncated piece is not named: $(cat "$T/c2.err")"
-cmp -s "$T/a/fields/fields_0002.vti" "$T/c2/fields/fields_0002.vti" ||
-    fail "resumed past truncated pieces: final state differs"
+[ -f "$T/c2/fields/fields_0002.vti" ] || fail "resumed past truncated pieces: no final state"
 
 # --- bad input: exit 2, the file named, nothing written
 "$CLI" heal $SMALL --days 1 --checkpoint-every 0.5 --checkpoint-pieces 3x1x1 --out "$T/d" ||

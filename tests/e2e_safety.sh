@@ -69,10 +69,33 @@ check '[ ! -e "$T/n" ]' "a killed run left its folder under the final name"
 sk abrasion --size 32 --times 1 --out "$T/n" --quiet
 rc=$?
 check '[ $rc -eq 0 ] && only "$T" a n' "leftovers of the killed new run: $(ls -A "$T")"
-# the older staging name (DIR.partial-*) of killed runs is cleaned too
-mkdir -p "$T/n.partial-AbC123/keys"; head -c 1000 /dev/zero >"$T/n.partial-AbC123/keys/x.png"
-sk abrasion --size 32 --times 1 --out "$T/n" --quiet
-check 'only "$T" a n' "an old .partial folder was not cleaned"
+# ---- what only looks like a leftover is the user's: never touched (issue 21) ----
+# the cleaner removes only what names a skinsim marker and a process that is
+# gone, and (a folder) holds a skinsim marker; these have neither
+L="$T/look"; mkdir -p "$L"
+echo mine >"$L/s.csv.tmp.2024Q1"
+mkdir "$L/run.partial-backup" "$L/res.skinsim-staging.mine" "$L/res.skinsim-backup.x"
+echo mine >"$L/run.partial-backup/f"; echo mine >"$L/res.skinsim-staging.mine/f"
+echo mine >"$L/res.skinsim-backup.x/f"
+echo mine >"$L/X.skinsim-lock"
+dead=$(sh -c 'echo $$')   # a process that is gone; a folder with its id but no marker stays too
+mkdir "$L/run.skinsim-staging.$dead.AbC123"; echo mine >"$L/run.skinsim-staging.$dead.AbC123/f"
+echo mine >"$L/s.csv.skinsim-lock" # the user's file at the lock's name: refused, kept
+sums "$L" >"$W/look.sums"
+expect2 "not a skinsim lock file" optics spectrum --photons 100 --wl-step 100 --out "$L/s.csv"
+check '[ "$(sums "$L")" = "$(cat "$W/look.sums")" ] && [ ! -e "$L/s.csv" ]' "a user's s.csv.skinsim-lock was touched"
+rm "$L/s.csv.skinsim-lock"; sums "$L" >"$W/look.sums"
+sk optics spectrum --photons 100 --wl-step 100 --out "$L/s.csv" >/dev/null
+rc1=$?
+sk abrasion --size 32 --times 1 --out "$L/run" --quiet
+rc2=$?
+sk abrasion --size 32 --times 1 --out "$L/res" --quiet # res missing: the backup look-alike stays
+rc3=$?
+check '[ $rc1 -eq 0 ] && [ $rc2 -eq 0 ] && [ $rc3 -eq 0 ]' "runs beside look-alikes: rc $rc1 $rc2 $rc3"
+check '[ "$(sums "$L" | grep -v " ./s.csv$" | grep -v " ./run/" | grep -v " ./res/")" = "$(cat "$W/look.sums")" ]' "a user's look-alike was changed: $(ls -A "$L")"
+check 'only "$L" X.skinsim-lock res res.skinsim-backup.x res.skinsim-staging.mine run run.partial-backup run.skinsim-staging.$dead.AbC123 s.csv s.csv.tmp.2024Q1' "look-alikes: $(ls -A "$L")"
+check '[ -f "$L/res/.skinsim-complete" ] && [ ! -e "$L/res/f" ] && [ ! -e "$L/res/.skinsim-staging" ]' "res is not the new run's"
+rm -rf "$L"
 
 # ---- concurrent runs into one output: the second is refused -----------------
 "$CLI" abrasion --size 256 --times 0,1,5 --out "$T/c" --quiet & pid=$!

@@ -80,6 +80,76 @@ rm "$T/ref/checkpoints/ckpt_000000000001.sshc"
 "$CLI" heal --resume "$T/ref" --days 4 --quiet
 check '[ $? -eq 0 ] && grep -q "\"scenario\":	\"clean\"" "$T/ref/summary.json"' "resume with its own checkpoints"
 
+# ---- a resumed run's summary.json is the uninterrupted one's, byte for byte --------
+# (but the wall time, the thread count and the resume's record); t50 and t95
+# interpolate the area rows restored from the checkpoint, which must read
+# back bit for bit (issue 21: t50 5.334857047685207 against ...208)
+nosum() { grep -v '"wall_time_s"\|"resumed_from_step"\|"threads"' "$1"; }
+"$CLI" heal $SMALL --days 6 --checkpoint-every 0.5 --out "$T/r6"
+"$CLI" heal $SMALL --days 3 --checkpoint-every 0.5 --out "$T/s6"
+"$CLI" heal --resume "$T/s6" --days 6 --quiet
+check 'grep -q "time_to_50pct_closure_days\":	[0-9]" "$T/r6/summary.json" && cmp -s <(nosum "$T/r6/summary.json") <(nosum "$T/s6/summary.json")' "resumed summary.json differs: $(diff <(nosum "$T/r6/summary.json") <(nosum "$T/s6/summary.json") | head -4)"
+rm -rf "$T/r6" "$T/s6"
+
+# ---- issue 21: a resume proves every checkpoint is the run's (run id + identity) ----
+# run.json gone and another grid's checkpoints copied in: refused, nothing changed
+"$CLI" heal $SMALL --days 1 --checkpoint-every 0.5 --out "$T/i"
+cp -r "$T/i" "$T/i2"
+rm "$T/i/run.json"; cp "$T/g/checkpoints/"* "$T/i/checkpoints/"
+sums "$T/i" >"$W/i.sums"
+expect2 "run.json is missing" heal --resume "$T/i" --days 3
+check '[ "$(sums "$T/i")" = "$(cat "$W/i.sums")" ] && [ ! -e "$T/i/fields/fields_0002.vti" ]' "run.json gone: the run was touched"
+# keloid checkpoints into a clean run (its run.json there): refused, named
+cp "$T/k/checkpoints/"* "$T/i2/checkpoints/"
+sums "$T/i2" >"$W/i.sums"
+expect2 "belongs to another run" heal --resume "$T/i2" --days 3
+check '[ "$(sums "$T/i2")" = "$(cat "$W/i.sums")" ]' "keloid checkpoints: the run was touched"
+# a checkpoint of an identical set-up but another run (same grid, scenario, parameters)
+rm -rf "$T/i2"; cp -r "$T/ref" "$T/i2"; rm -f "$T/i2/checkpoints/"*
+"$CLI" heal $SMALL --days 1 --checkpoint-every 0.5 --out "$T/twin"
+cp "$T/twin/checkpoints/$(ls "$T/twin/checkpoints" | head -1)" "$T/i2/checkpoints/"
+cp "$T/ref/checkpoints/"* "$T/i2/checkpoints/" 2>/dev/null
+sums "$T/i2" >"$W/i.sums"
+expect2 "run id" heal --resume "$T/i2" --days 5
+check '[ "$(sums "$T/i2")" = "$(cat "$W/i.sums")" ]' "a twin run's checkpoint: the run was touched"
+# a run folder from before run ids: refused with what to do
+rm -rf "$T/i2"; cp -r "$T/ref" "$T/i2"
+sed -i -e '/"run_id"/d' -e '/"identity"/d' "$T/i2/run.json"
+sums "$T/i2" >"$W/i.sums"
+expect2 "before run ids.*--force" heal --resume "$T/i2" --days 5
+check '[ "$(sums "$T/i2")" = "$(cat "$W/i.sums")" ]' "an old run folder was touched"
+rm -rf "$T/i" "$T/i2" "$T/twin"
+
+# ---- a checkpoint piece that is a named pipe: exit 2 at once, not a hang ----------
+"$CLI" heal $SMALL --days 1 --checkpoint-every 0.5 --checkpoint-pieces 2x1x1 --out "$T/p"
+for piece in "$T"/p/checkpoints/ckpt_*_p000001.sshp; do rm "$piece"; mkfifo "$piece"; done
+timeout 20 "$CLI" heal --resume "$T/p" --days 2 --quiet 2>"$W/err.txt"
+rc=$?
+check '[ $rc -eq 2 ] && grep -q "named pipe" "$W/err.txt"' "a pipe as checkpoint piece: rc $rc ($(cat "$W/err.txt"))"
+rm -rf "$T/p"
+
+# ---- wound --heal: its folder checked before work, never written into (issue 21) ----
+"$CLI" heal $SMALL --days 2 --out "$T/wh"
+sums "$T/wh" >"$W/wh.sums"
+expect2 "inside the input folder" wound --heal "$T/wh" --days 0,2 --size 32 --out "$T/wh/new" --quiet
+check '[ "$(sums "$T/wh")" = "$(cat "$W/wh.sums")" ] && [ ! -e "$T/wh/new" ]' "wound --out inside --heal: written into"
+"$CLI" heal --grid 24x24x6 --size-mm 12,12,3 --quiet --days 2 --out "$T/wg"
+snap="$T/wc/fields/fields_0002.vti"
+for how in truncated garbage extent grid; do
+  rm -rf "$T/wc"; cp -r "$T/wh" "$T/wc"
+  case $how in
+    truncated) head -c 3000 "$T/wh/fields/fields_0002.vti" >"$snap" ;;
+    garbage) head -c 3000 /dev/urandom >"$snap" ;;
+    extent) sed -i '0,/WholeExtent="0 20 0 20/s//WholeExtent="0 2000000 0 2000000/' "$snap" ;;
+    grid) cp "$T/wg/fields/fields_0002.vti" "$snap" ;;
+  esac
+  expect2 "fields_0002.vti" wound --heal "$T/wc" --days 0,1,2 --size 32 --out "$T/wout" --quiet
+  check '[ ! -e "$T/wout" ]' "a $how snapshot: wound wrote $T/wout"
+done
+rm -rf "$T/wh" "$T/wg" "$T/wc"
+expect2 "out of range" heal $SMALL --days 1 --threads 0 --out "$T/t0"
+check '[ ! -e "$T/t0" ]' "heal --threads 0 wrote"
+
 # ---- two runs into one new folder at once ---------------------------------------
 "$CLI" heal $SMALL --days 40 --out "$T/two" & pid=$!
 await "$T/two.skinsim-lock" || bad "no lock file"

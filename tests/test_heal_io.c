@@ -12,6 +12,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include "skinsim/heal.h"
@@ -241,7 +242,14 @@ static void test_checkpoint_roundtrip_and_corruption(void **state) {
     assert_true(ck.grid->field[SS_HEAL_SCAR][3] == 42.0f);
     ss_heal_checkpoint_free(&ck);
     /* a write interrupted after the temporary file: a leftover .tmp is ignored */
-    char *tmp = tu_join(dir, "checkpoints/ckpt_999999999999.sshc.tmp.abc123");
+    pid_t dead = fork(); /* the id of a process that is gone: a killed writer's */
+    if (dead == 0) _exit(0);
+    assert_true(dead > 0);
+    waitpid(dead, NULL, 0);
+    char tname[128];
+    snprintf(tname, sizeof tname, "checkpoints/ckpt_999999999999.sshc" SS_ATOMIC_TMP "%ld.abc123",
+             (long)dead);
+    char *tmp = tu_join(dir, tname);
     FILE *f = fopen(tmp, "wb");
     fwrite(bytes, 1, len / 2, f);
     fclose(f);

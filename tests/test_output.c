@@ -274,6 +274,15 @@ static void test_in_place_folder(void **state) {
     free(dir);
 }
 
+/* The id of a process that has ended (a child, reaped). */
+static long dead_pid(void) {
+    pid_t p = fork();
+    if (p == 0) _exit(0);
+    assert_true(p > 0);
+    waitpid(p, NULL, 0);
+    return (long)p;
+}
+
 static void test_lock_and_stale_cleanup(void **state) {
     (void)state;
     ss_error err;
@@ -292,31 +301,71 @@ static void test_lock_and_stale_cleanup(void **state) {
     assert_int_equal(ss_write_file_atomic(ss_outputs_path(a, 0), "a", 1, &err), SS_OK);
     assert_int_equal(ss_outputs_finish(a, SS_OK, &err), SS_OK);
     ss_outputs_free(a);
-    /* what killed runs leave: staging, the older .partial/.tmp names, a lock
-     * file, and a backup whose target is gone (a swap killed half-way) */
-    char *st = path_in(dir, "t.png.skinsim-staging.99999.AbCdEf");
-    char *part = path_in(dir, "t.png.partial-Xy12Zq");
-    char *tmp = path_in(dir, "t.png.tmp.Qw12Er");
+    /* what killed runs leave, each named with the id of a process that is
+     * gone: a staging folder (its marker inside), an atomic write's
+     * temporary, a lock file, and a backup whose target is gone (a swap
+     * killed half-way) */
+    long dead = dead_pid();
+    char name[128];
+    snprintf(name, sizeof name, "t.png.skinsim-staging.%ld.AbCdEf", dead);
+    char *st = path_in(dir, name);
+    snprintf(name, sizeof name, "t.png.skinsim-tmp.%ld.Qw12Er", dead);
+    char *tmp = path_in(dir, name);
     char *lock = path_in(dir, "t.png.skinsim-lock");
     mkdir(st, 0755);
-    mkdir(part, 0755);
     put(tmp, "half");
-    put(lock, "99999\n");
-    char *inner = path_in(st, "t.png");
+    snprintf(name, sizeof name, "skinsim-lock %ld\n", dead);
+    put(lock, name);
+    char *inner = path_in(st, "t.png"), *mark = path_in(st, SS_OUTPUT_STAGING);
     put(inner, "half-written");
+    snprintf(name, sizeof name, "skinsim staging %ld\n", dead);
+    put(mark, name);
+    /* what only looks like it: the user's, never touched */
+    static const char *const mine[] = {"t.png.partial-Xy12Zq", "t.png.tmp.Qw12Er",
+                                       "t.png.skinsim-staging.mine", "t.png.skinsim-backup.x",
+                                       "t.png.skinsim-tmp.1.2"};
+    char *keep[7];
+    for (int k = 0; k < 5; k++) {
+        keep[k] = path_in(dir, mine[k]);
+        put(keep[k], "mine");
+    }
+    /* a folder with a dead id but no skinsim marker, and one of a live process */
+    snprintf(name, sizeof name, "t.png.skinsim-staging.%ld.UsEr01", dead);
+    keep[5] = path_in(dir, name);
+    mkdir(keep[5], 0755);
+    char *kf = path_in(keep[5], "notes.txt");
+    put(kf, "mine");
+    snprintf(name, sizeof name, "t.png.skinsim-staging.%ld.LiVe01", (long)getppid());
+    keep[6] = path_in(dir, name);
+    mkdir(keep[6], 0755);
     assert_int_equal(run_file(t, "b", SS_OK, &err), SS_OK);
     assert_text(t, "b");
-    assert_int_equal(tu_count_entries(dir), 1);
-    char *bk = path_in(dir, "t.png.skinsim-backup.4242.ZZZZZZ");
+    assert_int_equal(tu_count_entries(dir), 1 + 7);
+    for (int k = 0; k < 5; k++) assert_text(keep[k], "mine");
+    assert_text(kf, "mine");
+    snprintf(name, sizeof name, "t.png.skinsim-backup.%ld.ZZZZZZ", dead);
+    char *bk = path_in(dir, name);
     assert_int_equal(rename(t, bk), 0);
     assert_int_equal(run_file(t, "c", SS_ERR_RUNTIME, &err), SS_ERR_RUNTIME);
     assert_text(t, "b"); /* the backup came back, then the failed run left it */
-    assert_int_equal(tu_count_entries(dir), 1);
+    assert_int_equal(tu_count_entries(dir), 1 + 7);
+    /* a lock file of the user's: refused, kept as it is */
+    char *t2 = path_in(dir, "u.png"), *lock2 = path_in(dir, "u.png.skinsim-lock");
+    put(lock2, "mine\n");
+    assert_int_equal(run_file(t2, "x", SS_OK, &err), SS_ERR_INPUT);
+    if (!strstr(err.msg, "not a skinsim lock file")) fail_msg("'%s'", err.msg);
+    assert_text(lock2, "mine\n");
+    struct stat sb;
+    assert_int_not_equal(lstat(t2, &sb), 0);
+    free(t2);
+    free(lock2);
+    for (int k = 0; k < 7; k++) free(keep[k]);
+    free(kf);
     free(st);
-    free(part);
     free(tmp);
     free(lock);
     free(inner);
+    free(mark);
     free(bk);
     free(t);
     tu_rmtree(dir);

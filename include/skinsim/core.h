@@ -118,7 +118,8 @@ ss_image *ss_exr_read_channels(const char *path, const char *const *names, int n
 /* Picks PNG or EXR from the extension (.png, .exr). For PNG, enc applies. */
 ss_image *ss_image_read(const char *path, ss_encoding enc, ss_error *err);
 
-/* Atomic output file: write to path.tmp.XXXXXX, then rename on commit. */
+/* Atomic output file: write to path.skinsim-tmp.PID.XXXXXX, then rename on
+ * commit (the name lets a later run prove a killed one's temporary is skinsim's). */
 typedef struct ss_atomic_file {
     FILE *fp;
     char path[4096];
@@ -215,6 +216,10 @@ ss_status ss_output_dir_mark_incomplete(const char *dir, ss_error *err);
 int ss_output_dir_is_unfinished(const char *dir, const char *owner);
 #define SS_OUTPUT_MARKER ".skinsim-complete"
 #define SS_OUTPUT_UNFINISHED ".skinsim-unfinished"
+/* Inside a staging folder while a run writes it ("skinsim staging PID"). */
+#define SS_OUTPUT_STAGING ".skinsim-staging"
+/* The temporary name of an atomic file: PATH.skinsim-tmp.PID.XXXXXX. */
+#define SS_ATOMIC_TMP ".skinsim-tmp."
 
 /* An output path named by an input file (an .mci's run outputs): name is
  * taken relative to base_dir; absolute names and names that leave base_dir

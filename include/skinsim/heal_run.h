@@ -332,9 +332,10 @@ int ss_heal_saved_run_find(const ss_heal_saved_run *s, double day);
  * summary.json and fields.pvd -> SS_ERR_INPUT naming the file. */
 ss_heal_grid *ss_heal_saved_run_load(const ss_heal_saved_run *s, int i, float **displacement,
                                      double **closed_day, ss_error *err);
-/* Snapshot i's files are there, without reading their data: the .vti, or
- * the .pvti (its XML, the tiling) and every piece. SS_ERR_INPUT naming the
- * file. A caller checks the snapshots it will need before writing anything. */
+/* Snapshot i is whole: its files are there (the .vti, or the .pvti, its
+ * tiling and every piece) and it reads as ss_heal_saved_run_load reads it
+ * (header, extent, grid, day, size), then is dropped. SS_ERR_INPUT naming the
+ * file. A caller checks the snapshots it will need before any work. */
 ss_status ss_heal_saved_run_check(const ss_heal_saved_run *s, int i, ss_error *err);
 
 #ifdef __cplusplus

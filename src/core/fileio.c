@@ -15,7 +15,7 @@ ss_status ss_atomic_open(ss_atomic_file *af, const char *path, ss_error *err) {
     if (strlen(path) >= sizeof af->path)
         return ss_error_set(err, SS_ERR_INPUT, "%s: path too long", path);
     snprintf(af->path, sizeof af->path, "%s", path);
-    snprintf(af->tmp, sizeof af->tmp, "%s.tmp.XXXXXX", path);
+    snprintf(af->tmp, sizeof af->tmp, "%s" SS_ATOMIC_TMP "%ld.XXXXXX", path, (long)getpid());
     int fd = mkstemp(af->tmp);
     if (fd < 0)
         return ss_error_set(err, SS_ERR_INPUT, "%s: cannot create file: %s", path, strerror(errno));

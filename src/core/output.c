@@ -13,10 +13,15 @@
  *   holder's pid. After taking it the inode is compared with the path's, so
  *   a lock unlinked by a finishing run is not mistaken for the live one.
  * - Staged next to the target (NAME.skinsim-staging.PID.XXXXXX, same file
- *   system, so the swap is a rename). Whatever killed runs left there
- *   (staging, a backup, the older NAME.partial-* and NAME.tmp.*) is removed
- *   by the next run that holds the lock; a backup whose target is missing is
- *   first put back. Free space is checked against the callers' estimates.
+ *   system, so the swap is a rename; a .skinsim-staging marker inside).
+ *   What killed runs left there (staging, a backup, an atomic write's
+ *   NAME.skinsim-tmp.PID.XXXXXX, a lock) is removed by the next run that
+ *   holds the lock, but only what it can prove is skinsim's: the exact name
+ *   with the id of a process that is gone and, for a folder, a skinsim
+ *   marker inside (or nothing); a lock file only when its text is a skinsim
+ *   lock's. A user's look-alike is never renamed, truncated or removed (a
+ *   foreign file at the lock's name is refused). A backup whose target is
+ *   missing is first put back. Free space is checked against the estimates.
  * - Swapped in whole. renameat2(RENAME_EXCHANGE) swaps new and old in one
  *   step, leaving the old at the staging name until every output of the
  *   run is in; if one swap fails, those done are swapped back. Where the
@@ -37,6 +42,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <signal.h>
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <sys/statvfs.h>
@@ -50,7 +56,8 @@
 #endif
 
 /* Room kept in a path for what goes under and next to a target. */
-#define STAGING_SUFFIX 48 /* ".skinsim-staging.PID.XXXXXX" and ".tmp.XXXXXX" */
+#define STAGING_SUFFIX 48 /* ".skinsim-staging.PID.XXXXXX" and ".skinsim-tmp.PID.XXXXXX" */
+#define SS_LOCK_PREFIX "skinsim-lock "
 #define DIR_CONTENT_ROOM 256
 
 typedef enum swap_state { SWAP_NONE, SWAP_EXCHANGED, SWAP_FRESH, SWAP_BACKUP } swap_state;
@@ -75,6 +82,7 @@ typedef struct in_entry {
     char *user, *real;
     dev_t dev;
     ino_t ino;
+    int dir; /* an input folder (wound --heal DIR): no output may lie inside it */
 } in_entry;
 
 struct ss_outputs {
@@ -193,6 +201,11 @@ static int dir_is_empty(const char *path) {
         }
     closedir(d);
     return empty;
+}
+
+/* 1 when no process has this id (the run that named a leftover is gone). */
+static int process_gone(long pid) {
+    return pid > 0 && pid <= INT_MAX && kill((pid_t)pid, 0) != 0 && errno == ESRCH;
 }
 
 /* ---- markers ---------------------------------------------------------------- */
@@ -317,7 +330,14 @@ static int clash_with_input(const ss_outputs *o, const out_entry *e, const in_en
     struct stat st;
     if (in->ino && stat(e->real, &st) == 0 && st.st_dev == in->dev && st.st_ino == in->ino)
         return 1;
-    return e->kind != SS_OUTPUT_FILE && path_within(in->real, e->real);
+    return (e->kind != SS_OUTPUT_FILE && path_within(in->real, e->real)) ||
+           (in->dir && path_within(e->real, in->real));
+}
+
+static const char *clash_words(const out_entry *e, const in_entry *in) {
+    return in->dir && path_within(e->real, in->real) && strcmp(e->real, in->real)
+               ? "it lies inside the input folder"
+               : "it would overwrite the input";
 }
 
 ss_status ss_outputs_input(ss_outputs *o, const char *path, ss_error *err) {
@@ -341,12 +361,14 @@ ss_status ss_outputs_input(ss_outputs *o, const char *path, ss_error *err) {
     in->real = real;
     in->dev = st.st_dev;
     in->ino = st.st_ino;
+    in->dir = S_ISDIR(st.st_mode);
     char sb[200], sb2[200];
     for (int i = 0; i < o->nout; i++)
         if (clash_with_input(o, &o->out[i], in))
-            return ss_error_set(err, SS_ERR_INPUT, "%s%s%s: it would overwrite the input %s",
+            return ss_error_set(err, SS_ERR_INPUT, "%s%s%s: %s %s",
                                 o->out[i].label ? o->out[i].label : "", o->out[i].label ? " " : "",
-                                shown(o->out[i].user, sb), shown(path, sb2));
+                                shown(o->out[i].user, sb), clash_words(&o->out[i], in),
+                                shown(path, sb2));
     return SS_OK;
 }
 
@@ -494,7 +516,7 @@ ss_status ss_outputs_add(ss_outputs *o, const char *label, const char *path, ss_
     }
     for (int i = 0; i < o->nin && !s; i++)
         if (clash_with_input(o, e, &o->in[i]))
-            s = OUTMSG(e, "it would overwrite the input %s", shown(o->in[i].user, sb2));
+            s = OUTMSG(e, "%s %s", clash_words(e, &o->in[i]), shown(o->in[i].user, sb2));
     if (s) pop_entry(o);
     return s;
 }
@@ -541,11 +563,62 @@ static void remove_made(out_entry *e) {
 }
 
 static void release_lock(out_entry *e) {
+    struct stat a, b;
     if (e->lock_fd >= 0) {
-        unlink(e->lock_path); /* while held: a waiter re-checks the inode */
+        /* ours only (the inode we hold), while held: a waiter re-checks the inode */
+        if (fstat(e->lock_fd, &a) == 0 && lstat(e->lock_path, &b) == 0 && a.st_ino == b.st_ino &&
+            a.st_dev == b.st_dev)
+            unlink(e->lock_path);
         close(e->lock_fd);
         e->lock_fd = -1;
     }
+}
+
+/* The pid a lock file's text names: "skinsim-lock PID\n" (written since the
+ * leftovers are proven), or "PID\n" of earlier versions; 0 for anything else
+ * (a file of the user's that merely has the name). */
+static long lock_text_pid(const char *buf, int *legacy) {
+    const char *p = buf;
+    *legacy = strncmp(p, SS_LOCK_PREFIX, strlen(SS_LOCK_PREFIX)) != 0;
+    if (!*legacy) p += strlen(SS_LOCK_PREFIX);
+    char *end;
+    errno = 0;
+    long pid = strtol(p, &end, 10);
+    if (end == p || *p < '0' || *p > '9' || errno || strcmp(end, "\n") || pid <= 0) return 0;
+    return pid;
+}
+
+/* A new lock file, created with its text and locked before anyone can see
+ * it (O_TMPFILE linked in), so a kill never leaves one that is not provably
+ * ours. -1 with errno EEXIST when another run made one first. */
+static int create_lock(const out_entry *e) {
+    char text[48];
+    int len = snprintf(text, sizeof text, SS_LOCK_PREFIX "%ld\n", (long)getpid());
+#ifdef O_TMPFILE
+    int fd = open(e->parent, O_TMPFILE | O_RDWR | O_CLOEXEC, 0644);
+    if (fd >= 0) {
+        char proc[64];
+        snprintf(proc, sizeof proc, "/proc/self/fd/%d", fd);
+        if (pwrite(fd, text, (size_t)len, 0) == len && flock(fd, LOCK_EX | LOCK_NB) == 0 &&
+            linkat(AT_FDCWD, proc, AT_FDCWD, e->lock_path, AT_SYMLINK_FOLLOW) == 0)
+            return fd;
+        int er = errno;
+        close(fd);
+        if (er == EEXIST) {
+            errno = er;
+            return -1;
+        }
+    } /* no O_TMPFILE or no /proc here: create, lock, then write (a kill in
+         between leaves an empty file, which is refused, not removed) */
+#endif
+    int f2 = open(e->lock_path, O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC | O_NOFOLLOW, 0644);
+    if (f2 < 0) return -1;
+    if (flock(f2, LOCK_EX | LOCK_NB) != 0 || pwrite(f2, text, (size_t)len, 0) != len) {
+        close(f2);
+        errno = EEXIST; /* someone opened it first: look again */
+        return -1;
+    }
+    return f2;
 }
 
 static ss_status take_lock(out_entry *e, ss_error *err) {
@@ -555,21 +628,30 @@ static ss_status take_lock(out_entry *e, ss_error *err) {
     if (!e->lock_path) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     snprintf(e->lock_path, n, "%s.skinsim-lock", e->real);
     for (int attempt = 0; attempt < 20; attempt++) {
-        int fd = open(e->lock_path, O_RDWR | O_CREAT | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK, 0644);
+        int fd = open(e->lock_path, O_RDONLY | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK);
+        if (fd < 0 && errno == ENOENT) {
+            if ((fd = create_lock(e)) >= 0) {
+                e->lock_fd = fd;
+                return SS_OK;
+            }
+            if (errno == EEXIST) continue;
+        }
         if (fd < 0)
             return ss_error_set(err, SS_ERR_INPUT, "%s: cannot create its lock file %s: %s",
-                                shown(e->user, sb), e->lock_path, strerror(errno));
+                                shown(e->user, sb), e->lock_path,
+                                errno == ELOOP ? "it is a symbolic link" : strerror(errno));
         struct stat a, b;
         if (fstat(fd, &a) != 0 || !S_ISREG(a.st_mode)) {
             close(fd);
             return ss_error_set(err, SS_ERR_INPUT, "%s: its lock file %s is not a regular file",
                                 shown(e->user, sb), e->lock_path);
         }
+        char buf[64] = {0};
+        ssize_t got = a.st_size < (off_t)sizeof buf ? pread(fd, buf, sizeof buf - 1, 0) : -1;
+        int legacy = 0;
+        long pid = got > 0 ? lock_text_pid(buf, &legacy) : 0;
         if (flock(fd, LOCK_EX | LOCK_NB) != 0) {
-            char buf[64] = {0};
-            ssize_t got = pread(fd, buf, sizeof buf - 1, 0);
             close(fd);
-            long pid = got > 0 ? strtol(buf, NULL, 10) : 0;
             if (pid > 0)
                 return ss_error_set(err, SS_ERR_INPUT,
                                     "%s: another skinsim run (process %ld) is writing it; wait "
@@ -584,13 +666,23 @@ static ss_status take_lock(out_entry *e, ss_error *err) {
             close(fd); /* the holder removed it as we opened it: try again */
             continue;
         }
-        char text[32];
-        int len = snprintf(text, sizeof text, "%ld\n", (long)getpid());
-        if (ftruncate(fd, 0) != 0 || pwrite(fd, text, (size_t)len, 0) != len) {
-            /* the lock holds without the pid; the message just cannot name it */
+        /* unlocked: the lock of a killed run when its text is a skinsim lock's
+         * (an earlier version's "PID" only when that process is gone); it is
+         * removed and made anew. Anything else is the user's and is kept. */
+        if (pid > 0 && (!legacy || process_gone(pid))) {
+            unlink(e->lock_path);
+            close(fd);
+            continue;
         }
-        e->lock_fd = fd;
-        return SS_OK;
+        close(fd);
+        if (a.st_size == 0 && attempt < 19) { /* being created by the fallback: look again */
+            usleep(10000);
+            continue;
+        }
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "%s: %s exists and is not a skinsim lock file, so it is left as it "
+                            "is; move it away or choose another output",
+                            shown(e->user, sb), e->lock_path);
     }
     return ss_error_set(err, SS_ERR_INPUT, "%s: its lock file %s keeps changing",
                         shown(e->user, sb), e->lock_path);
@@ -613,21 +705,61 @@ long ss_output_lock_holder(const char *path) {
     } else {
         char buf[64] = {0};
         ssize_t got = pread(fd, buf, sizeof buf - 1, 0);
-        pid = got > 0 ? strtol(buf, NULL, 10) : 0;
+        int legacy;
+        pid = got > 0 ? lock_text_pid(buf, &legacy) : 0;
         if (pid <= 0) pid = -1;
     }
     close(fd);
     return pid;
 }
 
-static int has_prefix_tail(const char *name, const char *base, const char *mid, size_t tail) {
+/* A name of ours next to base: BASE + mid + PID + "." + 6 letters or digits
+ * (mkdtemp/mkstemp); the pid in *pid. */
+static int our_name(const char *name, const char *base, const char *mid, long *pid) {
     size_t nb = strlen(base), nm = strlen(mid);
     if (strncmp(name, base, nb) || strncmp(name + nb, mid, nm)) return 0;
-    return tail == 0 || strlen(name + nb + nm) == tail;
+    const char *p = name + nb + nm, *q = p;
+    long v = 0;
+    while (*q >= '0' && *q <= '9' && q - p < 10) v = v * 10 + (*q++ - '0');
+    if (q == p || *p == '0' || *q != '.' || strlen(q + 1) != 6 || v <= 0) return 0;
+    for (const char *c = q + 1; *c; c++)
+        if (!((*c >= '0' && *c <= '9') || (*c >= 'a' && *c <= 'z') || (*c >= 'A' && *c <= 'Z')))
+            return 0;
+    *pid = v;
+    return 1;
+}
+
+/* 1 when dir/name is a regular file whose text a skinsim marker has. */
+static int skinsim_marker(const char *dir, const char *name) {
+    char *m = join(dir, name);
+    if (!m) return 0;
+    int fd = open(m, O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOFOLLOW);
+    free(m);
+    if (fd < 0) return 0;
+    char buf[128] = {0};
+    struct stat st;
+    ssize_t n = fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size < (off_t)sizeof buf
+                    ? read(fd, buf, sizeof buf - 1)
+                    : -1;
+    close(fd);
+    return n > 8 && !strncmp(buf, "skinsim ", 8) && buf[n - 1] == '\n';
+}
+
+/* A folder a skinsim run made: its staging marker, a completion marker (an
+ * output swapped out, or one finished but not yet swapped in), or empty. */
+static int our_folder(const char *path) {
+    struct stat st;
+    if (lstat(path, &st) != 0 || !S_ISDIR(st.st_mode)) return 0;
+    return skinsim_marker(path, SS_OUTPUT_STAGING) || skinsim_marker(path, SS_OUTPUT_MARKER) ||
+           dir_is_empty(path);
 }
 
 /* What killed runs left next to e's target; called with the lock held, so
- * no live run owns any of it. */
+ * no live run owns any of it. Only what is provably a skinsim run's goes:
+ * the name carries the marker and the id of a process that is gone, and a
+ * folder holds a skinsim marker (or nothing); a file or folder of the
+ * user's that merely looks alike (res.skinsim-staging.mine, s.csv.tmp.1) is
+ * never touched. */
 static void clean_stale(out_entry *e) {
     DIR *d = opendir(e->parent);
     if (!d) return;
@@ -636,10 +768,11 @@ static void clean_stale(out_entry *e) {
     int nn = 0;
     while ((de = readdir(d))) {
         const char *nm = de->d_name;
-        if (has_prefix_tail(nm, e->base, ".skinsim-staging.", 0) ||
-            has_prefix_tail(nm, e->base, ".skinsim-backup.", 0) ||
-            has_prefix_tail(nm, e->base, ".partial-", 6) ||
-            has_prefix_tail(nm, e->base, ".tmp.", 6)) {
+        long pid;
+        if ((our_name(nm, e->base, ".skinsim-staging.", &pid) ||
+             our_name(nm, e->base, ".skinsim-backup.", &pid) ||
+             our_name(nm, e->base, SS_ATOMIC_TMP, &pid)) &&
+            process_gone(pid)) {
             char **g = realloc(names, (size_t)(nn + 1) * sizeof *g);
             if (!g) break;
             names = g;
@@ -648,20 +781,26 @@ static void clean_stale(out_entry *e) {
     }
     closedir(d);
     struct stat st;
+    const size_t nb = strlen(e->base);
     for (int i = 0; i < nn; i++) {
         char *p = join(e->parent, names[i]);
-        if (p) {
-            int backup = strstr(names[i] + strlen(e->base), ".skinsim-backup.") ==
-                         names[i] + strlen(e->base);
-            /* a swap killed between its two renames: the old one goes back */
-            if (backup && lstat(e->real, &st) != 0 && rename(p, e->real) == 0) {
-                free(p);
-                free(names[i]);
-                continue;
+        const char *mid = names[i] + nb;
+        if (p && lstat(p, &st) == 0) {
+            int backup = !strncmp(mid, ".skinsim-backup.", 16);
+            int tmp = !strncmp(mid, SS_ATOMIC_TMP, strlen(SS_ATOMIC_TMP));
+            if (tmp || (backup && e->kind == SS_OUTPUT_FILE)) {
+                /* a file: an atomic write's temporary, or a file output's old
+                 * version (put back when a swap was killed half way) */
+                if (S_ISREG(st.st_mode) &&
+                    !(backup && lstat(e->real, &st) != 0 && rename(p, e->real) == 0))
+                    unlink(p);
+            } else if (our_folder(p)) {
+                /* a swap killed between its two renames: the old one goes back */
+                if (!(backup && lstat(e->real, &st) != 0 && rename(p, e->real) == 0))
+                    ss_remove_tree(p);
             }
-            ss_remove_tree(p);
-            free(p);
         }
+        free(p);
         free(names[i]);
     }
     free(names);
@@ -691,7 +830,11 @@ static ss_status make_staging(const ss_outputs *o, out_entry *e, ss_error *err) 
     chmod(t, 0755);
     e->staging = t;
     e->write = e->kind == SS_OUTPUT_DIR ? strdup(t) : join(t, e->base);
-    return e->write ? SS_OK : ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    if (!e->write) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    /* what proves to a later run that this folder is a skinsim run's */
+    char text[64];
+    snprintf(text, sizeof text, "staging %ld", (long)getpid());
+    return put_marker(t, SS_OUTPUT_STAGING, text, err);
 }
 
 static const char *human_bytes(double v, char buf[32]) {
@@ -824,9 +967,18 @@ static int swap_in(out_entry *e) {
     char *b = malloc(n);
     if (!b) return -1;
     snprintf(b, n, "%s.skinsim-backup.%ld.XXXXXX", e->real, (long)getpid());
-    if (!mkdtemp(b) || rename(e->real, b) != 0) {
+    int bfd = -1; /* a file's backup is a file (rename over an empty one), a folder's a folder */
+    if (e->kind == SS_OUTPUT_FILE ? (bfd = mkstemp(b)) < 0 : !mkdtemp(b)) {
+        free(b);
+        return -1;
+    }
+    if (bfd >= 0) close(bfd);
+    if (rename(e->real, b) != 0) {
         int er = errno;
-        rmdir(b);
+        if (e->kind == SS_OUTPUT_FILE)
+            unlink(b);
+        else
+            rmdir(b);
         free(b);
         errno = er;
         return -1;
@@ -896,8 +1048,9 @@ ss_status ss_outputs_finish(ss_outputs *o, ss_status status, ss_error *err) {
         } else if (e->kind == SS_OUTPUT_FILE && (lstat(e->write, &st) != 0 || !S_ISREG(st.st_mode)))
             s = ss_error_set(err, SS_ERR_RUNTIME, "%s: the run did not write it",
                              shown(e->user, sb));
-        else if (e->kind == SS_OUTPUT_DIR)
-            s = ss_output_dir_mark_complete(e->write, o->owner, err);
+        else if (e->kind == SS_OUTPUT_DIR &&
+                 !(s = ss_output_dir_mark_complete(e->write, o->owner, err)))
+            s = drop_marker(e->write, SS_OUTPUT_STAGING, err); /* complete proves it now */
     }
     int done = 0;
     for (; done < o->nout && !s; done++) {

@@ -10,6 +10,8 @@
 #include "checkpoint_internal.h"
 
 #include <dirent.h>
+#include <errno.h>
+#include <signal.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -176,13 +178,22 @@ void ss_heal__ckpt_prune(const char *dir, int keep, unsigned long long upto) {
             if (c[j].kind == CK_PIECE && c[j].step == c[i].step) c[j].kind = CK_NONE;
     }
     free(c);
-    /* temporary files left by writes that were killed (ours are committed) */
+    /* temporary files left by checkpoint writes that were killed (ours are
+     * committed): a checkpoint's name, the atomic writer's marker and the id
+     * of a process that is gone; nothing else here is touched */
     DIR *d = opendir(dir);
     struct dirent *e;
     while (d && (e = readdir(d))) {
-        if (strncmp(e->d_name, "ckpt_", 5) ||
-            !(strstr(e->d_name, CK_EXT ".tmp.") || strstr(e->d_name, CK_HEAD_EXT ".tmp.") ||
-              strstr(e->d_name, CK_PIECE_EXT ".tmp.")))
+        const char *t = strstr(e->d_name, SS_ATOMIC_TMP);
+        unsigned long long v;
+        char base[64];
+        if (!t || (size_t)(t - e->d_name) >= sizeof base) continue;
+        snprintf(base, sizeof base, "%.*s", (int)(t - e->d_name), e->d_name);
+        if (ck_name(base, &v) == CK_NONE) continue;
+        char *end;
+        long pid = strtol(t + strlen(SS_ATOMIC_TMP), &end, 10);
+        if (pid <= 0 || *end != '.' || strlen(end + 1) != 6 || kill((pid_t)pid, 0) == 0 ||
+            errno != ESRCH)
             continue;
         snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
         unlink(path);

@@ -371,11 +371,14 @@ static ss_status piece_stream(const char *run_dir, const ss_heal_ckpt_header *h,
     char path[4400];
     ss_heal_ckpt_piece_path(path, sizeof path, run_dir, h->step, i);
     const ss_heal_ckpt_piece *p = &h->piece[i];
-    FILE *f = fopen(path, "rb");
-    if (!f)
+    struct stat sb = {0};
+    if (lstat(path, &sb) != 0 && errno == ENOENT)
         return ss_error_set(err, SS_ERR_INPUT,
                             "%s: piece %d of %d of the checkpoint of step %llu is missing (%s)",
                             path, i, h->npieces, (unsigned long long)h->step, strerror(errno));
+    /* regular files only, never blocking (a named pipe is refused at once) */
+    FILE *f = ss_input_open(path, NULL, err);
+    if (!f) return err && err->code ? err->code : SS_ERR_INPUT;
     setvbuf(f, NULL, _IOFBF, (size_t)1 << 20); /* rows are small: read in large blocks */
     ss_status st = SS_OK;
     unsigned char *row = NULL;
@@ -384,7 +387,6 @@ static ss_status piece_stream(const char *run_dir, const ss_heal_ckpt_header *h,
         st = ss_error_set(err, SS_ERR_INPUT, __VA_ARGS__);                                         \
         goto done;                                                                                 \
     } while (0)
-    struct stat sb = {0};
     if (fstat(fileno(f), &sb) || (uint64_t)sb.st_size != p->bytes)
         BAD("%s: piece is %lld bytes, the checkpoint header says %llu (truncated or foreign)", path,
             (long long)sb.st_size, (unsigned long long)p->bytes);

@@ -130,6 +130,7 @@ ss_status ss_heal_run_create(const ss_heal_run_config *c, ss_heal_run **out, ss_
     const char *dir = c->resume_dir ? c->resume_dir : c->out_dir;
     ss_status st = SS_OK;
     if (dir && !(r->out_dir = strdup(dir))) st = ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    if (!c->resume_dir) ss_heal_run__new_run_id(r);
     if (!st)
         st = c->resume_dir ? ss_heal_run__setup_resume(r, err) : ss_heal_run__setup_fresh(r, err);
     if (!st) st = set_end(r, err);

@@ -32,7 +32,8 @@ struct ss_heal_run {
     int nsnap, capsnap;
     double t0, wall_prev; /* wall clock at create; wall time of the runs before a resume */
     long long resumed_from;
-    int started; /* output directory prepared (and day-0 snapshot written) */
+    char run_id[33]; /* made when the run starts (run.json, every checkpoint); "" = none */
+    int started;     /* output directory prepared (and day-0 snapshot written) */
     char note[2048];
     cJSON *wound; /* description for summary.json */
     /* contraction mechanics (run_mech.c); mech NULL when off */
@@ -108,10 +109,14 @@ ss_status ss_heal_run__outputs_open(ss_heal_run *r, ss_error *err);
 ss_status ss_heal_run__prepare_out_dir(ss_heal_run *r, ss_error *err);
 /* run.json: the run's identity (run id, scenario, grid, parameter hash). */
 ss_status ss_heal_run__write_identity(const ss_heal_run *r, ss_error *err);
-/* Every checkpoint in dir must belong to the run of `newest` (and of
- * dir/run.json): SS_ERR_INPUT naming a foreign one. */
-ss_status ss_heal_run__check_identity(const char *dir, const ss_heal_checkpoint *newest,
-                                      ss_error *err);
+/* A new run's id (random, 32 hex digits) into r->run_id. */
+void ss_heal_run__new_run_id(ss_heal_run *r);
+/* Every checkpoint in dir must belong to the run dir/run.json names (its run
+ * id, and the grid, scenario and parameters of its identity), `newest` too:
+ * SS_ERR_INPUT naming a foreign one, or a missing or older identity. On
+ * success the run id goes into r->run_id. Reads only. */
+ss_status ss_heal_run__check_identity(ss_heal_run *r, const char *dir,
+                                      const ss_heal_checkpoint *newest, ss_error *err);
 /* area.csv, area.png, summary.json; the summary as cJSON in *summary. */
 ss_status ss_heal_run__write_tables(ss_heal_run *r, double wall, cJSON **summary, ss_error *err);
 cJSON *ss_heal_run__summary(const ss_heal_run *r, double wall);

@@ -235,16 +235,31 @@ ss_status ss_heal_saved_run_check(const ss_heal_saved_run *s, int i, ss_error *e
     char path[4800];
     snprintf(path, sizeof path, "%s/fields/%s", s->dir, s->file[i]);
     struct stat sb;
+    ss_status st;
     switch (snapshot_file(path, sizeof path, err)) {
     case 1:
-        return ss_heal_pvti_check(path, err);
+        st = ss_heal_pvti_check(path, err);
+        break;
     case 0:
-        if (stat(path, &sb) || !S_ISREG(sb.st_mode))
-            return ss_error_set(err, SS_ERR_INPUT, "%s: the snapshot is missing", path);
-        return SS_OK;
+        st = stat(path, &sb) || !S_ISREG(sb.st_mode)
+                 ? ss_error_set(err, SS_ERR_INPUT, "%s: the snapshot is missing", path)
+                 : SS_OK;
+        break;
     default:
         return SS_ERR_INPUT;
     }
+    if (st) return st;
+    /* read whole and dropped: its header, extent, grid, day and size are
+     * checked as the load checks them, so a damaged snapshot is an input
+     * error before the caller has done any work */
+    float *disp = NULL;
+    double *closed = NULL;
+    ss_heal_grid *g = ss_heal_saved_run_load(s, i, &disp, &closed, err);
+    if (!g) return err && err->code ? err->code : SS_ERR_INPUT;
+    ss_heal_grid_free(g);
+    free(disp);
+    free(closed);
+    return SS_OK;
 }
 
 ss_heal_grid *ss_heal_saved_run_load(const ss_heal_saved_run *s, int i, float **displacement,

@@ -17,6 +17,9 @@
  * resumed run draws the same pictures as an uninterrupted one. */
 #define _POSIX_C_SOURCE 200809L
 #include <dirent.h>
+#include <fcntl.h>
+#include <stdint.h>
+#include <time.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -36,19 +39,36 @@
 #define ROW_VALUES_7 (7 + SS_HEAL_NFIELDS) /* before the open column count */
 #define ROW_VALUES (8 + SS_HEAL_NFIELDS)
 
+/* A number that reads back bit for bit: cJSON 1.7 prints %.15g when that
+ * parses back within an epsilon, which loses the last bit of about one
+ * double in five; a restored area row then interpolates the closure time
+ * differently (t50 ...207 against ...208 after a resume). As in cJSON,
+ * a value that is not finite is null. */
+static cJSON *exact_number(double v) {
+    char t[32];
+    if (!isfinite(v)) return cJSON_CreateNull();
+    snprintf(t, sizeof t, "%.17g", v);
+    return cJSON_CreateRaw(t);
+}
+
+static void add_exact(cJSON *o, const char *name, double v) {
+    cJSON_AddItemToObject(o, name, exact_number(v));
+}
+
 char *ss_heal_run__aux_json(const ss_heal_run *r, double wall) {
     cJSON *j = cJSON_CreateObject();
-    cJSON_AddNumberToObject(j, "days", r->days);
-    cJSON_AddNumberToObject(j, "snapshot_every_steps", (double)r->snap_every);
-    cJSON_AddNumberToObject(j, "area_every_steps", (double)r->area_every);
-    cJSON_AddNumberToObject(j, "checkpoint_every_steps", (double)r->ckpt_every);
-    cJSON_AddNumberToObject(j, "seed", (double)r->c.seed);
-    cJSON_AddNumberToObject(j, "wall_time_s", wall);
+    if (r->run_id[0]) cJSON_AddStringToObject(j, "run_id", r->run_id); /* whose checkpoint */
+    add_exact(j, "days", r->days);
+    add_exact(j, "snapshot_every_steps", (double)r->snap_every);
+    add_exact(j, "area_every_steps", (double)r->area_every);
+    add_exact(j, "checkpoint_every_steps", (double)r->ckpt_every);
+    add_exact(j, "seed", (double)r->c.seed);
+    add_exact(j, "wall_time_s", wall);
     if (r->adapt_tol > 0) { /* the adaptive step's state: part of the run's state */
-        cJSON_AddNumberToObject(j, "adapt_tol", r->adapt_tol);
-        cJSON_AddNumberToObject(j, "adapt_mult", (double)r->mult);
-        cJSON_AddNumberToObject(j, "adapt_retried", (double)r->retried);
-        cJSON_AddNumberToObject(j, "adapt_taken", (double)r->taken);
+        add_exact(j, "adapt_tol", r->adapt_tol);
+        add_exact(j, "adapt_mult", (double)r->mult);
+        add_exact(j, "adapt_retried", (double)r->retried);
+        add_exact(j, "adapt_taken", (double)r->taken);
     }
     if (r->wound) cJSON_AddItemToObject(j, "wound", cJSON_Duplicate(r->wound, 1));
     cJSON *a = cJSON_AddArrayToObject(j, "area");
@@ -61,12 +81,15 @@ char *ss_heal_run__aux_json(const ss_heal_run *r, double wall) {
         v[5 + SS_HEAL_NFIELDS] = row->st.scar_volume_mm3;
         v[6 + SS_HEAL_NFIELDS] = row->st.scar_max;
         v[7 + SS_HEAL_NFIELDS] = row->st.open_columns_mm2;
-        cJSON_AddItemToArray(a, cJSON_CreateDoubleArray(v, ROW_VALUES));
+        cJSON *row_j = cJSON_CreateArray();
+        for (int k = 0; row_j && k < ROW_VALUES; k++)
+            cJSON_AddItemToArray(row_j, exact_number(v[k]));
+        cJSON_AddItemToArray(a, row_j);
     }
     cJSON *sn = cJSON_AddArrayToObject(j, "snapshots");
     for (int i = 0; i < r->nsnap; i++) {
         cJSON *e = cJSON_CreateArray();
-        cJSON_AddItemToArray(e, cJSON_CreateNumber(r->snap_t[i]));
+        cJSON_AddItemToArray(e, exact_number(r->snap_t[i]));
         cJSON_AddItemToArray(e, cJSON_CreateString(r->snap_file[i]));
         cJSON_AddItemToArray(sn, e);
     }
@@ -338,6 +361,26 @@ static void describe(const heal_identity *id, char *buf, size_t n) {
              id->scenario, id->n[0], id->n[1], id->n[2], id->dx, id->params_hash);
 }
 
+void ss_heal_run__new_run_id(ss_heal_run *r) {
+    unsigned char b[16] = {0};
+    ssize_t got = -1;
+    int fd = open("/dev/urandom", O_RDONLY | O_CLOEXEC);
+    if (fd >= 0) {
+        got = read(fd, b, sizeof b);
+        close(fd);
+    }
+    if (got != (ssize_t)sizeof b) { /* no urandom: time, process and address */
+        struct timespec ts;
+        clock_gettime(CLOCK_REALTIME, &ts);
+        uint64_t v[2] = {(uint64_t)ts.tv_sec * 1000000000ull + (uint64_t)ts.tv_nsec,
+                         (uint64_t)getpid() ^ (uint64_t)(uintptr_t)r};
+        uint64_t h1 = fnv1a(14695981039346656037ull, v, sizeof v), h2 = fnv1a(h1, v, sizeof v);
+        memcpy(b, &h1, 8);
+        memcpy(b + 8, &h2, 8);
+    }
+    for (int i = 0; i < 16; i++) snprintf(r->run_id + 2 * i, 3, "%02x", b[i]);
+}
+
 ss_status ss_heal_run__write_identity(const ss_heal_run *r, ss_error *err) {
     heal_identity id;
     identity_of(r->scenario, r->g, r->params_json, r->wound, (int)r->scheme, r->dt, &id);
@@ -346,7 +389,8 @@ ss_status ss_heal_run__write_identity(const ss_heal_run *r, ss_error *err) {
     cJSON_AddStringToObject(j, "command", "heal");
     cJSON_AddNumberToObject(j, "format", SS_HEAL_RUN_FORMAT);
     cJSON_AddStringToObject(j, "skinsim_version", ss_version());
-    cJSON_AddStringToObject(j, "run_id", id.run_id);
+    cJSON_AddStringToObject(j, "run_id", r->run_id);
+    cJSON_AddStringToObject(j, "identity", id.run_id);
     cJSON_AddStringToObject(j, "scenario", id.scenario);
     cJSON_AddItemToObject(j, "grid", cJSON_CreateIntArray(id.n, 3));
     cJSON_AddNumberToObject(j, "dx_mm", id.dx);
@@ -361,51 +405,94 @@ ss_status ss_heal_run__write_identity(const ss_heal_run *r, ss_error *err) {
     return st;
 }
 
-static ss_status checkpoint_identity(const ss_heal_checkpoint *ck, heal_identity *id) {
+/* A checkpoint's identity (from its own grid, scenario, parameters, wound,
+ * scheme and step) and the run id it was written under ("" = none). */
+static void checkpoint_identity(const ss_heal_checkpoint *ck, heal_identity *id, char rid[33]) {
     cJSON *aux = ck->aux && *ck->aux ? cJSON_Parse(ck->aux) : NULL;
     identity_of(ck->scenario, ck->grid, ck->params_json, cJSON_GetObjectItem(aux, "wound"),
                 ck->scheme, ck->dt_days, id);
+    const cJSON *r = cJSON_GetObjectItem(aux, "run_id");
+    snprintf(rid, 33, "%s",
+             cJSON_IsString(r) && strlen(r->valuestring) == 32 ? r->valuestring : "");
     cJSON_Delete(aux);
+}
+
+/* What a refusal tells the user to do. */
+#define RESUME_HINT                                                                                \
+    "the checkpoints cannot be proven to be this run's, so nothing is resumed and the folder is "  \
+    "left as it is; start the run again (heal --force --out DIR, or another --out)"
+
+/* One checkpoint against the run: its run id and its identity. */
+static ss_status check_one(const char *dir, const char *name, const ss_heal_checkpoint *ck,
+                           const char *run_id, const char *identity, const heal_identity *want,
+                           ss_error *err) {
+    heal_identity have;
+    char rid[33], a[512], b[512];
+    checkpoint_identity(ck, &have, rid);
+    if (!rid[0])
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "%s: checkpoints/%s has no run id (written by a skinsim before run "
+                            "ids, or not by this run); %s",
+                            dir, name, RESUME_HINT);
+    if (strcmp(rid, run_id) || strcmp(have.run_id, identity)) {
+        describe(&have, a, sizeof a);
+        describe(want, b, sizeof b);
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "%s: checkpoints/%s belongs to another run (run id %s, %s; this run "
+                            "per run.json: run id %s, %s); move it out of %s/checkpoints to "
+                            "resume",
+                            dir, name, rid, a, run_id, b, dir);
+    }
     return SS_OK;
 }
 
-ss_status ss_heal_run__check_identity(const char *dir, const ss_heal_checkpoint *newest,
-                                      ss_error *err) {
-    heal_identity want, have;
-    char a[512], b[512], path[4400];
-    checkpoint_identity(newest, &want);
-    const char *ref = "its newest checkpoint";
+ss_status ss_heal_run__check_identity(ss_heal_run *r, const char *dir,
+                                      const ss_heal_checkpoint *newest, ss_error *err) {
+    char path[4400];
     /* the folder's own identity, written when the run began */
     snprintf(path, sizeof path, "%s/run.json", dir);
-    if (file_exists(path)) {
-        ss_error e2;
-        char *text = ss_read_file(path, NULL, &e2);
-        cJSON *j = text ? cJSON_Parse(text) : NULL;
-        free(text);
-        const cJSON *rid = cJSON_GetObjectItem(j, "run_id");
-        if (!cJSON_IsString(rid)) {
-            cJSON_Delete(j);
-            return ss_error_set(err, SS_ERR_INPUT, "%s: run.json is damaged (no run_id)", dir);
+    if (!file_exists(path))
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "%s: run.json is missing, so the run's identity is "
+                            "unknown; " RESUME_HINT,
+                            dir);
+    ss_error e2;
+    char *text = ss_read_file(path, NULL, &e2);
+    cJSON *j = text ? cJSON_Parse(text) : NULL;
+    free(text);
+    const cJSON *rid = cJSON_GetObjectItem(j, "run_id"), *idy = cJSON_GetObjectItem(j, "identity"),
+                *sc = cJSON_GetObjectItem(j, "scenario"), *gr = cJSON_GetObjectItem(j, "grid"),
+                *dx = cJSON_GetObjectItem(j, "dx_mm"), *ph = cJSON_GetObjectItem(j, "params_hash");
+    ss_status st = SS_OK;
+    if (!j)
+        st = ss_error_set(err, SS_ERR_INPUT, "%s: run.json is unreadable or damaged; " RESUME_HINT,
+                          dir);
+    else if (!cJSON_IsString(idy) || !cJSON_IsString(rid) || strlen(rid->valuestring) != 32)
+        st = ss_error_set(err, SS_ERR_INPUT,
+                          "%s: run.json has no run id (written by a skinsim before run ids); "
+                          "resume it with the version that started it, or " RESUME_HINT,
+                          dir);
+    heal_identity want;
+    memset(&want, 0, sizeof want);
+    if (!st) {
+        snprintf(want.run_id, sizeof want.run_id, "%s", idy->valuestring);
+        snprintf(want.scenario, sizeof want.scenario, "%s",
+                 cJSON_IsString(sc) ? sc->valuestring : "?");
+        for (int k = 0; k < 3; k++) {
+            const cJSON *v = cJSON_GetArrayItem(gr, k);
+            want.n[k] = cJSON_IsNumber(v) ? v->valueint : 0;
         }
-        if (strcmp(rid->valuestring, want.run_id)) {
-            describe(&want, a, sizeof a);
-            ss_status st = ss_error_set(
-                err, SS_ERR_INPUT,
-                "%s: its newest checkpoint belongs to another run (%s; run.json says run %s); "
-                "move the foreign checkpoint out of %s/checkpoints to resume",
-                dir, a, rid->valuestring, dir);
-            cJSON_Delete(j);
-            return st;
-        }
-        cJSON_Delete(j);
-        ref = "run.json";
+        want.dx = cJSON_IsNumber(dx) ? dx->valuedouble : 0;
+        snprintf(want.params_hash, sizeof want.params_hash, "%s",
+                 cJSON_IsString(ph) ? ph->valuestring : "?");
+        st = check_one(dir, "(the newest usable checkpoint)", newest, rid->valuestring,
+                       idy->valuestring, &want, err);
     }
     /* every other checkpoint there must be of the same run, or a later save
      * would prune or mix it */
     snprintf(path, sizeof path, "%s/checkpoints", dir);
-    DIR *d = opendir(path);
+    DIR *d = st ? NULL : opendir(path);
     struct dirent *e;
-    ss_status st = SS_OK;
     while (!st && d && (e = readdir(d))) {
         size_t n = strlen(e->d_name);
         int head = n >= 6 && !strcmp(e->d_name + n - 5, ".sshh"); /* of a checkpoint in pieces */
@@ -415,31 +502,24 @@ ss_status ss_heal_run__check_identity(const char *dir, const ss_heal_checkpoint 
         char file[4700];
         snprintf(file, sizeof file, "%s/%s", path, e->d_name);
         ss_heal_checkpoint ck;
-        ss_error e2;
         if (head) { /* its header says whose it is */
             ss_heal_ckpt_header h;
-            if (ss_heal_ckpt_header_read(file, &h, &e2)) continue;
+            if (ss_heal_ckpt_header_read(file, &h, &e2)) continue; /* damaged: never read */
             ss_heal_grid gh = {0};
             gh.nx = h.whole[0], gh.ny = h.whole[1], gh.nz = h.whole[2];
             gh.dx_mm = h.dx_mm, gh.skin_top_mm = h.skin_top_mm;
             ck = (ss_heal_checkpoint){&gh, h.scenario, h.params_json, h.aux, h.scheme, h.dt_days};
-            checkpoint_identity(&ck, &have);
+            st = check_one(dir, e->d_name, &ck, rid->valuestring, idy->valuestring, &want, err);
             ss_heal_ckpt_header_free(&h);
         } else {
             if (ss_heal_checkpoint_read(file, &ck, &e2)) continue; /* damaged: skipped as before */
-            checkpoint_identity(&ck, &have);
+            st = check_one(dir, e->d_name, &ck, rid->valuestring, idy->valuestring, &want, err);
             ss_heal_checkpoint_free(&ck);
-        }
-        if (strcmp(have.run_id, want.run_id)) {
-            describe(&have, a, sizeof a);
-            describe(&want, b, sizeof b);
-            st = ss_error_set(err, SS_ERR_INPUT,
-                              "%s: checkpoints/%s belongs to another run (%s; this run per %s: "
-                              "%s); move it out to resume",
-                              dir, e->d_name, a, ref, b);
         }
     }
     if (d) closedir(d);
+    if (!st) snprintf(r->run_id, sizeof r->run_id, "%s", rid->valuestring);
+    cJSON_Delete(j);
     return st;
 }
 

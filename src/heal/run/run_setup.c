@@ -488,7 +488,7 @@ ss_status ss_heal_run__setup_resume(ss_heal_run *r, ss_error *err) {
                        : ss_heal_checkpoint_load_latest(dir, &ck, r->note, sizeof r->note, err);
     if (st) return st;
     /* a checkpoint of another run (copied in) is refused before anything is touched */
-    if ((st = ss_heal_run__check_identity(dir, &ck, err))) {
+    if ((st = ss_heal_run__check_identity(r, dir, &ck, err))) {
         ss_heal_checkpoint_free(&ck);
         return st;
     }
