@@ -413,7 +413,7 @@ static int optics_mci(int argc, char **argv) {
     if (!file) return cli_usage_error(cmd, "an input FILE.mci is required");
     ss_threads_set((int)threads);
     size_t len;
-    char *text = ss_read_file(file, &len, &e);
+    char *text = ss_read_file_max(file, &len, SS_READ_MAX_CONFIG, &e);
     if (!text) return cli_fail(cmd, &e);
     ss_mci_file mf;
     ss_status st = ss_mci_parse(text, file, &mf, &e);

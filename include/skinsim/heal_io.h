@@ -45,7 +45,8 @@ ss_status ss_obj_read(const char *path, ss_tri_mesh *out, ss_error *err);
 ss_status ss_obj_parse(const char *text, const char *name, ss_tri_mesh *out, ss_error *err);
 void ss_tri_mesh_free(ss_tri_mesh *m);
 /* Closed = every undirected edge is used by an even, non-zero number of
- * triangles and no triangle is degenerate (repeated vertex). Otherwise
+ * triangles, no triangle is degenerate (repeated vertex) and no edge
+ * crosses a face it does not touch (self-intersection). Otherwise
  * SS_ERR_INPUT naming `name` and the OBJ line of an offending face. */
 ss_status ss_tri_mesh_check_closed(const ss_tri_mesh *m, const char *name, ss_error *err);
 

@@ -218,7 +218,7 @@ static ss_status parse_face(obj_state *s, char *line, const char *path, long lin
 ss_status ss_mesh_load_obj(const char *path, ss_mesh *out, ss_error *err) {
     memset(out, 0, sizeof *out);
     size_t len;
-    char *text = ss_read_file(path, &len, err);
+    char *text = ss_read_file_max(path, &len, SS_READ_MAX_MESH, err);
     if (!text) return err ? err->code : SS_ERR_INPUT;
     if (memchr(text, '\0', len)) {
         free(text);

@@ -1,7 +1,9 @@
 /* MCML input (.mci) and output (.mco) files, so existing MCML inputs run
  * unchanged (MCML 1.2, Wang, Jacques & Zheng 1995, Comput. Methods Programs
  * Biomed. 47:131). The reader follows MCML's rules: one item per data line,
- * '#' starts a comment, blank and comment-only lines are skipped. The writer
+ * '#' starts a comment, blank and comment-only lines are skipped; a run's
+ * output line must give both the name and the type (a line "A" alone is
+ * refused, not written as a file called A). The writer
  * produces MCML's ASCII layout and normalisations: RAT, A_l [-], A_z [1/cm],
  * Rd_r and Tt_r [1/cm^2] (annulus 2 pi (ir+0.5) dr^2), Rd_a and Tt_a [1/sr]
  * (2 pi sin((ia+0.5) da) da), values beyond the grid collected in the last
@@ -118,6 +120,15 @@ ss_status ss_mci_parse(const char *text, const char *name, ss_mci_file *out, ss_
             ss_mci_file_free(out);
             return perr(&lr, err, "run %d: expected 'name.mco A' (ASCII output), got '%s'", r + 1,
                         s);
+        }
+        /* both the name and the type letter: a line "A" alone is a name left
+         * out, not an output called A in the current folder (where the
+         * output may go is the caller's rule, ss_path_under) */
+        if (k < 2) {
+            ss_mci_file_free(out);
+            return perr(&lr, err,
+                        "run %d: expected 'name.mco A' (output name and type), got only '%s'",
+                        r + 1, s);
         }
         snprintf(run->out_name, sizeof run->out_name, "%s", fname);
         run->out_type = 'A';

@@ -240,6 +240,31 @@ int main(int argc, char **argv) {
         free(c);
         free(b);
     }
+    /* ---- a heal snapshot (.vti): whole, with closure days, cut short,
+     * without appended data, and with an absurd extent ---- */
+    if (g) {
+        p = target_path("vti", "small");
+        double closed[4 * 3];
+        for (int k = 0; k < 12; k++) closed[k] = k % 3 ? 1.5 * k : -1.0;
+        ss_heal_vti_write_all(p, g, 0, NULL, NULL, closed, &err);
+        size_t len;
+        char *b = slurp(p, &len);
+        free(p);
+        seed("vti", "truncated", b, len / 2);
+        char *app = strstr(b, "<AppendedData");
+        if (app) seed("vti", "no_appended", b, (size_t)(app - b));
+        char *we = strstr(b, "WholeExtent=\"0 4");
+        if (we) { /* WholeExtent and Piece Extent 0 2147483647 in x */
+            size_t head = (size_t)(we - b) + 15;
+            char *c = malloc(len + 32);
+            memcpy(c, b, head);
+            int k = sprintf(c + head, "2147483647");
+            memcpy(c + head + k, we + 16, len - head - 1);
+            seed("vti", "huge_extent", c, len - 1 + (size_t)k);
+            free(c);
+        }
+        free(b);
+    }
     /* ---- the header of a checkpoint in pieces; a .pvti ---- */
     if (g && pj) {
         char *dir = target_path("ckpt_pieces", "run");
