@@ -438,7 +438,8 @@ static int optics_mci(int argc, char **argv) {
             ss_error e2 = e;
             ss_error_set(&e, st, "%s run %d: %s", file, r + 1, e2.msg);
         }
-        double bytes = 8192.0 + 40.0 * (run->nz + 2.0 * run->nr + 2.0 * run->na + 8);
+        double bytes = 8192.0 + 40.0 * (run->nz + 2.0 * run->nr + 2.0 * run->na + 8) +
+                       13.0 * run->nr * (run->nz + 2.0 * run->na); /* the 2-D arrays */
         if (!st) st = ss_outputs_add(outs, label, paths[r], SS_OUTPUT_FILE, bytes, &e);
     }
     if (!st) st = ss_outputs_begin(outs, &e);

@@ -267,7 +267,7 @@ typedef struct ss_mech_suture {
 } ss_mech_suture;
 /* CSV lines "x1,y1,z1,x2,y2,z2[,remove_day]" in mm (a header line and # comments
  * allowed). *n gets the count; malformed -> SS_ERR_INPUT naming the line. */
-#define SS_MECH_MAX_SUTURES 100000 /* more stitches in a file is SS_ERR_INPUT */
+#define SS_MECH_MAX_SUTURES 10000 /* more stitches in a file is SS_ERR_INPUT */
 ss_mech_suture *ss_mech_sutures_read(const char *path, int *n, ss_error *err);
 
 /* Mechanics on a healing grid: the tissue cells (epidermis, dermis, wound) are
