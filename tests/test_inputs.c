@@ -3,7 +3,8 @@
  * whole-file reads refused by size before a byte is read; files named
  * inside a file (glTF buffers, .pvti pieces) held inside its folder; a
  * batch of springs equal to the same springs added one by one; a failed
- * EXR write that says why (the errno of the write). The PNGs are written
+ * EXR write that says why (the errno of the write; a real full disk where
+ * a tmpfs can be mounted). The PNGs are written
  * here byte by byte (stored deflate blocks, CRC-32 and Adler-32 by hand),
  * so the reader is checked against an independent writer. */
 #define _GNU_SOURCE
@@ -16,6 +17,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mount.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -396,6 +398,25 @@ static void test_exr_write_errno(void **state) {
     assert_null(strstr(msg, "Error writing to stream"));
     free(msg);
     assert_false(tu_file_exists(path)); /* nothing half-written */
+    /* a real full disk where we may mount one (root): a 200 KB tmpfs */
+    char mnt[512];
+    snprintf(mnt, sizeof mnt, "%s/disk", dir);
+    mkdir(mnt, 0755);
+    if (geteuid() == 0 && mount("tmpfs", mnt, "tmpfs", 0, "size=200k") == 0) {
+        ss_image *img = ss_image_create(512, 512, 3, &err);
+        assert_non_null(img);
+        uint64_t r = 88172645463325252ull; /* noise: OpenEXR's zip cannot shrink it */
+        for (size_t i = 0; i < 512 * 512 * 3; i++) {
+            r ^= r << 13, r ^= r >> 7, r ^= r << 17;
+            img->data[i] = (float)(r % 1000003) / 1000003.0f;
+        }
+        snprintf(path, sizeof path, "%s/x.exr", mnt);
+        assert_int_equal(ss_exr_write(path, img, 0, &err), SS_ERR_RUNTIME);
+        if (!strstr(err.msg, "No space left on device")) fail_msg("full disk: %s", err.msg);
+        assert_int_equal(tu_count_entries(mnt), 0);
+        ss_image_free(img);
+        umount(mnt);
+    }
     tu_rmtree(dir);
     free(dir);
 }
