@@ -168,16 +168,16 @@ ss_status ss_mci_parse(const char *text, const char *name, ss_mci_file *out, ss_
          * allocated: a stated cap, and the memory they take (at least two
          * block copies and the total, 8 bytes a value, plus 13 characters a
          * value of .mco text) within what is available */
-        double cells = v[1] * (v[0] + 2.0 * v[2]);
+        double cells = v[1] * (v[0] + 2.0 * v[2]); /* (FAIL frees run: v[] in messages) */
         if (cells > SS_MCI_MAX_GRID_VALUES)
             FAIL("run %d: grid nz %d nr %d na %d holds %.0f values in its 2-D arrays (nr * (nz + "
                  "2 na)), above the limit of %d",
-                 r + 1, run->nz, run->nr, run->na, cells, SS_MCI_MAX_GRID_VALUES);
+                 r + 1, (int)v[0], (int)v[1], (int)v[2], cells, SS_MCI_MAX_GRID_VALUES);
         double need = cells * (3 * 8.0 + 13.0), avail = ss_memory_available_bytes();
         if (avail > 0 && need > avail)
             FAIL("run %d: grid nz %d nr %d na %d needs %.2f GB, more than the %.2f GB of memory "
                  "available",
-                 r + 1, run->nz, run->nr, run->na, need / 1e9, avail / 1e9);
+                 r + 1, (int)v[0], (int)v[1], (int)v[2], need / 1e9, avail / 1e9);
         READ("the number of layers", 1);
         if (!is_int(v[0], 1, SS_OPTICS_MAX_LAYERS))
             FAIL("run %d: number of layers %g is not in 1..%d", r + 1, v[0], SS_OPTICS_MAX_LAYERS);
