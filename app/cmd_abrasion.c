@@ -324,9 +324,9 @@ static ss_status prepare(const opts *o, inputs *in, ss_wound_shape **shape, ss_e
         else
             st = ss_wound_shape_from_strokes(&in->strokes, o->hull, o->concave_k, o->size, o->seed,
                                              shape, err);
-        if (st && o->stroke) {
+        if (st && (o->stroke || o->mask)) { /* name the file the shape came from */
             ss_error e2 = *err;
-            ss_error_set(err, st, "%s: %s", o->stroke, e2.msg);
+            ss_error_set(err, st, "%s: %s", o->stroke ? o->stroke : o->mask, e2.msg);
         }
     }
     return st;

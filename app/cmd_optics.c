@@ -427,7 +427,7 @@ static int optics_mci(int argc, char **argv) {
     if (!file) return cli_usage_error(cmd, "an input FILE.mci is required");
     ss_threads_set((int)threads);
     size_t len;
-    char *text = ss_read_file(file, &len, &e);
+    char *text = ss_read_file_max(file, &len, SS_READ_MAX_CONFIG, &e);
     if (!text) return cli_fail(cmd, &e);
     ss_mci_file mf;
     ss_status st = ss_mci_parse(text, file, &mf, &e);
@@ -452,7 +452,8 @@ static int optics_mci(int argc, char **argv) {
             ss_error e2 = e;
             ss_error_set(&e, st, "%s run %d: %s", file, r + 1, e2.msg);
         }
-        double bytes = 8192.0 + 40.0 * (run->nz + 2.0 * run->nr + 2.0 * run->na + 8);
+        double bytes = 8192.0 + 40.0 * (run->nz + 2.0 * run->nr + 2.0 * run->na + 8) +
+                       13.0 * run->nr * (run->nz + 2.0 * run->na); /* the 2-D arrays */
         if (!st) st = ss_outputs_add(outs, label, paths[r], SS_OUTPUT_FILE, bytes, &e);
     }
     if (!st) st = ss_outputs_begin(outs, &e);

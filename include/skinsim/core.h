@@ -62,6 +62,9 @@ typedef struct ss_image {
 /* Up to 16 channels: RGBA images, and parameter maps (skin and wound bio maps)
  * (file writers other than ss_exr_write_channels take 1-4). */
 #define SS_IMAGE_MAX_CHANNELS 16
+/* The PNG reader refuses an ancillary chunk (tEXt, iCCP, ...) longer than
+ * this, and any chunk longer than what follows it in the file. */
+#define SS_PNG_MAX_ANCILLARY_BYTES (8 << 20)
 ss_image *ss_image_create(int width, int height, int channels, ss_error *err);
 /* Same, pixels left undefined: for images the caller overwrites entirely. */
 ss_image *ss_image_create_uninit(int width, int height, int channels, ss_error *err);
@@ -130,8 +133,20 @@ ss_status ss_atomic_commit(ss_atomic_file *af, ss_error *err); /* fflush+fsync+r
 void ss_atomic_abort(ss_atomic_file *af);                      /* close and unlink */
 /* Writes a whole buffer atomically. */
 ss_status ss_write_file_atomic(const char *path, const void *data, size_t len, ss_error *err);
-/* Reads a whole file (NUL-terminated for convenience); caller frees. */
+/* Reads a whole file (NUL-terminated for convenience); caller frees. The
+ * size is checked (fstat) before anything is read or allocated: above
+ * SS_READ_MAX_ANY or the memory available it is SS_ERR_INPUT naming the file
+ * and the limit. ss_read_file_max takes a per-format limit (below). */
 char *ss_read_file(const char *path, size_t *len, ss_error *err);
+char *ss_read_file_max(const char *path, size_t *len, size_t max_bytes, ss_error *err);
+/* Per-format size limits of whole-file reads (docs/reliability.md). */
+#define SS_MB ((size_t)1 << 20)
+#define SS_READ_MAX_ANY ((size_t)4096 * SS_MB)    /* anything else (checkpoints, snapshots) */
+#define SS_READ_MAX_CONFIG ((size_t)16 * SS_MB)   /* params, timeline, recipe JSON, .mci, spectra */
+#define SS_READ_MAX_STROKES ((size_t)64 * SS_MB)  /* stroke CSV */
+#define SS_READ_MAX_FEATURES ((size_t)64 * SS_MB) /* skin features CSV */
+#define SS_READ_MAX_TABLE ((size_t)512 * SS_MB)   /* the ModelMatch .sstab table */
+#define SS_READ_MAX_MESH ((size_t)1024 * SS_MB)   /* OBJ, glTF JSON, GLB, glTF buffers */
 /* mkdir -p; an existing directory is fine, a file in the way is an input error. */
 ss_status ss_mkdir_p(const char *path, ss_error *err);
 /* Checks that dir exists (or can be created) and a file can be created in it. */
@@ -227,6 +242,12 @@ int ss_output_dir_is_unfinished(const char *dir, const char *owner);
  * *out is malloc'd. */
 ss_status ss_path_under(const char *base_dir, const char *name, int allow_outside, char **out,
                         ss_error *err);
+/* A file named inside another file (a glTF buffer or image URI, a .pvti
+ * piece), already percent-decoded: resolved against the folder of referrer
+ * and refused (SS_ERR_INPUT naming the reference and the referrer) when it
+ * is absolute, has a ".." component, or resolves (symlinks followed) outside
+ * that folder. *out (malloc'd) is the folder joined with ref. */
+ss_status ss_input_path_inside(const char *referrer, const char *ref, char **out, ss_error *err);
 
 /* ---- inputs: never block, never allocate what the machine lacks --------- */
 

@@ -188,6 +188,10 @@ ss_springs *ss_springs_create(const ss_tetmesh *m, double modulus_kpa, ss_error 
 void ss_springs_free(ss_springs *s);
 /* Adds a spring (sutures); rest length and stiffness given. Rebuilds the CSR. */
 ss_status ss_springs_add(ss_springs *s, int a, int b, double rest, double k, ss_error *err);
+/* The same for count springs at once (node pairs ab[2i], ab[2i+1]): one CSR
+ * rebuild, so many sutures cost linear time. */
+ss_status ss_springs_add_many(ss_springs *s, int count, const int32_t *ab, const double *rest,
+                              const double *k, ss_error *err);
 /* Inversion-resistant volume term: every tet of m (the mesh the springs were
  * made from) gets the energy kvol V_r b(J), J = V / V_r its volume over its
  * rest volume V_r = V_0 sqrt(prod of its six edges' rest / l0) (exact for a
@@ -263,6 +267,7 @@ typedef struct ss_mech_suture {
 } ss_mech_suture;
 /* CSV lines "x1,y1,z1,x2,y2,z2[,remove_day]" in mm (a header line and # comments
  * allowed). *n gets the count; malformed -> SS_ERR_INPUT naming the line. */
+#define SS_MECH_MAX_SUTURES 10000 /* more stitches in a file is SS_ERR_INPUT */
 ss_mech_suture *ss_mech_sutures_read(const char *path, int *n, ss_error *err);
 
 /* Mechanics on a healing grid: the tissue cells (epidermis, dermis, wound) are

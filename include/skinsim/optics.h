@@ -147,7 +147,10 @@ typedef struct ss_mci_file {
     ss_mci_run *runs;
 } ss_mci_file;
 /* Parses the text of a .mci file; `name` is used in error messages. '#' starts
- * a comment; blank lines are skipped. Every value is range-checked. */
+ * a comment; blank lines are skipped. Every value is range-checked; a run line
+ * needs both name and type; a grid's 2-D arrays (nr * (nz + 2 na) values) are
+ * at most SS_MCI_MAX_GRID_VALUES and must fit in the memory available. */
+#define SS_MCI_MAX_GRID_VALUES 10000000
 ss_status ss_mci_parse(const char *text, const char *name, ss_mci_file *out, ss_error *err);
 void ss_mci_file_free(ss_mci_file *f);
 /* Runs one MCML run and returns the MCML-style output text (malloc'd): InParm,

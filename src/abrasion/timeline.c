@@ -55,7 +55,7 @@ ss_status ss_timeline_validate(const ss_timeline *t, ss_error *err) {
 }
 
 ss_status ss_timeline_load_json(const char *path, ss_timeline *t, ss_error *err) {
-    char *text = ss_read_file(path, NULL, err);
+    char *text = ss_read_file_max(path, NULL, SS_READ_MAX_CONFIG, err);
     if (!text) return SS_ERR_INPUT;
     cJSON *root = cJSON_Parse(text);
     free(text);

@@ -37,7 +37,8 @@
 /* Shared by the I/O callbacks and the quiet error handler (context user_data). */
 typedef struct exr_io {
     int fd;
-    char msg[256]; /* first message the library reported */
+    char msg[256];   /* first message the library reported */
+    int write_errno; /* errno of a failed write (ENOSPC on a full disk) */
 } exr_io;
 
 static void quiet_handler(exr_const_context_t ctxt, exr_result_t code, const char *msg) {
@@ -80,7 +81,10 @@ static int64_t io_write(exr_const_context_t ctxt, void *ud, const void *buf, uin
         ssize_t n =
             pwrite(io->fd, (const char *)buf + done, (size_t)(sz - done), (off_t)(off + done));
         if (n < 0 && errno == EINTR) continue;
-        if (n <= 0) return -1;
+        if (n <= 0) { /* kept: the library only says "Error writing to stream" */
+            io->write_errno = n < 0 ? errno : ENOSPC;
+            return -1;
+        }
         done += (uint64_t)n;
     }
     return (int64_t)done;
@@ -227,7 +231,8 @@ ss_status ss_exr_write_channels(const char *path, const ss_image *img, const cha
     if (!rv) rv = rv2;
     if (rv) {
         ss_atomic_abort(&af);
-        return ss_error_set(err, SS_ERR_RUNTIME, "%s: cannot write EXR: %s", path, why(&io, rv));
+        return ss_error_set(err, SS_ERR_RUNTIME, "%s: cannot write EXR: %s", path,
+                            io.write_errno ? strerror(io.write_errno) : why(&io, rv));
     }
     return ss_atomic_commit(&af, err);
 }

@@ -67,9 +67,28 @@ ss_status ss_write_file_atomic(const char *path, const void *data, size_t len, s
 }
 
 char *ss_read_file(const char *path, size_t *len, ss_error *err) {
+    return ss_read_file_max(path, len, SS_READ_MAX_ANY, err);
+}
+
+/* The size comes from fstat on the opened file, so a 2 GB sparse file is
+ * refused before a byte is read or allocated. */
+char *ss_read_file_max(const char *path, size_t *len, size_t max_bytes, ss_error *err) {
     size_t n = 0;
     FILE *f = ss_input_open(path, &n, err); /* regular files only, never blocks */
     if (!f) return NULL;
+    double avail = ss_memory_available_bytes();
+    if (n > max_bytes || (avail > 0 && (double)n + 1.0 > avail)) {
+        fclose(f);
+        if (n > max_bytes)
+            ss_error_set(err, SS_ERR_INPUT,
+                         "%s: %zu bytes is above the %zu MB limit for this kind of file", path, n,
+                         max_bytes / SS_MB);
+        else
+            ss_error_set(err, SS_ERR_INPUT,
+                         "%s: %zu bytes is more than the %.0f MB of memory available", path, n,
+                         avail / 1e6);
+        return NULL;
+    }
     char *buf = malloc(n + 1);
     if (!buf) {
         fclose(f);

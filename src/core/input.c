@@ -75,6 +75,61 @@ FILE *ss_input_open(const char *path, size_t *size, ss_error *err) {
     return f;
 }
 
+/* A reference is decided on its own text first (absolute, or a ".."
+ * component: refused whatever exists on disk), then on disk: realpath of
+ * the joined name must lie under realpath of the referrer's folder, which
+ * catches a symlink inside the folder pointing out of it. A name that does
+ * not exist is returned as joined; its reader then fails to open it. */
+ss_status ss_input_path_inside(const char *referrer, const char *ref, char **out, ss_error *err) {
+    *out = NULL;
+    if (!ref || !*ref)
+        return ss_error_set(err, SS_ERR_INPUT, "%s: a referenced file name is empty", referrer);
+    int dotdot = 0;
+    for (const char *p = ref; *p;) {
+        size_t l = strcspn(p, "/\\");
+        if (l == 2 && p[0] == '.' && p[1] == '.') dotdot = 1;
+        p += l;
+        if (*p) p++;
+    }
+    if (ref[0] == '/' || ref[0] == '\\' || dotdot)
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "%s: the referenced file '%s' is %s; a file may only reference "
+                            "files inside its own folder",
+                            referrer, ref,
+                            dotdot ? "outside its folder (a '..' component)" : "an absolute path");
+    const char *slash = strrchr(referrer, '/');
+    size_t dl = slash ? (size_t)(slash - referrer + 1) : 0;
+    char *joined = malloc(dl + strlen(ref) + 1);
+    if (!joined) return ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", referrer);
+    memcpy(joined, referrer, dl);
+    strcpy(joined + dl, ref);
+    char *folder = strndup(dl ? referrer : ".", dl ? dl : 1);
+    char *rdir = folder ? realpath(folder, NULL) : NULL;
+    char *rfile = realpath(joined, NULL);
+    ss_status st = SS_OK;
+    if (!rdir)
+        st = ss_error_set(err, SS_ERR_INPUT, "%s: cannot resolve its folder: %s", referrer,
+                          strerror(errno));
+    else if (rfile) {
+        size_t n = strlen(rdir);
+        int inside = !strncmp(rfile, rdir, n) && (rfile[n] == '/' || (n == 1 && rdir[0] == '/'));
+        if (!inside)
+            st = ss_error_set(err, SS_ERR_INPUT,
+                              "%s: the referenced file '%s' resolves to %s, outside the folder "
+                              "%s (a symbolic link?); a file may only reference files inside "
+                              "its own folder",
+                              referrer, ref, rfile, rdir);
+    }
+    free(folder);
+    free(rdir);
+    free(rfile);
+    if (st)
+        free(joined);
+    else
+        *out = joined;
+    return st;
+}
+
 /* A "key: value kB" line of a /proc file, in bytes; -1 if missing. */
 static double proc_kb(const char *file, const char *key) {
     FILE *f = fopen(file, "r");

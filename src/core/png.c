@@ -1,5 +1,9 @@
-/* PNG read/write with libpng: 8 or 16 bits, 1-4 channels; sRGB encoding of
- * colour channels only at this boundary (images in memory are linear). */
+/* PNG read/write with libpng: writes 8 or 16 bits, 1-4 channels; reads any
+ * PNG (1, 2, 4, 8, 16 bits, grey, palette, with alpha or tRNS); sRGB
+ * encoding of colour channels only at this boundary (images in memory are
+ * linear). Reading is bounded before libpng allocates: every chunk must fit
+ * in the file, ancillary chunks are capped, and the pixels the header
+ * claims must fit in memory and in what the compressed data can hold. */
 #include "skinsim/core.h"
 
 #include <errno.h>
@@ -90,6 +94,47 @@ ss_status ss_png_write(const char *path, const ss_image *img, int bits, ss_encod
     return ss_atomic_commit(&af, err);
 }
 
+/* Every chunk's length checked against what the file holds, before libpng
+ * sees the file (libpng allocates an ancillary chunk's stated length before
+ * it finds the file too short: a 44-byte PNG claiming a 2 GB tEXt took 2 GB).
+ * A chunk must fit in the bytes after it (its data and CRC) and an
+ * ancillary one is at most SS_PNG_MAX_ANCILLARY_BYTES. Seeks only: a few
+ * microseconds per chunk. f is left just after the signature. */
+static ss_status png_scan_chunks(FILE *f, const char *path, size_t fsize, ss_error *err) {
+    size_t pos = 8;
+    for (;;) {
+        unsigned char h[8];
+        if (fseek(f, (long)pos, SEEK_SET) != 0 || fread(h, 1, 8, f) != 8)
+            return ss_error_set(err, SS_ERR_INPUT,
+                                "%s: corrupt or truncated PNG (it ends at byte %zu, before IEND)",
+                                path, pos);
+        unsigned long len = ((unsigned long)h[0] << 24) | ((unsigned long)h[1] << 16) |
+                            ((unsigned long)h[2] << 8) | (unsigned long)h[3];
+        char type[5];
+        for (int k = 0; k < 4; k++) {
+            unsigned char c = h[4 + k];
+            type[k] = (char)((c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') ? c : '?');
+        }
+        type[4] = '\0';
+        size_t left = fsize - pos - 8; /* data and CRC must fit in this */
+        if (left < 4 || len > left - 4)
+            return ss_error_set(err, SS_ERR_INPUT,
+                                "%s: corrupt or truncated PNG (chunk %s at byte %zu claims %lu "
+                                "bytes, the file holds %zu more)",
+                                path, type, pos, len, left < 4 ? 0 : left - 4);
+        if ((h[4] & 0x20) && len > SS_PNG_MAX_ANCILLARY_BYTES)
+            return ss_error_set(err, SS_ERR_INPUT,
+                                "%s: ancillary chunk %s at byte %zu is %lu bytes, above the %d MB "
+                                "limit for ancillary chunks",
+                                path, type, pos, len, (int)(SS_PNG_MAX_ANCILLARY_BYTES >> 20));
+        if (!memcmp(h + 4, "IEND", 4)) break;
+        pos += 12 + (size_t)len;
+    }
+    if (fseek(f, 8, SEEK_SET) != 0)
+        return ss_error_set(err, SS_ERR_INPUT, "%s: cannot seek: %s", path, strerror(errno));
+    return SS_OK;
+}
+
 ss_image *ss_png_read(const char *path, ss_encoding enc, ss_error *err) {
     size_t fsize = 0;
     FILE *f = ss_input_open(path, &fsize, err); /* regular files only, never blocks */
@@ -98,6 +143,10 @@ ss_image *ss_png_read(const char *path, ss_encoding enc, ss_error *err) {
     if (fread(sig, 1, 8, f) != 8 || png_sig_cmp(sig, 0, 8) != 0) {
         fclose(f);
         ss_error_set(err, SS_ERR_INPUT, "%s: not a PNG file", path);
+        return NULL;
+    }
+    if (png_scan_chunks(f, path, fsize, err)) {
+        fclose(f);
         return NULL;
     }
     png_structp png =
@@ -116,9 +165,13 @@ ss_image *ss_png_read(const char *path, ss_encoding enc, ss_error *err) {
     png_init_io(png, f);
     png_set_sig_bytes(png, 8);
     png_set_user_limits(png, SS_IMAGE_MAX_SIDE, SS_IMAGE_MAX_SIDE);
+    png_set_chunk_malloc_max(png, SS_PNG_MAX_ANCILLARY_BYTES); /* also decompressed zTXt, iCCP */
     png_read_info(png, info);
-    png_set_expand(png);
-    png_set_packing(png);
+    /* the rows as stored (1, 2, 4 bits a sample, palette indices), before
+     * the expansion below: what the compressed data must hold */
+    double stored_rowbytes = (double)png_get_rowbytes(png, info);
+    png_set_expand(png);  /* palette -> RGB(A), 1/2/4-bit grey -> 8 bits, tRNS -> alpha */
+    png_set_packing(png); /* (for any depth below 8 the expansion leaves) */
     png_read_update_info(png, info);
     int w = (int)png_get_image_width(png, info), h = (int)png_get_image_height(png, info);
     int ch = png_get_channels(png, info), bits = png_get_bit_depth(png, info);
@@ -126,7 +179,7 @@ ss_image *ss_png_read(const char *path, ss_encoding enc, ss_error *err) {
      * memory, and the file must be able to hold them (deflate expands at
      * most about 1032:1, so a tiny file cannot be a huge image). */
     ss_error e2;
-    double raw = (double)h * ((double)png_get_rowbytes(png, info) + 1.0);
+    double raw = (double)h * (stored_rowbytes + 1.0);
     ss_status cs = ss_image_check_alloc(path, w, h, ch, &e2);
     if (!cs && raw > 1100.0 * (double)fsize + 65536.0)
         cs = ss_error_set(&e2, SS_ERR_INPUT,

@@ -3,7 +3,9 @@
  * textured body needs: triangle primitives (mode 4, and strips 5 and fans 6
  * turned into triangles), POSITION, NORMAL and TEXCOORD_0, indices of any
  * unsigned type, byteStride, normalised integer UVs. Buffers come from the
- * GLB BIN chunk, base64 data URIs, or files next to the .gltf.
+ * GLB BIN chunk, base64 data URIs, or files inside the .gltf's folder (a
+ * URI with "..", an absolute path or a symbolic link out of the folder is
+ * refused by name: a scene must not read what lies beside it).
  *
  * All primitives of all mesh nodes of the default scene (else every root
  * node, else every mesh) are merged into one ss_mesh with their world
@@ -165,10 +167,15 @@ static ss_status load_buffers(gltf_doc *d, ss_error *err) {
                 return ss_error_set(err, SS_ERR_INPUT,
                                     "%s: buffer %d: remote uri '%s' is not supported", d->path, i,
                                     uri->valuestring);
-            char *file = sibling_path(d->path, uri->valuestring);
-            if (!file) return ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", d->path);
+            /* decoded, then held inside the .gltf's folder: no "..", no
+             * absolute path, no symbolic link out of it */
+            char *rel = sibling_path("", uri->valuestring), *file = NULL;
+            if (!rel) return ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", d->path);
             ss_error e2;
-            char *data = ss_read_file(file, &bl->len, &e2);
+            ss_status ps = ss_input_path_inside(d->path, rel, &file, &e2);
+            free(rel);
+            if (ps) return ss_error_set(err, SS_ERR_INPUT, "buffer %d: %s", i, e2.msg);
+            char *data = ss_read_file_max(file, &bl->len, SS_READ_MAX_MESH, &e2);
             free(file);
             if (!data)
                 return ss_error_set(err, SS_ERR_INPUT, "%s: buffer %d: %s", d->path, i, e2.msg);
@@ -670,7 +677,7 @@ static ss_status parse_glb(gltf_doc *d, const unsigned char *f, size_t len, char
 ss_status ss_mesh_load_gltf(const char *path, ss_mesh *out, ss_error *err) {
     memset(out, 0, sizeof *out);
     size_t len;
-    char *file = ss_read_file(path, &len, err);
+    char *file = ss_read_file_max(path, &len, SS_READ_MAX_MESH, err);
     if (!file) return err ? err->code : SS_ERR_INPUT;
     gltf_doc d;
     memset(&d, 0, sizeof d);

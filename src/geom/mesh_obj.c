@@ -246,7 +246,7 @@ static ss_status parse_face(obj_state *s, char *line, const char *path, long lin
 ss_status ss_mesh_load_obj(const char *path, ss_mesh *out, ss_error *err) {
     memset(out, 0, sizeof *out);
     size_t len;
-    char *text = ss_read_file(path, &len, err);
+    char *text = ss_read_file_max(path, &len, SS_READ_MAX_MESH, err);
     if (!text) return err ? err->code : SS_ERR_INPUT;
     if (memchr(text, '\0', len)) {
         free(text);
@@ -445,7 +445,7 @@ fail:
 
 ss_status ss_obj_read(const char *path, ss_tri_mesh *out, ss_error *err) {
     memset(out, 0, sizeof *out);
-    char *text = ss_read_file(path, NULL, err);
+    char *text = ss_read_file_max(path, NULL, SS_READ_MAX_MESH, err);
     if (!text) return err ? err->code : SS_ERR_INPUT;
     ss_status st = ss_obj_parse(text, path, out, err);
     free(text);
@@ -520,6 +520,52 @@ ss_status ss_tri_mesh_check_closed(const ss_tri_mesh *m, const char *name, ss_er
         }
         i = j;
     }
+    /* self-intersection, as ss_shell_check_closed does for --mesh: every
+     * unique edge as a segment through a BVH of the faces; a face it
+     * crosses that does not share one of its vertices is a crossing */
+    float *pos = malloc(3 * ((size_t)nv + 1) * sizeof *pos);
+    uint32_t *idx = malloc(3 * ((size_t)nt + 1) * sizeof *idx);
+    ss_mesh fm = {.nvertices = nv, .ntriangles = nt, .positions = pos, .indices = idx};
+    ss_bvh *bvh = NULL;
+    if (pos && idx) {
+        for (int d = 0; d < 3; d++) fm.bbox_min[d] = INFINITY, fm.bbox_max[d] = -INFINITY;
+        for (size_t i = 0; i < 3 * (size_t)nv; i++) {
+            pos[i] = (float)m->v[i];
+            fm.bbox_min[i % 3] = fminf(fm.bbox_min[i % 3], pos[i]);
+            fm.bbox_max[i % 3] = fmaxf(fm.bbox_max[i % 3], pos[i]);
+        }
+        for (size_t i = 0; i < 3 * (size_t)nt; i++) idx[i] = (uint32_t)m->tri[i];
+        bvh = ss_bvh_build(&fm, err);
+    } else
+        ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", name);
+    if (!bvh) st = err && err->code ? err->code : SS_ERR_NOMEM;
+    for (size_t i = 0; bvh && !st && i < (size_t)nt * 3; i++) {
+        if (i && e[i].a == e[i - 1].a && e[i].b == e[i - 1].b) continue;
+        const float *pa = pos + 3 * e[i].a, *pb = pos + 3 * e[i].b;
+        float dir[3] = {pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]};
+        float t0 = 1e-4f;
+        for (int tries = 0; tries < 32; tries++) {
+            ss_ray_hit h;
+            if (!ss_bvh_raycast(bvh, pa, dir, t0, 1.0f - 1e-4f, &h)) break;
+            int touches = 0;
+            for (int k = 0; k < 3; k++) {
+                int w = weld[m->tri[3 * (size_t)h.triangle + k]];
+                touches |= w == e[i].a || w == e[i].b;
+            }
+            if (!touches) {
+                st = ss_error_set(err, SS_ERR_INPUT,
+                                  "%s:%d: the mesh intersects itself: an edge of this face crosses "
+                                  "the face of line %d; the wound mesh must be a closed surface "
+                                  "that does not cross itself",
+                                  name, m->line[e[i].tri], m->line[h.triangle]);
+                break;
+            }
+            t0 = h.t + 1e-5f;
+        }
+    }
+    ss_bvh_free(bvh);
+    free(pos);
+    free(idx);
 done:
     free(order);
     free(weld);

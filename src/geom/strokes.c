@@ -159,7 +159,7 @@ fail:
 
 ss_status ss_stroke_csv_read(const char *path, ss_stroke_set *out, ss_error *err) {
     memset(out, 0, sizeof *out);
-    char *text = ss_read_file(path, NULL, err);
+    char *text = ss_read_file_max(path, NULL, SS_READ_MAX_STROKES, err);
     if (!text) return err ? err->code : SS_ERR_INPUT;
     ss_status st = ss_stroke_csv_parse(text, path, out, err);
     free(text);

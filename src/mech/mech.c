@@ -195,45 +195,127 @@ static ss_status boundary(ss_mech *m, const ss_heal_grid *g, ss_error *err) {
     return SS_OK;
 }
 
-static int nearest_node(const ss_mech *m, const double p[3], double *dist) {
-    int best = -1;
-    double bd = INFINITY;
-    for (int i = 0; i < m->mesh->nnodes; i++) {
-        const double *x = m->mesh->x + 3 * i;
-        double d = (x[0] - p[0]) * (x[0] - p[0]) + (x[1] - p[1]) * (x[1] - p[1]) +
-                   (x[2] - p[2]) * (x[2] - p[2]);
-        if (d < bd) bd = d, best = i;
-    }
-    *dist = sqrt(bd);
-    return best;
+/* Mesh nodes bucketed in a uniform grid of cells of side h (>= the search
+ * radius), so finding the nodes near a suture point looks at 27 cells, not
+ * every node: n sutures cost O(n + nodes), not O(n * nodes). The cell
+ * count is kept within 8 nodes' worth (h grows on a sparse mesh). */
+typedef struct node_grid {
+    double lo[3], h;
+    int n[3];
+    int *start, *node; /* node[start[c] .. start[c+1]) lie in cell c */
+} node_grid;
+
+static void node_grid_free(node_grid *q) {
+    free(q->start);
+    free(q->node);
 }
 
-/* The nodes within r of p (the nearest one, near, always among them). */
-static ss_status bite_nodes(const ss_mech *m, const double p[3], double r, int near, int **out,
-                            int *n) {
-    int cap = 16, k = 0;
+static int node_cell(const node_grid *q, const double *x, int d) {
+    long c = (long)floor((x[d] - q->lo[d]) / q->h);
+    return (int)(c < 0 ? 0 : c >= q->n[d] ? q->n[d] - 1 : c);
+}
+
+static ss_status node_grid_build(node_grid *q, const ss_tetmesh *mesh, double h) {
+    memset(q, 0, sizeof *q);
+    double hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int d = 0; d < 3; d++) q->lo[d] = INFINITY;
+    for (int i = 0; i < mesh->nnodes; i++)
+        for (int d = 0; d < 3; d++) {
+            double v = mesh->x[3 * (size_t)i + d];
+            q->lo[d] = v < q->lo[d] ? v : q->lo[d];
+            hi[d] = v > hi[d] ? v : hi[d];
+        }
+    if (!(h > 0)) h = 1;
+    for (;;) {
+        double cells = 1;
+        for (int d = 0; d < 3; d++) {
+            double nd = mesh->nnodes ? floor((hi[d] - q->lo[d]) / h) + 1 : 1;
+            q->n[d] = (int)nd;
+            cells *= nd;
+        }
+        if (cells <= 8.0 * mesh->nnodes + 64) break;
+        h *= 2;
+    }
+    q->h = h;
+    size_t nc = (size_t)q->n[0] * q->n[1] * q->n[2];
+    q->start = calloc(nc + 1, sizeof(int));
+    q->node = malloc(((size_t)mesh->nnodes + 1) * sizeof(int));
+    if (!q->start || !q->node) return SS_ERR_NOMEM;
+    int *cell = malloc(((size_t)mesh->nnodes + 1) * sizeof(int));
+    if (!cell) return SS_ERR_NOMEM;
+    for (int i = 0; i < mesh->nnodes; i++) {
+        const double *x = mesh->x + 3 * (size_t)i;
+        cell[i] =
+            (node_cell(q, x, 2) * q->n[1] + node_cell(q, x, 1)) * q->n[0] + node_cell(q, x, 0);
+        q->start[cell[i] + 1]++;
+    }
+    for (size_t c = 0; c < nc; c++) q->start[c + 1] += q->start[c];
+    int *fill = malloc((nc + 1) * sizeof(int));
+    if (!fill) {
+        free(cell);
+        return SS_ERR_NOMEM;
+    }
+    memcpy(fill, q->start, (nc + 1) * sizeof(int));
+    for (int i = 0; i < mesh->nnodes; i++) q->node[fill[cell[i]]++] = i; /* ascending per cell */
+    free(fill);
+    free(cell);
+    return SS_OK;
+}
+
+static int cmp_int(const void *a, const void *b) {
+    int x = *(const int *)a, y = *(const int *)b;
+    return (x > y) - (x < y);
+}
+
+/* The nodes within r (<= q->h) of p, ascending, in *out (malloc'd); with
+ * *nearest the closest of them (lowest index on a tie, as a scan would
+ * give) or -1 when none is within r. */
+static ss_status near_nodes(const ss_mech *m, const node_grid *q, const double p[3], double r,
+                            int **out, int *n, int *nearest, double *dist) {
+    int c[3], cap = 16, k = 0, best = -1;
+    double bd = INFINITY;
     int *v = malloc((size_t)cap * sizeof(int));
     if (!v) return SS_ERR_NOMEM;
-    v[k++] = near;
-    for (int i = 0; i < m->mesh->nnodes; i++) {
-        const double *x = m->mesh->x + 3 * i;
-        double d = (x[0] - p[0]) * (x[0] - p[0]) + (x[1] - p[1]) * (x[1] - p[1]) +
-                   (x[2] - p[2]) * (x[2] - p[2]);
-        if (i == near || d > r * r) continue;
-        if (k == cap) {
-            cap *= 2;
-            int *w = realloc(v, (size_t)cap * sizeof(int));
-            if (!w) {
-                free(v);
-                return SS_ERR_NOMEM;
+    for (int d = 0; d < 3; d++) c[d] = node_cell(q, p, d);
+    for (int z = c[2] - 1; z <= c[2] + 1; z++)
+        for (int y = c[1] - 1; y <= c[1] + 1; y++)
+            for (int x = c[0] - 1; x <= c[0] + 1; x++) {
+                if (x < 0 || y < 0 || z < 0 || x >= q->n[0] || y >= q->n[1] || z >= q->n[2])
+                    continue;
+                size_t cc = ((size_t)z * q->n[1] + y) * q->n[0] + x;
+                for (int j = q->start[cc]; j < q->start[cc + 1]; j++) {
+                    int i = q->node[j];
+                    const double *xi = m->mesh->x + 3 * (size_t)i;
+                    double d = (xi[0] - p[0]) * (xi[0] - p[0]) + (xi[1] - p[1]) * (xi[1] - p[1]) +
+                               (xi[2] - p[2]) * (xi[2] - p[2]);
+                    if (d > r * r) continue;
+                    if (d < bd || (d == bd && i < best)) bd = d, best = i;
+                    if (k == cap) {
+                        cap *= 2;
+                        int *w = realloc(v, (size_t)cap * sizeof(int));
+                        if (!w) {
+                            free(v);
+                            return SS_ERR_NOMEM;
+                        }
+                        v = w;
+                    }
+                    v[k++] = i;
+                }
             }
-            v = w;
-        }
-        v[k++] = i;
-    }
+    qsort(v, (size_t)k, sizeof(int), cmp_int);
     *out = v;
     *n = k;
+    *nearest = best;
+    *dist = sqrt(bd);
     return SS_OK;
+}
+
+/* The bite: the nearest node first, then the others within r ascending. */
+static void bite_order(int *v, int n, int near) {
+    int at = 0;
+    while (at < n && v[at] != near) at++;
+    for (; at > 0; at--) v[at] = v[at - 1];
+    if (n) v[0] = near;
 }
 
 ss_mech *ss_mech_create(ss_heal_grid *g, const ss_heal_params *heal, const ss_mech_params *p,
@@ -311,44 +393,81 @@ ss_mech *ss_mech_create(ss_heal_grid *g, const ss_heal_params *heal, const ss_me
         m->suture_day = malloc((size_t)nsut * sizeof(double));
         if (!m->suture_spring || !m->suture_day) goto nomem;
         double reach = 1.5 * p->tet_size_mm, bite = 1.5 * p->tet_size_mm;
-        for (int i = 0; i < nsut; i++) {
+        node_grid q;
+        if (node_grid_build(&q, m->mesh, reach > bite ? reach : bite) != SS_OK) {
+            node_grid_free(&q);
+            goto nomem;
+        }
+        /* every suture's springs gathered, then added in one batch */
+        size_t nadd = 0, capadd = 0;
+        int32_t *ab = NULL;
+        double *rest_add = NULL, *k_add = NULL;
+        ss_status st = SS_OK;
+        for (int i = 0; i < nsut && !st; i++) {
             double da, db;
-            int a = nearest_node(m, sut[i].a, &da), b = nearest_node(m, sut[i].b, &db);
-            if (da > reach || db > reach || a == b) {
-                ss_error_set(
-                    err, SS_ERR_INPUT, "sutures: stitch %d (%g,%g,%g)-(%g,%g,%g) mm %s", i + 1,
-                    sut[i].a[0], sut[i].a[1], sut[i].a[2], sut[i].b[0], sut[i].b[1], sut[i].b[2],
-                    a == b ? "joins a node to itself" : "has a point outside the skin domain");
-                goto fail;
-            }
-            int *A = NULL, *B = NULL, na = 0, nb = 0;
-            if (bite_nodes(m, sut[i].a, bite, a, &A, &na) != SS_OK ||
-                bite_nodes(m, sut[i].b, bite, b, &B, &nb) != SS_OK) {
+            int a, b, *A = NULL, *B = NULL, na = 0, nb = 0;
+            if (near_nodes(m, &q, sut[i].a, bite, &A, &na, &a, &da) != SS_OK ||
+                near_nodes(m, &q, sut[i].b, bite, &B, &nb, &b, &db) != SS_OK) {
                 free(A);
                 free(B);
-                goto nomem;
+                st = ss_error_set(err, SS_ERR_NOMEM, "sutures: out of memory");
+                break;
             }
+            if (a < 0 || b < 0 || da > reach || db > reach || a == b) {
+                free(A);
+                free(B);
+                st = ss_error_set(
+                    err, SS_ERR_INPUT, "sutures: stitch %d (%g,%g,%g)-(%g,%g,%g) mm %s", i + 1,
+                    sut[i].a[0], sut[i].a[1], sut[i].a[2], sut[i].b[0], sut[i].b[1], sut[i].b[2],
+                    a >= 0 && a == b ? "joins a node to itself"
+                                     : "has a point outside the skin domain");
+                break;
+            }
+            bite_order(A, na, a);
+            bite_order(B, nb, b);
             double gap = 0;
             for (int d = 0; d < 3; d++)
                 gap += (sut[i].b[d] - sut[i].a[d]) * (sut[i].b[d] - sut[i].a[d]);
             gap = sqrt(gap);
-            m->suture_spring[i] = m->S->nsprings;
-            ss_status st = SS_OK;
+            m->suture_spring[i] = m->S->nsprings + (int)nadd;
             for (int u = 0; u < na && !st; u++)
                 for (int v = 0; v < nb && !st; v++) {
                     if (A[u] == B[v]) continue;
+                    if (nadd == capadd) {
+                        capadd = capadd ? 2 * capadd : 1024;
+                        int32_t *nab = realloc(ab, 2 * capadd * sizeof *ab);
+                        if (nab) ab = nab;
+                        double *nr = realloc(rest_add, capadd * sizeof *nr);
+                        if (nr) rest_add = nr;
+                        double *nk = realloc(k_add, capadd * sizeof *nk);
+                        if (nk) k_add = nk;
+                        if (!nab || !nr || !nk) {
+                            st = ss_error_set(err, SS_ERR_NOMEM, "sutures: out of memory");
+                            break;
+                        }
+                    }
                     const double *xa = m->mesh->x + 3 * A[u], *xb = m->mesh->x + 3 * B[v];
                     double l =
                         sqrt((xb[0] - xa[0]) * (xb[0] - xa[0]) + (xb[1] - xa[1]) * (xb[1] - xa[1]) +
                              (xb[2] - xa[2]) * (xb[2] - xa[2]));
-                    double rest = l - gap > 0 ? l - gap : 0.0;
-                    st = ss_springs_add(m->S, A[u], B[v], rest, p->k_suture / (na * nb), err);
+                    ab[2 * nadd] = A[u];
+                    ab[2 * nadd + 1] = B[v];
+                    rest_add[nadd] = l - gap > 0 ? l - gap : 0.0;
+                    k_add[nadd] = p->k_suture / (na * nb);
+                    nadd++;
                 }
             free(A);
             free(B);
-            if (st) goto fail;
             m->suture_day[i] = sut[i].remove_day;
         }
+        node_grid_free(&q);
+        if (!st && nadd > (size_t)INT32_MAX)
+            st = ss_error_set(err, SS_ERR_INPUT, "sutures: too many springs");
+        if (!st) st = ss_springs_add_many(m->S, (int)nadd, ab, rest_add, k_add, err);
+        free(ab);
+        free(rest_add);
+        free(k_add);
+        if (st) goto fail;
         m->suture_spring[nsut] = m->S->nsprings;
         m->nsutures = nsut;
     }
@@ -838,7 +957,7 @@ ss_status ss_mech_state_apply(ss_mech *m, ss_heal_grid *g, ss_error *err) {
 }
 
 ss_mech_suture *ss_mech_sutures_read(const char *path, int *count, ss_error *err) {
-    char *text = ss_read_file(path, NULL, err);
+    char *text = ss_read_file_max(path, NULL, SS_READ_MAX_STROKES, err);
     if (!text) return NULL;
     int cap = 16, n = 0, line = 0, header = 0;
     ss_mech_suture *s = malloc((size_t)cap * sizeof *s);
@@ -883,6 +1002,11 @@ ss_mech_suture *ss_mech_sutures_read(const char *path, int *count, ss_error *err
         }
         if (k == 7 && !(v[6] >= 0)) {
             ss_error_set(err, SS_ERR_INPUT, "%s:%d: removal day %g must be >= 0", path, line, v[6]);
+            goto fail;
+        }
+        if (n == SS_MECH_MAX_SUTURES) {
+            ss_error_set(err, SS_ERR_INPUT, "%s:%d: more than %d sutures (the limit)", path, line,
+                         SS_MECH_MAX_SUTURES);
             goto fail;
         }
         if (n == cap) {

@@ -193,31 +193,47 @@ nomem:
 }
 
 ss_status ss_springs_add(ss_springs *s, int a, int b, double rest, double k, ss_error *err) {
-    if (a < 0 || b < 0 || a >= s->nnodes || b >= s->nnodes || a == b)
-        return ss_error_set(err, SS_ERR_INPUT, "springs: bad node pair %d-%d", a, b);
-    int n = s->nsprings + 1;
-    int32_t *e = realloc(s->e, 2 * (size_t)n * sizeof(int32_t));
+    const int32_t ab[2] = {a, b};
+    return ss_springs_add_many(s, 1, ab, &rest, &k, err);
+}
+
+/* One reallocation and one CSR rebuild for the whole batch: adding the
+ * springs of many sutures one by one rebuilt the CSR each time (quadratic). */
+ss_status ss_springs_add_many(ss_springs *s, int count, const int32_t *ab, const double *rest,
+                              const double *k, ss_error *err) {
+    if (count <= 0) return SS_OK;
+    for (int i = 0; i < count; i++) {
+        int a = ab[2 * i], b = ab[2 * i + 1];
+        if (a < 0 || b < 0 || a >= s->nnodes || b >= s->nnodes || a == b)
+            return ss_error_set(err, SS_ERR_INPUT, "springs: bad node pair %d-%d", a, b);
+    }
+    if (count > INT32_MAX - s->nsprings)
+        return ss_error_set(err, SS_ERR_INPUT, "springs: more than %d springs", INT32_MAX);
+    size_t n = (size_t)s->nsprings + (size_t)count;
+    int32_t *e = realloc(s->e, 2 * n * sizeof(int32_t));
     if (e) s->e = e;
-    double *l0 = realloc(s->l0, (size_t)n * sizeof(double));
+    double *l0 = realloc(s->l0, n * sizeof(double));
     if (l0) s->l0 = l0;
-    double *rs = realloc(s->rest, (size_t)n * sizeof(double));
+    double *rs = realloc(s->rest, n * sizeof(double));
     if (rs) s->rest = rs;
-    double *kk = realloc(s->k, (size_t)n * sizeof(double));
+    double *kk = realloc(s->k, n * sizeof(double));
     if (kk) s->k = kk;
-    double *vv = realloc(s->vol, (size_t)n * sizeof(double));
+    double *vv = realloc(s->vol, n * sizeof(double));
     if (vv) s->vol = vv;
     if (!e || !l0 || !rs || !kk || !vv)
         return ss_error_set(err, SS_ERR_NOMEM, "springs: out of memory");
-    s->e[2 * s->nsprings] = a;
-    s->e[2 * s->nsprings + 1] = b;
-    const double *pa = s->X + 3 * a, *pb = s->X + 3 * b;
-    s->l0[s->nsprings] =
-        sqrt((pb[0] - pa[0]) * (pb[0] - pa[0]) + (pb[1] - pa[1]) * (pb[1] - pa[1]) +
-             (pb[2] - pa[2]) * (pb[2] - pa[2]));
-    s->rest[s->nsprings] = rest;
-    s->k[s->nsprings] = k;
-    s->vol[s->nsprings] = 0;
-    s->nsprings = n;
+    for (int i = 0; i < count; i++) {
+        int a = ab[2 * i], b = ab[2 * i + 1], j = s->nsprings + i;
+        s->e[2 * j] = a;
+        s->e[2 * j + 1] = b;
+        const double *pa = s->X + 3 * a, *pb = s->X + 3 * b;
+        s->l0[j] = sqrt((pb[0] - pa[0]) * (pb[0] - pa[0]) + (pb[1] - pa[1]) * (pb[1] - pa[1]) +
+                        (pb[2] - pa[2]) * (pb[2] - pa[2]));
+        s->rest[j] = rest[i];
+        s->k[j] = k[i];
+        s->vol[j] = 0;
+    }
+    s->nsprings = (int)n;
     ss_status st = build_adjacency(s, err);
     if (st == SS_OK) ss_springs_update_mass(s);
     return st;

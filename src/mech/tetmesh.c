@@ -269,9 +269,9 @@ static int numbers(const char *s, double *out, int max) {
 static int is_int(double v) { return v == floor(v) && fabs(v) < 2e9; }
 
 ss_tetmesh *ss_tetmesh_read_tetgen(const char *node_path, const char *ele_path, ss_error *err) {
-    char *nt = ss_read_file(node_path, NULL, err);
+    char *nt = ss_read_file_max(node_path, NULL, SS_READ_MAX_MESH, err);
     if (!nt) return NULL;
-    char *et = ss_read_file(ele_path, NULL, err);
+    char *et = ss_read_file_max(ele_path, NULL, SS_READ_MAX_MESH, err);
     if (!et) {
         free(nt);
         return NULL;
@@ -362,7 +362,7 @@ fail:
 }
 
 ss_tetmesh *ss_tetmesh_read_msh(const char *path, ss_error *err) {
-    char *text = ss_read_file(path, NULL, err);
+    char *text = ss_read_file_max(path, NULL, SS_READ_MAX_MESH, err);
     if (!text) return NULL;
     ss_tetmesh *m = calloc(1, sizeof *m);
     int32_t *idmap = NULL;
@@ -575,7 +575,7 @@ ss_tetmesh *ss_tetmesh_tetgen(const char *surface_path, double max_volume_mm3, s
     }
     char *text;
     size_t len;
-    if (!(text = ss_read_file(surface_path, &len, err))) return NULL;
+    if (!(text = ss_read_file_max(surface_path, &len, SS_READ_MAX_MESH, err))) return NULL;
     char dir[] = "/tmp/skinsim-tetgen-XXXXXX";
     if (!mkdtemp(dir)) {
         free(text);

@@ -1,7 +1,10 @@
 /* MCML input (.mci) and output (.mco) files, so existing MCML inputs run
  * unchanged (MCML 1.2, Wang, Jacques & Zheng 1995, Comput. Methods Programs
  * Biomed. 47:131). The reader follows MCML's rules: one item per data line,
- * '#' starts a comment, blank and comment-only lines are skipped. The writer
+ * '#' starts a comment, blank and comment-only lines are skipped; a run's
+ * output line must give both the name and the type (a line "A" alone is
+ * refused, not written as a file called A) and the grid's 2-D arrays hold
+ * at most SS_MCI_MAX_GRID_VALUES values within the memory available. The writer
  * produces MCML's ASCII layout and normalisations: RAT, A_l [-], A_z [1/cm],
  * Rd_r and Tt_r [1/cm^2] (annulus 2 pi (ir+0.5) dr^2), Rd_a and Tt_a [1/sr]
  * (2 pi sin((ia+0.5) da) da), values beyond the grid collected in the last
@@ -119,6 +122,15 @@ ss_status ss_mci_parse(const char *text, const char *name, ss_mci_file *out, ss_
             return perr(&lr, err, "run %d: expected 'name.mco A' (ASCII output), got '%s'", r + 1,
                         s);
         }
+        /* both the name and the type letter: a line "A" alone is a name left
+         * out, not an output called A in the current folder (where the
+         * output may go is the caller's rule, ss_path_under) */
+        if (k < 2) {
+            ss_mci_file_free(out);
+            return perr(&lr, err,
+                        "run %d: expected 'name.mco A' (output name and type), got only '%s'",
+                        r + 1, s);
+        }
         snprintf(run->out_name, sizeof run->out_name, "%s", fname);
         run->out_type = 'A';
         for (int q = 0; q < r; q++)
@@ -152,6 +164,20 @@ ss_status ss_mci_parse(const char *text, const char *name, ss_mci_file *out, ss_
         run->nz = (int)v[0];
         run->nr = (int)v[1];
         run->na = (int)v[2];
+        /* the 2-D tallies (A_rz, Rd_ra, Tt_ra), bounded before anything is
+         * allocated: a stated cap, and the memory they take (at least two
+         * block copies and the total, 8 bytes a value, plus 13 characters a
+         * value of .mco text) within what is available */
+        double cells = v[1] * (v[0] + 2.0 * v[2]); /* (FAIL frees run: v[] in messages) */
+        if (cells > SS_MCI_MAX_GRID_VALUES)
+            FAIL("run %d: grid nz %d nr %d na %d holds %.0f values in its 2-D arrays (nr * (nz + "
+                 "2 na)), above the limit of %d",
+                 r + 1, (int)v[0], (int)v[1], (int)v[2], cells, SS_MCI_MAX_GRID_VALUES);
+        double need = cells * (3 * 8.0 + 13.0), avail = ss_memory_available_bytes();
+        if (avail > 0 && need > avail)
+            FAIL("run %d: grid nz %d nr %d na %d needs %.2f GB, more than the %.2f GB of memory "
+                 "available",
+                 r + 1, (int)v[0], (int)v[1], (int)v[2], need / 1e9, avail / 1e9);
         READ("the number of layers", 1);
         if (!is_int(v[0], 1, SS_OPTICS_MAX_LAYERS))
             FAIL("run %d: number of layers %g is not in 1..%d", r + 1, v[0], SS_OPTICS_MAX_LAYERS);

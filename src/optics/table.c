@@ -387,7 +387,7 @@ truncated:
 
 ss_mm_table *ss_mm_table_read(const char *path, ss_error *err) {
     size_t len = 0;
-    char *buf = ss_read_file(path, &len, err);
+    char *buf = ss_read_file_max(path, &len, SS_READ_MAX_TABLE, err);
     if (!buf) return NULL;
     ss_mm_table *t = ss_mm_table_from_memory((const unsigned char *)buf, len, path, err);
     free(buf);

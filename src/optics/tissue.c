@@ -154,7 +154,7 @@ static ss_status load_csv(const char *file, int ncols, ss_spectrum_table *out[],
     char path[4096];
     snprintf(path, sizeof path, "%s/spectra/%s", ss_data_dir(), file);
     size_t len;
-    char *text = ss_read_file(path, &len, err);
+    char *text = ss_read_file_max(path, &len, SS_READ_MAX_CONFIG, err);
     if (!text) return err ? err->code : SS_ERR_INPUT;
     int cap = 256, n = 0;
     double *nm = malloc(cap * sizeof *nm);

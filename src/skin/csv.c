@@ -138,7 +138,7 @@ ss_status ss_skin_features_parse_csv(const char *text, const char *name, ss_skin
 ss_status ss_skin_features_read_csv(const char *path, ss_skin_feature_list *out, ss_error *err) {
     memset(out, 0, sizeof *out);
     size_t len;
-    char *text = ss_read_file(path, &len, err);
+    char *text = ss_read_file_max(path, &len, SS_READ_MAX_FEATURES, err);
     if (!text) return err->code;
     if (strlen(text) != len) {
         free(text);

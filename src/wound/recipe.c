@@ -134,7 +134,7 @@ ss_status ss_wound_recipe_parse(const char *json, const char *name, ss_wound_rec
 }
 
 ss_status ss_wound_recipe_load(const char *path, ss_wound_recipe *r, ss_error *err) {
-    char *text = ss_read_file(path, NULL, err);
+    char *text = ss_read_file_max(path, NULL, SS_READ_MAX_CONFIG, err);
     if (!text) return err->code;
     ss_status st = ss_wound_recipe_parse(text, path, r, err);
     free(text);

@@ -163,6 +163,31 @@ int main(int argc, char **argv) {
     png_chunk(f, "IEND", NULL, 0);
     fclose(f);
     free(p);
+    /* issue 21: 44 bytes whose tEXt claims 2^31-1; a 64 x 64 bilevel circle */
+    p = target_path("png", "text_bomb");
+    f = fopen(p, "wb");
+    fwrite("\x89PNG\r\n\x1a\n", 1, 8, f);
+    unsigned char ihdr1[13] = {0, 0, 0, 1, 0, 0, 0, 1, 8, 0, 0, 0, 0};
+    png_chunk(f, "IHDR", ihdr1, 13);
+    fwrite("\x7f\xff\xff\xfftEXtabc", 1, 11, f);
+    fclose(f);
+    free(p);
+    p = target_path("png", "bilevel_64");
+    f = fopen(p, "wb");
+    fwrite("\x89PNG\r\n\x1a\n", 1, 8, f);
+    unsigned char ihdr2[13] = {0, 0, 0, 64, 0, 0, 0, 64, 1, 0, 0, 0, 0};
+    png_chunk(f, "IHDR", ihdr2, 13);
+    unsigned char bits[64 * 9] = {0}, zb[1024];
+    for (int y = 0; y < 64; y++)
+        for (int x = 0; x < 64; x++)
+            if ((x - 32) * (x - 32) + (y - 32) * (y - 32) < 400)
+                bits[y * 9 + 1 + x / 8] |= (unsigned char)(0x80 >> (x % 8));
+    zn = sizeof zb;
+    compress(zb, &zn, bits, sizeof bits);
+    png_chunk(f, "IDAT", zb, (unsigned)zn);
+    png_chunk(f, "IEND", NULL, 0);
+    fclose(f);
+    free(p);
 
     /* ---- EXR ---- */
     p = target_path("exr", "rgb_half");
@@ -238,6 +263,31 @@ int main(int argc, char **argv) {
         seed("checkpoint", "huge_nx", c, len);
         seed("checkpoint", "truncated", b, len - 9);
         free(c);
+        free(b);
+    }
+    /* ---- a heal snapshot (.vti): whole, with closure days, cut short,
+     * without appended data, and with an absurd extent ---- */
+    if (g) {
+        p = target_path("vti", "small");
+        double closed[4 * 3];
+        for (int k = 0; k < 12; k++) closed[k] = k % 3 ? 1.5 * k : -1.0;
+        ss_heal_vti_write_all(p, g, 0, NULL, NULL, closed, &err);
+        size_t len;
+        char *b = slurp(p, &len);
+        free(p);
+        seed("vti", "truncated", b, len / 2);
+        char *app = strstr(b, "<AppendedData");
+        if (app) seed("vti", "no_appended", b, (size_t)(app - b));
+        char *we = strstr(b, "WholeExtent=\"0 4");
+        if (we) { /* WholeExtent and Piece Extent 0 2147483647 in x */
+            size_t head = (size_t)(we - b) + 15;
+            char *c = malloc(len + 32);
+            memcpy(c, b, head);
+            int k = sprintf(c + head, "2147483647");
+            memcpy(c + head + k, we + 16, len - head - 1);
+            seed("vti", "huge_extent", c, len - 1 + (size_t)k);
+            free(c);
+        }
         free(b);
     }
     /* ---- the header of a checkpoint in pieces; a .pvti ---- */

@@ -13,7 +13,9 @@
  * (memory: the whole grid plus the largest piece). The closure days
  * (a FieldData array per piece, for its own columns) are joined the same way:
  * pieces sharing a column (a z stack) must agree, and every column must be
- * covered once any piece has them. Gave up: ghost levels, other VTK encodings
+ * covered once any piece has them. A Source must name a file inside the
+ * .pvti's folder (no "..", no absolute path, no symbolic link out of it).
+ * Gave up: ghost levels, other VTK encodings
  * and point data (this writer makes none). */
 #define _POSIX_C_SOURCE 200809L
 #include <stdlib.h>
@@ -52,7 +54,7 @@ static const char *attr(const char *tag, const char *end, const char *name, char
 
 typedef struct pv_piece {
     ss_heal_box box;
-    char *file; /* the piece's path (next to the .pvti when relative) */
+    char *file; /* the piece's path, inside the .pvti's folder */
 } pv_piece;
 
 typedef struct pv_image {
@@ -60,6 +62,7 @@ typedef struct pv_image {
     double dx;
     int n;
     pv_piece *p;
+    char why[sizeof(((ss_error *)0)->msg)]; /* a refused Source, whole */
 } pv_image;
 
 static void pv_free(pv_image *v) {
@@ -92,8 +95,6 @@ static const char *pv_parse(const char *path, const char *text, pv_image *v) {
         sp[2] != sp[0])
         return "bad Spacing (the heal grid has cubic voxels)";
     v->dx = sp[0];
-    const char *slash = strrchr(path, '/');
-    int dl = slash ? (int)(slash - path + 1) : 0;
     for (const char *pc = ime; (pc = strstr(pc, "<Piece")); pc++) {
         const char *pe = strchr(pc, '>');
         int e[6];
@@ -110,9 +111,12 @@ static const char *pv_parse(const char *path, const char *text, pv_image *v) {
         for (int a = 0; a < 3; a++) p->box.lo[a] = e[2 * a], p->box.n[a] = e[2 * a + 1] - e[2 * a];
         v->n++;
         if (!attr(pc, pe, "Source", buf, sizeof buf) || !buf[0]) return "a Piece has no Source";
-        size_t l = (buf[0] == '/' ? 0 : (size_t)dl) + strlen(buf) + 1;
-        if (!(p->file = malloc(l))) return "out of memory";
-        snprintf(p->file, l, "%.*s%s", buf[0] == '/' ? 0 : dl, path, buf);
+        /* inside the .pvti's folder: no "..", no absolute path, no link out */
+        ss_error e2;
+        if (ss_input_path_inside(path, buf, &p->file, &e2)) {
+            snprintf(v->why, sizeof v->why, "%s", e2.msg);
+            return v->why;
+        }
     }
     if (!v->n) return "no Piece";
     return NULL;
@@ -121,7 +125,7 @@ static const char *pv_parse(const char *path, const char *text, pv_image *v) {
 /* The .pvti read and checked (XML, tiling); SS_OK or an error naming it. */
 static ss_status pv_open(const char *path, pv_image *v, ss_error *err) {
     memset(v, 0, sizeof *v);
-    char *text = ss_read_file(path, NULL, err);
+    char *text = ss_read_file_max(path, NULL, SS_READ_MAX_CONFIG, err);
     if (!text) return err && err->code ? err->code : SS_ERR_INPUT;
     const char *why = pv_parse(path, text, v);
     free(text);
@@ -134,6 +138,8 @@ static ss_status pv_open(const char *path, pv_image *v, ss_error *err) {
                      path, v->whole[0], v->whole[1], v->whole[2], v->p[bad].file, b->lo[0],
                      b->lo[0] + b->n[0], b->lo[1], b->lo[1] + b->n[1], b->lo[2], b->lo[2] + b->n[2],
                      why);
+    } else if (why == v->why) {
+        ss_error_set(err, SS_ERR_INPUT, "%s", why);
     } else if (why) {
         ss_error_set(err, SS_ERR_INPUT, "%s: %s", path, why);
     }

@@ -405,8 +405,9 @@ static ss_heal_grid *read_vti(const char *path, int piece, int whole[3], int off
         return NULL;
     }
     if (g) g->nx = n[0], g->ny = n[1], g->nz = n[2];
-    const unsigned char *data = (const unsigned char *)us + 1;
-    size_t avail = len - (size_t)(us + 1 - text);
+    /* no arithmetic on us when there is no appended data (NULL + 1 is UB) */
+    const unsigned char *data = us ? (const unsigned char *)us + 1 : NULL;
+    size_t avail = us ? len - (size_t)(us + 1 - text) : 0;
     size_t ncell = (size_t)n[0] * (size_t)n[1] * (size_t)n[2];
     int have_cell = 0, have[SS_HEAL_NFIELDS] = {0};
     /* each DataArray of the header */

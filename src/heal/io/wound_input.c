@@ -7,6 +7,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "skinsim/heal_io.h"
 #include "skinsim/geom.h"
+#include "skinsim/mesh.h"
 
 #include <math.h>
 #include <stdlib.h>

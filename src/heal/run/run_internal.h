@@ -104,6 +104,7 @@ ss_status ss_heal_run__aux_restore(ss_heal_run *r, const char *aux, const char *
 /* Checks the output folder before any work (a previous run needs force; a
  * path the core refuses) and registers the inputs and the disk estimate. */
 ss_status ss_heal_run__outputs_open(ss_heal_run *r, ss_error *err);
+ss_status ss_heal_run__outputs_precheck(ss_heal_run *r, ss_error *err);
 /* Begins the outputs (lock, leftovers, disk, staging), points out_dir at
  * where files go, makes fields/ and surface/, writes run.json (fresh runs). */
 ss_status ss_heal_run__prepare_out_dir(ss_heal_run *r, ss_error *err);
@@ -123,6 +124,8 @@ cJSON *ss_heal_run__summary(const ss_heal_run *r, double wall);
 
 /* run_mech.c: the contraction mechanics inside a run */
 ss_status ss_heal_run__mech_setup_fresh(ss_heal_run *r, ss_error *err);
+/* The mechanics options that need no grid, checked before long work. */
+ss_status ss_heal_run__mech_check_options(ss_heal_run *r, ss_error *err);
 ss_status ss_heal_run__mech_setup_resume(ss_heal_run *r, const char *dir, ss_error *err);
 ss_status ss_heal_run__mech_row(ss_heal_run *r, ss_error *err); /* after a row was added */
 ss_status ss_heal_run__mech_snapshot(ss_heal_run *r, int idx, ss_error *err);

@@ -99,7 +99,38 @@ static ss_status create_mech(ss_heal_run *r, ss_heal_grid *g, ss_error *err) {
         return err->code ? err->code : SS_ERR_INPUT;
     r->mech = ss_mech_create(g, r->p, &r->mp, mesh, r->sutures, r->nsutures, err);
     ss_tetmesh_free(mesh);
+    if (!r->mech && err && !strncmp(err->msg, "sutures: ", 9)) { /* name the file */
+        ss_error e2 = *err;
+        ss_error_set(err, e2.code, "%s: %s", r->c.sutures ? r->c.sutures : "the run's sutures",
+                     e2.msg + 9);
+    }
     if (!r->mech) return err->code ? err->code : SS_ERR_INPUT;
+    return SS_OK;
+}
+
+ss_status ss_heal_run__mech_check_options(ss_heal_run *r, ss_error *err) {
+    const ss_heal_run_config *c = &r->c;
+    if (!c->mechanics) return ss_heal_run__mech_setup_fresh(r, err); /* only checks */
+    if (c->kappa >= 0 && !(c->kappa <= 1.0 / 3.0 + 1e-12))
+        return ss_error_set(err, SS_ERR_INPUT, "--kappa %g: the dispersion is 0..1/3", c->kappa);
+    if (c->tet_size_mm != 0 && !(c->tet_size_mm > 0 && c->tet_size_mm <= 1e3))
+        return ss_error_set(err, SS_ERR_INPUT, "--tet-size-mm %g: need a value in (0, 1000] mm",
+                            c->tet_size_mm);
+    ss_mech_params mp;
+    ss_mech_params_default(&mp);
+    ss_status st = SS_OK;
+    if (c->params_path) {
+        char *text = ss_read_file_max(c->params_path, NULL, SS_READ_MAX_CONFIG, err);
+        if (!text) return err->code ? err->code : SS_ERR_INPUT;
+        st = ss_mech_params_parse(&mp, text, c->params_path, err);
+        free(text);
+        if (st) return st;
+    }
+    if (c->fibres && (st = ss_mech_params_set_fibres(&mp, c->fibres, err))) return st;
+    if ((st = ss_mech_params_check(&mp, err))) return st;
+    if (c->sutures && !r->sutures &&
+        !(r->sutures = ss_mech_sutures_read(c->sutures, &r->nsutures, err)))
+        return err->code ? err->code : SS_ERR_INPUT;
     return SS_OK;
 }
 
@@ -115,7 +146,7 @@ ss_status ss_heal_run__mech_setup_fresh(ss_heal_run *r, ss_error *err) {
     ss_mech_params_default(&r->mp);
     ss_status st = SS_OK;
     if (c->params_path) {
-        char *text = ss_read_file(c->params_path, NULL, err);
+        char *text = ss_read_file_max(c->params_path, NULL, SS_READ_MAX_CONFIG, err);
         if (!text) return err->code ? err->code : SS_ERR_INPUT;
         st = ss_mech_params_parse(&r->mp, text, c->params_path, err);
         free(text);
@@ -136,7 +167,8 @@ ss_status ss_heal_run__mech_setup_fresh(ss_heal_run *r, ss_error *err) {
         r->mp.tet_size_mm = c->tet_size_mm;
     }
     if ((st = ss_mech_params_check(&r->mp, err))) return st;
-    if (c->sutures && !(r->sutures = ss_mech_sutures_read(c->sutures, &r->nsutures, err)))
+    if (c->sutures && !r->sutures &&
+        !(r->sutures = ss_mech_sutures_read(c->sutures, &r->nsutures, err)))
         return err->code ? err->code : SS_ERR_INPUT;
     if (c->tet_mesh && !r->g->cell) { /* read it now: its errors are input errors */
         ss_tetmesh *mesh = ss_tetmesh_read(c->tet_mesh, err);

@@ -256,6 +256,17 @@ static double estimate_bytes(const ss_heal_run *r) {
     return snaps * (vti + map) + ckpt + rows * 24.0 * (4 + SS_HEAL_NFIELDS) + 500e3;
 }
 
+/* The checks of ss_heal_run__outputs_open that need no grid (the folder's
+ * lock, a previous run in it, the path itself), for a run that first does
+ * long work (a mesh) before its grid exists: a bad --out fails at once. */
+ss_status ss_heal_run__outputs_precheck(ss_heal_run *r, ss_error *err) {
+    if (!r->out_dir) return SS_OK;
+    ss_status s = ss_heal_run__outputs_open(r, err);
+    ss_outputs_free(r->outs); /* nothing staged yet: only checked */
+    r->outs = NULL;
+    return s;
+}
+
 ss_status ss_heal_run__outputs_open(ss_heal_run *r, ss_error *err) {
     const ss_heal_run_config *c = &r->c;
     const char *dir = r->out_dir;
@@ -298,7 +309,7 @@ ss_status ss_heal_run__outputs_open(ss_heal_run *r, ss_error *err) {
      * staged and swapped in whole at the end, so the old run stays until
      * then. */
     ss_output_kind kind = !c->resume_dir && exists ? SS_OUTPUT_DIR : SS_OUTPUT_DIR_IN_PLACE;
-    if (!s) s = ss_outputs_add(r->outs, opt, dir, kind, estimate_bytes(r), err);
+    if (!s) s = ss_outputs_add(r->outs, opt, dir, kind, r->g ? estimate_bytes(r) : 0, err);
     return s;
 }
 

@@ -406,7 +406,22 @@ ss_status ss_heal_run__setup_fresh(ss_heal_run *r, ss_error *err) {
     if (!st && ss_heal_run__shell_wanted(c)) { /* a patch of skin on a mesh */
         r->days = c->days != 0 ? c->days : SS_HEAL_RUN_DEFAULT_DAYS;
         r->scheme = c->scheme;
-        st = ss_heal_run__shell_setup_fresh(r, err);
+        /* every option that needs no grid before the mesh work (minutes on
+         * a large mesh): mechanics, checkpoint pieces, steps, the output */
+        st = ss_heal_run__mech_check_options(r, err);
+        const int *d = c->checkpoint_pieces;
+        if (!st && (d[0] || d[1] || d[2]) &&
+            (d[0] < 1 || d[1] < 1 || d[2] < 1 ||
+             (long long)d[0] * d[1] * d[2] > SS_HEAL_CKPT_MAX_PIECES))
+            st = ss_error_set(err, SS_ERR_INPUT,
+                              "--checkpoint-pieces %dx%dx%d: need at least 1 per axis and at most "
+                              "%d in all",
+                              d[0], d[1], d[2], SS_HEAL_CKPT_MAX_PIECES);
+        if (!st && c->dt_days > 0 && llround(r->days / c->dt_days) < 1)
+            st = ss_error_set(err, SS_ERR_INPUT, "--days %g is shorter than one step (dt %g)",
+                              r->days, c->dt_days);
+        if (!st) st = ss_heal_run__outputs_precheck(r, err);
+        if (!st) st = ss_heal_run__shell_setup_fresh(r, err);
         if (!st) st = ss_heal_run__mech_setup_fresh(r, err);
         if (!st) st = setup_solver(r, err);
         return st;

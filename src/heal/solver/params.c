@@ -293,7 +293,13 @@ ss_heal_params *ss_heal_params_parse(const char *text, const char *what, const c
     }
     if (!scenario) scenario = sc ? sc->valuestring : "clean";
     p = ss_heal_params_preset(scenario, err);
-    if (!p) goto fail;
+    if (!p) {
+        if (sc && !strcmp(scenario, sc->valuestring)) { /* the file's own word: name the file */
+            ss_error e2 = *err;
+            ss_error_set(err, e2.code, "%s: %s", what, e2.msg);
+        }
+        goto fail;
+    }
     for (const cJSON *it = root->child; it; it = it->next) {
         if (strcmp(it->string, "scenario") && strcmp(it->string, "params") &&
             strcmp(it->string, "switches") && strcmp(it->string, "comment") &&
@@ -385,7 +391,7 @@ ss_heal_params *ss_heal_params_load(const char *json_path, const char *scenario,
         return NULL;
     }
     size_t len = 0;
-    char *text = ss_read_file(json_path, &len, err);
+    char *text = ss_read_file_max(json_path, &len, SS_READ_MAX_CONFIG, err);
     if (!text) {
         if (err) err->code = SS_ERR_INPUT;
         return NULL;
