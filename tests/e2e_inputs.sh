@@ -151,7 +151,7 @@ printf '0.5,0.5\n0.6,0.5\n0.5,0.6\n' >"$T/uv.csv"
 expect2 "need --mechanics" o13 heal --mesh open.obj --wound-uv uv.csv --fibres 1,0,0 --out o13 --quiet
 expect2 "--kappa" o14 heal --mesh open.obj --wound-uv uv.csv --mechanics --kappa 0.9 --out o14 --quiet
 mkdir -p "$T/prev" && echo x >"$T/prev/mine.txt"
-expect2 "holds a previous run" "" heal --mesh open.obj --wound-uv uv.csv --out prev --quiet
+expect2 "is not a .skinsim heal. run folder" "" heal --mesh open.obj --wound-uv uv.csv --out prev --quiet
 check '[ "$(cat "$T/prev/mine.txt")" = x ]' "a refused heal --mesh touched the --out folder"
 expect2 "not a closed surface|too few triangles" o15 heal --mesh open.obj --wound-uv uv.csv --out o15 --quiet
 
