@@ -106,10 +106,11 @@ static ss_status create_mech(ss_heal_run *r, ss_heal_grid *g, ss_error *err) {
 ss_status ss_heal_run__mech_setup_fresh(ss_heal_run *r, ss_error *err) {
     const ss_heal_run_config *c = &r->c;
     if (!c->mechanics) {
-        if (c->fibres || c->kappa >= 0 || c->tet_size_mm != 0 || c->sutures || c->tet_mesh)
+        if (c->fibres || c->kappa >= 0 || c->tet_size_mm != 0 || c->sutures || c->tet_mesh ||
+            c->mech_model)
             return ss_error_set(err, SS_ERR_INPUT,
-                                "--fibres, --kappa, --tet-size-mm, --sutures and --tet-mesh need "
-                                "--mechanics");
+                                "--fibres, --kappa, --tet-size-mm, --sutures, --tet-mesh and "
+                                "--mech-model need --mechanics");
         return SS_OK;
     }
     ss_mech_params_default(&r->mp);
@@ -122,6 +123,7 @@ ss_status ss_heal_run__mech_setup_fresh(ss_heal_run *r, ss_error *err) {
         if (st) return st;
     }
     if (c->fibres && (st = ss_mech_params_set_fibres(&r->mp, c->fibres, err))) return st;
+    if (c->mech_model && (st = ss_mech_model_parse(c->mech_model, &r->mp.model, err))) return st;
     if (c->kappa >= 0) {
         if (!(c->kappa <= 1.0 / 3.0 + 1e-12))
             return ss_error_set(err, SS_ERR_INPUT, "--kappa %g: the dispersion is 0..1/3",

@@ -107,7 +107,7 @@ void ss_mech_params_default(ss_mech_params *p) {
     p->model = SS_MECH_MODEL_SPRINGS;
     p->k1_goh = 100.0;
     p->prestretch = 1.15;
-    p->k_suture_goh = 200.0;
+    p->k_suture_goh = 1000.0;
 }
 
 ss_status ss_mech_model_parse(const char *text, int *model, ss_error *err) {
