@@ -387,7 +387,8 @@ ss_mech_suture *ss_mech_sutures_read(const char *path, int *n, ss_error *err);
  * meshed by the lattice (mesh NULL) or the given mesh is used (its nodes must
  * lie in the grid's tissue). heal gives the healthy fibroblast level. The
  * grid's velocity arrays are allocated (zero) if absent. Sutures whose points
- * are farther than one tet edge from the mesh -> SS_ERR_INPUT. */
+ * are farther than 1.5 tet edges (the grip, docs/mech.md) from the mesh ->
+ * SS_ERR_INPUT. */
 ss_mech *ss_mech_create(ss_heal_grid *g, const ss_heal_params *heal, const ss_mech_params *p,
                         const ss_tetmesh *mesh, const ss_mech_suture *sutures, int nsutures,
                         ss_error *err);

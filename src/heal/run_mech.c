@@ -16,6 +16,7 @@
  * metadata grows with the mesh (about 80 bytes per node). */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -99,6 +100,12 @@ static ss_status create_mech(ss_heal_run *r, ss_heal_grid *g, ss_error *err) {
         return err->code ? err->code : SS_ERR_INPUT;
     r->mech = ss_mech_create(g, r->p, &r->mp, mesh, r->sutures, r->nsutures, err);
     ss_tetmesh_free(mesh);
+    if (!r->mech && r->c.sutures && err && !strncmp(err->msg, "sutures:", 8)) {
+        /* the stitch errors name the stitch; the run knows its file */
+        char msg[sizeof err->msg];
+        snprintf(msg, sizeof msg, "%s", err->msg + 9);
+        ss_error_set(err, SS_ERR_INPUT, "%.200s: %.800s", r->c.sutures, msg);
+    }
     if (!r->mech) return err->code ? err->code : SS_ERR_INPUT;
     return SS_OK;
 }
