@@ -447,6 +447,9 @@ ss_status ss_mech_vtu_write(const ss_mech *m, const char *path, double t_days, s
  * frame's maximum), the deformed wound outline in white. Linear RGB image,
  * px pixels on the longer side. */
 ss_image *ss_mech_top_view(const ss_mech *m, int px, double vmax, ss_error *err);
+/* The same view with a colour bar on its right, labelled 0, vmax / 2 and vmax
+ * mm/day (vmax <= 0: the frame's largest speed). */
+ss_image *ss_mech_top_view_bar(const ss_mech *m, int px, double vmax, ss_error *err);
 
 #ifdef __cplusplus
 }

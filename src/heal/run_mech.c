@@ -303,9 +303,10 @@ ss_status ss_heal_run__mech_snapshot(ss_heal_run *r, int idx, ss_error *err) {
     if (st) return st;
     st = ss_heal_run__series_pvd(r, "fields", "mesh", err);
     if (st) return st;
-    /* Fig. 7: speed on a fixed scale for the run, 0 .. the first frame's
-     * reference of 0.5 mm/day (the seed's 7.7e-3 mm/s is for a face mesh) */
-    ss_image *img = ss_mech_top_view(r->mech, 512, 0.5, err);
+    /* Fig. 7: speed from 0 to the frame's largest, with a colour bar that
+     * says what it is (a fixed 0.5 mm/day left most of a fast frame flat
+     * red and a slow one flat blue) */
+    ss_image *img = ss_mech_top_view_bar(r->mech, 512, 0, err);
     if (!img) return err->code ? err->code : SS_ERR_NOMEM;
     snprintf(path, sizeof path, "%s/surface/velocity_%04d.png", r->out_dir, idx);
     st = ss_png_write(path, img, 8, SS_ENC_SRGB, err);
