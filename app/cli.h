@@ -21,6 +21,7 @@ int cmd_wound(int argc, char **argv);
 int cmd_optics(int argc, char **argv);
 int cmd_skin(int argc, char **argv);
 int cmd_view(int argc, char **argv); /* execs skinsim-view (app/cmd_view.c) */
+int cmd_mech(int argc, char **argv); /* `skinsim mech stretch` (app/cmd_mech.c) */
 /* `skinsim optics fit` and `skinsim optics table` (app/cmd_optics_fit.c). */
 int cmd_optics_fit(int argc, char **argv);
 int cmd_optics_table(int argc, char **argv);

@@ -88,6 +88,8 @@ static void help(FILE *f) {
                "  --tet-mesh FILE        TetGen .node/.ele or Gmsh 2.2 .msh instead of the\n"
                "                         lattice (mm, in the grid frame)\n"
                "  --sutures CSV          stitches 'x1,y1,z1,x2,y2,z2[,remove_day]' in mm\n"
+               "  --mech-model M         springs (the seed's mass-spring network, default) or\n"
+               "                         goh (hyperelastic GOH tets with resting skin tension)\n"
                "  mechanical parameters: the \"mechanics\" object of --params (see\n"
                "  data/heal/mechanics.json)\n"
                "\n");

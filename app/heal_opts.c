@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "cli.h"
+#include "skinsim/mech.h"
 
 static ss_status parse_grid(const char *s, int g[3], ss_error *err) {
     long v[3];
@@ -87,6 +88,11 @@ int heal_parse_problem_option(const char *a, const char *v, ss_heal_run_config *
         st = cli_parse_double(a, v, 1e-6, 1e3, &c->tet_size_mm, err);
     } else if (!strcmp(a, "--sutures")) {
         c->sutures = v;
+    } else if (!strcmp(a, "--mech-model")) {
+        int mm;
+        st = ss_mech_model_parse(v, &mm, err);
+        if (st) ss_error_set(err, SS_ERR_INPUT, "--mech-model: '%s' is not 'springs' or 'goh'", v);
+        c->mech_model = v;
     } else if (!strcmp(a, "--tet-mesh")) {
         c->tet_mesh = v;
     } else if (!strcmp(a, "--mesh")) {

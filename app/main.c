@@ -14,6 +14,7 @@ static const cli_command commands[] = {
     {"wound", "a healing wound as skin textures day by day (seeds 001 + 003 + 000)", cmd_wound},
     {"optics", "skin light transport: spectra, colour, BRDF, MCML files (seed 003)", cmd_optics},
     {"skin", "procedural skin textures from biological features (seed 003)", cmd_skin},
+    {"mech", "tissue mechanics: the uniaxial stretch test of the GOH and springs models", cmd_mech},
     {"view", "paint a wound on a 3D body and scrub its healing (GTK 4 window)", cmd_view},
 };
 static const int ncommands = (int)(sizeof commands / sizeof commands[0]);

@@ -93,6 +93,9 @@ typedef struct ss_heal_run_config {
     const char *sutures;  /* stitches CSV "x1,y1,z1,x2,y2,z2[,remove_day]" (mm); NULL = none */
     const char *tet_mesh; /* TetGen .node/.ele or Gmsh .msh instead of the lattice; NULL */
 
+    /* "springs" or "goh" (ss_mech_params.model); NULL = params file or default */
+    const char *mech_model;
+
     /* ---- adaptive steps (split scheme without mechanics; fresh runs) ---- */
     double adapt_tol; /* 0 = fixed steps of dt (default). > 0: a step is m x dt (m = 1..
                          SS_HEAL_SPLIT_LATE_MAX_DT_DAYS / dt), m doubled while no species

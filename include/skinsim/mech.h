@@ -96,7 +96,16 @@ typedef struct ss_mech_params {
     double j_min;       /* 1, volume ratio below which the tet barrier acts (0 = none) */
     double tol;         /* 1, convergence: max residual displacement / edge length */
     int max_substeps;   /* sub-steps per frame at most */
+    /* the hyperelastic path (ss_hyper, --mech-model goh; docs/mech.md) */
+    int model;           /* SS_MECH_MODEL_SPRINGS (the seed's, default) or SS_MECH_MODEL_GOH */
+    double k1_goh;       /* kPa, GOH fibre stiffness of the hyperelastic solver */
+    double prestretch;   /* 1, in vivo resting stretch of intact skin along the fibres */
+    double k_suture_goh; /* mN/mm, stitch stiffness on the hyperelastic path */
 } ss_mech_params;
+enum { SS_MECH_MODEL_SPRINGS = 0, SS_MECH_MODEL_GOH = 1 };
+/* "springs" / "goh" -> *model; anything else SS_ERR_INPUT naming the text. */
+ss_status ss_mech_model_parse(const char *text, int *model, ss_error *err);
+const char *ss_mech_model_name(int model);
 
 /* The built-in defaults (equal to data/heal/mechanics.json). */
 void ss_mech_params_default(ss_mech_params *p);
@@ -107,6 +116,10 @@ void ss_mech_params_default(ss_mech_params *p);
  * the key. No "mechanics" object: the defaults. */
 ss_status ss_mech_params_parse(ss_mech_params *p, const char *json_text, const char *what,
                                ss_error *err);
+/* Sets one parameter from text: a numeric key ("mu", "1e3"), "fibres"
+ * ("X,Y,Z[:X,Y,Z]") or "model" ("springs" / "goh"); unknown key, bad number
+ * or out-of-range value -> SS_ERR_INPUT naming the key. */
+ss_status ss_mech_params_set(ss_mech_params *p, const char *key, const char *value, ss_error *err);
 /* Unit of a key ("K_act" -> "kPa"), NULL if unknown. */
 const char *ss_mech_param_unit(const char *key);
 /* Parses "X,Y,Z[:X,Y,Z]" into p->fibre / p->nfibres (normalised); zero,
@@ -225,6 +238,111 @@ double ss_springs_substep(ss_springs *s);
  * returns the count (*converged = 1 if tol was met). */
 int ss_springs_relax(ss_springs *s, double tol, int max_steps, int *converged);
 
+/* ---- hyperelastic GOH tet solver (docs/mech.md, "The GOH solver") ------------ */
+
+/* The tissue as a continuum on linear tets: per tet the Gasser-Ogden-
+ * Holzapfel energy (Gasser, Ogden, Holzapfel 2006) of the elastic part F_e =
+ * F G^-1 of the deformation gradient, G the tet's growth / contraction /
+ * pre-stretch tensor (multiplicative F = F_e G), plus an active isotropic
+ * stress s (kPa, > 0 pulls: Cauchy stress s I, energy s J per reference
+ * volume), an elastic foundation per node, dead loads per node and zero- or
+ * finite-rest-length springs (sutures). Quasi-static: ss_hyper_solve
+ * minimises the energy by Newton's method with the analytic tangent (sparse
+ * 3x3-block matrix, conjugate gradients with block-Jacobi, stopped at
+ * negative curvature) and a backtracking line search that never accepts a
+ * folded tet. Units: mm, kPa, mN, uJ. Bit-identical for any thread count. */
+typedef struct ss_hyper ss_hyper;
+/* The energy density of one tet's material: W(F_e) = mu/2 (J^-2/3 I1 - 3) +
+ * K_bulk/2 (J - 1)^2 + sum_i k1/(2 k2) (exp(k2 E_i^2) - 1) for E_i > 0 (the
+ * fibres bear no compression, as in GOH06), E_i = kappa I1 + (1 - 3 kappa) I4_i
+ * - 1, I4_i = a_i . C a_i; p gives mu, K_bulk, k1_goh (the fibre stiffness of
+ * this solver; k1 is the springs path's), k2, kappa and the fibres. Also P =
+ * dW/dF (row-major 3x3, *P may be NULL). Returns W (kPa); J <= 0: INFINITY. */
+double ss_hyper_goh_energy(const ss_mech_params *p, const double F[9], double P[9]);
+/* The closed-form Cauchy stress of the same law (kPa, row-major):
+ * sigma = mu J^-5/3 dev(b) + K (J - 1) I + (2/J) sum_i psi_i' (kappa b + (1 - 3 kappa)
+ * (F a_i)(F a_i)), b = F F^T; written from the invariants, independently of
+ * the solver's derivative code. */
+void ss_hyper_goh_cauchy(const ss_mech_params *p, const double F[9], double sigma[9]);
+
+/* A solver on mesh m (copied) with the material of p. All tets start with
+ * G = I, s = 0, full stiffness and fibres on; nodes free at their reference
+ * positions. */
+ss_hyper *ss_hyper_create(const ss_tetmesh *m, const ss_mech_params *p, ss_error *err);
+void ss_hyper_free(ss_hyper *h);
+int ss_hyper_nodes(const ss_hyper *h);
+int ss_hyper_tets(const ss_hyper *h);
+/* Current positions (3n, mm): read, or set before a solve (a warm start). */
+double *ss_hyper_x(ss_hyper *h);
+const double *ss_hyper_X(const ss_hyper *h); /* reference positions */
+/* Per tet: growth tensor G (9, row-major, det > 0), active stress s (kPa),
+ * stiffness scale c (> 0, multiplies W), fibres on (1) or off (0, e.g. a
+ * clot without oriented collagen). */
+double *ss_hyper_growth(ss_hyper *h);
+double *ss_hyper_active(ss_hyper *h);
+double *ss_hyper_scale(ss_hyper *h);
+uint8_t *ss_hyper_fibres_on(ss_hyper *h);
+/* Per node: foundation stiffness to the reference position (mN/mm), dead
+ * load (3n, mN), fixed degrees of freedom (3n, 1 = held at its current
+ * value). */
+double *ss_hyper_anchor(ss_hyper *h);
+double *ss_hyper_load(ss_hyper *h);
+uint8_t *ss_hyper_fixed(ss_hyper *h);
+/* Adds a spring k/2 (|x_b - x_a| - rest)^2 (k mN/mm); returns its index. */
+int ss_hyper_add_spring(ss_hyper *h, int a, int b, double rest, double k, ss_error *err);
+void ss_hyper_set_spring(ss_hyper *h, int i, double rest, double k);
+/* The internal force of the tets (3n, mN: -dE_tets/dx) at the current
+ * positions, springs, foundation and loads left out. */
+void ss_hyper_tet_forces(ss_hyper *h, double *f);
+/* Total potential energy (uJ) at the current positions. */
+double ss_hyper_energy(ss_hyper *h);
+typedef struct ss_hyper_report {
+    int newton, cg;     /* Newton iterations, conjugate-gradient iterations in all */
+    int converged;      /* 1: the last Newton step moved no node more than tol * h */
+    double max_step_mm; /* largest node move of the last Newton step */
+    double residual;    /* largest free-dof force (mN) at the end */
+} ss_hyper_report;
+/* Newton to the energy minimum from the current positions: stops when a
+ * step moves no node more than tol times the mean edge, or after max_newton
+ * iterations. SS_ERR_NOMEM only. */
+ss_status ss_hyper_solve(ss_hyper *h, double tol, int max_newton, ss_hyper_report *rep,
+                         ss_error *err);
+/* Volume-weighted mean Cauchy stress (kPa, 9) over all tets, and the current
+ * volume (mm^3). */
+void ss_hyper_mean_cauchy(ss_hyper *h, double sigma[9], double *volume);
+
+/* ---- the uniaxial material test (`skinsim mech stretch`) ------------------- */
+
+typedef struct ss_mech_stretch_config {
+    double stretch;     /* lambda along the axis (> 0) */
+    int axis;           /* 0 x, 1 y, 2 z */
+    double fibre[3];    /* fibre direction (unit; one family) */
+    double size_mm;     /* cube edge of the block (default 4) */
+    double tet_size_mm; /* lattice edge (default: p's tet_size_mm) */
+    int model;          /* SS_MECH_MODEL_GOH or SS_MECH_MODEL_SPRINGS */
+    int increments;     /* load steps (default 10) */
+} ss_mech_stretch_config;
+typedef struct ss_mech_stretch_result {
+    double stress_kpa;          /* reaction force on the moving face / current cross-section */
+    double analytic_stress_kpa; /* homogeneous uniaxial GOH (lateral stresses zero) */
+    double lateral_stretch[2];  /* the block's mean lateral stretches (the other two axes) */
+    double analytic_lateral[2];
+    double mean_sigma_kpa; /* the volume-weighted Cauchy stress along the axis */
+    int nodes, tets, newton, cg, converged;
+} ss_mech_stretch_result;
+void ss_mech_stretch_config_default(ss_mech_stretch_config *c);
+/* Stretches a lattice block of the solver's own mesh: the face at the low
+ * end of the axis held in the axis direction (one corner held, one node
+ * against rotation), the face at the high end moved to lambda, the lateral
+ * faces free. The analytic value solves the same GOH law for the
+ * homogeneous state with only the axial Cauchy stress non-zero. */
+ss_status ss_mech_stretch(const ss_mech_params *p, const ss_mech_stretch_config *c,
+                          ss_mech_stretch_result *r, ss_error *err);
+/* The analytic part alone: homogeneous uniaxial stretch lambda along the unit
+ * vector n; *lateral (2, may be NULL) the stretches across it. */
+ss_status ss_mech_uniaxial_analytic(const ss_mech_params *p, const double n[3], double lambda,
+                                    double *sigma_kpa, double lateral[2], ss_error *err);
+
 /* ---- cubic B-spline kernel and grid <-> particle transfer (§5.3) ------------ */
 
 /* The seed's cubic B-spline (1D), support |x| < 2, integral 1. */
@@ -274,7 +392,8 @@ ss_mech_suture *ss_mech_sutures_read(const char *path, int *n, ss_error *err);
  * meshed by the lattice (mesh NULL) or the given mesh is used (its nodes must
  * lie in the grid's tissue). heal gives the healthy fibroblast level. The
  * grid's velocity arrays are allocated (zero) if absent. Sutures whose points
- * are farther than one tet edge from the mesh -> SS_ERR_INPUT. */
+ * are farther than 1.5 tet edges (the grip, docs/mech.md) from the mesh ->
+ * SS_ERR_INPUT. */
 ss_mech *ss_mech_create(ss_heal_grid *g, const ss_heal_params *heal, const ss_mech_params *p,
                         const ss_tetmesh *mesh, const ss_mech_suture *sutures, int nsutures,
                         ss_error *err);
@@ -333,6 +452,9 @@ ss_status ss_mech_vtu_write(const ss_mech *m, const char *path, double t_days, s
  * frame's maximum), the deformed wound outline in white. Linear RGB image,
  * px pixels on the longer side. */
 ss_image *ss_mech_top_view(const ss_mech *m, int px, double vmax, ss_error *err);
+/* The same view with a colour bar on its right, labelled 0, vmax / 2 and vmax
+ * mm/day (vmax <= 0: the frame's largest speed). */
+ss_image *ss_mech_top_view_bar(const ss_mech *m, int px, double vmax, ss_error *err);
 
 #ifdef __cplusplus
 }

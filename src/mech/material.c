@@ -67,6 +67,9 @@ static const key keys[] = {
     K(j_min, "1", 0, 0.9),
     K(tol, "1", 1e-9, 0.1),
     {"max_substeps", "1", offsetof(ss_mech_params, max_substeps), 1, 1e6, 1},
+    K(k1_goh, "kPa", 0, 1e7),
+    K(prestretch, "1", 1, 1.5),
+    K(k_suture_goh, "mN/mm", 0, 1e9),
 };
 #undef K
 #define NKEYS (sizeof keys / sizeof keys[0])
@@ -101,11 +104,28 @@ void ss_mech_params_default(ss_mech_params *p) {
     p->j_min = 0.2;
     p->tol = 1e-4;
     p->max_substeps = 400;
+    p->model = SS_MECH_MODEL_SPRINGS;
+    p->k1_goh = 100.0;
+    p->prestretch = 1.15;
+    p->k_suture_goh = 1000.0;
 }
+
+ss_status ss_mech_model_parse(const char *text, int *model, ss_error *err) {
+    if (text && !strcmp(text, "springs"))
+        *model = SS_MECH_MODEL_SPRINGS;
+    else if (text && !strcmp(text, "goh"))
+        *model = SS_MECH_MODEL_GOH;
+    else
+        return ss_error_set(err, SS_ERR_INPUT, "mechanics model '%s' is not 'springs' or 'goh'",
+                            text ? text : "");
+    return SS_OK;
+}
+
+const char *ss_mech_model_name(int model) { return model == SS_MECH_MODEL_GOH ? "goh" : "springs"; }
 
 const char *ss_mech_param_unit(const char *k) {
     if (!k) return NULL;
-    if (!strcmp(k, "fibres")) return "1";
+    if (!strcmp(k, "fibres") || !strcmp(k, "model")) return "1";
     for (size_t i = 0; i < NKEYS; i++)
         if (!strcmp(keys[i].name, k)) return keys[i].unit;
     return NULL;
@@ -123,6 +143,26 @@ static void set(ss_mech_params *p, const key *k, double v) {
         *(int *)(void *)b = (int)v;
     else
         *(double *)(void *)b = v;
+}
+
+ss_status ss_mech_params_set(ss_mech_params *p, const char *k, const char *v, ss_error *err) {
+    if (!k || !v) return ss_error_set(err, SS_ERR_INPUT, "mechanics parameter: no name or value");
+    if (!strcmp(k, "fibres")) return ss_mech_params_set_fibres(p, v, err);
+    if (!strcmp(k, "model")) return ss_mech_model_parse(v, &p->model, err);
+    for (size_t i = 0; i < NKEYS; i++) {
+        if (strcmp(keys[i].name, k)) continue;
+        char *end;
+        double x = strtod(v, &end);
+        if (end == v || *end || !isfinite(x))
+            return ss_error_set(err, SS_ERR_INPUT, "mechanics parameter %s: '%s' is not a number",
+                                k, v);
+        if (x < keys[i].lo || x > keys[i].hi || (keys[i].is_int && x != floor(x)))
+            return ss_error_set(err, SS_ERR_INPUT, "mechanics parameter %s = %g outside %g..%g %s",
+                                k, x, keys[i].lo, keys[i].hi, keys[i].unit);
+        set(p, &keys[i], x);
+        return SS_OK;
+    }
+    return ss_error_set(err, SS_ERR_INPUT, "unknown mechanics parameter '%s'", k);
 }
 
 ss_status ss_mech_params_set_fibres(ss_mech_params *p, const char *text, ss_error *err) {
@@ -184,6 +224,8 @@ ss_status ss_mech_params_check(const ss_mech_params *p, ss_error *err) {
                             "mechanics parameters: need theta1 (%g) < theta* = p_max/K_act (%g) < "
                             "theta2 (%g)",
                             p->theta1, ts, p->theta2);
+    if (p->model != SS_MECH_MODEL_SPRINGS && p->model != SS_MECH_MODEL_GOH)
+        return ss_error_set(err, SS_ERR_INPUT, "mechanics: model must be springs or goh");
     if (p->nfibres < 1 || p->nfibres > 2)
         return ss_error_set(err, SS_ERR_INPUT, "mechanics: 1 or 2 fibre families");
     return SS_OK;
@@ -235,6 +277,15 @@ ss_status ss_mech_params_parse(ss_mech_params *p, const char *json_text, const c
             if ((st = ss_mech_params_set_fibres(p, v->valuestring, err)) != SS_OK) goto done;
             continue;
         }
+        if (!strcmp(it->string, "model")) {
+            if (!cJSON_IsString(v)) {
+                st = ss_error_set(err, SS_ERR_INPUT,
+                                  "%s: 'model' value must be \"springs\" or \"goh\"", what);
+                goto done;
+            }
+            if ((st = ss_mech_model_parse(v->valuestring, &p->model, err)) != SS_OK) goto done;
+            continue;
+        }
         if (!cJSON_IsNumber(v) || !isfinite(v->valuedouble)) {
             st = ss_error_set(err, SS_ERR_INPUT, "%s: mechanics parameter '%s' is not a number",
                               what, it->string);
@@ -276,6 +327,9 @@ char *ss_mech_params_to_json(const ss_mech_params *p) {
                  p->fibre[1][1], p->fibre[1][2]);
     cJSON *o = cJSON_AddObjectToObject(mo, "fibres");
     cJSON_AddStringToObject(o, "value", fb);
+    cJSON_AddStringToObject(o, "unit", "1");
+    o = cJSON_AddObjectToObject(mo, "model");
+    cJSON_AddStringToObject(o, "value", ss_mech_model_name(p->model));
     cJSON_AddStringToObject(o, "unit", "1");
     char *s = cJSON_Print(root);
     cJSON_Delete(root);

@@ -40,6 +40,8 @@
 
 #include "mech_internal.h"
 
+static void displacement_to_grid(ss_mech *m);
+
 static int tissue(uint8_t c) {
     return c == SS_CELL_EPIDERMIS || c == SS_CELL_DERMIS || c == SS_CELL_WOUND;
 }
@@ -48,6 +50,7 @@ void ss_mech_free(ss_mech *m) {
     if (!m) return;
     ss_tetmesh_free(m->mesh);
     ss_springs_free(m->S);
+    ss_hyper_free(m->H);
     ss_mech_transfer_free(m->T);
     free(m->mask);
     free(m->wound0);
@@ -534,6 +537,10 @@ ss_mech *ss_mech_create(ss_heal_grid *g, const ss_heal_params *heal, const ss_me
     ss_mech_stats st;
     ss_mech_stats_compute(m, &st);
     m->outline0 = st.outline_area_mm2;
+    if (p->model == SS_MECH_MODEL_GOH) {
+        if (ss_mech_goh_setup(m, err) != SS_OK) goto fail;
+        displacement_to_grid(m);
+    }
     return m;
 nomem:
     ss_error_set(err, SS_ERR_NOMEM, "mechanics: out of memory");
@@ -726,6 +733,12 @@ ss_status ss_mech_step(ss_mech *m, ss_heal_grid *g, double dt_days, ss_error *er
         }
         m->stress[i] = ss_mech_pcell(p, m->nth[i]) * n_w * m->nmf[i] * p->K_m;
     }
+    if (m->H) { /* steps 2-3 on the hyperelastic tissue (mech_goh.c) */
+        memcpy(m->xprev, S->x, 3 * (size_t)nn * sizeof(double));
+        ss_status gst = ss_mech_goh_frame(m, g, dt_days, err);
+        if (gst) return gst;
+        goto velocities;
+    }
     /* 2. rest lengths and stiffness of the tissue springs */
     const int ntis = m->ntissue;
     const double follow = p->tau_remodel > 0 ? 1.0 - exp(-dt_days / p->tau_remodel) : 1.0;
@@ -796,6 +809,7 @@ ss_status ss_mech_step(ss_mech *m, ss_heal_grid *g, double dt_days, ss_error *er
         free(k_new);
     }
     /* 4. velocities and the grid */
+velocities:;
     double vmax = 0;
     for (int i = 0; i < 3 * nn; i++) {
         m->vel[i] = dt_days > 0 ? (S->x[i] - m->xprev[i]) / dt_days : 0.0;
@@ -894,7 +908,9 @@ void ss_mech_stats_compute(const ss_mech *m, ss_mech_stats *st) {
 }
 
 size_t ss_mech_state_size(const ss_mech *m) {
-    return ((size_t)m->mesh->nnodes * 9 + (size_t)m->S->nsprings) * sizeof(double) +
+    return ((size_t)m->mesh->nnodes * 9 + (size_t)m->S->nsprings +
+            (m->H ? 9 * (size_t)m->mesh->ntets : 0)) *
+               sizeof(double) +
            sizeof(uint64_t);
 }
 
@@ -910,6 +926,9 @@ void ss_mech_state_get(const ss_mech *m, void *buf) {
     memcpy(b + 7 * nn * sizeof(double), m->nmf, nn * sizeof(double));
     memcpy(b + 8 * nn * sizeof(double), m->nproto, nn * sizeof(double));
     memcpy(b + 9 * nn * sizeof(double), m->S->rest, (size_t)m->S->nsprings * sizeof(double));
+    if (m->H)
+        memcpy(b + (9 * nn + (size_t)m->S->nsprings) * sizeof(double), ss_hyper_growth(m->H),
+               9 * (size_t)m->mesh->ntets * sizeof(double));
 }
 
 ss_status ss_mech_state_set(ss_mech *m, const void *buf, size_t size, ss_error *err) {
@@ -929,6 +948,9 @@ ss_status ss_mech_state_set(ss_mech *m, const void *buf, size_t size, ss_error *
     memcpy(m->nmf, b + 7 * nn * sizeof(double), nn * sizeof(double));
     memcpy(m->nproto, b + 8 * nn * sizeof(double), nn * sizeof(double));
     memcpy(m->S->rest, b + 9 * nn * sizeof(double), (size_t)m->S->nsprings * sizeof(double));
+    if (m->H)
+        memcpy(ss_hyper_growth(m->H), b + (9 * nn + (size_t)m->S->nsprings) * sizeof(double),
+               9 * (size_t)m->mesh->ntets * sizeof(double));
     for (size_t i = 0; i < 3 * nn; i++)
         if (!isfinite(m->S->x[i]) || !isfinite(m->vel[i]))
             return ss_error_set(err, SS_ERR_INPUT, "mechanics state: non-finite value");

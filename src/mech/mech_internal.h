@@ -46,7 +46,13 @@ struct ss_mech {
     int last_substeps, last_converged;
     double last_vmax;
     long frames;
+    ss_hyper *H; /* the hyperelastic tissue (model goh; NULL for springs) */
 };
+
+/* The GOH path (mech_goh.c): set-up after the springs, sutures and
+ * transfer exist (solves the day-0 gape), and steps 2-3 of a frame. */
+ss_status ss_mech_goh_setup(ss_mech *m, ss_error *err);
+ss_status ss_mech_goh_frame(ss_mech *m, const ss_heal_grid *g, double dt_days, ss_error *err);
 
 /* Sub-lattice level of the transfer (bspline.c): P2G without the upsampling,
  * copies of the sub-lattice values, upsampling of stored values, divergence

@@ -11,6 +11,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <cairo.h>
+
 #include "mech_internal.h"
 
 ss_status ss_mech_vtu_write(const ss_mech *m, const char *path, double t_days, ss_error *err) {
@@ -183,4 +185,77 @@ ss_image *ss_mech_top_view(const ss_mech *m, int px, double vmax, ss_error *err)
     }
     free(speed);
     return img;
+}
+
+/* The top view with a colour bar to its right: the ramp from 0 (bottom) to
+ * vmax (top) with its end values in mm/day, drawn with cairo (text) on an
+ * sRGB canvas and returned linear, as the view itself. */
+ss_image *ss_mech_top_view_bar(const ss_mech *m, int px, double vmax, ss_error *err) {
+    if (!(vmax > 0)) {
+        vmax = 0;
+        const int nn = m->mesh->nnodes;
+        for (int i = 0; i < nn; i++) {
+            const double *v = m->vel + 3 * i;
+            double s = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+            if (s > vmax) vmax = s;
+        }
+        if (!(vmax > 0)) vmax = 1.0;
+    }
+    ss_image *view = ss_mech_top_view(m, px, vmax, err);
+    if (!view) return NULL;
+    const int bw = 110, W = view->width + bw, H = view->height;
+    cairo_surface_t *cs = cairo_image_surface_create(CAIRO_FORMAT_RGB24, W, H);
+    if (cairo_surface_status(cs) != CAIRO_STATUS_SUCCESS) {
+        cairo_surface_destroy(cs);
+        ss_image_free(view);
+        ss_error_set(err, SS_ERR_NOMEM, "top view: out of memory");
+        return NULL;
+    }
+    cairo_surface_flush(cs);
+    unsigned char *d = cairo_image_surface_get_data(cs);
+    const int stride = cairo_image_surface_get_stride(cs);
+    const int bx0 = view->width + 14, bx1 = bx0 + 18, by0 = 24, by1 = H - 24;
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x < W; x++) {
+            float rgb[3] = {0.02f, 0.02f, 0.02f};
+            if (x < view->width)
+                memcpy(rgb, ss_image_px(view, x, y), sizeof rgb);
+            else if (x >= bx0 && x < bx1 && y >= by0 && y <= by1)
+                ramp((double)(by1 - y) / (by1 - by0), rgb);
+            unsigned char *p = d + (size_t)y * (size_t)stride + 4 * (size_t)x;
+            for (int c = 0; c < 3; c++) {
+                float e = ss_srgb_encode(rgb[c] < 0 ? 0 : rgb[c] > 1 ? 1 : rgb[c]);
+                p[2 - c] = (unsigned char)lrintf(e * 255.0f);
+            }
+            p[3] = 255;
+        }
+    cairo_surface_mark_dirty(cs);
+    cairo_t *cr = cairo_create(cs);
+    cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+    cairo_set_font_size(cr, 13);
+    cairo_set_source_rgb(cr, 1, 1, 1);
+    char lab[64];
+    snprintf(lab, sizeof lab, "%.3g", vmax);
+    cairo_move_to(cr, bx1 + 6, by0 + 5);
+    cairo_show_text(cr, lab);
+    cairo_move_to(cr, bx1 + 6, (by0 + by1) / 2 + 5);
+    snprintf(lab, sizeof lab, "%.3g", 0.5 * vmax);
+    cairo_show_text(cr, lab);
+    cairo_move_to(cr, bx1 + 6, by1 + 5);
+    cairo_show_text(cr, "0");
+    cairo_move_to(cr, bx0 - 4, 15);
+    cairo_show_text(cr, "mm/day");
+    cairo_destroy(cr);
+    cairo_surface_flush(cs);
+    ss_image *out = ss_image_create(W, H, 3, err);
+    if (out)
+        for (int y = 0; y < H; y++)
+            for (int x = 0; x < W; x++) {
+                const unsigned char *p = d + (size_t)y * (size_t)stride + 4 * (size_t)x;
+                float *q = ss_image_px(out, x, y);
+                for (int c = 0; c < 3; c++) q[c] = ss_srgb_decode(p[2 - c] / 255.0f);
+            }
+    cairo_surface_destroy(cs);
+    ss_image_free(view);
+    return out;
 }

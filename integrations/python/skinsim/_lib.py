@@ -598,6 +598,7 @@ class ss_heal_run_config(ctypes.Structure):
         ("tet_size_mm", c_double),
         ("sutures", c_char_p),
         ("tet_mesh", c_char_p),
+        ("mech_model", c_char_p),
         ("adapt_tol", c_double),
         ("skin_mesh", c_char_p),
         ("wound_uv", c_char_p),

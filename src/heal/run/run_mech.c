@@ -16,6 +16,7 @@
  * metadata grows with the mesh (about 80 bytes per node). */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -137,10 +138,11 @@ ss_status ss_heal_run__mech_check_options(ss_heal_run *r, ss_error *err) {
 ss_status ss_heal_run__mech_setup_fresh(ss_heal_run *r, ss_error *err) {
     const ss_heal_run_config *c = &r->c;
     if (!c->mechanics) {
-        if (c->fibres || c->kappa >= 0 || c->tet_size_mm != 0 || c->sutures || c->tet_mesh)
+        if (c->fibres || c->kappa >= 0 || c->tet_size_mm != 0 || c->sutures || c->tet_mesh ||
+            c->mech_model)
             return ss_error_set(err, SS_ERR_INPUT,
-                                "--fibres, --kappa, --tet-size-mm, --sutures and --tet-mesh need "
-                                "--mechanics");
+                                "--fibres, --kappa, --tet-size-mm, --sutures, --tet-mesh and "
+                                "--mech-model need --mechanics");
         return SS_OK;
     }
     ss_mech_params_default(&r->mp);
@@ -153,6 +155,7 @@ ss_status ss_heal_run__mech_setup_fresh(ss_heal_run *r, ss_error *err) {
         if (st) return st;
     }
     if (c->fibres && (st = ss_mech_params_set_fibres(&r->mp, c->fibres, err))) return st;
+    if (c->mech_model && (st = ss_mech_model_parse(c->mech_model, &r->mp.model, err))) return st;
     if (c->kappa >= 0) {
         if (!(c->kappa <= 1.0 / 3.0 + 1e-12))
             return ss_error_set(err, SS_ERR_INPUT, "--kappa %g: the dispersion is 0..1/3",
@@ -326,9 +329,10 @@ ss_status ss_heal_run__mech_snapshot(ss_heal_run *r, int idx, ss_error *err) {
     if (st) return st;
     st = ss_heal_run__series_pvd(r, "fields", "mesh", err);
     if (st) return st;
-    /* Fig. 7: speed on a fixed scale for the run, 0 .. the first frame's
-     * reference of 0.5 mm/day (the seed's 7.7e-3 mm/s is for a face mesh) */
-    ss_image *img = ss_mech_top_view(r->mech, 512, 0.5, err);
+    /* Fig. 7: speed from 0 to the frame's largest, with a colour bar that
+     * says what it is (a fixed 0.5 mm/day left most of a fast frame flat
+     * red and a slow one flat blue) */
+    ss_image *img = ss_mech_top_view_bar(r->mech, 512, 0, err);
     if (!img) return err->code ? err->code : SS_ERR_NOMEM;
     snprintf(path, sizeof path, "%s/surface/velocity_%04d.png", r->out_dir, idx);
     st = ss_png_write(path, img, 8, SS_ENC_SRGB, err);

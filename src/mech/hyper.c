@@ -1,0 +1,881 @@
+/* Hyperelastic tet solver for the skin (GOH; docs/mech.md, "The GOH solver").
+ *
+ * What: the tissue as a continuum of linear (4-node) tets, each with the
+ * Gasser-Ogden-Holzapfel 2006 energy (isochoric neo-Hookean ground substance
+ * mu, a volumetric penalty K_bulk (J - 1)^2 / 2, one or two dispersed fibre
+ * families k1_goh, k2, kappa) of the elastic part F_e = F G^-1 of its
+ * deformation gradient. G is the tet's rest state from the biology (the
+ * multiplicative split F = F_e G of growth and remodelling, Rodriguez, Hoger
+ * and McCulloch 1994): the contraction the myofibroblasts lock in, and the
+ * in vivo pre-stretch of intact skin. The myofibroblasts' pull is the seed's
+ * isotropic active stress s = p_cell n K_m, a Cauchy stress s I, whose
+ * energy is s J per volume of the rest state. Nodes carry an elastic
+ * foundation (subcutis, far field), dead loads and springs (sutures).
+ *
+ * Why this way: the seed's mass-spring network is linear, isotropic and has
+ * a Poisson ratio near zero whatever the parameters; the continuum gives the
+ * material it claims (the uniaxial test of `skinsim mech stretch` matches
+ * the closed-form GOH stress). Linear tets with G folded into the shape
+ * gradients (F_e = sum_a x_a (x) beta_a G^-1, so growth costs nothing per
+ * evaluation). Quasi-static Newton: the analytic tangent per tet (12 x 12 from
+ * the 9 x 9 d^2W/dF^2), assembled into a 3x3-block CSR matrix by a gather in
+ * a fixed order (each block sums its tets' contributions in tet order, so
+ * the result is bit-identical for any thread count; no atomics), solved by
+ * conjugate gradients with a block-Jacobi preconditioner, stopped at the
+ * forcing tolerance or at negative curvature (the active term and the
+ * fibres' switch make the tangent indefinite away from the minimum; then the
+ * CG iterate so far is still a descent direction, truncated Newton), and a
+ * backtracking (Armijo) line search on the total energy, which is infinite
+ * for a folded tet, so no accepted step folds one.
+ *
+ * What it gave up: linear tets lock somewhat in near-incompressible bending
+ * (the default K_bulk/mu = 2.1 is far from it); no sparse direct solver (no
+ * packaged MIT/BSD one that is small), so ill-conditioned problems (stiff
+ * fibres on a soft foundation) take many CG iterations; the stored per-tet
+ * tangents cost 1.2 kB per tet. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "skinsim/mech.h"
+
+typedef struct mat {
+    double mu, K, k1, k2, kappa;
+    double a[2][3];
+    int nf;
+} mat;
+
+struct ss_hyper {
+    mat M;
+    int nn, nt, ns, scap;
+    double *X, *x, *xt;
+    int32_t *tet;
+    double *beta0, *V0; /* reference shape gradients (12 per tet), volume */
+    double *beta, *Vg;  /* with G folded in: beta0 G^-1, V0 det G */
+    double *G, *act, *scale;
+    uint8_t *fib, *gdirty;
+    double *anchor, *load;
+    uint8_t *fixed;
+    int32_t *se;
+    double *srest, *sk;
+    /* block CSR */
+    int pattern_ok;
+    int32_t *rowptr, *col, *diag;
+    int nblk;
+    double *val;
+    int32_t *cstart, *clist; /* per block: (tet * 16 + la * 4 + lb) in tet order */
+    int32_t *nstart, *nlist; /* per node: (tet * 4 + la) in tet order */
+    double *Kt, *gt, *et;
+    double *Minv;
+    double *g, *d, *r, *z, *p, *q;
+    double mean_edge;
+};
+
+/* ---- material ---------------------------------------------------------------- */
+
+static void mat_from(mat *M, const ss_mech_params *p) {
+    M->mu = p->mu;
+    M->K = p->K_bulk;
+    M->k1 = p->k1_goh;
+    M->k2 = p->k2;
+    M->kappa = p->kappa;
+    M->nf = p->nfibres;
+    memcpy(M->a, p->fibre, sizeof M->a);
+}
+
+static double det3(const double *F) {
+    return F[0] * (F[4] * F[8] - F[5] * F[7]) - F[1] * (F[3] * F[8] - F[5] * F[6]) +
+           F[2] * (F[3] * F[7] - F[4] * F[6]);
+}
+
+/* cofactor matrix (J F^-T) */
+static void cof3(const double *F, double *C) {
+    C[0] = F[4] * F[8] - F[5] * F[7];
+    C[1] = F[5] * F[6] - F[3] * F[8];
+    C[2] = F[3] * F[7] - F[4] * F[6];
+    C[3] = F[2] * F[7] - F[1] * F[8];
+    C[4] = F[0] * F[8] - F[2] * F[6];
+    C[5] = F[1] * F[6] - F[0] * F[7];
+    C[6] = F[1] * F[5] - F[2] * F[4];
+    C[7] = F[2] * F[3] - F[0] * F[5];
+    C[8] = F[0] * F[4] - F[1] * F[3];
+}
+
+/* W(F) of the GOH law (fibres when fib), P = dW/dF and H = d2W/dF2 (81,
+ * H[(3i+j)*9 + 3k+l]); P, H may be NULL. s adds the active energy s J. */
+static double goh(const mat *M, const double *F, int fib, double s, double *P, double *H) {
+    const double J = det3(F);
+    if (!(J > 0)) return INFINITY;
+    double cf[9];
+    cof3(F, cf); /* dJ/dF */
+    double I1 = 0;
+    for (int i = 0; i < 9; i++) I1 += F[i] * F[i];
+    const double J23 = pow(J, -2.0 / 3.0), J53 = J23 / J, J83 = J53 / J;
+    double W = 0.5 * M->mu * (J23 * I1 - 3.0) + 0.5 * M->K * (J - 1) * (J - 1) + s * J;
+    const double f1 = 0.5 * M->mu * J23;
+    const double fJ = -M->mu / 3.0 * J53 * I1 + M->K * (J - 1) + s;
+    const double f1J = -M->mu / 3.0 * J53;
+    const double fJJ = 5.0 * M->mu / 9.0 * J83 * I1 + M->K;
+    double gE[2] = {0, 0}, gEE[2] = {0, 0}, dE[2][9];
+    int on[2] = {0, 0};
+    if (fib && M->k1 > 0)
+        for (int f = 0; f < M->nf; f++) {
+            const double *a = M->a[f];
+            double Fa[3];
+            for (int i = 0; i < 3; i++)
+                Fa[i] = F[3 * i] * a[0] + F[3 * i + 1] * a[1] + F[3 * i + 2] * a[2];
+            double I4 = Fa[0] * Fa[0] + Fa[1] * Fa[1] + Fa[2] * Fa[2];
+            double E = M->kappa * I1 + (1 - 3 * M->kappa) * I4 - 1.0;
+            if (!(E > 0)) continue;
+            on[f] = 1;
+            double ex = exp(M->k2 * E * E);
+            W += M->k2 > 1e-12 ? M->k1 / (2 * M->k2) * expm1(M->k2 * E * E) : 0.5 * M->k1 * E * E;
+            gE[f] = M->k1 * E * ex;
+            gEE[f] = M->k1 * ex * (1 + 2 * M->k2 * E * E);
+            for (int i = 0; i < 3; i++)
+                for (int j = 0; j < 3; j++)
+                    dE[f][3 * i + j] =
+                        2 * M->kappa * F[3 * i + j] + 2 * (1 - 3 * M->kappa) * Fa[i] * a[j];
+        }
+    if (P) {
+        for (int i = 0; i < 9; i++) P[i] = 2 * f1 * F[i] + fJ * cf[i];
+        for (int f = 0; f < 2; f++)
+            if (on[f])
+                for (int i = 0; i < 9; i++) P[i] += gE[f] * dE[f][i];
+    }
+    if (H) {
+        double Fi[9]; /* F^-1 = cof^T / J */
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++) Fi[3 * i + j] = cf[3 * j + i] / J;
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++)
+                for (int k = 0; k < 3; k++)
+                    for (int l = 0; l < 3; l++) {
+                        int a = 3 * i + j, b = 3 * k + l;
+                        /* d2J/dF_ij dF_kl = J (Fi_ji Fi_lk - Fi_jk Fi_li) */
+                        double hJ =
+                            J * (Fi[3 * j + i] * Fi[3 * l + k] - Fi[3 * j + k] * Fi[3 * l + i]);
+                        double h = fJ * hJ + f1J * (2 * F[a] * cf[b] + cf[a] * 2 * F[b]) +
+                                   fJJ * cf[a] * cf[b];
+                        if (i == k && j == l) h += 2 * f1;
+                        for (int f = 0; f < 2; f++) {
+                            if (!on[f]) continue;
+                            h += gEE[f] * dE[f][a] * dE[f][b];
+                            if (i == k)
+                                h += gE[f] * (2 * M->kappa * (j == l) +
+                                              2 * (1 - 3 * M->kappa) * M->a[f][j] * M->a[f][l]);
+                        }
+                        H[a * 9 + b] = h;
+                    }
+    }
+    return W;
+}
+
+double ss_hyper_goh_energy(const ss_mech_params *p, const double F[9], double P[9]) {
+    mat M;
+    mat_from(&M, p);
+    return goh(&M, F, 1, 0.0, P, NULL);
+}
+
+void ss_hyper_goh_cauchy(const ss_mech_params *p, const double F[9], double sg[9]) {
+    const double J = det3(F);
+    double b[9];
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            b[3 * i + j] =
+                F[3 * i] * F[3 * j] + F[3 * i + 1] * F[3 * j + 1] + F[3 * i + 2] * F[3 * j + 2];
+    const double I1 = b[0] + b[4] + b[8];
+    for (int i = 0; i < 9; i++) sg[i] = p->mu * pow(J, -5.0 / 3.0) * b[i];
+    for (int i = 0; i < 3; i++)
+        sg[4 * i] += -p->mu * pow(J, -5.0 / 3.0) * I1 / 3.0 + p->K_bulk * (J - 1);
+    for (int f = 0; f < p->nfibres; f++) {
+        const double *a = p->fibre[f];
+        double Fa[3];
+        for (int i = 0; i < 3; i++)
+            Fa[i] = F[3 * i] * a[0] + F[3 * i + 1] * a[1] + F[3 * i + 2] * a[2];
+        double E = p->kappa * I1 +
+                   (1 - 3 * p->kappa) * (Fa[0] * Fa[0] + Fa[1] * Fa[1] + Fa[2] * Fa[2]) - 1;
+        if (!(E > 0) || !(p->k1_goh > 0)) continue;
+        double dpsi = p->k1_goh * E * exp(p->k2 * E * E); /* dPsi/dE */
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++)
+                sg[3 * i + j] +=
+                    2.0 / J * dpsi * (p->kappa * b[3 * i + j] + (1 - 3 * p->kappa) * Fa[i] * Fa[j]);
+    }
+}
+
+/* ---- set-up -------------------------------------------------------------------- */
+
+void ss_hyper_free(ss_hyper *h) {
+    if (!h) return;
+    void *ptrs[] = {h->X,    h->x,     h->xt,     h->tet,   h->beta0,  h->V0,     h->beta,
+                    h->Vg,   h->G,     h->act,    h->scale, h->fib,    h->gdirty, h->anchor,
+                    h->load, h->fixed, h->se,     h->srest, h->sk,     h->rowptr, h->col,
+                    h->diag, h->val,   h->cstart, h->clist, h->nstart, h->nlist,  h->Kt,
+                    h->gt,   h->et,    h->Minv,   h->g,     h->d,      h->r,      h->z,
+                    h->p,    h->q};
+    for (size_t i = 0; i < sizeof ptrs / sizeof ptrs[0]; i++) free(ptrs[i]);
+    free(h);
+}
+
+/* 3x3 inverse; returns the determinant */
+static double inv3(const double *A, double *B) {
+    double c[9];
+    cof3(A, c);
+    double d = det3(A);
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) B[3 * i + j] = c[3 * j + i] / d;
+    return d;
+}
+
+ss_hyper *ss_hyper_create(const ss_tetmesh *m, const ss_mech_params *p, ss_error *err) {
+    if (!m || m->nnodes < 4 || m->ntets < 1) {
+        ss_error_set(err, SS_ERR_INPUT, "hyperelastic solver: empty mesh");
+        return NULL;
+    }
+    ss_hyper *h = calloc(1, sizeof *h);
+    if (!h) goto nomem;
+    mat_from(&h->M, p);
+    const int nn = h->nn = m->nnodes, nt = h->nt = m->ntets;
+    const size_t n3 = 3 * (size_t)nn;
+    h->X = malloc(n3 * sizeof(double));
+    h->x = malloc(n3 * sizeof(double));
+    h->xt = malloc(n3 * sizeof(double));
+    h->tet = malloc(4 * (size_t)nt * sizeof(int32_t));
+    h->beta0 = malloc(12 * (size_t)nt * sizeof(double));
+    h->beta = malloc(12 * (size_t)nt * sizeof(double));
+    h->V0 = malloc((size_t)nt * sizeof(double));
+    h->Vg = malloc((size_t)nt * sizeof(double));
+    h->G = malloc(9 * (size_t)nt * sizeof(double));
+    h->act = calloc((size_t)nt, sizeof(double));
+    h->scale = malloc((size_t)nt * sizeof(double));
+    h->fib = malloc((size_t)nt);
+    h->gdirty = malloc((size_t)nt);
+    h->anchor = calloc((size_t)nn, sizeof(double));
+    h->load = calloc(n3, sizeof(double));
+    h->fixed = calloc(n3, 1);
+    h->gt = malloc(12 * (size_t)nt * sizeof(double));
+    h->et = malloc((size_t)nt * sizeof(double));
+    h->Minv = malloc(9 * (size_t)nn * sizeof(double));
+    h->g = malloc(n3 * sizeof(double));
+    h->d = malloc(n3 * sizeof(double));
+    h->r = malloc(n3 * sizeof(double));
+    h->z = malloc(n3 * sizeof(double));
+    h->p = malloc(n3 * sizeof(double));
+    h->q = malloc(n3 * sizeof(double));
+    if (!h->X || !h->x || !h->xt || !h->tet || !h->beta0 || !h->beta || !h->V0 || !h->Vg || !h->G ||
+        !h->act || !h->scale || !h->fib || !h->gdirty || !h->anchor || !h->load || !h->fixed ||
+        !h->gt || !h->et || !h->Minv || !h->g || !h->d || !h->r || !h->z || !h->p || !h->q)
+        goto nomem;
+    memcpy(h->X, m->x, n3 * sizeof(double));
+    memcpy(h->x, m->x, n3 * sizeof(double));
+    memcpy(h->tet, m->tet, 4 * (size_t)nt * sizeof(int32_t));
+    double esum = 0;
+    for (int t = 0; t < nt; t++) {
+        const int32_t *q = h->tet + 4 * t;
+        double D[9], B[9];
+        for (int c = 0; c < 3; c++)
+            for (int i = 0; i < 3; i++) D[3 * i + c] = h->X[3 * q[c + 1] + i] - h->X[3 * q[0] + i];
+        double det = inv3(D, B);
+        if (!(det > 0)) {
+            ss_error_set(err, SS_ERR_INPUT, "hyperelastic solver: tet %d is degenerate or inverted",
+                         t + 1);
+            goto fail;
+        }
+        h->V0[t] = det / 6.0;
+        double *be = h->beta0 + 12 * (size_t)t;
+        for (int j = 0; j < 3; j++) {
+            be[j] = -(B[j] + B[3 + j] + B[6 + j]);
+            for (int c = 0; c < 3; c++) be[3 * (c + 1) + j] = B[3 * c + j];
+        }
+        for (int k = 1; k < 4; k++)
+            esum += sqrt(D[k - 1] * D[k - 1] + D[k + 2] * D[k + 2] + D[k + 5] * D[k + 5]);
+        static const double I[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+        memcpy(h->G + 9 * (size_t)t, I, sizeof I);
+        h->scale[t] = 1.0;
+        h->fib[t] = 1;
+        h->gdirty[t] = 1;
+    }
+    h->mean_edge = esum / (3.0 * nt);
+    return h;
+nomem:
+    ss_error_set(err, SS_ERR_NOMEM, "hyperelastic solver: out of memory");
+fail:
+    ss_hyper_free(h);
+    return NULL;
+}
+
+int ss_hyper_nodes(const ss_hyper *h) { return h->nn; }
+int ss_hyper_tets(const ss_hyper *h) { return h->nt; }
+double *ss_hyper_x(ss_hyper *h) { return h->x; }
+const double *ss_hyper_X(const ss_hyper *h) { return h->X; }
+double *ss_hyper_growth(ss_hyper *h) {
+    memset(h->gdirty, 1, (size_t)h->nt); /* the caller may change any G */
+    return h->G;
+}
+double *ss_hyper_active(ss_hyper *h) { return h->act; }
+double *ss_hyper_scale(ss_hyper *h) { return h->scale; }
+uint8_t *ss_hyper_fibres_on(ss_hyper *h) { return h->fib; }
+double *ss_hyper_anchor(ss_hyper *h) { return h->anchor; }
+double *ss_hyper_load(ss_hyper *h) { return h->load; }
+uint8_t *ss_hyper_fixed(ss_hyper *h) { return h->fixed; }
+
+int ss_hyper_add_spring(ss_hyper *h, int a, int b, double rest, double k, ss_error *err) {
+    if (a < 0 || b < 0 || a >= h->nn || b >= h->nn || a == b) {
+        ss_error_set(err, SS_ERR_INPUT, "hyperelastic solver: spring %d-%d: bad nodes", a, b);
+        return -1;
+    }
+    if (h->ns == h->scap) {
+        int cap = h->scap ? 2 * h->scap : 16;
+        int32_t *se = realloc(h->se, 2 * (size_t)cap * sizeof(int32_t));
+        if (se) h->se = se;
+        double *sr = realloc(h->srest, (size_t)cap * sizeof(double));
+        if (sr) h->srest = sr;
+        double *sk = realloc(h->sk, (size_t)cap * sizeof(double));
+        if (sk) h->sk = sk;
+        if (!se || !sr || !sk) {
+            ss_error_set(err, SS_ERR_NOMEM, "hyperelastic solver: out of memory");
+            return -1;
+        }
+        h->scap = cap;
+    }
+    h->se[2 * h->ns] = a;
+    h->se[2 * h->ns + 1] = b;
+    h->srest[h->ns] = rest;
+    h->sk[h->ns] = k;
+    h->pattern_ok = 0;
+    return h->ns++;
+}
+
+void ss_hyper_set_spring(ss_hyper *h, int i, double rest, double k) {
+    if (i < 0 || i >= h->ns) return;
+    h->srest[i] = rest;
+    h->sk[i] = k;
+}
+
+static int cmp_i32(const void *a, const void *b) {
+    int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+static int find_blk(const ss_hyper *h, int a, int b) {
+    int lo = h->rowptr[a], hi = h->rowptr[a + 1] - 1;
+    while (lo <= hi) {
+        int mid = (lo + hi) / 2;
+        if (h->col[mid] == b) return mid;
+        if (h->col[mid] < b)
+            lo = mid + 1;
+        else
+            hi = mid - 1;
+    }
+    return -1;
+}
+
+/* The block pattern (tets and springs), the tet -> block gather lists and
+ * the node -> tet lists. */
+static ss_status build_pattern(ss_hyper *h) {
+    const int nn = h->nn, nt = h->nt;
+    free(h->rowptr);
+    free(h->col);
+    free(h->diag);
+    free(h->val);
+    free(h->cstart);
+    free(h->clist);
+    free(h->nstart);
+    free(h->nlist);
+    free(h->Kt);
+    h->rowptr = h->col = h->diag = h->cstart = h->clist = h->nstart = h->nlist = NULL;
+    h->val = h->Kt = NULL;
+    /* node -> (tet, local) */
+    h->nstart = calloc((size_t)nn + 1, sizeof(int32_t));
+    h->nlist = malloc(4 * (size_t)nt * sizeof(int32_t));
+    if (!h->nstart || !h->nlist) return SS_ERR_NOMEM;
+    for (int t = 0; t < 4 * nt; t++) h->nstart[h->tet[t] + 1]++;
+    for (int i = 0; i < nn; i++) h->nstart[i + 1] += h->nstart[i];
+    int32_t *fill = malloc((size_t)nn * sizeof(int32_t));
+    if (!fill) return SS_ERR_NOMEM;
+    memcpy(fill, h->nstart, (size_t)nn * sizeof(int32_t));
+    for (int t = 0; t < 4 * nt; t++) h->nlist[fill[h->tet[t]]++] = t;
+    /* neighbours per node: candidate list, sorted, unique */
+    int32_t *cnt = calloc((size_t)nn + 1, sizeof(int32_t));
+    if (!cnt) {
+        free(fill);
+        return SS_ERR_NOMEM;
+    }
+    for (int i = 0; i < nn; i++) cnt[i + 1] = 4 * (h->nstart[i + 1] - h->nstart[i]) + 1;
+    for (int s = 0; s < h->ns; s++) {
+        cnt[h->se[2 * s] + 1]++;
+        cnt[h->se[2 * s + 1] + 1]++;
+    }
+    for (int i = 0; i < nn; i++) cnt[i + 1] += cnt[i];
+    int32_t *cand = malloc((size_t)cnt[nn] * sizeof(int32_t));
+    if (!cand) {
+        free(fill);
+        free(cnt);
+        return SS_ERR_NOMEM;
+    }
+    memcpy(fill, cnt, (size_t)nn * sizeof(int32_t));
+    for (int i = 0; i < nn; i++) {
+        cand[fill[i]++] = i;
+        for (int k = h->nstart[i]; k < h->nstart[i + 1]; k++) {
+            const int32_t *q = h->tet + 4 * (h->nlist[k] / 4);
+            for (int l = 0; l < 4; l++) cand[fill[i]++] = q[l];
+        }
+    }
+    for (int s = 0; s < h->ns; s++) {
+        int a = h->se[2 * s], b = h->se[2 * s + 1];
+        cand[fill[a]++] = b;
+        cand[fill[b]++] = a;
+    }
+    h->rowptr = calloc((size_t)nn + 1, sizeof(int32_t));
+    if (!h->rowptr) {
+        free(fill);
+        free(cnt);
+        free(cand);
+        return SS_ERR_NOMEM;
+    }
+    int total = 0;
+    for (int i = 0; i < nn; i++) {
+        int32_t *c = cand + cnt[i];
+        int k = cnt[i + 1] - cnt[i], u = 0;
+        qsort(c, (size_t)k, sizeof *c, cmp_i32);
+        for (int j = 0; j < k; j++)
+            if (j == 0 || c[j] != c[j - 1]) c[u++] = c[j];
+        h->rowptr[i + 1] = h->rowptr[i] + u;
+        total += u;
+    }
+    h->nblk = total;
+    h->col = malloc((size_t)total * sizeof(int32_t));
+    h->diag = malloc((size_t)nn * sizeof(int32_t));
+    h->val = malloc(9 * (size_t)total * sizeof(double));
+    h->cstart = calloc((size_t)total + 1, sizeof(int32_t));
+    h->clist = malloc(16 * (size_t)nt * sizeof(int32_t));
+    h->Kt = malloc(144 * (size_t)nt * sizeof(double));
+    if (!h->col || !h->diag || !h->val || !h->cstart || !h->clist || !h->Kt) {
+        free(fill);
+        free(cnt);
+        free(cand);
+        return SS_ERR_NOMEM;
+    }
+    for (int i = 0; i < nn; i++) {
+        int u = h->rowptr[i + 1] - h->rowptr[i];
+        memcpy(h->col + h->rowptr[i], cand + cnt[i], (size_t)u * sizeof(int32_t));
+    }
+    free(cand);
+    free(cnt);
+    free(fill);
+    for (int i = 0; i < nn; i++) h->diag[i] = find_blk(h, i, i);
+    /* per block, its tets' contributions in tet order (counting sort) */
+    int32_t *bk = malloc(16 * (size_t)nt * sizeof(int32_t));
+    if (!bk) return SS_ERR_NOMEM;
+    for (int t = 0; t < nt; t++)
+        for (int a = 0; a < 4; a++)
+            for (int b = 0; b < 4; b++) {
+                int k = find_blk(h, h->tet[4 * t + a], h->tet[4 * t + b]);
+                bk[16 * (size_t)t + 4 * a + b] = k;
+                h->cstart[k + 1]++;
+            }
+    for (int k = 0; k < total; k++) h->cstart[k + 1] += h->cstart[k];
+    int32_t *pos = malloc((size_t)total * sizeof(int32_t));
+    if (!pos) {
+        free(bk);
+        return SS_ERR_NOMEM;
+    }
+    memcpy(pos, h->cstart, (size_t)total * sizeof(int32_t));
+    for (int c = 0; c < 16 * nt; c++) h->clist[pos[bk[c]]++] = c;
+    free(pos);
+    free(bk);
+    h->pattern_ok = 1;
+    return SS_OK;
+}
+
+/* ---- evaluation ---------------------------------------------------------------- */
+
+static void update_growth(ss_hyper *h) {
+#pragma omp parallel for schedule(static)
+    for (int t = 0; t < h->nt; t++) {
+        if (!h->gdirty[t]) continue;
+        double Gi[9];
+        double dg = inv3(h->G + 9 * (size_t)t, Gi);
+        const double *b0 = h->beta0 + 12 * (size_t)t;
+        double *b = h->beta + 12 * (size_t)t;
+        for (int a = 0; a < 4; a++)
+            for (int j = 0; j < 3; j++)
+                b[3 * a + j] =
+                    b0[3 * a] * Gi[j] + b0[3 * a + 1] * Gi[3 + j] + b0[3 * a + 2] * Gi[6 + j];
+        h->Vg[t] = h->V0[t] * dg;
+        h->gdirty[t] = 0;
+    }
+}
+
+/* F_e of tet t at positions x */
+static void tet_F(const ss_hyper *h, int t, const double *x, double *F) {
+    const int32_t *q = h->tet + 4 * t;
+    const double *b = h->beta + 12 * (size_t)t;
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            F[3 * i + j] = x[3 * q[0] + i] * b[j] + x[3 * q[1] + i] * b[3 + j] +
+                           x[3 * q[2] + i] * b[6 + j] + x[3 * q[3] + i] * b[9 + j];
+}
+
+/* mode 0: energies; 1: + gradients; 2: + tangents */
+static void eval_tets(ss_hyper *h, const double *x, int mode) {
+    update_growth(h);
+#pragma omp parallel for schedule(static)
+    for (int t = 0; t < h->nt; t++) {
+        double F[9], P[9], H[81];
+        tet_F(h, t, x, F);
+        const double c = h->scale[t], V = h->Vg[t], s = h->act[t];
+        /* c W(F_e) + s J_e: the active energy is not scaled by the stiffness */
+        double W = goh(&h->M, F, h->fib[t], s / c, mode ? P : NULL, mode == 2 ? H : NULL);
+        h->et[t] = V * c * W;
+        if (!mode) continue;
+        const double *b = h->beta + 12 * (size_t)t;
+        double *g = h->gt + 12 * (size_t)t;
+        if (!isfinite(W)) {
+            for (int k = 0; k < 12; k++) g[k] = 0;
+            if (mode == 2) memset(h->Kt + 144 * (size_t)t, 0, 144 * sizeof(double));
+            continue;
+        }
+        const double w = V * c;
+        for (int a = 0; a < 4; a++)
+            for (int i = 0; i < 3; i++)
+                g[3 * a + i] = w * (P[3 * i] * b[3 * a] + P[3 * i + 1] * b[3 * a + 1] +
+                                    P[3 * i + 2] * b[3 * a + 2]);
+        if (mode < 2) continue;
+        double Mx[12][9]; /* Mx[(a,i)][(k,l)] = sum_j b_aj H(ij,kl) */
+        for (int a = 0; a < 4; a++)
+            for (int i = 0; i < 3; i++)
+                for (int kl = 0; kl < 9; kl++)
+                    Mx[3 * a + i][kl] = b[3 * a] * H[(3 * i) * 9 + kl] +
+                                        b[3 * a + 1] * H[(3 * i + 1) * 9 + kl] +
+                                        b[3 * a + 2] * H[(3 * i + 2) * 9 + kl];
+        double *K = h->Kt + 144 * (size_t)t;
+        for (int r = 0; r < 12; r++)
+            for (int bb = 0; bb < 4; bb++)
+                for (int k = 0; k < 3; k++)
+                    K[r * 12 + 3 * bb + k] =
+                        w * (Mx[r][3 * k] * b[3 * bb] + Mx[r][3 * k + 1] * b[3 * bb + 1] +
+                             Mx[r][3 * k + 2] * b[3 * bb + 2]);
+    }
+}
+
+/* fixed-order sums: partial sums per block of 4096 in parallel, then a
+ * serial sum of the partials (the same for any thread count) */
+enum { SUMBLK = 4096 };
+static double fsum(const double *a, const double *b, size_t n) {
+    size_t nb = (n + SUMBLK - 1) / SUMBLK;
+    double stack[256], *part = nb <= 256 ? stack : malloc(nb * sizeof(double));
+    if (!part) part = stack, nb = 0; /* out of memory: the serial sum below */
+    if (nb == 0) {
+        double s = 0;
+        for (size_t i = 0; i < n; i++) s += b ? a[i] * b[i] : a[i];
+        return s;
+    }
+#pragma omp parallel for schedule(static)
+    for (size_t k = 0; k < nb; k++) {
+        size_t lo = k * SUMBLK, hi = lo + SUMBLK < n ? lo + SUMBLK : n;
+        double s = 0;
+        for (size_t i = lo; i < hi; i++) s += b ? a[i] * b[i] : a[i];
+        part[k] = s;
+    }
+    double s = 0;
+    for (size_t k = 0; k < nb; k++) s += part[k];
+    if (part != stack) free(part);
+    return s;
+}
+
+static double spring_energy(const ss_hyper *h, const double *x, double *g) {
+    double E = 0;
+    for (int s = 0; s < h->ns; s++) { /* serial: few springs, fixed order */
+        if (!(h->sk[s] > 0)) continue;
+        int a = h->se[2 * s], b = h->se[2 * s + 1];
+        double d[3], l2 = 0;
+        for (int k = 0; k < 3; k++) {
+            d[k] = x[3 * b + k] - x[3 * a + k];
+            l2 += d[k] * d[k];
+        }
+        double l = sqrt(l2), e = l - h->srest[s];
+        E += 0.5 * h->sk[s] * e * e;
+        if (g && l > 0)
+            for (int k = 0; k < 3; k++) {
+                double f = h->sk[s] * e * d[k] / l;
+                g[3 * b + k] += f;
+                g[3 * a + k] -= f;
+            }
+    }
+    return E;
+}
+
+/* total energy at x; with g: its gradient (fixed dofs zeroed) */
+static double total(ss_hyper *h, const double *x, double *g) {
+    eval_tets(h, x, g ? 1 : 0);
+    const int nn = h->nn;
+    double Et = fsum(h->et, NULL, (size_t)h->nt);
+    if (!isfinite(Et)) return INFINITY;
+    if (g) {
+#pragma omp parallel for schedule(static)
+        for (int i = 0; i < nn; i++) {
+            double s[3] = {0, 0, 0};
+            for (int k = h->nstart[i]; k < h->nstart[i + 1]; k++) {
+                int c = h->nlist[k]; /* tet * 4 + local */
+                const double *gt = h->gt + 12 * (size_t)(c / 4) + 3 * (c % 4);
+                s[0] += gt[0];
+                s[1] += gt[1];
+                s[2] += gt[2];
+            }
+            for (int d = 0; d < 3; d++)
+                g[3 * i + d] =
+                    s[d] + h->anchor[i] * (x[3 * i + d] - h->X[3 * i + d]) - h->load[3 * i + d];
+        }
+    }
+    /* foundation and loads: per-node terms, summed in fixed blocks */
+    double *tmp = h->r; /* scratch (not in use during an evaluation) */
+#pragma omp parallel for schedule(static)
+    for (int i = 0; i < nn; i++) {
+        double e = 0;
+        for (int d = 0; d < 3; d++) {
+            double u = x[3 * i + d] - h->X[3 * i + d];
+            e += 0.5 * h->anchor[i] * u * u - h->load[3 * i + d] * u;
+        }
+        tmp[i] = e;
+    }
+    double E = Et + fsum(tmp, NULL, (size_t)nn) + spring_energy(h, x, g);
+    if (g)
+        for (size_t i = 0; i < 3 * (size_t)nn; i++)
+            if (h->fixed[i]) g[i] = 0;
+    return E;
+}
+
+double ss_hyper_energy(ss_hyper *h) {
+    if (!h->pattern_ok && build_pattern(h) != SS_OK) return NAN;
+    return total(h, h->x, NULL);
+}
+
+void ss_hyper_tet_forces(ss_hyper *h, double *f) {
+    if (!h->pattern_ok && build_pattern(h) != SS_OK) return;
+    eval_tets(h, h->x, 1);
+    for (int i = 0; i < h->nn; i++) {
+        double s[3] = {0, 0, 0};
+        for (int k = h->nstart[i]; k < h->nstart[i + 1]; k++) {
+            int c = h->nlist[k];
+            const double *gt = h->gt + 12 * (size_t)(c / 4) + 3 * (c % 4);
+            for (int d = 0; d < 3; d++) s[d] += gt[d];
+        }
+        for (int d = 0; d < 3; d++) f[3 * i + d] = -s[d];
+    }
+}
+
+/* the tangent: tets gathered per block, then foundation and springs */
+static void assemble(ss_hyper *h, const double *x) {
+    eval_tets(h, x, 2);
+#pragma omp parallel for schedule(static)
+    for (int k = 0; k < h->nblk; k++) {
+        double s[9] = {0};
+        for (int c = h->cstart[k]; c < h->cstart[k + 1]; c++) {
+            int code = h->clist[c], t = code / 16, la = (code / 4) % 4, lb = code % 4;
+            const double *K = h->Kt + 144 * (size_t)t;
+            for (int i = 0; i < 3; i++)
+                for (int j = 0; j < 3; j++) s[3 * i + j] += K[(3 * la + i) * 12 + 3 * lb + j];
+        }
+        memcpy(h->val + 9 * (size_t)k, s, sizeof s);
+    }
+    for (int i = 0; i < h->nn; i++)
+        for (int d = 0; d < 3; d++) h->val[9 * (size_t)h->diag[i] + 4 * d] += h->anchor[i];
+    for (int s = 0; s < h->ns; s++) {
+        if (!(h->sk[s] > 0)) continue;
+        int a = h->se[2 * s], b = h->se[2 * s + 1];
+        double d[3], l2 = 0;
+        for (int k = 0; k < 3; k++) {
+            d[k] = x[3 * b + k] - x[3 * a + k];
+            l2 += d[k] * d[k];
+        }
+        double l = sqrt(l2);
+        if (!(l > 0)) continue;
+        double w = 1 - h->srest[s] / l, B[9];
+        if (w < 0) w = 0; /* a compressed spring: keep the tangent positive */
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++)
+                B[3 * i + j] = h->sk[s] * ((i == j) * w + (1 - w) * d[i] * d[j] / l2);
+        int ab = find_blk(h, a, b), ba = find_blk(h, b, a);
+        for (int k = 0; k < 9; k++) {
+            h->val[9 * (size_t)h->diag[a] + k] += B[k];
+            h->val[9 * (size_t)h->diag[b] + k] += B[k];
+            h->val[9 * (size_t)ab + k] -= B[k];
+            h->val[9 * (size_t)ba + k] -= B[k];
+        }
+    }
+    /* block-Jacobi preconditioner; fixed dofs -> identity rows */
+#pragma omp parallel for schedule(static)
+    for (int i = 0; i < h->nn; i++) {
+        double A[9];
+        memcpy(A, h->val + 9 * (size_t)h->diag[i], sizeof A);
+        for (int d = 0; d < 3; d++)
+            if (h->fixed[3 * i + d])
+                for (int e = 0; e < 3; e++) {
+                    A[3 * d + e] = A[3 * e + d] = 0;
+                    A[4 * d] = 1;
+                }
+        double *Mi = h->Minv + 9 * (size_t)i;
+        double det = det3(A);
+        int spd = A[0] > 0 && A[0] * A[4] - A[1] * A[3] > 0 && det > 0;
+        if (spd)
+            inv3(A, Mi);
+        else {
+            double m = fmax(fabs(A[0]), fmax(fabs(A[4]), fabs(A[8])));
+            memset(Mi, 0, 9 * sizeof(double));
+            for (int d = 0; d < 3; d++) Mi[4 * d] = m > 0 ? 1 / m : 1;
+        }
+    }
+}
+
+static void matvec(const ss_hyper *h, const double *v, double *out) {
+#pragma omp parallel for schedule(static)
+    for (int i = 0; i < h->nn; i++) {
+        double s[3] = {0, 0, 0};
+        for (int k = h->rowptr[i]; k < h->rowptr[i + 1]; k++) {
+            const double *B = h->val + 9 * (size_t)k, *w = v + 3 * (size_t)h->col[k];
+            s[0] += B[0] * w[0] + B[1] * w[1] + B[2] * w[2];
+            s[1] += B[3] * w[0] + B[4] * w[1] + B[5] * w[2];
+            s[2] += B[6] * w[0] + B[7] * w[1] + B[8] * w[2];
+        }
+        for (int d = 0; d < 3; d++) out[3 * i + d] = h->fixed[3 * i + d] ? 0 : s[d];
+    }
+}
+
+static void precond(const ss_hyper *h, const double *r, double *z) {
+#pragma omp parallel for schedule(static)
+    for (int i = 0; i < h->nn; i++) {
+        const double *M = h->Minv + 9 * (size_t)i, *v = r + 3 * (size_t)i;
+        for (int d = 0; d < 3; d++)
+            z[3 * i + d] = h->fixed[3 * i + d]
+                               ? 0
+                               : M[3 * d] * v[0] + M[3 * d + 1] * v[1] + M[3 * d + 2] * v[2];
+    }
+}
+
+/* truncated preconditioned CG on K d = -g; returns iterations */
+static int cg(ss_hyper *h, double eta, int maxit) {
+    const size_t n = 3 * (size_t)h->nn;
+    double *d = h->d, *r = h->r, *z = h->z, *p = h->p, *q = h->q;
+    for (size_t i = 0; i < n; i++) {
+        d[i] = 0;
+        r[i] = -h->g[i];
+    }
+    precond(h, r, z);
+    memcpy(p, z, n * sizeof(double));
+    double rz = fsum(r, z, n), r0 = sqrt(fsum(r, r, n));
+    if (!(r0 > 0)) return 0;
+    int it;
+    for (it = 0; it < maxit; it++) {
+        matvec(h, p, q);
+        double pq = fsum(p, q, n);
+        if (!(pq > 0)) {
+            if (it == 0) memcpy(d, z, n * sizeof(double)); /* a preconditioned gradient step */
+            break;
+        }
+        double a = rz / pq;
+#pragma omp parallel for schedule(static)
+        for (size_t i = 0; i < n; i++) {
+            d[i] += a * p[i];
+            r[i] -= a * q[i];
+        }
+        if (sqrt(fsum(r, r, n)) <= eta * r0) {
+            it++;
+            break;
+        }
+        precond(h, r, z);
+        double rz1 = fsum(r, z, n), b = rz1 / rz;
+        rz = rz1;
+#pragma omp parallel for schedule(static)
+        for (size_t i = 0; i < n; i++) p[i] = z[i] + b * p[i];
+    }
+    return it;
+}
+
+ss_status ss_hyper_solve(ss_hyper *h, double tol, int max_newton, ss_hyper_report *rep,
+                         ss_error *err) {
+    ss_hyper_report rr = {0, 0, 0, 0, 0};
+    if (!h->pattern_ok && build_pattern(h) != SS_OK)
+        return ss_error_set(err, SS_ERR_NOMEM, "hyperelastic solver: out of memory");
+    const size_t n = 3 * (size_t)h->nn;
+    double E = total(h, h->x, h->g);
+    if (!isfinite(E)) /* a folded start: nothing to minimise from */
+        return ss_error_set(err, SS_ERR_INPUT, "hyperelastic solver: the start has a folded tet");
+    double g0 = sqrt(fsum(h->g, h->g, n));
+    for (int it = 0; it < max_newton; it++) {
+        double gn = sqrt(fsum(h->g, h->g, n));
+        if (!(gn > 0)) {
+            rr.converged = 1;
+            break;
+        }
+        assemble(h, h->x);
+        double eta = g0 > 0 ? sqrt(gn / g0) : 0.1;
+        if (eta > 0.1) eta = 0.1;
+        if (eta < 1e-6) eta = 1e-6;
+        int maxcg = (int)(n < 2000 ? 2000 : n);
+        rr.cg += cg(h, eta, maxcg);
+        rr.newton++;
+        double slope = fsum(h->g, h->d, n);
+        if (!(slope < 0)) { /* not a descent direction: the gradient itself */
+            precond(h, h->g, h->d);
+            for (size_t i = 0; i < n; i++) h->d[i] = -h->d[i];
+            slope = fsum(h->g, h->d, n);
+            if (!(slope < 0)) break;
+        }
+        double alpha = 1, En = INFINITY;
+        for (int ls = 0; ls < 40; ls++) {
+#pragma omp parallel for schedule(static)
+            for (size_t i = 0; i < n; i++) h->xt[i] = h->x[i] + alpha * h->d[i];
+            En = total(h, h->xt, NULL);
+            if (isfinite(En) && En <= E + 1e-4 * alpha * slope) break;
+            alpha *= 0.5;
+        }
+        if (!(isfinite(En) && En <= E + 1e-4 * alpha * slope)) {
+            /* no decrease within rounding: we sit at the minimum */
+            rr.converged = 1;
+            break;
+        }
+        double mx = 0;
+        for (int i = 0; i < h->nn; i++) {
+            double s2 = 0;
+            for (int dd = 0; dd < 3; dd++)
+                s2 += alpha * alpha * h->d[3 * i + dd] * h->d[3 * i + dd];
+            if (s2 > mx) mx = s2;
+        }
+        rr.max_step_mm = sqrt(mx);
+        memcpy(h->x, h->xt, n * sizeof(double));
+        E = total(h, h->x, h->g);
+        if (rr.max_step_mm < tol * h->mean_edge) {
+            rr.converged = 1;
+            break;
+        }
+    }
+    double gm = 0;
+    for (size_t i = 0; i < n; i++) gm = fmax(gm, fabs(h->g[i]));
+    rr.residual = gm;
+    if (rep) *rep = rr;
+    return SS_OK;
+}
+
+void ss_hyper_mean_cauchy(ss_hyper *h, double sigma[9], double *volume) {
+    update_growth(h);
+    double S[9] = {0}, V = 0;
+    for (int t = 0; t < h->nt; t++) { /* serial, fixed order */
+        double F[9], P[9];
+        tet_F(h, t, h->x, F);
+        double c = h->scale[t];
+        if (!isfinite(goh(&h->M, F, h->fib[t], h->act[t] / c, P, NULL))) continue;
+        double J = det3(F), v = h->Vg[t] * J;
+        /* sigma = c P F^T / J (the active part included) */
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++)
+                S[3 * i + j] += v * c *
+                                (P[3 * i] * F[3 * j] + P[3 * i + 1] * F[3 * j + 1] +
+                                 P[3 * i + 2] * F[3 * j + 2]) /
+                                J;
+        V += v;
+    }
+    for (int k = 0; k < 9; k++) sigma[k] = V > 0 ? S[k] / V : 0;
+    if (volume) *volume = V;
+}

@@ -1,0 +1,272 @@
+/* The hyperelastic GOH tissue (src/mech/hyper.c, stretch.c, mech_goh.c):
+ * the solver's forces are its energy's gradient and its energy is objective;
+ * the closed-form Cauchy stress agrees with the derivative of the energy; the
+ * uniaxial stretch of a block of the solver's own mesh gives the analytic GOH
+ * stress at every refinement and under a permutation of the axes; mu, k2 and
+ * the fibre direction change it; and in a heal set-up the resting tension
+ * makes a slit across the fibres gape more than one along them, and stitches
+ * hold it. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <omp.h>
+
+#include "testutil.h"
+#include "skinsim/mech.h"
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
+static ss_tetmesh *box_mesh(int n, double dx, double h) {
+    uint8_t *in = malloc((size_t)n * n * n);
+    memset(in, 1, (size_t)n * n * n);
+    ss_error err;
+    ss_tetmesh *m = ss_tetmesh_lattice(in, n, n, n, dx, h, &err);
+    free(in);
+    assert_non_null(m);
+    return m;
+}
+
+/* a deterministic pseudo-random number in [-1, 1] */
+static double rnd(unsigned *s) {
+    *s = *s * 1103515245u + 12345u;
+    return ((*s >> 8) & 0xffff) / 32767.5 - 1.0;
+}
+
+static void test_closed_form_cauchy(void **state) {
+    (void)state;
+    ss_mech_params p;
+    ss_mech_params_default(&p);
+    p.kappa = 0.1;
+    p.k2 = 3;
+    p.nfibres = 2;
+    p.fibre[1][0] = 0;
+    p.fibre[1][1] = 0.6;
+    p.fibre[1][2] = 0.8;
+    unsigned s = 7;
+    for (int k = 0; k < 20; k++) {
+        double F[9];
+        for (int i = 0; i < 9; i++) F[i] = (i % 4 == 0) + 0.15 * rnd(&s);
+        double P[9], sg[9],
+            J = F[0] * (F[4] * F[8] - F[5] * F[7]) - F[1] * (F[3] * F[8] - F[5] * F[6]) +
+                F[2] * (F[3] * F[7] - F[4] * F[6]);
+        ss_hyper_goh_energy(&p, F, P);
+        ss_hyper_goh_cauchy(&p, F, sg);
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++) {
+                double c = (P[3 * i] * F[3 * j] + P[3 * i + 1] * F[3 * j + 1] +
+                            P[3 * i + 2] * F[3 * j + 2]) /
+                           J;
+                assert_float_equal(c, sg[3 * i + j], 1e-9 * (1 + fabs(c)));
+            }
+        /* P is the derivative of W (central differences) */
+        for (int i = 0; i < 9; i++) {
+            double Fp[9], Fm[9], h = 1e-6;
+            memcpy(Fp, F, sizeof Fp);
+            memcpy(Fm, F, sizeof Fm);
+            Fp[i] += h;
+            Fm[i] -= h;
+            double d =
+                (ss_hyper_goh_energy(&p, Fp, NULL) - ss_hyper_goh_energy(&p, Fm, NULL)) / (2 * h);
+            assert_float_equal(d, P[i], 1e-5 * (1 + fabs(P[i])));
+        }
+    }
+}
+
+/* forces = -dE/dx by central differences; a rigid rotation keeps the
+ * energy and rotates the forces; growth, active stress and fibres on */
+static void test_forces_objective(void **state) {
+    (void)state;
+    ss_mech_params p;
+    ss_mech_params_default(&p);
+    p.kappa = 0.05;
+    p.fibre[0][0] = 0.8;
+    p.fibre[0][1] = 0.6;
+    ss_tetmesh *m = box_mesh(4, 0.5, 1.0);
+    ss_error err;
+    ss_hyper *H = ss_hyper_create(m, &p, &err);
+    assert_non_null(H);
+    const int nn = ss_hyper_nodes(H), nt = ss_hyper_tets(H);
+    double *G = ss_hyper_growth(H), *act = ss_hyper_active(H);
+    unsigned s = 3;
+    for (int t = 0; t < nt; t++) {
+        for (int i = 0; i < 9; i++) G[9 * t + i] = (i % 4 == 0) + 0.05 * rnd(&s);
+        act[t] = 2.0 * (1 + rnd(&s));
+    }
+    double *x = ss_hyper_x(H);
+    for (int i = 0; i < 3 * nn; i++) x[i] = m->x[i] * (1 + (i % 3 == 0) * 0.12) + 0.03 * rnd(&s);
+    double *f = malloc(3 * (size_t)nn * sizeof(double));
+    ss_hyper_tet_forces(H, f);
+    for (int k = 0; k < 3 * nn; k += 7) {
+        double x0 = x[k], h = 1e-6;
+        x[k] = x0 + h;
+        double ep = ss_hyper_energy(H);
+        x[k] = x0 - h;
+        double em = ss_hyper_energy(H);
+        x[k] = x0;
+        assert_float_equal(-(ep - em) / (2 * h), f[k], 1e-5 * (1 + fabs(f[k])));
+    }
+    /* rotate everything by 40 degrees about (1, 2, 2)/3 */
+    double E0 = ss_hyper_energy(H), a = 40 * M_PI / 180, u[3] = {1 / 3.0, 2 / 3.0, 2 / 3.0}, R[9];
+    double c = cos(a), sn = sin(a);
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) {
+            double e = 0;
+            if ((i + 1) % 3 == j) e = -u[3 - i - j];
+            if ((j + 1) % 3 == i) e = u[3 - i - j];
+            R[3 * i + j] = c * (i == j) + (1 - c) * u[i] * u[j] + sn * e;
+        }
+    for (int i = 0; i < nn; i++) {
+        double y[3];
+        for (int d = 0; d < 3; d++)
+            y[d] = R[3 * d] * x[3 * i] + R[3 * d + 1] * x[3 * i + 1] + R[3 * d + 2] * x[3 * i + 2];
+        memcpy(x + 3 * i, y, sizeof y);
+    }
+    double E1 = ss_hyper_energy(H);
+    assert_float_equal(E1, E0, 1e-10 * fabs(E0));
+    double *f1 = malloc(3 * (size_t)nn * sizeof(double));
+    ss_hyper_tet_forces(H, f1);
+    for (int i = 0; i < nn; i++)
+        for (int d = 0; d < 3; d++) {
+            double rf =
+                R[3 * d] * f[3 * i] + R[3 * d + 1] * f[3 * i + 1] + R[3 * d + 2] * f[3 * i + 2];
+            assert_float_equal(f1[3 * i + d], rf, 1e-9 * (1 + fabs(rf)));
+        }
+    free(f);
+    free(f1);
+    ss_hyper_free(H);
+    ss_tetmesh_free(m);
+}
+
+static ss_mech_stretch_result stretch(const ss_mech_params *p, double lam, int axis,
+                                      const double fib[3], double h) {
+    ss_mech_stretch_config c;
+    ss_mech_stretch_config_default(&c);
+    c.stretch = lam;
+    c.axis = axis;
+    memcpy(c.fibre, fib, sizeof c.fibre);
+    c.tet_size_mm = h;
+    c.increments = 5;
+    ss_mech_stretch_result r;
+    ss_error err;
+    assert_int_equal(ss_mech_stretch(p, &c, &r, &err), SS_OK);
+    assert_true(r.converged);
+    return r;
+}
+
+static void test_stretch_analytic(void **state) {
+    (void)state;
+    ss_mech_params p;
+    ss_mech_params_default(&p);
+    const double fx[3] = {1, 0, 0}, fy[3] = {0, 1, 0}, fz[3] = {0, 0, 1};
+    /* refinement: 48, 384, 1296 tets */
+    const double hs[3] = {2.0, 1.0, 2.0 / 3.0};
+    for (int k = 0; k < (tu_quick() ? 2 : 3); k++) {
+        ss_mech_stretch_result r = stretch(&p, 1.1, 0, fx, hs[k]);
+        print_message("h %.3f mm, %d tets: %.9f kPa, analytic %.9f kPa\n", hs[k], r.tets,
+                      r.stress_kpa, r.analytic_stress_kpa);
+        assert_float_equal(r.stress_kpa, r.analytic_stress_kpa, 1e-6 * r.analytic_stress_kpa);
+        assert_float_equal(r.lateral_stretch[0], r.analytic_lateral[0], 1e-6);
+    }
+    /* the closed form (incompressible limit check of the analytic solver):
+     * with K_bulk large the lateral stretches are 1/sqrt(lambda) for fibres
+     * along the axis and the stress is mu (l^2 - 1/l) + 2 l^2 psi'(E) */
+    {
+        ss_mech_params q = p;
+        q.K_bulk = 1e6;
+        double n[3] = {1, 0, 0}, sg, lat[2], l = 1.1;
+        assert_int_equal(ss_mech_uniaxial_analytic(&q, n, l, &sg, lat, NULL), SS_OK);
+        double E = l * l - 1,
+               ex = q.mu * (l * l - 1 / l) + 2 * l * l * q.k1_goh * E * exp(q.k2 * E * E);
+        assert_float_equal(sg, ex, 1e-3 * ex);
+        assert_float_equal(lat[0], 1 / sqrt(l), 1e-5);
+    }
+    ss_mech_stretch_result along = stretch(&p, 1.1, 0, fx, 1.0);
+    /* objectivity: the same test along y and z with the fibres turned with it */
+    ss_mech_stretch_result ry = stretch(&p, 1.1, 1, fy, 1.0), rz = stretch(&p, 1.1, 2, fz, 1.0);
+    assert_float_equal(ry.stress_kpa, along.stress_kpa, 1e-8 * along.stress_kpa);
+    assert_float_equal(rz.stress_kpa, along.stress_kpa, 1e-8 * along.stress_kpa);
+    /* across the fibres: the fibres are compressed and bear nothing */
+    ss_mech_stretch_result across = stretch(&p, 1.1, 0, fy, 1.0);
+    assert_float_equal(across.stress_kpa, across.analytic_stress_kpa,
+                       1e-6 * across.analytic_stress_kpa);
+    assert_true(along.stress_kpa > 5 * across.stress_kpa);
+    /* mu and k2 matter */
+    ss_mech_params q = p;
+    q.mu = 30;
+    ss_mech_stretch_result rmu = stretch(&q, 1.1, 0, fy, 1.0);
+    assert_true(rmu.stress_kpa > 1.5 * across.stress_kpa);
+    assert_float_equal(rmu.stress_kpa, rmu.analytic_stress_kpa, 1e-6 * rmu.analytic_stress_kpa);
+    q = p;
+    q.k2 = 10;
+    ss_mech_stretch_result rk2 = stretch(&q, 1.1, 0, fx, 1.0);
+    assert_true(rk2.stress_kpa > 1.2 * along.stress_kpa);
+    assert_float_equal(rk2.stress_kpa, rk2.analytic_stress_kpa, 1e-6 * rk2.analytic_stress_kpa);
+    /* compression too */
+    ss_mech_stretch_result rc = stretch(&p, 0.9, 0, fx, 1.0);
+    assert_true(rc.stress_kpa < 0);
+    assert_float_equal(rc.stress_kpa, rc.analytic_stress_kpa, 1e-6 * fabs(rc.analytic_stress_kpa));
+    /* the same answer on 1 and 2 threads, bit for bit */
+    omp_set_num_threads(1);
+    ss_mech_stretch_result r1 = stretch(&p, 1.1, 0, fx, 1.0);
+    omp_set_num_threads(2);
+    ss_mech_stretch_result r2 = stretch(&p, 1.1, 0, fx, 1.0);
+    assert_memory_equal(&r1.stress_kpa, &r2.stress_kpa, sizeof(double));
+}
+
+/* a 20 x 20 x 4 mm block (0.5 mm voxels, skin top at 3 mm), a slit 2 mm x
+ * 12 mm, 1 mm deep, along y (across the x fibres) or along x; returns the
+ * outline area after the day-0 gape over the cut area */
+static double gape(int along_x, const ss_mech_suture *sut, int nsut) {
+    ss_error err;
+    ss_heal_params *hp = ss_heal_params_preset("clean", &err);
+    assert_non_null(hp);
+    ss_heal_grid *g = ss_heal_grid_create(40, 40, 8, 0.5, &err);
+    assert_non_null(g);
+    uint8_t *w = ss_heal_wound_box(g, 3.0, along_x ? 12.0 : 2.0, along_x ? 2.0 : 12.0, 1.0, &err);
+    assert_non_null(w);
+    assert_int_equal(ss_heal_grid_init(g, 3.0, 0.1, w, hp, &err), SS_OK);
+    free(w);
+    ss_mech_params p;
+    ss_mech_params_default(&p);
+    p.model = SS_MECH_MODEL_GOH;
+    ss_mech *m = ss_mech_create(g, hp, &p, NULL, sut, nsut, &err);
+    if (!m) fail_msg("%s", err.msg);
+    ss_mech_stats st;
+    ss_mech_stats_compute(m, &st);
+    assert_int_equal(st.inverted_tets, 0);
+    double r = st.outline_area_mm2 / st.initial_outline_area_mm2;
+    ss_mech_free(m);
+    ss_heal_grid_free(g);
+    ss_heal_params_free(hp);
+    return r;
+}
+
+static void test_resting_tension_gape(void **state) {
+    (void)state;
+    double across = gape(0, NULL, 0), along = gape(1, NULL, 0);
+    ss_mech_suture sut[4];
+    for (int i = 0; i < 4; i++) {
+        double y = 6.5 + 2.3 * i;
+        sut[i] = (ss_mech_suture){{8.0, y, 2.0}, {12.0, y, 2.0}, INFINITY};
+    }
+    double stitched = gape(0, sut, 4);
+    print_message("outline / cut: across the fibres %.3f, along %.3f, across and stitched %.3f\n",
+                  across, along, stitched);
+    assert_true(across > 1.2);
+    assert_true(across - 1 > 2 * (along - 1));
+    assert_true(stitched - 1 < 0.5 * (across - 1));
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_closed_form_cauchy),
+        cmocka_unit_test(test_forces_objective),
+        cmocka_unit_test(test_stretch_analytic),
+        cmocka_unit_test(test_resting_tension_gape),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
