@@ -281,17 +281,39 @@ static ss_status declare_outputs(const ss_wound_make_config *c, ss_outputs *outs
 
 /* ---- writing --------------------------------------------------------------------------- */
 
+/* The height PNG has skinsim skin's encoding: 16-bit, 0..1 spans the frame's
+ * height_min_mm..height_max_mm (written next to the file names in
+ * timeline.json), here the frame's own range widened to at least
+ * +-height_range, so it never clips and a flat frame is mid-grey. */
+ss_status ss_wound_height_range(const ss_image *h, double range_mm, double *lo, double *hi) {
+    double mn = -range_mm, mx = range_mm;
+    size_t n = (size_t)h->width * (size_t)h->height;
+    for (size_t i = 0; i < n; i++) {
+        double v = h->data[i];
+        if (!isfinite(v)) return SS_ERR_RUNTIME;
+        mn = v < mn ? v : mn;
+        mx = v > mx ? v : mx;
+    }
+    *lo = mn;
+    *hi = mx;
+    return SS_OK;
+}
+
 static ss_status write_frame(const char *dir, const char *stem, const ss_wound_textures *t,
-                             double range_mm, int exr, cJSON *files, ss_error *err) {
+                             double range_mm, int exr, cJSON *frame, cJSON *files, ss_error *err) {
     static const char *names[4] = {"base_color", "roughness", "height", "normal"};
     static const int bits[4] = {8, 8, 16, 8};
     ss_image *h01 = ss_image_create(t->height->width, t->height->height, 1, err);
     if (!h01) return err->code;
     size_t n = (size_t)t->height->width * (size_t)t->height->height;
-    for (size_t i = 0; i < n; i++) {
-        float v = 0.5f + 0.5f * (float)(t->height->data[i] / range_mm);
-        h01->data[i] = v < 0 ? 0 : v > 1 ? 1 : v;
+    double lo, hi;
+    if (ss_wound_height_range(t->height, range_mm, &lo, &hi)) {
+        ss_image_free(h01);
+        return ss_error_set(err, SS_ERR_RUNTIME, "%s: the height map is not finite", stem);
     }
+    for (size_t i = 0; i < n; i++) h01->data[i] = (float)((t->height->data[i] - lo) / (hi - lo));
+    cJSON_AddNumberToObject(frame, "height_min_mm", lo);
+    cJSON_AddNumberToObject(frame, "height_max_mm", hi);
     const ss_image *imgs[4] = {t->base_color, t->roughness, h01, t->normal};
     const ss_image *raw[4] = {t->base_color, t->roughness, t->height, t->normal};
     ss_error errs[8];
@@ -499,7 +521,7 @@ static ss_status run_days(job *j, const char *dir, cJSON *frames, ss_image **thu
         cJSON_AddNumberToObject(f, "day", c->days[i]);
         cJSON_AddStringToObject(f, "phase", "simulated");
         cJSON *files = cJSON_AddObjectToObject(f, "files");
-        if (!st) st = write_frame(dir, stem, &tex, range, c->exr, files, err);
+        if (!st) st = write_frame(dir, stem, &tex, range, c->exr, f, files, err);
         if (!st) st = write_gltf(dir, stem, &tex, j->side_mm, j->mesh, files, err);
         int ts = c->size < 512 ? c->size : 512;
         if (!st && !(thumbs[i] = ss_image_resize(tex.base_color, ts, ts, err))) st = err->code;
@@ -596,7 +618,10 @@ static cJSON *summary_base(const job *j) {
     cJSON_AddNumberToObject(s, "world_size_cm", j->side_mm / 10.0);
     cJSON_AddNumberToObject(s, "seed", (double)c->seed);
     cJSON_AddNumberToObject(s, "height_range_mm", j->recipe.v[SS_WR_HEIGHT_RANGE_MM]);
-    cJSON_AddStringToObject(s, "height_encoding", "0.5 + 0.5 * height_mm / height_range_mm");
+    cJSON_AddStringToObject(s, "height_encoding",
+                            "16-bit PNG, value v in 0..1: height_mm = height_min_mm + v * "
+                            "(height_max_mm - height_min_mm), per frame (as skinsim skin's "
+                            "height.png); the range covers at least +-height_range_mm");
     cJSON_AddStringToObject(s, "base_skin", c->skin_path ? c->skin_path : "forearm (built-in)");
     if (j->mesh) {
         cJSON_AddStringToObject(s, "skin_mesh", c->heal.skin_mesh);

@@ -730,7 +730,7 @@ except AttributeError:
 
 # ---- wound ------------------------------------------------------------------------
 
-SS_WR_NKEYS = 42
+SS_WR_NKEYS = 47
 
 
 class ss_wound_recipe(ctypes.Structure):
