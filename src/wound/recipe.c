@@ -63,7 +63,7 @@ static const struct {
     [SS_WR_KELOID_ROUGHNESS] = {"keloid_roughness", "1", 0.22, 0, 1},
     [SS_WR_SCAB_BILIRUBIN] = {"scab_bilirubin", "g/L", 1.5, 0, 100},
     [SS_WR_PIH_GAIN] = {"pih_gain", "1", 5, 0, 10},
-    [SS_WR_PIH_DAYS] = {"pih_days", "day", 240, 0.01, 1e5},
+    [SS_WR_PIH_DAYS] = {"pih_days", "day", 120, 0.01, 1e5},
     [SS_WR_CRUST_DRY_DAYS] = {"crust_dry_days", "day", 2, 0.01, 1e5},
     [SS_WR_CRUST_LIFT_MM] = {"crust_lift", "mm", 0.15, 0, 10},
     [SS_WR_BED_TEXTURE] = {"bed_texture", "1", 1, 0, 10},
