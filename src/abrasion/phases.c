@@ -501,9 +501,10 @@ static ss_status render_scab(const ctx *c, ss_texture_set *out, ss_error *err) {
 /* Maturation at a position (Alg. 4.4's healed border sweeping inward by up to
  * half the closing distance, its inner border rand(0.4, 0.8) of that further
  * in), on the smoothed distance, so its fronts are rounded and nested:
- *   healed (d <= outer): the skin under new epithelium, pink while young,
- *     turning into a faint pale scar with the days since that ring healed
- *     (maturity 1 - exp(-age / 60 d)), with post-inflammatory
+ *   healed (d <= outer): the skin under new epithelium, pink while young
+ *     (fading as exp(-age / 120 d), age the days since that ring healed),
+ *     turning into a faint pale scar after the first month (1 - exp(-(age -
+ *     30 d) / 150 d)), with post-inflammatory
  *     hyperpigmentation rising over the first weeks and fading over months,
  *     as strong as the skin type's clinical rate (palette);
  *   front (outer < d <= inner): new epithelium at the front, red
@@ -511,8 +512,10 @@ static ss_status render_scab(const ctx *c, ss_texture_set *out, ss_error *err) {
  *   core: moist granulation tissue with fibrin.
  * Ages: span_days is the maturation phase's length, after_days the time past
  * its end (the scar keeps maturing). */
-#define SCAR_DAYS 60.0f  /* maturity of the healed epithelium and scar */
-#define SCAR_WEIGHT 0.6f /* how far a mature scar goes to the palette's scar */
+#define SCAR_RED_DAYS 120.0f  /* fading of the young scar's pink */
+#define SCAR_PALE_DELAY 30.0f /* days before the scar starts to pale */
+#define SCAR_PALE_DAYS 150.0f /* its paling */
+#define SCAR_WEIGHT 0.6f      /* how far a mature scar goes to the palette's scar */
 #define PIH_RISE_DAYS 14.0f
 #define PIH_FADE_DAYS 240.0f
 static inline int maturation_px(const ctx *c, const look *l, size_t i, double position,
@@ -534,12 +537,17 @@ static inline int maturation_px(const ctx *c, const look *l, size_t i, double po
     double pos_h = s > 0 ? s / max_outer : 0;
     double age = (position - pos_h) * span_days + after_days;
     if (age < 0) age = 0;
-    float mat = 1.0f - expf(-(float)age / SCAR_DAYS);
+    /* the young scar's redness fades over months while its pallor comes in
+     * after the first month (two effects, not one lerp: pink to pale through
+     * the skin's own colour would hide the scar around day 90) */
+    float red = expf(-(float)age / SCAR_RED_DAYS);
+    float pale = 1.0f - expf(-fmaxf(0.0f, (float)age - SCAR_PALE_DELAY) / SCAR_PALE_DAYS);
+    float mat = 1.0f - red;
     float pih = c->P->pih_prevalence * (1.0f - expf(-(float)age / PIH_RISE_DAYS)) *
                 expf(-(float)age / PIH_FADE_DAYS);
     for (int k = 0; k < 3; k++) {
-        float scar = 1.0f + (P->scar[k] - 1.0f) * SCAR_WEIGHT;
-        float f = P->new_epithelium[k] + (scar - P->new_epithelium[k]) * mat;
+        float f =
+            1.0f + (P->new_epithelium[k] - 1.0f) * red + (P->scar[k] - 1.0f) * SCAR_WEIGHT * pale;
         f *= 1.0f + (P->hyperpigment[k] - 1.0f) * pih;
         healed[k] = up[k] * f;
     }
