@@ -503,8 +503,9 @@ static ss_status render_scab(const ctx *c, ss_texture_set *out, ss_error *err) {
  * in), on the smoothed distance, so its fronts are rounded and nested:
  *   healed (d <= outer): the skin under new epithelium, pink while young
  *     (fading as exp(-age / 120 d), age the days since that ring healed),
- *     turning into a faint pale scar after the first month (1 - exp(-(age -
- *     30 d) / 150 d)), with post-inflammatory
+ *     lightening (1 - exp(-age / 60 d)) and turning into a faint pale scar
+ *     after the first month (1 - exp(-(age - 30 d) / 150 d)), with
+ *     post-inflammatory
  *     hyperpigmentation rising over the first weeks and fading over months,
  *     as strong as the skin type's clinical rate (palette);
  *   front (outer < d <= inner): new epithelium at the front, red
@@ -512,10 +513,11 @@ static ss_status render_scab(const ctx *c, ss_texture_set *out, ss_error *err) {
  *   core: moist granulation tissue with fibrin.
  * Ages: span_days is the maturation phase's length, after_days the time past
  * its end (the scar keeps maturing). */
-#define SCAR_RED_DAYS 120.0f  /* fading of the young scar's pink */
-#define SCAR_PALE_DELAY 30.0f /* days before the scar starts to pale */
-#define SCAR_PALE_DAYS 150.0f /* its paling */
-#define SCAR_WEIGHT 0.6f      /* how far a mature scar goes to the palette's scar */
+#define SCAR_RED_DAYS 120.0f   /* fading of the young scar's pink */
+#define SCAR_PALE_DELAY 30.0f  /* days before the scar starts to pale */
+#define SCAR_PALE_DAYS 150.0f  /* its paling */
+#define SCAR_BRIGHT_DAYS 60.0f /* its lightening (dense collagen, less melanin) */
+#define SCAR_WEIGHT 0.6f       /* how far a mature scar goes to the palette's scar */
 #define PIH_RISE_DAYS 14.0f
 #define PIH_FADE_DAYS 240.0f
 static inline int maturation_px(const ctx *c, const look *l, size_t i, double position,
@@ -542,12 +544,19 @@ static inline int maturation_px(const ctx *c, const look *l, size_t i, double po
      * the skin's own colour would hide the scar around day 90) */
     float red = expf(-(float)age / SCAR_RED_DAYS);
     float pale = 1.0f - expf(-fmaxf(0.0f, (float)age - SCAR_PALE_DELAY) / SCAR_PALE_DAYS);
+    float bright_t = 1.0f - expf(-(float)age / SCAR_BRIGHT_DAYS);
     float mat = 1.0f - red;
+    /* the scar's multiplier split into its brightness (which comes in first)
+     * and its chromaticity (the loss of redness, with the pallor), so that on
+     * the way from pink to pale the scar is lighter than the skin, never the
+     * skin's own colour */
+    float sb = lum(P->scar) > 1e-6f ? lum(P->scar) : 1.0f;
     float pih = c->P->pih_prevalence * (1.0f - expf(-(float)age / PIH_RISE_DAYS)) *
                 expf(-(float)age / PIH_FADE_DAYS);
     for (int k = 0; k < 3; k++) {
-        float f =
-            1.0f + (P->new_epithelium[k] - 1.0f) * red + (P->scar[k] - 1.0f) * SCAR_WEIGHT * pale;
+        float f = (1.0f + (P->new_epithelium[k] - 1.0f) * red) *
+                  (1.0f + (sb - 1.0f) * SCAR_WEIGHT * bright_t) *
+                  (1.0f + (P->scar[k] / sb - 1.0f) * SCAR_WEIGHT * pale);
         f *= 1.0f + (P->hyperpigment[k] - 1.0f) * pih;
         healed[k] = up[k] * f;
     }
