@@ -6,6 +6,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <cjson/cJSON.h>
+
 #include "cli.h"
 #include "heal_opts.h"
 #include "skinsim/wound.h"
@@ -172,6 +174,11 @@ int cmd_wound(int argc, char **argv) {
     ss_status st = ss_wound_make(&o.c, &summary, &err);
     free(o.days);
     if (st) return cli_fail(CMD, &err);
+    cJSON *sum = summary ? cJSON_Parse(summary) : NULL;
+    const cJSON *warn, *ws = sum ? cJSON_GetObjectItemCaseSensitive(sum, "warnings") : NULL;
+    cJSON_ArrayForEach(warn, ws) if (cJSON_IsString(warn))
+        fprintf(stderr, "skinsim %s: warning: %s\n", CMD, warn->valuestring);
+    cJSON_Delete(sum);
     if (o.json)
         printf("%s\n", summary);
     else if (!o.c.quiet)

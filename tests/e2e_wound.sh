@@ -43,6 +43,21 @@ assert t["height_range_mm"] > 0 and "recipe" in t and "keys" in t
 s = json.load(open(sys.argv[2]))
 assert s["frames"] == t["frames"]
 PY
+# the height PNG's range is in each frame's entry and covers the frame (no clipping)
+/usr/bin/python3 - "$T/a/timeline.json" <<'PY' || fail "height range"
+import json, sys
+for f in json.load(open(sys.argv[1]))["frames"]:
+    lo, hi = f["height_min_mm"], f["height_max_mm"]
+    assert lo <= -2 and hi >= 2 and hi > lo, f
+PY
+# a skin of another world size than the block is matched, with a warning
+"$CLI" skin --size 64 --world-size-cm 5 --quiet --out "$T/skin5" || fail "skin run failed"
+"$CLI" wound $SMALL --scenario scab --days 0 --skin "$T/skin5" --no-compare --out "$T/w5" \
+    2>"$T/w5.err" || fail "wound on a 5 cm skin failed"
+grep -q "warning: --skin .* covers 5 cm but the texture covers" "$T/w5.err" ||
+    fail "no warning for a 5 cm skin under the block: $(cat "$T/w5.err")"
+grep -q '"warnings":[[:space:]]*\[[[:space:]]*"--skin' "$T/w5/timeline.json" ||
+    fail "timeline.json lacks the skin-size warning"
 # the glTF references files that exist
 grep -q '"t3_base_color.png"' "$T/a/frames/t3.gltf" || fail "glTF does not reference the base colour"
 # one thread gives the same pictures as two

@@ -5,8 +5,12 @@
  *   - outside the wound region (beyond the contraction's reach) the colour
  *     equals the base skin (Delta-E00 < 1) on every day;
  *   - day 1 (clean): the wound is redder than the skin (a* at least 5 higher);
+ *   - day 1 (clean): the bed is not one flat colour (L* sd > 1);
  *   - day 3 (scab): a dark crust (L* at least 15 below the skin), mottled (L*
- *     standard deviation > 1.5) and thicker in the middle than at its rim;
+ *     standard deviation > 1.5), thicker in the middle than at its rim, and
+ *     raised above the skin (mean height > 0.05 mm);
+ *   - the height PNG encoding round-trips without clipping; PIH rates by skin
+ *     type;
  *   - day 28 (clean): closed and pinker than the skin (a* higher);
  *   - day 365 (clean): the scar is visible (Delta-E00 > 2) but close to skin
  *     (Delta-E00 < 12);
@@ -22,6 +26,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "skinsim/abrasion.h"
 #include "skinsim/wound.h"
 
 /* ---- CIEDE2000 (Sharma, Wu & Dalal 2005, Table 1) ------------------------------------- */
@@ -281,8 +286,11 @@ static void test_clinical(void **state) {
     stats c[4];
     run_days(&s, "clean", cdays, quick ? 2 : 4, c);
     assert_true(c[0].wound[1] >= c[0].skin[1] + 5); /* day 1: redder */
-    assert_true(c[1].cover >= 0.9);                 /* day 28: closed */
-    assert_true(c[1].wound[1] > c[1].skin[1]);      /* and pinker */
+    /* and not one flat colour: capillary loops, pooled blood, exudate */
+    fprintf(stderr, "clean day 1: L* sd over the bed %.2f\n", c[0].l_sd);
+    assert_true(c[0].l_sd > 1.0);
+    assert_true(c[1].cover >= 0.9);            /* day 28: closed */
+    assert_true(c[1].wound[1] > c[1].skin[1]); /* and pinker */
     /* scab: a dark crust on day 3 */
     double sdays[] = {3};
     stats sc;
@@ -294,6 +302,8 @@ static void test_clinical(void **state) {
             sc.inner_h, sc.rim_h);
     assert_true(sc.l_sd > 1.5);
     assert_true(sc.inner_h > sc.rim_h + 0.05);
+    /* and raised: the crust fills the defect and stands above the skin */
+    assert_true(sc.height_wound > 0.05);
     if (!quick) {
         /* keloid: raised above the clean scar (day 60) */
         double kdays[] = {60};
@@ -309,6 +319,62 @@ static void test_clinical(void **state) {
     }
     scene_free(&s);
     if (model_failures) skip();
+}
+
+/* The height PNG's encoding (skinsim skin's: 0..1 spans the frame's
+ * height_min_mm..height_max_mm) round-trips a keloid-like map of -1.2..+4.6
+ * mm through a 16-bit PNG within a quantisation step, with no texel clipped
+ * (the old encoding, 0.5 + 0.5 h / 2 mm, clipped everything above 2 mm). */
+static void test_height_encoding(void **state) {
+    (void)state;
+    ss_error err;
+    int n = 64;
+    ss_image *h = ss_image_create(n, n, 1, &err), *e = ss_image_create(n, n, 1, &err);
+    for (int i = 0; i < n * n; i++)
+        h->data[i] = (float)(-1.2 + 5.8 * ((i * 37) % (n * n)) / (n * n - 1.0));
+    double lo, hi;
+    assert_int_equal(ss_wound_height_range(h, 2.0, &lo, &hi), SS_OK);
+    assert_true(lo <= -2.0 && hi >= 4.6 - 1e-6);
+    for (int i = 0; i < n * n; i++) e->data[i] = (float)((h->data[i] - lo) / (hi - lo));
+    char *dir = tu_tmpdir("height"), *path = tu_join(dir, "h.png");
+    assert_int_equal(ss_png_write(path, e, 16, SS_ENC_LINEAR, &err), SS_OK);
+    ss_image *back = ss_png_read(path, SS_ENC_LINEAR, &err);
+    assert_non_null(back);
+    double worst = 0;
+    int at_top = 0;
+    for (int i = 0; i < n * n; i++) {
+        double mm = lo + back->data[i] * (hi - lo);
+        worst = fmax(worst, fabs(mm - h->data[i]));
+        at_top += back->data[i] >= 1.0f;
+    }
+    assert_true(worst <= (hi - lo) / 65535.0 + 1e-6);
+    assert_true(at_top <= 1); /* only the maximum itself */
+    /* a flat frame is mid-grey over +-range */
+    for (int i = 0; i < n * n; i++) h->data[i] = 0;
+    assert_int_equal(ss_wound_height_range(h, 2.0, &lo, &hi), SS_OK);
+    assert_true(lo == -2.0 && hi == 2.0);
+    h->data[3] = NAN;
+    assert_int_equal(ss_wound_height_range(h, 2.0, &lo, &hi), SS_ERR_RUNTIME);
+    ss_image_free(back);
+    ss_image_free(h);
+    ss_image_free(e);
+    tu_rmtree(dir);
+    free(path);
+    free(dir);
+}
+
+/* Post-inflammatory hyperpigmentation rates by skin type: rise from very
+ * light to dark skin, 65 % for the darkest class (Taylor et al. 2002). */
+static void test_pih_rates(void **state) {
+    (void)state;
+    double prev = 1;
+    for (double ita = -60; ita <= 70; ita += 5) {
+        double p = ss_pih_prevalence(ita);
+        assert_true(p <= prev + 1e-12 && p > 0 && p < 1);
+        prev = p;
+    }
+    assert_float_equal(ss_pih_prevalence(-50), 0.65, 1e-9);
+    assert_true(ss_pih_prevalence(60) < 0.05);
 }
 
 /* The base skin's textures are the ModelMatch lookup of its bio map. */
@@ -393,9 +459,10 @@ static void test_threads(void **state) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_delta_e2000), cmocka_unit_test(test_recipe),
-        cmocka_unit_test(test_layers),      cmocka_unit_test(test_clinical),
-        cmocka_unit_test(test_threads),     cmocka_unit_test(test_base_lookup),
+        cmocka_unit_test(test_delta_e2000),     cmocka_unit_test(test_recipe),
+        cmocka_unit_test(test_layers),          cmocka_unit_test(test_clinical),
+        cmocka_unit_test(test_threads),         cmocka_unit_test(test_base_lookup),
+        cmocka_unit_test(test_height_encoding), cmocka_unit_test(test_pih_rates),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -43,6 +43,11 @@ typedef struct ss_wound_shape {
     int box_x, box_y, box_w, box_h; /* bounding box of the mask (box_w = 0: empty) */
     int npolys;                     /* hulls (0 for mask input) */
     ss_polygon *polys;
+    /* signed distance to the outline in pixels (> 0 inside), smoothed by a
+       blur of a tenth of the wound's size: its level sets are the nested,
+       rounded fronts of maturation (no ridges along the medial axis, no X
+       on a square); exact in the changed region only, 0 elsewhere */
+    ss_image *smooth;
 } ss_wound_shape;
 
 /* One hull per stroke id (each needs >= 3 distinct, non-collinear points),
@@ -61,10 +66,36 @@ void ss_wound_shape_free(ss_wound_shape *w);
  * linear RGB, size x size. Inputs may be given (any size, resampled; grey is
  * replicated to RGB, alpha dropped); the
  * rest are generated procedurally from seed (see docs/abrasion.md). */
+/* The tissue colours the phases draw, from the optics model (linear sRGB
+ * albedos; src/abrasion/palette.c, docs/abrasion.md): the exposed dermis
+ * (blanched, dilated, a capillary loop, granulation tissue), films over the
+ * dilated bed (fresh blood, serous exudate, fibrin, dark and light dried
+ * crust), and multipliers of the healthy skin (erythema, new epithelium,
+ * mature scar, hyperpigmentation). melanin: the skin's melanin fraction
+ * estimated from the upper texture; ita_deg its typology angle;
+ * pih_prevalence the clinical rate of post-inflammatory hyperpigmentation at
+ * that skin type (ss_pih_prevalence). */
+typedef struct ss_abrasion_palette {
+    float bed_pale[3], bed[3], capillary[3], granulation[3];
+    float blood[3], serous[3], fibrin[3], crust_dark[3], crust_light[3];
+    float erythema[3], new_epithelium[3], scar[3], hyperpigment[3];
+    float melanin, ita_deg, pih_prevalence;
+} ss_abrasion_palette;
+/* Computes the palette for a skin whose healthy colour is `upper` (linear
+ * RGB); reads the optics model's spectra (data/spectra). */
+ss_status ss_abrasion_palette_compute(const ss_image *upper, ss_abrasion_palette *p, ss_error *err);
+/* Fraction of patients with post-inflammatory hyperpigmentation after an
+ * inflammatory skin injury, by the skin's individual typology angle (ITA,
+ * degrees; Chardon et al. 1991 classes), from the rates of Taylor et al. 2002
+ * and Davis & Callender 2010 (palette.c): 0.03 for very light skin, 0.65 for
+ * dark skin. */
+double ss_pih_prevalence(double ita_deg);
+
 typedef struct ss_base_skin {
     ss_image *upper, *lower; /* linear RGB */
     ss_image *upper_srgb,
-        *lower_srgb; /* the same, sRGB-encoded: the seed blends in display space */
+        *lower_srgb;              /* the same, sRGB-encoded: the seed blends in display space */
+    ss_abrasion_palette *palette; /* the tissue colours for this skin (owned) */
 } ss_base_skin;
 ss_status ss_base_skin_create(const ss_image *upper_in, const ss_image *lower_in, int size,
                               uint64_t seed, ss_base_skin *out, ss_error *err);
@@ -124,6 +155,15 @@ void ss_abrasion_changed_region(const ss_wound_shape *w, const ss_abrasion_setti
 ss_status ss_abrasion_maturation_color(const ss_wound_shape *w, const ss_base_skin *skin,
                                        const ss_abrasion_settings *s, double position,
                                        ss_image *color, ss_error *err);
+/* The same with the ages of the healed rings in days: span_days is the
+ * maturation phase's length (position 0..1 over it), after_days the time past
+ * its end (the scar keeps maturing: new epithelium turns into a faint scar,
+ * hyperpigmentation fades); reflection (may be NULL) gets the healed skin's
+ * and the granulation's shine. Writes the changed region only. */
+ss_status ss_abrasion_maturation_at(const ss_wound_shape *w, const ss_base_skin *skin,
+                                    const ss_abrasion_settings *s, double position,
+                                    double span_days, double after_days, ss_image *color,
+                                    ss_image *reflection, ss_error *err);
 
 /* For renderers without a specular map (glTF's metallic-roughness): an RGB
  * image with roughness = 1 - 0.8 x reflection in G and metallic 0 in B (R is

@@ -78,6 +78,13 @@ enum {
     SS_WR_KELOID_MELANIN,     /* 1: melanin of keloid epidermis, multiple of the skin's */
     SS_WR_KELOID_ROUGHNESS,   /* 1: roughness of the keloid's stretched surface (shiny) */
     SS_WR_SCAB_BILIRUBIN,     /* g/L: serum pigment (bilirubin, carotenoids) of the dried crust */
+    /* after healing: post-inflammatory pigmentation by skin type, the crust's ageing */
+    SS_WR_PIH_GAIN,       /* 1: extra melanin of post-inflammatory hyperpigmentation at full
+                             strength, times the skin type's clinical rate */
+    SS_WR_PIH_DAYS,       /* day: time constant of its fading */
+    SS_WR_CRUST_DRY_DAYS, /* day: time constant of the crust's drying and darkening */
+    SS_WR_CRUST_LIFT_MM,  /* mm: how far the crust's edge lifts over new epithelium */
+    SS_WR_BED_TEXTURE,    /* 1: strength of the bed's capillary-loop and exudate texture */
     SS_WR_NKEYS
 };
 
@@ -268,6 +275,10 @@ void ss_wound_make_config_default(ss_wound_make_config *c);
  * t<day>_metal_rough.png and t<day>.gltf per day, contact_sheet.png,
  * compare_abrasion.png, timeline.json (the summary, also returned as
  * malloc'd JSON text when summary_json is not NULL). */
+/* The range a wound height map is encoded over (the frames' height PNGs):
+ * its minimum and maximum in mm, widened to at least -range_mm..+range_mm;
+ * SS_ERR_RUNTIME if a texel is not finite. */
+ss_status ss_wound_height_range(const ss_image *height_mm, double range_mm, double *lo, double *hi);
 ss_status ss_wound_make(const ss_wound_make_config *c, char **summary_json, ss_error *err);
 
 /* ---- colour checks ------------------------------------------------------------------ */

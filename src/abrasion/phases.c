@@ -14,20 +14,12 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Seed colours (display values). */
-static const float GLOW_RED[3] = {0.79f, 0.0f, 0.0f};      /* §4.3.2 */
-static const float EDGE_GREY = 0.95f;                      /* §4.3.2 */
-static const float SPECKLE_RED[3] = {0.88f, 0.20f, 0.22f}; /* §4.3.3 */
-static const float SCAB_RED[3] = {0.5f, 0.04f, 0.03f};     /* §4.3.4 */
-static const float SCAB_LIGHT[3] = {0.78f, 0.48f, 0.27f};  /* §4.3.4 */
-static const float SCAB_DARK[3] = {0.39f, 0.12f, 0.11f};   /* §4.3.4 */
-static const float WOUND_WHITE[3] = {0.79f, 0.41f, 0.41f}; /* §4.3.5 */
-
 /* Reflection and height where the seed gives none (docs/abrasion.md). */
 static const float SKIN_REFLECTION = 0.25f;     /* healthy skin specular strength */
 static const float RAW_WOUND_REFLECTION = 0.5f; /* fresh, wet wound bed */
 static const float WOUND_DEPTH = 0.05f;         /* epidermis removed: 0.05 of the height range */
 static const float SCRAPE_RELIEF = 0.02f;       /* depth of the scrape lines */
+#define DEFAULT_MATURATION_DAYS 20.0 /* the default timeline's maturation span (days 10..30) */
 
 /* Noise streams: one per noise texture, so each phase is reproducible alone. */
 enum {
@@ -86,26 +78,7 @@ void ss_texture_set_free(ss_texture_set *t) {
     memset(t, 0, sizeof *t);
 }
 
-/* sRGB decode through a table (built per render, a few microseconds): the
- * renderer decodes every output pixel and powf would dominate. */
-#define LUT_N 4096
-typedef struct decode_lut {
-    float v[LUT_N + 1];
-} decode_lut;
-static void lut_init(decode_lut *l) {
-    for (int i = 0; i <= LUT_N; i++) l->v[i] = ss_srgb_decode((float)i / LUT_N);
-}
-static inline float decode(const decode_lut *l, float e) {
-    if (!(e > 0.0f)) return 0.0f;
-    if (e >= 1.0f) return 1.0f;
-    float f = e * LUT_N;
-    int i = (int)f;
-    float t = f - (float)i;
-    return l->v[i] + (l->v[i + 1] - l->v[i]) * t;
-}
-static inline void lerp3(const float *a, const float *b, float t, float *out) {
-    for (int k = 0; k < 3; k++) out[k] = a[k] + (b[k] - a[k]) * t;
-}
+static inline float lum(const float *c) { return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2]; }
 
 /* Everything one render needs, resolved for the output size. */
 typedef struct ctx {
@@ -114,13 +87,16 @@ typedef struct ctx {
     const ss_abrasion_settings *s;
     int n;
     size_t npx;
-    float k;            /* output pixels per reference pixel */
-    int bx, by, bw, bh; /* the wound's box: noise, erosion and normals are only
-                           needed there (outside, every phase is plain skin), so
-                           the cost grows with the wound, not the texture */
-    int rx, ry, rw, rh; /* the box grown by the glow: where any colour differs
-                           from healthy skin */
-    decode_lut lut;
+    float k;                      /* output pixels per reference pixel */
+    int bx, by, bw, bh;           /* the wound's box: noise, erosion and normals are only
+                                     needed there (outside, every phase is plain skin), so
+                                     the cost grows with the wound, not the texture */
+    int rx, ry, rw, rh;           /* the box grown by the glow: where any colour differs
+                                     from healthy skin */
+    const ss_abrasion_palette *P; /* the tissue colours (optics) */
+    float px_per_mm;              /* texture pixels per mm on the body */
+    float rim_px;                 /* width of the torn-epidermis rim: 0.35 mm */
+    float lower_mean;             /* mean luminance of the lower skin in the box */
 } ctx;
 
 void ss_abrasion_changed_region(const ss_wound_shape *w, const ss_abrasion_settings *s, int *x,
@@ -142,16 +118,19 @@ static void ctx_init(ctx *c, const ss_wound_shape *w, const ss_base_skin *skin,
     c->n = s->size;
     c->npx = (size_t)s->size * (size_t)s->size;
     c->k = (float)(s->size / s->reference_px);
-    lut_init(&c->lut);
+    c->P = skin->palette;
+    c->px_per_mm = (float)(s->size / (s->world_size_cm * 10.0));
+    c->rim_px = fmaxf(1.0f, 0.35f * c->px_per_mm);
     c->bx = w->box_x;
     c->by = w->box_y;
     c->bw = w->box_w;
     c->bh = w->box_h;
     ss_abrasion_changed_region(w, s, &c->rx, &c->ry, &c->rw, &c->rh);
-}
-
-static inline void put_color(const ctx *c, float *dst, const float rgb[3]) {
-    for (int k = 0; k < 3; k++) dst[k] = decode(&c->lut, rgb[k]);
+    double acc = 0;
+    for (int y = c->by; y < c->by + c->bh; y++)
+        for (int x = c->bx; x < c->bx + c->bw; x++)
+            acc += lum(skin->lower->data + ((size_t)y * (size_t)c->n + (size_t)x) * 3);
+    c->lower_mean = c->bw > 0 && acc > 0 ? (float)(acc / ((double)c->bw * c->bh)) : 1.0f;
 }
 
 /* A value-noise texture over the wound's box only (noise is only read inside
@@ -187,16 +166,6 @@ static inline size_t box_index(const ctx *c, int x0, int y0, int w, size_t i) {
 /* Thickness of the glow and the scab's inner gradient: 100 reference px. */
 static inline float gradient_px(const ctx *c) { return 100.0f * c->k; }
 
-/* Outside the wound the glow fades from red to the upper skin (Alg. 3.4);
- * where it is not drawn the pixel keeps the healthy skin fill_healthy wrote. */
-static inline void outside_glow(const ctx *c, size_t i, ss_texture_set *out) {
-    float t = ss_gradient_weight(0, c->w->dist->data[i], gradient_px(c), 0);
-    if (t < 0.0f) return;
-    float rgb[3];
-    lerp3(GLOW_RED, c->skin->upper_srgb->data + i * 3, t, rgb);
-    put_color(c, out->color->data + i * 3, rgb);
-}
-
 /* Every phase starts from healthy skin: the upper colour, its reflection,
  * flat height and normal; the phases then draw only around the wound. */
 static void fill_healthy(const ctx *c, ss_texture_set *out) {
@@ -223,8 +192,8 @@ static void normals(const ctx *c, ss_texture_set *out) {
     float strength = (float)(2.0 * c->s->scab_height_mm / pixel_mm);
     /* Outside the wound the height is flat (0.5), so the normal is (0,0,1);
      * only the box around the wound needs the differences. */
-    int x0 = c->bx - 2, y0 = c->by - 2, w = c->bw + 4, h = c->bh + 4;
-    if (c->bw == 0 || x0 < 0 || y0 < 0 || x0 + w > c->n || y0 + h > c->n) {
+    int x0 = c->rx - 2, y0 = c->ry - 2, w = c->rw + 4, h = c->rh + 4;
+    if (c->rw == 0 || x0 < 0 || y0 < 0 || x0 + w > c->n || y0 + h > c->n) {
         ss_height_to_normal(out->height, strength, out->normal);
         return;
     }
@@ -247,205 +216,400 @@ static void normals(const ctx *c, ss_texture_set *out) {
     ss_image_free(ns);
 }
 
+/* ---- the tissue look (docs/abrasion.md, "Colours from the optics") ------------ */
+
+/* Streams of the noises the tissue look adds to the seed's. */
+enum { ST_JITTER = 0x140, ST_CAPILLARY, ST_PATCH, ST_BLEED };
+
+static inline float clampf(float v, float lo, float hi) { return v < lo ? lo : v > hi ? hi : v; }
+static inline float smooth01(float e0, float e1, float v) {
+    float t = clampf((v - e0) / (e1 - e0), 0.0f, 1.0f);
+    return t * t * (3.0f - 2.0f * t);
+}
+
+/* Value noise over the changed region whose coarsest period is period_mm on
+ * the body; index it with region_index. */
+static ss_status noise_mm(const ctx *c, int octaves, double period_mm, uint64_t stream,
+                          ss_image **out, ss_error *err) {
+    ss_noise_params p;
+    ss_noise_params_default(&p);
+    p.octaves = octaves;
+    double cell = period_mm * c->px_per_mm / (double)(1 << octaves);
+    p.cell_px = (float)(cell < 0.5 ? 0.5 : cell);
+    *out = ss_image_create_uninit(c->rw > 0 ? c->rw : 1, c->rh > 0 ? c->rh : 1, 1, err);
+    if (!*out) return err->code;
+    if (c->rw == 0) return SS_OK;
+    ss_status st = ss_value_noise_rect(&p, c->s->seed, stream, c->n, c->n, c->rx, c->ry, *out, err);
+    if (st) {
+        ss_image_free(*out);
+        *out = NULL;
+    }
+    return st;
+}
+static inline size_t region_index(const ctx *c, size_t i) {
+    return box_index(c, c->rx, c->ry, c->rw, i);
+}
+/* Index of pixel i into a box-sized image, clamped into the box (pixels just
+ * outside the mask, inside the jittered margin, read the nearest box pixel). */
+static inline size_t box_index_clamped(const ctx *c, size_t i) {
+    int y = (int)(i / (size_t)c->n), x = (int)(i - (size_t)y * (size_t)c->n);
+    x = x < c->bx ? c->bx : x >= c->bx + c->bw ? c->bx + c->bw - 1 : x;
+    y = y < c->by ? c->by : y >= c->by + c->bh ? c->by + c->bh - 1 : y;
+    return (size_t)(y - c->by) * (size_t)c->bw + (size_t)(x - c->bx);
+}
+
+/* The noises every phase reads: the margin jitter (~1 mm), the capillary
+ * loops of the dermal papillae (~0.35 mm), patches of exudate or fibrin
+ * (~2.5 mm) and spots of bleeding (~1.2 mm). */
+typedef struct look {
+    ss_image *jitter, *cap, *patch, *bleed;
+} look;
+static void look_free(look *l) {
+    ss_image_free(l->jitter);
+    ss_image_free(l->cap);
+    ss_image_free(l->patch);
+    ss_image_free(l->bleed);
+}
+static ss_status look_create(const ctx *c, look *l, ss_error *err) {
+    memset(l, 0, sizeof *l);
+    ss_status st = noise_mm(c, 3, 1.2, ST_JITTER, &l->jitter, err);
+    if (!st) st = noise_mm(c, 1, 0.3, ST_CAPILLARY, &l->cap, err);
+    if (!st) st = noise_mm(c, 4, 2.5, ST_PATCH, &l->patch, err);
+    if (!st) st = noise_mm(c, 3, 1.2, ST_BLEED, &l->bleed, err);
+    if (st) look_free(l);
+    return st;
+}
+
+/* Where pixel i sits against the one distance field every mask of a phase is
+ * cut from: s (pixels, > 0 inside) jittered by +-0.2 mm so the margin is
+ * ragged, and the erythema weight of the glow (1 at the outline, 0 at the
+ * glow's width; from the unjittered distance, so it ends inside the changed
+ * region). */
+typedef struct where {
+    float s, glow;
+    size_t r; /* region index */
+} where;
+static inline where locate_px(const ctx *c, const look *l, size_t i) {
+    where w;
+    w.r = region_index(c, i);
+    float d = c->w->dist->data[i], s = c->w->mask->data[i] > 0.5f ? d : -d;
+    float x = clampf(-s / gradient_px(c), 0.0f, 1.0f);
+    w.glow = (1.0f - x) * (1.0f - x);
+    w.s = s + 0.2f * c->px_per_mm * (2.0f * l->jitter->data[w.r] - 1.0f);
+    return w;
+}
+
+/* The colour outside the outline: the skin, reddened by the erythema of the
+ * glow (strength 0..1). */
+static inline void glow_color(const ctx *c, size_t i, float glow, float strength, float *rgb) {
+    const float *up = c->skin->upper->data + i * 3, *e = c->P->erythema;
+    for (int k = 0; k < 3; k++) rgb[k] = up[k] * (1.0f + (e[k] - 1.0f) * glow * strength);
+}
+
+/* The lower skin texture's relative brightness: the bed keeps its detail. */
+static inline float lower_mod(const ctx *c, size_t i) {
+    return clampf(lum(c->skin->lower->data + i * 3) / c->lower_mean, 0.8f, 1.2f);
+}
+
+/* Writes the pixel: outside the jittered outline the glow, inside the bed,
+ * the two joined across the rim (rim_mm of torn epidermis) by one lerp, so
+ * the colour runs monotonically from the glow into the bed with no band of
+ * another colour between. depth: how far the bed lies below the skin (height
+ * units); refl: the bed's reflection. */
+static inline void put_px(const ctx *c, size_t i, const where *w, float strength, const float *bed,
+                          float refl, float height, ss_texture_set *out) {
+    float g[3];
+    glow_color(c, i, w->glow, strength, g);
+    float t = smooth01(0.0f, c->rim_px, w->s);
+    float *o = out->color->data + i * 3;
+    for (int k = 0; k < 3; k++) o[k] = clampf(g[k] + (bed[k] - g[k]) * t, 0.0f, 1.0f);
+    out->reflection->data[i] = SKIN_REFLECTION + (refl - SKIN_REFLECTION) * t;
+    out->height->data[i] = 0.5f + (height - 0.5f) * t;
+}
+
+/* Loops over the changed region, pixel index i. */
+#define FOR_REGION(c)                                                                              \
+    _Pragma("omp parallel for schedule(static)") for (int y_ = (c)->ry; y_ < (c)->ry + (c)->rh;    \
+                                                      y_++) for (size_t i =                        \
+                                                                     (size_t)y_ * (size_t)(c)->n + \
+                                                                     (size_t)(c)->rx,              \
+                                                                 e_ = i + (size_t)(c)->rw;         \
+                                                                 i < e_; i++)
+
+/* The capillary loops of the exposed papillae: red dots where the fine noise
+ * is high (0..1). */
+static inline float capillary_dots(const look *l, size_t r) {
+    return smooth01(0.66f, 0.85f, l->cap->data[r]);
+}
+
 static ss_status render_vasoconstriction(const ctx *c, ss_texture_set *out, ss_error *err) {
-    (void)err;
-    /* §4.3.1: lower skin inside the shape, upper skin outside. */
-#pragma omp parallel for schedule(static)
-    for (int y = c->ry; y < c->ry + c->rh; y++)
-        for (size_t i = (size_t)y * (size_t)c->n + (size_t)c->rx, e = i + (size_t)c->rw; i < e;
-             i++) {
-            if (c->w->mask->data[i] <= 0.5f) continue;
-            put_color(c, out->color->data + i * 3, c->skin->lower_srgb->data + i * 3);
-            out->reflection->data[i] = RAW_WOUND_REFLECTION;
-            out->height->data[i] = 0.5f - WOUND_DEPTH;
+    /* §4.3.1: the fresh, blanched bed (vessels constricted): pale pink-white
+     * exposed dermis with the first punctate bleeding from torn capillary
+     * loops; wet; no erythema yet. */
+    look l;
+    ss_status st = look_create(c, &l, err);
+    if (st) return st;
+    const ss_abrasion_palette *P = c->P;
+    FOR_REGION(c) {
+        where w = locate_px(c, &l, i);
+        if (w.s <= 0.0f) continue; /* healthy skin (fill_healthy) */
+        float m = lower_mod(c, i), dots = 0.45f * capillary_dots(&l, w.r), bed[3];
+        float bl = 0.25f * smooth01(0.6f, 0.9f, l.bleed->data[w.r]);
+        for (int k = 0; k < 3; k++) {
+            float v = P->bed_pale[k] * m;
+            v += (P->capillary[k] - v) * dots;
+            bed[k] = v + (P->blood[k] - v) * bl;
         }
+        put_px(c, i, &w, 0.0f, bed, RAW_WOUND_REFLECTION + 0.2f * bl,
+               0.5f - WOUND_DEPTH + 0.01f * (l.cap->data[w.r] - 0.5f), out);
+    }
+    look_free(&l);
     return SS_OK;
 }
 
 static ss_status render_vasodilation(const ctx *c, ss_texture_set *out, ss_error *err) {
-    ss_image *scrape = NULL, *e1 = NULL, *e2 = NULL;
-    /* Scrape lines: 5 octaves, persistence 0.09, bias 0.5, gain 0.43, y x64. */
+    /* §4.3.2: the dilated bed: red-pink dermis dotted with capillary loops,
+     * bleeding along the scrape lines and in spots, a wet film (shiny), the
+     * erythema of the glow around; the seed's scrape lines as reflection and
+     * relief. */
+    ss_image *scrape = NULL;
+    look l;
     ss_status st = noise(c, 5, 0.09f, 0.5f, 0.43f, 64.0f, ST_SCRAPE, &scrape, err);
-    /* The half-scraped edge: erode twice (widths 3-5, then 3-10), in a box
-     * around the wound padded wider than the kernels so the result equals
-     * eroding the whole texture. */
-    int lo = (int)fmaxf(1.0f, roundf(3 * c->k)), hi1 = (int)fmaxf((float)lo, roundf(5 * c->k)),
-        hi2 = (int)fmaxf((float)lo, roundf(10 * c->k)), pad = hi2 / 2 + 3;
-    int ex0 = c->bx - pad < 0 ? 0 : c->bx - pad;
-    int ex1 = c->bx + c->bw + pad > c->n ? c->n : c->bx + c->bw + pad, ew = ex1 - ex0;
-    int *widths = NULL;
-    if (!st && c->bw > 0) {
-        widths = malloc((size_t)ew * (size_t)c->bh * sizeof(int));
-        e1 = ss_image_create_uninit(ew, c->bh, 1, err);
-        e2 = e1 ? ss_image_create_uninit(ew, c->bh, 1, err) : NULL;
-        if (!e2 || !widths) {
-            st = widths ? err->code : ss_error_set(err, SS_ERR_NOMEM, "out of memory");
-        } else {
-            for (int y = 0; y < c->bh; y++)
-                memcpy(ss_image_px(e2, 0, y), ss_image_px(c->w->mask, ex0, c->by + y),
-                       (size_t)ew * sizeof(float));
-            ss_erosion_widths_rect(c->n, c->n, ex0, c->by, ew, c->bh, lo, hi1, c->s->seed,
-                                   ST_ERODE1, widths);
-            ss_erode(e2, widths, e1);
-            ss_erosion_widths_rect(c->n, c->n, ex0, c->by, ew, c->bh, lo, hi2, c->s->seed,
-                                   ST_ERODE2, widths);
-            ss_erode(e1, widths, e2);
+    if (!st) st = look_create(c, &l, err);
+    if (st) {
+        ss_image_free(scrape);
+        return st;
+    }
+    const ss_abrasion_palette *P = c->P;
+    FOR_REGION(c) {
+        where w = locate_px(c, &l, i);
+        if (w.s <= 0.0f) {
+            if (w.glow > 0.0f) glow_color(c, i, w.glow, 1.0f, out->color->data + i * 3);
+            continue;
         }
+        float sc = scrape->data[box_index_clamped(c, i)];
+        float m = lower_mod(c, i), dots = capillary_dots(&l, w.r), bed[3];
+        float bl =
+            0.55f * smooth01(0.55f, 0.85f, l.bleed->data[w.r]) + 0.25f * smooth01(0.55f, 0.8f, sc);
+        bl = clampf(bl, 0.0f, 0.7f);
+        for (int k = 0; k < 3; k++) {
+            float v = P->bed[k] * m;
+            v += (P->capillary[k] - v) * (0.25f + 0.45f * dots);
+            bed[k] = v + (P->blood[k] - v) * bl;
+        }
+        put_px(c, i, &w, 1.0f, bed, 0.55f + 0.4f * sc,
+               0.5f - WOUND_DEPTH + SCRAPE_RELIEF * (sc - 0.5f) + 0.008f * (dots - 0.5f), out);
     }
-    if (!st) {
-#pragma omp parallel for schedule(static)
-        for (int y = c->ry; y < c->ry + c->rh; y++)
-            for (size_t i = (size_t)y * (size_t)c->n + (size_t)c->rx, e = i + (size_t)c->rw; i < e;
-                 i++) {
-                if (c->w->mask->data[i] <= 0.5f) {
-                    outside_glow(c, i, out);
-                    continue;
-                }
-                float rgb[3];
-                float sc = scrape->data[box_index(c, c->bx, c->by, c->bw, i)];
-                int bed = e2->data[box_index(c, ex0, c->by, ew, i)] > 0.5f;
-                if (bed) {
-                    /* Inside: lower skin multiplied by the red (§4.3.2). */
-                    const float *lo_s = c->skin->lower_srgb->data + i * 3;
-                    for (int k = 0; k < 3; k++) rgb[k] = lo_s[k] * GLOW_RED[k];
-                } else {
-                    /* The edge of half scraped-off skin. */
-                    const float *up = c->skin->upper_srgb->data + i * 3;
-                    for (int k = 0; k < 3; k++) rgb[k] = up[k] * EDGE_GREY;
-                }
-                out->reflection->data[i] = sc;
-                out->height->data[i] = bed ? 0.5f - WOUND_DEPTH + SCRAPE_RELIEF * (sc - 0.5f)
-                                           : 0.5f - 0.5f * WOUND_DEPTH;
-                put_color(c, out->color->data + i * 3, rgb);
-            }
-    }
+    look_free(&l);
     ss_image_free(scrape);
-    ss_image_free(e1);
-    ss_image_free(e2);
-    free(widths);
-    return st;
+    return SS_OK;
 }
 
 static ss_status render_scab_forming(const ctx *c, ss_texture_set *out, ss_error *err) {
+    /* §4.3.3: the bed glazed with serous exudate that turns to yellow fibrin
+     * in patches (the seed's Eq. 4.5 mix, its low noise as the fibrin
+     * weight), dark-red speckles of drying blood (its Eq. 4.6 speckles),
+     * drying, so less shiny where fibrin has set; the glow fades. */
     ss_image *low = NULL, *speck = NULL, *scrape = NULL;
-    /* Bottom layer: 5 octaves, 0.85 persistence, 0.54 bias, 0.21 gain. */
+    look l;
     ss_status st = noise(c, 5, 0.85f, 0.54f, 0.21f, 1.0f, ST_SCABFORM_LOW, &low, err);
-    /* Speckles: 5 octaves, 0.48 persistence, 0.16 bias, 0.15 gain. */
     if (!st) st = noise(c, 5, 0.48f, 0.16f, 0.15f, 1.0f, ST_SCABFORM_SPECKLE, &speck, err);
-    /* The scrape lines stay visible in the reflection while the bed dries. */
     if (!st) st = noise(c, 5, 0.09f, 0.5f, 0.43f, 64.0f, ST_SCRAPE, &scrape, err);
-    if (!st) {
-#pragma omp parallel for schedule(static)
-        for (int y = c->ry; y < c->ry + c->rh; y++)
-            for (size_t i = (size_t)y * (size_t)c->n + (size_t)c->rx, e = i + (size_t)c->rw; i < e;
-                 i++) {
-                if (c->w->mask->data[i] <= 0.5f) {
-                    outside_glow(c, i, out);
-                    continue;
-                }
-                size_t b = box_index(c, c->bx, c->by, c->bw, i);
-                const float *lo_s = c->skin->lower_srgb->data + i * 3;
-                const float *up = c->skin->upper_srgb->data + i * 3;
-                float ln = low->data[b], lower_wound[3], sp[3], rgb[3];
-                /* Eq. 4.5 */
-                for (int k = 0; k < 3; k++) lower_wound[k] = lo_s[k] * ln + up[k] * (1.0f - ln);
-                /* Eq. 4.6: speckle colour = noise x (0.88, 0.20, 0.22), weighted by its red. */
-                for (int k = 0; k < 3; k++) sp[k] = speck->data[b] * SPECKLE_RED[k];
-                for (int k = 0; k < 3; k++)
-                    rgb[k] = sp[k] * sp[0] + lower_wound[k] * (1.0f - sp[0]);
-                out->reflection->data[i] = 0.7f * scrape->data[b];
-                /* The redder parts are carved deeper (§4.3.3). */
-                out->height->data[i] = 0.5f - WOUND_DEPTH * (0.5f + ln) - WOUND_DEPTH * sp[0];
-                put_color(c, out->color->data + i * 3, rgb);
-            }
+    if (!st) st = look_create(c, &l, err);
+    if (st) {
+        ss_image_free(low);
+        ss_image_free(speck);
+        ss_image_free(scrape);
+        return st;
     }
+    const ss_abrasion_palette *P = c->P;
+    FOR_REGION(c) {
+        where w = locate_px(c, &l, i);
+        if (w.s <= 0.0f) {
+            if (w.glow > 0.0f) glow_color(c, i, w.glow, 0.8f, out->color->data + i * 3);
+            continue;
+        }
+        size_t b = box_index_clamped(c, i);
+        float m = lower_mod(c, i), dots = capillary_dots(&l, w.r), bed[3];
+        float fib = 0.45f * smooth01(0.5f, 0.85f, 0.5f * low->data[b] + 0.5f * l.patch->data[w.r]);
+        float sp = smooth01(0.25f, 0.6f, speck->data[b]) * 0.8f;
+        for (int k = 0; k < 3; k++) {
+            float v = P->bed[k] * m;
+            v += (P->capillary[k] - v) * (0.2f + 0.4f * dots);
+            v += (P->serous[k] - v) * 0.35f;
+            v += (P->fibrin[k] - v) * fib;
+            float dried = 0.5f * (P->capillary[k] + P->crust_dark[k]);
+            bed[k] = v + (dried - v) * sp;
+        }
+        put_px(c, i, &w, 0.8f, bed, 0.75f * (1.0f - 0.6f * fib) * (0.6f + 0.4f * scrape->data[b]),
+               0.5f - WOUND_DEPTH * (0.5f + low->data[b]) - WOUND_DEPTH * sp + 0.02f * fib, out);
+    }
+    look_free(&l);
     ss_image_free(low);
     ss_image_free(speck);
     ss_image_free(scrape);
-    return st;
+    return SS_OK;
 }
 
 static ss_status render_scab(const ctx *c, ss_texture_set *out, ss_error *err) {
+    /* §4.3.4: the crust. Its height = mask noise x middle noise, as the seed;
+     * colour from a thin serous (amber) to a thick dark dried-blood crust
+     * with the height; within 100 reference px of the edge a redder, thinner
+     * crust where the red-detail noise is high (the seed's inward red
+     * gradient); matte (reflection noise x 0.4); the glow fades. */
     ss_image *mask_n = NULL, *mid = NULL, *redn = NULL, *refl = NULL;
-    /* Height = mask noise (7, 1.0, 0.44, 0.02) x middle noise (5, 0.54, 0.3, 0.69). */
+    look l;
     ss_status st = noise(c, 7, 1.0f, 0.44f, 0.02f, 1.0f, ST_SCAB_MASK, &mask_n, err);
     if (!st) st = noise(c, 5, 0.54f, 0.3f, 0.69f, 1.0f, ST_SCAB_MIDDLE, &mid, err);
-    /* Red details mask: 5 octaves, 0.33 persistence, 0.60 bias, 0.59 gain. */
     if (!st) st = noise(c, 5, 0.33f, 0.60f, 0.59f, 1.0f, ST_SCAB_RED, &redn, err);
-    /* Reflection: 10 octaves, 1.0 persistence, 0.25 bias, 0.95 gain. */
     if (!st) st = noise(c, 10, 1.0f, 0.25f, 0.95f, 1.0f, ST_SCAB_REFLECT, &refl, err);
-    if (!st) {
-#pragma omp parallel for schedule(static)
-        for (int y = c->ry; y < c->ry + c->rh; y++)
-            for (size_t i = (size_t)y * (size_t)c->n + (size_t)c->rx, e = i + (size_t)c->rw; i < e;
-                 i++) {
-                if (c->w->mask->data[i] <= 0.5f) {
-                    outside_glow(c, i, out);
-                    continue;
-                }
-                size_t b = box_index(c, c->bx, c->by, c->bw, i);
-                float h = mask_n->data[b] * mid->data[b];
-                float in_col[3], grad[3] = {0, 0, 0}, rgb[3];
-                /* Higher crust is the lighter, yellowish colour (docs/abrasion.md). */
-                lerp3(SCAB_DARK, SCAB_LIGHT, h, in_col);
-                /* Inward gradient, thickness 100, from (0.5, 0.04, 0.03) to
-                 * black, masked by the red-detail noise. */
-                float t = ss_gradient_weight(1, c->w->dist->data[i], gradient_px(c), 1);
-                if (t >= 0.0f) {
-                    static const float black[3] = {0, 0, 0};
-                    lerp3(SCAB_RED, black, t, grad);
-                    for (int k = 0; k < 3; k++) grad[k] *= redn->data[b];
-                }
-                /* Eq. 4.7 */
-                for (int k = 0; k < 3; k++) rgb[k] = in_col[k] + grad[k] * (1.0f - in_col[k]);
-                out->reflection->data[i] = refl->data[b];
-                out->height->data[i] = 0.5f + 0.5f * h;
-                put_color(c, out->color->data + i * 3, rgb);
-            }
+    if (!st) st = look_create(c, &l, err);
+    if (st) {
+        ss_image_free(mask_n);
+        ss_image_free(mid);
+        ss_image_free(redn);
+        ss_image_free(refl);
+        return st;
     }
+    const ss_abrasion_palette *P = c->P;
+    FOR_REGION(c) {
+        where w = locate_px(c, &l, i);
+        if (w.s <= 0.0f) {
+            if (w.glow > 0.0f) glow_color(c, i, w.glow, 0.5f, out->color->data + i * 3);
+            continue;
+        }
+        size_t b = box_index_clamped(c, i);
+        float h = mask_n->data[b] * mid->data[b];
+        /* the thick parts are the dark crust, the thin ones amber */
+        float thick = clampf(0.55f + 1.2f * h, 0.0f, 1.0f), crust[3];
+        float edge = 1.0f - smooth01(0.0f, gradient_px(c), w.s);
+        float red = edge * redn->data[b] * 0.6f;
+        for (int k = 0; k < 3; k++) {
+            float v = P->crust_light[k] + (P->crust_dark[k] - P->crust_light[k]) * thick;
+            crust[k] = v + (0.5f * (P->capillary[k] + P->crust_dark[k]) - v) * red;
+        }
+        put_px(c, i, &w, 0.5f, crust, 0.4f * refl->data[b], 0.5f + 0.5f * h, out);
+    }
+    look_free(&l);
     ss_image_free(mask_n);
     ss_image_free(mid);
     ss_image_free(redn);
     ss_image_free(refl);
-    return st;
+    return SS_OK;
 }
 
-/* Alg. 4.4 for one pixel (display-space colour); returns 0 for pixels
- * outside the wound, which stay healthy skin. */
-static inline int maturation_color(const ctx *c, size_t i, double position, float *rgb) {
-    const float *skin = c->skin->upper_srgb->data + i * 3;
-    int l = c->w->label[i];
-    if (c->w->mask->data[i] <= 0.5f || l < 0) return 0;
-    double closing = c->w->closing_px[l];
-    double max_outer = closing * 0.5; /* Eq. 4.8 */
-    double outer = max_outer * position;
-    double inner = outer + max_outer * c->w->inner_ratio[l];
-    double d = c->w->dist->data[i];
-    if (d <= outer) {
-        memcpy(rgb, skin, 3 * sizeof(float));
-    } else if (d <= inner) {
-        float t = (float)((d - outer) / (inner - outer));
-        lerp3(skin, GLOW_RED, t, rgb);
-    } else {
-        double span = closing * 0.5 - inner;
-        float t = span > 0 ? (float)((d - inner) / span) : 1.0f;
-        lerp3(GLOW_RED, WOUND_WHITE, t < 0 ? 0 : t > 1 ? 1 : t, rgb);
+/* Maturation at a position (Alg. 4.4's healed border sweeping inward by up to
+ * half the closing distance, its inner border rand(0.4, 0.8) of that further
+ * in), on the smoothed distance, so its fronts are rounded and nested:
+ *   healed (d <= outer): the skin under new epithelium, pink while young
+ *     (fading as exp(-age / 120 d), age the days since that ring healed),
+ *     lightening (1 - exp(-age / 60 d)) and turning into a faint pale scar
+ *     after the first month (1 - exp(-(age - 30 d) / 150 d)), with
+ *     post-inflammatory
+ *     hyperpigmentation rising over the first weeks and fading over months,
+ *     as strong as the skin type's clinical rate (palette);
+ *   front (outer < d <= inner): new epithelium at the front, red
+ *     granulation tissue behind it;
+ *   core: moist granulation tissue with fibrin.
+ * Ages: span_days is the maturation phase's length, after_days the time past
+ * its end (the scar keeps maturing). */
+#define SCAR_RED_DAYS 120.0f   /* fading of the young scar's pink */
+#define SCAR_PALE_DELAY 30.0f  /* days before the scar starts to pale */
+#define SCAR_PALE_DAYS 150.0f  /* its paling */
+#define SCAR_BRIGHT_DAYS 60.0f /* its lightening (dense collagen, less melanin) */
+#define SCAR_WEIGHT 0.6f       /* how far a mature scar goes to the palette's scar */
+#define PIH_RISE_DAYS 14.0f
+#define PIH_FADE_DAYS 240.0f
+static inline int maturation_px(const ctx *c, const look *l, size_t i, double position,
+                                double span_days, double after_days, float *rgb, float *refl) {
+    const ss_abrasion_palette *P = c->P;
+    float d = c->w->smooth->data[i];
+    where w = locate_px(c, l, i);
+    float s = d + (w.s - (c->w->mask->data[i] > 0.5f ? c->w->dist->data[i]
+                                                     : -c->w->dist->data[i])); /* + jitter */
+    if (s <= -c->rim_px) return 0;
+    int lab = c->w->label[i];
+    double closing = c->w->closing_px[lab >= 0 ? lab : 0];
+    double ratio = c->w->inner_ratio[lab >= 0 ? lab : 0];
+    double max_outer = closing * 0.5, outer = max_outer * position;
+    double inner = outer + max_outer * ratio;
+    const float *up = c->skin->upper->data + i * 3;
+    float healed[3], heal_t = 0, m = lower_mod(c, i);
+    /* days since this ring healed */
+    double pos_h = s > 0 ? s / max_outer : 0;
+    double age = (position - pos_h) * span_days + after_days;
+    if (age < 0) age = 0;
+    /* the young scar's redness fades over months while its pallor comes in
+     * after the first month (two effects, not one lerp: pink to pale through
+     * the skin's own colour would hide the scar around day 90) */
+    float red = expf(-(float)age / SCAR_RED_DAYS);
+    float pale = 1.0f - expf(-fmaxf(0.0f, (float)age - SCAR_PALE_DELAY) / SCAR_PALE_DAYS);
+    float bright_t = 1.0f - expf(-(float)age / SCAR_BRIGHT_DAYS);
+    float mat = 1.0f - red;
+    /* the scar's multiplier split into its brightness (which comes in first)
+     * and its chromaticity (the loss of redness, with the pallor), so that on
+     * the way from pink to pale the scar is lighter than the skin, never the
+     * skin's own colour */
+    float sb = lum(P->scar) > 1e-6f ? lum(P->scar) : 1.0f;
+    float pih = c->P->pih_prevalence * (1.0f - expf(-(float)age / PIH_RISE_DAYS)) *
+                expf(-(float)age / PIH_FADE_DAYS);
+    for (int k = 0; k < 3; k++) {
+        float f = (1.0f + (P->new_epithelium[k] - 1.0f) * red) *
+                  (1.0f + (sb - 1.0f) * SCAR_WEIGHT * bright_t) *
+                  (1.0f + (P->scar[k] / sb - 1.0f) * SCAR_WEIGHT * pale);
+        f *= 1.0f + (P->hyperpigment[k] - 1.0f) * pih;
+        healed[k] = up[k] * f;
     }
+    float r = 0.32f - 0.05f * mat; /* young epithelium is smooth and shiny */
+    if (s > outer) {               /* the front and the open core */
+        double t = inner > outer ? (s - outer) / (inner - outer) : 1.0;
+        heal_t = smooth01(0.0f, 1.0f, (float)t);
+        double span = closing * 0.5 - inner;
+        float core = span > 0 ? clampf((float)((s - inner) / span), 0.0f, 1.0f) : 1.0f;
+        core = s > inner ? core : 0.0f;
+        float dots = capillary_dots(l, w.r);
+        float fib = 0.35f * core * smooth01(0.45f, 0.75f, l->patch->data[w.r]);
+        for (int k = 0; k < 3; k++) {
+            float g = P->granulation[k] * m;
+            g += (P->capillary[k] - g) * 0.3f * dots;
+            g += (P->fibrin[k] - g) * fib;
+            healed[k] += (g - healed[k]) * heal_t;
+        }
+        r += (0.75f - r) * heal_t;
+    }
+    /* the scar's edge: soft over the rim */
+    float in = smooth01(-c->rim_px, c->rim_px, s);
+    for (int k = 0; k < 3; k++) rgb[k] = up[k] + (healed[k] - up[k]) * in;
+    *refl = SKIN_REFLECTION + (r - SKIN_REFLECTION) * in;
     return 1;
+}
+
+static ss_status maturation_region(const ctx *c, double position, double span_days,
+                                   double after_days, ss_image *color, ss_image *reflection,
+                                   ss_error *err) {
+    look l;
+    ss_status st = look_create(c, &l, err);
+    if (st) return st;
+    FOR_REGION(c) {
+        float rgb[3], r;
+        if (!maturation_px(c, &l, i, position, span_days, after_days, rgb, &r)) continue;
+        for (int k = 0; k < 3; k++) color->data[i * 3 + k] = clampf(rgb[k], 0.0f, 1.0f);
+        if (reflection) reflection->data[i] = r;
+    }
+    look_free(&l);
+    return SS_OK;
 }
 
 static ss_status render_maturation(const ctx *c, double position, ss_texture_set *out,
                                    ss_error *err) {
-    (void)err;
-    /* Reflection, height and normal stay those of healthy skin. */
-#pragma omp parallel for schedule(static)
-    for (int y = c->by; y < c->by + c->bh; y++)
-        for (size_t i = (size_t)y * (size_t)c->n + (size_t)c->bx, e = i + (size_t)c->bw; i < e;
-             i++) {
-            float rgb[3];
-            if (maturation_color(c, i, position, rgb)) put_color(c, out->color->data + i * 3, rgb);
-        }
-    return SS_OK;
+    /* The height is flat, a hair below the skin inside (a flat scar). */
+    ss_status st = maturation_region(c, position, DEFAULT_MATURATION_DAYS, 0.0, out->color,
+                                     out->reflection, err);
+    FOR_REGION(c) {
+        float d = c->w->smooth->data[i];
+        out->height->data[i] = 0.5f - 0.01f * smooth01(-c->rim_px, c->rim_px, d);
+    }
+    return st;
 }
 
 static ss_status check_inputs(const ss_wound_shape *w, const ss_base_skin *skin,
@@ -497,21 +661,24 @@ ss_status ss_abrasion_render_phase(ss_phase phase, double position, const ss_wou
     return st;
 }
 
+ss_status ss_abrasion_maturation_at(const ss_wound_shape *w, const ss_base_skin *skin,
+                                    const ss_abrasion_settings *s, double position,
+                                    double span_days, double after_days, ss_image *color,
+                                    ss_image *reflection, ss_error *err) {
+    if (!(position >= 0.0 && position <= 1.0))
+        return ss_error_set(err, SS_ERR_INPUT, "maturation position %g is outside 0..1", position);
+    if (!(span_days >= 0) || !(after_days >= 0))
+        return ss_error_set(err, SS_ERR_INPUT, "maturation: days must be >= 0");
+    ctx c;
+    ctx_init(&c, w, skin, s);
+    return maturation_region(&c, position, span_days, after_days, color, reflection, err);
+}
+
 ss_status ss_abrasion_maturation_color(const ss_wound_shape *w, const ss_base_skin *skin,
                                        const ss_abrasion_settings *s, double position,
                                        ss_image *color, ss_error *err) {
-    if (!(position >= 0.0 && position <= 1.0))
-        return ss_error_set(err, SS_ERR_INPUT, "maturation position %g is outside 0..1", position);
-    ctx c;
-    ctx_init(&c, w, skin, s);
-#pragma omp parallel for schedule(static)
-    for (int y = c.by; y < c.by + c.bh; y++)
-        for (int x = c.bx; x < c.bx + c.bw; x++) {
-            size_t i = (size_t)y * (size_t)c.n + (size_t)x;
-            float rgb[3];
-            if (maturation_color(&c, i, position, rgb)) put_color(&c, color->data + i * 3, rgb);
-        }
-    return SS_OK;
+    return ss_abrasion_maturation_at(w, skin, s, position, DEFAULT_MATURATION_DAYS, 0.0, color,
+                                     NULL, err);
 }
 
 ss_status ss_reflection_to_metal_rough(const ss_image *reflection, ss_image *mr, ss_error *err) {

@@ -14,6 +14,7 @@ void ss_wound_shape_free(ss_wound_shape *w) {
     if (!w) return;
     ss_image_free(w->mask);
     ss_image_free(w->dist);
+    ss_image_free(w->smooth);
     free(w->label);
     free(w->closing_px);
     free(w->inner_ratio);
@@ -57,6 +58,61 @@ static void find_box(ss_wound_shape *w) {
     w->box_y = y1 >= 0 ? y0 : 0;
     w->box_w = x1 >= 0 ? x1 - x0 + 1 : 0;
     w->box_h = y1 >= 0 ? y1 - y0 + 1 : 0;
+}
+
+/* One pass of a running-sum box filter of radius r along rows (dir 0) or
+ * columns (dir 1) of the w x h block at (x0, y0) of src into dst, clamped at
+ * the block's edges. */
+static void box_pass(const float *src, float *dst, int n, int x0, int y0, int w, int h, int r,
+                     int dir) {
+    int lines = dir ? w : h, len = dir ? h : w;
+#pragma omp parallel for schedule(static)
+    for (int l = 0; l < lines; l++) {
+        size_t step = dir ? (size_t)n : 1;
+        size_t base = dir ? (size_t)y0 * (size_t)n + (size_t)(x0 + l)
+                          : (size_t)(y0 + l) * (size_t)n + (size_t)x0;
+        double acc = 0;
+        for (int k = -r; k <= r; k++) {
+            int q = k < 0 ? 0 : k >= len ? len - 1 : k;
+            acc += src[base + (size_t)q * step];
+        }
+        for (int k = 0; k < len; k++) {
+            dst[base + (size_t)k * step] = (float)(acc / (2 * r + 1));
+            int out = k - r < 0 ? 0 : k - r, in = k + r + 1 >= len ? len - 1 : k + r + 1;
+            acc += src[base + (size_t)in * step] - src[base + (size_t)out * step];
+        }
+    }
+}
+
+/* The smoothed signed distance (ss_wound_shape.smooth): three box passes each
+ * way (close to a Gaussian) of a tenth of the largest closing distance, over
+ * the box grown by the glow, so the fronts of maturation are rounded. */
+static ss_status smooth_distance(ss_wound_shape *w, ss_error *err) {
+    int n = w->size;
+    w->smooth = ss_image_create(n, n, 1, err);
+    ss_image *tmp = w->smooth ? ss_image_create(n, n, 1, err) : NULL;
+    if (!tmp) return err->code;
+    double cl = 1;
+    for (int i = 0; i < w->nwounds; i++) cl = fmax(cl, w->closing_px[i]);
+    int r = (int)lround(0.1 * cl / sqrt(3.0)); /* three passes: sd ~ r */
+    int g = (int)ceil(SS_ABRASION_MAX_GRADIENT_REF_PX * n / 2048.0) + 2;
+    int x0 = w->box_x - g < 0 ? 0 : w->box_x - g, y0 = w->box_y - g < 0 ? 0 : w->box_y - g;
+    int x1 = w->box_x + w->box_w + g > n ? n : w->box_x + w->box_w + g;
+    int y1 = w->box_y + w->box_h + g > n ? n : w->box_y + w->box_h + g;
+    if (w->box_w == 0) x1 = x0, y1 = y0;
+    for (int y = y0; y < y1; y++)
+        for (int x = x0; x < x1; x++) {
+            size_t i = (size_t)y * (size_t)n + (size_t)x;
+            float d = w->dist->data[i];
+            w->smooth->data[i] = w->mask->data[i] > 0.5f ? d : -d;
+        }
+    if (r >= 1 && x1 > x0 && y1 > y0)
+        for (int pass = 0; pass < 3; pass++) {
+            box_pass(w->smooth->data, tmp->data, n, x0, y0, x1 - x0, y1 - y0, r, 0);
+            box_pass(tmp->data, w->smooth->data, n, x0, y0, x1 - x0, y1 - y0, r, 1);
+        }
+    ss_image_free(tmp);
+    return SS_OK;
 }
 
 /* Eq. 4.8's rand(0.4, 0.8), one draw per wound from the run's seed. */
@@ -121,6 +177,10 @@ ss_status ss_wound_shape_from_strokes(const ss_stroke_set *s, ss_hull_kind kind,
     }
     draw_inner_ratios(w, seed);
     find_box(w);
+    if ((st = smooth_distance(w, err))) {
+        ss_wound_shape_free(w);
+        return st;
+    }
     *out = w;
     return SS_OK;
 }
@@ -272,6 +332,10 @@ ss_status ss_wound_shape_from_mask(const ss_image *mask_in, int size, uint64_t s
     }
     draw_inner_ratios(w, seed);
     find_box(w);
+    if ((st = smooth_distance(w, err))) {
+        ss_wound_shape_free(w);
+        return st;
+    }
     *out = w;
     return SS_OK;
 }

@@ -15,7 +15,9 @@ void ss_base_skin_free(ss_base_skin *b) {
     ss_image_free(b->lower);
     ss_image_free(b->upper_srgb);
     ss_image_free(b->lower_srgb);
+    free(b->palette);
     b->upper = b->lower = b->upper_srgb = b->lower_srgb = NULL;
+    b->palette = NULL;
 }
 
 enum { STREAM_SKIN_BLOTCH = 0x51, STREAM_SKIN_GRAIN, STREAM_DERMIS_BLOTCH, STREAM_DERMIS_GRAIN };
@@ -69,6 +71,7 @@ static ss_status make_skin(int size, uint64_t seed, const float srgb[3], float b
 ss_status ss_base_skin_create(const ss_image *upper_in, const ss_image *lower_in, int size,
                               uint64_t seed, ss_base_skin *out, ss_error *err) {
     out->upper = out->lower = out->upper_srgb = out->lower_srgb = NULL;
+    out->palette = NULL;
     static const float skin_srgb[3] = {0.86f, 0.66f, 0.55f};   /* light skin */
     static const float skin_tint[3] = {0.6f, 1.0f, 1.1f};      /* blotches redden */
     static const float dermis_srgb[3] = {0.78f, 0.36f, 0.33f}; /* exposed dermis */
@@ -121,5 +124,9 @@ ss_status ss_base_skin_create(const ss_image *upper_in, const ss_image *lower_in
     size_t n = (size_t)size * (size_t)size * 3;
     ss_srgb_encode_array(out->upper->data, out->upper_srgb->data, n);
     ss_srgb_encode_array(out->lower->data, out->lower_srgb->data, n);
-    return SS_OK;
+    out->palette = malloc(sizeof *out->palette);
+    ss_status st2 = out->palette ? ss_abrasion_palette_compute(out->upper, out->palette, err)
+                                 : ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    if (st2) ss_base_skin_free(out);
+    return st2;
 }

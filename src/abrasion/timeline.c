@@ -255,8 +255,11 @@ ss_status ss_abrasion_frame(const ss_abrasion *a, double day, ss_texture_set *ou
     const ss_texture_set *kb = &a->phase[a->timeline.key[p.key_b].phase];
     if (p.in_maturation) {
         copy_set(ka, out, 1);
-        return ss_abrasion_maturation_color(a->shape, a->skin, &a->settings, p.maturation_pos,
-                                            out->color, err);
+        const ss_timeline *tl = &a->timeline;
+        double start = tl->key[tl->nkeys - 1].day, span = tl->end_day - start;
+        return ss_abrasion_maturation_at(
+            a->shape, a->skin, &a->settings, p.maturation_pos, span > 0 ? span : 0,
+            day > tl->end_day ? day - tl->end_day : 0, out->color, out->reflection, err);
     }
     if (ka == kb || p.weight <= 0.0) {
         copy_set(ka, out, 1);

@@ -56,6 +56,7 @@ typedef struct job {
     double side_mm;
     double t_heal, t_render, t_write, t_setup, t_compare;
     const ss_mesh *mesh; /* on a real body (--mesh): the skin mesh, textures in its UVs */
+    char warning[512];   /* set when the inputs were matched (e.g. the skin's world size) */
     ss_image *columns;   /* then: the tissue column under every texel */
 } job;
 
@@ -101,11 +102,66 @@ static ss_status check_days(const ss_wound_make_config *c, ss_error *err) {
     return SS_OK;
 }
 
+/* The world size (cm) a `skinsim skin` folder's bio map covers, from the
+ * skin.json next to it; 0 when there is none (a bare EXR). */
+static double skin_world_cm(const char *path) {
+    char file[4200];
+    const char *slash = strrchr(path, '/');
+    size_t n = strlen(path);
+    if (n > 4 && !strcmp(path + n - 4, ".exr"))
+        snprintf(file, sizeof file, "%.*s/skin.json", slash ? (int)(slash - path) : 1,
+                 slash ? path : ".");
+    else
+        snprintf(file, sizeof file, "%s/skin.json", path);
+    ss_error e;
+    char *text = ss_read_file(file, NULL, &e);
+    if (!text) return 0;
+    cJSON *root = cJSON_Parse(text);
+    free(text);
+    const cJSON *w = root ? cJSON_GetObjectItemCaseSensitive(root, "world_size_cm") : NULL;
+    double v = cJSON_IsNumber(w) && w->valuedouble > 0 ? w->valuedouble : 0;
+    cJSON_Delete(root);
+    return v;
+}
+
+/* A skin of another world size than the texture's (make demo's 5 cm skin
+ * under a 3 cm block) would stretch its features: the part of it that the
+ * texture covers is cut out (the middle, wrapping around: skin maps tile),
+ * so freckles and follicles keep their size; j->warning says so. */
+static ss_status match_skin(job *j, double skin_cm, ss_error *err) {
+    double tex_cm = j->side_mm / 10.0;
+    if (!(skin_cm > 0) || fabs(skin_cm - tex_cm) <= 0.01 * tex_cm) return SS_OK;
+    const ss_image *b = j->skin;
+    int w = (int)lround(b->width * tex_cm / skin_cm), h = (int)lround(b->height * tex_cm / skin_cm);
+    if (w < 4) w = 4;
+    if (h < 4) h = 4;
+    ss_image *m = ss_image_create(w, h, b->channels, err);
+    if (!m) return err->code;
+    int x0 = (b->width - w) / 2, y0 = (b->height - h) / 2;
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            int sx = ((x0 + x) % b->width + b->width) % b->width;
+            int sy = ((y0 + y) % b->height + b->height) % b->height;
+            memcpy(m->data + ((size_t)y * w + x) * b->channels,
+                   b->data + ((size_t)sy * b->width + sx) * b->channels,
+                   sizeof(float) * (size_t)b->channels);
+        }
+    snprintf(j->warning, sizeof j->warning,
+             "--skin %s covers %g cm but the texture covers %g cm: using %s %g cm of it "
+             "(features keep their size)",
+             j->c->skin_path, skin_cm, tex_cm, tex_cm < skin_cm ? "the middle" : "a tiling to",
+             tex_cm);
+    ss_image_free(j->skin);
+    j->skin = m;
+    return SS_OK;
+}
+
 static ss_status read_skin(job *j, ss_error *err) {
     const ss_wound_make_config *c = j->c;
     j->skin = c->skin_path ? ss_wound_skin_read(c->skin_path, err)
                            : ss_wound_default_skin(c->size, j->side_mm, c->seed, err);
-    return j->skin ? SS_OK : (err->code ? err->code : SS_ERR_INPUT);
+    if (!j->skin) return err->code ? err->code : SS_ERR_INPUT;
+    return c->skin_path ? match_skin(j, skin_world_cm(c->skin_path), err) : SS_OK;
 }
 
 /* The built-in wound of `skinsim wound` when none is given: an irregular
@@ -281,17 +337,39 @@ static ss_status declare_outputs(const ss_wound_make_config *c, ss_outputs *outs
 
 /* ---- writing --------------------------------------------------------------------------- */
 
+/* The height PNG has skinsim skin's encoding: 16-bit, 0..1 spans the frame's
+ * height_min_mm..height_max_mm (written next to the file names in
+ * timeline.json), here the frame's own range widened to at least
+ * +-height_range, so it never clips and a flat frame is mid-grey. */
+ss_status ss_wound_height_range(const ss_image *h, double range_mm, double *lo, double *hi) {
+    double mn = -range_mm, mx = range_mm;
+    size_t n = (size_t)h->width * (size_t)h->height;
+    for (size_t i = 0; i < n; i++) {
+        double v = h->data[i];
+        if (!isfinite(v)) return SS_ERR_RUNTIME;
+        mn = v < mn ? v : mn;
+        mx = v > mx ? v : mx;
+    }
+    *lo = mn;
+    *hi = mx;
+    return SS_OK;
+}
+
 static ss_status write_frame(const char *dir, const char *stem, const ss_wound_textures *t,
-                             double range_mm, int exr, cJSON *files, ss_error *err) {
+                             double range_mm, int exr, cJSON *frame, cJSON *files, ss_error *err) {
     static const char *names[4] = {"base_color", "roughness", "height", "normal"};
     static const int bits[4] = {8, 8, 16, 8};
     ss_image *h01 = ss_image_create(t->height->width, t->height->height, 1, err);
     if (!h01) return err->code;
     size_t n = (size_t)t->height->width * (size_t)t->height->height;
-    for (size_t i = 0; i < n; i++) {
-        float v = 0.5f + 0.5f * (float)(t->height->data[i] / range_mm);
-        h01->data[i] = v < 0 ? 0 : v > 1 ? 1 : v;
+    double lo, hi;
+    if (ss_wound_height_range(t->height, range_mm, &lo, &hi)) {
+        ss_image_free(h01);
+        return ss_error_set(err, SS_ERR_RUNTIME, "%s: the height map is not finite", stem);
     }
+    for (size_t i = 0; i < n; i++) h01->data[i] = (float)((t->height->data[i] - lo) / (hi - lo));
+    cJSON_AddNumberToObject(frame, "height_min_mm", lo);
+    cJSON_AddNumberToObject(frame, "height_max_mm", hi);
     const ss_image *imgs[4] = {t->base_color, t->roughness, h01, t->normal};
     const ss_image *raw[4] = {t->base_color, t->roughness, t->height, t->normal};
     ss_error errs[8];
@@ -499,7 +577,7 @@ static ss_status run_days(job *j, const char *dir, cJSON *frames, ss_image **thu
         cJSON_AddNumberToObject(f, "day", c->days[i]);
         cJSON_AddStringToObject(f, "phase", "simulated");
         cJSON *files = cJSON_AddObjectToObject(f, "files");
-        if (!st) st = write_frame(dir, stem, &tex, range, c->exr, files, err);
+        if (!st) st = write_frame(dir, stem, &tex, range, c->exr, f, files, err);
         if (!st) st = write_gltf(dir, stem, &tex, j->side_mm, j->mesh, files, err);
         int ts = c->size < 512 ? c->size : 512;
         if (!st && !(thumbs[i] = ss_image_resize(tex.base_color, ts, ts, err))) st = err->code;
@@ -596,8 +674,13 @@ static cJSON *summary_base(const job *j) {
     cJSON_AddNumberToObject(s, "world_size_cm", j->side_mm / 10.0);
     cJSON_AddNumberToObject(s, "seed", (double)c->seed);
     cJSON_AddNumberToObject(s, "height_range_mm", j->recipe.v[SS_WR_HEIGHT_RANGE_MM]);
-    cJSON_AddStringToObject(s, "height_encoding", "0.5 + 0.5 * height_mm / height_range_mm");
+    cJSON_AddStringToObject(s, "height_encoding",
+                            "16-bit PNG, value v in 0..1: height_mm = height_min_mm + v * "
+                            "(height_max_mm - height_min_mm), per frame (as skinsim skin's "
+                            "height.png); the range covers at least +-height_range_mm");
     cJSON_AddStringToObject(s, "base_skin", c->skin_path ? c->skin_path : "forearm (built-in)");
+    cJSON *warn = cJSON_AddArrayToObject(s, "warnings");
+    if (j->warning[0]) cJSON_AddItemToArray(warn, cJSON_CreateString(j->warning));
     if (j->mesh) {
         cJSON_AddStringToObject(s, "skin_mesh", c->heal.skin_mesh);
         cJSON_AddStringToObject(s, "texture_space", "the mesh's UV layout");

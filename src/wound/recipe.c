@@ -36,7 +36,7 @@ static const struct {
     [SS_WR_NEW_EPIDERMIS] = {"new_epidermis", "1", 0.6, 0, 10},
     [SS_WR_SCAR_DENSITY_HI] = {"scar_density_hi", "1", 0.3, 1e-6, 1e3},
     [SS_WR_SCAR_BLOOD] = {"scar_blood", "1", 0.6, 0, 10},
-    [SS_WR_SCAR_WHITENING] = {"scar_whitening", "1", 0.15, 0, 1},
+    [SS_WR_SCAR_WHITENING] = {"scar_whitening", "1", 0.2, 0, 1},
     [SS_WR_SCAB_SCALE] = {"scab_scale", "1", 1, 0, 100},
     [SS_WR_SCAB_HB_FACTOR] = {"scab_hb_factor", "1", 3, 0, 20},
     [SS_WR_SCAB_MIN_DENSITY] = {"scab_min_density", "1", 0.5, 0.2, 0.8},
@@ -62,6 +62,11 @@ static const struct {
     [SS_WR_KELOID_MELANIN] = {"keloid_melanin", "1", 1.15, 0, 10},
     [SS_WR_KELOID_ROUGHNESS] = {"keloid_roughness", "1", 0.22, 0, 1},
     [SS_WR_SCAB_BILIRUBIN] = {"scab_bilirubin", "g/L", 1.5, 0, 100},
+    [SS_WR_PIH_GAIN] = {"pih_gain", "1", 5, 0, 10},
+    [SS_WR_PIH_DAYS] = {"pih_days", "day", 120, 0.01, 1e5},
+    [SS_WR_CRUST_DRY_DAYS] = {"crust_dry_days", "day", 2, 0.01, 1e5},
+    [SS_WR_CRUST_LIFT_MM] = {"crust_lift", "mm", 0.15, 0, 10},
+    [SS_WR_BED_TEXTURE] = {"bed_texture", "1", 1, 0, 10},
 };
 
 void ss_wound_recipe_default(ss_wound_recipe *r) {

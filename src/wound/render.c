@@ -28,7 +28,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "skinsim/abrasion.h"
 #include "skinsim/geom.h"
+#include "skinsim/optics.h"
 #include "skinsim/texture.h"
 #include "wound_internal.h"
 
@@ -52,6 +54,8 @@ struct ss_wound_renderer {
     ss_image *crack;   /* value noise at ~2.5 mm: its mid-level lines are the cracks */
     ss_image *warp[2]; /* value noise at ~1.2 mm: jitter of where the tissue maps are
                           sampled, so margins are ragged, not stepped with the voxels */
+    ss_image *cap;     /* value noise at ~0.35 mm: the bed's capillary loops */
+    double pih;        /* the skin type's rate of post-inflammatory hyperpigmentation */
     ss_wound_textures base;
     ss_image *columns; /* NULL: the flat block; else tissue-map coordinates per texel */
 };
@@ -155,6 +159,8 @@ ss_status ss_wound_renderer_create(const ss_wound_render_options *o, ss_wound_re
     if (!st) st = ss_wound__noise(o->size, o->side_mm, 2.0, 3, o->seed, 202, r->mottle, err);
     if (!st && !(r->crack = ss_image_create(o->size, o->size, 1, err))) st = err->code;
     if (!st) st = ss_wound__noise(o->size, o->side_mm, 2.5, 3, o->seed, 203, r->crack, err);
+    if (!st && !(r->cap = ss_image_create(o->size, o->size, 1, err))) st = err->code;
+    if (!st) st = ss_wound__noise(o->size, o->side_mm, 0.35, 1, o->seed, 206, r->cap, err);
     for (int k = 0; k < 2 && !st; k++) {
         if (!(r->warp[k] = ss_image_create(o->size, o->size, 1, err))) st = err->code;
         if (!st)
@@ -162,6 +168,16 @@ ss_status ss_wound_renderer_create(const ss_wound_render_options *o, ss_wound_re
                                  r->warp[k], err);
     }
     if (!st) st = render_base(r, err);
+    if (!st) { /* the skin type: typology angle of the base skin's mean colour */
+        size_t n = (size_t)o->size * (size_t)o->size;
+        double m[3] = {0, 0, 0}, lab[3], chroma, hue, ita;
+        for (size_t i = 0; i < n; i++)
+            for (int c = 0; c < 3; c++) m[c] += r->base.base_color->data[i * 3 + c];
+        for (int c = 0; c < 3; c++) m[c] /= (double)n;
+        ss_srgb_linear_to_lab(m, lab);
+        ss_lab_describe(lab, &chroma, &hue, &ita);
+        r->pih = ss_pih_prevalence(ita);
+    }
     if (st) {
         ss_wound_renderer_free(r);
         return st;
@@ -179,6 +195,7 @@ void ss_wound_renderer_free(ss_wound_renderer *r) {
     ss_image_free(r->crack);
     ss_image_free(r->warp[0]);
     ss_image_free(r->warp[1]);
+    ss_image_free(r->cap);
     ss_skin_lut_free(r->lut);
     ss_wound_textures_free(&r->base);
     free(r);
@@ -256,11 +273,11 @@ typedef struct texel_out {
 
 /* The three crust noises at a texel (0..1). */
 typedef struct crust_noise {
-    float thick, mottle, crack;
+    float thick, mottle, crack, cap;
 } crust_noise;
 
 static void render_texel(const ss_wound_renderer *r, const float *skin, const crust_noise *nz,
-                         const texel_tissue *s, texel_out *o) {
+                         const texel_tissue *s, double day, texel_out *o) {
     const double *v = r->o.recipe.v;
     double cover = ramp(s->e, v[SS_WR_EPITHELIUM_LO], v[SS_WR_EPITHELIUM_HI]), open = 1 - cover;
     double reg = ramp(s->plasma, v[SS_WR_REGION_LO], v[SS_WR_REGION_HI]);
@@ -272,9 +289,14 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
     for (int c = 0; c < SS_BIO_NCHANNELS; c++) k[c] = (float)lerp(skin[c], r->mean[c], reg);
     /* keloid tissue: hypervascular, hypoxic, often hyperpigmented (docs/wound.md) */
     double kel = 1 - exp(-s->keloid / v[SS_WR_KELOID_LOOK_MM]);
-    double mel = k[SS_BIO_MELANIN] * cover *
-                 lerp(1, lerp(v[SS_WR_NEW_MELANIN], v[SS_WR_SCAR_MELANIN], m_pig), reg) *
-                 lerp(1, v[SS_WR_KELOID_MELANIN], kel);
+    /* post-inflammatory hyperpigmentation: rises over the first two weeks after
+     * closure, fades over months, as strong as the skin type's clinical rate */
+    double pih =
+        v[SS_WR_PIH_GAIN] * r->pih * (1 - exp(-s->age / 14.0)) * exp(-s->age / v[SS_WR_PIH_DAYS]);
+    double mel =
+        k[SS_BIO_MELANIN] * cover *
+        lerp(1, lerp(v[SS_WR_NEW_MELANIN], v[SS_WR_SCAR_MELANIN], m_pig) * (1 + pih), reg) *
+        lerp(1, v[SS_WR_KELOID_MELANIN], kel);
     double epi =
         lerp(EPI_FLOOR_CM,
              k[SS_BIO_EPIDERMIS_CM] * lerp(1, lerp(v[SS_WR_NEW_EPIDERMIS], 1, m_epi), reg), cover);
@@ -284,7 +306,11 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
         k[SS_BIO_BLOOD] * cap * lerp(1, v[SS_WR_SCAR_BLOOD], reg * scar * m_scar) +
         v[SS_WR_YOUNG_BLOOD] * reg * cover * (1 - m_scar);
     tissue_blood = lerp(tissue_blood, v[SS_WR_KELOID_BLOOD], kel * cover);
-    double blood = lerp(tissue_blood, v[SS_WR_BED_BLOOD], open * reg);
+    /* the open bed: its capillary loops (dots at ~0.35 mm) hold more blood */
+    double bedtex = v[SS_WR_BED_TEXTURE] * open * reg;
+    double dots = ramp(nz->cap, 0.55, 0.85);
+    double blood =
+        lerp(tissue_blood, v[SS_WR_BED_BLOOD] * (1 + bedtex * (3 * dots - 0.5)), open * reg);
     /* blood under cover follows the tissue's oxygen; blood in the open bed is
      * oxygenated by the air (atmospheric O2 reaches ~0.3 mm deep) */
     double oxy = lerp(lerp(v[SS_WR_TISSUE_MIN_OXYGENATION], k[SS_BIO_OXYGENATION], clamp01(s->oxy)),
@@ -299,49 +325,90 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
     lookup5 l;
     bio_to_render(r->lut, b, &l);
     /* dense mature collagen scatters more: lift the albedo towards white */
+    /* dense mature collagen scatters more: a lift of the albedo towards white
+     * on light skin, at the skin's own hue on melanin-rich skin (towards white
+     * it would grey a dark skin: the epidermis above the scattering collagen
+     * still filters the light) */
     double white = v[SS_WR_SCAR_WHITENING] * reg * scar * m_scar * cover * (1 - kel);
-    double skin_rgb[3];
-    for (int c = 0; c < 3; c++) skin_rgb[c] = clamp01(l.rgb[c] + white * (1 - l.rgb[c]));
-    /* the clot filling the open, avascular part of the bed (below the
-     * crust), then the scab: blood layers over the skin */
+    double skin_rgb[3], top = fmax(l.rgb[0], fmax(l.rgb[1], l.rgb[2]));
+    double tint = ramp(k[SS_BIO_MELANIN], 0.02, 0.15);
+    for (int c = 0; c < 3; c++) {
+        double hue = lerp(1, top > 1e-6 ? l.rgb[c] / top : 1, tint);
+        skin_rgb[c] = clamp01(l.rgb[c] + white * (hue - l.rgb[c]));
+    }
     /* the crust: thin at its edge, full from scab_dome inwards; its thickness
-     * mottled (+-scab_mottle at ~1.5 mm); cracked along the mid-level lines of
-     * a noise, the more the nearer its edge (where it dries and lifts first) */
+     * mottled (+-scab_mottle at ~1.5 mm) */
     double dome = lerp(v[SS_WR_SCAB_EDGE], 1, 1 - exp(-s->crust_in / v[SS_WR_SCAB_DOME_MM]));
     double thick =
         s->scab * v[SS_WR_SCAB_SCALE] * dome * (1 + v[SS_WR_SCAB_MOTTLE] * (2.0 * nz->thick - 1));
+    if (thick < 0) thick = 0;
+    /* drying: a fresh crust is wet, red blood; it darkens to the aged crust
+     * (deoxygenated, concentrated) and turns matte over crust_dry_days */
+    double dry = 1 - exp(-day / v[SS_WR_CRUST_DRY_DAYS]);
+    /* cracks along the mid-level lines of a noise, where the dried crust
+     * shrinks: across the crust, the more the nearer its edge; a fissure is a
+     * groove in the height and a shadow, not the bed showing through */
     double crack = v[SS_WR_CRACK_WIDTH] > 0
                        ? (1 - ramp(fabs(nz->crack - 0.5), 0, v[SS_WR_CRACK_WIDTH])) *
-                             exp(-s->crust_in / v[SS_WR_CRACK_REACH_MM])
+                             lerp(0.45, 1, exp(-s->crust_in / v[SS_WR_CRACK_REACH_MM])) * dry
                        : 0;
-    thick *= 1 - crack;
+    double scab_cover = 1 - exp(-thick / 0.05); /* a 0.05 mm crust hides the bed */
+    crack *= scab_cover;
     /* patches of serous (haemoglobin-poor, amber) crust among the bloody one */
     double serous = v[SS_WR_SCAB_SEROUS] * ramp(nz->mottle, 0.5, 0.8);
-    double R[3], T[3], R2[3], T2[3], mid[3];
-    double clot =
-        open * reg * (s->depth - s->scab > 0 ? s->depth - s->scab : 0) * v[SS_WR_CLOT_SCALE];
+    double R[3], T[3], R2[3], T2[3], R3[3], T3[3], mid[3];
+    /* the clot: fresh blood in the open, avascular bed, pooled in patches and
+     * at the capillary loops, at most 0.25 mm (a scrape oozes, it does not
+     * fill with blood); exudate: serum and fibrin glazing the bed from the
+     * first day (yellow patches) */
+    double room = s->depth - s->scab > 0 ? s->depth - s->scab : 0;
+    double pool = lerp(1, 0.25 + 0.75 * ramp(nz->mottle, 0.3, 0.75) + 0.3 * dots,
+                       fmin(1, v[SS_WR_BED_TEXTURE]));
+    double clot = open * reg * fmin(room, 0.25) * v[SS_WR_CLOT_SCALE] * pool;
+    double exudate = bedtex * 0.04 * ramp(nz->thick, 0.45, 0.8) * (1 - exp(-day / 1.0));
     ss_layer_table_eval(&r->clot, clot, R, T);
     ss_layer_over(R, T, skin_rgb, mid);
+    ss_layer_table_eval(&r->serous, exudate, R, T);
+    ss_layer_over(R, T, mid, mid);
+    /* the crust: the fresh one as whole blood of the same haemoglobin per
+     * area (hb_factor x the thickness), the aged one the dried-blood layer */
+    ss_layer_table_eval(&r->clot, thick * v[SS_WR_SCAB_HB_FACTOR], R3, T3);
     ss_layer_table_eval(&r->scab, thick, R, T);
     ss_layer_table_eval(&r->serous, thick, R2, T2);
-    for (int c = 0; c < 3; c++) R[c] = lerp(R[c], R2[c], serous), T[c] = lerp(T[c], T2[c], serous);
+    for (int c = 0; c < 3; c++) {
+        R[c] = lerp(R[c], R2[c], serous), T[c] = lerp(T[c], T2[c], serous);
+        R[c] = lerp(R3[c], R[c], dry), T[c] = lerp(T3[c], T[c], dry);
+    }
     ss_layer_over(R, T, mid, o->rgb);
+    /* the edge lifts where new epithelium has slid under it (Winter 1962):
+     * raised, drier and paler, before it comes off */
+    double lift = v[SS_WR_CRUST_LIFT_MM] > 0 ? cover * scab_cover * exp(-s->crust_in / 0.8) : 0;
+    for (int c = 0; c < 3; c++) o->rgb[c] *= (1 - 0.65 * crack) * (1 + 0.5 * lift);
     /* the extra colour (hair) over everything, gone where the tissue was destroyed */
     double ea = k[SS_BIO_EXTRA_A] * (1 - reg);
     for (int c = 0; c < 3; c++)
         o->rgb[c] = clamp01(clamp01(o->rgb[c]) * (1 - ea) + k[SS_BIO_EXTRA_R + c] * ea);
-    double scab_cover = 1 - exp(-thick / 0.05); /* a 0.05 mm crust is matte */
     double rough = l.roughness;
-    rough = lerp(rough, v[SS_WR_WET_ROUGHNESS], open * reg);
+    /* the wet bed: a fluid film, smoother where fresh blood pools */
+    rough =
+        lerp(rough, v[SS_WR_WET_ROUGHNESS] * (0.75 + 0.5 * nz->mottle) * (1 - 0.3 * dots * bedtex),
+             open * reg);
     rough = lerp(rough, v[SS_WR_SCAR_ROUGHNESS], reg * cover * m_epi * scar);
     rough = lerp(rough, v[SS_WR_KELOID_ROUGHNESS], kel * cover);
-    rough = lerp(rough, v[SS_WR_SCAB_ROUGHNESS], scab_cover);
+    rough = lerp(rough, lerp(0.4, v[SS_WR_SCAB_ROUGHNESS], dry) + 0.1 * crack, scab_cover);
     o->roughness = clamp01(rough);
     /* the keloid's swelling saturates at a few mm (Vancouver Scar Scale heights:
      * < 2, 2-5, > 5 mm) */
     double kmax = v[SS_WR_KELOID_MAX_MM];
     double keloid = kmax * (1 - exp(-v[SS_WR_KELOID_SCALE] * s->keloid / kmax));
-    o->height_mm = k[SS_BIO_HEIGHT_MM] - v[SS_WR_DEPTH_SCALE] * s->depth + thick + keloid;
+    /* the surface: the skin, down by the wound's depth, filled by the clot and
+     * by the crust (which fills the defect and stands above the skin), the
+     * bed's relief of capillary loops, the crust's cracks and lifted edge, and
+     * the keloid's raise */
+    double fill = fmax(scab_cover, 0.0);
+    o->height_mm = k[SS_BIO_HEIGHT_MM] - v[SS_WR_DEPTH_SCALE] * s->depth * (1 - fill) + clot +
+                   bedtex * 0.02 * (dots - 0.5) + thick * (1 - 0.7 * crack) +
+                   v[SS_WR_CRUST_LIFT_MM] * lift + keloid;
 }
 
 /* Per column: mm from the crust's edge inwards (0 where there is no crust):
@@ -423,8 +490,9 @@ ss_status ss_wound_render(ss_wound_renderer *r, const ss_wound_tissue *t,
             texel_tissue s;
             sample_tissue(t, crust_in->data, mx, my, &s);
             texel_out o;
-            crust_noise nz = {r->crust->data[i], r->mottle->data[i], r->crack->data[i]};
-            render_texel(r, r->skin->data + i * SS_BIO_NCHANNELS, &nz, &s, &o);
+            crust_noise nz = {r->crust->data[i], r->mottle->data[i], r->crack->data[i],
+                              r->cap->data[i]};
+            render_texel(r, r->skin->data + i * SS_BIO_NCHANNELS, &nz, &s, t->day, &o);
             for (int c = 0; c < 3; c++) out->base_color->data[i * 3 + c] = (float)o.rgb[c];
             out->roughness->data[i] = (float)o.roughness;
             out->height->data[i] = (float)(o.height_mm + dz);

@@ -12,7 +12,9 @@
  * per run by rasterising the UV triangles (one thread, triangles in file
  * order, so the later triangle wins where UV islands overlap); the renderer
  * then samples the tissue there instead of at its texel's place in a flat
- * block. The texture's world scale is the mesh's mean mm per UV unit
+ * block; texels just outside an island take their neighbour's columns (a
+ * 2-texel gutter), so filtering at island edges does not show base-skin
+ * seams through the wound. The texture's world scale is the mesh's mean mm per UV unit
  * (sqrt of 3D area over UV area), which sizes the base skin's features and
  * the normal map's slopes. Gave up: per-texel scale and tangent frames (a
  * UV layout stretched unevenly gets features of uneven size). */
@@ -35,6 +37,33 @@ static double tri_area3(const double a[3], const double b[3], const double c[3])
     return 0.5 * sqrt(x * x + y * y + z * z);
 }
 
+/* Texels of no UV triangle next to the edge of an island take the columns of
+ * a covered neighbour, PAD_TEXELS deep (the gutter a texture baker leaves):
+ * texture filtering and mipmaps at the island's edge then read the wound,
+ * not a 1-texel seam of base skin (the hard tabs along a wound's rim where it
+ * crosses an island edge). The first covered neighbour in a fixed order
+ * wins, so the result does not depend on the thread count. */
+#define PAD_TEXELS 2
+static void pad_islands(ss_image *out, unsigned char *hit, int size) {
+    static const int dx[8] = {1, -1, 0, 0, 1, -1, 1, -1}, dy[8] = {0, 0, 1, -1, 1, 1, -1, -1};
+    for (int pass = 1; pass <= PAD_TEXELS; pass++)
+        for (int y = 0; y < size; y++)
+            for (int x = 0; x < size; x++) {
+                size_t i = (size_t)y * (size_t)size + (size_t)x;
+                if (hit[i]) continue;
+                for (int k = 0; k < 8; k++) {
+                    int xx = x + dx[k], yy = y + dy[k];
+                    if (xx < 0 || yy < 0 || xx >= size || yy >= size) continue;
+                    size_t j = (size_t)yy * (size_t)size + (size_t)xx;
+                    if (!hit[j] || hit[j] > pass) continue; /* filled in this pass */
+                    out->data[i * 2] = out->data[j * 2];
+                    out->data[i * 2 + 1] = out->data[j * 2 + 1];
+                    hit[i] = (unsigned char)(pass + 1);
+                    break;
+                }
+            }
+}
+
 ss_image *ss_wound_uv_columns(const ss_shell_patch *p, const ss_mesh *m, int size,
                               double *mm_per_uv, ss_error *err) {
     if (!m->has_uvs) {
@@ -44,6 +73,13 @@ ss_image *ss_wound_uv_columns(const ss_shell_patch *p, const ss_mesh *m, int siz
     ss_image *out = ss_image_create(size, size, 2, err);
     if (!out) return NULL;
     for (size_t i = 0; i < (size_t)size * (size_t)size * 2; i++) out->data[i] = NAN;
+    /* texels whose centre lies in some UV triangle (whether or not on the patch) */
+    unsigned char *hit = calloc((size_t)size * (size_t)size, 1);
+    if (!hit) {
+        ss_image_free(out);
+        ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+        return NULL;
+    }
     double area3 = 0, areauv = 0, u = p->units_mm;
     for (int t = 0; t < m->ntriangles; t++) {
         double P[3][3], U[3][2];
@@ -87,6 +123,7 @@ ss_image *ss_wound_uv_columns(const ss_shell_patch *p, const ss_mesh *m, int siz
                 }
                 double ci = loc[0] - 0.5, cj = loc[1] - 0.5;
                 float *o = out->data + ((size_t)y * (size_t)size + (size_t)x) * 2;
+                hit[(size_t)y * (size_t)size + (size_t)x] = 1;
                 int ii = (int)lround(ci), jj = (int)lround(cj);
                 /* the patch's outer columns are its boundary layer, not skin */
                 if (ci < 1.5 || cj < 1.5 || ci > p->nx - 2.5 || cj > p->ny - 2.5) {
@@ -102,6 +139,8 @@ ss_image *ss_wound_uv_columns(const ss_shell_patch *p, const ss_mesh *m, int siz
                 o[1] = (float)((p->ny - 1) - cj); /* row 0 = grid y ny-1 */
             }
     }
+    pad_islands(out, hit, size);
+    free(hit);
     *mm_per_uv = areauv > 0 ? sqrt(area3 / areauv) : 100.0;
     return out;
 }

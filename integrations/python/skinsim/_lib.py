@@ -456,12 +456,13 @@ class ss_wound_shape(ctypes.Structure):
         ("box_h", c_int),
         ("npolys", c_int),
         ("polys", c_void_p),
+        ("smooth", P_IMAGE),
     ]
 
 
 class ss_base_skin(ctypes.Structure):
     _fields_ = [("upper", P_IMAGE), ("lower", P_IMAGE), ("upper_srgb", P_IMAGE),
-                ("lower_srgb", P_IMAGE)]
+                ("lower_srgb", P_IMAGE), ("palette", c_void_p)]
 
 
 class ss_texture_set(ctypes.Structure):
@@ -730,7 +731,7 @@ except AttributeError:
 
 # ---- wound ------------------------------------------------------------------------
 
-SS_WR_NKEYS = 42
+SS_WR_NKEYS = 47
 
 
 class ss_wound_recipe(ctypes.Structure):
