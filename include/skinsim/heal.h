@@ -102,6 +102,14 @@ typedef struct ss_heal_params {
     double keloid_tau; /* day, e-folding time of the invasion signal a(t) = exp(-t/keloid_tau):
                           keloid deposition in tissue not yet keloid (rho < rho_max) is scaled
                           by a(t), so the front slows and stops; 0 = no decay (a = 1) */
+    /* scar maturation (docs/heal-model.md §2 [D10]) */
+    double rho_mature; /* 1, collagen of a mature scar (x normal dermis): remodelling resorbs
+                          only the excess above it, so the scar stays */
+    /* adnexal re-epithelialisation (docs/heal-model.md §2 [D11]) */
+    double kadn;      /* 1/day, outgrowth of epithelium from surviving follicle and gland
+                         remnants below a partial-thickness wound; 0 = edge only */
+    double adnexa_mm; /* mm, wound depth at which no adnexal remnant survives; the share that
+                         survives falls linearly from 1 at the surface to 0 at this depth */
 } ss_heal_params;
 
 /* omega = [p > SS_HEAL_P_MIN] (plasma is normalised to 1 in the fresh clot). */
@@ -397,9 +405,10 @@ typedef struct ss_heal_course {
     double scar_peak_day;
     double scar_end_mm3;      /* at the end */
     double scar_max_peak;     /* peak of the largest rho */
-    double half_life_days;    /* remodelling: ln 2 over the decay rate of the scar volume
-                                 over the last quarter of the run (after the peak;
-                                 -1 = not decaying, 0 = no peak yet) */
+    double half_life_days;    /* remodelling: ln 2 over the decay rate of the scar collagen
+                                 above rho_mature (the part remodelling resorbs) over
+                                 the last quarter of the run (after the peak; -1 = not
+                                 decaying, 0 = no peak yet) */
     double deep_e_fraction;   /* tissue voxels deeper than 0.5 mm below the skin surface
                                  with e > 0.5, fraction, at deep_check_day */
     double keloid_beyond_mm;  /* mean advance beyond the original margin of the scar above
