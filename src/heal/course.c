@@ -156,6 +156,10 @@ ss_status ss_heal_course_run(const ss_heal_params *p, const ss_heal_course_opts 
             c->scar_peak_day = g->t_days;
         }
         if (stt.scar_max > c->scar_max_peak) c->scar_max_peak = stt.scar_max;
+        if (stt.elevation_max_mm > c->elev_max_mm) {
+            c->elev_max_mm = stt.elevation_max_mm;
+            c->elev_max_day = g->t_days;
+        }
         if (o->keloid_thr > 0) {
             const double kb = keloid_beyond(g, o->wound_mm, o->keloid_thr, NULL);
             if (kb > c->keloid_beyond_max) c->keloid_beyond_max = kb;
@@ -193,6 +197,8 @@ ss_status ss_heal_course_run(const ss_heal_params *p, const ss_heal_course_opts 
         c->t50 = cross(sm, ns, 0.5, 0);
         c->scar_end_mm3 = stt.scar_volume_mm3;
         c->scar_max_end = stt.scar_max;
+        c->elev_end_max_mm = stt.elevation_max_mm;
+        c->elev_end_mean_mm = stt.elevation_mean_mm;
         c->region_area_mm2 = stt.wound_region_area_mm2;
         /* remodelling: decay of the scar collagen above the mature scar's over the
          * last quarter, after the peak (the mature part stays, [D10]) */

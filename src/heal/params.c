@@ -88,7 +88,8 @@ static const pdef PDEFS[] = {
      CAL ": scar forms during the first 1-2 weeks, peak density ~1.5 x normal dermis", 0.6, 0.6,
      0.6},
     {"lamrhop", OFF(lamrhop), "1/day",
-     "remodelling half-life ln 2 / lamrhop = 120 days (clean, scab): scar maturation takes 6-24 "
+     "remodelling half-life ln 2 / lamrhop = 120 days (clean, scab) of the collagen above "
+     "rho_mature (docs/heal-model.md [D10]): scar maturation takes 6-24 "
      "months (Gurtner et al. 2008, Nature 453:314; Bayat et al. 2003, BMJ 326:88); keloid 365 "
      "days: keloids do not regress",
      0.005776, 0.005776, 0.0019},

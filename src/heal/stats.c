@@ -25,7 +25,25 @@ static int is_tissue(uint8_t c) { return c != SS_CELL_AIR && c != SS_CELL_BOUND;
  * as the front crosses a column, where the threshold flips whole columns). */
 static float uncovered(float e) { return e >= 1.0f ? 0.0f : e <= 0.0f ? 1.0f : 1.0f - e; }
 
-void ss_heal_stats_acc_init(ss_heal_stats_acc *a) { memset(a, 0, sizeof *a); }
+void ss_heal_stats_acc_init(ss_heal_stats_acc *a) {
+    memset(a, 0, sizeof *a);
+    a->elev_max = -INFINITY;
+}
+
+static float elev_k(const ss_heal_grid *g) { return (float)(SS_HEAL_COLLAGEN_VOLUME * g->dx_mm); }
+
+void ss_heal_elevation_scan(const ss_heal_grid *g, int z0, int z1, float *elev) {
+    const float k = elev_k(g), *rho = g->field[SS_HEAL_SCAR];
+    const size_t ncol = (size_t)g->nx * (size_t)g->ny;
+    if (z0 < 0) z0 = 0;
+    if (z1 > g->nz) z1 = g->nz;
+    for (int z = z1 - 1; z >= z0; z--) {
+        const uint8_t *c = g->cell + (size_t)z * ncol;
+        const float *r = rho + (size_t)z * ncol;
+        for (size_t i = 0; i < ncol; i++)
+            if (is_tissue(c[i])) elev[i] += ss_heal_elevation_term(r[i], c[i], k);
+    }
+}
 
 static void limbs_normalise(int64_t *l) {
     for (int i = 0; i < SS_HEAL_ACC_LIMBS - 1; i++) {
@@ -89,10 +107,13 @@ static void add_cells(ss_heal_stats_acc *a, const ss_heal_grid *g, int x, int y,
 /* A column's figures from its surface cell: wound column (initial: a WOUND
  * voxel at the surface at t = 0) with the eschar maximum below it, in omega
  * (region), and for either the open test and the uncovered fraction of e. */
-static void add_column(ss_heal_stats_acc *a, int initial, int region, float smax, float e) {
+static void add_column(ss_heal_stats_acc *a, int initial, int region, float smax, float e,
+                       float elev) {
+    if (elev > a->elev_max) a->elev_max = elev;
     if (initial) {
         a->n_initial++;
         limbs_add(a, SS_HEAL_ACC_ESCHAR, smax);
+        limbs_add(a, SS_HEAL_ACC_ELEV, elev);
         a->n_wcol++;
     }
     if (region) a->n_region++;
@@ -132,7 +153,15 @@ void ss_heal_stats_acc_add(ss_heal_stats_acc *a, const ss_heal_grid *g, int x0, 
                     if (!is_tissue(g->cell[c])) break;
                     if (s[c] > smax) smax = s[c];
                 }
-                add_column(a, initial, p[c0] > (float)SS_HEAL_P_MIN, smax, e[c0]);
+                /* the elevation: every tissue cell, top down (ss_heal_elevation_scan) */
+                const float k = elev_k(g), *rho = g->field[SS_HEAL_SCAR];
+                float elev = 0.0f;
+                for (int z = g->nz - 1; z >= 0; z--) {
+                    size_t c = ss_heal_idx(g, x, y, z);
+                    if (is_tissue(g->cell[c]))
+                        elev += ss_heal_elevation_term(rho[c], g->cell[c], k);
+                }
+                add_column(a, initial, p[c0] > (float)SS_HEAL_P_MIN, smax, e[c0], elev);
             }
             add_cells(a, g, x, y, 0, g->nz);
         }
@@ -165,7 +194,16 @@ void ss_heal_stats_acc_add_stack(ss_heal_stats_acc *a, const ss_heal_grid *g, in
                 }
                 if (s[c] > cs->smax) cs->smax = s[c];
             }
-            if (bottom && cs->phase) add_column(a, cs->initial, cs->region, cs->smax, cs->esurf);
+            /* the elevation: every tissue cell of the owned levels, top down */
+            const float k = elev_k(g), *rho = g->field[SS_HEAL_SCAR];
+            for (int z = g->nz - 2; z >= 1; z--) {
+                const int Z = z + zoff;
+                const size_t c = ss_heal_idx(g, x, y, z);
+                if (Z >= 1 && Z <= gz - 2 && is_tissue(g->cell[c]))
+                    cs->elev += ss_heal_elevation_term(rho[c], g->cell[c], k);
+            }
+            if (bottom && cs->phase)
+                add_column(a, cs->initial, cs->region, cs->smax, cs->esurf, cs->elev);
             add_cells(a, g, x, y, 1, g->nz - 1);
         }
     }
@@ -182,6 +220,7 @@ void ss_heal_stats_acc_merge(ss_heal_stats_acc *a, const ss_heal_stats_acc *b) {
     for (int k = 0; k < SS_HEAL_ACC_SUMS; k++)
         for (int i = 0; i < SS_HEAL_ACC_LIMBS; i++) a->sum[k][i] += b->sum[k][i];
     if (b->scar_max > a->scar_max) a->scar_max = b->scar_max;
+    if (b->elev_max > a->elev_max) a->elev_max = b->elev_max;
     ss_heal_stats_acc_normalise(a);
 }
 
@@ -198,9 +237,13 @@ void ss_heal_stats_acc_finish(const ss_heal_stats_acc *a, double dx_mm, ss_heal_
         st->field_mean[f] = a->n_tissue ? limbs_value(a->sum[f]) / (double)a->n_tissue : 0.0;
     st->scar_volume_mm3 = limbs_value(a->sum[SS_HEAL_SCAR]) * area * dx_mm;
     st->scar_max = a->scar_max;
+    st->elevation_mean_mm =
+        a->n_initial ? limbs_value(a->sum[SS_HEAL_ACC_ELEV]) / (double)a->n_initial : 0.0;
+    st->elevation_max_mm = isfinite(a->elev_max) ? a->elev_max : 0.0;
     if (a->n_nonfinite) { /* a blown-up field shows as NaN, never as a plausible figure */
         for (int f = 0; f < SS_HEAL_NFIELDS; f++) st->field_mean[f] = NAN;
         st->scar_volume_mm3 = st->eschar_wound_mean = st->open_area_mm2 = NAN;
+        st->elevation_mean_mm = st->elevation_max_mm = NAN;
     }
 }
 
