@@ -406,6 +406,25 @@ static void test_adnexa(void **state) {
     ss_heal_params_free(p);
 }
 
+/* The packing limit rho_sat holds whatever deposits the collagen: the
+ * ordinary deposition (lamnrho) is not saturated, and four times its rate on
+ * the scab's 10 mm wound would pack ~4.5 (issue 25: 3.33 in a 4 cm circle). */
+static void test_packing_limit(void **state) {
+    (void)state;
+    ss_error err;
+    ss_heal_params *p = ss_heal_params_preset("scab", &err);
+    assert_non_null(p);
+    p->lamnrho *= 4.0;
+    ss_heal_course_opts o = {16, 10, 1.0, 0.5, 25, 0.05, 0, -1, 0, {0, 0}};
+    ss_heal_course c;
+    assert_int_equal(ss_heal_course_run(p, &o, &c, &err), SS_OK);
+    print_message("packing: lamnrho x4, peak scar %.4f (rho_sat %g)\n", c.scar_max_peak,
+                  p->rho_sat);
+    assert_true(c.bounds_ok);
+    assert_true(c.scar_max_peak > 0.95 * p->rho_sat && c.scar_max_peak <= p->rho_sat);
+    ss_heal_params_free(p);
+}
+
 /* Maturation: the scar is permanent. A year after the injury (quick: 200
  * days) the scar volume is still >= 90 % of its peak and the densest cell has
  * come down to the mature scar's collagen (rho_mature) from above, the excess
@@ -811,14 +830,23 @@ static void test_fig4_convergence(void **state) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_params),         cmocka_unit_test(test_grid_init),
-        cmocka_unit_test(test_healthy_steady), cmocka_unit_test(test_dt_limit),
-        cmocka_unit_test(test_symmetry),       cmocka_unit_test(test_threads_bitidentical),
-        cmocka_unit_test(test_scenarios),      cmocka_unit_test(test_fig4_convergence),
-        cmocka_unit_test(test_remodelling),    cmocka_unit_test(test_mature_scar),
-        cmocka_unit_test(test_adnexa),         cmocka_unit_test(test_keloid),
-        cmocka_unit_test(test_keloid_stop),    cmocka_unit_test(test_grid_convergence),
-        cmocka_unit_test(test_scab_crust),     cmocka_unit_test(test_bed_window_uneven),
+        cmocka_unit_test(test_params),
+        cmocka_unit_test(test_grid_init),
+        cmocka_unit_test(test_healthy_steady),
+        cmocka_unit_test(test_dt_limit),
+        cmocka_unit_test(test_symmetry),
+        cmocka_unit_test(test_threads_bitidentical),
+        cmocka_unit_test(test_scenarios),
+        cmocka_unit_test(test_fig4_convergence),
+        cmocka_unit_test(test_remodelling),
+        cmocka_unit_test(test_mature_scar),
+        cmocka_unit_test(test_adnexa),
+        cmocka_unit_test(test_packing_limit),
+        cmocka_unit_test(test_keloid),
+        cmocka_unit_test(test_keloid_stop),
+        cmocka_unit_test(test_grid_convergence),
+        cmocka_unit_test(test_scab_crust),
+        cmocka_unit_test(test_bed_window_uneven),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

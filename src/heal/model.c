@@ -664,6 +664,10 @@ static void sys_init(ss_heal_rd_system *s, model_ctx *c, const ss_heal_grid *g,
         s->mface_closed = (float)SS_HEAL_CRUST_CLOSED; /* [D9] */
     }
     s->hi[SS_HEAL_ESCHAR] = s->hi[SS_HEAL_EPITHELIUM] = s->hi[SS_HEAL_PLASMA] = 1.0f;
+    /* the packing limit holds for every deposition (the ordinary one is not
+     * saturated: a large or long-open wound could pack it past rho_sat, issue
+     * 25: 3.33 in a 4 cm circle); below rho_sat nothing changes */
+    s->hi[SS_HEAL_SCAR] = (float)p->rho_sat;
     for (int d = 0; d < 3; d++) s->velocity[d] = g->velocity[d];
     s->react = heal_react;
     s->prepare = c->ztop ? heal_prepare : NULL;
