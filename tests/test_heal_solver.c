@@ -468,6 +468,10 @@ static void test_keloid(void **state) {
     ss_heal_params *p = ss_heal_params_preset("keloid", &err);
     assert_true(a.scar_max_peak > 1.6 && a.scar_max_peak <= p->rho_sat);
     assert_true(b.scar_max_peak > 1.6 && b.scar_max_peak <= p->rho_sat);
+    /* it lies in the dermis above keloid_mm: the deeper tissue, intact dermis
+     * under the wound too, is not keloid (it filled the whole block depth at
+     * 2.97 before [D12]) */
+    assert_true(a.scar_deep_max < p->rho_max && b.scar_deep_max < p->rho_max);
     ss_heal_params_free(p);
 }
 

@@ -110,6 +110,8 @@ typedef struct ss_heal_params {
                          remnants below a partial-thickness wound; 0 = edge only */
     double adnexa_mm; /* mm, wound depth at which no adnexal remnant survives; the share that
                          survives falls linearly from 1 at the surface to 0 at this depth */
+    double keloid_mm; /* mm, depth below the skin surface to which the keloid deposition
+                         (lamkrho) reaches (the reticular dermis); deeper dermis stays */
 } ss_heal_params;
 
 /* omega = [p > SS_HEAL_P_MIN] (plasma is normalised to 1 in the fresh clot). */
@@ -449,6 +451,8 @@ typedef struct ss_heal_course {
     double elev_max_day;
     double elev_end_max_mm; /* largest and wound-mean surface elevation at the end */
     double elev_end_mean_mm;
+    double scar_deep_max; /* largest rho at the end of tissue wholly below keloid_mm (its
+                             voxel's top deeper than keloid_mm below the surface) */
 } ss_heal_course;
 ss_status ss_heal_course_run(const ss_heal_params *p, const ss_heal_course_opts *o,
                              ss_heal_course *c, ss_error *err);

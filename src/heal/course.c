@@ -199,6 +199,15 @@ ss_status ss_heal_course_run(const ss_heal_params *p, const ss_heal_course_opts 
         c->scar_max_end = stt.scar_max;
         c->elev_end_max_mm = stt.elevation_max_mm;
         c->elev_end_mean_mm = stt.elevation_mean_mm;
+        for (int z = 1; z < g->nz - 1; z++) { /* below the keloid's layer */
+            if (top - (z + 1) * dx < p->keloid_mm - 1e-9) continue;
+            for (int y = 1; y < g->ny - 1; y++)
+                for (int x = 1; x < g->nx - 1; x++) {
+                    const size_t i = ss_heal_idx(g, x, y, z);
+                    const float r = g->field[SS_HEAL_SCAR][i];
+                    if (tissue(g->cell[i]) && r > c->scar_deep_max) c->scar_deep_max = r;
+                }
+        }
         c->region_area_mm2 = stt.wound_region_area_mm2;
         /* remodelling: decay of the scar collagen above the mature scar's over the
          * last quarter, after the peak (the mature part stays, [D10]) */

@@ -46,6 +46,7 @@ typedef struct model_ctx {
     float kact;         /* keloid invasion signal a(t) for the current step (keloid_signal) */
     float rmat;         /* rho_mature: remodelling resorbs only the excess above it [D10] */
     float kadn, adn_mm; /* adnexal outgrowth rate and the depth that destroys it [D11] */
+    float kel_h;        /* keloid_mm / voxel: the keloid's depth in voxel levels [D12] */
     int scab, static_region;
     const uint8_t *cell;
     int nx, ny, nz;
@@ -136,7 +137,7 @@ react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep, const i
     /* keloid factor G = a + (1 - a) clamp(rho/rho_max - 1, 0, 1), times lamkrho */
     const float lka = m->lamkrho * m->kact, lkb = m->lamkrho * (1.0f - m->kact);
     const float irmax = m->inv_rhomax;
-    const float rmat = m->rmat, lrm = m->lamrhop * m->rmat;
+    const float rmat = m->rmat, lrm = m->lamrhop * m->rmat, kel_h = m->kel_h;
     const float kang = m->kang * m->inv_scabmm;
     float *restrict m0 = row->m[0], *restrict m1 = row->m[1];
     float *restrict p1 = pr[0], *restrict p2 = pr[1], *restrict p3 = pr[2], *restrict p4 = pr[3];
@@ -197,9 +198,12 @@ react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep, const i
          * - lamrhop (rho - rho_mature)+ [D10], as production lamrhop rho_mature
          * and loss lamrhop where rho > rho_mature (rho never falls below it) */
         const float over = (float)(rho > rmat);
-        const float kdep =
-            kel ? (lka + lkb * clampf(rho * irmax - 1.0f, 0.0f, 1.0f)) * pos(1.0f - rho * irsat)
-                : 0.0f;
+        /* the keloid lies in the dermis above keloid_mm: the fraction of the
+         * voxel inside it (levels below the column's surface cell) */
+        const float kin = kel ? clampf(kel_h - (float)(ZT[i] - z), 0.0f, 1.0f) : 0.0f;
+        const float kdep = kel ? (lka + lkb * clampf(rho * irmax - 1.0f, 0.0f, 1.0f)) *
+                                     pos(1.0f - rho * irsat) * kin
+                               : 0.0f;
         p7[i] = om * ns * nn * (imm * necl * lamnrho + kdep) + lrm * over;
         l7[i] = m->lamrhop * over;
         /* 4.1.8 plasma: Dp lap p + lampp p + C(rho)(1-p) */
@@ -590,6 +594,7 @@ static void ctx_init(model_ctx *c, const ss_heal_params *p, const ss_heal_grid *
     c->rmat = (float)p->rho_mature;
     c->kadn = (float)p->kadn;
     c->adn_mm = p->adnexa_mm > 0 ? (float)p->adnexa_mm : 1.0f;
+    c->kel_h = (float)(p->keloid_mm / g->dx_mm);
     c->rho_closed = (float)(1.0 - p->rho_open);
     c->bed_mm = (float)p->bed_mm;
     c->h = (float)g->dx_mm;
@@ -680,7 +685,7 @@ static ss_status check_params(const ss_heal_params *p, ss_error *err) {
     if (!(p->lam11 > 0) || !(p->u3_eq > 0) || !(p->K > 0) || !(p->rho_max > 0) ||
         !(p->u1_beta2 > 0) || !(p->gamma1 > 0 && p->gamma1 < 1) || !(p->bed_mm > 0) ||
         !(p->scab_mm >= 0) || !(p->rho_sat > 0) || !(p->rho_mature >= 0) || !(p->kadn >= 0) ||
-        !(p->adnexa_mm > 0))
+        !(p->adnexa_mm > 0) || !(p->keloid_mm > 0))
         return ss_error_set(err, SS_ERR_INPUT,
                             "heal params: lam11, u3_eq, K, rho_max, u1_beta2, bed_mm, rho_sat must "
                             "be > 0, "

@@ -182,6 +182,14 @@ static const pdef PDEFS[] = {
      "edge, in more than 3 weeks with hypertrophic scarring (Deitch et al. 1983). At 1 mm the "
      "default wound heals from its edge only",
      1.0, 1.0, 1.0},
+    {"keloid_mm", OFF(keloid_mm), "mm",
+     "keloid only (docs/heal-model.md §2 [D12]): depth below the skin surface to which the "
+     "keloid's autocrine deposition reaches. Keloids are driven by chronic inflammation in the "
+     "reticular dermis (Eura et al. 2022, PRS Glob Open 10:e4374; Limandjaja et al. 2020, Front "
+     "Cell Dev Biol 8:360: a dermal lesion) and do not fill the tissue below it; 2 mm, the depth "
+     "of the dermis on the trunk and limbs (estimate); the deeper tissue of the block stays "
+     "intact",
+     2.0, 2.0, 2.0},
 };
 #define NPDEFS ((int)(sizeof PDEFS / sizeof PDEFS[0]))
 /* keys whose value may be negative */
@@ -256,7 +264,8 @@ static ss_status check_value(const char *what, const pdef *d, double v, ss_error
                             d->key, v, may_be_negative(d->key) ? "number" : "value >= 0");
     if ((!strcmp(d->key, "u3_eq") || !strcmp(d->key, "K") || !strcmp(d->key, "lam11") ||
          !strcmp(d->key, "rho_max") || !strcmp(d->key, "u1_beta2") || !strcmp(d->key, "bed_mm") ||
-         !strcmp(d->key, "rho_sat") || !strcmp(d->key, "adnexa_mm")) &&
+         !strcmp(d->key, "rho_sat") || !strcmp(d->key, "adnexa_mm") ||
+         !strcmp(d->key, "keloid_mm")) &&
         !(v > 0))
         return ss_error_set(err, SS_ERR_INPUT, "%s: parameter '%s' = %g must be > 0", what, d->key,
                             v);
