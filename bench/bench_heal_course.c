@@ -4,9 +4,9 @@
  * bench/heal_tables.sh builds from it. Prints one JSON object.
  * Usage: bench_heal_course [--scenario S] [--dx MM] [--block MM] [--wound MM]
  *        [--depth MM] [--days D] [--dt D] [--late-dt D] [--deep-day D]
- *        [--keloid-thr R] [--keloid-days A,B] [--set KEY=VALUE]... [--scale KEY=FACTOR]...
- *        bench_heal_course [--scenario S] --get KEY   (prints the preset value)
- * Figures only; nothing is asserted. */
+ *        [--keloid-thr R] [--keloid-days A,B] [--set KEY=VALUE]... [--scale
+ * KEY=FACTOR]... bench_heal_course [--scenario S] --get KEY   (prints the preset value) Figures
+ * only; nothing is asserted. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -101,12 +101,15 @@ int main(int argc, char **argv) {
         "\"scar_max_peak\": %.4f, \"half_life_days\": %.1f, \"deep_e_fraction\": %.4f, "
         "\"keloid_beyond_mm\": %.3f, \"keloid_beyond_t95\": %.3f, \"keloid_area_mm2\": %.1f, "
         "\"region_area_mm2\": %.1f, \"keloid_beyond_days\": [%.3f, %.3f], "
-        "\"keloid_beyond_max\": %.3f, \"scar_max_end\": %.4f, \"steps\": %ld, \"wall_s\": %.2f}\n",
+        "\"keloid_beyond_max\": %.3f, \"scar_max_end\": %.4f, \"elev_max_mm\": %.4f, "
+        "\"elev_max_day\": %.2f, \"elev_end_max_mm\": %.4f, \"elev_end_mean_mm\": %.4f, "
+        "\"scar_deep_max\": %.4f, \"steps\": %ld, \"wall_s\": %.2f}\n",
         scen, o.dx_mm, o.block_mm, o.wound_mm, o.days, c.t50, c.t95, c.scab_day, c.scab_gone_day,
         c.scar_peak_mm3, c.scar_peak_day, c.scar_end_mm3, c.scar_max_peak, c.half_life_days,
         c.deep_e_fraction, c.keloid_beyond_mm, c.keloid_beyond_t95, c.keloid_area_mm2,
         c.region_area_mm2, c.keloid_beyond_day[0], c.keloid_beyond_day[1], c.keloid_beyond_max,
-        c.scar_max_end, c.steps, c.wall_s);
+        c.scar_max_end, c.elev_max_mm, c.elev_max_day, c.elev_end_max_mm, c.elev_end_mean_mm,
+        c.scar_deep_max, c.steps, c.wall_s);
     ss_heal_params_free(p);
     return 0;
 }

@@ -128,6 +128,7 @@ static void test_vti_roundtrip(void **state) {
     size_t blocks = 8 + n + SS_HEAL_NFIELDS * (8 + 4 * n);
     int vel = g->velocity[0] != NULL;
     if (vel) blocks += 8 + 12 * n;
+    blocks += 8 + 4 * n; /* surface_elevation_mm */
     const char *tail = (const char *)base + blocks;
     assert_true(tail < data + len);
     assert_int_equal(strncmp(tail, "\n  </AppendedData>\n</VTKFile>\n", 30), 0);
@@ -704,6 +705,80 @@ static void test_stroke_csv(void **state) {
 
 /* ---- surface maps, area table and plots -------------------------------------------------- */
 
+/* Surface elevation [D12]: collagen beyond the dermis a wound cell lost, or
+ * any collagen added to intact dermis, raises the column by
+ * SS_HEAL_COLLAGEN_VOLUME x its volume; a wound cell short of it sinks. Known
+ * values on a hand-set grid: the statistics (mean over the wound's columns,
+ * largest column) and the VTI array surface_elevation_mm, the column's value
+ * in every cell of it. */
+static void test_surface_elevation(void **state) {
+    (void)state;
+    ss_error err;
+    ss_heal_params *p = ss_heal_params_preset("clean", &err);
+    ss_heal_grid *g = ss_heal_grid_create(8, 8, 8, 0.5, &err);
+    assert_non_null(g);
+    uint8_t *w = ss_heal_wound_box(g, 3.0, 2.0, 2.0, 1.0, &err);
+    assert_non_null(w);
+    assert_int_equal(ss_heal_grid_init(g, 3.0, 0.1, w, p, &err), SS_OK);
+    free(w);
+    /* rho = 0.5 in the wound (short of the dermis' 1), 3 in intact column (1, 1) */
+    const size_t n = (size_t)g->nx * g->ny * g->nz;
+    for (size_t i = 0; i < n; i++)
+        g->field[SS_HEAL_SCAR][i] = g->cell[i] == SS_CELL_WOUND ? 0.5f : 0.0f;
+    int keloid_cells = 0;
+    for (int z = 0; z < g->nz; z++) {
+        size_t i = ss_heal_idx(g, 1, 1, z);
+        if (g->cell[i] != SS_CELL_AIR && g->cell[i] != SS_CELL_BOUND) {
+            g->field[SS_HEAL_SCAR][i] = 3.0f;
+            keloid_cells++;
+        }
+    }
+    assert_int_equal(keloid_cells, 5); /* levels 1..5 below the 3 mm surface */
+    const double k = SS_HEAL_COLLAGEN_VOLUME * 0.5;
+    const double sunk = 2 * k * (0.5 - 1.0), raised = keloid_cells * k * 3.0; /* 1 mm wound */
+    ss_heal_stats st;
+    ss_heal_stats_compute(g, &st);
+    print_message("elevation: wound mean %.4f (expect %.4f), max %.4f (expect %.4f)\n",
+                  st.elevation_mean_mm, sunk, st.elevation_max_mm, raised);
+    assert_true(fabs(st.elevation_mean_mm - sunk) < 1e-6);
+    assert_true(fabs(st.elevation_max_mm - raised) < 1e-6);
+    /* the snapshot's array */
+    char *dir = tu_tmpdir("elev");
+    char *path = tu_join(dir, "g.vti");
+    assert_int_equal(ss_heal_vti_write(path, g, &err), SS_OK);
+    size_t len;
+    char *data = ss_read_file(path, &len, &err);
+    assert_non_null(data);
+    char *app = strstr(data, "<AppendedData encoding=\"raw\">");
+    char *da = strstr(data, "type=\"Float32\" Name=\"surface_elevation_mm\"");
+    assert_non_null(app);
+    assert_non_null(da);
+    unsigned long long off;
+    assert_int_equal(sscanf(strstr(da, "offset=\"") + 8, "%llu", &off), 1);
+    const unsigned char *base = (const unsigned char *)strchr(app, '_') + 1;
+    assert_int_equal(get_u64le(base + off), 4 * n);
+    for (int z = 0; z < g->nz; z++)
+        for (int y = 0; y < g->ny; y++)
+            for (int x = 0; x < g->nx; x++) {
+                float v;
+                memcpy(&v, base + off + 8 + 4 * ss_heal_idx(g, x, y, z), 4);
+                const int wound = g->cell[ss_heal_idx(g, x, y, 4)] == SS_CELL_WOUND;
+                const double want = x == 1 && y == 1 ? raised : wound ? sunk : 0.0;
+                assert_true(fabs(v - want) < 1e-6);
+            }
+    /* the reader takes the file back (the extra array is not a field) */
+    ss_heal_grid *b = ss_heal_vti_read(path, NULL, NULL, &err);
+    assert_non_null(b);
+    assert_memory_equal(b->field[SS_HEAL_SCAR], g->field[SS_HEAL_SCAR], n * sizeof(float));
+    ss_heal_grid_free(b);
+    free(data);
+    tu_rmtree(dir);
+    free(path);
+    free(dir);
+    ss_heal_grid_free(g);
+    ss_heal_params_free(p);
+}
+
 static void test_surface_and_area(void **state) {
     (void)state;
     ss_error err;
@@ -861,6 +936,7 @@ int main(void) {
         cmocka_unit_test(test_obj_sphere),
         cmocka_unit_test(test_footprint_mask),
         cmocka_unit_test(test_stroke_csv),
+        cmocka_unit_test(test_surface_elevation),
         cmocka_unit_test(test_surface_and_area),
         cmocka_unit_test(test_cli_mask_and_depth_image),
     };

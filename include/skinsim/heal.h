@@ -102,6 +102,16 @@ typedef struct ss_heal_params {
     double keloid_tau; /* day, e-folding time of the invasion signal a(t) = exp(-t/keloid_tau):
                           keloid deposition in tissue not yet keloid (rho < rho_max) is scaled
                           by a(t), so the front slows and stops; 0 = no decay (a = 1) */
+    /* scar maturation (docs/heal-model.md §2 [D10]) */
+    double rho_mature; /* 1, collagen of a mature scar (x normal dermis): remodelling resorbs
+                          only the excess above it, so the scar stays */
+    /* adnexal re-epithelialisation (docs/heal-model.md §2 [D11]) */
+    double kadn;      /* 1/day, outgrowth of epithelium from surviving follicle and gland
+                         remnants below a partial-thickness wound; 0 = edge only */
+    double adnexa_mm; /* mm, wound depth at which no adnexal remnant survives; the share that
+                         survives falls linearly from 1 at the surface to 0 at this depth */
+    double keloid_mm; /* mm, depth below the skin surface to which the keloid deposition
+                         (lamkrho) reaches (the reticular dermis); deeper dermis stays */
 } ss_heal_params;
 
 /* omega = [p > SS_HEAL_P_MIN] (plasma is normalised to 1 in the fresh clot). */
@@ -326,6 +336,9 @@ typedef struct ss_heal_stats {
     double scar_max;                    /* largest rho of any tissue cell */
     double open_columns_mm2;            /* those columns whose e < threshold (whole
                                            columns: the closure-day map's test) */
+    double elevation_mean_mm;           /* surface elevation (ss_heal_elevation_scan),
+                                           mean over the initial wound columns */
+    double elevation_max_mm;            /* its largest value over all columns */
 } ss_heal_stats;
 /* Epithelium level below which a column counts as open: 0.5. */
 double ss_heal_open_threshold(void);
@@ -336,13 +349,15 @@ void ss_heal_stats_compute(const ss_heal_grid *g, ss_heal_stats *st);
 #define SS_HEAL_ACC_LIMBS 12
 #define SS_HEAL_ACC_ESCHAR SS_HEAL_NFIELDS        /* sum[]: the eschar column maxima */
 #define SS_HEAL_ACC_DEFICIT (SS_HEAL_NFIELDS + 1) /* sum[]: 1 - e of the open-test columns */
-#define SS_HEAL_ACC_SUMS (SS_HEAL_NFIELDS + 2)
+#define SS_HEAL_ACC_ELEV (SS_HEAL_NFIELDS + 2)    /* sum[]: elevations of the wound columns */
+#define SS_HEAL_ACC_SUMS (SS_HEAL_NFIELDS + 3)
 typedef struct ss_heal_stats_acc {
     int64_t n_initial, n_region, n_open, n_wcol, n_tissue, n_nonfinite;
     int64_t sum[SS_HEAL_ACC_SUMS][SS_HEAL_ACC_LIMBS]; /* fields, the eschar column
                                                          maxima, the uncovered fractions */
     int64_t adds;    /* additions since the limbs were last normalised */
     double scar_max; /* largest rho */
+    double elev_max; /* largest column elevation (-inf: no column yet) */
 } ss_heal_stats_acc;
 void ss_heal_stats_acc_init(ss_heal_stats_acc *a);
 /* Adds the columns x0 <= x < x1, y0 <= y < y1 of g (grid indices, all z). */
@@ -360,6 +375,7 @@ void ss_heal_stats_acc_merge(ss_heal_stats_acc *a, const ss_heal_stats_acc *b);
 typedef struct ss_heal_col_state {
     float smax, esurf;              /* eschar maximum; e of the surface cell */
     uint8_t phase, initial, region; /* phase 0 above the surface, 1 in the tissue run, 2 past it */
+    float elev;                     /* the column's elevation so far (ss_heal_elevation_scan) */
 } ss_heal_col_state;
 void ss_heal_stats_acc_add_stack(ss_heal_stats_acc *a, const ss_heal_grid *g, int x0, int x1,
                                  int y0, int y1, int zoff, int gz, ss_heal_col_state *cols,
@@ -368,6 +384,22 @@ void ss_heal_stats_acc_add_stack(ss_heal_stats_acc *a, const ss_heal_grid *g, in
  * and merge; integer sums of normalised parts stay exact. */
 void ss_heal_stats_acc_normalise(ss_heal_stats_acc *a);
 void ss_heal_stats_acc_finish(const ss_heal_stats_acc *a, double dx_mm, ss_heal_stats *st);
+/* Surface elevation (mm) where collagen exceeds the dermis it replaced, or
+ * falls short of it (docs/heal-model.md §2 [D12]): each tissue cell adds
+ * SS_HEAL_COLLAGEN_VOLUME x dx x (rho - ref), ref = 1 in a WOUND cell (its
+ * dermis was removed, the scar has to replace its collagen) and 0 elsewhere
+ * (a keloid's collagen in intact dermis comes on top of it). Collagen is ~0.3
+ * of the dermis' volume (70-80 % of a dry weight that is ~1/3 of the wet
+ * weight); scar tissue around excess collagen is taken to hold it at that
+ * fraction. ss_heal_elevation_scan adds, for every column of g (elev: nx*ny,
+ * index y*nx + x, continued from its values), the tissue cells of levels
+ * z1 - 1 down to z0, top down in float (a z stack of boxes continues the
+ * sums box by box in the same order: bit-identical to one grid). */
+#define SS_HEAL_COLLAGEN_VOLUME 0.3
+static inline float ss_heal_elevation_term(float rho, uint8_t cell, float k) {
+    return k * (rho - (cell == SS_CELL_WOUND ? 1.0f : 0.0f));
+}
+void ss_heal_elevation_scan(const ss_heal_grid *g, int z0, int z1, float *elev);
 /* omega for one cell (1 = wound region) under params p. */
 int ss_heal_in_region(const ss_heal_grid *g, const ss_heal_params *p, size_t idx);
 
@@ -397,9 +429,10 @@ typedef struct ss_heal_course {
     double scar_peak_day;
     double scar_end_mm3;      /* at the end */
     double scar_max_peak;     /* peak of the largest rho */
-    double half_life_days;    /* remodelling: ln 2 over the decay rate of the scar volume
-                                 over the last quarter of the run (after the peak;
-                                 -1 = not decaying, 0 = no peak yet) */
+    double half_life_days;    /* remodelling: ln 2 over the decay rate of the scar collagen
+                                 above rho_mature (the part remodelling resorbs) over
+                                 the last quarter of the run (after the peak; -1 = not
+                                 decaying, 0 = no peak yet) */
     double deep_e_fraction;   /* tissue voxels deeper than 0.5 mm below the skin surface
                                  with e > 0.5, fraction, at deep_check_day */
     double keloid_beyond_mm;  /* mean advance beyond the original margin of the scar above
@@ -414,6 +447,12 @@ typedef struct ss_heal_course {
     double keloid_beyond_day[2]; /* keloid extent at opts.keloid_day[k] (first step at or after) */
     double keloid_beyond_max;    /* its largest value over the run (regression if > the end) */
     double scar_max_end;         /* largest rho at the end (regression if below the peak) */
+    double elev_max_mm;          /* largest surface elevation over the run and its day */
+    double elev_max_day;
+    double elev_end_max_mm; /* largest and wound-mean surface elevation at the end */
+    double elev_end_mean_mm;
+    double scar_deep_max; /* largest rho at the end of tissue wholly below keloid_mm (its
+                             voxel's top deeper than keloid_mm below the surface) */
 } ss_heal_course;
 ss_status ss_heal_course_run(const ss_heal_params *p, const ss_heal_course_opts *o,
                              ss_heal_course *c, ss_error *err);

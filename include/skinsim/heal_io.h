@@ -56,9 +56,10 @@ uint8_t *ss_heal_voxelise_mesh_box(const ss_tri_mesh *m, const int gdim[3], cons
  * VTK XML ImageData, one piece, cell data (one value per voxel), appended raw
  * binary with UInt64 headers, little endian. Arrays: `cell_state` UInt8 (the
  * ss_heal_cell codes), one Float32 array per field named by
- * ss_heal_field_name(), `velocity` Float32 x3 when the grid has velocities.
- * WholeExtent 0 nx 0 ny 0 nz, Origin 0 0 0, Spacing dx dx dx (mm). FieldData
- * TimeValue holds t in days. Written atomically. */
+ * ss_heal_field_name(), `velocity` Float32 x3 when the grid has velocities,
+ * then `surface_elevation_mm` Float32 (the column's ss_heal_elevation_scan,
+ * the same in every cell of a column: a height map for `wound`). WholeExtent 0 nx 0 ny 0 nz, Origin
+ * 0 0 0, Spacing dx dx dx (mm). FieldData TimeValue holds t in days. Written atomically. */
 ss_status ss_heal_vti_write(const char *path, const ss_heal_grid *g, ss_error *err);
 /* The same with nvec more 3-component cell arrays (names[v], vecs[v][c] of
  * nx*ny*nz floats), e.g. the mechanics' displacement. */
@@ -101,11 +102,14 @@ ss_status ss_heal_vti_write_box(const char *path, const ss_heal_grid *g, const i
                                 ss_error *err);
 /* The same with the grid's velocity (when g has one) and nvec 3-vectors over
  * g (names[i], vecs[i][0..2]) on the box, e.g. a rank's piece of a run with
- * the contraction mechanics (velocity, displacement). */
+ * the contraction mechanics (velocity, displacement); elevation: the surface
+ * elevation of g's columns (nx*ny, the whole column's, e.g. summed over a z
+ * stack of boxes), NULL = over the box's own levels. */
 ss_status ss_heal_vti_write_box_vectors(const char *path, const ss_heal_grid *g, const int box[6],
                                         const int off[3], const int whole[3], int nvec,
                                         const char *const *names, float *const (*vecs)[3],
-                                        const double *closed_day, ss_error *err);
+                                        const double *closed_day, const float *elevation,
+                                        ss_error *err);
 /* Reads a snapshot written by ss_heal_vti_write(_vectors) back into a new grid
  * (cell states, every field, t_days; skin_top_mm and step are left 0: the
  * file does not hold them). displacement: if not NULL, receives a malloc'd

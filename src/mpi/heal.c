@@ -544,9 +544,9 @@ static void do_stats(ss_dist_heal *d, ss_heal_stats *st) {
     int64_t cnt[6] = {a.n_initial, a.n_region, a.n_open, a.n_wcol, a.n_tissue, a.n_nonfinite};
     memcpy(in, cnt, sizeof cnt);
     memcpy(in + 6, a.sum, sizeof a.sum);
-    double mx = a.scar_max, mxall = 0;
+    double mx[2] = {a.scar_max, a.elev_max}, mxall[2] = {0, 0};
     MPI_Reduce(in, out, NI, MPI_INT64_T, MPI_SUM, 0, d->cart);
-    MPI_Reduce(&mx, &mxall, 1, MPI_DOUBLE, MPI_MAX, 0, d->cart);
+    MPI_Reduce(mx, mxall, 2, MPI_DOUBLE, MPI_MAX, 0, d->cart);
     if (d->rank == 0) {
         ss_heal_stats_acc t;
         ss_heal_stats_acc_init(&t);
@@ -557,7 +557,8 @@ static void do_stats(ss_dist_heal *d, ss_heal_stats *st) {
         t.n_tissue = out[4];
         t.n_nonfinite = out[5];
         memcpy(t.sum, out + 6, sizeof t.sum);
-        t.scar_max = mxall;
+        t.scar_max = mxall[0];
+        t.elev_max = mxall[1];
         ss_heal_stats_acc_finish(&t, d->su.dx_mm, st);
     }
     d->t_stats += MPI_Wtime() - t0;
@@ -1089,8 +1090,20 @@ static ss_status do_pieces(ss_dist_heal *d, int index, ss_error *err) {
     /* the owned box, written straight from the box + halo */
     const int box[6] = {1, 1, d->hz, d->n[0], d->n[1], d->n[2]};
     const int off[3] = {d->lo[0], d->lo[1], d->lo[2]};
+    /* the surface elevation: with z split summed down the stack in the
+     * single grid's order (top down), then the bottom box's totals to all */
+    float *ev = NULL;
+    if (d->hz) {
+        const size_t nc = (size_t)d->g->nx * d->g->ny;
+        if (!(ev = malloc(nc * sizeof *ev))) MPI_Abort(d->cart, 3);
+        zchain(d, ev, nc * sizeof *ev, 0);
+        ss_heal_elevation_scan(d->g, 1, d->g->nz - 1, ev);
+        zchain(d, ev, nc * sizeof *ev, 1);
+        MPI_Bcast(ev, (int)nc, MPI_FLOAT, d->zroot, d->zcomm);
+    }
     ss_status st = ss_heal_vti_write_box_vectors(path, d->g, box, off, d->su.G, d->su.mech ? 1 : 0,
-                                                 vnames + 1, vec, cb, &e);
+                                                 vnames + 1, vec, cb, ev, &e);
+    free(ev);
     free(cb);
     int v = (int)st, vmax = 0;
     MPI_Allreduce(&v, &vmax, 1, MPI_INT, MPI_MAX, d->cart);

@@ -543,6 +543,8 @@ class ss_heal_stats(ctypes.Structure):
         ("scar_volume_mm3", c_double),
         ("scar_max", c_double),
         ("open_columns_mm2", c_double),
+        ("elevation_mean_mm", c_double),
+        ("elevation_max_mm", c_double),
     ]
 
 

@@ -66,7 +66,8 @@ int main(void) {
     S(ss_abrasion), F(ss_abrasion, timeline), F(ss_abrasion, shape), F(ss_abrasion, skin),
         F(ss_abrasion, phase), F(ss_abrasion, rendered);
     S(ss_heal_stats), F(ss_heal_stats, initial_area_mm2), F(ss_heal_stats, field_mean),
-        F(ss_heal_stats, scar_max), F(ss_heal_stats, open_columns_mm2);
+        F(ss_heal_stats, scar_max), F(ss_heal_stats, open_columns_mm2),
+        F(ss_heal_stats, elevation_mean_mm), F(ss_heal_stats, elevation_max_mm);
     S(ss_heal_area_row), F(ss_heal_area_row, st);
     S(ss_heal_grid), F(ss_heal_grid, dx_mm), F(ss_heal_grid, cell), F(ss_heal_grid, field),
         F(ss_heal_grid, velocity), F(ss_heal_grid, t_days), F(ss_heal_grid, step);

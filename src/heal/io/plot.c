@@ -39,7 +39,7 @@ ss_status ss_heal_area_csv_write_columns(const char *path, const ss_heal_area_ro
         const char *name = ss_heal_field_name(k);
         fprintf(f, ",mean_%s", name ? name : "field");
     }
-    fprintf(f, ",open_columns_mm2");
+    fprintf(f, ",open_columns_mm2,elevation_mean_mm,elevation_max_mm");
     for (int c = 0; c < ncols; c++) fprintf(f, ",%s", names[c]);
     fputc('\n', f);
     for (int i = 0; i < n; i++) {
@@ -47,7 +47,8 @@ ss_status ss_heal_area_csv_write_columns(const char *path, const ss_heal_area_ro
         fprintf(f, "%.9g,%.9g,%.9g,%.9g", rows[i].t_days, s->open_area_mm2,
                 ss_heal_area_normalised(s), s->wound_region_area_mm2);
         for (int k = 0; k < SS_HEAL_NFIELDS; k++) fprintf(f, ",%.9g", s->field_mean[k]);
-        fprintf(f, ",%.9g", s->open_columns_mm2);
+        fprintf(f, ",%.9g,%.9g,%.9g", s->open_columns_mm2, s->elevation_mean_mm,
+                s->elevation_max_mm);
         for (int c = 0; c < ncols; c++) fprintf(f, ",%.9g", vals[(size_t)i * ncols + c]);
         fputc('\n', f);
     }

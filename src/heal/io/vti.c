@@ -83,8 +83,8 @@ static void put_vec3(FILE *f, float *const v[3], size_t n) {
 
 static ss_status write_vti(const char *path, const ss_heal_grid *g, const int box[6], int nvec,
                            const char *const *names, float *const (*vecs)[3],
-                           const double *closed_day, const int off[3], const int whole[3],
-                           ss_error *err);
+                           const double *closed_day, const float *elevation, const int off[3],
+                           const int whole[3], ss_error *err);
 
 /* The vector v (3 arrays over g) on g's box bx (x0 y0 z0 nx ny nz), row by row. */
 static void put_vec3_box(FILE *f, const ss_heal_grid *g, float *const v[3], const int bx[6]) {
@@ -123,13 +123,13 @@ ss_status ss_heal_vti_write_all(const char *path, const ss_heal_grid *g, int nve
                                 const double *closed_day, ss_error *err) {
     if (!g || !g->cell) return ss_error_set(err, SS_ERR_INPUT, "%s: no grid", path);
     const int off[3] = {0, 0, 0}, whole[3] = {g->nx, g->ny, g->nz};
-    return write_vti(path, g, NULL, nvec, names, vecs, closed_day, off, whole, err);
+    return write_vti(path, g, NULL, nvec, names, vecs, closed_day, NULL, off, whole, err);
 }
 
 ss_status ss_heal_vti_write_piece(const char *path, const ss_heal_grid *piece, const int off[3],
                                   const int whole[3], ss_error *err) {
     if (!piece || !piece->cell) return ss_error_set(err, SS_ERR_INPUT, "%s: no grid", path);
-    return write_vti(path, piece, NULL, 0, NULL, NULL, NULL, off, whole, err);
+    return write_vti(path, piece, NULL, 0, NULL, NULL, NULL, NULL, off, whole, err);
 }
 
 ss_status ss_heal_vti_write_piece_all(const char *path, const ss_heal_grid *piece, const int off[3],
@@ -137,7 +137,7 @@ ss_status ss_heal_vti_write_piece_all(const char *path, const ss_heal_grid *piec
                                       float *const (*vecs)[3], const double *closed_day,
                                       ss_error *err) {
     if (!piece || !piece->cell) return ss_error_set(err, SS_ERR_INPUT, "%s: no grid", path);
-    return write_vti(path, piece, NULL, nvec, names, vecs, closed_day, off, whole, err);
+    return write_vti(path, piece, NULL, nvec, names, vecs, closed_day, NULL, off, whole, err);
 }
 
 ss_status ss_heal_vti_write_box(const char *path, const ss_heal_grid *g, const int box[6],
@@ -147,18 +147,19 @@ ss_status ss_heal_vti_write_box(const char *path, const ss_heal_grid *g, const i
         box[4] < 1 || box[5] < 1 || box[0] + box[3] > g->nx || box[1] + box[4] > g->ny ||
         box[2] + box[5] > g->nz)
         return ss_error_set(err, SS_ERR_INPUT, "%s: no grid, or the box is not inside it", path);
-    return write_vti(path, g, box, 0, NULL, NULL, closed_day, off, whole, err);
+    return write_vti(path, g, box, 0, NULL, NULL, closed_day, NULL, off, whole, err);
 }
 
 ss_status ss_heal_vti_write_box_vectors(const char *path, const ss_heal_grid *g, const int box[6],
                                         const int off[3], const int whole[3], int nvec,
                                         const char *const *names, float *const (*vecs)[3],
-                                        const double *closed_day, ss_error *err) {
+                                        const double *closed_day, const float *elevation,
+                                        ss_error *err) {
     if (!g || !g->cell || !box || box[0] < 0 || box[1] < 0 || box[2] < 0 || box[3] < 1 ||
         box[4] < 1 || box[5] < 1 || box[0] + box[3] > g->nx || box[1] + box[4] > g->ny ||
         box[2] + box[5] > g->nz || nvec < 0 || (nvec && (!names || !vecs)))
         return ss_error_set(err, SS_ERR_INPUT, "%s: no grid, or the box is not inside it", path);
-    return write_vti(path, g, box, nvec, names, vecs, closed_day, off, whole, err);
+    return write_vti(path, g, box, nvec, names, vecs, closed_day, elevation, off, whole, err);
 }
 
 ss_status ss_heal_pvti_write(const char *path, const int whole[3], double dx_mm, int npieces,
@@ -187,7 +188,8 @@ ss_status ss_heal_pvti_write_vectors(const char *path, const int whole[3], doubl
     for (int v = 0; v < nvec; v++)
         fprintf(f, "      <PDataArray type=\"Float32\" Name=\"%s\" NumberOfComponents=\"3\"/>\n",
                 names[v]);
-    fprintf(f, "    </PCellData>\n");
+    fprintf(f, "      <PDataArray type=\"Float32\" Name=\"surface_elevation_mm\"/>\n"
+               "    </PCellData>\n");
     for (int i = 0; i < npieces; i++) {
         fprintf(f, "    <Piece Extent=\"%d %d %d %d %d %d\" Source=\"", ext[i][0], ext[i][1],
                 ext[i][2], ext[i][3], ext[i][4], ext[i][5]);
@@ -202,16 +204,28 @@ ss_status ss_heal_pvti_write_vectors(const char *path, const int whole[3], doubl
  * whose dimensions are whole (the plain file: off 0, whole = g's). */
 static ss_status write_vti(const char *path, const ss_heal_grid *g, const int box[6], int nvec,
                            const char *const *names, float *const (*vecs)[3],
-                           const double *closed_day, const int org[3], const int whole[3],
-                           ss_error *err) {
+                           const double *closed_day, const float *elevation, const int org[3],
+                           const int whole[3], ss_error *err) {
     int vel = g->velocity[0] && g->velocity[1] && g->velocity[2];
     /* the cells written: g's box x0 y0 z0 nx ny nz (box), or all of g */
     const int bx[6] = {box ? box[0] : 0,     box ? box[1] : 0,     box ? box[2] : 0,
                        box ? box[3] : g->nx, box ? box[4] : g->ny, box ? box[5] : g->nz};
     size_t n = (size_t)bx[3] * (size_t)bx[4] * (size_t)bx[5];
+    /* the surface elevation of every column (given, or over the box's levels,
+     * which for a box spanning the grid's depth is the whole column) */
+    float *elev = NULL;
+    if (!elevation) {
+        elev = calloc((size_t)g->nx * (size_t)g->ny, sizeof *elev);
+        if (!elev) return ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", path);
+        ss_heal_elevation_scan(g, bx[2], bx[2] + bx[5], elev);
+        elevation = elev;
+    }
     ss_atomic_file af;
     ss_status st = ss_atomic_open(&af, path, err);
-    if (st) return st;
+    if (st) {
+        free(elev);
+        return st;
+    }
     FILE *f = af.fp;
     fprintf(f, "<?xml version=\"1.0\"?>\n"
                "<VTKFile type=\"ImageData\" version=\"1.0\" byte_order=\"LittleEndian\" "
@@ -228,7 +242,7 @@ static ss_status write_vti(const char *path, const ss_heal_grid *g, const int bo
     /* the closure days go after every cell array in the appended data */
     size_t ncol = (size_t)bx[3] * (size_t)bx[4];
     uint64_t coff = 8 + n + SS_HEAL_NFIELDS * (8 + 4 * (uint64_t)n) +
-                    (uint64_t)(vel + nvec) * (8 + 12 * (uint64_t)n);
+                    (uint64_t)(vel + nvec) * (8 + 12 * (uint64_t)n) + 8 + 4 * (uint64_t)n;
     if (closed_day)
         fprintf(f,
                 "      <DataArray type=\"Float64\" Name=\"closed_day\" NumberOfTuples=\"%zu\" "
@@ -265,6 +279,11 @@ static ss_status write_vti(const char *path, const ss_heal_grid *g, const int bo
                 names[v], (unsigned long long)off);
         off += 8 + 12 * n;
     }
+    fprintf(f,
+            "        <DataArray type=\"Float32\" Name=\"surface_elevation_mm\" "
+            "format=\"appended\" offset=\"%llu\"/>\n",
+            (unsigned long long)off);
+    off += 8 + 4 * n;
     fprintf(f, "      </CellData>\n    </Piece>\n  </ImageData>\n"
                "  <AppendedData encoding=\"raw\">\n   _");
     put_u64le(f, (uint64_t)n);
@@ -286,6 +305,12 @@ static ss_status write_vti(const char *path, const ss_heal_grid *g, const int bo
         if (!box) put_vec3(f, vecs[v], n);
         if (box) put_vec3_box(f, g, vecs[v], bx);
     }
+    put_u64le(f, (uint64_t)(4 * n)); /* per column, repeated along z */
+    for (int z = 0; z < bx[5]; z++)
+        for (int y = 0; y < bx[4]; y++)
+            put_f32le(f, elevation + (size_t)(bx[1] + y) * (size_t)g->nx + (size_t)bx[0],
+                      (size_t)bx[3]);
+    free(elev);
     if (closed_day) {
         put_u64le(f, (uint64_t)(8 * ncol));
         put_f64le(f, closed_day, ncol);

@@ -37,7 +37,8 @@
  * they read as 0). */
 #define ROW_VALUES_OLD (4 + SS_HEAL_NFIELDS)
 #define ROW_VALUES_7 (7 + SS_HEAL_NFIELDS) /* before the open column count */
-#define ROW_VALUES (8 + SS_HEAL_NFIELDS)
+#define ROW_VALUES_8 (8 + SS_HEAL_NFIELDS) /* before the elevation */
+#define ROW_VALUES (10 + SS_HEAL_NFIELDS)
 
 /* A number that reads back bit for bit: cJSON 1.7 prints %.15g when that
  * parses back within an epsilon, which loses the last bit of about one
@@ -81,6 +82,8 @@ char *ss_heal_run__aux_json(const ss_heal_run *r, double wall) {
         v[5 + SS_HEAL_NFIELDS] = row->st.scar_volume_mm3;
         v[6 + SS_HEAL_NFIELDS] = row->st.scar_max;
         v[7 + SS_HEAL_NFIELDS] = row->st.open_columns_mm2;
+        v[8 + SS_HEAL_NFIELDS] = row->st.elevation_mean_mm;
+        v[9 + SS_HEAL_NFIELDS] = row->st.elevation_max_mm;
         cJSON *row_j = cJSON_CreateArray();
         for (int k = 0; row_j && k < ROW_VALUES; k++)
             cJSON_AddItemToArray(row_j, exact_number(v[k]));
@@ -112,7 +115,7 @@ static ss_status restore_rows(ss_heal_run *r, const cJSON *area, const char *dir
     const cJSON *e;
     cJSON_ArrayForEach(e, area) {
         const int nv = cJSON_GetArraySize(e);
-        if (nv != ROW_VALUES && nv != ROW_VALUES_7 && nv != ROW_VALUES_OLD)
+        if (nv != ROW_VALUES && nv != ROW_VALUES_8 && nv != ROW_VALUES_7 && nv != ROW_VALUES_OLD)
             return ss_error_set(err, SS_ERR_INPUT, "%s: checkpoint area rows malformed", dir);
         double v[ROW_VALUES] = {0};
         for (int k = 0; k < nv; k++) {
@@ -133,6 +136,8 @@ static ss_status restore_rows(ss_heal_run *r, const cJSON *area, const char *dir
         row->st.scar_volume_mm3 = v[5 + SS_HEAL_NFIELDS];
         row->st.scar_max = v[6 + SS_HEAL_NFIELDS];
         row->st.open_columns_mm2 = v[7 + SS_HEAL_NFIELDS];
+        row->st.elevation_mean_mm = v[8 + SS_HEAL_NFIELDS];
+        row->st.elevation_max_mm = v[9 + SS_HEAL_NFIELDS];
     }
     return SS_OK;
 }
@@ -652,6 +657,7 @@ static void add_course(cJSON *j, const ss_heal_run *r) {
     if (!r->nrows) return;
     const double t95 = ss_heal_time_to_closure(r->rows, r->nrows, 0.05);
     double formed = -1, gone = -1, pmax = 0, pmax_day = 0, pvol = 0, pvol_day = 0;
+    double emax = r->rows[0].st.elevation_max_mm, emax_day = r->rows[0].t_days;
     for (int i = 0; i < r->nrows; i++) {
         const ss_heal_area_row *w = &r->rows[i];
         if (formed < 0 && w->st.eschar_wound_mean > 0.5) formed = w->t_days;
@@ -660,6 +666,7 @@ static void add_course(cJSON *j, const ss_heal_run *r) {
             gone = w->t_days;
         if (w->st.scar_max > pmax) pmax = w->st.scar_max, pmax_day = w->t_days;
         if (w->st.scar_volume_mm3 > pvol) pvol = w->st.scar_volume_mm3, pvol_day = w->t_days;
+        if (w->st.elevation_max_mm > emax) emax = w->st.elevation_max_mm, emax_day = w->t_days;
     }
     const ss_heal_stats *e = &r->rows[r->nrows - 1].st;
     add_closure_time(j, "scab_formed_day", formed);
@@ -671,6 +678,12 @@ static void add_course(cJSON *j, const ss_heal_run *r) {
     cJSON_AddNumberToObject(j, "scar_peak_volume_day", pvol_day);
     cJSON_AddNumberToObject(j, "final_scar_volume_mm3", e->scar_volume_mm3);
     cJSON_AddNumberToObject(j, "final_wound_region_area_mm2", e->wound_region_area_mm2);
+    /* the surface raised by collagen beyond the dermis it replaced (largest
+     * over the run and the columns) and at the end [D12] */
+    cJSON_AddNumberToObject(j, "surface_elevation_max_mm", emax);
+    cJSON_AddNumberToObject(j, "surface_elevation_max_day", emax_day);
+    cJSON_AddNumberToObject(j, "final_surface_elevation_max_mm", e->elevation_max_mm);
+    cJSON_AddNumberToObject(j, "final_surface_elevation_mean_mm", e->elevation_mean_mm);
 }
 
 cJSON *ss_heal_run__summary(const ss_heal_run *r, double wall) {

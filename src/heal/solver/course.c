@@ -13,7 +13,7 @@
 #include "skinsim/heal.h"
 
 typedef struct sample {
-    double t, area, eschar, vol;
+    double t, area, eschar, vol, exc;
 } sample;
 
 static int tissue(uint8_t c) { return c != SS_CELL_AIR && c != SS_CELL_BOUND; }
@@ -33,6 +33,18 @@ static double deep_fraction(const ss_heal_grid *g) {
             }
     }
     return deep ? (double)hit / (double)deep : 0.0;
+}
+
+/* The scar collagen above the mature scar's (the part remodelling resorbs,
+ * docs/heal-model.md [D10]): the integral of (rho - rho_mature)+, mm^3. */
+static double scar_excess(const ss_heal_grid *g, double rho_mature) {
+    const float *rho = g->field[SS_HEAL_SCAR];
+    const float rm = (float)rho_mature;
+    const size_t n = (size_t)g->nx * (size_t)g->ny * (size_t)g->nz;
+    double sum = 0;
+    for (size_t i = 0; i < n; i++)
+        if (tissue(g->cell[i]) && rho[i] > rm) sum += (double)(rho[i] - rm);
+    return sum * g->dx_mm * g->dx_mm * g->dx_mm;
 }
 
 static float colmax_scar(const ss_heal_grid *g, int x, int y) {
@@ -120,7 +132,7 @@ ss_status ss_heal_course_run(const ss_heal_params *p, const ss_heal_course_opts 
     ss_heal_stats_compute(g, &stt);
     const double a0 = stt.initial_area_mm2;
     int ns = 0;
-    sm[ns++] = (sample){0, 1, stt.eschar_wound_mean, stt.scar_volume_mm3};
+    sm[ns++] = (sample){0, 1, stt.eschar_wound_mean, stt.scar_volume_mm3, 0};
     int late = 0, deep_done = o->deep_check_day < 0, kday_done[2] = {0, 0};
     while (g->t_days < o->days - 1e-9 && !st) {
         double dt = ss_heal_solver_dt(s);
@@ -137,13 +149,17 @@ ss_status ss_heal_course_run(const ss_heal_params *p, const ss_heal_course_opts 
         if (ns == cap) break;
         sample *q = &sm[ns++];
         *q = (sample){g->t_days, a0 > 0 ? stt.open_area_mm2 / a0 : 0, stt.eschar_wound_mean,
-                      stt.scar_volume_mm3};
+                      stt.scar_volume_mm3, scar_excess(g, p->rho_mature)};
         if (c->scab_day < 0 && q->eschar > 0.5) c->scab_day = q->t;
         if (stt.scar_volume_mm3 > c->scar_peak_mm3) {
             c->scar_peak_mm3 = stt.scar_volume_mm3;
             c->scar_peak_day = g->t_days;
         }
         if (stt.scar_max > c->scar_max_peak) c->scar_max_peak = stt.scar_max;
+        if (stt.elevation_max_mm > c->elev_max_mm) {
+            c->elev_max_mm = stt.elevation_max_mm;
+            c->elev_max_day = g->t_days;
+        }
         if (o->keloid_thr > 0) {
             const double kb = keloid_beyond(g, o->wound_mm, o->keloid_thr, NULL);
             if (kb > c->keloid_beyond_max) c->keloid_beyond_max = kb;
@@ -181,15 +197,27 @@ ss_status ss_heal_course_run(const ss_heal_params *p, const ss_heal_course_opts 
         c->t50 = cross(sm, ns, 0.5, 0);
         c->scar_end_mm3 = stt.scar_volume_mm3;
         c->scar_max_end = stt.scar_max;
+        c->elev_end_max_mm = stt.elevation_max_mm;
+        c->elev_end_mean_mm = stt.elevation_mean_mm;
+        for (int z = 1; z < g->nz - 1; z++) { /* below the keloid's layer */
+            if (top - (z + 1) * dx < p->keloid_mm - 1e-9) continue;
+            for (int y = 1; y < g->ny - 1; y++)
+                for (int x = 1; x < g->nx - 1; x++) {
+                    const size_t i = ss_heal_idx(g, x, y, z);
+                    const float r = g->field[SS_HEAL_SCAR][i];
+                    if (tissue(g->cell[i]) && r > c->scar_deep_max) c->scar_deep_max = r;
+                }
+        }
         c->region_area_mm2 = stt.wound_region_area_mm2;
-        /* remodelling: decay of the scar volume over the last quarter, after the peak */
+        /* remodelling: decay of the scar collagen above the mature scar's over the
+         * last quarter, after the peak (the mature part stays, [D10]) */
         double ta = 0.75 * o->days;
         if (ta < c->scar_peak_day) ta = c->scar_peak_day;
         int ia = 0;
         while (ia < ns - 1 && sm[ia].t < ta) ia++;
         const sample *A = &sm[ia], *B = &sm[ns - 1];
-        if (B->t - A->t > 1.0 && A->vol > 0 && B->vol > 0) {
-            double rate = log(A->vol / B->vol) / (B->t - A->t);
+        if (B->t - A->t > 1.0 && A->exc > 0 && B->exc > 0) {
+            double rate = log(A->exc / B->exc) / (B->t - A->t);
             c->half_life_days = rate > 0 ? log(2.0) / rate : -1;
         }
         if (o->keloid_thr > 0)

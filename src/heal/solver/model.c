@@ -43,7 +43,10 @@ typedef struct model_ctx {
     float lam11, lam31, lam12, lam22, beta2, lam33, lam32, inv_u3eq, rn, inv_K, lamnn;
     float Rs, lames, lamge, lamee, gamma1, lamnrho, lamrhop, lamkrho, lampp, inv_rhomax, rhomax;
     float kscab, kang, bed_mm, h, rho_closed, inv_rhosat, inv_scabmm;
-    float kact; /* keloid invasion signal a(t) for the current step (keloid_signal) */
+    float kact;         /* keloid invasion signal a(t) for the current step (keloid_signal) */
+    float rmat;         /* rho_mature: remodelling resorbs only the excess above it [D10] */
+    float kadn, adn_mm; /* adnexal outgrowth rate and the depth that destroys it [D11] */
+    float kel_h;        /* keloid_mm / voxel: the keloid's depth in voxel levels [D12] */
     int scab, static_region;
     const uint8_t *cell;
     int nx, ny, nz;
@@ -134,6 +137,7 @@ react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep, const i
     /* keloid factor G = a + (1 - a) clamp(rho/rho_max - 1, 0, 1), times lamkrho */
     const float lka = m->lamkrho * m->kact, lkb = m->lamkrho * (1.0f - m->kact);
     const float irmax = m->inv_rhomax;
+    const float rmat = m->rmat, lrm = m->lamrhop * m->rmat, kel_h = m->kel_h;
     const float kang = m->kang * m->inv_scabmm;
     float *restrict m0 = row->m[0], *restrict m1 = row->m[1];
     float *restrict p1 = pr[0], *restrict p2 = pr[1], *restrict p3 = pr[2], *restrict p4 = pr[3];
@@ -190,11 +194,18 @@ react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep, const i
          * - lamrhop rho; G = a + (1 - a) clamp(rho/rho_max - 1, 0, 1): tissue
          * not yet keloid needs the invasion signal a(t) [D6] */
         const float imm = pos(1.0f - rclosed * u3); /* (1 - u3) at rho_open = 0 */
-        const float kdep =
-            kel ? (lka + lkb * clampf(rho * irmax - 1.0f, 0.0f, 1.0f)) * pos(1.0f - rho * irsat)
-                : 0.0f;
-        p7[i] = om * ns * nn * (imm * necl * lamnrho + kdep);
-        l7[i] = m->lamrhop;
+        /* remodelling resorbs the excess above the mature scar's collagen:
+         * - lamrhop (rho - rho_mature)+ [D10], as production lamrhop rho_mature
+         * and loss lamrhop where rho > rho_mature (rho never falls below it) */
+        const float over = (float)(rho > rmat);
+        /* the keloid lies in the dermis above keloid_mm: the fraction of the
+         * voxel inside it (levels below the column's surface cell) */
+        const float kin = kel ? clampf(kel_h - (float)(ZT[i] - z), 0.0f, 1.0f) : 0.0f;
+        const float kdep = kel ? (lka + lkb * clampf(rho * irmax - 1.0f, 0.0f, 1.0f)) *
+                                     pos(1.0f - rho * irsat) * kin
+                               : 0.0f;
+        p7[i] = om * ns * nn * (imm * necl * lamnrho + kdep) + lrm * over;
+        l7[i] = m->lamrhop * over;
         /* 4.1.8 plasma: Dp lap p + lampp p + C(rho)(1-p) */
         const float C = pos(rho - m->rhomax) * m->inv_rhomax;
         p8[i] = dyn * (C + ppos * p);
@@ -260,6 +271,22 @@ static void find_surface(model_ctx *c) {
     /* the margin [D8]: lateral faces of a surface cell with intact epidermis
      * (the Dirichlet e = 1 of the sheet) at the same level */
     const float kf = c->De / (c->h * c->h);
+    const size_t ncol = (size_t)nx * ny;
+    /* adnexal remnants [D11]: the column's wound depth from the lowest WOUND
+     * level (whole-grid, the maximum of its negative over a z stack); kept in
+     * ds, which prepare recomputes before it is read */
+    if (c->kadn > 0.0f) {
+        for (size_t i = 0; i < ncol; i++) {
+            float lo = -1e30f;
+            for (int z = 1; z <= nz - 2; z++)
+                if (c->cell[(size_t)z * ncol + i] == SS_CELL_WOUND) {
+                    lo = -(float)(z + c->zoff);
+                    break;
+                }
+            c->ds[i] = lo;
+        }
+        if (c->col) c->col(c->col_ctx, SS_HEAL_COL_MAX, c->ds, ncol);
+    }
     for (int y = 0; y < ny; y++)
         for (int x = 0; x < nx; x++) {
             const size_t i = (size_t)y * nx + x;
@@ -273,6 +300,12 @@ static void find_surface(model_ctx *c) {
             const int nb = (cz[i - 1] == SS_CELL_EPIDERMIS) + (cz[i + 1] == SS_CELL_EPIDERMIS) +
                            (cz[i - nx] == SS_CELL_EPIDERMIS) + (cz[i + nx] == SS_CELL_EPIDERMIS);
             c->kfix[i] = kf * (float)nb;
+            /* the surviving adnexa pull the sheet towards 1 like the margin
+             * does, an areal source kadn (1 - depth / adnexa_mm)+ (1 - e) */
+            if (c->kadn > 0.0f && cz[i] == SS_CELL_WOUND && c->ds[i] > -1e29f) {
+                const float depth = (float)(c->ztop[i] + c->ds[i] + 1.0f) * c->h;
+                c->kfix[i] += c->kadn * clampf(1.0f - depth / c->adn_mm, 0.0f, 1.0f);
+            }
         }
     c->ztop_of = c->cell;
 }
@@ -558,6 +591,10 @@ static void ctx_init(model_ctx *c, const ss_heal_params *p, const ss_heal_grid *
     c->inv_scabmm = p->scab_mm > 0 ? (float)(1.0 / p->scab_mm) : 0.0f;
     c->inv_rhosat = (float)(1.0 / p->rho_sat);
     c->kact = 1.0f;
+    c->rmat = (float)p->rho_mature;
+    c->kadn = (float)p->kadn;
+    c->adn_mm = p->adnexa_mm > 0 ? (float)p->adnexa_mm : 1.0f;
+    c->kel_h = (float)(p->keloid_mm / g->dx_mm);
     c->rho_closed = (float)(1.0 - p->rho_open);
     c->bed_mm = (float)p->bed_mm;
     c->h = (float)g->dx_mm;
@@ -582,7 +619,7 @@ static double rate_bound(const ss_heal_params *p) {
                    2.0 * (p->lam33 + p->lam32 * u2max),
                    2.0 * p->rn * u1max + p->lamnn,
                    p->scab ? p->Rs + p->lames : p->lames,
-                   p->lamge + p->lamee,
+                   p->lamge + p->lamee + p->kadn,
                    p->lamrhop,
                    p->static_region ? 0.0 : fabs(p->lampp)};
     double m = 0.0;
@@ -632,6 +669,10 @@ static void sys_init(ss_heal_rd_system *s, model_ctx *c, const ss_heal_grid *g,
         s->mface_closed = (float)SS_HEAL_CRUST_CLOSED; /* [D9] */
     }
     s->hi[SS_HEAL_ESCHAR] = s->hi[SS_HEAL_EPITHELIUM] = s->hi[SS_HEAL_PLASMA] = 1.0f;
+    /* the packing limit holds for every deposition (the ordinary one is not
+     * saturated: a large or long-open wound could pack it past rho_sat, issue
+     * 25: 3.33 in a 4 cm circle); below rho_sat nothing changes */
+    s->hi[SS_HEAL_SCAR] = (float)p->rho_sat;
     for (int d = 0; d < 3; d++) s->velocity[d] = g->velocity[d];
     s->react = heal_react;
     s->prepare = c->ztop ? heal_prepare : NULL;
@@ -643,11 +684,13 @@ static void sys_init(ss_heal_rd_system *s, model_ctx *c, const ss_heal_grid *g,
 static ss_status check_params(const ss_heal_params *p, ss_error *err) {
     if (!(p->lam11 > 0) || !(p->u3_eq > 0) || !(p->K > 0) || !(p->rho_max > 0) ||
         !(p->u1_beta2 > 0) || !(p->gamma1 > 0 && p->gamma1 < 1) || !(p->bed_mm > 0) ||
-        !(p->scab_mm >= 0) || !(p->rho_sat > 0))
+        !(p->scab_mm >= 0) || !(p->rho_sat > 0) || !(p->rho_mature >= 0) || !(p->kadn >= 0) ||
+        !(p->adnexa_mm > 0) || !(p->keloid_mm > 0))
         return ss_error_set(err, SS_ERR_INPUT,
                             "heal params: lam11, u3_eq, K, rho_max, u1_beta2, bed_mm, rho_sat must "
                             "be > 0, "
-                            "scab_mm >= 0 and gamma1 in (0, 1)");
+                            "scab_mm >= 0 and gamma1 in (0, 1); rho_mature, kadn >= 0, "
+                            "adnexa_mm > 0");
     return SS_OK;
 }
 

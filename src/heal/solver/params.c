@@ -88,7 +88,8 @@ static const pdef PDEFS[] = {
      CAL ": scar forms during the first 1-2 weeks, peak density ~1.5 x normal dermis", 0.6, 0.6,
      0.6},
     {"lamrhop", OFF(lamrhop), "1/day",
-     "remodelling half-life ln 2 / lamrhop = 120 days (clean, scab): scar maturation takes 6-24 "
+     "remodelling half-life ln 2 / lamrhop = 120 days (clean, scab) of the collagen above "
+     "rho_mature (docs/heal-model.md [D10]): scar maturation takes 6-24 "
      "months (Gurtner et al. 2008, Nature 453:314; Bayat et al. 2003, BMJ 326:88); keloid 365 "
      "days: keloids do not regress",
      0.005776, 0.005776, 0.0019},
@@ -155,6 +156,40 @@ static const pdef PDEFS[] = {
      "after closure, then stops ~3 mm beyond the margin, which the default 30 mm block holds "
      "(docs/heal-model.md §6); 0 = no decay (the front never stops)",
      20.0, 20.0, 20.0},
+    {"rho_mature", OFF(rho_mature), "1",
+     "collagen of a mature scar, x normal dermis (docs/heal-model.md §2 [D10]): remodelling "
+     "(lamrhop) resorbs only the excess above it, so the scar matures to a permanent plateau "
+     "instead of fading: the scar's collagen content levels off while synthesis and lysis go on "
+     "(Madden & Peacock 1971, Ann Surg 174:511), type III is replaced by type I over 6-24 months "
+     "and the mature scar reaches only ~70-80 % of the strength of normal skin (Levenson et al. "
+     "1965, Ann Surg 161:293; Gurtner et al. 2008, Nature 453:314); 1 = the collagen of the "
+     "dermis the scar replaced",
+     1.0, 1.0, 1.0},
+    {"kadn", OFF(kadn), "1/day",
+     "adnexal re-epithelialisation (docs/heal-model.md §2 [D11]): outgrowth rate of the "
+     "epithelium from surviving hair-follicle and sweat-gland remnants below a partial-thickness "
+     "wound (eccrine glands are major contributors, Rittié et al. 2013, Am J Pathol 182:163; "
+     "~1.4 follicles and ~1.3 eccrine glands per mm^2, Xu et al. 2017, J Am Acad Dermatol "
+     "77:1133: ~1 mm apart, below the voxel, so an areal source). Calibrated: a 2 x 2 cm wound "
+     "0.25 mm deep closes to 95 % in ~7 days (superficial partial-thickness wounds heal in 7-14 "
+     "days from their adnexa, Deitch et al. 1983, J Trauma 23:895); 0 = the edge only",
+     0.02, 0.02, 0.02},
+    {"adnexa_mm", OFF(adnexa_mm), "mm",
+     "wound depth at which no adnexal remnant is left to re-epithelialise (docs/heal-model.md §2 "
+     "[D11]): the share that survives falls linearly from 1 at the surface to 0 here. Vellus "
+     "follicles, the most numerous outside the scalp (Otberg et al. 2004, J Invest Dermatol "
+     "122:14), end ~1 mm deep; deep dermal wounds keep few remnants and heal mostly from the "
+     "edge, in more than 3 weeks with hypertrophic scarring (Deitch et al. 1983). At 1 mm the "
+     "default wound heals from its edge only",
+     1.0, 1.0, 1.0},
+    {"keloid_mm", OFF(keloid_mm), "mm",
+     "keloid only (docs/heal-model.md §2 [D12]): depth below the skin surface to which the "
+     "keloid's autocrine deposition reaches. Keloids are driven by chronic inflammation in the "
+     "reticular dermis (Eura et al. 2022, PRS Glob Open 10:e4374; Limandjaja et al. 2020, Front "
+     "Cell Dev Biol 8:360: a dermal lesion) and do not fill the tissue below it; 2 mm, the depth "
+     "of the dermis on the trunk and limbs (estimate); the deeper tissue of the block stays "
+     "intact",
+     2.0, 2.0, 2.0},
 };
 #define NPDEFS ((int)(sizeof PDEFS / sizeof PDEFS[0]))
 /* keys whose value may be negative */
@@ -229,7 +264,8 @@ static ss_status check_value(const char *what, const pdef *d, double v, ss_error
                             d->key, v, may_be_negative(d->key) ? "number" : "value >= 0");
     if ((!strcmp(d->key, "u3_eq") || !strcmp(d->key, "K") || !strcmp(d->key, "lam11") ||
          !strcmp(d->key, "rho_max") || !strcmp(d->key, "u1_beta2") || !strcmp(d->key, "bed_mm") ||
-         !strcmp(d->key, "rho_sat")) &&
+         !strcmp(d->key, "rho_sat") || !strcmp(d->key, "adnexa_mm") ||
+         !strcmp(d->key, "keloid_mm")) &&
         !(v > 0))
         return ss_error_set(err, SS_ERR_INPUT, "%s: parameter '%s' = %g must be > 0", what, d->key,
                             v);

@@ -8,6 +8,7 @@
  * run on any number of ranks. The conversion to double is deterministic (a
  * Horner pass over the limbs, a few units in the last place of the exact sum). */
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "skinsim/heal.h"
@@ -25,7 +26,25 @@ static int is_tissue(uint8_t c) { return c != SS_CELL_AIR && c != SS_CELL_BOUND;
  * as the front crosses a column, where the threshold flips whole columns). */
 static float uncovered(float e) { return e >= 1.0f ? 0.0f : e <= 0.0f ? 1.0f : 1.0f - e; }
 
-void ss_heal_stats_acc_init(ss_heal_stats_acc *a) { memset(a, 0, sizeof *a); }
+void ss_heal_stats_acc_init(ss_heal_stats_acc *a) {
+    memset(a, 0, sizeof *a);
+    a->elev_max = -INFINITY;
+}
+
+static float elev_k(const ss_heal_grid *g) { return (float)(SS_HEAL_COLLAGEN_VOLUME * g->dx_mm); }
+
+void ss_heal_elevation_scan(const ss_heal_grid *g, int z0, int z1, float *elev) {
+    const float k = elev_k(g), *rho = g->field[SS_HEAL_SCAR];
+    const size_t ncol = (size_t)g->nx * (size_t)g->ny;
+    if (z0 < 0) z0 = 0;
+    if (z1 > g->nz) z1 = g->nz;
+    for (int z = z1 - 1; z >= z0; z--) {
+        const uint8_t *c = g->cell + (size_t)z * ncol;
+        const float *r = rho + (size_t)z * ncol;
+        for (size_t i = 0; i < ncol; i++)
+            if (is_tissue(c[i])) elev[i] += ss_heal_elevation_term(r[i], c[i], k);
+    }
+}
 
 static void limbs_normalise(int64_t *l) {
     for (int i = 0; i < SS_HEAL_ACC_LIMBS - 1; i++) {
@@ -41,21 +60,26 @@ void ss_heal_stats_acc_normalise(ss_heal_stats_acc *a) {
     a->adds = 0;
 }
 
-/* Adds the float v exactly; a non-finite value is counted instead. */
+/* Adds the float v exactly; a non-finite value is counted instead. The
+ * mantissa and exponent come from the bits (|v| = M 2^(E - 150) for a normal
+ * float, M = mant | 2^23, E its biased exponent; mant 2^-149 for a
+ * subnormal): the same value, so the same normalised limbs, as frexpf, at a
+ * fraction of the cost (the statistics of every area row, issue 25). */
 static void limbs_add(ss_heal_stats_acc *a, int k, float v) {
-    if (!isfinite(v)) {
+    uint32_t b;
+    memcpy(&b, &v, sizeof b);
+    const uint32_t ex = (b >> 23) & 0xffu, mant = b & 0x7fffffu;
+    if (ex == 0xffu) {
         a->n_nonfinite++;
         return;
     }
-    if (v == 0.0f) return;
-    int e;
-    float m = frexpf(fabsf(v), &e);         /* |v| = m 2^e, m in [0.5, 1) */
-    int64_t M = (int64_t)ldexpf(m, 24);     /* 24-bit integer mantissa */
-    int pos = e - 24 + LIMB_BIAS;           /* >= 4 for the smallest subnormal */
-    uint64_t t = (uint64_t)M << (pos % 32); /* < 2^56 */
+    if (ex == 0 && mant == 0) return;
+    const int64_t M = ex ? (int64_t)(mant | 0x800000u) : (int64_t)mant;
+    const int pos = (ex ? (int)ex : 1) - 150 + LIMB_BIAS; /* >= 27 */
+    uint64_t t = (uint64_t)M << (pos % 32);               /* < 2^56 */
     int64_t lo = (int64_t)(t & 0xffffffffu), hi = (int64_t)(t >> 32);
     int64_t *l = a->sum[k] + pos / 32;
-    if (v > 0) {
+    if (!(b >> 31)) {
         l[0] += lo;
         l[1] += hi;
     } else {
@@ -89,10 +113,13 @@ static void add_cells(ss_heal_stats_acc *a, const ss_heal_grid *g, int x, int y,
 /* A column's figures from its surface cell: wound column (initial: a WOUND
  * voxel at the surface at t = 0) with the eschar maximum below it, in omega
  * (region), and for either the open test and the uncovered fraction of e. */
-static void add_column(ss_heal_stats_acc *a, int initial, int region, float smax, float e) {
+static void add_column(ss_heal_stats_acc *a, int initial, int region, float smax, float e,
+                       float elev) {
+    if (elev > a->elev_max) a->elev_max = elev;
     if (initial) {
         a->n_initial++;
         limbs_add(a, SS_HEAL_ACC_ESCHAR, smax);
+        limbs_add(a, SS_HEAL_ACC_ELEV, elev);
         a->n_wcol++;
     }
     if (region) a->n_region++;
@@ -100,6 +127,29 @@ static void add_column(ss_heal_stats_acc *a, int initial, int region, float smax
         a->n_open += e < (float)ss_heal_open_threshold();
         limbs_add(a, SS_HEAL_ACC_DEFICIT, uncovered(e));
     }
+}
+
+/* The tissue cells of columns [x0, x1) x [y0, y1), plane by plane in memory
+ * order (the sums are exact, so the order is free; a column-by-column walk
+ * strided through every plane), and each column's elevation, top down in
+ * float into elev (row-major over the range) as ss_heal_elevation_scan. */
+static void add_planes(ss_heal_stats_acc *a, const ss_heal_grid *g, int x0, int x1, int y0, int y1,
+                       float *elev) {
+    const float k = elev_k(g), *rho = g->field[SS_HEAL_SCAR];
+    const int w = x1 - x0;
+    for (int z = g->nz - 1; z >= 0; z--)
+        for (int y = y0; y < y1; y++) {
+            const size_t r = ss_heal_idx(g, 0, y, z);
+            float *ev = elev + (size_t)(y - y0) * (size_t)w;
+            for (int x = x0; x < x1; x++) {
+                const size_t c = r + (size_t)x;
+                if (!is_tissue(g->cell[c])) continue;
+                a->n_tissue++;
+                for (int f = 0; f < SS_HEAL_NFIELDS; f++) limbs_add(a, f, g->field[f][c]);
+                if (rho[c] > a->scar_max) a->scar_max = rho[c];
+                ev[x - x0] += ss_heal_elevation_term(rho[c], g->cell[c], k);
+            }
+        }
 }
 
 void ss_heal_stats_acc_add(ss_heal_stats_acc *a, const ss_heal_grid *g, int x0, int x1, int y0,
@@ -110,6 +160,13 @@ void ss_heal_stats_acc_add(ss_heal_stats_acc *a, const ss_heal_grid *g, int x0, 
     if (y0 < 0) y0 = 0;
     if (x1 > g->nx) x1 = g->nx;
     if (y1 > g->ny) y1 = g->ny;
+    if (x1 <= x0 || y1 <= y0) return;
+    float *elev = calloc((size_t)(x1 - x0) * (size_t)(y1 - y0), sizeof *elev);
+    if (!elev) { /* no memory: a NaN figure rather than a wrong one */
+        a->n_nonfinite++;
+        return;
+    }
+    add_planes(a, g, x0, x1, y0, y1, elev);
     for (int y = y0; y < y1; y++) {
         for (int x = x0; x < x1; x++) {
             /* columns: the epithelium is a sheet on the tissue surface, so a
@@ -132,11 +189,12 @@ void ss_heal_stats_acc_add(ss_heal_stats_acc *a, const ss_heal_grid *g, int x0, 
                     if (!is_tissue(g->cell[c])) break;
                     if (s[c] > smax) smax = s[c];
                 }
-                add_column(a, initial, p[c0] > (float)SS_HEAL_P_MIN, smax, e[c0]);
+                add_column(a, initial, p[c0] > (float)SS_HEAL_P_MIN, smax, e[c0],
+                           elev[(size_t)(y - y0) * (size_t)(x1 - x0) + (size_t)(x - x0)]);
             }
-            add_cells(a, g, x, y, 0, g->nz);
         }
     }
+    free(elev);
     ss_heal_stats_acc_normalise(a);
 }
 
@@ -165,7 +223,16 @@ void ss_heal_stats_acc_add_stack(ss_heal_stats_acc *a, const ss_heal_grid *g, in
                 }
                 if (s[c] > cs->smax) cs->smax = s[c];
             }
-            if (bottom && cs->phase) add_column(a, cs->initial, cs->region, cs->smax, cs->esurf);
+            /* the elevation: every tissue cell of the owned levels, top down */
+            const float k = elev_k(g), *rho = g->field[SS_HEAL_SCAR];
+            for (int z = g->nz - 2; z >= 1; z--) {
+                const int Z = z + zoff;
+                const size_t c = ss_heal_idx(g, x, y, z);
+                if (Z >= 1 && Z <= gz - 2 && is_tissue(g->cell[c]))
+                    cs->elev += ss_heal_elevation_term(rho[c], g->cell[c], k);
+            }
+            if (bottom && cs->phase)
+                add_column(a, cs->initial, cs->region, cs->smax, cs->esurf, cs->elev);
             add_cells(a, g, x, y, 1, g->nz - 1);
         }
     }
@@ -182,6 +249,7 @@ void ss_heal_stats_acc_merge(ss_heal_stats_acc *a, const ss_heal_stats_acc *b) {
     for (int k = 0; k < SS_HEAL_ACC_SUMS; k++)
         for (int i = 0; i < SS_HEAL_ACC_LIMBS; i++) a->sum[k][i] += b->sum[k][i];
     if (b->scar_max > a->scar_max) a->scar_max = b->scar_max;
+    if (b->elev_max > a->elev_max) a->elev_max = b->elev_max;
     ss_heal_stats_acc_normalise(a);
 }
 
@@ -198,9 +266,13 @@ void ss_heal_stats_acc_finish(const ss_heal_stats_acc *a, double dx_mm, ss_heal_
         st->field_mean[f] = a->n_tissue ? limbs_value(a->sum[f]) / (double)a->n_tissue : 0.0;
     st->scar_volume_mm3 = limbs_value(a->sum[SS_HEAL_SCAR]) * area * dx_mm;
     st->scar_max = a->scar_max;
+    st->elevation_mean_mm =
+        a->n_initial ? limbs_value(a->sum[SS_HEAL_ACC_ELEV]) / (double)a->n_initial : 0.0;
+    st->elevation_max_mm = isfinite(a->elev_max) ? a->elev_max : 0.0;
     if (a->n_nonfinite) { /* a blown-up field shows as NaN, never as a plausible figure */
         for (int f = 0; f < SS_HEAL_NFIELDS; f++) st->field_mean[f] = NAN;
         st->scar_volume_mm3 = st->eschar_wound_mean = st->open_area_mm2 = NAN;
+        st->elevation_mean_mm = st->elevation_max_mm = NAN;
     }
 }
 
