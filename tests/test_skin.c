@@ -216,8 +216,10 @@ static void test_single_features(void **state) {
     ss_error err;
     ss_skin_settings s = small_settings(64);
     s.phi = 0.0;
-    s.world_size_cm = 0.64; /* 0.1 mm texels */
-    const double mm = 6.4;  /* mm per texture unit */
+    s.dist.mottle_melanin = s.dist.mottle_blood = s.dist.mottle_height = 0.0;
+    s.dist.relief_depth = s.dist.relief_depth2 = 0.0; /* no network */
+    s.world_size_cm = 0.64;                           /* 0.1 mm texels */
+    const double mm = 6.4;                            /* mm per texture unit */
     ss_skin_feature fs[3];
     memset(fs, 0, sizeof fs);
     fs[0].type = SS_FEAT_MOLE, fs[0].x = 0.25, fs[0].y = 0.25, fs[0].r = 0.5, fs[0].h = 0.6,
@@ -238,11 +240,15 @@ static void test_single_features(void **state) {
             double u = (x + 0.5) / 64, v = (y + 0.5) / 64;
             double dm = hypot(u - 0.25, v - 0.25) * mm, dc = hypot(u - 0.75, v - 0.25) * mm,
                    df = hypot(u - 0.5, v - 0.75) * mm;
-            double sm = dm < 1.0 ? ss_profile_sigmoid(dm, 0.5) : 0.0;
+            /* the mole: its outline and sharp border, uniform pigment */
+            double sm = ss_profile_mole(dm, ss_mole_outline(0.5, atan2(v - 0.25, u - 0.25)),
+                                        s.dist.mole_border);
             double sc = dc < 0.8 ? ss_profile_sigmoid(dc, 0.4) : 0.0;
             double al = ss_profile_follicle(df, 0.15, 0.4);
-            double mel = s.base_lo[SS_BIO_MELANIN] + sm * 0.2;
+            const double lo = s.base_lo[SS_BIO_MELANIN];
+            double mel = lo + sm * 0.2 * (1.0 + 3.0 * lo); /* contrast follows the tone */
             double h = sc * 0.3 + 0.6 * sm * 0.2;
+            if (df > 0.15) h -= 0.012 * al; /* the follicle opening's pit */
             if (df <= 0.15 && h < s.dist.follicle_height) h = s.dist.follicle_height;
             double blood = s.dist.lip_blood * (1.0 - s.dist.follicle_blood_drop * al);
             assert_float_equal(p[SS_BIO_MELANIN], mel, 2e-6);
@@ -288,8 +294,13 @@ static void test_seamless_wrap(void **state) {
             }
         }
         assert_true(maxc > 0.0);
-        assert_true(wc <= maxc);
-        assert_true(wr <= maxr);
+        /* 5 % slack: with the microrelief network everywhere, every column
+         * pair differs alike and the seam is one draw among 128 of them; a
+         * cut feature would exceed the roughest pair by far more */
+        if (!(wc <= 1.05 * maxc && wr <= 1.05 * maxr))
+            print_error("channel %d: seam %g %g, roughest pair %g %g\n", c, wc, wr, maxc, maxr);
+        assert_true(wc <= 1.05 * maxc);
+        assert_true(wr <= 1.05 * maxr);
     }
     /* with --no-wrap the same features are cut at the edge: the seam is larger */
     s.wrap = 0;
