@@ -12,6 +12,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
 static double sigm(double x) { return 1.0 / (1.0 + exp(-x)); }
 
 static void test_profiles(void **state) {
@@ -471,6 +475,237 @@ static void test_lut_other_table(void **state) {
     ss_mm_table_free(t);
 }
 
+/* Mean and sd over cells of cell_mm of one bio channel, and the mean
+ * |difference| of horizontally neighbouring texels. */
+static void cell_stats(const ss_image *bio, int ch, double world_mm, double cell_mm, double *sd,
+                       double *neighbour, double *cells, int *ncell) {
+    const int N = bio->width, cw = (int)lround(cell_mm / world_mm * N), nc = N / cw;
+    double s1 = 0, s2 = 0, nb = 0;
+    for (int cy = 0; cy < nc; cy++)
+        for (int cx = 0; cx < nc; cx++) {
+            double m = 0;
+            for (int y = 0; y < cw; y++)
+                for (int x = 0; x < cw; x++) m += ss_image_px(bio, cx * cw + x, cy * cw + y)[ch];
+            m /= (double)cw * cw;
+            if (cells) cells[cy * nc + cx] = m;
+            s1 += m, s2 += m * m;
+        }
+    const double n = (double)nc * nc, mean = s1 / n;
+    *sd = sqrt(fmax(0.0, s2 / n - mean * mean));
+    for (int y = 0; y < N; y++)
+        for (int x = 0; x + 1 < N; x++)
+            nb += fabs(ss_image_px(bio, x + 1, y)[ch] - ss_image_px(bio, x, y)[ch]);
+    *neighbour = nb / ((double)N * (N - 1));
+    if (ncell) *ncell = nc * nc;
+}
+
+/* Colour and height variation is defined in mm: the same world patch at
+ * two texture sizes has the same statistics over mm-sized cells (and the
+ * same cell means, cell by cell), and no per-texel noise (neighbouring
+ * texels at half the texel size differ about half as much). */
+static void test_mm_defined_variation(void **state) {
+    (void)state;
+    ss_error err;
+    const int sizes[2] = {192, 384};
+    const double world_mm = 24.0;
+    ss_image *bio[2];
+    for (int k = 0; k < 2; k++) {
+        ss_skin_settings s;
+        assert_int_equal(ss_skin_settings_preset(&s, "forearm", sizes[k], &err), SS_OK);
+        s.world_size_cm = world_mm / 10.0;
+        ss_skin_forearm_counts(s.world_size_cm, s.count);
+        s.seed = 11;
+        ss_skin_feature_list l;
+        assert_int_equal(ss_skin_generate(&s, NULL, &l, NULL, 0, &err), SS_OK);
+        bio[k] = ss_skin_bio_maps(&s, NULL, &l, &err);
+        assert_non_null(bio[k]);
+        ss_skin_feature_list_free(&l);
+    }
+    const int chans[3] = {SS_BIO_MELANIN, SS_BIO_BLOOD, SS_BIO_HEIGHT_MM};
+    for (int c = 0; c < 3; c++)
+        for (int cell = 0; cell < 2; cell++) {
+            const double cmm = cell ? 1.0 : 0.5;
+            double sd[2], nb[2];
+            static double cells[2][4096];
+            int nc = 0;
+            for (int k = 0; k < 2; k++)
+                cell_stats(bio[k], chans[c], world_mm, cmm, &sd[k], &nb[k], cells[k], &nc);
+            print_message("channel %d, %.1f mm cells: sd %.5g / %.5g, neighbour %.3g / %.3g\n",
+                          chans[c], cmm, sd[0], sd[1], nb[0], nb[1]);
+            assert_true(sd[0] > 0.0);
+            assert_true(fabs(sd[1] / sd[0] - 1.0) < 0.1);
+            double dif = 0;
+            for (int i = 0; i < nc; i++) dif += fabs(cells[1][i] - cells[0][i]);
+            print_message("  cell by cell: mean |difference| %.3g sd\n", dif / nc / sd[0]);
+            /* the same patch, cell by cell (height: the follicle stubs and
+             * Bezier furrows are narrower than a texel and point-sampled) */
+            assert_true(dif / nc < (chans[c] == SS_BIO_HEIGHT_MM ? 0.6 : 0.25) * sd[0]);
+            /* no per-texel noise: neighbours differ far less than texels
+             * spread (white noise: 1.13 x the texel sd) */
+            double t1 = 0, t2 = 0;
+            const size_t nt = (size_t)sizes[1] * sizes[1];
+            for (size_t i = 0; i < nt; i++) {
+                double v = bio[1]->data[i * SS_BIO_NCHANNELS + chans[c]];
+                t1 += v, t2 += v * v;
+            }
+            double tsd = sqrt(fmax(0.0, t2 / nt - (t1 / nt) * (t1 / nt)));
+            if (chans[c] != SS_BIO_HEIGHT_MM) assert_true(nb[1] < 0.35 * tsd); /* lines are sharp */
+        }
+    ss_image_free(bio[0]);
+    ss_image_free(bio[1]);
+}
+
+/* The surface roughness follows the surface state and the anatomy: more
+ * hydration and sebum make it smoother, lips and scars smoother still, the
+ * microrelief lines and follicle openings rougher; it varies over the patch. */
+static void test_surface_state(void **state) {
+    (void)state;
+    ss_error err;
+    const int N = 128;
+    ss_skin_settings s;
+    assert_int_equal(ss_skin_settings_preset(&s, "forearm", N, &err), SS_OK);
+    s.world_size_cm = 1.28; /* 0.1 mm texels */
+    ss_skin_forearm_counts(s.world_size_cm, s.count);
+    s.count[SS_FEAT_MOLE] = 0;
+    ss_image *hyd = ss_image_create(4, 4, 1, &err), *scar = ss_image_create(4, 4, 1, &err),
+             *lips = ss_image_create(4, 4, 1, &err);
+    for (int y = 0; y < 4; y++)
+        for (int x = 0; x < 4; x++) {
+            ss_image_px(hyd, x, y)[0] = x < 2 ? 1.0f : 0.0f;   /* left half wet */
+            ss_image_px(scar, x, y)[0] = y == 0 ? 1.0f : 0.0f; /* top quarter a scar */
+            ss_image_px(lips, x, y)[0] = y == 3 ? 1.0f : 0.0f; /* bottom quarter lips */
+        }
+    ss_skin_fields f;
+    memset(&f, 0, sizeof f);
+    f.hydration = hyd;
+    ss_skin_feature_list l;
+    assert_int_equal(ss_skin_generate(&s, &f, &l, NULL, 0, &err), SS_OK);
+    ss_image *b1 = ss_skin_bio_maps(&s, &f, &l, &err);
+    f.scar = scar;
+    f.lips = lips;
+    ss_image *b2 = ss_skin_bio_maps(&s, &f, &l, &err);
+    assert_non_null(b1);
+    assert_non_null(b2);
+    /* rows 40..87 are away from the fields' blends (sampled bilinearly) */
+    double wet = 0, dry = 0, line = 0, plateau = 0, sc = 0, lip = 0, mid = 0, h_sc = 0, h_mid = 0;
+    int nl = 0, np = 0;
+    for (int y = 0; y < N; y++)
+        for (int x = 0; x < N; x++) {
+            const float *p = ss_image_px(b1, x, y), *q = ss_image_px(b2, x, y);
+            const int band = y >= 40 && y < 88;
+            if (band && x >= 8 && x < 56) wet += p[SS_BIO_SURFACE_SIGMA];
+            if (band && x >= 72 && x < 120) dry += p[SS_BIO_SURFACE_SIGMA];
+            if (band && p[SS_BIO_EXTRA_A] == 0.0f) {
+                if (p[SS_BIO_HEIGHT_MM] < -0.02f) line += p[SS_BIO_SURFACE_SIGMA], nl++;
+                if (p[SS_BIO_HEIGHT_MM] > -0.001f) plateau += p[SS_BIO_SURFACE_SIGMA], np++;
+            }
+            if (y >= 4 && y < 20) sc += q[SS_BIO_SURFACE_SIGMA], h_sc += fabs(q[SS_BIO_HEIGHT_MM]);
+            if (y >= 108 && y < 124) lip += q[SS_BIO_SURFACE_SIGMA];
+            if (band) mid += q[SS_BIO_SURFACE_SIGMA], h_mid += fabs(q[SS_BIO_HEIGHT_MM]);
+        }
+    wet /= 48.0 * 48, dry /= 48.0 * 48, sc /= 16.0 * N, lip /= 16.0 * N, mid /= 48.0 * N;
+    h_sc /= 16.0 * N, h_mid /= 48.0 * N;
+    assert_true(nl > 50 && np > 50);
+    line /= nl, plateau /= np;
+    print_message("sigma: wet %.3f dry %.3f, lines %.3f plateaus %.3f, scar %.3f lips %.3f "
+                  "skin %.3f; |height| scar %.4f skin %.4f mm\n",
+                  wet, dry, line, plateau, sc, lip, mid, h_sc, h_mid);
+    assert_true(wet < 0.9 * dry);
+    assert_true(line > plateau + 0.05);
+    assert_true(sc < 0.8 * mid && lip < 0.8 * mid);
+    assert_true(h_sc < 0.5 * h_mid); /* a scar has lost the microrelief */
+    /* Weyrich et al. 2006's range of facial specular roughness: plateaus of
+     * the default forearm in 0.3..0.5 (sigma = GGX alpha ~ Beckmann m) */
+    assert_true(plateau > 0.3 && plateau < 0.5);
+    ss_image_free(b1);
+    ss_image_free(b2);
+    ss_image_free(hyd);
+    ss_image_free(scar);
+    ss_image_free(lips);
+    ss_skin_feature_list_free(&l);
+}
+
+/* With a user's vector field wrinkles follow it; wrinkles.cross_deg turns
+ * every other one only when cross_with_field is set (the CLI sets it when
+ * --param wrinkles.cross_deg is given). */
+static void test_wrinkles_follow_field(void **state) {
+    (void)state;
+    ss_error err;
+    ss_skin_settings s;
+    assert_int_equal(ss_skin_settings_preset(&s, "forearm", 64, &err), SS_OK);
+    s.world_size_cm = 1.0;
+    memset(s.count, 0, sizeof s.count);
+    s.count[SS_FEAT_WRINKLE] = 40;
+    assert_true(s.dist.wrinkle_cross_deg == 60.0);
+    ss_image *vf = ss_image_create(2, 2, 3, &err);
+    for (int i = 0; i < 4; i++)
+        vf->data[i * 3] = 1.0f, vf->data[i * 3 + 1] = 0.5f, vf->data[i * 3 + 2] = 1.0f;
+    ss_skin_fields f;
+    memset(&f, 0, sizeof f);
+    f.wrinkle_vectors = vf;
+    for (int with = 0; with < 2; with++) {
+        s.dist.wrinkle_cross_with_field = with;
+        ss_skin_feature_list l;
+        assert_int_equal(ss_skin_generate(&s, &f, &l, NULL, 0, &err), SS_OK);
+        for (size_t k = 0; k < l.n; k++) {
+            const ss_bezier3 *b = &l.f[k].curve;
+            double a = atan2(b->y[3] - b->y[0], b->x[3] - b->x[0]) * 180.0 / M_PI;
+            double want = with && (k & 1) ? 60.0 : 0.0;
+            assert_true(fabs(a - want) < 1.0);
+        }
+        ss_skin_feature_list_free(&l);
+    }
+    ss_image_free(vf);
+}
+
+/* Moles have a sharp border (moles.border), and reticular ones a pigment
+ * network; their melanin contrast grows with the skin's own melanin. */
+static void test_mole_border(void **state) {
+    (void)state;
+    assert_float_equal(ss_profile_mole(0.9, 1.0, 0.08), 1.0, 0);
+    assert_float_equal(ss_profile_mole(1.0, 1.0, 0.08), 0.5, 1e-12);
+    assert_float_equal(ss_profile_mole(1.05, 1.0, 0.08), 0.0, 0);
+    for (double th = 0; th < 6.3; th += 0.1) {
+        double r = ss_mole_outline(2.0, th);
+        assert_true(r > 2.0 * 0.91 && r < 2.0 * 1.09);
+    }
+    ss_error err;
+    ss_skin_settings s = small_settings(128);
+    s.world_size_cm = 1.28;
+    s.phi = 0.0;
+    s.dist.mottle_melanin = s.dist.mottle_blood = 0.0;
+    ss_skin_feature fs[2];
+    memset(fs, 0, sizeof fs);
+    fs[0].type = fs[1].type = SS_FEAT_MOLE;
+    fs[0].x = 0.25, fs[1].x = 0.75, fs[0].y = fs[1].y = 0.5;
+    fs[0].r = fs[1].r = 2.0, fs[0].m = fs[1].m = 0.1;
+    fs[1].p = 1.0; /* reticular */
+    ss_skin_feature_list l = {2, fs};
+    double sdev[2] = {0}, inside_mel[2] = {0};
+    for (int dark = 0; dark < 2; dark++) {
+        s.base_lo[SS_BIO_MELANIN] = dark ? 0.25 : 0.02;
+        ss_image *bio = ss_skin_bio_maps(&s, NULL, &l, &err);
+        assert_non_null(bio);
+        for (int k = 0; k < 2; k++) {
+            double s1 = 0, s2 = 0;
+            int n = 0;
+            for (int y = 54; y < 74; y++)
+                for (int x = 22; x < 42; x++) {
+                    double v = ss_image_px(bio, x + 64 * k, y)[SS_BIO_MELANIN];
+                    s1 += v, s2 += v * v, n++;
+                }
+            if (!dark) sdev[k] = sqrt(fmax(0.0, s2 / n - (s1 / n) * (s1 / n)));
+            if (k == 0) inside_mel[dark] = s1 / n - s.base_lo[SS_BIO_MELANIN];
+        }
+        /* 0.3 mm outside the outline: untouched skin */
+        double out = ss_image_px(bio, 32 + 23, 64)[SS_BIO_MELANIN];
+        assert_true(fabs(out - s.base_lo[SS_BIO_MELANIN]) < 0.15 * s.base_lo[SS_BIO_MELANIN]);
+        ss_image_free(bio);
+    }
+    assert_true(sdev[1] > 3.0 * sdev[0] + 1e-4); /* the network shows inside */
+    assert_true(inside_mel[1] > 1.5 * inside_mel[0]);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_profiles),
@@ -482,6 +717,10 @@ int main(void) {
         cmocka_unit_test(test_determinism_and_roundtrip),
         cmocka_unit_test(test_lut_matches_table),
         cmocka_unit_test(test_lut_other_table),
+        cmocka_unit_test(test_mm_defined_variation),
+        cmocka_unit_test(test_surface_state),
+        cmocka_unit_test(test_wrinkles_follow_field),
+        cmocka_unit_test(test_mole_border),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
