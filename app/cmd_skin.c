@@ -637,7 +637,9 @@ static ss_status run(const opts *o, const ss_skin_settings *s, inputs *in, const
         st = err->code;
     if (!st && !(lut = ss_skin_lut_create(in->table, err))) st = err->code;
     double t1 = ss_now();
-    if (!st) st = ss_skin_render_maps(bio, lut, s->world_size_cm, o->directx, &maps, err);
+    /* rendered in the OpenGL convention; a DirectX normal.png is a flipped
+     * copy, and the OpenGL map is kept for glTF (normal_gl.png) */
+    if (!st) st = ss_skin_render_maps(bio, lut, s->world_size_cm, 0, &maps, err);
     tm.lookup_s = ss_now() - t1;
     double t2 = ss_now();
     if (!st && o->gltf) {
@@ -650,10 +652,18 @@ static ss_status run(const opts *o, const ss_skin_settings *s, inputs *in, const
     }
     /* glTF requires a +Y (OpenGL) normal map: with --normal-convention
      * directx the material gets its own OpenGL copy */
-    if (!st && o->gltf && o->directx) {
-        if (!(normal_gl = ss_image_clone(maps.normal, err))) st = err->code;
+    if (!st && o->directx) {
+        ss_image *dx = ss_image_clone(maps.normal, err);
+        if (!dx) st = err->code;
         for (size_t i = 0; !st && i < (size_t)s->size * s->size; i++)
-            normal_gl->data[i * 3 + 1] = 1.0f - normal_gl->data[i * 3 + 1];
+            dx->data[i * 3 + 1] = 1.0f - dx->data[i * 3 + 1];
+        if (!st) {
+            if (o->gltf)
+                normal_gl = maps.normal; /* the OpenGL map, for glTF */
+            else
+                ss_image_free(maps.normal);
+            maps.normal = dx;
+        }
     }
     if (!st) st = write_maps(dir, &maps, o->no_bio ? NULL : bio, mr, normal_gl, err);
     char path[4200];

@@ -87,8 +87,8 @@ expect2 "$CLI" optics table --lookup "$T/trunc.sstab"
 cp "$T/t1.sstab" "$T/corrupt.sstab"
 printf '\x55' | dd of="$T/corrupt.sstab" bs=1 seek=200 conv=notrunc 2>/dev/null
 expect2 "$CLI" optics table --lookup "$T/corrupt.sstab"
-cp "$T/t1.sstab" "$T/v2.sstab"
-printf '\x02' | dd of="$T/v2.sstab" bs=1 seek=8 conv=notrunc 2>/dev/null
+cp "$T/t1.sstab" "$T/v2.sstab"  # version 7: not readable
+printf '\x07' | dd of="$T/v2.sstab" bs=1 seek=8 conv=notrunc 2>/dev/null
 expect2 "$CLI" optics table --lookup "$T/v2.sstab"
 grep -q "version" "$T/e.txt" || fail "version error names the version"
 expect2 "$CLI" optics table --lookup "$T/missing.sstab"
