@@ -65,7 +65,7 @@ static void help(void) {
            "  --threads N, --quiet, --json, --list-params, --help\n\n"
            "Writes DIR/base_color.png (sRGB), roughness.png, specular.png (GGX, linear\n"
            "8-bit), height.png (16-bit; 0..1 spans skin.json's height_min_mm..max_mm),\n"
-           "normal.png, translucency.png (subsurface radius R,G,B, linear, 1 = 1 mm),\n"
+           "normal.png, translucency.png (subsurface radius R,G,B, linear, 1 = 2 mm),\n"
            "cavity.png (1 open, 0 deep in a furrow), bio.exr (float channels: melanin,\n"
            "pheomelanin_ratio, blood, oxygenation, sc_thickness_cm,\n"
            "epidermis_thickness_cm, height_mm, extra.R/G/B/A, surface_roughness;\n"
@@ -467,9 +467,9 @@ static ss_status write_maps(const char *dir, const ss_skin_maps *m, const ss_ima
     double lo = m->height_min_mm, span = m->height_max_mm - m->height_min_mm;
     for (size_t i = 0; i < n; i++)
         h16->data[i] = span > 0 ? (float)((m->height_mm->data[i] - lo) / span) : 0.5f;
-    /* subsurface radius: 1.0 = 1 mm (10 x the table's cm), clamped */
+    /* subsurface radius: 1.0 = 2 mm (5 x the table's cm), clamped */
     for (size_t i = 0; i < n * 3; i++) {
-        float v = m->translucency->data[i] * 10.0f;
+        float v = m->translucency->data[i] * 5.0f;
         tr->data[i] = v < 0.0f ? 0.0f : v > 1.0f ? 1.0f : v;
     }
     const char *bio_names[SS_BIO_NCHANNELS];
@@ -584,10 +584,10 @@ static ss_status write_sheet(const char *dir, const ss_skin_maps *m, const ss_im
     work[8] = work[7] ? ss_image_clone(m->translucency, err) : NULL;
     work[9] = work[8] ? crop_centre(m->cavity, CROP, err) : NULL;
     if (!work[9]) st = err->code;
-    if (!st) { /* radius 0..1 mm, shown as stored in translucency.png */
+    if (!st) { /* radius 0..2 mm, shown as stored in translucency.png */
         size_t nv = (size_t)work[8]->width * work[8]->height * 3;
         for (size_t i = 0; i < nv; i++) {
-            float v = work[8]->data[i] * 10.0f;
+            float v = work[8]->data[i] * 5.0f;
             work[8]->data[i] = ss_srgb_decode(v < 0.0f ? 0.0f : v > 1.0f ? 1.0f : v);
         }
         size_t nc = (size_t)work[9]->width * work[9]->height;

@@ -91,8 +91,17 @@ ss_status skin_relief_init(skin_relief *r, const ss_skin_settings *s, const ss_i
     r->w2 = 0.02;
     r->d1 = d->relief_depth;
     r->d2 = d->relief_depth2;
-    if (r->w1 < wmin) r->d1 *= r->w1 / wmin, r->w1 = wmin;
-    if (r->w2 < wmin) r->d2 *= r->w2 / wmin, r->w2 = wmin;
+    r->k1 = r->k2 = 1.0;
+    if (r->w1 < wmin) {
+        r->k1 = r->w1 / wmin;
+        r->d1 *= r->k1;
+        r->w1 = wmin;
+    }
+    if (r->w2 < wmin) {
+        r->k2 = r->w2 / wmin;
+        r->d2 *= r->k2;
+        r->w2 = wmin;
+    }
     return SS_OK;
 }
 
@@ -167,6 +176,11 @@ float skin_relief_eval(const skin_relief *r, double u, double v, float *groove) 
     double g1 = e1 < r->w1 ? (1.0 - e1 / r->w1) : 0.0, g2 = e2 < r->w2 ? (1.0 - e2 / r->w2) : 0.0;
     g1 *= g1;
     g2 *= g2;
-    *groove = (float)(g1 > 0.5 * g2 ? g1 : 0.5 * g2);
+    /* the groove weight keeps its area when the line is widened, like the depth */
+    g1 *= r->k1;
+    g2 *= 0.5 * r->k2;
+    *groove = (float)(g1 > g2 ? g1 : g2);
+    g1 /= r->k1;
+    g2 /= 0.5 * r->k2;
     return (float)-(r->d1 * dep1 * g1 + r->d2 * dep2 * g2);
 }

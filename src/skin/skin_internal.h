@@ -33,6 +33,7 @@ typedef struct skin_relief {
     double world_mm, texel_mm;
     double w1, w2; /* line half-widths, mm (antialiased: >= 0.75 texel) */
     double d1, d2; /* line depths, mm (scaled by w / w_eff when widened) */
+    double k1, k2; /* that scale (1 when not widened), also applied to the groove */
     double stretch;
     int nd; /* direction grid per side (doubled angle: cos 2a, sin 2a) */
     float *dir;
