@@ -401,10 +401,12 @@ static void test_determinism_and_roundtrip(void **state) {
     ss_mm_entry me;
     assert_int_equal(ss_mm_table_lookup_bio(t, &bp, &me, &err), SS_OK);
     const float *px = ss_image_px(bio2, 5, 7);
+    double sc; /* the base colour kept under the texel's own lobe */
+    ss_mm_surface_lobe(t, px[SS_BIO_SURFACE_SIGMA], NULL, NULL, &sc);
     if (px[SS_BIO_EXTRA_A] == 0.0f)
         for (int c = 0; c < 3; c++)
             assert_float_equal(ss_image_px(maps[0].base_color, 5, 7)[c],
-                               fmin(1.0, fmax(0.0, me.fit[SS_RENDER_GGX].base_rgb[c])), 2e-5);
+                               fmin(1.0, fmax(0.0, me.fit[SS_RENDER_GGX].base_rgb[c] * sc)), 2e-5);
     ss_image_free(bio2);
     tu_rmtree(dir);
     free(dir);
@@ -706,6 +708,66 @@ static void test_mole_border(void **state) {
     assert_true(inside_mel[1] > 1.5 * inside_mel[0]);
 }
 
+/* With the shipped table (its surface curve) the roughness and specular maps
+ * vary over the patch and follow the surface: the lookup with a surface
+ * sigma equals ss_mm_surface_lobe, and no subsurface radius is negative. */
+static void test_render_surface_maps(void **state) {
+    (void)state;
+    ss_error err;
+    ss_mm_table *t = load_table();
+    assert_true(t->nsurface >= 2);
+    for (size_t e = 0; e < t->nentries; e++)
+        for (int c = 12; c < 15; c++) assert_true(t->entries[e * SS_MM_NFIELDS + c] > 0.0);
+    ss_skin_lut *lut = ss_skin_lut_create(t, &err);
+    const float x[6] = {0.05f, 0.3f, 0.01f, 0.8f, 0.0015f, 0.009f};
+    double prev = 0.0;
+    for (double sg = 0.25; sg <= 0.9; sg += 0.05) {
+        float out[8];
+        double sp, ro, sc, ref[SS_MM_NFIELDS];
+        ss_skin_lut_lookup_surface(lut, x, (float)sg, out);
+        ss_mm_surface_lobe(t, sg, &sp, &ro, &sc);
+        double xd[6];
+        for (int a = 0; a < 6; a++) xd[a] = x[a];
+        ss_mm_table_lookup(t, xd, ref);
+        assert_float_equal(out[3], sp, 1e-5);
+        assert_float_equal(out[4], ro, 1e-5);
+        for (int c = 0; c < 3; c++) assert_float_equal(out[c], ref[c] * sc, 2e-5 * (1 + ref[c]));
+        for (int c = 0; c < 3; c++) assert_float_equal(out[5 + c], ref[12 + c], 2e-5);
+        assert_true(ro > prev); /* a rougher surface, a rougher lobe */
+        prev = ro;
+    }
+    ss_skin_settings s;
+    assert_int_equal(ss_skin_settings_preset(&s, "forearm", 128, &err), SS_OK);
+    s.world_size_cm = 1.28;
+    ss_skin_forearm_counts(s.world_size_cm, s.count);
+    ss_skin_feature_list l;
+    assert_int_equal(ss_skin_generate(&s, NULL, &l, NULL, 0, &err), SS_OK);
+    ss_image *bio = ss_skin_bio_maps(&s, NULL, &l, &err);
+    ss_skin_maps m;
+    assert_int_equal(ss_skin_render_maps(bio, lut, s.world_size_cm, 0, &m, &err), SS_OK);
+    const size_t n = 128 * 128;
+    double r1 = 0, r2 = 0, s1 = 0, s2 = 0, rl = 0, rp = 0;
+    int nl = 0, np = 0;
+    for (size_t i = 0; i < n; i++) {
+        double r = m.roughness->data[i], q = m.specular->data[i];
+        r1 += r, r2 += r * r, s1 += q, s2 += q * q;
+        assert_true(m.cavity->data[i] >= 0.0f && m.cavity->data[i] <= 1.0f);
+        for (int c = 0; c < 3; c++) assert_true(m.translucency->data[i * 3 + c] > 0.0f);
+        if (m.cavity->data[i] < 0.5f) rl += r, nl++;
+        if (m.cavity->data[i] == 1.0f) rp += r, np++;
+    }
+    const double rsd = sqrt(r2 / n - (r1 / n) * (r1 / n)), ssd = sqrt(s2 / n - (s1 / n) * (s1 / n));
+    print_message("roughness %.3f sd %.3f (lines %.3f, plateaus %.3f), specular %.3f sd %.3f\n",
+                  r1 / n, rsd, nl ? rl / nl : 0, np ? rp / np : 0, s1 / n, ssd);
+    assert_true(rsd > 0.02 && ssd > 0.02);
+    assert_true(nl > 100 && np > 100 && rl / nl > rp / np + 0.03);
+    ss_skin_maps_free(&m);
+    ss_image_free(bio);
+    ss_skin_feature_list_free(&l);
+    ss_skin_lut_free(lut);
+    ss_mm_table_free(t);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_profiles),
@@ -721,6 +783,7 @@ int main(void) {
         cmocka_unit_test(test_surface_state),
         cmocka_unit_test(test_wrinkles_follow_field),
         cmocka_unit_test(test_mole_border),
+        cmocka_unit_test(test_render_surface_maps),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

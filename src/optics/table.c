@@ -191,13 +191,10 @@ void ss_mm_table_lookup(const ss_mm_table *t, const double x[SS_MM_NAXES],
 
 void ss_mm_surface_lobe(const ss_mm_table *t, double sigma, double *specular, double *roughness,
                         double *diffuse_scale) {
-    double sp, ro;
     const double e_spec = t->entries ? t->entries[3] : 0.5,
                  e_rough = t->entries ? t->entries[4] : 0.5;
-    if (t->nsurface < 2) {
-        sp = e_spec;
-        ro = e_rough;
-    } else {
+    double sp = e_spec, ro = e_rough, sc = 1.0;
+    if (t->nsurface >= 2) {
         const int n = t->nsurface;
         const double *v = t->surf_sigma;
         double s = sigma;
@@ -208,14 +205,17 @@ void ss_mm_surface_lobe(const ss_mm_table *t, double sigma, double *specular, do
         double f = (s - v[i]) / (v[i + 1] - v[i]);
         sp = t->surf_specular[i] + f * (t->surf_specular[i + 1] - t->surf_specular[i]);
         ro = t->surf_roughness[i] + f * (t->surf_roughness[i + 1] - t->surf_roughness[i]);
+        /* the scale at the two nodes, interpolated like the lobe */
+        const double one_e0 = 1.0 - ss_render_ggx_spec_albedo(e_spec, e_rough, 1.0);
+        const double s0 = one_e0 / (1.0 - ss_render_ggx_spec_albedo(t->surf_specular[i],
+                                                                    t->surf_roughness[i], 1.0));
+        const double s1 = one_e0 / (1.0 - ss_render_ggx_spec_albedo(t->surf_specular[i + 1],
+                                                                    t->surf_roughness[i + 1], 1.0));
+        sc = s0 + f * (s1 - s0);
     }
     if (specular) *specular = sp;
     if (roughness) *roughness = ro;
-    if (diffuse_scale) {
-        double e0 = ss_render_ggx_spec_albedo(e_spec, e_rough, 1.0);
-        double e1 = ss_render_ggx_spec_albedo(sp, ro, 1.0);
-        *diffuse_scale = t->nsurface < 2 ? 1.0 : (1.0 - e0) / (1.0 - e1);
-    }
+    if (diffuse_scale) *diffuse_scale = sc;
 }
 
 /* ---- file ---------------------------------------------------------------- */
