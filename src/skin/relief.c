@@ -106,11 +106,15 @@ ss_status skin_relief_init(skin_relief *r, const ss_skin_settings *s, const ss_i
 }
 
 /* Distance (mm, in the stretched metric) from (u, v) to the nearest Voronoi
- * edge of the m x m periodic point set, and that edge's depth factor. */
+ * edge of the m x m periodic point set, and that edge's depth factor; only
+ * edges nearer than `reach_mm` are looked for (+INFINITY: none). A rival k
+ * can only be the edge's other side when |p_k| - |p_best| < 2 reach (the
+ * bisector distance is at least half that difference), which skips most. */
 static double edge_distance(const float *p, int m, double world_mm, double u, double v, double tx,
-                            double ty, double inv_stretch, int reach, float *depth) {
+                            double ty, double inv_stretch, int reach, double reach_mm,
+                            float *depth) {
     const int ci = (int)floor(u * m), cj = (int)floor(v * m);
-    double bx[49], by[49];
+    double bx[49], by[49], bd2[49];
     float bz[49];
     int nb = 0, best = 0;
     double bd = INFINITY;
@@ -130,19 +134,20 @@ static double edge_distance(const float *p, int m, double world_mm, double u, do
             by[nb] = b;
             bz[nb] = q[2];
             double dd = a * a + b * b;
+            bd2[nb] = dd;
             if (dd < bd) bd = dd, best = nb;
             nb++;
         }
+    const double lim = sqrt(bd) + 2.0 * reach_mm, lim2 = lim * lim;
     double e = INFINITY;
     float dep = 0.0f;
     for (int k = 0; k < nb; k++) {
-        if (k == best) continue;
+        if (k == best || bd2[k] > lim2) continue;
         double gx = bx[k] - bx[best], gy = by[k] - by[best];
         double gl = sqrt(gx * gx + gy * gy);
         if (!(gl > 0)) continue;
         /* the bisector: points x with (x - mid) . g = 0; the texel is at 0 */
-        double mx = 0.5 * (bx[k] + bx[best]), my = 0.5 * (by[k] + by[best]);
-        double dist = (mx * gx + my * gy) / gl;
+        double dist = (bd2[k] - bd) / (2.0 * gl);
         if (dist < e) {
             e = dist;
             dep = 0.5f + 0.5f * (bz[k] + bz[best]); /* symmetric in the two cells */
@@ -168,11 +173,15 @@ float skin_relief_eval(const skin_relief *r, double u, double v, float *groove) 
         c2 += ww[k] * q[0];
         s2 += ww[k] * q[1];
     }
-    const double a = 0.5 * atan2(s2, c2), tx = cos(a), ty = sin(a);
+    /* half the doubled angle: cos a = sqrt((1 + c) / 2), sin a = sign(s) sqrt((1 - c) / 2) */
+    const double len = sqrt(c2 * c2 + s2 * s2), c = len > 0 ? c2 / len : 1.0;
+    const double tx = sqrt(fmax(0.0, 0.5 * (1.0 + c))),
+                 ty = (s2 < 0 ? -1.0 : 1.0) * sqrt(fmax(0.0, 0.5 * (1.0 - c)));
     float dep1, dep2;
     const double e1 =
-        edge_distance(r->p1, r->m1, r->world_mm, u, v, tx, ty, 1.0 / r->stretch, 2, &dep1);
-    const double e2 = edge_distance(r->p2, r->m2, r->world_mm, u, v, 1.0, 0.0, 1.0, 2, &dep2);
+        edge_distance(r->p1, r->m1, r->world_mm, u, v, tx, ty, 1.0 / r->stretch, 2, r->w1, &dep1);
+    const double e2 =
+        edge_distance(r->p2, r->m2, r->world_mm, u, v, 1.0, 0.0, 1.0, 2, r->w2, &dep2);
     double g1 = e1 < r->w1 ? (1.0 - e1 / r->w1) : 0.0, g2 = e2 < r->w2 ? (1.0 - e2 / r->w2) : 0.0;
     g1 *= g1;
     g2 *= g2;
