@@ -6,6 +6,7 @@
  * features.csv round trip, the render lookup against ss_mm_table_lookup,
  * and bad inputs. */
 #include "testutil.h"
+#include "skinsim/optics.h"
 #include "skinsim/skin.h"
 
 #include <math.h>
@@ -768,6 +769,61 @@ static void test_render_surface_maps(void **state) {
     ss_mm_table_free(t);
 }
 
+static int cmp_double(const void *a, const void *b) {
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* Both ends of the tone range from the baseline melanin, through the shipped
+ * table: very light (ITA > 55, C* >= 14) and dark (ITA < -30, C* <= 24),
+ * the medians of the base colour map's L*, a*, b*. */
+static void test_tone_ends(void **state) {
+    (void)state;
+    ss_error err;
+    ss_mm_table *t = load_table();
+    ss_skin_lut *lut = ss_skin_lut_create(t, &err);
+    const double mel[2] = {0.003, 0.43};
+    for (int k = 0; k < 2; k++) {
+        ss_skin_settings s;
+        assert_int_equal(ss_skin_settings_preset(&s, "forearm", 128, &err), SS_OK);
+        s.world_size_cm = 1.28;
+        ss_skin_forearm_counts(s.world_size_cm, s.count);
+        s.base_lo[SS_BIO_MELANIN] = mel[k];
+        ss_skin_feature_list l;
+        assert_int_equal(ss_skin_generate(&s, NULL, &l, NULL, 0, &err), SS_OK);
+        ss_image *bio = ss_skin_bio_maps(&s, NULL, &l, &err);
+        ss_skin_maps m;
+        assert_int_equal(ss_skin_render_maps(bio, lut, s.world_size_cm, 0, &m, &err), SS_OK);
+        const size_t n = 128 * 128;
+        double *L[3];
+        for (int c = 0; c < 3; c++) L[c] = malloc(n * sizeof(double));
+        for (size_t i = 0; i < n; i++) {
+            double rgb[3], lab[3];
+            for (int c = 0; c < 3; c++) rgb[c] = m.base_color->data[i * 3 + c];
+            ss_srgb_linear_to_lab(rgb, lab);
+            for (int c = 0; c < 3; c++) L[c][i] = lab[c];
+        }
+        double med[3], C, ita;
+        for (int c = 0; c < 3; c++) {
+            qsort(L[c], n, sizeof(double), cmp_double);
+            med[c] = L[c][n / 2];
+            free(L[c]);
+        }
+        ss_lab_describe(med, &C, NULL, &ita);
+        print_message("melanin %.3f: L* %.1f a* %.1f b* %.1f, C* %.1f, ITA %.1f\n", mel[k], med[0],
+                      med[1], med[2], C, ita);
+        if (k == 0)
+            assert_true(ita > 55.0 && C >= 14.0);
+        else
+            assert_true(ita < -30.0 && C <= 24.0);
+        ss_skin_maps_free(&m);
+        ss_image_free(bio);
+        ss_skin_feature_list_free(&l);
+    }
+    ss_skin_lut_free(lut);
+    ss_mm_table_free(t);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_profiles),
@@ -784,6 +840,7 @@ int main(void) {
         cmocka_unit_test(test_wrinkles_follow_field),
         cmocka_unit_test(test_mole_border),
         cmocka_unit_test(test_render_surface_maps),
+        cmocka_unit_test(test_tone_ends),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
