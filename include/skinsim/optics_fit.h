@@ -217,8 +217,8 @@ ss_status ss_mm_table_lookup_bio(const ss_mm_table *t, const ss_bio_params *bio,
  * surface curve (clamped to its ends), and diffuse_scale = (1 - E(0) at the
  * entries' sigma) / (1 - E(0) at sigma): the factor that turns an entry's
  * base colour into the one that keeps the albedo under this lobe (E the
- * lobe's directional albedo, ss_render_ggx_spec_albedo; interpolated between the curve's nodes like the lobe). Without a curve
- * (version 1): entry 0's lobe, scale 1. Any pointer may be NULL. */
+ * lobe's directional albedo, ss_render_ggx_spec_albedo; interpolated between the curve's nodes like
+ * the lobe). Without a curve (version 1): entry 0's lobe, scale 1. Any pointer may be NULL. */
 void ss_mm_surface_lobe(const ss_mm_table *t, double sigma, double *specular, double *roughness,
                         double *diffuse_scale);
 /* Binary file (format in docs/modelmatch.md): magic "SSMMTAB\n", version,
