@@ -387,6 +387,10 @@ static void table_help(FILE *f, const fit_cli *c) {
             "                           epidermis; fractions 0..1, thicknesses in cm);\n"
             "                           repeatable, e.g. a denser melanin axis\n"
             "  --lookup FILE            read a table and interpolate instead of building\n"
+            "  --surface-sigma S        with --lookup: the surface's Trowbridge-Reitz\n"
+            "                           roughness (0..2); the GGX lobe and base colour\n"
+            "                           follow the table's surface curve (default: the\n"
+            "                           sigma the entries were built with)\n"
             "When building, bilirubin and beta-carotene are the fixed non-axis values and\n"
             "the six axis parameters below are not used; with --lookup they are the point.\n\n%s",
             BIO_HELP);
@@ -444,6 +448,7 @@ int cmd_optics_table(int argc, char **argv) {
     int rc = 0;
     ss_error e;
     ss_error_clear(&e);
+    double surface_sigma = -1.0; /* --lookup: the surface's sigma (default: the table's) */
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
             table_help(stdout, &c);
@@ -466,6 +471,10 @@ int cmd_optics_table(int argc, char **argv) {
             if ((rc = need(cmd, argc, i, argv[i]))) return rc;
             if (cli_parse_int("--samples", argv[++i], 1, 9, &c.samples, &e))
                 return cli_fail(cmd, &e);
+        } else if (!strcmp(argv[i], "--surface-sigma")) {
+            if ((rc = need(cmd, argc, i, argv[i]))) return rc;
+            if (cli_parse_double("--surface-sigma", argv[++i], 0.0, 2.0, &surface_sigma, &e))
+                return cli_fail(cmd, &e);
         } else
             return cli_unknown_option(cmd, argv[i], table_help_options);
     }
@@ -481,16 +490,33 @@ int cmd_optics_table(int argc, char **argv) {
             ss_mm_table_free(t);
             return cli_fail(cmd, &e);
         }
+        /* the GGX lobe of the surface's state (the table's surface curve),
+         * and the base colour that keeps the albedo under it */
+        const double sig = surface_sigma >= 0.0 ? surface_sigma : t->surface_sigma;
+        double scale = 1.0;
+        if (t->nsurface >= 2) {
+            ss_mm_surface_lobe(t, sig, &en.fit[SS_RENDER_GGX].specular,
+                               &en.fit[SS_RENDER_GGX].roughness, &scale);
+            for (int k = 0; k < 3; k++) en.fit[SS_RENDER_GGX].base_rgb[k] *= scale;
+        }
         if (c.json) {
             printf("{\"table\": ");
             json_str(c.lookup);
-            printf(", \"entries\": %zu, \"photons\": %llu, ", t->nentries,
-                   (unsigned long long)t->photons);
+            printf(", \"entries\": %zu, \"photons\": %llu, \"surface_sigma\": %.6g, "
+                   "\"table_surface_sigma\": %.6g, \"surface_curve\": %s, ",
+                   t->nentries, (unsigned long long)t->photons, sig, t->surface_sigma,
+                   t->nsurface >= 2 ? "true" : "false");
             print_entry(&en, NULL, 1);
             printf("}\n");
         } else {
             printf("# ModelMatch lookup in %s (%zu entries, %llu photons per trace)\n", c.lookup,
                    t->nentries, (unsigned long long)t->photons);
+            if (t->nsurface >= 2)
+                printf("# surface sigma %g (entries traced at %g): GGX lobe from the surface "
+                       "curve, base colour x %.4f\n",
+                       sig, t->surface_sigma, scale);
+            else
+                printf("# version 1 table: no surface curve, the entries' own lobe\n");
             print_entry(&en, NULL, 0);
         }
         ss_mm_table_free(t);
@@ -547,6 +573,10 @@ int cmd_optics_table(int argc, char **argv) {
         ss_mm_table_free(t);
         return ss_status_exit_code(st);
     }
+    /* the surface curve (cheap; the MPI build fills the entries only) */
+    if (!st && t->nsurface == 0)
+        st = ss_mm_table_build_surface(t, &c.build, SS_MM_SURFACE_N, SS_MM_SURFACE_LO,
+                                       SS_MM_SURFACE_HI, &e);
     if (!st) st = ss_mm_table_write(ss_outputs_path(outs, 0), t, &e);
     st = ss_outputs_finish(outs, st, &e);
     ss_outputs_free(outs);

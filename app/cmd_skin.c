@@ -34,7 +34,12 @@ static void help(FILE *f) {
             "                        stretched over the texture; colour images are read as\n"
             "                        luminance) for a feature type, or lips=FILE (lip\n"
             "                        weight), or vectors=FILE (RGB wrinkle vector field:\n"
-            "                        R,G direction with 0.5 = 0, B length)\n"
+            "                        R,G direction with 0.5 = 0, B length; wrinkles and the\n"
+            "                        microrelief follow it, and wrinkles.cross_deg rotates\n"
+            "                        every other wrinkle only when --param sets it), or the\n"
+            "                        surface state: hydration=FILE, sebum=FILE (0..1,\n"
+            "                        default: surface.hydration, surface.sebum), scar=FILE\n"
+            "                        (mask: smooth, shiny, paler, no microrelief)\n"
             "  --param NAME=V        a distribution constant, e.g. moles.r_sigma=1.5\n"
             "                        (--list-params prints them with their values)\n"
             "  --base NAME=LO        low end of a baseline parameter: melanin, pheomelanin,\n"
@@ -56,13 +61,18 @@ static void help(FILE *f) {
             "  --mesh FILE           with --gltf: the material on this mesh's UVs instead\n"
             "                        (OBJ, glTF or GLB, e.g. data/meshes/generic-hand-left.glb;\n"
             "                        --no-wrap suits UV islands)\n"
+            "  --no-bio              do not write bio.exr (the slowest file)\n"
             "  --out DIR             output folder (default skin-out)\n"
             "  --threads N, --quiet, --json, --list-params, --help\n\n"
             "Writes DIR/base_color.png (sRGB), roughness.png, specular.png (GGX, linear\n"
             "8-bit), height.png (16-bit; 0..1 spans skin.json's height_min_mm..max_mm),\n"
-            "normal.png, bio.exr (float channels: melanin, pheomelanin_ratio, blood,\n"
-            "oxygenation, sc_thickness_cm, epidermis_thickness_cm, height_mm,\n"
-            "extra.R/G/B/A), features.csv, contact_sheet.png and skin.json.\n\n"
+            "normal.png, translucency.png (subsurface radius R,G,B, linear, 1 = 2 mm),\n"
+            "cavity.png (1 open, 0 deep in a furrow), bio.exr (float channels: melanin,\n"
+            "pheomelanin_ratio, blood, oxygenation, sc_thickness_cm,\n"
+            "epidermis_thickness_cm, height_mm, extra.R/G/B/A, surface_roughness;\n"
+            "ZIP-compressed), features.csv, contact_sheet.png and skin.json. With\n"
+            "--gltf the material always points at an OpenGL (+Y) normal map\n"
+            "(normal_gl.png when --normal-convention directx).\n\n"
             "Example:\n"
             "  skinsim skin --preset seed --field follicles=data/skin_face/follicles.png \\\n"
             "      --field lips=data/skin_face/lips.png --out face\n");
@@ -75,7 +85,7 @@ typedef struct opts {
     int nfields;
     char *counts[64], *params[64], *bases[16];
     int ncounts, nparams, nbases;
-    int size, threads, quiet, json, gltf, no_wrap, directx, sampler, list_params;
+    int size, threads, quiet, json, gltf, no_wrap, directx, sampler, list_params, no_bio;
     double world_cm;
     int world_set;
     uint64_t seed;
@@ -109,6 +119,7 @@ static int parse(int argc, char **argv, opts *o, ss_error *err) {
                                              {"seed", required_argument, 0, 'S'},
                                              {"gltf", no_argument, 0, 'G'},
                                              {"mesh", required_argument, 0, 'M'},
+                                             {"no-bio", no_argument, 0, 'B'},
                                              {"threads", required_argument, 0, 'j'},
                                              {"quiet", no_argument, 0, 'q'},
                                              {"json", no_argument, 0, 'J'},
@@ -208,6 +219,9 @@ static int parse(int argc, char **argv, opts *o, ss_error *err) {
         case 'M':
             o->mesh = optarg;
             break;
+        case 'B':
+            o->no_bio = 1;
+            break;
         case 'j':
             st = cli_parse_int("--threads", optarg, 1, SS_THREADS_MAX, &v, err);
             o->threads = (int)v;
@@ -273,6 +287,9 @@ static ss_status make_settings(const opts *o, ss_skin_settings *s, ss_error *err
         double x;
         if (!st) st = cli_parse_double("--param", val, -1e9, 1e9, &x, err);
         if (!st) st = ss_skin_dist_set(&s->dist, key, x, err);
+        /* asked for on the command line: the crossing also applies with a
+         * user's vector field (docs/skin.md) */
+        if (!st && !strcmp(key, "wrinkles.cross_deg")) s->dist.wrinkle_cross_with_field = 1.0;
     }
     static const char *const base_names[6] = {"melanin",     "pheomelanin", "blood",
                                               "oxygenation", "sc",          "epidermis"};
@@ -368,10 +385,14 @@ static ss_status read_inputs(const opts *o, inputs *in, cJSON *notes, ss_error *
             continue;
         }
         int t = ss_feature_type_from_name(name);
-        if (t < 0 && strcmp(name, "lips")) {
+        int surf = !strcmp(name, "hydration") ? 1
+                   : !strcmp(name, "sebum")   ? 2
+                   : !strcmp(name, "scar")    ? 3
+                                              : 0;
+        if (t < 0 && !surf && strcmp(name, "lips")) {
             st = ss_error_set(err, SS_ERR_INPUT,
                               "--field: unknown name '%s' (cysts, moles, freckles, wrinkles, "
-                              "follicles, lips, vectors)",
+                              "follicles, lips, vectors, hydration, sebum, scar)",
                               name);
             break;
         }
@@ -394,7 +415,13 @@ static ss_status read_inputs(const opts *o, inputs *in, cJSON *notes, ss_error *
                      in->img[i]->width, in->img[i]->height, o->size, o->size);
             cJSON_AddItemToArray(notes, cJSON_CreateString(msg));
         }
-        if (t < 0)
+        if (surf == 1)
+            in->fields.hydration = in->img[i];
+        else if (surf == 2)
+            in->fields.sebum = in->img[i];
+        else if (surf == 3)
+            in->fields.scar = in->img[i];
+        else if (t < 0)
             in->fields.lips = in->img[i];
         else
             in->fields.density[t] = in->img[i];
@@ -425,17 +452,27 @@ static ss_status read_inputs(const opts *o, inputs *in, cJSON *notes, ss_error *
 }
 
 static ss_status write_maps(const char *dir, const ss_skin_maps *m, const ss_image *bio,
-                            const ss_image *mr, ss_error *err) {
-    enum { N = 7 };
-    static const char *names[N] = {"base_color.png", "roughness.png", "specular.png",
-                                   "height.png",     "normal.png",    "bio.exr",
-                                   "metal_rough.png"};
+                            const ss_image *mr, const ss_image *normal_gl, ss_error *err) {
+    enum { N = 10 };
+    static const char *names[N] = {
+        "base_color.png", "roughness.png",   "specular.png",     "height.png", "normal.png",
+        "bio.exr",        "metal_rough.png", "translucency.png", "cavity.png", "normal_gl.png"};
+    const size_t n = (size_t)m->height_mm->width * m->height_mm->height;
     ss_image *h16 = ss_image_create_uninit(m->height_mm->width, m->height_mm->height, 1, err);
-    if (!h16) return err->code;
+    ss_image *tr =
+        h16 ? ss_image_create_uninit(m->height_mm->width, m->height_mm->height, 3, err) : NULL;
+    if (!tr) {
+        ss_image_free(h16);
+        return err->code;
+    }
     double lo = m->height_min_mm, span = m->height_max_mm - m->height_min_mm;
-    size_t n = (size_t)h16->width * h16->height;
     for (size_t i = 0; i < n; i++)
         h16->data[i] = span > 0 ? (float)((m->height_mm->data[i] - lo) / span) : 0.5f;
+    /* subsurface radius: 1.0 = 2 mm (5 x the table's cm), clamped */
+    for (size_t i = 0; i < n * 3; i++) {
+        float v = m->translucency->data[i] * 5.0f;
+        tr->data[i] = v < 0.0f ? 0.0f : v > 1.0f ? 1.0f : v;
+    }
     const char *bio_names[SS_BIO_NCHANNELS];
     for (int c = 0; c < SS_BIO_NCHANNELS; c++) bio_names[c] = ss_bio_channel_name(c);
     ss_error errs[N];
@@ -461,14 +498,24 @@ static ss_status write_maps(const char *dir, const ss_skin_maps *m, const ss_ima
             sts[k] = ss_png_write(path, m->normal, 8, SS_ENC_LINEAR, &errs[k]);
             break;
         case 5:
-            sts[k] = ss_exr_write_channels(path, bio, bio_names, 0, &errs[k]);
+            if (bio) sts[k] = ss_exr_write_channels(path, bio, bio_names, 0, &errs[k]);
             break;
         case 6:
             if (mr) sts[k] = ss_png_write(path, mr, 8, SS_ENC_LINEAR, &errs[k]);
             break;
+        case 7:
+            sts[k] = ss_png_write(path, tr, 8, SS_ENC_LINEAR, &errs[k]);
+            break;
+        case 8:
+            sts[k] = ss_png_write(path, m->cavity, 8, SS_ENC_LINEAR, &errs[k]);
+            break;
+        case 9:
+            if (normal_gl) sts[k] = ss_png_write(path, normal_gl, 8, SS_ENC_LINEAR, &errs[k]);
+            break;
         }
     }
     ss_image_free(h16);
+    ss_image_free(tr);
     for (int k = 0; k < N; k++)
         if (sts[k]) {
             *err = errs[k];
@@ -520,11 +567,12 @@ static ss_image *display_grey(const ss_image *bio, int channel, const ss_image *
  * blue), melanin, blood. */
 static ss_status write_sheet(const char *dir, const ss_skin_maps *m, const ss_image *bio,
                              ss_error *err) {
-    enum { N = 8 };
+    enum { N = 10 };
     const int S = m->base_color->width, T = S < 512 ? S : 512, CROP = S < 256 ? S : 256;
     ss_image *tiles[N] = {0}, *work[N] = {0};
-    static const char *labels[N] = {"base colour", "base colour 1:1", "roughness", "specular",
-                                    "height",      "normal 1:1",      "melanin",   "blood"};
+    static const char *labels[N] = {"base colour",  "base colour 1:1", "roughness", "specular",
+                                    "height",       "normal 1:1",      "melanin",   "blood",
+                                    "translucency", "cavity 1:1"};
     ss_status st = SS_OK;
     work[0] = ss_image_clone(m->base_color, err);
     work[1] = work[0] ? crop_centre(m->base_color, CROP, err) : NULL;
@@ -534,7 +582,18 @@ static ss_status write_sheet(const char *dir, const ss_skin_maps *m, const ss_im
     work[5] = work[4] ? crop_centre(m->normal, CROP, err) : NULL;
     work[6] = work[5] ? display_grey(bio, SS_BIO_MELANIN, NULL, err) : NULL;
     work[7] = work[6] ? display_grey(bio, SS_BIO_BLOOD, NULL, err) : NULL;
-    if (!work[7]) st = err->code;
+    work[8] = work[7] ? ss_image_clone(m->translucency, err) : NULL;
+    work[9] = work[8] ? crop_centre(m->cavity, CROP, err) : NULL;
+    if (!work[9]) st = err->code;
+    if (!st) { /* radius 0..2 mm, shown as stored in translucency.png */
+        size_t nv = (size_t)work[8]->width * work[8]->height * 3;
+        for (size_t i = 0; i < nv; i++) {
+            float v = work[8]->data[i] * 5.0f;
+            work[8]->data[i] = ss_srgb_decode(v < 0.0f ? 0.0f : v > 1.0f ? 1.0f : v);
+        }
+        size_t nc = (size_t)work[9]->width * work[9]->height;
+        for (size_t i = 0; i < nc; i++) work[9]->data[i] = ss_srgb_decode(work[9]->data[i]);
+    }
     if (!st) { /* the normal map's stored values, shown as they are */
         size_t nv = (size_t)work[5]->width * work[5]->height * 3;
         for (size_t i = 0; i < nv; i++) work[5]->data[i] = ss_srgb_decode(work[5]->data[i]);
@@ -545,7 +604,7 @@ static ss_status write_sheet(const char *dir, const ss_skin_maps *m, const ss_im
         if (tiles[k] == work[k]) work[k] = NULL;
     }
     if (!st) {
-        ss_image *sheet = ss_contact_sheet((const ss_image *const *)tiles, labels, N, 256, N, err);
+        ss_image *sheet = ss_contact_sheet((const ss_image *const *)tiles, labels, N, 256, 5, err);
         if (!sheet)
             st = err->code;
         else {
@@ -567,7 +626,7 @@ static ss_status run(const opts *o, const ss_skin_settings *s, inputs *in, const
     ss_status st = SS_OK;
     ss_skin_timing tm = {0};
     ss_skin_lut *lut = NULL;
-    ss_image *bio = NULL, *mr = NULL;
+    ss_image *bio = NULL, *mr = NULL, *normal_gl = NULL;
     ss_skin_maps maps = {0};
     double t0 = ss_now();
     char note_buf[512] = "";
@@ -579,7 +638,9 @@ static ss_status run(const opts *o, const ss_skin_settings *s, inputs *in, const
         st = err->code;
     if (!st && !(lut = ss_skin_lut_create(in->table, err))) st = err->code;
     double t1 = ss_now();
-    if (!st) st = ss_skin_render_maps(bio, lut, s->world_size_cm, o->directx, &maps, err);
+    /* rendered in the OpenGL convention; a DirectX normal.png is a flipped
+     * copy, and the OpenGL map is kept for glTF (normal_gl.png) */
+    if (!st) st = ss_skin_render_maps(bio, lut, s->world_size_cm, 0, &maps, err);
     tm.lookup_s = ss_now() - t1;
     double t2 = ss_now();
     if (!st && o->gltf) {
@@ -590,22 +651,37 @@ static ss_status run(const opts *o, const ss_skin_settings *s, inputs *in, const
             mr->data[i * 3 + 2] = 0.0f;
         }
     }
-    if (!st) st = write_maps(dir, &maps, bio, mr, err);
+    /* glTF requires a +Y (OpenGL) normal map: with --normal-convention
+     * directx the material gets its own OpenGL copy */
+    if (!st && o->directx) {
+        ss_image *dx = ss_image_clone(maps.normal, err);
+        if (!dx) st = err->code;
+        for (size_t i = 0; !st && i < (size_t)s->size * s->size; i++)
+            dx->data[i * 3 + 1] = 1.0f - dx->data[i * 3 + 1];
+        if (!st) {
+            if (o->gltf)
+                normal_gl = maps.normal; /* the OpenGL map, for glTF */
+            else
+                ss_image_free(maps.normal);
+            maps.normal = dx;
+        }
+    }
+    if (!st) st = write_maps(dir, &maps, o->no_bio ? NULL : bio, mr, normal_gl, err);
     char path[4200];
     if (!st) {
         snprintf(path, sizeof path, "%s/features.csv", dir);
         st = ss_skin_features_write_csv(path, &in->features, err);
     }
     if (!st) st = write_sheet(dir, &maps, bio, err);
+    const char *gl_normal = o->directx ? "normal_gl.png" : "normal.png";
     if (!st && o->gltf) {
         snprintf(path, sizeof path, "%s/skin.gltf", dir);
         if (o->mesh)
             st = ss_gltf_write_textured_mesh(path, &in->mesh, "skin", "base_color.png",
-                                             "metal_rough.png", "normal.png", err);
+                                             "metal_rough.png", gl_normal, err);
         else
             st = ss_gltf_write_textured_square(path, s->world_size_cm / 100.0, "skin",
-                                               "base_color.png", "metal_rough.png", "normal.png",
-                                               err);
+                                               "base_color.png", "metal_rough.png", gl_normal, err);
     }
     double t3 = ss_now();
     if (!st) {
@@ -624,6 +700,7 @@ static ss_status run(const opts *o, const ss_skin_settings *s, inputs *in, const
         cJSON_AddStringToObject(summary, "sampler",
                                 s->sampler == SS_SAMPLER_REJECTION ? "rejection" : "alias");
         cJSON_AddStringToObject(summary, "normal_convention", o->directx ? "directx" : "opengl");
+        cJSON_AddBoolToObject(summary, "bio_exr", !o->no_bio);
         cJSON_AddStringToObject(summary, "table", in->table_path);
         cJSON_AddStringToObject(summary, "render_model", "ggx");
         cJSON_AddNumberToObject(summary, "height_min_mm", maps.height_min_mm);
@@ -650,6 +727,7 @@ static ss_status run(const opts *o, const ss_skin_settings *s, inputs *in, const
         free(text);
     }
     ss_image_free(mr);
+    ss_image_free(normal_gl);
     ss_skin_maps_free(&maps);
     ss_image_free(bio);
     ss_skin_lut_free(lut);

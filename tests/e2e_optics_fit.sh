@@ -87,8 +87,8 @@ expect2 "$CLI" optics table --lookup "$T/trunc.sstab"
 cp "$T/t1.sstab" "$T/corrupt.sstab"
 printf '\x55' | dd of="$T/corrupt.sstab" bs=1 seek=200 conv=notrunc 2>/dev/null
 expect2 "$CLI" optics table --lookup "$T/corrupt.sstab"
-cp "$T/t1.sstab" "$T/v2.sstab"
-printf '\x02' | dd of="$T/v2.sstab" bs=1 seek=8 conv=notrunc 2>/dev/null
+cp "$T/t1.sstab" "$T/v2.sstab"  # version 7: not readable
+printf '\x07' | dd of="$T/v2.sstab" bs=1 seek=8 conv=notrunc 2>/dev/null
 expect2 "$CLI" optics table --lookup "$T/v2.sstab"
 grep -q "version" "$T/e.txt" || fail "version error names the version"
 expect2 "$CLI" optics table --lookup "$T/missing.sstab"
@@ -106,7 +106,15 @@ expect2 "$CLI" optics table --axis skin=0.1 --out "$T/bad.sstab"
 if [ -f "$SRC/data/modelmatch_default.sstab" ]; then
   "$CLI" optics table --lookup "$SRC/data/modelmatch_default.sstab" --melanin 0.1 --json \
     >"$T/d.json" || fail "default table lookup"
-  grep -q '"entries": 2268' "$T/d.json" || fail "default table has 7 x 3 x 4 x 3 x 3 x 3 entries"
+  grep -q '"entries": 4320' "$T/d.json" || fail "default table has 8 x 5 x 4 x 3 x 3 x 3 entries"
+  grep -q '"surface_curve": true' "$T/d.json" || fail "default table has a surface curve"
+  # the lobe follows the surface's roughness
+  r1=$("$CLI" optics table --lookup "$SRC/data/modelmatch_default.sstab" --surface-sigma 0.3 --json \
+       | python3 -c "import json,sys; print(json.load(sys.stdin)['models']['ggx']['roughness'])")
+  r2=$("$CLI" optics table --lookup "$SRC/data/modelmatch_default.sstab" --surface-sigma 0.7 --json \
+       | python3 -c "import json,sys; print(json.load(sys.stdin)['models']['ggx']['roughness'])")
+  python3 -c "import sys; assert float(sys.argv[1]) + 0.15 < float(sys.argv[2])" "$r1" "$r2" \
+    || fail "--surface-sigma 0.3 / 0.7 give roughness $r1 / $r2"
 else
   fail "data/modelmatch_default.sstab is missing"
 fi

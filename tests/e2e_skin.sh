@@ -17,7 +17,7 @@ check() { if eval "$1"; then ok; else bad "$2"; fi; }
 "$CLI" skin --size 256 --out "$T/def" --quiet >"$T/o" 2>"$T/e"
 check '[ $? -eq 0 ]' "default run ($(cat "$T/e"))"
 for f in base_color.png roughness.png specular.png height.png normal.png bio.exr features.csv \
-         skin.json contact_sheet.png; do
+         skin.json contact_sheet.png translucency.png cavity.png; do
   check '[ -s "$T/def/$f" ]' "missing $f"
 done
 check 'python3 - "$T/def/skin.json" "$T/def/features.csv" <<PY
@@ -27,7 +27,7 @@ rows = list(csv.reader(open(sys.argv[2])))
 assert rows[0][0] == "type" and len(rows) - 1 == sum(d["counts"].values()), (len(rows), d["counts"])
 for k in ("cysts", "moles", "freckles", "wrinkles", "follicles"): assert k in d["counts"]
 assert d["length_unit"] == "mm" and d["height_max_mm"] > d["height_min_mm"]
-assert d["wrap"] is True and len(d["bio_channels"]) == 11
+assert d["wrap"] is True and len(d["bio_channels"]) == 12 and d["bio_channels"][11] == "surface_roughness"
 PY' "skin.json / features.csv content"
 check '[ -z "$(ls "$T" | grep partial)" ]' "staging folder left behind"
 
@@ -66,8 +66,23 @@ import json, os, sys
 g = json.load(open(sys.argv[1])); d = os.path.dirname(sys.argv[1])
 assert g["asset"]["version"] == "2.0"
 for im in g["images"]: assert os.path.getsize(os.path.join(d, im["uri"])) > 0, im
+# glTF requires +Y normals: with --normal-convention directx it points at normal_gl.png
+n = g["materials"][0]["normalTexture"]["index"]
+assert g["images"][g["textures"][n]["source"]]["uri"] == "normal_gl.png", g["images"]
 PY' "glTF and its images"
+  # normal_gl.png is normal.png (DirectX) with green flipped back
+  check 'cmp -s "$T/face/normal_gl.png" "$T/face/normal.png"; [ $? -eq 1 ]' "normal_gl.png differs from the DirectX map"
+  "$CLI" skin --preset seed --size 256 --count follicles=20000 --field follicles="$FACE/follicles.png" \
+    --field freckles="$FACE/freckles.png" --field lips="$FACE/lips.png" --field moles="$FACE/moles.png" \
+    --field vectors="$FACE/wrinkle_vectors.png" --field wrinkles="$FACE/wrinkles.png" \
+    --sampler rejection --out "$T/face_gl" --quiet 2>"$T/e"
+  check 'cmp -s "$T/face/normal_gl.png" "$T/face_gl/normal.png"' "normal_gl.png equals the OpenGL run's normal.png"
 fi
+
+# 4a. --no-bio: every map but bio.exr; the surface maps vary over the patch.
+"$CLI" skin --size 128 --no-bio --out "$T/nobio" --json --quiet >"$T/nobio.json" 2>"$T/e"
+check '[ $? -eq 0 ] && [ ! -e "$T/nobio/bio.exr" ] && [ -s "$T/nobio/translucency.png" ] && [ -s "$T/nobio/cavity.png" ]' "--no-bio run ($(cat "$T/e"))"
+check 'python3 -c "import json,sys; assert json.load(open(sys.argv[1]))[\"bio_exr\"] is False" "$T/nobio.json"' "--no-bio in the summary"
 
 # 4b. The material on the hand mesh's UVs.
 HAND="$SRC/data/meshes/generic-hand-left.glb"

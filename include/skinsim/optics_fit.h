@@ -173,6 +173,7 @@ typedef struct ss_mm_entry {
 void ss_mm_entry_pack(const ss_mm_entry *e, double v[SS_MM_NFIELDS]);
 void ss_mm_entry_unpack(const double v[SS_MM_NFIELDS], ss_mm_entry *e);
 
+#define SS_MM_MAX_SURFACE 32
 typedef struct ss_mm_table {
     int nsamples[SS_MM_NAXES];
     double *axis[SS_MM_NAXES]; /* strictly increasing sample values per axis */
@@ -182,6 +183,15 @@ typedef struct ss_mm_table {
     uint64_t photons, seed;
     int n_theta_i, n_theta_r, n_phi;
     double wl_min_nm, wl_max_nm, wl_step_nm;
+    /* The surface (version 2): the Trowbridge-Reitz roughness sigma the
+     * entries were traced with, and the GGX lobe fitted to the surface-
+     * reflected BRDF alone at nsurface roughnesses (separable: the lobe
+     * depends on the surface only, docs/modelmatch.md). nsurface 0 (a
+     * version 1 file): no curve, the entries' own lobe is used. */
+    double surface_sigma;
+    int nsurface;
+    double surf_sigma[SS_MM_MAX_SURFACE]; /* strictly increasing */
+    double surf_specular[SS_MM_MAX_SURFACE], surf_roughness[SS_MM_MAX_SURFACE];
 } ss_mm_table;
 
 /* Uniform axes: nsamples[a] values from lo[a] to hi[a] (one sample: lo). */
@@ -191,17 +201,31 @@ void ss_mm_table_free(ss_mm_table *t);
 size_t ss_mm_table_index(const ss_mm_table *t, const int idx[SS_MM_NAXES]);
 
 /* Multilinear interpolation over the 2^6 surrounding nodes; coordinates
- * outside an axis are clamped to its range. Exact at the nodes. */
+ * outside an axis are clamped to its range. Exact at the nodes. The colour
+ * fields (base colours, subsurface radius, albedo) are interpolated in log
+ * space (multilinearly in log, where all 64 corners are positive): albedo
+ * falls about exponentially with the absorbers, so log is where it is
+ * smooth (docs/modelmatch.md gives the errors against the transport). */
 void ss_mm_table_lookup(const ss_mm_table *t, const double x[SS_MM_NAXES],
                         double out[SS_MM_NFIELDS]);
 /* Same, with the coordinates taken from bio (validated first). */
 ss_status ss_mm_table_lookup_bio(const ss_mm_table *t, const ss_bio_params *bio, ss_mm_entry *out,
                                  ss_error *err);
 
+/* The GGX lobe (specular strength, perceptual roughness) of a surface of
+ * Trowbridge-Reitz roughness sigma, interpolated linearly over the table's
+ * surface curve (clamped to its ends), and diffuse_scale = (1 - E(0) at the
+ * entries' sigma) / (1 - E(0) at sigma): the factor that turns an entry's
+ * base colour into the one that keeps the albedo under this lobe (E the
+ * lobe's directional albedo, ss_render_ggx_spec_albedo; interpolated between the curve's nodes like
+ * the lobe). Without a curve (version 1): entry 0's lobe, scale 1. Any pointer may be NULL. */
+void ss_mm_surface_lobe(const ss_mm_table *t, double sigma, double *specular, double *roughness,
+                        double *diffuse_scale);
 /* Binary file (format in docs/modelmatch.md): magic "SSMMTAB\n", version,
- * axes, entry layout, little-endian doubles, CRC-32. Written atomically.
- * Reading a truncated, corrupt or other-version file is SS_ERR_INPUT. */
-#define SS_MM_FILE_VERSION 1
+ * axes, entry layout, little-endian doubles, the surface curve (version 2),
+ * CRC-32. Written atomically (version 2). Version 1 and 2 files are read;
+ * a truncated, corrupt or other-version file is SS_ERR_INPUT. */
+#define SS_MM_FILE_VERSION 2
 ss_status ss_mm_table_write(const char *path, const ss_mm_table *t, ss_error *err);
 ss_mm_table *ss_mm_table_read(const char *path, ss_error *err);
 ss_mm_table *ss_mm_table_from_memory(const unsigned char *buf, size_t len, const char *name,
@@ -235,7 +259,19 @@ ss_status ss_mm_sample_fast(const ss_bio_params *bio, const ss_mm_build_options 
 void ss_mm_sss_radius(const double *radial_rgb, int bins, double max_cm, double out_cm[3]);
 void ss_mm_radial_albedo(const double *radial_rgb, int bins, double max_cm, double out[3]);
 
-/* Fills every entry of t (axes set by ss_mm_table_create). */
+/* Fits the surface curve of t (nsurface sigmas spread over sigma_lo..hi,
+ * 2..SS_MM_MAX_SURFACE) with o's bins, photons and seed; t->surface_sigma =
+ * o->spectrum.mc.roughness_sigma. ss_mm_table_build calls it. */
+ss_status ss_mm_table_build_surface(ss_mm_table *t, const ss_mm_build_options *o, int nsurface,
+                                    double sigma_lo, double sigma_hi, ss_error *err);
+/* Default surface curve: SS_MM_SURFACE_N sigmas over LO .. HI (below about
+ * 0.25 the 8 x 8 x 8 default bins are coarser than the lobe: the fitted
+ * roughness stops falling there). */
+#define SS_MM_SURFACE_N 9
+#define SS_MM_SURFACE_LO 0.15
+#define SS_MM_SURFACE_HI 0.95
+/* Fills every entry of t (axes set by ss_mm_table_create), and the surface
+ * curve (the defaults above). */
 ss_status ss_mm_table_build(ss_mm_table *t, const ss_mm_build_options *o, ss_error *err);
 /* The same in parts (the MPI driver shares them out, src/mpi): a geometry is
  * one pair of layer thicknesses (axes 4 and 5, gi = isc * nsamples[5] + iep),

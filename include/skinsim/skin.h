@@ -46,6 +46,12 @@ double ss_profile_freckle(double d, double r); /* §5.3.5: clamp(1 - 1.2 d / r, 
 double ss_profile_follicle(double d, double r_inner, double r_outer); /* alpha, §5.3.4 */
 double ss_wrinkle_taper(double t, double w);                          /* §5.3.7 T(t, w) */
 double ss_profile_wrinkle(double d, double thickness);                /* §5.3.7, in [0, 1] */
+/* Moles (ours, docs/skin.md): the outline's radius at angle theta (radians)
+ * about the centre, r (1 + 0.05 sin(2 theta + 2 pi r) + 0.03 sin(3 theta +
+ * 4 pi r)), and the border profile: 1 inside r_out - border/2, 0 beyond
+ * r_out + border/2, a smoothstep across the border. */
+double ss_mole_outline(double r, double theta);
+double ss_profile_mole(double d, double r_out, double border);
 
 /* ---- features ----------------------------------------------------------- */
 
@@ -64,7 +70,8 @@ int ss_feature_type_from_name(const char *name); /* -1 if unknown; singular acce
 
 /* One generated feature. Which fields mean what per type:
  *   cyst     x,y centre; r radius; h maximum height
- *   mole     x,y centre; r radius; h height scale; m maximum melanin ratio
+ *   mole     x,y centre; r radius; h height scale; m maximum melanin ratio;
+ *            p 1 for reticular pigment, 0 for uniform
  *   freckle  x,y centre; r radius; m maximum melanin M; p maximum pheomelanin H
  *   wrinkle  curve control points (texture units; x,y = first); w maximum
  *            width; h depth
@@ -98,6 +105,20 @@ typedef struct ss_skin_dist {
     double freckle_r_mean, freckle_r_sigma, freckle_m_max, freckle_h_scale, freckle_power;
     double lip_blood, lip_pheomelanin;
     double wrinkle_max_length, wrinkle_width, wrinkle_depth, wrinkle_cross_deg;
+    double wrinkle_cross_with_field; /* 1: cross_deg also with a user's vector field */
+    /* ours (docs/skin.md): moles r = r_min + |s N|, a border of this width,
+     * reticular pigment in this share of moles */
+    double mole_r_min, mole_border, mole_reticular;
+    /* baseline mottling in mm (Tsumura et al. 2003 chromophore maps):
+     * relative amplitude of melanin and blood, finest and coarsest
+     * wavelength of the fBm octaves */
+    double mottle_melanin, mottle_blood, mottle_min_mm, mottle_max_mm, mottle_height;
+    /* microrelief network: primary cell size and line depth, secondary cell
+     * size and depth (mm), stretch along the wrinkle field (>= 1) */
+    double relief_cell, relief_depth, relief_cell2, relief_depth2, relief_stretch;
+    /* surface state (0..1) and the surface roughness it gives: sigma =
+     * sigma_dry (1 - a_h hydration) (1 - a_s sebum), then features */
+    double surface_hydration, surface_sebum, surface_sigma_dry;
 } ss_skin_dist;
 void ss_skin_dist_default(ss_skin_dist *d);
 /* Sets one constant by name ("moles.r_sigma"); SS_ERR_INPUT for an unknown
@@ -120,7 +141,8 @@ enum {
     SS_BIO_EXTRA_G = 8,
     SS_BIO_EXTRA_B = 9,
     SS_BIO_EXTRA_A = 10,
-    SS_BIO_NCHANNELS = 11
+    SS_BIO_SURFACE_SIGMA = 11, /* Trowbridge-Reitz roughness of the surface (its state) */
+    SS_BIO_NCHANNELS = 12
 };
 /* The optics model's parameters (optics.h) of one texel of a bio map:
  * melanin, pheomelanin ratio, blood, oxygenation and the two thicknesses
@@ -128,7 +150,8 @@ enum {
 void ss_skin_bio_texel(const ss_image *bio, int x, int y, ss_bio_params *out);
 /* Channel names as written to bio.exr: "melanin", "pheomelanin_ratio",
  * "blood", "oxygenation", "sc_thickness_cm", "epidermis_thickness_cm",
- * "height_mm", "extra.R", "extra.G", "extra.B", "extra.A". */
+ * "height_mm", "extra.R", "extra.G", "extra.B", "extra.A",
+ * "surface_roughness". */
 const char *ss_bio_channel_name(int channel);
 
 /* Probability fields (§5.1): greyscale images whose value 0..1 is the
@@ -141,6 +164,9 @@ typedef struct ss_skin_fields {
     const ss_image *density[SS_FEAT_NTYPES]; /* 1 channel; [SS_FEAT_WRINKLE]: start points */
     const ss_image *lips;                    /* 1 channel */
     const ss_image *wrinkle_vectors;         /* 3 channels */
+    /* surface state, 1 channel 0..1 each (NULL: the settings' constants):
+     * stratum corneum hydration, sebum, and a scar mask */
+    const ss_image *hydration, *sebum, *scar;
 } ss_skin_fields;
 
 typedef enum ss_skin_sampler {
@@ -205,12 +231,18 @@ void ss_skin_lut_free(ss_skin_lut *l);
 /* Multilinear lookup of one texel: x in table axis order (melanin,
  * pheomelanin, blood, oxygenation, sc cm, epidermis cm); out: base R, G, B,
  * specular, roughness. Equals ss_mm_table_lookup's GGX fields to float
- * rounding. */
+ * rounding (colours interpolated in log space, as there). */
 void ss_skin_lut_lookup(const ss_skin_lut *l, const float x[6], float out[5]);
+/* The same with the surface's Trowbridge-Reitz roughness sigma: specular and
+ * roughness from the table's surface curve, the base colour scaled to keep
+ * the albedo (ss_mm_surface_lobe); out[5..7] the subsurface radius (cm). */
+void ss_skin_lut_lookup_surface(const ss_skin_lut *l, const float x[6], float sigma, float out[8]);
 
 typedef struct ss_skin_maps {
     ss_image *base_color;           /* linear RGB (extra colour composited) */
     ss_image *roughness, *specular; /* 1 channel, 0..1 (GGX, optics_fit.h) */
+    ss_image *translucency;         /* RGB subsurface radius, cm (the table's) */
+    ss_image *cavity;               /* 1 channel, 1 = open surface, 0 = deep in a furrow */
     ss_image *height_mm;            /* 1 channel, mm */
     ss_image *normal;               /* RGB, tangent space, OpenGL (+Y) unless directx */
     double height_min_mm, height_max_mm;

@@ -25,10 +25,11 @@ const char *ss_mm_axis_name(int axis) {
 }
 
 void ss_mm_axis_default_range(int axis, double *lo, double *hi) {
-    /* Plausible ranges (BioSpec / Jacques): melanosome fraction 1-43 %, blood
+    /* Plausible ranges (BioSpec / Jacques): melanosome fraction 0.3-43 %
+     * (0.3 %: the very light end, ITA above 55 degrees), blood
      * 0.2-5 % of the dermis, SC 10-40 um, epidermis 40-150 um. */
-    static const double r[SS_MM_NAXES][2] = {{0.01, 0.43}, {0.0, 1.0},     {0.002, 0.05},
-                                             {0.5, 1.0},   {0.001, 0.004}, {0.004, 0.015}};
+    static const double r[SS_MM_NAXES][2] = {{0.003, 0.43}, {0.0, 1.0},     {0.002, 0.05},
+                                             {0.5, 1.0},    {0.001, 0.004}, {0.004, 0.015}};
     *lo = r[axis][0];
     *hi = r[axis][1];
 }
@@ -130,6 +131,9 @@ size_t ss_mm_table_index(const ss_mm_table *t, const int idx[SS_MM_NAXES]) {
 
 /* ---- lookup -------------------------------------------------------------- */
 
+/* Fields interpolated in log space (colours: base colours, radius, albedo). */
+static int field_is_colour(int f) { return (f >= 0 && f < 3) || (f >= 5 && f < 8) || f >= 12; }
+
 void ss_mm_table_lookup(const ss_mm_table *t, const double x[SS_MM_NAXES],
                         double out[SS_MM_NFIELDS]) {
     int i0[SS_MM_NAXES];
@@ -148,23 +152,70 @@ void ss_mm_table_lookup(const ss_mm_table *t, const double x[SS_MM_NAXES],
         i0[a] = i;
         fr[a] = (xa - v[i]) / (v[i + 1] - v[i]);
     }
-    for (int f = 0; f < SS_MM_NFIELDS; f++) out[f] = 0.0;
+    double w[1 << SS_MM_NAXES];
+    const double *e[1 << SS_MM_NAXES];
+    int nc = 0;
     for (int corner = 0; corner < (1 << SS_MM_NAXES); corner++) {
-        double w = 1.0;
+        double wc = 1.0;
         int idx[SS_MM_NAXES];
         for (int a = 0; a < SS_MM_NAXES; a++) {
             int up = (corner >> a) & 1;
             if (t->nsamples[a] == 1 && up) {
-                w = 0.0;
+                wc = 0.0;
                 break;
             }
-            w *= up ? fr[a] : 1.0 - fr[a];
+            wc *= up ? fr[a] : 1.0 - fr[a];
             idx[a] = i0[a] + up;
         }
-        if (w == 0.0) continue;
-        const double *e = t->entries + ss_mm_table_index(t, idx) * SS_MM_NFIELDS;
-        for (int f = 0; f < SS_MM_NFIELDS; f++) out[f] += w * e[f];
+        if (wc == 0.0) continue;
+        w[nc] = wc;
+        e[nc++] = t->entries + ss_mm_table_index(t, idx) * SS_MM_NFIELDS;
     }
+    if (nc == 1) { /* on a node: its entry exactly */
+        memcpy(out, e[0], SS_MM_NFIELDS * sizeof(double));
+        return;
+    }
+    for (int f = 0; f < SS_MM_NFIELDS; f++) {
+        int use_log = field_is_colour(f);
+        for (int k = 0; k < nc && use_log; k++) use_log = e[k][f] > 0.0;
+        double s = 0.0;
+        if (use_log) {
+            for (int k = 0; k < nc; k++) s += w[k] * log(e[k][f]);
+            out[f] = exp(s);
+        } else {
+            for (int k = 0; k < nc; k++) s += w[k] * e[k][f];
+            out[f] = s;
+        }
+    }
+}
+
+void ss_mm_surface_lobe(const ss_mm_table *t, double sigma, double *specular, double *roughness,
+                        double *diffuse_scale) {
+    const double e_spec = t->entries ? t->entries[3] : 0.5,
+                 e_rough = t->entries ? t->entries[4] : 0.5;
+    double sp = e_spec, ro = e_rough, sc = 1.0;
+    if (t->nsurface >= 2) {
+        const int n = t->nsurface;
+        const double *v = t->surf_sigma;
+        double s = sigma;
+        if (!(s > v[0])) s = v[0];
+        if (s > v[n - 1]) s = v[n - 1];
+        int i = 0;
+        while (i < n - 2 && s >= v[i + 1]) i++;
+        double f = (s - v[i]) / (v[i + 1] - v[i]);
+        sp = t->surf_specular[i] + f * (t->surf_specular[i + 1] - t->surf_specular[i]);
+        ro = t->surf_roughness[i] + f * (t->surf_roughness[i + 1] - t->surf_roughness[i]);
+        /* the scale at the two nodes, interpolated like the lobe */
+        const double one_e0 = 1.0 - ss_render_ggx_spec_albedo(e_spec, e_rough, 1.0);
+        const double s0 = one_e0 / (1.0 - ss_render_ggx_spec_albedo(t->surf_specular[i],
+                                                                    t->surf_roughness[i], 1.0));
+        const double s1 = one_e0 / (1.0 - ss_render_ggx_spec_albedo(t->surf_specular[i + 1],
+                                                                    t->surf_roughness[i + 1], 1.0));
+        sc = s0 + f * (s1 - s0);
+    }
+    if (specular) *specular = sp;
+    if (roughness) *roughness = ro;
+    if (diffuse_scale) *diffuse_scale = sc;
 }
 
 /* ---- file ---------------------------------------------------------------- */
@@ -229,6 +280,13 @@ ss_status ss_mm_table_write(const char *path, const ss_mm_table *t, ss_error *er
         for (int k = 0; k < t->nsamples[a]; k++) put_f64(&b, t->axis[a][k]);
     }
     for (size_t i = 0; i < t->nentries * SS_MM_NFIELDS; i++) put_f64(&b, t->entries[i]);
+    put_f64(&b, t->surface_sigma);
+    put_u32(&b, (uint32_t)t->nsurface);
+    for (int k = 0; k < t->nsurface; k++) {
+        put_f64(&b, t->surf_sigma[k]);
+        put_f64(&b, t->surf_specular[k]);
+        put_f64(&b, t->surf_roughness[k]);
+    }
     uLong crc = crc32(0L, Z_NULL, 0);
     if (!b.fail) crc = crc32(crc, b.p, (uInt)b.len);
     put_u32(&b, (uint32_t)crc);
@@ -277,10 +335,10 @@ ss_mm_table *ss_mm_table_from_memory(const unsigned char *buf, size_t len, const
     }
     r.pos = 8;
     if (!get_u32(&r, &version)) goto truncated;
-    if (version != SS_MM_FILE_VERSION) {
+    if (version != 1 && version != SS_MM_FILE_VERSION) {
         ss_error_set(err, SS_ERR_INPUT,
                      "%s: ModelMatch table version %u is not supported (this build reads "
-                     "version %d)",
+                     "versions 1 and %d)",
                      name, version, SS_MM_FILE_VERSION);
         return NULL;
     }
@@ -358,6 +416,33 @@ ss_mm_table *ss_mm_table_from_memory(const unsigned char *buf, size_t len, const
                          name, i);
             goto fail;
         }
+    }
+    if (version >= 2) {
+        uint32_t ns2;
+        if (!get_f64(&r, &t->surface_sigma) || !get_u32(&r, &ns2)) goto trunc_free;
+        if (!(t->surface_sigma >= 0.0 && t->surface_sigma <= 10.0) || ns2 == 1 ||
+            ns2 > SS_MM_MAX_SURFACE) {
+            ss_error_set(err, SS_ERR_INPUT,
+                         "%s: ModelMatch table surface curve is malformed (sigma %g, %u points)",
+                         name, t->surface_sigma, ns2);
+            goto fail;
+        }
+        t->nsurface = (int)ns2;
+        for (int k = 0; k < t->nsurface; k++) {
+            if (!get_f64(&r, &t->surf_sigma[k]) || !get_f64(&r, &t->surf_specular[k]) ||
+                !get_f64(&r, &t->surf_roughness[k]))
+                goto trunc_free;
+            if (!isfinite(t->surf_sigma[k]) || !isfinite(t->surf_specular[k]) ||
+                !isfinite(t->surf_roughness[k]) ||
+                (k > 0 && !(t->surf_sigma[k] > t->surf_sigma[k - 1]))) {
+                ss_error_set(err, SS_ERR_INPUT,
+                             "%s: ModelMatch table surface curve is not finite and increasing",
+                             name);
+                goto fail;
+            }
+        }
+    } else {
+        t->surface_sigma = 0.75; /* version 1 tables were all built at BioSpec's default */
     }
     if (r.pos != r.len) {
         ss_error_set(err, SS_ERR_INPUT, "%s: ModelMatch table has %zu unexpected trailing bytes",
@@ -558,9 +643,14 @@ static ss_status build_geometry(const ss_optics_data *data, const ss_bio_params 
                     for (size_t b = 0; b < nb; b++)
                         for (int c = 0; c < 3; c++) f[b * 3 + c] += w[c] * r.brdf_exit[b];
                 } else {
+                    /* the radius is a mean distance: weighted by the spectral
+                     * energy each channel sees (the positive part of its
+                     * colour-matching weight), never by signed sRGB weights,
+                     * whose negative lobes made it negative for dark skin */
                     double *rad = out->radial + (size_t)a * MM_RADIAL_BINS * 3;
                     for (int b = 0; b < MM_RADIAL_BINS; b++)
-                        for (int c = 0; c < 3; c++) rad[b * 3 + c] += w[c] * r.radial[b];
+                        for (int c = 0; c < 3; c++)
+                            rad[b * 3 + c] += (w[c] > 0.0 ? w[c] : 0.0) * r.radial[b];
                     for (int c = 0; c < 3; c++) out->albedo[(size_t)a * 3 + c] += w[c] * r.diffuse;
                 }
                 ss_mc_result_free(&r);
@@ -701,6 +791,7 @@ ss_status ss_mm_sample_fast(const ss_bio_params *bio, const ss_mm_build_options 
 }
 
 void ss_mm_table_record_options(ss_mm_table *t, const ss_mm_build_options *o) {
+    t->surface_sigma = o->spectrum.mc.roughness_sigma;
     t->photons = o->spectrum.mc.photons;
     t->seed = o->spectrum.mc.seed;
     t->n_theta_i = o->n_theta_i;
@@ -719,7 +810,75 @@ static ss_status build_range(ss_mm_table *t, const ss_mm_build_options *o, int g
                              ss_error *err);
 
 ss_status ss_mm_table_build(ss_mm_table *t, const ss_mm_build_options *o, ss_error *err) {
-    return build_range(t, o, 0, ss_mm_table_ngeometries(t), err);
+    ss_status st = build_range(t, o, 0, ss_mm_table_ngeometries(t), err);
+    if (!st)
+        st = ss_mm_table_build_surface(t, o, SS_MM_SURFACE_N, SS_MM_SURFACE_LO, SS_MM_SURFACE_HI,
+                                       err);
+    return st;
+}
+
+ss_status ss_mm_table_build_surface(ss_mm_table *t, const ss_mm_build_options *o, int nsurface,
+                                    double sigma_lo, double sigma_hi, ss_error *err) {
+    int nwl;
+    ss_status st = check_build_options(o, &nwl, err);
+    if (st) return st;
+    if (nsurface < 2 || nsurface > SS_MM_MAX_SURFACE || !(sigma_lo > 0.0) ||
+        !(sigma_hi > sigma_lo) || sigma_hi > 2.0)
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "ModelMatch surface curve: %d sigmas over %g..%g (need 2..%d, 0 < lo "
+                            "< hi <= 2)",
+                            nsurface, sigma_lo, sigma_hi, SS_MM_MAX_SURFACE);
+    ss_status fst = SS_OK;
+    ss_error ferr;
+    double sp[SS_MM_MAX_SURFACE], ro[SS_MM_MAX_SURFACE];
+    /* each sigma: the surface-reflected BRDF alone (air over the stratum
+     * corneum, nothing from below), the GGX lobe fitted to it as the
+     * entries' lobe is (base colour 0) */
+#pragma omp parallel for schedule(dynamic, 1)
+    for (int k = 0; k < nsurface; k++) {
+        ss_spectrum_options so = o->spectrum;
+        so.mc.roughness_sigma = sigma_lo + (sigma_hi - sigma_lo) * k / (nsurface - 1);
+        /* ten times the entries' packets: one grey trace per incidence bin
+         * is cheap, and the lobe's strength is a small signal */
+        so.mc.photons = o->spectrum.mc.photons * 10;
+        ss_brdf_sampled surf = {0, 0, 0, NULL};
+        ss_error e2;
+        ss_status s2 =
+            ss_optics_surface_brdf_sample(&so, o->n_theta_i, o->n_theta_r, o->n_phi, &surf, &e2);
+        ss_fit_result fr;
+        if (!s2) {
+            ss_fit_options fo = o->fit;
+            fo.base_mode = SS_FIT_BASE_ALBEDO;
+            fo.albedo_rgb[0] = fo.albedo_rgb[1] = fo.albedo_rgb[2] = 0.0;
+            fo.surface = &surf;
+            s2 = ss_render_fit(SS_RENDER_GGX, &surf, &fo, &fr, &e2);
+        }
+        ss_brdf_sampled_free(&surf);
+        if (s2) {
+#pragma omp critical(mm_surf_err)
+            {
+                if (fst == SS_OK) {
+                    fst = s2;
+                    ferr = e2;
+                }
+            }
+            continue;
+        }
+        sp[k] = fr.params.specular;
+        ro[k] = fr.params.roughness;
+    }
+    if (fst) {
+        *err = ferr;
+        return fst;
+    }
+    t->surface_sigma = o->spectrum.mc.roughness_sigma;
+    t->nsurface = nsurface;
+    for (int k = 0; k < nsurface; k++) {
+        t->surf_sigma[k] = sigma_lo + (sigma_hi - sigma_lo) * k / (nsurface - 1);
+        t->surf_specular[k] = sp[k];
+        t->surf_roughness[k] = ro[k];
+    }
+    return SS_OK;
 }
 
 ss_status ss_mm_table_build_geometry(ss_mm_table *t, const ss_mm_build_options *o, int gi,

@@ -12,7 +12,7 @@
  * points. A start where the field has no direction or no length is redrawn
  * (index n + k, n + 2k, ...), so counts are exact; a field with no usable
  * vector anywhere is an input error. */
-#include "skinsim/skin.h"
+#include "skin_internal.h"
 
 #include <math.h>
 #include <stddef.h>
@@ -80,6 +80,23 @@ static const dist_field DIST_FIELDS[] = {
     DF("wrinkles.width", wrinkle_width, 0, 100),
     DF("wrinkles.depth", wrinkle_depth, 0, 100),
     DF("wrinkles.cross_deg", wrinkle_cross_deg, -180, 180),
+    DF("wrinkles.cross_with_field", wrinkle_cross_with_field, 0, 1),
+    DF("moles.r_min", mole_r_min, 0, 100),
+    DF("moles.border", mole_border, 0, 1),
+    DF("moles.reticular", mole_reticular, 0, 1),
+    DF("mottle.melanin", mottle_melanin, 0, 2),
+    DF("mottle.blood", mottle_blood, 0, 2),
+    DF("mottle.min_mm", mottle_min_mm, 0.01, 1000),
+    DF("mottle.max_mm", mottle_max_mm, 0.01, 1000),
+    DF("mottle.height", mottle_height, 0, 10),
+    DF("relief.cell", relief_cell, 0.02, 100),
+    DF("relief.depth", relief_depth, 0, 10),
+    DF("relief.cell2", relief_cell2, 0.02, 100),
+    DF("relief.depth2", relief_depth2, 0, 10),
+    DF("relief.stretch", relief_stretch, 1, 4),
+    DF("surface.hydration", surface_hydration, 0, 1),
+    DF("surface.sebum", surface_sebum, 0, 1),
+    DF("surface.sigma_dry", surface_sigma_dry, 0.05, 1.5),
 };
 #define NDIST ((int)(sizeof DIST_FIELDS / sizeof DIST_FIELDS[0]))
 
@@ -118,6 +135,23 @@ void ss_skin_dist_default(ss_skin_dist *d) {
     d->wrinkle_width = 0.3;
     d->wrinkle_depth = 0.08;
     d->wrinkle_cross_deg = 0.0;
+    d->wrinkle_cross_with_field = 0.0;
+    d->mole_r_min = 0.0;
+    d->mole_border = 0.08; /* naevi are mostly sharp-edged: a 0.08 mm border */
+    d->mole_reticular = 0.4;
+    d->mottle_melanin = 0.12; /* relative sd of melanin and blood (ours, docs/skin.md) */
+    d->mottle_blood = 0.25;
+    d->mottle_min_mm = 0.1;
+    d->mottle_max_mm = 25.6;
+    d->mottle_height = 0.004; /* sd of the gentle undulation, mm */
+    d->relief_cell = 0.5;     /* polygons 0.2-1 mm, primary lines 20-100 um deep */
+    d->relief_depth = 0.05;
+    d->relief_cell2 = 0.15;
+    d->relief_depth2 = 0.012;
+    d->relief_stretch = 1.6;
+    d->surface_hydration = 0.5; /* forearm: moderately hydrated, little sebum */
+    d->surface_sebum = 0.15;
+    d->surface_sigma_dry = 0.55;
 }
 
 static const dist_field *dist_find(const char *name) {
@@ -168,6 +202,10 @@ ss_status ss_skin_settings_preset(ss_skin_settings *s, const char *preset, int s
     for (int a = 0; a < 6; a++) ss_mm_axis_default_range(a, &s->base_lo[a], &s->base_hi[a]);
     s->base_lo[SS_BIO_OXYGENATION] = 0.75;
     s->base_hi[SS_BIO_OXYGENATION] = 0.95;
+    /* melanin and blood are baseline values with relative mottling (not the
+     * seed's low end plus a band): a light skin by default */
+    s->base_lo[SS_BIO_MELANIN] = 0.02;
+    s->base_lo[SS_BIO_BLOOD] = 0.007;
     if (!strcmp(preset, "seed")) {
         s->world_size_cm = 20.0;
         const long c[SS_FEAT_NTYPES] = {5000, 700, 3000, 1000, 170000};
@@ -179,7 +217,8 @@ ss_status ss_skin_settings_preset(ss_skin_settings *s, const char *preset, int s
         ss_skin_forearm_counts(s->world_size_cm, s->count);
         /* a forearm: larger moles and flatter cysts than the seed's face,
          * fine crossing furrows (docs/skin.md) */
-        s->dist.mole_r_sigma = 1.0;
+        s->dist.mole_r_sigma = 0.7; /* r = 1 + |0.7 N| mm: diameters 2-6 mm */
+        s->dist.mole_r_min = 1.0;
         s->dist.mole_h_scale = 0.3;
         s->dist.mole_h_offset = 0.1;
         s->dist.cyst_h_max = 0.04;
@@ -189,8 +228,15 @@ ss_status ss_skin_settings_preset(ss_skin_settings *s, const char *preset, int s
         s->dist.wrinkle_width = 0.1;
         s->dist.wrinkle_depth = 0.025;
         s->dist.wrinkle_cross_deg = 60.0;
-        s->base_lo[SS_BIO_MELANIN] = 0.025;
-        s->base_lo[SS_BIO_BLOOD] = 0.006;
+        s->base_lo[SS_BIO_MELANIN] = 0.02;
+        s->dist.mole_m_min = 0.05; /* with the tone factor 1 + 3 melanin */
+        s->dist.mole_m_range = 0.12;
+        s->base_lo[SS_BIO_BLOOD] = 0.007;
+        /* a forearm's stratum corneum (~13-15 um) and viable epidermis (~85-90
+         * um), not the ranges' thinnest ends: a 40 um epidermis let melanin 0.43
+         * through as a saturated rust (docs/skin.md, tone range) */
+        s->base_lo[SS_BIO_SC_CM] = 0.0012;
+        s->base_lo[SS_BIO_EPIDERMIS_CM] = 0.0082;
         return SS_OK;
     }
     return ss_error_set(err, SS_ERR_INPUT, "--preset: unknown preset '%s' (forearm or seed)",
@@ -270,6 +316,18 @@ static void field_vector(const ss_image *v, double x, double y, double *vx, doub
  * one 8-bit step of (0.5, 0.5). */
 #define MIN_DIR 0.01
 
+int skin_field_direction(const ss_image *vf, double x, double y, double *vx, double *vy) {
+    double len;
+    field_vector(vf, x, y, vx, vy, &len);
+    double n = hypot(*vx, *vy);
+    if (!(n > MIN_DIR)) {
+        *vx = 1.0, *vy = 0.0;
+        return 0;
+    }
+    *vx /= n, *vy /= n;
+    return 1;
+}
+
 static int has_vector(const ss_image *v) {
     if (!v) return 1;
     size_t n = (size_t)v->width * v->height;
@@ -290,7 +348,11 @@ static int make_wrinkle(const ss_skin_settings *s, const ss_image *vf, size_t k,
     double norm = hypot(vx, vy);
     if (!(norm > MIN_DIR) || !(len > 1e-3)) return 0;
     double step = len * s->dist.wrinkle_max_length / 3.0 / mm_per_unit;
-    double rot = (k & 1) ? s->dist.wrinkle_cross_deg * M_PI / 180.0 : 0.0;
+    /* with a user's vector field, wrinkles follow it unless the crossing is
+     * asked for (wrinkles.cross_with_field, which --param wrinkles.cross_deg
+     * sets on the command line) */
+    const int cross = !vf || s->dist.wrinkle_cross_with_field != 0.0;
+    double rot = (k & 1) && cross ? s->dist.wrinkle_cross_deg * M_PI / 180.0 : 0.0;
     double cr = cos(rot), sr = sin(rot);
     double x = x0, y = y0, px = vx / norm, py = vy / norm;
     f->curve.x[0] = x;
@@ -327,7 +389,9 @@ static void point_params(const ss_skin_settings *s, int t, size_t k, ss_skin_fea
         f->h = d->cyst_h_max * draw_u(sd, t, k, 2);
         break;
     case SS_FEAT_MOLE:
-        f->r = fabs(d->mole_r_sigma * draw_n(sd, t, k, 0));
+        f->r = d->mole_r_min + fabs(d->mole_r_sigma * draw_n(sd, t, k, 0));
+        /* p: 1 for a reticular pigment network, 0 for uniform pigment */
+        f->p = draw_u(sd, t, k, 4) < d->mole_reticular ? 1.0 : 0.0;
         f->h = d->mole_h_scale * draw_u(sd, t, k, 2) + d->mole_h_offset;
         f->m = d->mole_m_min + d->mole_m_range * draw_u(sd, t, k, 3);
         break;

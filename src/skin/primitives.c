@@ -163,3 +163,14 @@ double ss_profile_wrinkle(double d, double thickness) {
     if (u <= 0.0) return 1.0;
     return 1.0 - pow(u, 0.2);
 }
+
+double ss_mole_outline(double r, double theta) {
+    const double ph = 6.283185307179586 * r;
+    return r * (1.0 + 0.05 * sin(2.0 * theta + ph) + 0.03 * sin(3.0 * theta + 2.0 * ph));
+}
+
+double ss_profile_mole(double d, double r_out, double border) {
+    const double b = border > 1e-6 ? border : 1e-6;
+    double a = (r_out + 0.5 * b - d) / b;
+    return a <= 0.0 ? 0.0 : a >= 1.0 ? 1.0 : a * a * (3.0 - 2.0 * a);
+}

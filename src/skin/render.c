@@ -9,9 +9,18 @@
  * 5 of them at millions of texels, so ss_skin_lut copies the GGX base
  * colour, specular and roughness of every node (read through the public
  * table struct) into 8 floats, and interpolates by successive linear
- * interpolation along the axes (63 8-wide lerps, which vectorise). The
- * result equals ss_mm_table_lookup's to float rounding (tested); a new
- * table file plugs in unchanged. */
+ * interpolation along the axes (63 8-wide lerps, which vectorise). Colours
+ * (base colour, subsurface radius) are stored as logs and interpolated in
+ * log space, as ss_mm_table_lookup does (albedo is about exponential in the
+ * absorbers). The result equals ss_mm_table_lookup's to float rounding
+ * (tested); a new table file plugs in unchanged.
+ *
+ * The surface: specular and roughness come from the table's surface curve
+ * at the texel's surface roughness sigma (bio channel SS_BIO_SURFACE_SIGMA,
+ * set by the surface state in texgen), and the base colour is scaled so the
+ * albedo is kept under that lobe (ss_mm_surface_lobe). Furrows and follicle
+ * openings occlude the lobe: specular x (1 - 0.5 (1 - cavity)), cavity from
+ * the height below its 0.25 mm neighbourhood. */
 #include "skinsim/skin.h"
 #include "skinsim/texture.h"
 
@@ -19,7 +28,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define LUT_F 5 /* base R, G, B, specular, roughness */
+#define LUT_F 8 /* log base R, G, B, specular, roughness, log radius R, G, B */
+#define LUT_LOG_MIN 1e-9f
 
 struct ss_skin_lut {
     int n[SS_MM_NAXES];
@@ -27,6 +37,10 @@ struct ss_skin_lut {
     float *axis[SS_MM_NAXES];
     size_t corner[64]; /* node offset of each cell corner from the cell's first node */
     float *node;       /* nentries x LUT_F */
+    /* surface curve: sigma, specular, roughness, base colour scale per node */
+    int nsurf;
+    float s_sigma[SS_MM_MAX_SURFACE], s_spec[SS_MM_MAX_SURFACE], s_rough[SS_MM_MAX_SURFACE],
+        s_scale[SS_MM_MAX_SURFACE];
 };
 
 void ss_skin_lut_free(ss_skin_lut *l) {
@@ -67,7 +81,10 @@ ss_skin_lut *ss_skin_lut_create(const ss_mm_table *t, ss_error *err) {
         ss_mm_entry_unpack(t->entries + e * SS_MM_NFIELDS, &en);
         const ss_render_params *g = &en.fit[SS_RENDER_GGX];
         float *o = l->node + e * LUT_F;
-        for (int c = 0; c < 3; c++) o[c] = (float)g->base_rgb[c];
+        for (int c = 0; c < 3; c++) {
+            o[c] = logf(fmaxf((float)g->base_rgb[c], LUT_LOG_MIN));
+            o[5 + c] = logf(fmaxf((float)en.sss_radius_cm[c], LUT_LOG_MIN));
+        }
         o[3] = (float)g->specular;
         o[4] = (float)g->roughness;
         for (int c = 0; c < LUT_F; c++)
@@ -76,6 +93,15 @@ ss_skin_lut *ss_skin_lut_create(const ss_mm_table *t, ss_error *err) {
                 ss_skin_lut_free(l);
                 return NULL;
             }
+    }
+    l->nsurf = t->nsurface >= 2 ? t->nsurface : 0;
+    for (int k = 0; k < l->nsurf; k++) {
+        double sp, ro, sc;
+        ss_mm_surface_lobe(t, t->surf_sigma[k], &sp, &ro, &sc);
+        l->s_sigma[k] = (float)t->surf_sigma[k];
+        l->s_spec[k] = (float)sp;
+        l->s_rough[k] = (float)ro;
+        l->s_scale[k] = (float)sc;
     }
     return l;
 nomem:
@@ -143,6 +169,34 @@ static inline void lut_lookup_slots(const ss_skin_lut *l, size_t *cbase, float (
         out[f] = b[0];
     }
 #undef LERP_LEVEL
+    for (int c = 0; c < 3; c++) {
+        out[c] = expf(out[c]);
+        out[5 + c] = expf(out[5 + c]);
+    }
+}
+
+/* The surface curve at sigma: specular, roughness, base colour scale. */
+static inline void lut_surface(const ss_skin_lut *l, float sigma, float *sp, float *ro, float *sc) {
+    const int n = l->nsurf;
+    const float *v = l->s_sigma;
+    float s = sigma;
+    if (!(s > v[0])) s = v[0];
+    if (s > v[n - 1]) s = v[n - 1];
+    int i = 0;
+    while (i < n - 2 && s >= v[i + 1]) i++;
+    const float f = (s - v[i]) / (v[i + 1] - v[i]);
+    *sp = l->s_spec[i] + f * (l->s_spec[i + 1] - l->s_spec[i]);
+    *ro = l->s_rough[i] + f * (l->s_rough[i + 1] - l->s_rough[i]);
+    *sc = l->s_scale[i] + f * (l->s_scale[i + 1] - l->s_scale[i]);
+}
+
+static inline void apply_surface(const ss_skin_lut *l, float sigma, float out[LUT_F]) {
+    if (l->nsurf < 2) return;
+    float sp, ro, sc;
+    lut_surface(l, sigma, &sp, &ro, &sc);
+    out[0] *= sc, out[1] *= sc, out[2] *= sc;
+    out[3] = sp;
+    out[4] = ro;
 }
 
 static inline void lut_lookup(const ss_skin_lut *l, lut_cache *c, const float x[6],
@@ -158,7 +212,19 @@ void ss_skin_lut_lookup(const ss_skin_lut *l, const float x[6], float out[5]) {
         float cor[1][LUT_F][64];
     } one;
     one.base[0] = (size_t)-1;
+    float r[LUT_F];
+    lut_lookup_slots(l, one.base, one.cor, 1, x, r);
+    memcpy(out, r, 5 * sizeof(float));
+}
+
+void ss_skin_lut_lookup_surface(const ss_skin_lut *l, const float x[6], float sigma, float out[8]) {
+    struct {
+        size_t base[1];
+        float cor[1][LUT_F][64];
+    } one;
+    one.base[0] = (size_t)-1;
     lut_lookup_slots(l, one.base, one.cor, 1, x, out);
+    apply_surface(l, sigma, out);
 }
 
 void ss_skin_bio_texel(const ss_image *bio, int x, int y, ss_bio_params *out) {
@@ -179,7 +245,49 @@ void ss_skin_maps_free(ss_skin_maps *m) {
     ss_image_free(m->specular);
     ss_image_free(m->height_mm);
     ss_image_free(m->normal);
+    ss_image_free(m->translucency);
+    ss_image_free(m->cavity);
     memset(m, 0, sizeof *m);
+}
+
+/* Cavity: how far a texel lies below the mean height of its neighbourhood
+ * (a box of +-0.25 mm, wrapped), over CAVITY_DEPTH_MM: 1 on plateaus and
+ * ridges, 0 at the bottom of a furrow 0.05 mm deep. Separable running
+ * sums, so O(1) per texel whatever the texel size. */
+#define CAVITY_RADIUS_MM 0.25
+#define CAVITY_DEPTH_MM 0.05
+static ss_status cavity_map(const ss_image *h, double texel_mm, ss_image *out, ss_error *err) {
+    const int W = h->width, H = h->height;
+    int R = (int)lround(CAVITY_RADIUS_MM / texel_mm);
+    if (R < 1) R = 1;
+    if (2 * R + 1 > W) R = (W - 1) / 2;
+    if (2 * R + 1 > H) R = (H - 1) / 2;
+    float *tmp = malloc((size_t)W * H * sizeof(float));
+    if (!tmp) return ss_error_set(err, SS_ERR_NOMEM, "cavity map: out of memory");
+#pragma omp parallel for schedule(static)
+    for (int y = 0; y < H; y++) {
+        const float *row = h->data + (size_t)y * W;
+        double s = 0;
+        for (int k = -R; k <= R; k++) s += row[((k % W) + W) % W];
+        for (int x = 0; x < W; x++) {
+            tmp[(size_t)y * W + x] = (float)(s / (2 * R + 1));
+            s += row[(x + R + 1) % W] - row[((x - R) % W + W) % W];
+        }
+    }
+#pragma omp parallel for schedule(static)
+    for (int x = 0; x < W; x++) {
+        double s = 0;
+        for (int k = -R; k <= R; k++) s += tmp[(size_t)(((k % H) + H) % H) * W + x];
+        for (int y = 0; y < H; y++) {
+            const double mean = s / (2 * R + 1);
+            const double d = (mean - h->data[(size_t)y * W + x]) / CAVITY_DEPTH_MM;
+            out->data[(size_t)y * W + x] = (float)(d <= 0 ? 1.0 : d >= 1 ? 0.0 : 1.0 - d);
+            s += tmp[(size_t)((y + R + 1) % H) * W + x] -
+                 tmp[(size_t)(((y - R) % H + H) % H) * W + x];
+        }
+    }
+    free(tmp);
+    return SS_OK;
 }
 
 ss_status ss_skin_render_maps(const ss_image *bio, const ss_skin_lut *lut, double world_size_cm,
@@ -195,7 +303,9 @@ ss_status ss_skin_render_maps(const ss_image *bio, const ss_skin_lut *lut, doubl
         !(out->roughness = ss_image_create_uninit(W, H, 1, err)) ||
         !(out->specular = ss_image_create_uninit(W, H, 1, err)) ||
         !(out->height_mm = ss_image_create_uninit(W, H, 1, err)) ||
-        !(out->normal = ss_image_create_uninit(W, H, 3, err))) {
+        !(out->normal = ss_image_create_uninit(W, H, 3, err)) ||
+        !(out->translucency = ss_image_create_uninit(W, H, 3, err)) ||
+        !(out->cavity = ss_image_create_uninit(W, H, 1, err))) {
         ss_skin_maps_free(out);
         return err->code;
     }
@@ -208,11 +318,13 @@ ss_status ss_skin_render_maps(const ss_image *bio, const ss_skin_lut *lut, doubl
 #pragma omp for schedule(static)
         for (size_t i = 0; i < n; i++) {
             const float *p = bio->data + i * SS_BIO_NCHANNELS;
-            float r[5];
-            if (cache)
+            float r[LUT_F];
+            if (cache) {
                 lut_lookup(lut, cache, p, r);
-            else
-                ss_skin_lut_lookup(lut, p, r);
+                apply_surface(lut, p[SS_BIO_SURFACE_SIGMA], r);
+            } else
+                ss_skin_lut_lookup_surface(lut, p, p[SS_BIO_SURFACE_SIGMA], r);
+            for (int c = 0; c < 3; c++) out->translucency->data[i * 3 + c] = r[5 + c];
             const float a = p[SS_BIO_EXTRA_A];
             for (int c = 0; c < 3; c++) {
                 float b = r[c] < 0.0f ? 0.0f : r[c] > 1.0f ? 1.0f : r[c];
@@ -229,6 +341,15 @@ ss_status ss_skin_render_maps(const ss_image *bio, const ss_skin_lut *lut, doubl
     }
     const double texel_mm = world_size_cm * 10.0 / W;
     ss_height_to_normal(out->height_mm, (float)(1.0 / texel_mm), out->normal);
+    ss_status st = cavity_map(out->height_mm, texel_mm, out->cavity, err);
+    if (st) {
+        ss_skin_maps_free(out);
+        return st;
+    }
+    /* furrows and follicle openings shadow the specular lobe */
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < n; i++)
+        out->specular->data[i] *= 1.0f - 0.5f * (1.0f - out->cavity->data[i]);
     if (normal_directx)
 #pragma omp parallel for schedule(static)
         for (size_t i = 0; i < n; i++)

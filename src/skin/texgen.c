@@ -24,21 +24,21 @@
  * lies in the hull of its control points). Inside it, per row, only the x
  * range where the boxes of a 16-segment flattening of the curve (grown by
  * the width and a texel) meet the row gets the golden-section distance. */
-#include "skinsim/skin.h"
+#include "skin_internal.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #define TILE 32
+#define MOLE_BORDER_MAX 1.0 /* mm; the upper bound of moles.border */
 
 const char *ss_bio_channel_name(int c) {
-    static const char *const names[SS_BIO_NCHANNELS] = {"melanin",         "pheomelanin_ratio",
-                                                        "blood",           "oxygenation",
-                                                        "sc_thickness_cm", "epidermis_thickness_cm",
-                                                        "height_mm",       "extra.R",
-                                                        "extra.G",         "extra.B",
-                                                        "extra.A"};
+    static const char *const names[SS_BIO_NCHANNELS] = {
+        "melanin",     "pheomelanin_ratio", "blood",
+        "oxygenation", "sc_thickness_cm",   "epidermis_thickness_cm",
+        "height_mm",   "extra.R",           "extra.G",
+        "extra.B",     "extra.A",           "surface_roughness"};
     return c >= 0 && c < SS_BIO_NCHANNELS ? names[c] : "unknown";
 }
 
@@ -59,8 +59,10 @@ static void support_box(const ss_skin_feature *f, double mm_per_unit, double *x0
     double R = 0.0;
     switch (f->type) {
     case SS_FEAT_CYST:
-    case SS_FEAT_MOLE:
         R = 2.0 * f->r;
+        break;
+    case SS_FEAT_MOLE: /* the border, and 8 % of irregular outline */
+        R = 1.1 * f->r + 0.5 * MOLE_BORDER_MAX;
         break;
     case SS_FEAT_FRECKLE:
         R = f->r / 1.2;
@@ -151,56 +153,100 @@ typedef struct wrinkle_flat {
     float x[FLAT + 1], y[FLAT + 1];
 } wrinkle_flat;
 
-static float u24(uint32_t v) { return (float)(v >> 8) * 0x1p-24f; }
+/* What the texel pass shares: the mottling, the relief network, fields. */
+typedef struct texel_ctx {
+    const ss_skin_settings *s;
+    const ss_skin_fields *fields;
+    const skin_mottle *mot;
+    const skin_relief *rel;
+} texel_ctx;
 
-/* Baseline skin for one tile (§5.3.1) and the lips (§5.3.6). */
-static void tile_baseline(const ss_skin_settings *s, const ss_image *lips, int tx0, int ty0, int tw,
-                          int th, ss_image *bio) {
+static float field01(const ss_image *img, double u, double v, float dflt) {
+    if (!img) return dflt;
+    float w;
+    ss_image_sample_wrap(img, (float)u, (float)v, &w);
+    return w < 0.0f ? 0.0f : w > 1.0f ? 1.0f : w;
+}
+
+/* Per-tile scratch: the groove of the relief network and the melanin
+ * mottle per texel (moles and freckles read them). */
+typedef struct tile_scratch {
+    float groove[TILE * TILE], mottle[TILE * TILE];
+} tile_scratch;
+
+/* Baseline skin for one tile (§5.3.1 with mottling in mm), the microrelief
+ * network, the lips (§5.3.6), a scar and the surface state. */
+static void tile_baseline(const texel_ctx *c, int tx0, int ty0, int tw, int th, ss_image *bio,
+                          tile_scratch *sc) {
+    const ss_skin_settings *s = c->s;
+    const ss_skin_dist *d = &s->dist;
     const int size = s->size;
-    float lo[6], wid[6];
+    float mean[6], wid[6];
     for (int a = 0; a < 6; a++) {
-        lo[a] = (float)s->base_lo[a];
         wid[a] = (float)(s->phi * (s->base_hi[a] - s->base_lo[a]));
+        mean[a] = (float)s->base_lo[a] + 0.5f * wid[a];
     }
-    for (int y = ty0; y < ty0 + th; y++)
-        for (int x = tx0; x < tx0 + tw; x += 4) {
-            uint64_t k =
-                (uint64_t)y * (uint64_t)size + (uint64_t)x; /* multiple of 4 when size is */
-            uint32_t r[6][4];
-            for (int a = 0; a < 6; a++) ss_rng4(s->seed, 32 + (uint64_t)a, k / 4, r[a]);
-            for (int j = 0; j < 4 && x + j < tx0 + tw; j++) {
-                float *p = ss_image_px(bio, x + j, y);
-                int lane = (int)((k + (uint64_t)j) % 4);
-                uint32_t rr[6];
-                if ((k % 4) == 0) {
-                    for (int a = 0; a < 6; a++) rr[a] = r[a][lane];
-                } else { /* size not a multiple of 4: draw this texel's own block */
-                    uint64_t kk = k + (uint64_t)j;
-                    for (int a = 0; a < 6; a++) {
-                        uint32_t o[4];
-                        ss_rng4(s->seed, 32 + (uint64_t)a, kk / 4, o);
-                        rr[a] = o[kk % 4];
-                    }
-                }
-                for (int a = 0; a < 6; a++) p[a] = lo[a] + wid[a] * u24(rr[a]);
-                p[SS_BIO_HEIGHT_MM] = 0.0f;
-                p[7] = p[8] = p[9] = p[10] = 0.0f;
-                if (lips) {
-                    float w;
-                    ss_image_sample_wrap(lips, (x + j + 0.5f) / size, (y + 0.5f) / size, &w);
-                    w = w < 0.0f ? 0.0f : w > 1.0f ? 1.0f : w;
-                    p[SS_BIO_BLOOD] += ((float)s->dist.lip_blood - p[SS_BIO_BLOOD]) * w;
-                    p[SS_BIO_PHEOMELANIN] +=
-                        ((float)s->dist.lip_pheomelanin - p[SS_BIO_PHEOMELANIN]) * w;
-                }
+    const ss_image *lips = c->fields->lips, *scar = c->fields->scar;
+    for (int y = ty0; y < ty0 + th; y++) {
+        for (int x = tx0; x < tx0 + tw; x++) {
+            const double u = (x + 0.5) / size, v = (y + 0.5) / size;
+            float *p = ss_image_px(bio, x, y);
+            float m[MOTTLE_F];
+            skin_mottle_eval(c->mot, u, v, m);
+            /* melanin and blood: log-normal mottling around the baseline
+             * value base_lo (their chromophore maps vary by a factor, not
+             * an offset; the seed's band of phi x range on top of the low
+             * end added 0.02 melanin to every skin, so very light skin was
+             * out of reach); the others within the seed's phi band */
+            p[SS_BIO_MELANIN] = (float)s->base_lo[0] * expf((float)d->mottle_melanin * m[0]);
+            p[SS_BIO_BLOOD] = (float)s->base_lo[2] * expf((float)d->mottle_blood * m[2]);
+            for (int a = 0; a < 6; a++) {
+                if (a == SS_BIO_MELANIN || a == SS_BIO_BLOOD) continue;
+                float q = mean[a] + 0.29f * wid[a] * m[a];
+                float lo = (float)s->base_lo[a];
+                p[a] = q < lo ? lo : q > lo + wid[a] ? lo + wid[a] : q;
             }
+            p[SS_BIO_HEIGHT_MM] = (float)d->mottle_height * m[MOT_HEIGHT]; /* gentle undulation */
+            p[7] = p[8] = p[9] = p[10] = 0.0f;
+            /* the relief network, oriented by the wrinkle field (read every
+             * 8 texels: it turns over millimetres) */
+            float g;
+            float hr = skin_relief_eval(c->rel, u, v, &g);
+            const float S = field01(scar, u, v, 0.0f);
+            hr *= 1.0f - 0.85f * S, g *= 1.0f - 0.85f * S; /* scars lose the microrelief */
+            p[SS_BIO_HEIGHT_MM] += hr;
+            p[SS_BIO_MELANIN] *= 1.0f + 0.12f * g; /* lines read slightly darker */
+            const int k = (y - ty0) * TILE + (x - tx0);
+            sc->groove[k] = g;
+            sc->mottle[k] = m[0];
+            /* surface state -> the surface's roughness (docs/skin.md): water
+             * in the stratum corneum and a sebum film smooth it */
+            float hyd = field01(c->fields->hydration, u, v, (float)d->surface_hydration);
+            float seb = field01(c->fields->sebum, u, v, (float)d->surface_sebum) *
+                        expf(0.4f * m[MOT_SEBUM]);
+            if (seb > 1.0f) seb = 1.0f;
+            float sig = (float)d->surface_sigma_dry * (1.0f - 0.4f * hyd) * (1.0f - 0.5f * seb);
+            sig += (0.75f - sig) * 0.6f * g; /* the lines' walls are rough */
+            if (lips) {
+                float w = field01(lips, u, v, 0.0f);
+                p[SS_BIO_BLOOD] += ((float)d->lip_blood - p[SS_BIO_BLOOD]) * w;
+                p[SS_BIO_PHEOMELANIN] += ((float)d->lip_pheomelanin - p[SS_BIO_PHEOMELANIN]) * w;
+                sig += (0.22f - sig) * w; /* the moist vermilion is glossy */
+            }
+            if (S > 0.0f) { /* scar: paler, pinker, smooth and shiny */
+                p[SS_BIO_MELANIN] *= 1.0f - 0.4f * S;
+                p[SS_BIO_BLOOD] += (0.02f - p[SS_BIO_BLOOD]) * 0.4f * S;
+                sig += (0.25f - sig) * S;
+            }
+            p[SS_BIO_SURFACE_SIGMA] = sig;
         }
+    }
 }
 
 /* One feature over the texels of its box inside the tile. */
 static void apply_feature(const ss_skin_settings *s, const ss_skin_feature *f, uint32_t fi,
                           const wrinkle_flat *wf, double ox, double oy, int tx0, int ty0, int tw,
-                          int th, double mm_per_unit, ss_image *bio) {
+                          int th, double mm_per_unit, ss_image *bio, const tile_scratch *sc) {
     const int size = s->size;
     double bx0, by0, bx1, by1;
     support_box(f, mm_per_unit, &bx0, &by0, &bx1, &by1);
@@ -240,7 +286,15 @@ static void apply_feature(const ss_skin_settings *s, const ss_skin_feature *f, u
                                                   f->w / mm_per_unit, &t) *
                               mm_per_unit;
                 double prof = ss_profile_wrinkle(dist, ss_wrinkle_taper(t, f->w));
-                if (prof > 0.0) ss_image_px(bio, x, y)[SS_BIO_HEIGHT_MM] -= (float)(prof * f->h);
+                if (prof > 0.0) {
+                    float *p = ss_image_px(bio, x, y);
+                    p[SS_BIO_HEIGHT_MM] -= (float)(prof * f->h);
+                    /* a furrow: slightly darker (as melanin, so it follows
+                     * the tone) and rough-walled */
+                    p[SS_BIO_MELANIN] *= (float)(1.0 + 0.15 * prof);
+                    p[SS_BIO_SURFACE_SIGMA] +=
+                        (0.75f - p[SS_BIO_SURFACE_SIGMA]) * (float)(0.5 * prof);
+                }
             }
         }
         return;
@@ -255,18 +309,30 @@ static void apply_feature(const ss_skin_settings *s, const ss_skin_feature *f, u
                 if (dist < 2.0 * f->r)
                     p[SS_BIO_HEIGHT_MM] += (float)(ss_profile_sigmoid(dist, f->r) * f->h);
                 break;
-            case SS_FEAT_MOLE:
-                if (dist < 2.0 * f->r) {
-                    double sg = ss_profile_sigmoid(dist, f->r);
-                    p[SS_BIO_MELANIN] += (float)(sg * f->m);
-                    p[SS_BIO_HEIGHT_MM] += (float)(f->h * sg * f->m);
+            case SS_FEAT_MOLE: {
+                /* a naevus: a sharp border (moles.border wide), a slightly
+                 * irregular outline, uniform or reticular pigment; melanin
+                 * added in proportion to M and to the skin's own melanin,
+                 * so the contrast follows the tone */
+                const double a = ss_profile_mole(dist, ss_mole_outline(f->r, atan2(v - cy, u - cx)),
+                                                 d->mole_border);
+                if (a > 0.0) {
+                    const int k = (y - ty0) * TILE + (x - tx0);
+                    const double pat = f->p > 0.5 ? 0.45 + 0.55 * sqrt(sc->groove[k]) : 1.0;
+                    p[SS_BIO_MELANIN] += (float)(a * pat * f->m * (1.0 + 3.0 * p[SS_BIO_MELANIN]));
+                    p[SS_BIO_HEIGHT_MM] += (float)(f->h * a * f->m);
                 }
                 break;
+            }
             case SS_FEAT_FRECKLE: {
                 double a = ss_profile_freckle(dist, f->r);
                 if (a > 0.0) {
-                    double U = ss_rng_uniform(s->seed, 40, (uint64_t)y * size + (uint64_t)x);
-                    p[SS_BIO_MELANIN] += (float)(a * f->m * U);
+                    /* the seed's per-texel U is the melanin mottle here (in
+                     * mm, not per texel); contrast follows the tone */
+                    const float mt = sc->mottle[(y - ty0) * TILE + (x - tx0)];
+                    double U = 0.6 + 0.25 * mt;
+                    U = U < 0.1 ? 0.1 : U > 1.0 ? 1.0 : U;
+                    p[SS_BIO_MELANIN] += (float)(a * f->m * U * (1.0 + 3.0 * p[SS_BIO_MELANIN]));
                     p[SS_BIO_PHEOMELANIN] += (float)(a * f->p * U);
                 }
                 break;
@@ -279,6 +345,9 @@ static void apply_feature(const ss_skin_settings *s, const ss_skin_feature *f, u
                         p[7 + c] = (float)(d->hair_rgb[c] * al + p[7 + c] * (1.0 - al));
                     p[10] = (float)(al + p[10] * (1.0 - al));
                     p[SS_BIO_BLOOD] *= (float)(1.0 - d->follicle_blood_drop * al);
+                    /* the opening around the hair: a shallow pit, rough */
+                    if (dist > f->r) p[SS_BIO_HEIGHT_MM] -= (float)(0.012 * al);
+                    p[SS_BIO_SURFACE_SIGMA] += (0.8f - p[SS_BIO_SURFACE_SIGMA]) * (float)(0.6 * al);
                     if (dist <= f->r && p[SS_BIO_HEIGHT_MM] < d->follicle_height)
                         p[SS_BIO_HEIGHT_MM] = (float)d->follicle_height;
                 }
@@ -334,6 +403,8 @@ ss_image *ss_skin_bio_maps_timed(const ss_skin_settings *s, const ss_skin_fields
     flat = malloc((nw ? nw : 1) * sizeof *flat);
     ss_image *bio = NULL;
     tile_index ix = {0};
+    skin_mottle mot = {0};
+    skin_relief rel = {0};
     if (!order || !flat || !flat_of) {
         ss_error_set(err, SS_ERR_NOMEM, "features: out of memory");
         goto done;
@@ -357,38 +428,62 @@ ss_image *ss_skin_bio_maps_timed(const ss_skin_settings *s, const ss_skin_fields
             }
     }
     if (index_build(l, order, size, mm_per_unit, s->wrap, &ix, err)) goto done;
+    if (skin_mottle_init(&mot, s, err)) goto done;
+    if (skin_relief_init(&rel, s, fields->wrinkle_vectors, err)) goto done;
     double t1 = ss_now();
     bio = ss_image_create_uninit(size, size, SS_BIO_NCHANNELS, err);
     if (!bio) goto done;
     const int nt = ix.ntiles;
-    const ss_image *lips = fields->lips;
-#pragma omp parallel for schedule(dynamic, 4)
-    for (int t = 0; t < nt * nt; t++) {
-        const int tx0 = (t % nt) * TILE, ty0 = (t / nt) * TILE;
-        const int tw = tx0 + TILE <= size ? TILE : size - tx0;
-        const int th = ty0 + TILE <= size ? TILE : size - ty0;
-        tile_baseline(s, lips, tx0, ty0, tw, th, bio);
-        for (size_t q = ix.start[t]; q < ix.start[t + 1]; q++) {
-            const entry *e = &ix.e[q];
-            const ss_skin_feature *f = &l->f[e->feature];
-            apply_feature(s, f, e->feature,
-                          f->type == SS_FEAT_WRINKLE ? &flat[flat_of[e->feature]] : NULL, e->ox,
-                          e->oy, tx0, ty0, tw, th, mm_per_unit, bio);
+    const texel_ctx ctx = {s, fields, &mot, &rel};
+    int nomem = 0;
+#pragma omp parallel
+    {
+        tile_scratch *sc = malloc(sizeof *sc);
+        if (!sc) {
+#pragma omp atomic write
+            nomem = 1;
         }
-        /* clamp fractions, un-premultiply the extra colour */
-        for (int y = ty0; y < ty0 + th; y++)
-            for (int x = tx0; x < tx0 + tw; x++) {
-                float *p = ss_image_px(bio, x, y);
-                for (int a = 0; a < 4; a++) p[a] = p[a] < 0.0f ? 0.0f : p[a] > 1.0f ? 1.0f : p[a];
-                if (p[10] > 0.0f)
-                    for (int c = 7; c < 10; c++) p[c] /= p[10];
+#pragma omp for schedule(dynamic, 4)
+        for (int t = 0; t < nt * nt; t++) {
+            if (!sc) continue;
+            const int tx0 = (t % nt) * TILE, ty0 = (t / nt) * TILE;
+            const int tw = tx0 + TILE <= size ? TILE : size - tx0;
+            const int th = ty0 + TILE <= size ? TILE : size - ty0;
+            tile_baseline(&ctx, tx0, ty0, tw, th, bio, sc);
+            for (size_t q = ix.start[t]; q < ix.start[t + 1]; q++) {
+                const entry *e = &ix.e[q];
+                const ss_skin_feature *f = &l->f[e->feature];
+                apply_feature(s, f, e->feature,
+                              f->type == SS_FEAT_WRINKLE ? &flat[flat_of[e->feature]] : NULL, e->ox,
+                              e->oy, tx0, ty0, tw, th, mm_per_unit, bio, sc);
             }
+            /* clamp fractions, un-premultiply the extra colour */
+            for (int y = ty0; y < ty0 + th; y++)
+                for (int x = tx0; x < tx0 + tw; x++) {
+                    float *p = ss_image_px(bio, x, y);
+                    for (int a = 0; a < 4; a++)
+                        p[a] = p[a] < 0.0f ? 0.0f : p[a] > 1.0f ? 1.0f : p[a];
+                    if (p[10] > 0.0f)
+                        for (int c = 7; c < 10; c++) p[c] /= p[10];
+                    float sg = p[SS_BIO_SURFACE_SIGMA];
+                    p[SS_BIO_SURFACE_SIGMA] = sg < 0.05f ? 0.05f : sg > 1.5f ? 1.5f : sg;
+                }
+        }
+        free(sc);
+    }
+    if (nomem) {
+        ss_error_set(err, SS_ERR_NOMEM, "texels: out of memory");
+        ss_image_free(bio);
+        bio = NULL;
+        goto done;
     }
     if (tm) {
         tm->index_s = t1 - t0;
         tm->texels_s = ss_now() - t1;
     }
 done:
+    skin_mottle_free(&mot);
+    skin_relief_free(&rel);
     index_free(&ix);
     free(order);
     free(flat);

@@ -361,6 +361,9 @@ class ss_mm_entry(ctypes.Structure):
     ]
 
 
+SS_MM_MAX_SURFACE = 32
+
+
 class ss_mm_table(ctypes.Structure):
     _fields_ = [
         ("nsamples", c_int * SS_MM_NAXES),
@@ -375,6 +378,11 @@ class ss_mm_table(ctypes.Structure):
         ("wl_min_nm", c_double),
         ("wl_max_nm", c_double),
         ("wl_step_nm", c_double),
+        ("surface_sigma", c_double),
+        ("nsurface", c_int),
+        ("surf_sigma", c_double * SS_MM_MAX_SURFACE),
+        ("surf_specular", c_double * SS_MM_MAX_SURFACE),
+        ("surf_roughness", c_double * SS_MM_MAX_SURFACE),
     ]
 
 
@@ -641,12 +649,15 @@ libc_free.restype = None
 # ---- skin ------------------------------------------------------------------------
 
 SS_FEAT_NTYPES = 5
-SS_BIO_NCHANNELS = 11
+SS_BIO_NCHANNELS = 12
+
+
+NDIST = 43  # doubles in ss_skin_dist
 
 
 class ss_skin_dist(ctypes.Structure):
     # the distribution constants, set and read by name (ss_skin_dist_set/get)
-    _fields_ = [("v", c_double * 26)]
+    _fields_ = [("v", c_double * NDIST)]
 
 
 class ss_skin_settings(ctypes.Structure):
@@ -666,7 +677,8 @@ class ss_skin_settings(ctypes.Structure):
 
 class ss_skin_fields(ctypes.Structure):
     _fields_ = [("density", P_IMAGE * SS_FEAT_NTYPES), ("lips", P_IMAGE),
-                ("wrinkle_vectors", P_IMAGE)]
+                ("wrinkle_vectors", P_IMAGE), ("hydration", P_IMAGE), ("sebum", P_IMAGE),
+                ("scar", P_IMAGE)]
 
 
 class ss_bezier3(ctypes.Structure):
@@ -697,6 +709,8 @@ class ss_skin_maps(ctypes.Structure):
         ("base_color", P_IMAGE),
         ("roughness", P_IMAGE),
         ("specular", P_IMAGE),
+        ("translucency", P_IMAGE),
+        ("cavity", P_IMAGE),
         ("height_mm", P_IMAGE),
         ("normal", P_IMAGE),
         ("height_min_mm", c_double),

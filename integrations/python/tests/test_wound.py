@@ -48,13 +48,14 @@ class Textures(unittest.TestCase):
         # outer 1 mm ring (texels), 1 mm from the wound, is intact skin and
         # changes at most slightly (oxygen diffusing towards the wound; the
         # renderer samples the tissue up to 0.7 of a 0.5 mm column off, so a
-        # ring texel may see tissue 0.35 mm nearer the wound: 0.0055 here)
+        # ring texel may see tissue 0.35 mm nearer the wound: 0.0055 here
+        # with the old baseline; 0.0065 with the mottled skin of issue 23)
         ring = N // 12
         inner = d[N // 3:2 * N // 3, N // 3:2 * N // 3]
         outer = np.concatenate([d[:ring].ravel(), d[-ring:].ravel(), d[:, :ring].ravel(),
                                 d[:, -ring:].ravel()])
         self.assertGreater(inner.mean(), 0.01)  # the epithelium closes in
-        self.assertLess(outer.max(), 0.006)
+        self.assertLess(outer.max(), 0.0075)
         # the open wound bed lies below the skin surface
         self.assertLess(self.day0["height_mm"][N // 2, N // 2], -0.1)
 

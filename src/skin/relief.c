@@ -1,0 +1,195 @@
+/* The skin's microrelief network (docs/skin.md): primary lines, grooves
+ * about 20-100 um deep that enclose polygonal plateaus of roughly 0.2-1 mm,
+ * with shallower secondary lines inside them, a connected pattern (the
+ * "sulci cutis" of dermatology texts). The seed's Bezier wrinkles (§5.3.7)
+ * stay as the deep furrows on top of it.
+ *
+ * Design: the lines are the edges of a Voronoi diagram of jittered lattice
+ * points (one per cell of a periodic lattice, so the network tiles and is
+ * connected by construction: Voronoi edges form a planar graph without
+ * loose ends). The distance to the nearest edge is the distance to the
+ * bisector between the nearest point and its rivals, exact for a Voronoi
+ * diagram. Where a direction is given (the wrinkle vector field), the metric
+ * is stretched along it by `relief_stretch`, so cells are elongated and the
+ * long edges - the primary lines - run along the field, as skin lines
+ * follow the tension lines of the body. Each edge has its own depth (a
+ * symmetric hash of its two cells). The groove profile is (1 - d/w)^2;
+ * below 0.75 texel the width is widened and the depth lowered in
+ * proportion, which keeps the groove's cross-section, so the look at a given
+ * world size does not depend on --size. Gave up: the network is
+ * statistically, not anatomically, oriented (no per-region pattern). */
+#include "skin_internal.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+void skin_relief_free(skin_relief *r) {
+    if (!r) return;
+    free(r->p1);
+    free(r->p2);
+    free(r->dir);
+    memset(r, 0, sizeof *r);
+}
+
+static float *make_points(int m, uint64_t seed, uint64_t stream) {
+    float *p = malloc((size_t)m * m * 3 * sizeof(float));
+    if (!p) return NULL;
+#pragma omp parallel for schedule(static)
+    for (int j = 0; j < m; j++)
+        for (int i = 0; i < m; i++) {
+            uint32_t r[4];
+            ss_rng4(seed, stream, (uint64_t)j * m + i, r);
+            float *q = p + ((size_t)j * m + i) * 3;
+            q[0] = (i + 0.1f + 0.8f * ((r[0] >> 8) * 0x1p-24f)) / m;
+            q[1] = (j + 0.1f + 0.8f * ((r[1] >> 8) * 0x1p-24f)) / m;
+            q[2] = (r[2] >> 8) * 0x1p-24f; /* per-point share of its edges' depth */
+        }
+    return p;
+}
+
+ss_status skin_relief_init(skin_relief *r, const ss_skin_settings *s, const ss_image *vf,
+                           ss_error *err) {
+    memset(r, 0, sizeof *r);
+    const ss_skin_dist *d = &s->dist;
+    r->world_mm = s->world_size_cm * 10.0;
+    r->texel_mm = r->world_mm / s->size;
+    r->stretch = d->relief_stretch < 1.0 ? 1.0 : d->relief_stretch;
+    if (!(d->relief_depth > 0.0 || d->relief_depth2 > 0.0)) return SS_OK; /* no network */
+    long m1 = lround(r->world_mm / d->relief_cell), m2 = lround(r->world_mm / d->relief_cell2);
+    if (m1 < 3) m1 = 3;
+    if (m2 < 3) m2 = 3;
+    if (m1 > 4096 || m2 > 4096)
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "microrelief: cells of %g / %g mm on %g mm need more than 4096 per "
+                            "side",
+                            d->relief_cell, d->relief_cell2, r->world_mm);
+    r->m1 = (int)m1;
+    r->m2 = (int)m2;
+    r->p1 = make_points(r->m1, s->seed, 240);
+    r->p2 = make_points(r->m2, s->seed, 241);
+    long nd = lround(r->world_mm / 0.4);
+    r->nd = (int)(nd < 8 ? 8 : nd > 1024 ? 1024 : nd);
+    r->dir = malloc((size_t)r->nd * r->nd * 2 * sizeof(float));
+    if (r->dir)
+#pragma omp parallel for schedule(static)
+        for (int j = 0; j < r->nd; j++)
+            for (int i = 0; i < r->nd; i++) {
+                double tx, ty;
+                skin_field_direction(vf, (double)i / r->nd, (double)j / r->nd, &tx, &ty);
+                float *q = r->dir + ((size_t)j * r->nd + i) * 2;
+                q[0] = (float)(tx * tx - ty * ty); /* cos 2a */
+                q[1] = (float)(2.0 * tx * ty);     /* sin 2a */
+            }
+    if (!r->p1 || !r->p2 || !r->dir) {
+        skin_relief_free(r);
+        return ss_error_set(err, SS_ERR_NOMEM, "microrelief: out of memory");
+    }
+    /* half-widths: primary lines about 80 um wide, secondary 40 um */
+    const double wmin = 0.75 * r->texel_mm;
+    r->w1 = 0.04;
+    r->w2 = 0.02;
+    r->d1 = d->relief_depth;
+    r->d2 = d->relief_depth2;
+    r->k1 = r->k2 = 1.0;
+    if (r->w1 < wmin) {
+        r->k1 = r->w1 / wmin;
+        r->d1 *= r->k1;
+        r->w1 = wmin;
+    }
+    if (r->w2 < wmin) {
+        r->k2 = r->w2 / wmin;
+        r->d2 *= r->k2;
+        r->w2 = wmin;
+    }
+    return SS_OK;
+}
+
+/* Distance (mm, in the stretched metric) from (u, v) to the nearest Voronoi
+ * edge of the m x m periodic point set, and that edge's depth factor; only
+ * edges nearer than `reach_mm` are looked for (+INFINITY: none). A rival k
+ * can only be the edge's other side when |p_k| - |p_best| < 2 reach (the
+ * bisector distance is at least half that difference), which skips most. */
+static double edge_distance(const float *p, int m, double world_mm, double u, double v, double tx,
+                            double ty, double inv_stretch, int reach, double reach_mm,
+                            float *depth) {
+    const int ci = (int)floor(u * m), cj = (int)floor(v * m);
+    double bx[49], by[49], bd2[49];
+    float bz[49];
+    int nb = 0, best = 0;
+    double bd = INFINITY;
+    for (int dj = -reach; dj <= reach; dj++)
+        for (int di = -reach; di <= reach; di++) {
+            int i = ci + di, j = cj + dj;
+            double ox = 0, oy = 0;
+            if (i < 0) i += m, ox = -1;
+            if (i >= m) i -= m, ox = 1;
+            if (j < 0) j += m, oy = -1;
+            if (j >= m) j -= m, oy = 1;
+            const float *q = p + ((size_t)j * m + i) * 3;
+            double dx = (q[0] + ox - u) * world_mm, dy = (q[1] + oy - v) * world_mm;
+            /* into the metric: shrink the component along the direction */
+            double a = (dx * tx + dy * ty) * inv_stretch, b = -dx * ty + dy * tx;
+            bx[nb] = a;
+            by[nb] = b;
+            bz[nb] = q[2];
+            double dd = a * a + b * b;
+            bd2[nb] = dd;
+            if (dd < bd) bd = dd, best = nb;
+            nb++;
+        }
+    const double lim = sqrt(bd) + 2.0 * reach_mm, lim2 = lim * lim;
+    double e = INFINITY;
+    float dep = 0.0f;
+    for (int k = 0; k < nb; k++) {
+        if (k == best || bd2[k] > lim2) continue;
+        double gx = bx[k] - bx[best], gy = by[k] - by[best];
+        double gl = sqrt(gx * gx + gy * gy);
+        if (!(gl > 0)) continue;
+        /* the bisector: points x with (x - mid) . g = 0; the texel is at 0 */
+        double dist = (bd2[k] - bd) / (2.0 * gl);
+        if (dist < e) {
+            e = dist;
+            dep = 0.5f + 0.5f * (bz[k] + bz[best]); /* symmetric in the two cells */
+        }
+    }
+    *depth = dep;
+    return e;
+}
+
+float skin_relief_eval(const skin_relief *r, double u, double v, float *groove) {
+    *groove = 0.0f;
+    if (!r->p1) return 0.0f;
+    /* the field's axis here: bilinear in the doubled angle, periodic */
+    const int nd = r->nd;
+    double X = u * nd, Y = v * nd, fx = floor(X), fy = floor(Y);
+    int i0 = ((int)fx % nd + nd) % nd, j0 = ((int)fy % nd + nd) % nd;
+    int i1 = (i0 + 1) % nd, j1 = (j0 + 1) % nd;
+    double sx = X - fx, sy = Y - fy, c2 = 0, s2 = 0;
+    const int ii[4] = {i0, i1, i0, i1}, jj[4] = {j0, j0, j1, j1};
+    const double ww[4] = {(1 - sx) * (1 - sy), sx * (1 - sy), (1 - sx) * sy, sx * sy};
+    for (int k = 0; k < 4; k++) {
+        const float *q = r->dir + ((size_t)jj[k] * nd + ii[k]) * 2;
+        c2 += ww[k] * q[0];
+        s2 += ww[k] * q[1];
+    }
+    /* half the doubled angle: cos a = sqrt((1 + c) / 2), sin a = sign(s) sqrt((1 - c) / 2) */
+    const double len = sqrt(c2 * c2 + s2 * s2), c = len > 0 ? c2 / len : 1.0;
+    const double tx = sqrt(fmax(0.0, 0.5 * (1.0 + c))),
+                 ty = (s2 < 0 ? -1.0 : 1.0) * sqrt(fmax(0.0, 0.5 * (1.0 - c)));
+    float dep1, dep2;
+    const double e1 =
+        edge_distance(r->p1, r->m1, r->world_mm, u, v, tx, ty, 1.0 / r->stretch, 2, r->w1, &dep1);
+    const double e2 =
+        edge_distance(r->p2, r->m2, r->world_mm, u, v, 1.0, 0.0, 1.0, 2, r->w2, &dep2);
+    double g1 = e1 < r->w1 ? (1.0 - e1 / r->w1) : 0.0, g2 = e2 < r->w2 ? (1.0 - e2 / r->w2) : 0.0;
+    g1 *= g1;
+    g2 *= g2;
+    /* the groove weight keeps its area when the line is widened, like the depth */
+    g1 *= r->k1;
+    g2 *= 0.5 * r->k2;
+    *groove = (float)(g1 > g2 ? g1 : g2);
+    g1 /= r->k1;
+    g2 /= 0.5 * r->k2;
+    return (float)-(r->d1 * dep1 * g1 + r->d2 * dep2 * g2);
+}
