@@ -116,7 +116,10 @@ static ss_status render_base(ss_wound_renderer *r, ss_error *err) {
     r->base.roughness = m.roughness;
     r->base.height = m.height_mm;
     r->base.normal = m.normal;
+    /* The wound has its own specular, translucency and cavity: drop the skin's. */
     ss_image_free(m.specular);
+    ss_image_free(m.translucency);
+    ss_image_free(m.cavity);
     return SS_OK;
 }
 
