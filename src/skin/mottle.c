@@ -90,9 +90,11 @@ void skin_mottle_eval(const skin_mottle *m, double u, double v, float out[MOTTLE
         const int n = m->n[o];
         double X = u * n, Y = v * n;
         double fx0 = floor(X), fy0 = floor(Y);
-        int ix = (int)fx0 % n, iy = (int)fy0 % n;
-        if (ix < 0) ix += n;
-        if (iy < 0) iy += n;
+        /* texel centres give 0 <= X, Y < n: no division (two per octave
+         * were a third of the cost); any other position wraps */
+        int ix = (int)fx0, iy = (int)fy0;
+        if (ix < 0 || ix >= n) ix = ((ix % n) + n) % n;
+        if (iy < 0 || iy >= n) iy = ((iy % n) + n) % n;
         const int ix1 = ix + 1 == n ? 0 : ix + 1, iy1 = iy + 1 == n ? 0 : iy + 1;
         const float sx = quintic((float)(X - fx0)), sy = quintic((float)(Y - fy0));
         const float *a = m->lat[o] + ((size_t)iy * n + ix) * MOTTLE_F;
