@@ -62,12 +62,14 @@ static void help(FILE *f) {
             "                        (OBJ, glTF or GLB, e.g. data/meshes/generic-hand-left.glb;\n"
             "                        --no-wrap suits UV islands)\n"
             "  --no-bio              do not write bio.exr (the slowest file)\n"
+            "  --bio-float           bio.exr in float32 (default half: 3 significant\n"
+            "                        digits, a quarter of the size and of the time)\n"
             "  --out DIR             output folder (default skin-out)\n"
             "  --threads N, --quiet, --json, --list-params, --help\n\n"
             "Writes DIR/base_color.png (sRGB), roughness.png, specular.png (GGX, linear\n"
             "8-bit), height.png (16-bit; 0..1 spans skin.json's height_min_mm..max_mm),\n"
             "normal.png, translucency.png (subsurface radius R,G,B, linear, 1 = 2 mm),\n"
-            "cavity.png (1 open, 0 deep in a furrow), bio.exr (float channels: melanin,\n"
+            "cavity.png (1 open, 0 deep in a furrow), bio.exr (half channels: melanin,\n"
             "pheomelanin_ratio, blood, oxygenation, sc_thickness_cm,\n"
             "epidermis_thickness_cm, height_mm, extra.R/G/B/A, surface_roughness;\n"
             "ZIP-compressed), features.csv, contact_sheet.png and skin.json. With\n"
@@ -85,7 +87,7 @@ typedef struct opts {
     int nfields;
     char *counts[64], *params[64], *bases[16];
     int ncounts, nparams, nbases;
-    int size, threads, quiet, json, gltf, no_wrap, directx, sampler, list_params, no_bio;
+    int size, threads, quiet, json, gltf, no_wrap, directx, sampler, list_params, no_bio, bio_float;
     double world_cm;
     int world_set;
     uint64_t seed;
@@ -120,6 +122,7 @@ static int parse(int argc, char **argv, opts *o, ss_error *err) {
                                              {"gltf", no_argument, 0, 'G'},
                                              {"mesh", required_argument, 0, 'M'},
                                              {"no-bio", no_argument, 0, 'B'},
+                                             {"bio-float", no_argument, 0, 'X'},
                                              {"threads", required_argument, 0, 'j'},
                                              {"quiet", no_argument, 0, 'q'},
                                              {"json", no_argument, 0, 'J'},
@@ -221,6 +224,9 @@ static int parse(int argc, char **argv, opts *o, ss_error *err) {
             break;
         case 'B':
             o->no_bio = 1;
+            break;
+        case 'X':
+            o->bio_float = 1;
             break;
         case 'j':
             st = cli_parse_int("--threads", optarg, 1, SS_THREADS_MAX, &v, err);
@@ -452,7 +458,8 @@ static ss_status read_inputs(const opts *o, inputs *in, cJSON *notes, ss_error *
 }
 
 static ss_status write_maps(const char *dir, const ss_skin_maps *m, const ss_image *bio,
-                            const ss_image *mr, const ss_image *normal_gl, ss_error *err) {
+                            int bio_half, const ss_image *mr, const ss_image *normal_gl,
+                            ss_error *err) {
     enum { N = 10 };
     static const char *names[N] = {
         "base_color.png", "roughness.png",   "specular.png",     "height.png", "normal.png",
@@ -498,7 +505,7 @@ static ss_status write_maps(const char *dir, const ss_skin_maps *m, const ss_ima
             sts[k] = ss_png_write(path, m->normal, 8, SS_ENC_LINEAR, &errs[k]);
             break;
         case 5:
-            if (bio) sts[k] = ss_exr_write_channels(path, bio, bio_names, 0, &errs[k]);
+            if (bio) sts[k] = ss_exr_write_channels(path, bio, bio_names, bio_half, &errs[k]);
             break;
         case 6:
             if (mr) sts[k] = ss_png_write(path, mr, 8, SS_ENC_LINEAR, &errs[k]);
@@ -666,7 +673,7 @@ static ss_status run(const opts *o, const ss_skin_settings *s, inputs *in, const
             maps.normal = dx;
         }
     }
-    if (!st) st = write_maps(dir, &maps, o->no_bio ? NULL : bio, mr, normal_gl, err);
+    if (!st) st = write_maps(dir, &maps, o->no_bio ? NULL : bio, !o->bio_float, mr, normal_gl, err);
     char path[4200];
     if (!st) {
         snprintf(path, sizeof path, "%s/features.csv", dir);
@@ -701,6 +708,8 @@ static ss_status run(const opts *o, const ss_skin_settings *s, inputs *in, const
                                 s->sampler == SS_SAMPLER_REJECTION ? "rejection" : "alias");
         cJSON_AddStringToObject(summary, "normal_convention", o->directx ? "directx" : "opengl");
         cJSON_AddBoolToObject(summary, "bio_exr", !o->no_bio);
+        if (!o->no_bio)
+            cJSON_AddStringToObject(summary, "bio_exr_type", o->bio_float ? "float" : "half");
         cJSON_AddStringToObject(summary, "table", in->table_path);
         cJSON_AddStringToObject(summary, "render_model", "ggx");
         cJSON_AddNumberToObject(summary, "height_min_mm", maps.height_min_mm);
