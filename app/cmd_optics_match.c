@@ -175,7 +175,7 @@ int cmd_optics_match(int argc, char **argv) {
            o.geometry == SS_MM_GEOMETRY_SCI ? "sci" : "sce", r.surface);
     printf("Delta-E00          %.3f (%s; table stage %.3f)\n", r.delta_e00,
            r.refined ? "transport" : "table", r.table_delta_e00);
-    printf("prior penalty      %.3f (Delta-E00 units; the population prior, docs/modelmatch.md)\n",
+    printf("prior penalty      %.3f (Delta-E00 units; the population prior, docs/optics.md)\n",
            r.prior_penalty);
     if (r.unique)
         printf("unique             yes (every fit within Delta-E00 +%.1f lies within %.2f of the "

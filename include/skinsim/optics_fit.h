@@ -294,7 +294,7 @@ typedef struct ss_mm_match_options {
     int refine;                   /* 1 (default): refine the table's answer by transport */
     double prior_weight;          /* Delta-E00 per unit of the population prior's
                                      -log density (SS_MM_PRIOR_WEIGHT; 0: none;
-                                     docs/modelmatch.md) */
+                                     docs/optics.md) */
     int base_set;                 /* 1: take the non-axis parameters from base */
     ss_bio_params base;
     int geometry; /* colour compared with the target: SS_MM_GEOMETRY_SCI (default) or _SCE */

@@ -69,7 +69,7 @@ static double clampd(double v, double lo, double hi) { return v < lo ? lo : v > 
  * prior_weight (Delta-E00 per unit): colour alone leaves a valley of
  * near-equal fits (more pheomelanin trades against more eumelanin and
  * blood), and the prior picks the biology people have. Means and spreads
- * (docs/modelmatch.md): pheomelanin share 0.26 (Del Bino et al. 2015, about
+ * (docs/optics.md): pheomelanin share 0.26 (Del Bino et al. 2015, about
  * 26 % pheomelanin in the epidermis of every skin type, light to dark), sd
  * 0.1; oxygenation 0.75 sd 0.1 (dermal blood between arterial and venous);
  * stratum corneum and epidermis thickness log-normal around the model's
