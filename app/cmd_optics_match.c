@@ -20,7 +20,10 @@ static void match_help(FILE *f) {
                "d:8 spectrophotometer with the specular component included measures skin, and\n"
                "as a photo under diffuse light shows it). The ModelMatch table gives the start,\n"
                "photon transport at the thicknesses found refines the four pigment parameters.\n"
-               "Prints both stages' Delta-E00.\n\n"
+               "Among colours that fit, a population prior (measured pheomelanin share,\n"
+               "oxygenation, layer thicknesses, blood) picks the plausible biology; prints both\n"
+               "stages' Delta-E00, the prior's penalty, and whether another biology far away\n"
+               "fits within Delta-E00 +1 (unique: no, with that alternative).\n\n"
                "  --srgb R,G,B      target as 8-bit sRGB (0..255 each, e.g. picked from a photo)\n"
                "  --lab L,a,b       target as CIELAB (D65)\n"
                "  --table FILE      ModelMatch table (data/modelmatch_default.sstab)\n"
@@ -150,8 +153,13 @@ int cmd_optics_match(int argc, char **argv) {
                r.delta_e00, r.refined ? "true" : "false",
                o.geometry == SS_MM_GEOMETRY_SCI ? "sci" : "sce", r.surface);
         print_bio_json(&r.table_bio);
-        printf(", \"table_lab\": [%.4f, %.4f, %.4f], \"table_delta_e00\": %.4f}\n", r.table_lab[0],
-               r.table_lab[1], r.table_lab[2], r.table_delta_e00);
+        printf(", \"table_lab\": [%.4f, %.4f, %.4f], \"table_delta_e00\": %.4f, "
+               "\"prior_penalty\": %.4f, \"unique\": %s, \"alternative\": {\"bio\": ",
+               r.table_lab[0], r.table_lab[1], r.table_lab[2], r.table_delta_e00, r.prior_penalty,
+               r.unique ? "true" : "false");
+        print_bio_json(&r.alt_bio);
+        printf(", \"delta_e00_table\": %.4f, \"distance\": %.4f}}\n", r.alt_delta_e00,
+               r.alt_distance);
         return 0;
     }
     printf("target             L*a*b* %.2f %.2f %.2f\n", target[0], target[1], target[2]);
@@ -167,5 +175,16 @@ int cmd_optics_match(int argc, char **argv) {
            o.geometry == SS_MM_GEOMETRY_SCI ? "sci" : "sce", r.surface);
     printf("Delta-E00          %.3f (%s; table stage %.3f)\n", r.delta_e00,
            r.refined ? "transport" : "table", r.table_delta_e00);
+    printf("prior penalty      %.3f (Delta-E00 units; the population prior, docs/optics.md)\n",
+           r.prior_penalty);
+    if (r.unique)
+        printf("unique             yes (every fit within Delta-E00 +%.1f lies within %.2f of the "
+               "axis ranges)\n",
+               SS_MM_MATCH_TOL, SS_MM_MATCH_FAR);
+    else
+        printf("unique             no: melanin %.4f, pheomelanin ratio %.3f, blood %.4f, "
+               "oxygenation %.3f also fits (table Delta-E00 %.3f, distance %.2f)\n",
+               r.alt_bio.melanin, r.alt_bio.pheomelanin_ratio, r.alt_bio.blood,
+               r.alt_bio.oxygenation, r.alt_delta_e00, r.alt_distance);
     return 0;
 }

@@ -18,38 +18,38 @@
 static const char *CMD = "skin";
 
 static void help(FILE *f) {
+    fprintf(f, "usage: skinsim skin [options]\n\n"
+               "Procedural skin textures (seed 003 §4.8, §5): cysts, moles, freckles, wrinkles\n"
+               "and hair follicles scattered by probability fields over a baseline skin, lips\n"
+               "from a field, turned into biological parameters per texel and through the\n"
+               "ModelMatch table into render maps. Lengths in mm; see docs/skin.md.\n\n"
+               "Skin:\n"
+               "  --preset NAME         forearm (default: counts per cm^2 of a forearm, 5 cm)\n"
+               "                        or seed (the seed's 5000 cysts, 700 moles, 3000\n"
+               "                        freckles, 170000 follicles, 1000 wrinkles on 20 cm)\n"
+               "  --count TYPE=N        features of a type: cysts, moles, freckles, wrinkles,\n"
+               "                        follicles (repeatable; N >= 0)\n"
+               "  --field TYPE=FILE     greyscale probability field (PNG or EXR, any size,\n"
+               "                        stretched over the texture; colour images are read as\n"
+               "                        luminance) for a feature type, or lips=FILE (lip\n"
+               "                        weight), or vectors=FILE (RGB wrinkle vector field:\n"
+               "                        R,G direction with 0.5 = 0, B length; wrinkles and the\n"
+               "                        microrelief follow it, and wrinkles.cross_deg rotates\n"
+               "                        every other wrinkle only when --param sets it), or the\n"
+               "                        surface state: hydration=FILE, sebum=FILE (0..1,\n"
+               "                        default: surface.hydration, surface.sebum), scar=FILE\n"
+               "                        (mask: smooth, shiny, paler, no microrelief)\n"
+               "  --param NAME=V        a distribution constant, e.g. moles.r_sigma=1.5\n"
+               "                        (--list-params prints them with their values)\n"
+               "  --base NAME=LO        low end of a baseline parameter: melanin, pheomelanin,\n"
+               "                        blood, oxygenation, sc (cm), epidermis (cm)\n"
+               "  --features-in FILE    render this features.csv instead of generating\n"
+               "  --sampler NAME        alias (default, exact and fast) or rejection (the\n"
+               "                        seed's ChoosePoint loop; same distribution)\n"
+               "  --no-wrap             features do not wrap around the edges (for meshes\n"
+               "                        with UV islands); default: the texture is a torus\n"
+               "                        and the maps tile seamlessly\n\n");
     fprintf(f,
-            "usage: skinsim skin [options]\n\n"
-            "Procedural skin textures (seed 003 §4.8, §5): cysts, moles, freckles, wrinkles\n"
-            "and hair follicles scattered by probability fields over a baseline skin, lips\n"
-            "from a field, turned into biological parameters per texel and through the\n"
-            "ModelMatch table into render maps. Lengths in mm; see docs/skin.md.\n\n"
-            "Skin:\n"
-            "  --preset NAME         forearm (default: counts per cm^2 of a forearm, 5 cm)\n"
-            "                        or seed (the seed's 5000 cysts, 700 moles, 3000\n"
-            "                        freckles, 170000 follicles, 1000 wrinkles on 20 cm)\n"
-            "  --count TYPE=N        features of a type: cysts, moles, freckles, wrinkles,\n"
-            "                        follicles (repeatable; N >= 0)\n"
-            "  --field TYPE=FILE     greyscale probability field (PNG or EXR, any size,\n"
-            "                        stretched over the texture; colour images are read as\n"
-            "                        luminance) for a feature type, or lips=FILE (lip\n"
-            "                        weight), or vectors=FILE (RGB wrinkle vector field:\n"
-            "                        R,G direction with 0.5 = 0, B length; wrinkles and the\n"
-            "                        microrelief follow it, and wrinkles.cross_deg rotates\n"
-            "                        every other wrinkle only when --param sets it), or the\n"
-            "                        surface state: hydration=FILE, sebum=FILE (0..1,\n"
-            "                        default: surface.hydration, surface.sebum), scar=FILE\n"
-            "                        (mask: smooth, shiny, paler, no microrelief)\n"
-            "  --param NAME=V        a distribution constant, e.g. moles.r_sigma=1.5\n"
-            "                        (--list-params prints them with their values)\n"
-            "  --base NAME=LO        low end of a baseline parameter: melanin, pheomelanin,\n"
-            "                        blood, oxygenation, sc (cm), epidermis (cm)\n"
-            "  --features-in FILE    render this features.csv instead of generating\n"
-            "  --sampler NAME        alias (default, exact and fast) or rejection (the\n"
-            "                        seed's ChoosePoint loop; same distribution)\n"
-            "  --no-wrap             features do not wrap around the edges (for meshes\n"
-            "                        with UV islands); default: the texture is a torus\n"
-            "                        and the maps tile seamlessly\n\n"
             "Output:\n"
             "  --size N              texture side in texels (default 2048, 8..16384)\n"
             "  --world-size-cm X     side of the texture on the body (default: preset's)\n"
@@ -61,13 +61,19 @@ static void help(FILE *f) {
             "  --mesh FILE           with --gltf: the material on this mesh's UVs instead\n"
             "                        (OBJ, glTF or GLB, e.g. data/meshes/generic-hand-left.glb;\n"
             "                        --no-wrap suits UV islands)\n"
+            "  --pad N               with --mesh: texels outside the UV islands, within N\n"
+            "                        texels of one, take the nearest island texel's value\n"
+            "                        in every map (edge dilation for filtering and mipmaps;\n"
+            "                        default 0, 0..256)\n"
             "  --no-bio              do not write bio.exr (the slowest file)\n"
+            "  --bio-float           bio.exr in float32 (default half: 3 significant\n"
+            "                        digits, a quarter of the size and of the time)\n"
             "  --out DIR             output folder (default skin-out)\n"
             "  --threads N, --quiet, --json, --list-params, --help\n\n"
             "Writes DIR/base_color.png (sRGB), roughness.png, specular.png (GGX, linear\n"
             "8-bit), height.png (16-bit; 0..1 spans skin.json's height_min_mm..max_mm),\n"
             "normal.png, translucency.png (subsurface radius R,G,B, linear, 1 = 2 mm),\n"
-            "cavity.png (1 open, 0 deep in a furrow), bio.exr (float channels: melanin,\n"
+            "cavity.png (1 open, 0 deep in a furrow), bio.exr (half channels: melanin,\n"
             "pheomelanin_ratio, blood, oxygenation, sc_thickness_cm,\n"
             "epidermis_thickness_cm, height_mm, extra.R/G/B/A, surface_roughness;\n"
             "ZIP-compressed), features.csv, contact_sheet.png and skin.json. With\n"
@@ -85,7 +91,8 @@ typedef struct opts {
     int nfields;
     char *counts[64], *params[64], *bases[16];
     int ncounts, nparams, nbases;
-    int size, threads, quiet, json, gltf, no_wrap, directx, sampler, list_params, no_bio;
+    int size, threads, quiet, json, gltf, no_wrap, directx, sampler, list_params, no_bio, bio_float,
+        pad;
     double world_cm;
     int world_set;
     uint64_t seed;
@@ -120,6 +127,8 @@ static int parse(int argc, char **argv, opts *o, ss_error *err) {
                                              {"gltf", no_argument, 0, 'G'},
                                              {"mesh", required_argument, 0, 'M'},
                                              {"no-bio", no_argument, 0, 'B'},
+                                             {"bio-float", no_argument, 0, 'X'},
+                                             {"pad", required_argument, 0, 'D'},
                                              {"threads", required_argument, 0, 'j'},
                                              {"quiet", no_argument, 0, 'q'},
                                              {"json", no_argument, 0, 'J'},
@@ -222,6 +231,13 @@ static int parse(int argc, char **argv, opts *o, ss_error *err) {
         case 'B':
             o->no_bio = 1;
             break;
+        case 'X':
+            o->bio_float = 1;
+            break;
+        case 'D':
+            st = cli_parse_int("--pad", optarg, 0, 256, &v, err);
+            o->pad = (int)v;
+            break;
         case 'j':
             st = cli_parse_int("--threads", optarg, 1, SS_THREADS_MAX, &v, err);
             o->threads = (int)v;
@@ -247,6 +263,8 @@ static int parse(int argc, char **argv, opts *o, ss_error *err) {
         st = ss_error_set(err, SS_ERR_INPUT, "unexpected argument '%s'", argv[optind]);
     if (!st && o->mesh && !o->gltf)
         st = ss_error_set(err, SS_ERR_INPUT, "--mesh needs --gltf (the mesh is only used there)");
+    if (!st && o->pad > 0 && !o->mesh)
+        st = ss_error_set(err, SS_ERR_INPUT, "--pad needs --mesh (the UV islands to pad)");
     return st ? (int)st : 0;
 }
 
@@ -452,7 +470,8 @@ static ss_status read_inputs(const opts *o, inputs *in, cJSON *notes, ss_error *
 }
 
 static ss_status write_maps(const char *dir, const ss_skin_maps *m, const ss_image *bio,
-                            const ss_image *mr, const ss_image *normal_gl, ss_error *err) {
+                            int bio_half, const ss_image *mr, const ss_image *normal_gl,
+                            ss_error *err) {
     enum { N = 10 };
     static const char *names[N] = {
         "base_color.png", "roughness.png",   "specular.png",     "height.png", "normal.png",
@@ -498,7 +517,7 @@ static ss_status write_maps(const char *dir, const ss_skin_maps *m, const ss_ima
             sts[k] = ss_png_write(path, m->normal, 8, SS_ENC_LINEAR, &errs[k]);
             break;
         case 5:
-            if (bio) sts[k] = ss_exr_write_channels(path, bio, bio_names, 0, &errs[k]);
+            if (bio) sts[k] = ss_exr_write_channels(path, bio, bio_names, bio_half, &errs[k]);
             break;
         case 6:
             if (mr) sts[k] = ss_png_write(path, mr, 8, SS_ENC_LINEAR, &errs[k]);
@@ -621,6 +640,22 @@ static ss_status write_sheet(const char *dir, const ss_skin_maps *m, const ss_im
     return st;
 }
 
+/* --pad: texels outside the mesh's UV islands, within pad texels of one,
+ * take the nearest island texel's value in every map and the bio map. */
+static ss_status pad_maps(const ss_mesh *mesh, int pad, ss_skin_maps *m, ss_image *bio,
+                          ss_error *err) {
+    const int w = m->base_color->width, h = m->base_color->height;
+    unsigned char *in = malloc((size_t)w * (size_t)h);
+    if (!in) return ss_error_set(err, SS_ERR_NOMEM, "--pad: out of memory");
+    ss_status st = ss_mesh_uv_coverage(mesh, w, h, in, err);
+    ss_image *const all[] = {m->base_color, m->roughness, m->specular, m->translucency,
+                             m->cavity,     m->height_mm, m->normal,   bio};
+    for (size_t k = 0; !st && k < sizeof all / sizeof all[0]; k++)
+        if (all[k]) st = ss_image_pad_islands(all[k], in, pad, err);
+    free(in);
+    return st;
+}
+
 static ss_status run(const opts *o, const ss_skin_settings *s, inputs *in, const char *dir,
                      cJSON *summary, cJSON *notes, ss_error *err) {
     ss_status st = SS_OK;
@@ -641,6 +676,7 @@ static ss_status run(const opts *o, const ss_skin_settings *s, inputs *in, const
     /* rendered in the OpenGL convention; a DirectX normal.png is a flipped
      * copy, and the OpenGL map is kept for glTF (normal_gl.png) */
     if (!st) st = ss_skin_render_maps(bio, lut, s->world_size_cm, 0, &maps, err);
+    if (!st && o->pad > 0) st = pad_maps(&in->mesh, o->pad, &maps, bio, err);
     tm.lookup_s = ss_now() - t1;
     double t2 = ss_now();
     if (!st && o->gltf) {
@@ -666,7 +702,7 @@ static ss_status run(const opts *o, const ss_skin_settings *s, inputs *in, const
             maps.normal = dx;
         }
     }
-    if (!st) st = write_maps(dir, &maps, o->no_bio ? NULL : bio, mr, normal_gl, err);
+    if (!st) st = write_maps(dir, &maps, o->no_bio ? NULL : bio, !o->bio_float, mr, normal_gl, err);
     char path[4200];
     if (!st) {
         snprintf(path, sizeof path, "%s/features.csv", dir);
@@ -701,6 +737,8 @@ static ss_status run(const opts *o, const ss_skin_settings *s, inputs *in, const
                                 s->sampler == SS_SAMPLER_REJECTION ? "rejection" : "alias");
         cJSON_AddStringToObject(summary, "normal_convention", o->directx ? "directx" : "opengl");
         cJSON_AddBoolToObject(summary, "bio_exr", !o->no_bio);
+        if (!o->no_bio)
+            cJSON_AddStringToObject(summary, "bio_exr_type", o->bio_float ? "float" : "half");
         cJSON_AddStringToObject(summary, "table", in->table_path);
         cJSON_AddStringToObject(summary, "render_model", "ggx");
         cJSON_AddNumberToObject(summary, "height_min_mm", maps.height_min_mm);

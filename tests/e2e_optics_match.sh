@@ -30,7 +30,8 @@ check() { # name, srgb, maximum Delta-E00
   python3 - "$T/$1.json" "$1" "$3" <<'PY' || fail "match $1 result"
 import json, sys
 d = json.load(open(sys.argv[1]))
-for k in ("target_lab", "bio", "albedo_rgb", "lab", "delta_e00", "table_delta_e00", "refined"):
+for k in ("target_lab", "bio", "albedo_rgb", "lab", "delta_e00", "table_delta_e00", "refined",
+          "prior_penalty", "unique", "alternative"):
     assert k in d, k
 b = d["bio"]
 print("%s: melanin %.4f pheomelanin %.3f blood %.4f oxygenation %.3f SC %.4f epi %.4f -> "
@@ -55,6 +56,21 @@ assert d['geometry'] == 'sci' and 0.02 < d['surface'] < 0.03, d" || fail "SCI su
 python3 -c "
 import json; d=json.load(open('$T/sce.json'))
 assert d['geometry'] == 'sce' and d['surface'] == 0.0, d" || fail "SCE has no surface term"
+# plausible biology among fits (issue: with --geometry sce the light-skin
+# patch came back as pheomelanin 1): the population prior keeps the
+# pheomelanin share near its measured 0.26, reports its penalty and whether
+# another biology far away also fits
+"$CLI" optics match --srgb 194,150,130 --geometry sce --photons $PH --json --threads 2 \
+  >"$T/sce-light.json" || fail "match light-skin --geometry sce"
+python3 -c "
+import json; d=json.load(open('$T/sce-light.json'))
+assert d['delta_e00'] <= 1.0, d
+assert d['bio']['pheomelanin_ratio'] < 0.45 and d['bio']['melanin'] < 0.05, d['bio']
+assert 0.0 <= d['prior_penalty'] < 1.0, d
+a = d['alternative']
+assert isinstance(d['unique'], bool) and d['unique'] == (a['distance'] <= 0.25), d
+assert a['delta_e00_table'] <= d['delta_e00'] + 1.0 + 1e-4, a" \
+  || fail "light-skin --geometry sce: implausible biology or no prior report"
 # the dark patch needs more melanin than the light one
 python3 -c "
 import json; a=json.load(open('$T/light-skin.json')); b=json.load(open('$T/dark-skin.json'))

@@ -96,6 +96,11 @@ acc = g["accessors"][g["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"]
 assert acc["count"] > 1000, acc
 assert g["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["index"] == 0
 PY' "glTF on the hand"
+  # --pad: the same maps with a gutter around the UV islands (the values
+  # themselves: test_mesh's test_uv_pad)
+  "$CLI" skin --size 64 --gltf --mesh "$HAND" --no-wrap --pad 4 --out "$T/handpad" --quiet 2>"$T/e"
+  check '[ $? -eq 0 ]' "--pad run ($(cat "$T/e"))"
+  check '! cmp -s "$T/hand/base_color.png" "$T/handpad/base_color.png" && ! cmp -s "$T/hand/normal.png" "$T/handpad/normal.png"' "--pad changed nothing"
 fi
 
 # 5. Fixtures: an all-black field, an RGB field, a zero vector field, a truncated PNG.
@@ -153,6 +158,8 @@ expect2 "grey vector field" --field vectors="$T/black.png"
 expect2 "NaN world size" --world-size-cm nan
 expect2 "mesh without gltf" --mesh "$T/nope.glb"
 expect2 "missing mesh" --gltf --mesh "$T/nope.glb"
+expect2 "pad without mesh" --pad 4
+expect2 "negative pad" --gltf --mesh "$SRC/data/meshes/generic-hand-left.glb" --pad -1
 
 echo "e2e_skin: $pass passed, $fail failed"
 [ $fail -eq 0 ]

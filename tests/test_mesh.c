@@ -461,6 +461,79 @@ static void test_bvh_huge_coordinates(void **state) {
     ss_mesh_free(&m);
 }
 
+/* UV padding: two islands (a triangle and a quad) on a 48 x 40 texture with
+ * a different value in every covered texel. Outside texels within N of an
+ * island get the value of a covered texel at the least distance (brute
+ * force over all covered texels), farther ones and covered ones keep
+ * theirs; the same with 1 and 2 threads. */
+static void test_uv_pad(void **state) {
+    (void)state;
+    ss_error err;
+    const int W = 48, H = 40, N = 5;
+    const float pos[7 * 3] = {0};
+    const float uv[7 * 2] = {0.10f, 0.10f, 0.45f, 0.15f, 0.20f, 0.70f, /* triangle */
+                             0.60f, 0.30f, 0.90f, 0.30f, 0.90f, 0.80f, 0.60f, 0.80f};
+    const uint32_t idx[9] = {0, 1, 2, 3, 4, 5, 3, 5, 6};
+    ss_mesh m;
+    assert_int_equal(ss_mesh_from_arrays(pos, NULL, uv, 7, idx, 3, "islands", &m, &err), SS_OK);
+    unsigned char *in = malloc((size_t)W * H);
+    assert_int_equal(ss_mesh_uv_coverage(&m, W, H, in, &err), SS_OK);
+    /* the quad island covers x 29..43 (centres 0.6*48=28.8 .. 43.2), y 12..31 */
+    assert_true(in[20 * W + 35] && !in[20 * W + 28] && in[20 * W + 29] && !in[11 * W + 35]);
+    ss_image *img = ss_image_create(W, H, 2, &err), *ref = ss_image_create(W, H, 2, &err);
+    for (int i = 0; i < W * H; i++) {
+        img->data[2 * i] = in[i] ? (float)i : -1.0f;
+        img->data[2 * i + 1] = in[i] ? (float)(i % 7) : -2.0f;
+    }
+    memcpy(ref->data, img->data, (size_t)W * H * 2 * sizeof(float));
+    ss_image *again = ss_image_clone(img, &err);
+    ss_threads_set(2);
+    assert_int_equal(ss_image_pad_islands(img, in, N, &err), SS_OK);
+    ss_threads_set(1);
+    assert_int_equal(ss_image_pad_islands(again, in, N, &err), SS_OK);
+    assert_memory_equal(img->data, again->data, (size_t)W * H * 2 * sizeof(float));
+    int padded = 0;
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x < W; x++) {
+            const int i = y * W + x;
+            if (in[i]) {
+                assert_true(img->data[2 * i] == ref->data[2 * i] &&
+                            img->data[2 * i + 1] == ref->data[2 * i + 1]);
+                continue;
+            }
+            long best = -1;
+            for (int j = 0; j < W * H; j++) {
+                if (!in[j]) continue;
+                long dx = j % W - x, dy = j / W - y, d2 = dx * dx + dy * dy;
+                if (best < 0 || d2 < best) best = d2;
+            }
+            if (best > (long)N * N) {
+                assert_true(img->data[2 * i] == -1.0f && img->data[2 * i + 1] == -2.0f);
+                continue;
+            }
+            int src = (int)img->data[2 * i];
+            assert_true(src >= 0 && src < W * H && in[src]);
+            long dx = src % W - x, dy = src / W - y;
+            assert_int_equal(dx * dx + dy * dy, best); /* a nearest covered texel */
+            assert_true(img->data[2 * i + 1] == (float)(src % 7));
+            padded++;
+        }
+    assert_true(padded > 100);
+    /* n = 0 changes nothing; no UVs is an input error */
+    memcpy(again->data, ref->data, (size_t)W * H * 2 * sizeof(float));
+    assert_int_equal(ss_image_pad_islands(again, in, 0, &err), SS_OK);
+    assert_memory_equal(again->data, ref->data, (size_t)W * H * 2 * sizeof(float));
+    ss_mesh nouv;
+    assert_int_equal(ss_mesh_from_arrays(pos, NULL, NULL, 7, idx, 3, "bare", &nouv, &err), SS_OK);
+    assert_int_equal(ss_mesh_uv_coverage(&nouv, W, H, in, &err), SS_ERR_INPUT);
+    ss_mesh_free(&nouv);
+    ss_image_free(img);
+    ss_image_free(ref);
+    ss_image_free(again);
+    free(in);
+    ss_mesh_free(&m);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_hand),
@@ -470,6 +543,7 @@ int main(void) {
         cmocka_unit_test(test_bvh_soup),
         cmocka_unit_test(test_ray_uv),
         cmocka_unit_test(test_bvh_huge_coordinates),
+        cmocka_unit_test(test_uv_pad),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

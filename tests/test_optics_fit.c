@@ -706,6 +706,66 @@ static void test_fast_brdf_close_to_direct(void **state) {
     ss_brdf_sampled_free(&direct);
 }
 
+/* Colour -> biology picks the plausible biology among colours that fit
+ * (issue: a brown target came back as melanin 0.24 with pheomelanin 0.77
+ * although the default biology at melanin 0.14 fits within dE00 0.31). The
+ * target is the table's own colour of the default biology at melanin 0.14
+ * (SCI, the default geometry): the answer keeps the default pheomelanin
+ * share and melanin near 0.14; the prior penalty is reported; an
+ * alternative, when reported, really fits within the tolerance (its table
+ * colour recomputed) and lies as far away as said. Table stage only (the
+ * transport stage is e2e_optics_match's). */
+static void test_match_prior(void **state) {
+    (void)state;
+    ss_error err;
+    ss_mm_table *t = ss_mm_table_read(SKINSIM_SOURCE_DIR "/data/modelmatch_default.sstab", &err);
+    assert_non_null(t);
+    ss_mm_match_options o;
+    ss_mm_match_options_default(&o);
+    o.refine = 0;
+    ss_mm_match_result r;
+    const double grey[3] = {60.0, 10.0, 15.0};
+    assert_int_equal(ss_mm_match(t, grey, &o, &r, &err), SS_OK);
+    const double surface = r.surface;
+    assert_true(surface > 0.02 && surface < 0.03);
+    ss_bio_params d;
+    ss_bio_params_default(&d);
+    double x[SS_MM_NAXES] = {0.14,          d.pheomelanin_ratio, d.blood,
+                             d.oxygenation, d.sc_thickness_cm,   d.epidermis_thickness_cm};
+    double v[SS_MM_NFIELDS], rgb[3], target[3];
+    ss_mm_table_lookup(t, x, v);
+    for (int k = 0; k < 3; k++) rgb[k] = v[15 + k] + surface;
+    ss_srgb_linear_to_lab(rgb, target);
+    assert_int_equal(ss_mm_match(t, target, &o, &r, &err), SS_OK);
+    print_message("brown target Lab %.2f %.2f %.2f -> melanin %.4f pheomelanin %.3f blood %.4f "
+                  "dE00 %.3f prior %.3f unique %d (alt melanin %.3f pheo %.3f dE %.3f dist %.2f)\n",
+                  target[0], target[1], target[2], r.bio.melanin, r.bio.pheomelanin_ratio,
+                  r.bio.blood, r.delta_e00, r.prior_penalty, r.unique, r.alt_bio.melanin,
+                  r.alt_bio.pheomelanin_ratio, r.alt_delta_e00, r.alt_distance);
+    assert_true(r.delta_e00 <= 0.5);
+    assert_true(fabs(r.bio.pheomelanin_ratio - d.pheomelanin_ratio) <= 0.15);
+    assert_true(fabs(r.bio.melanin - 0.14) <= 0.04);
+    assert_true(r.prior_penalty >= 0.0 && r.prior_penalty < 1.0);
+    /* the alternative is what it says */
+    double ax[SS_MM_NAXES] = {r.alt_bio.melanin,         r.alt_bio.pheomelanin_ratio,
+                              r.alt_bio.blood,           r.alt_bio.oxygenation,
+                              r.alt_bio.sc_thickness_cm, r.alt_bio.epidermis_thickness_cm};
+    ss_mm_table_lookup(t, ax, v);
+    double alab[3];
+    for (int k = 0; k < 3; k++) rgb[k] = v[15 + k] + surface;
+    ss_srgb_linear_to_lab(rgb, alab);
+    assert_true(fabs(ss_ciede2000(alab, target) - r.alt_delta_e00) < 1e-3);
+    assert_true(r.alt_delta_e00 <= r.delta_e00 + SS_MM_MATCH_TOL + 1e-6);
+    assert_int_equal(r.unique, r.alt_distance <= SS_MM_MATCH_FAR);
+    /* without the prior the fit is at least as close in colour, and less plausible */
+    ss_mm_match_result r0;
+    o.prior_weight = 0.0;
+    assert_int_equal(ss_mm_match(t, target, &o, &r0, &err), SS_OK);
+    assert_true(r0.prior_penalty == 0.0);
+    assert_true(r0.delta_e00 <= r.delta_e00 + 1e-9);
+    ss_mm_table_free(t);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_reciprocity),
@@ -718,6 +778,7 @@ int main(void) {
         cmocka_unit_test(test_table_lookup),
         cmocka_unit_test(test_table_file),
         cmocka_unit_test(test_shipped_table_offgrid),
+        cmocka_unit_test(test_match_prior),
         cmocka_unit_test(test_fast_path_matches_direct),
         cmocka_unit_test(test_table_build),
         cmocka_unit_test(test_fast_brdf_close_to_direct),

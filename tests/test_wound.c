@@ -247,6 +247,21 @@ static void run_days(const scene *s, const char *scenario, const double *days, i
         }
         assert_int_equal(ss_wound_render(s->r, t, NULL, &tex, &err), SS_OK);
         measure(s, t, &tex, 2.0, &out[k]);
+        /* the raise is the healing model's own surface elevation (heal's
+         * surface_elevation_mm): the tissue map's maximum is heal's, and the
+         * height map reaches the recipe's saturating curve of it */
+        ss_heal_stats hs;
+        ss_heal_stats_compute(ss_heal_run_grid(run), &hs);
+        float emax = -INFINITY, hmax = -INFINITY;
+        for (size_t i = 0; i < (size_t)t->nx * t->ny; i++) emax = fmaxf(emax, t->elevation_mm[i]);
+        for (size_t i = 0; i < (size_t)tex.height->width * tex.height->height; i++)
+            hmax = fmaxf(hmax, tex.height->data[i]);
+        assert_true(fabs(emax - hs.elevation_max_mm) <= 1e-5 * (1 + fabs(hs.elevation_max_mm)));
+        if (!strcmp(scenario, "keloid") && days[k] >= 60) {
+            const double kmax = rec.v[SS_WR_KELOID_MAX_MM];
+            assert_true(emax > 0.5);
+            assert_true(hmax >= 0.9 * kmax * (1 - exp(-rec.v[SS_WR_KELOID_SCALE] * emax / kmax)));
+        }
         double ec = 0;
         int nc = 0;
         for (size_t i = 0; i < (size_t)t->nx * t->ny; i++)

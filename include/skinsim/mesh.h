@@ -76,6 +76,19 @@ ss_status ss_tri_mesh_check_closed(const ss_tri_mesh *m, const char *name, ss_er
  * -1 when the mesh has no UVs or memory runs out. */
 int ss_mesh_uv_islands(const ss_mesh *m, int *island);
 
+/* UV coverage: mask[y * width + x] (caller-allocated) = 1 where the texel
+ * centre lies in a UV triangle, else 0. No UVs -> SS_ERR_INPUT.
+ * (src/geom/uvpad.c) */
+ss_status ss_mesh_uv_coverage(const ss_mesh *m, int width, int height, unsigned char *mask,
+                              ss_error *err);
+
+/* UV padding: every texel with inside == 0 whose nearest texel with
+ * inside != 0 (Euclidean, in texels; ties to the lower column, then row) is
+ * at most n texels away takes that texel's value; texels with inside != 0
+ * and those farther away are unchanged. Bit-identical for any thread count.
+ * n <= 0 does nothing. */
+ss_status ss_image_pad_islands(ss_image *img, const unsigned char *inside, int n, ss_error *err);
+
 /* weld[v] (nvertices entries, caller-allocated): the lowest index of the
  * vertices at exactly v's position (seams duplicate positions). */
 ss_status ss_mesh_weld(const ss_mesh *m, int *weld, ss_error *err);

@@ -292,8 +292,9 @@ typedef struct ss_mm_match_options {
     ss_spectrum_options spectrum; /* transport stage: wavelengths, mc.photons, mc.seed,
                                      mc.roughness_sigma (defaults: 400..700 step 20, 20000) */
     int refine;                   /* 1 (default): refine the table's answer by transport */
-    double prior_weight;          /* pull towards default pheomelanin, oxygenation,
-                                     thicknesses (0.02) */
+    double prior_weight;          /* Delta-E00 per unit of the population prior's
+                                     -log density (SS_MM_PRIOR_WEIGHT; 0: none;
+                                     docs/optics.md) */
     int base_set;                 /* 1: take the non-axis parameters from base */
     ss_bio_params base;
     int geometry; /* colour compared with the target: SS_MM_GEOMETRY_SCI (default) or _SCE */
@@ -316,7 +317,15 @@ typedef struct ss_mm_match_result {
     double table_albedo_rgb[3], table_lab[3], table_delta_e00;
     double surface; /* surface reflectance added to the albedo before comparing (SCI; 0 for SCE);
                        lab and table_lab are of albedo + surface */
+    double prior_penalty;  /* prior_weight x the prior's -log density at bio (Delta-E00 units) */
+    int unique;            /* 0: a fit within SS_MM_MATCH_TOL lies farther than SS_MM_MATCH_FAR */
+    ss_bio_params alt_bio; /* the farthest grid point within the tolerance (table colour) */
+    double alt_delta_e00;  /* its Delta-E00 by the table, without the prior */
+    double alt_distance;   /* its distance from bio: pigment axes in units of their range */
 } ss_mm_match_result;
+#define SS_MM_PRIOR_WEIGHT 0.05
+#define SS_MM_MATCH_TOL 1.0  /* Delta-E00: about one just-noticeable difference */
+#define SS_MM_MATCH_FAR 0.25 /* a quarter of the axis ranges */
 /* The biological parameters (within the table's axis ranges) whose colour
  * (albedo, plus the surface reflectance for SCI) is closest in CIEDE2000 to
  * target_lab (D65 CIELAB): table search, then

@@ -123,7 +123,9 @@ typedef struct ss_wound_tissue {
                            intact skin: SS_WOUND_AGE_INTACT) */
     double *closed_day; /* internal: day of closure (+inf open, -inf intact) */
     float u3_eq, u1_healthy, rho_max, scab_min;
-    double threshold; /* capillary threshold used for depth_mm */
+    double threshold;    /* capillary threshold used for depth_mm */
+    float *elevation_mm; /* the healing model's surface elevation (ss_heal_elevation_scan, the
+                            surface_elevation_mm of heal's snapshots): the keloid's raise */
 } ss_wound_tissue;
 #define SS_WOUND_AGE_INTACT 1e5f
 

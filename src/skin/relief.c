@@ -163,8 +163,10 @@ float skin_relief_eval(const skin_relief *r, double u, double v, float *groove) 
     /* the field's axis here: bilinear in the doubled angle, periodic */
     const int nd = r->nd;
     double X = u * nd, Y = v * nd, fx = floor(X), fy = floor(Y);
-    int i0 = ((int)fx % nd + nd) % nd, j0 = ((int)fy % nd + nd) % nd;
-    int i1 = (i0 + 1) % nd, j1 = (j0 + 1) % nd;
+    int i0 = (int)fx, j0 = (int)fy;
+    if (i0 < 0 || i0 >= nd) i0 = (i0 % nd + nd) % nd;
+    if (j0 < 0 || j0 >= nd) j0 = (j0 % nd + nd) % nd;
+    int i1 = i0 + 1 == nd ? 0 : i0 + 1, j1 = j0 + 1 == nd ? 0 : j0 + 1;
     double sx = X - fx, sy = Y - fy, c2 = 0, s2 = 0;
     const int ii[4] = {i0, i1, i0, i1}, jj[4] = {j0, j0, j1, j1};
     const double ww[4] = {(1 - sx) * (1 - sy), sx * (1 - sy), (1 - sx) * sy, sx * sy};

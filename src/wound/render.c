@@ -231,7 +231,7 @@ static double lerp(double a, double b, double t) { return a + (b - a) * t; }
 
 /* The tissue at one texel (bilinear between column centres, clamped at the edges). */
 typedef struct texel_tissue {
-    double e, cap, oxy, plasma, scab, scar, keloid, depth, age;
+    double e, cap, oxy, plasma, scab, scar, keloid, depth, age, elev;
     double crust_in; /* mm from the crust's edge inwards (0 outside the crust) */
 } texel_tissue;
 
@@ -256,6 +256,7 @@ static void sample_tissue(const ss_wound_tissue *t, const float *crust_in, doubl
     s->scab = BL(t->scab_mm);
     s->scar = BL(t->scar);
     s->keloid = BL(t->keloid_mm);
+    s->elev = BL(t->elevation_mm);
     s->depth = BL(t->depth_mm);
     s->age = BL(t->age_days);
     s->crust_in = BL(crust_in);
@@ -400,10 +401,13 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
     rough = lerp(rough, v[SS_WR_KELOID_ROUGHNESS], kel * cover);
     rough = lerp(rough, lerp(0.4, v[SS_WR_SCAB_ROUGHNESS], dry) + 0.1 * crack, scab_cover);
     o->roughness = clamp01(rough);
-    /* the keloid's swelling saturates at a few mm (Vancouver Scar Scale heights:
-     * < 2, 2-5, > 5 mm) */
+    /* the keloid's raise: the healing model's surface elevation (collagen
+     * beyond the dermis it replaced, heal's surface_elevation_mm) where it is
+     * raised - where it falls short, the open wound's depth above already
+     * draws the defect - saturating at a few mm (Vancouver Scar Scale
+     * heights: < 2, 2-5, > 5 mm) */
     double kmax = v[SS_WR_KELOID_MAX_MM];
-    double keloid = kmax * (1 - exp(-v[SS_WR_KELOID_SCALE] * s->keloid / kmax));
+    double keloid = kmax * (1 - exp(-v[SS_WR_KELOID_SCALE] * fmax(s->elev, 0.0) / kmax));
     /* the surface: the skin, down by the wound's depth, filled by the clot and
      * by the crust (which fills the defect and stands above the skin), the
      * bed's relief of capillary loops, the crust's cracks and lifted edge, and

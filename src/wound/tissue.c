@@ -31,8 +31,8 @@ ss_wound_tissue *ss_wound_tissue_create(const ss_heal_grid *g, const ss_heal_par
     t->ny = g->ny;
     t->dx_mm = g->dx_mm;
     size_t n = (size_t)g->nx * (size_t)g->ny;
-    float **maps[] = {&t->epithelium, &t->capillary, &t->oxygen,   &t->plasma,  &t->scab_mm,
-                      &t->scar,       &t->keloid_mm, &t->depth_mm, &t->age_days};
+    float **maps[] = {&t->epithelium, &t->capillary, &t->oxygen,   &t->plasma,   &t->scab_mm,
+                      &t->scar,       &t->keloid_mm, &t->depth_mm, &t->age_days, &t->elevation_mm};
     int ok = 1;
     for (size_t k = 0; k < sizeof maps / sizeof *maps; k++) ok &= !!(*maps[k] = calloc(n, 4));
     ok &= !!(t->closed_day = malloc(n * sizeof *t->closed_day));
@@ -62,6 +62,7 @@ void ss_wound_tissue_free(ss_wound_tissue *t) {
     free(t->scab_mm);
     free(t->scar);
     free(t->keloid_mm);
+    free(t->elevation_mm);
     free(t->depth_mm);
     free(t->age_days);
     free(t->closed_day);
@@ -109,6 +110,20 @@ void ss_wound_tissue_observe_closure(ss_wound_tissue *t, const ss_heal_grid *g,
 
 static void observe(ss_wound_tissue *t, const ss_heal_grid *g, const double *closed) {
     const int nx = g->nx, ny = g->ny, nz = g->nz;
+    /* the surface elevation, as heal computes and writes it (its snapshots'
+     * surface_elevation_mm), from the same grid: grid rows, then flipped
+     * into image orientation */
+    memset(t->elevation_mm, 0, (size_t)nx * (size_t)ny * sizeof(float));
+    ss_heal_elevation_scan(g, 0, nz, t->elevation_mm);
+    for (int y = 0; y < ny / 2; y++) {
+        float *a = t->elevation_mm + (size_t)y * nx,
+              *b = t->elevation_mm + (size_t)(ny - 1 - y) * nx;
+        for (int x = 0; x < nx; x++) {
+            float tmp = a[x];
+            a[x] = b[x];
+            b[x] = tmp;
+        }
+    }
     const float *e = g->field[SS_HEAL_EPITHELIUM], *u3 = g->field[SS_HEAL_CAPILLARY],
                 *u1 = g->field[SS_HEAL_OXYGEN], *pl = g->field[SS_HEAL_PLASMA],
                 *s = g->field[SS_HEAL_ESCHAR], *rho = g->field[SS_HEAL_SCAR];
