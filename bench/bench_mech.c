@@ -24,10 +24,11 @@
  * load for which --default-load asks). Every tet carries the volume
  * barrier (j_min): the 99360-tet grid folded 144 tets without it, 0 with
  * it (docs/mech.md, Performance).
- * --mech-model goh times the hyperelastic GOH solver (src/mech/hyper.c) on the
- * same mesh and load instead of the springs (its Newton iterations are the
- * "substeps" column; the day-0 gape of the resting tension is solved in the
- * untimed set-up).
+ * Each grid is timed with the springs and then with the hyperelastic GOH
+ * solver (src/mech/hyper.c) on the same mesh and load, one row each (the
+ * GOH rows' Newton iterations are the "substeps" column; the day-0 gape of
+ * the resting tension is solved in the untimed set-up); --mech-model times
+ * one of them only.
  * Usage: bench_mech [--skip-large] [--default-load] [--frames N] [--threads "1 2"]
  *                   [--mech-model springs|goh]
  * Figures only; nothing is asserted. Targets: 34185 tets <= 50 ms/frame on 2
@@ -57,7 +58,8 @@ int main(int argc, char **argv) {
      * benchmark was first measured with, so its figures stay comparable when
      * the defaults are recalibrated (--default-load takes the defaults) */
     double bench_k1 = 4000, bench_max_shorten = 0.5;
-    int threads[2] = {1, 2}, nthr = 2, model = SS_MECH_MODEL_SPRINGS;
+    int threads[2] = {1, 2}, nthr = 2;
+    int models[2] = {SS_MECH_MODEL_SPRINGS, SS_MECH_MODEL_GOH}, nmod = 2;
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--skip-large"))
             skip_large = 1;
@@ -70,10 +72,11 @@ int main(int argc, char **argv) {
             frames = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--mech-model") && i + 1 < argc) {
             ss_error e;
-            if (ss_mech_model_parse(argv[++i], &model, &e)) {
+            if (ss_mech_model_parse(argv[++i], &models[0], &e)) {
                 fprintf(stderr, "%s\n", e.msg);
                 return 2;
             }
+            nmod = 1;
         } else if (!strcmp(argv[i], "--threads") && i + 1 < argc) {
             nthr = sscanf(argv[++i], "%d %d", &threads[0], &threads[1]);
             if (nthr < 1) nthr = 1;
@@ -97,12 +100,13 @@ int main(int argc, char **argv) {
            "0 -> 0.5 in 50 untimed frames, then +0.01 per timed frame; folds: the most folded tets "
            "after any frame, start-up included\n",
            bench_k1, bench_max_shorten);
-    printf("# model: %s\n", ss_mech_model_name(model));
+    printf("# model: springs (the seed's mass-spring network) and goh (the hyperelastic tets), "
+           "one row each per grid and thread count\n");
     printf("# cpu_s: process CPU seconds per frame (all threads): on a loaded machine, cpu_s on 1 "
            "thread is the idle figure.\n");
-    printf("%-14s %8s %8s %3s %8s %10s %10s %10s %6s %5s %10s %10s %10s\n", "grid", "tets",
-           "seedtets", "thr", "stride", "s/frame", "cpu_s", "substeps", "incr", "folds", "seed_s",
-           "coupled_s", "cpl_cpu_s");
+    printf("%-14s %-7s %8s %8s %3s %8s %10s %10s %10s %6s %5s %10s %10s %10s\n", "grid", "model",
+           "tets", "seedtets", "thr", "stride", "s/frame", "cpu_s", "substeps", "incr", "folds",
+           "seed_s", "coupled_s", "cpl_cpu_s");
     for (int gi = 0; gi < 3; gi++) {
         if (gi == 2 && skip_large) continue;
         const int nx = dims[gi][0], ny = dims[gi][1], nz = dims[gi][2];
@@ -110,84 +114,87 @@ int main(int argc, char **argv) {
         /* tissue box: the grid's interior below the skin top */
         double vol = (nx - 2) * dx * (ny - 2) * dx * (top - dx);
         double h = cbrt(6.0 * vol / seed_tets[gi]);
-        for (int ti = 0; ti < nthr; ti++) {
-            omp_set_num_threads(threads[ti]);
-            ss_heal_grid *g = ss_heal_grid_create(nx, ny, nz, dx, &err);
-            uint8_t *w = g ? ss_heal_wound_box(g, top, 20.0, 20.0, 1.0, &err) : NULL;
-            if (!w || ss_heal_grid_init(g, top, 0.1, w, hp, &err) != SS_OK) {
-                fprintf(stderr, "%s\n", err.msg);
-                return 1;
-            }
-            free(w);
-            ss_mech_params p;
-            ss_mech_params_default(&p);
-            p.tet_size_mm = h;
-            p.tau_myo = 0;
-            p.tau_remodel = 0;
-            p.k1 = bench_k1;
-            p.max_shorten = bench_max_shorten;
-            p.model = model;
-            ss_mech *m = ss_mech_create(g, hp, &p, NULL, NULL, 0, &err);
-            if (!m) {
-                fprintf(stderr, "%s\n", err.msg);
-                return 1;
-            }
-            size_t n = (size_t)nx * ny * nz;
-            double tm = 0, tc = 0;
-            long subs = 0, incs = 0;
-            int folds = 0;
-            const int warm = 50; /* untimed start-up: n = 0.01, 0.02, ... 0.5 */
-            for (int f = -warm; f < frames; f++) {
-                float level =
-                    f < 0 ? (float)(0.01 * (warm + 1 + f)) : (float)(0.5 + 0.01 * (f + 1));
-                for (size_t i = 0; i < n; i++)
-                    if (g->cell[i] == SS_CELL_WOUND) g->field[SS_HEAL_FIBROBLAST][i] = level;
-                double t0 = ss_now(), c0 = cpu_now();
-                if (ss_mech_step(m, g, 0.05, &err) != SS_OK) {
+        for (int mi = 0; mi < nmod; mi++)
+            for (int ti = 0; ti < nthr; ti++) {
+                const int model = models[mi];
+                omp_set_num_threads(threads[ti]);
+                ss_heal_grid *g = ss_heal_grid_create(nx, ny, nz, dx, &err);
+                uint8_t *w = g ? ss_heal_wound_box(g, top, 20.0, 20.0, 1.0, &err) : NULL;
+                if (!w || ss_heal_grid_init(g, top, 0.1, w, hp, &err) != SS_OK) {
                     fprintf(stderr, "%s\n", err.msg);
                     return 1;
                 }
-                double dt = ss_now() - t0, dc = cpu_now() - c0;
-                ss_mech_stats st;
-                ss_mech_stats_compute(m, &st);
-                if (st.inverted_tets > folds) folds = st.inverted_tets;
-                if (f < 0) continue;
-                tm += dt;
-                tc += dc;
-                subs += st.substeps;
-                incs += st.increments;
-            }
-            double coupled = -1, coupled_cpu = -1;
-            if (gi == 1) { /* one split heal step + one mechanics frame */
-                ss_heal_solver *sol = ss_heal_solver_create(g, hp, SS_HEAL_SPLIT, 0, &err);
-                if (!sol) {
+                free(w);
+                ss_mech_params p;
+                ss_mech_params_default(&p);
+                p.tet_size_mm = h;
+                p.tau_myo = 0;
+                p.tau_remodel = 0;
+                p.k1 = bench_k1;
+                p.max_shorten = bench_max_shorten;
+                p.model = model;
+                ss_mech *m = ss_mech_create(g, hp, &p, NULL, NULL, 0, &err);
+                if (!m) {
                     fprintf(stderr, "%s\n", err.msg);
                     return 1;
                 }
-                int nc = 3;
-                double t0 = ss_now(), c0 = cpu_now();
-                for (int k = 0; k < nc; k++)
-                    if (ss_heal_step(sol, g, &err) != SS_OK ||
-                        ss_mech_step(m, g, ss_heal_solver_dt(sol), &err) != SS_OK) {
+                size_t n = (size_t)nx * ny * nz;
+                double tm = 0, tc = 0;
+                long subs = 0, incs = 0;
+                int folds = 0;
+                const int warm = 50; /* untimed start-up: n = 0.01, 0.02, ... 0.5 */
+                for (int f = -warm; f < frames; f++) {
+                    float level =
+                        f < 0 ? (float)(0.01 * (warm + 1 + f)) : (float)(0.5 + 0.01 * (f + 1));
+                    for (size_t i = 0; i < n; i++)
+                        if (g->cell[i] == SS_CELL_WOUND) g->field[SS_HEAL_FIBROBLAST][i] = level;
+                    double t0 = ss_now(), c0 = cpu_now();
+                    if (ss_mech_step(m, g, 0.05, &err) != SS_OK) {
                         fprintf(stderr, "%s\n", err.msg);
                         return 1;
                     }
-                coupled = (ss_now() - t0) / nc;
-                coupled_cpu = (cpu_now() - c0) / nc;
-                ss_heal_solver_free(sol);
+                    double dt = ss_now() - t0, dc = cpu_now() - c0;
+                    ss_mech_stats st;
+                    ss_mech_stats_compute(m, &st);
+                    if (st.inverted_tets > folds) folds = st.inverted_tets;
+                    if (f < 0) continue;
+                    tm += dt;
+                    tc += dc;
+                    subs += st.substeps;
+                    incs += st.increments;
+                }
+                double coupled = -1, coupled_cpu = -1;
+                if (gi == 1) { /* one split heal step + one mechanics frame */
+                    ss_heal_solver *sol = ss_heal_solver_create(g, hp, SS_HEAL_SPLIT, 0, &err);
+                    if (!sol) {
+                        fprintf(stderr, "%s\n", err.msg);
+                        return 1;
+                    }
+                    int nc = 3;
+                    double t0 = ss_now(), c0 = cpu_now();
+                    for (int k = 0; k < nc; k++)
+                        if (ss_heal_step(sol, g, &err) != SS_OK ||
+                            ss_mech_step(m, g, ss_heal_solver_dt(sol), &err) != SS_OK) {
+                            fprintf(stderr, "%s\n", err.msg);
+                            return 1;
+                        }
+                    coupled = (ss_now() - t0) / nc;
+                    coupled_cpu = (cpu_now() - c0) / nc;
+                    ss_heal_solver_free(sol);
+                }
+                int stride;
+                ss_mech_kernel(m, &stride);
+                char gname[32];
+                snprintf(gname, sizeof gname, "%dx%dx%d", nx, ny, nz);
+                printf("%-14s %-7s %8d %8d %3d %8d %10.4f %10.4f %10.1f %6.2f %5d %10.3f %10.4f "
+                       "%10.4f\n",
+                       gname, ss_mech_model_name(model), ss_mech_mesh(m)->ntets, seed_tets[gi],
+                       threads[ti], stride, tm / frames, tc / frames, (double)subs / frames,
+                       (double)incs / frames, folds, seed_s[gi], coupled, coupled_cpu);
+                fflush(stdout);
+                ss_mech_free(m);
+                ss_heal_grid_free(g);
             }
-            int stride;
-            ss_mech_kernel(m, &stride);
-            char gname[32];
-            snprintf(gname, sizeof gname, "%dx%dx%d", nx, ny, nz);
-            printf("%-14s %8d %8d %3d %8d %10.4f %10.4f %10.1f %6.2f %5d %10.3f %10.4f %10.4f\n",
-                   gname, ss_mech_mesh(m)->ntets, seed_tets[gi], threads[ti], stride, tm / frames,
-                   tc / frames, (double)subs / frames, (double)incs / frames, folds, seed_s[gi],
-                   coupled, coupled_cpu);
-            fflush(stdout);
-            ss_mech_free(m);
-            ss_heal_grid_free(g);
-        }
     }
     ss_heal_params_free(hp);
     return 0;

@@ -402,6 +402,47 @@ static size_t centres_in_box(int n, double dx, const double lo[3], const double 
     return c[0] * c[1] * c[2];
 }
 
+/* A 10 mm cube whose every triangle has its own copies of its corners (a
+ * seam everywhere), each copy moved off the corner by up to eps: copies 1e-9
+ * of the size apart (an exporter's rounding) weld and the cube is closed;
+ * 1e-3 apart are distinct vertices and it is open. */
+static void test_obj_weld_tolerance(void **state) {
+    (void)state;
+    static const int q[6][4] = {{0, 2, 6, 4}, {1, 3, 7, 5}, {0, 1, 5, 4},
+                                {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 5, 7, 6}};
+    const double eps[2] = {1e-9, 1e-3};
+    for (int c = 0; c < 2; c++) {
+        char obj[8192];
+        size_t o = 0;
+        int nv = 0;
+        for (int f = 0; f < 6; f++)
+            for (int h = 0; h < 2; h++) {
+                int tri[3] = {q[f][0], q[f][1 + h], q[f][2 + h]};
+                for (int k = 0; k < 3; k++, nv++) {
+                    double p[3];
+                    for (int d = 0; d < 3; d++)
+                        p[d] = 3.0 + 10.0 * ((tri[k] >> d) & 1) +
+                               10.0 * eps[c] * (((nv * 7 + d * 3) % 5) - 2) / 2.0;
+                    o += (size_t)snprintf(obj + o, sizeof obj - o, "v %.17g %.17g %.17g\n", p[0],
+                                          p[1], p[2]);
+                }
+                o += (size_t)snprintf(obj + o, sizeof obj - o, "f %d %d %d\n", nv - 2, nv - 1, nv);
+            }
+        ss_tri_mesh m;
+        ss_error err;
+        assert_int_equal(ss_obj_parse(obj, "seams.obj", &m, &err), SS_OK);
+        assert_int_equal(m.nverts, 36);
+        ss_status st = ss_tri_mesh_check_closed(&m, "seams.obj", &err);
+        if (c == 0) {
+            if (st) fail_msg("%s", err.msg);
+        } else {
+            assert_int_equal(st, SS_ERR_INPUT);
+            assert_non_null(strstr(err.msg, "seams.obj"));
+        }
+        ss_tri_mesh_free(&m);
+    }
+}
+
 static void test_obj_cube(void **state) {
     (void)state;
     char obj[4096];
@@ -933,6 +974,7 @@ int main(void) {
         cmocka_unit_test(test_checkpoint_roundtrip_and_corruption),
         cmocka_unit_test(test_resume_bit_identical),
         cmocka_unit_test(test_obj_cube),
+        cmocka_unit_test(test_obj_weld_tolerance),
         cmocka_unit_test(test_obj_sphere),
         cmocka_unit_test(test_footprint_mask),
         cmocka_unit_test(test_stroke_csv),

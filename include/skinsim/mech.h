@@ -248,8 +248,9 @@ int ss_springs_relax(ss_springs *s, double tol, int max_steps, int *converged);
  * volume), an elastic foundation per node, dead loads per node and zero- or
  * finite-rest-length springs (sutures). Quasi-static: ss_hyper_solve
  * minimises the energy by Newton's method with the analytic tangent (sparse
- * 3x3-block matrix, conjugate gradients with block-Jacobi, stopped at
- * negative curvature) and a backtracking line search that never accepts a
+ * 3x3-block matrix, conjugate gradients with block-Jacobi plus a coarse
+ * correction on aggregates' rigid modes, stopped at negative curvature; the
+ * tangent reused while it still converges fast) and a backtracking line search that never accepts a
  * folded tet. Units: mm, kPa, mN, uJ. Bit-identical for any thread count. */
 typedef struct ss_hyper ss_hyper;
 /* The energy density of one tet's material: W(F_e) = mu/2 (J^-2/3 I1 - 3) +
@@ -270,6 +271,11 @@ void ss_hyper_goh_cauchy(const ss_mech_params *p, const double F[9], double sigm
  * positions. */
 ss_hyper *ss_hyper_create(const ss_tetmesh *m, const ss_mech_params *p, ss_error *err);
 void ss_hyper_free(ss_hyper *h);
+/* on (the default): the two-level preconditioner (block-Jacobi plus a coarse
+ * correction on the aggregates' rigid modes) and the tangent reused while
+ * Newton converges fast; off: block-Jacobi and a fresh tangent every Newton
+ * iteration (the reference the tests compare with). */
+void ss_hyper_set_fast(ss_hyper *h, int on);
 int ss_hyper_nodes(const ss_hyper *h);
 int ss_hyper_tets(const ss_hyper *h);
 /* Current positions (3n, mm): read, or set before a solve (a warm start). */

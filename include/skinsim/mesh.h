@@ -89,8 +89,13 @@ ss_status ss_mesh_uv_coverage(const ss_mesh *m, int width, int height, unsigned 
  * n <= 0 does nothing. */
 ss_status ss_image_pad_islands(ss_image *img, const unsigned char *inside, int n, ss_error *err);
 
-/* weld[v] (nvertices entries, caller-allocated): the lowest index of the
- * vertices at exactly v's position (seams duplicate positions). */
+/* Vertices closer than SS_WELD_REL times the bounding box's diagonal are
+ * one (seams duplicate positions, exporters round them differently). */
+#define SS_WELD_REL 1e-6
+/* weld[v] (n entries, caller-allocated): the lowest index of the points
+ * joined to v by chains of distances <= SS_WELD_REL x the diagonal. */
+ss_status ss_weld_positions(int n, const double *xyz, int *weld, ss_error *err);
+/* The same for a mesh's vertices (seams duplicate positions). */
 ss_status ss_mesh_weld(const ss_mesh *m, int *weld, ss_error *err);
 /* Refines the triangles with a corner within radius of centre (mesh units):
  * split 1-to-4 at their edge midpoints while an edge is longer than

@@ -454,17 +454,6 @@ ss_status ss_obj_read(const char *path, ss_tri_mesh *out, ss_error *err) {
 
 /* ---- closedness --------------------------------------------------------------------- */
 
-static const double *cmp_base;
-/* (qsort has no context argument; the comparator reads the vertex array through a
- * file-static pointer set just before the call, in one thread.) */
-static int cmp_vert(const void *a, const void *b) {
-    const double *p = cmp_base + 3 * (size_t) * (const int *)a;
-    const double *q = cmp_base + 3 * (size_t) * (const int *)b;
-    for (int k = 0; k < 3; k++)
-        if (p[k] != q[k]) return p[k] < q[k] ? -1 : 1;
-    return 0;
-}
-
 typedef struct edge {
     int a, b, tri;
 } edge;
@@ -477,20 +466,16 @@ static int cmp_edge(const void *x, const void *y) {
 
 ss_status ss_tri_mesh_check_closed(const ss_tri_mesh *m, const char *name, ss_error *err) {
     int nv = m->nverts, nt = m->ntris;
-    int *order = malloc((size_t)nv * sizeof *order), *weld = malloc((size_t)nv * sizeof *weld);
+    int *weld = malloc((size_t)nv * sizeof *weld);
     edge *e = malloc((size_t)nt * 3 * sizeof *e);
     ss_status st = SS_OK;
-    if (!order || !weld || !e) {
+    if (!weld || !e) {
         st = ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", name);
         goto done;
     }
-    /* Weld vertices with identical coordinates (exporters often split them). */
-    for (int i = 0; i < nv; i++) order[i] = i;
-    cmp_base = m->v;
-    qsort(order, (size_t)nv, sizeof *order, cmp_vert);
-    for (int i = 0; i < nv; i++)
-        weld[order[i]] =
-            (i > 0 && cmp_vert(&order[i - 1], &order[i]) == 0) ? weld[order[i - 1]] : order[i];
+    /* Weld vertices at the same position within the mesh size's tolerance
+     * (exporters often split them, and round the copies differently). */
+    if ((st = ss_weld_positions(nv, m->v, weld, err))) goto done;
     for (int t = 0; t < nt; t++) {
         int a = weld[m->tri[3 * t]], b = weld[m->tri[3 * t + 1]], c = weld[m->tri[3 * t + 2]];
         if (a == b || b == c || a == c) {
@@ -567,7 +552,6 @@ ss_status ss_tri_mesh_check_closed(const ss_tri_mesh *m, const char *name, ss_er
     free(pos);
     free(idx);
 done:
-    free(order);
     free(weld);
     free(e);
     return st;

@@ -5,8 +5,12 @@
  * the body's triangles.
  *
  * Design:
- * - Welding sorts (x, y, z, index) records with qsort; the records carry the
- *   key, so the comparator needs no global state.
+ * - Welding joins vertices within SS_WELD_REL of the bounding box's
+ *   diagonal (seams computed in float or by trigonometry differ in the last
+ *   digits; 1e-9 relative is common): positions binned into cubes of that
+ *   size, records (bin, index) sorted with qsort (they carry the key, so the
+ *   comparator needs no global state), each vertex compared with the 27
+ *   neighbouring bins, a union-find whose root is the lowest index.
  * - Refinement is red-green, one level at a time: a triangle near the point
  *   whose longest edge is too long is split 1-to-4 at its edge midpoints
  *   ("red"); a neighbour that shares one split edge is split 1-to-2
@@ -27,33 +31,91 @@
 #include "skinsim/mesh.h"
 
 typedef struct wrec {
-    float p[3];
+    int64_t k[3];
     int i;
 } wrec;
 
 static int cmp_wrec(const void *x, const void *y) {
     const wrec *a = x, *b = y;
     for (int d = 0; d < 3; d++)
-        if (a->p[d] != b->p[d]) return a->p[d] < b->p[d] ? -1 : 1;
+        if (a->k[d] != b->k[d]) return a->k[d] < b->k[d] ? -1 : 1;
     return a->i - b->i;
+}
+
+static int cmp_key(const int64_t *a, const int64_t *b) {
+    for (int d = 0; d < 3; d++)
+        if (a[d] != b[d]) return a[d] < b[d] ? -1 : 1;
+    return 0;
+}
+
+static int uf_find(int *up, int a) {
+    while (up[a] != a) a = up[a] = up[up[a]];
+    return a;
+}
+
+ss_status ss_weld_positions(int n, const double *p, int *weld, ss_error *err) {
+    if (n <= 0) return SS_OK;
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int i = 0; i < n; i++)
+        for (int d = 0; d < 3; d++) {
+            lo[d] = fmin(lo[d], p[3 * (size_t)i + d]);
+            hi[d] = fmax(hi[d], p[3 * (size_t)i + d]);
+        }
+    double diag = 0;
+    for (int d = 0; d < 3; d++) diag += (hi[d] - lo[d]) * (hi[d] - lo[d]);
+    const double tol = SS_WELD_REL * sqrt(diag);
+    wrec *r = malloc((size_t)n * sizeof *r);
+    if (!r) return ss_error_set(err, SS_ERR_NOMEM, "mesh weld: out of memory");
+    for (int i = 0; i < n; i++) {
+        for (int d = 0; d < 3; d++) {
+            double q = tol > 0 ? floor((p[3 * (size_t)i + d] - lo[d]) / tol) : 0;
+            r[i].k[d] = isfinite(q) ? (int64_t)q : 0;
+        }
+        r[i].i = i;
+        weld[i] = i; /* union-find parents, the root the lowest index */
+    }
+    qsort(r, (size_t)n, sizeof *r, cmp_wrec);
+    for (int s = 0; s < n; s++) {
+        const double *a = p + 3 * (size_t)r[s].i;
+        for (int dx = -1; dx <= 1; dx++)
+            for (int dy = -1; dy <= 1; dy++) {
+                int64_t key[3] = {r[s].k[0] + dx, r[s].k[1] + dy, r[s].k[2] - 1};
+                int l = 0, u = n; /* first record with key >= (x, y, z - 1) */
+                while (l < u) {
+                    int mid = l + (u - l) / 2;
+                    if (cmp_key(r[mid].k, key) < 0)
+                        l = mid + 1;
+                    else
+                        u = mid;
+                }
+                for (int t = l; t < n; t++) {
+                    if (r[t].k[0] != key[0] || r[t].k[1] != key[1] || r[t].k[2] > key[2] + 2) break;
+                    if (t == s) continue;
+                    const double *b = p + 3 * (size_t)r[t].i;
+                    double d2 = 0;
+                    for (int d = 0; d < 3; d++) d2 += (a[d] - b[d]) * (a[d] - b[d]);
+                    if (!(d2 <= tol * tol)) continue;
+                    int ra = uf_find(weld, r[s].i), rb = uf_find(weld, r[t].i);
+                    if (ra < rb)
+                        weld[rb] = ra;
+                    else if (rb < ra)
+                        weld[ra] = rb;
+                }
+            }
+    }
+    for (int i = 0; i < n; i++) weld[i] = uf_find(weld, i);
+    free(r);
+    return SS_OK;
 }
 
 ss_status ss_mesh_weld(const ss_mesh *m, int *weld, ss_error *err) {
     int n = m->nvertices;
-    wrec *r = malloc((size_t)(n > 0 ? n : 1) * sizeof *r);
-    if (!r) return ss_error_set(err, SS_ERR_NOMEM, "mesh weld: out of memory");
-    for (int i = 0; i < n; i++) {
-        memcpy(r[i].p, m->positions + 3 * (size_t)i, sizeof r[i].p);
-        r[i].i = i;
-    }
-    qsort(r, (size_t)n, sizeof *r, cmp_wrec);
-    for (int i = 0; i < n; i++)
-        weld[r[i].i] = i && r[i].p[0] == r[i - 1].p[0] && r[i].p[1] == r[i - 1].p[1] &&
-                               r[i].p[2] == r[i - 1].p[2]
-                           ? weld[r[i - 1].i]
-                           : r[i].i;
-    free(r);
-    return SS_OK;
+    double *p = malloc(3 * (size_t)(n > 0 ? n : 1) * sizeof *p);
+    if (!p) return ss_error_set(err, SS_ERR_NOMEM, "mesh weld: out of memory");
+    for (size_t i = 0; i < 3 * (size_t)n; i++) p[i] = m->positions[i];
+    ss_status st = ss_weld_positions(n, p, weld, err);
+    free(p);
+    return st;
 }
 
 /* ---- a small open-addressing map from an edge key to an int ---------------------- */

@@ -21,12 +21,20 @@
  * the 9 x 9 d^2W/dF^2), assembled into a 3x3-block CSR matrix by a gather in
  * a fixed order (each block sums its tets' contributions in tet order, so
  * the result is bit-identical for any thread count; no atomics), solved by
- * conjugate gradients with a block-Jacobi preconditioner, stopped at the
- * forcing tolerance or at negative curvature (the active term and the
- * fibres' switch make the tangent indefinite away from the minimum; then the
- * CG iterate so far is still a descent direction, truncated Newton), and a
- * backtracking (Armijo) line search on the total energy, which is infinite
- * for a folded tet, so no accepted step folds one.
+ * conjugate gradients with a two-level preconditioner (block-Jacobi plus a
+ * coarse correction on the rigid modes of aggregates of nodes: the thick
+ * block on its soft foundation has slow bending modes block-Jacobi alone
+ * took hundreds of iterations for), stopped at the forcing tolerance or at
+ * negative curvature (the active term and the fibres' switch make the
+ * tangent indefinite away from the minimum; then the CG iterate so far is
+ * still a descent direction, truncated Newton), and a backtracking (Armijo)
+ * line search on the total energy, which is infinite for a folded tet, so no
+ * accepted step folds one. The tangent and its preconditioner are kept from
+ * iteration to iteration and frame to frame while the steps they give still
+ * cut the gradient five-fold (a frame's load changes the tangent little);
+ * the assembly was over half of a frame. ss_hyper_set_fast(h, 0) gives the
+ * plain solver (block-Jacobi, fresh tangent each iteration), which the tests
+ * compare with.
  *
  * What it gave up: linear tets lock somewhat in near-incompressible bending
  * (the default K_bulk/mu = 2.1 is far from it); no sparse direct solver (no
@@ -69,6 +77,12 @@ struct ss_hyper {
     double *Minv;
     double *g, *d, *r, *z, *p, *q;
     double mean_edge;
+    /* two-level preconditioner: aggregates of nodes (spatial bins), their
+     * rigid modes as the coarse space, the coarse matrix's Cholesky factor */
+    int fast, nagg, nc, coarse_ok, tangent_ok;
+    int32_t *agg, *astart, *alist;
+    double *acen, *arho, ascale; /* arho: node offsets from the centroid / bin side */
+    double *Ac, *Lc, *wc;
 };
 
 /* ---- material ---------------------------------------------------------------- */
@@ -110,7 +124,7 @@ static double goh(const mat *M, const double *F, int fib, double s, double *P, d
     cof3(F, cf); /* dJ/dF */
     double I1 = 0;
     for (int i = 0; i < 9; i++) I1 += F[i] * F[i];
-    const double J23 = pow(J, -2.0 / 3.0), J53 = J23 / J, J83 = J53 / J;
+    const double cJ = cbrt(J), J23 = 1.0 / (cJ * cJ), J53 = J23 / J, J83 = J53 / J;
     double W = 0.5 * M->mu * (J23 * I1 - 3.0) + 0.5 * M->K * (J - 1) * (J - 1) + s * J;
     const double f1 = 0.5 * M->mu * J23;
     const double fJ = -M->mu / 3.0 * J53 * I1 + M->K * (J - 1) + s;
@@ -208,12 +222,13 @@ void ss_hyper_goh_cauchy(const ss_mech_params *p, const double F[9], double sg[9
 
 void ss_hyper_free(ss_hyper *h) {
     if (!h) return;
-    void *ptrs[] = {h->X,    h->x,     h->xt,     h->tet,   h->beta0,  h->V0,     h->beta,
-                    h->Vg,   h->G,     h->act,    h->scale, h->fib,    h->gdirty, h->anchor,
-                    h->load, h->fixed, h->se,     h->srest, h->sk,     h->rowptr, h->col,
-                    h->diag, h->val,   h->cstart, h->clist, h->nstart, h->nlist,  h->Kt,
-                    h->gt,   h->et,    h->Minv,   h->g,     h->d,      h->r,      h->z,
-                    h->p,    h->q};
+    void *ptrs[] = {h->X,    h->x,     h->xt,     h->tet,    h->beta0,  h->V0,     h->beta,
+                    h->Vg,   h->G,     h->act,    h->scale,  h->fib,    h->gdirty, h->anchor,
+                    h->load, h->fixed, h->se,     h->srest,  h->sk,     h->rowptr, h->col,
+                    h->diag, h->val,   h->cstart, h->clist,  h->nstart, h->nlist,  h->Kt,
+                    h->gt,   h->et,    h->Minv,   h->g,      h->d,      h->r,      h->z,
+                    h->p,    h->q,     h->agg,    h->astart, h->alist,  h->acen,   h->arho,
+                    h->Ac,   h->Lc,    h->wc};
     for (size_t i = 0; i < sizeof ptrs / sizeof ptrs[0]; i++) free(ptrs[i]);
     free(h);
 }
@@ -297,6 +312,7 @@ ss_hyper *ss_hyper_create(const ss_tetmesh *m, const ss_mech_params *p, ss_error
         h->gdirty[t] = 1;
     }
     h->mean_edge = esum / (3.0 * nt);
+    h->fast = 1;
     return h;
 nomem:
     ss_error_set(err, SS_ERR_NOMEM, "hyperelastic solver: out of memory");
@@ -304,6 +320,8 @@ fail:
     ss_hyper_free(h);
     return NULL;
 }
+
+void ss_hyper_set_fast(ss_hyper *h, int on) { h->fast = on != 0; }
 
 int ss_hyper_nodes(const ss_hyper *h) { return h->nn; }
 int ss_hyper_tets(const ss_hyper *h) { return h->nt; }
@@ -349,6 +367,7 @@ int ss_hyper_add_spring(ss_hyper *h, int a, int b, double rest, double k, ss_err
 
 void ss_hyper_set_spring(ss_hyper *h, int i, double rest, double k) {
     if (i < 0 || i >= h->ns) return;
+    if (h->sk[i] != k || h->srest[i] != rest) h->tangent_ok = 0; /* a stitch cut: fresh tangent */
     h->srest[i] = rest;
     h->sk[i] = k;
 }
@@ -373,6 +392,7 @@ static int find_blk(const ss_hyper *h, int a, int b) {
 
 /* The block pattern (tets and springs), the tet -> block gather lists and
  * the node -> tet lists. */
+static ss_status build_aggregates(ss_hyper *h);
 static ss_status build_pattern(ss_hyper *h) {
     const int nn = h->nn, nt = h->nt;
     free(h->rowptr);
@@ -485,8 +505,220 @@ static ss_status build_pattern(ss_hyper *h) {
     for (int c = 0; c < 16 * nt; c++) h->clist[pos[bk[c]]++] = c;
     free(pos);
     free(bk);
+    if (build_aggregates(h) != SS_OK) return SS_ERR_NOMEM;
+    h->tangent_ok = 0;
     h->pattern_ok = 1;
     return SS_OK;
+}
+
+/* The coarse space of the two-level preconditioner: the nodes binned into
+ * cubes of AGG_EDGES mean edges over the reference bounding box (occupied
+ * bins only, numbered in bin order; nodes in node order), each aggregate's
+ * coarse dofs its three translations and three small rotations about its
+ * centroid (the slow modes block-Jacobi leaves alone: the block moving and
+ * bending on its soft foundation). */
+enum { AGG_EDGES = 4 };
+static ss_status build_aggregates(ss_hyper *h) {
+    const int nn = h->nn;
+    free(h->agg);
+    free(h->astart);
+    free(h->alist);
+    free(h->acen);
+    free(h->arho);
+    free(h->Ac);
+    free(h->Lc);
+    free(h->wc);
+    h->agg = h->astart = h->alist = NULL;
+    h->acen = h->arho = h->Ac = h->Lc = h->wc = NULL;
+    h->nagg = h->nc = h->coarse_ok = 0;
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int i = 0; i < nn; i++)
+        for (int d = 0; d < 3; d++) {
+            lo[d] = fmin(lo[d], h->X[3 * i + d]);
+            hi[d] = fmax(hi[d], h->X[3 * i + d]);
+        }
+    const double side = AGG_EDGES * h->mean_edge;
+    int nb[3];
+    for (int d = 0; d < 3; d++) {
+        double c = floor((hi[d] - lo[d]) / side) + 1;
+        nb[d] = c > 64 ? 64 : (int)c; /* at most 64^3 bins */
+    }
+    const size_t nbins = (size_t)nb[0] * nb[1] * nb[2];
+    int32_t *bin = malloc((size_t)nn * sizeof(int32_t));
+    int32_t *idx = malloc(nbins * sizeof(int32_t));
+    h->agg = malloc((size_t)nn * sizeof(int32_t));
+    h->alist = malloc((size_t)nn * sizeof(int32_t));
+    if (!bin || !idx || !h->agg || !h->alist) {
+        free(bin);
+        free(idx);
+        return SS_ERR_NOMEM;
+    }
+    for (size_t b = 0; b < nbins; b++) idx[b] = -1;
+    for (int i = 0; i < nn; i++) {
+        size_t b = 0;
+        for (int d = 2; d >= 0; d--) {
+            int c = (int)((h->X[3 * i + d] - lo[d]) / (hi[d] - lo[d] + 1e-300) * nb[d]);
+            if (c < 0) c = 0;
+            if (c >= nb[d]) c = nb[d] - 1;
+            b = b * nb[d] + (size_t)c;
+        }
+        bin[i] = (int32_t)b;
+        idx[b] = 0;
+    }
+    int na = 0;
+    for (size_t b = 0; b < nbins; b++)
+        if (idx[b] == 0) idx[b] = na++;
+    h->nagg = na;
+    h->nc = 6 * na;
+    h->astart = calloc((size_t)na + 1, sizeof(int32_t));
+    h->acen = calloc(3 * (size_t)na, sizeof(double));
+    h->arho = malloc(3 * (size_t)nn * sizeof(double));
+    h->Ac = malloc((size_t)h->nc * h->nc * sizeof(double));
+    h->Lc = malloc((size_t)h->nc * h->nc * sizeof(double));
+    h->wc = malloc(2 * (size_t)h->nc * sizeof(double));
+    if (!h->astart || !h->acen || !h->arho || !h->Ac || !h->Lc || !h->wc) {
+        free(bin);
+        free(idx);
+        return SS_ERR_NOMEM;
+    }
+    for (int i = 0; i < nn; i++) {
+        int a = h->agg[i] = idx[bin[i]];
+        h->astart[a + 1]++;
+        for (int d = 0; d < 3; d++) h->acen[3 * a + d] += h->X[3 * i + d];
+    }
+    for (int a = 0; a < na; a++) {
+        for (int d = 0; d < 3; d++) h->acen[3 * a + d] /= h->astart[a + 1];
+        h->astart[a + 1] += h->astart[a];
+    }
+    memcpy(bin, h->astart, (size_t)na * sizeof(int32_t)); /* fill pointers */
+    for (int i = 0; i < nn; i++) h->alist[bin[h->agg[i]]++] = i;
+    h->ascale = 1.0 / side;
+    for (int i = 0; i < nn; i++)
+        for (int d = 0; d < 3; d++)
+            h->arho[3 * i + d] = (h->X[3 * i + d] - h->acen[3 * h->agg[i] + d]) * h->ascale;
+    free(bin);
+    free(idx);
+    return SS_OK;
+}
+
+/* P_i (3 x 6) of node i: translations, rotations (e_k x r, r in bins); fixed
+ * dofs' rows zero */
+static void prolong_block(const ss_hyper *h, int i, double *P) {
+    const double *r = h->arho + 3 * (size_t)i;
+    const double v[18] = {1,     0, 0,    0, r[2], -r[1], 0,    1,     0,
+                          -r[2], 0, r[0], 0, 0,    1,     r[1], -r[0], 0};
+    memcpy(P, v, sizeof v);
+    for (int d = 0; d < 3; d++)
+        if (h->fixed[3 * i + d])
+            for (int c = 0; c < 6; c++) P[6 * d + c] = 0;
+}
+
+/* A_c = P^T A P (each aggregate's rows by one thread, in node and block
+ * order), then its Cholesky factor; a pivot below 1e-10 of its diagonal
+ * (a rotation of a flat or tiny aggregate, a fully fixed one) or negative
+ * (an indefinite tangent) drops that coarse dof. */
+static void coarse_build(ss_hyper *h) {
+    const int nc = h->nc;
+    double *A = h->Ac;
+#pragma omp parallel for schedule(dynamic, 1)
+    for (int I = 0; I < h->nagg; I++) {
+        double *row = A + (size_t)6 * I * nc;
+        memset(row, 0, 6 * (size_t)nc * sizeof(double));
+        for (int s = h->astart[I]; s < h->astart[I + 1]; s++) {
+            const int i = h->alist[s];
+            double Pi[18];
+            prolong_block(h, i, Pi);
+            for (int k = h->rowptr[i]; k < h->rowptr[i + 1]; k++) {
+                const int j = h->col[k], J = h->agg[j];
+                const double *B = h->val + 9 * (size_t)k;
+                double Pj[18], T[18];
+                prolong_block(h, j, Pj);
+                for (int r = 0; r < 3; r++)
+                    for (int c = 0; c < 6; c++)
+                        T[6 * r + c] =
+                            B[3 * r] * Pj[c] + B[3 * r + 1] * Pj[6 + c] + B[3 * r + 2] * Pj[12 + c];
+                for (int r = 0; r < 6; r++)
+                    for (int c = 0; c < 6; c++)
+                        row[(size_t)r * nc + 6 * J + c] +=
+                            Pi[r] * T[c] + Pi[6 + r] * T[6 + c] + Pi[12 + r] * T[12 + c];
+            }
+        }
+    }
+    double *L = h->Lc;
+    memcpy(L, A, (size_t)nc * nc * sizeof(double));
+    for (int j = 0; j < nc; j++) {
+        double *Lj = L + (size_t)j * nc;
+        double dj = Lj[j];
+        for (int k = 0; k < j; k++) dj -= Lj[k] * Lj[k];
+        if (!(dj > 1e-10 * fabs(A[(size_t)j * nc + j]))) {
+            for (int k = 0; k <= j; k++) Lj[k] = 0; /* dropped */
+            for (int i = j + 1; i < nc; i++) L[(size_t)i * nc + j] = 0;
+            continue;
+        }
+        const double ljj = sqrt(dj);
+        Lj[j] = ljj;
+#pragma omp parallel for schedule(static) if (nc - j > 256)
+        for (int i = j + 1; i < nc; i++) {
+            double *Li = L + (size_t)i * nc;
+            double s = Li[j];
+            for (int k = 0; k < j; k++) s -= Li[k] * Lj[k];
+            Li[j] = s / ljj;
+        }
+    }
+    h->coarse_ok = 1;
+}
+
+/* z += P A_c^-1 P^T r; P^T r per node is (r, rho x r), P (t, th) is t +
+ * th x rho (fixed dofs masked) */
+static void coarse_apply(const ss_hyper *h, const double *r, double *z) {
+    const int nc = h->nc;
+    double *w = h->wc, *y = h->wc + nc;
+#pragma omp parallel for schedule(static)
+    for (int I = 0; I < h->nagg; I++) {
+        double s[6] = {0, 0, 0, 0, 0, 0};
+        for (int t = h->astart[I]; t < h->astart[I + 1]; t++) {
+            const int i = h->alist[t];
+            const double *p = h->arho + 3 * (size_t)i;
+            double v[3];
+            for (int d = 0; d < 3; d++) v[d] = h->fixed[3 * i + d] ? 0 : r[3 * i + d];
+            s[0] += v[0];
+            s[1] += v[1];
+            s[2] += v[2];
+            s[3] += p[1] * v[2] - p[2] * v[1];
+            s[4] += p[2] * v[0] - p[0] * v[2];
+            s[5] += p[0] * v[1] - p[1] * v[0];
+        }
+        memcpy(w + 6 * I, s, sizeof s);
+    }
+    const double *L = h->Lc;
+    for (int i = 0; i < nc; i++) { /* L y = w */
+        const double *Li = L + (size_t)i * nc;
+        if (!(Li[i] > 0)) {
+            y[i] = 0;
+            continue;
+        }
+        double s = w[i];
+        for (int k = 0; k < i; k++) s -= Li[k] * y[k];
+        y[i] = s / Li[i];
+    }
+    for (int i = nc - 1; i >= 0; i--) { /* L^T w = y */
+        const double lii = L[(size_t)i * nc + i];
+        if (!(lii > 0)) {
+            w[i] = 0;
+            continue;
+        }
+        double s = y[i];
+        for (int k = i + 1; k < nc; k++) s -= L[(size_t)k * nc + i] * w[k];
+        w[i] = s / lii;
+    }
+#pragma omp parallel for schedule(static)
+    for (int i = 0; i < h->nn; i++) {
+        const double *c = w + 6 * h->agg[i], *p = h->arho + 3 * (size_t)i;
+        const double u[3] = {c[0] + c[4] * p[2] - c[5] * p[1], c[1] + c[5] * p[0] - c[3] * p[2],
+                             c[2] + c[3] * p[1] - c[4] * p[0]};
+        for (int d = 0; d < 3; d++)
+            if (!h->fixed[3 * i + d]) z[3 * i + d] += u[d];
+    }
 }
 
 /* ---- evaluation ---------------------------------------------------------------- */
@@ -727,6 +959,8 @@ static void assemble(ss_hyper *h, const double *x) {
             for (int d = 0; d < 3; d++) Mi[4 * d] = m > 0 ? 1 / m : 1;
         }
     }
+    h->coarse_ok = 0;
+    if (h->fast && h->nagg > 1) coarse_build(h);
 }
 
 static void matvec(const ss_hyper *h, const double *v, double *out) {
@@ -752,6 +986,7 @@ static void precond(const ss_hyper *h, const double *r, double *z) {
                                ? 0
                                : M[3 * d] * v[0] + M[3 * d + 1] * v[1] + M[3 * d + 2] * v[2];
     }
+    if (h->coarse_ok) coarse_apply(h, r, z);
 }
 
 /* truncated preconditioned CG on K d = -g; returns iterations */
@@ -803,13 +1038,26 @@ ss_status ss_hyper_solve(ss_hyper *h, double tol, int max_newton, ss_hyper_repor
     if (!isfinite(E)) /* a folded start: nothing to minimise from */
         return ss_error_set(err, SS_ERR_INPUT, "hyperelastic solver: the start has a folded tet");
     double g0 = sqrt(fsum(h->g, h->g, n));
+    /* fast: the tangent (and its preconditioner) of an earlier iteration,
+     * even of the previous solve, is kept while the steps it gives cut the
+     * gradient at least REUSE_RATIO-fold with a full step (a modified
+     * Newton: the load of a frame changes the tangent little); a poor step,
+     * a failed line search or no descent with an old tangent assembles it
+     * afresh at the current positions. */
+    const double REUSE_RATIO = 0.2;
+    int fresh = 0; /* the matrix is the tangent at the current x */
+    if (!h->fast) h->tangent_ok = 0;
     for (int it = 0; it < max_newton; it++) {
         double gn = sqrt(fsum(h->g, h->g, n));
         if (!(gn > 0)) {
             rr.converged = 1;
             break;
         }
-        assemble(h, h->x);
+        if (!h->tangent_ok) {
+            assemble(h, h->x);
+            h->tangent_ok = h->fast;
+            fresh = 1;
+        }
         double eta = g0 > 0 ? sqrt(gn / g0) : 0.1;
         if (eta > 0.1) eta = 0.1;
         if (eta < 1e-6) eta = 1e-6;
@@ -817,6 +1065,10 @@ ss_status ss_hyper_solve(ss_hyper *h, double tol, int max_newton, ss_hyper_repor
         rr.cg += cg(h, eta, maxcg);
         rr.newton++;
         double slope = fsum(h->g, h->d, n);
+        if (!(slope < 0) && !fresh) { /* an old tangent: assemble and retry */
+            h->tangent_ok = 0;
+            continue;
+        }
         if (!(slope < 0)) { /* not a descent direction: the gradient itself */
             precond(h, h->g, h->d);
             for (size_t i = 0; i < n; i++) h->d[i] = -h->d[i];
@@ -832,6 +1084,10 @@ ss_status ss_hyper_solve(ss_hyper *h, double tol, int max_newton, ss_hyper_repor
             alpha *= 0.5;
         }
         if (!(isfinite(En) && En <= E + 1e-4 * alpha * slope)) {
+            if (!fresh) {
+                h->tangent_ok = 0;
+                continue;
+            }
             /* no decrease within rounding: we sit at the minimum */
             rr.converged = 1;
             break;
@@ -846,10 +1102,12 @@ ss_status ss_hyper_solve(ss_hyper *h, double tol, int max_newton, ss_hyper_repor
         rr.max_step_mm = sqrt(mx);
         memcpy(h->x, h->xt, n * sizeof(double));
         E = total(h, h->x, h->g);
+        fresh = 0;
         if (rr.max_step_mm < tol * h->mean_edge) {
             rr.converged = 1;
             break;
         }
+        if (alpha < 1 || !(sqrt(fsum(h->g, h->g, n)) <= REUSE_RATIO * gn)) h->tangent_ok = 0;
     }
     double gm = 0;
     for (size_t i = 0; i < n; i++) gm = fmax(gm, fabs(h->g[i]));
