@@ -46,7 +46,8 @@ static int dispatch(int argc, char **argv);
  * loaded, before main, so the policy is set by running the command once more
  * with OMP_WAIT_POLICY=PASSIVE (same process, same pid: mpirun is unaffected).
  * A user's OMP_WAIT_POLICY or GOMP_SPINCOUNT is kept; results do not depend on
- * it (no reductions depend on the schedule). If exec fails the run goes on. */
+ * it (no reductions depend on the schedule). If exec fails the run goes on.
+ * Under a tool that hosts the process (valgrind), set OMP_WAIT_POLICY. */
 static void passive_threads(int argc, char **argv) {
     if (argc < 2 || strcmp(argv[1], "heal") || getenv("OMP_WAIT_POLICY") ||
         getenv("GOMP_SPINCOUNT"))
