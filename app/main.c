@@ -1,7 +1,9 @@
 /* The `skinsim` command: dispatches to one subcommand per file (cmd_*.c). */
+#define _POSIX_C_SOURCE 200809L
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "cli.h"
 #ifdef SKINSIM_HAVE_MPI
@@ -36,10 +38,29 @@ static void usage(FILE *f) {
 
 static int dispatch(int argc, char **argv);
 
+/* `skinsim heal` steps thousands of short parallel loops; with the OpenMP
+ * default (threads spin at each barrier for a while before they sleep) the
+ * spinning cost 30 % of the command's CPU time on a machine shared with other
+ * jobs (1 simulated day on the 160x124x159 grid, 2 threads, load ~7: 11.4 vs
+ * 8.1 CPU-s; docs/heal-model.md §8). libgomp reads its environment when it is
+ * loaded, before main, so the policy is set by running the command once more
+ * with OMP_WAIT_POLICY=PASSIVE (same process, same pid: mpirun is unaffected).
+ * A user's OMP_WAIT_POLICY or GOMP_SPINCOUNT is kept; results do not depend on
+ * it (no reductions depend on the schedule). If exec fails the run goes on.
+ * Under a tool that hosts the process (valgrind), set OMP_WAIT_POLICY. */
+static void passive_threads(int argc, char **argv) {
+    if (argc < 2 || strcmp(argv[1], "heal") || getenv("OMP_WAIT_POLICY") ||
+        getenv("GOMP_SPINCOUNT"))
+        return;
+    if (setenv("OMP_WAIT_POLICY", "PASSIVE", 0)) return;
+    execv("/proc/self/exe", argv);
+}
+
 /* Under mpirun (a build with MPI) every rank runs the same command line; only
  * rank 0 prints (the others' stdout and stderr go to /dev/null unless
  * SKINSIM_DIST_VERBOSE=1) and only heal and optics run on several ranks. */
 int main(int argc, char **argv) {
+    passive_threads(argc, argv);
 #ifdef SKINSIM_HAVE_MPI
     if (ss_dist_init(&argc, &argv)) {
         fprintf(stderr, "skinsim: error: MPI_Init failed\n");

@@ -406,6 +406,35 @@ static void test_adnexa(void **state) {
     ss_heal_params_free(p);
 }
 
+/* Large wounds do not stall (issue 25): the margin advances at a rate
+ * independent of the wound's size (Cukjati et al. 2001, Med Biol Eng Comput
+ * 39:263), so the time to 95 % closure grows about linearly with the half
+ * width. With the window held at one half once the bed matured (before
+ * issue 25) it grew 1.6x faster from 20 to 40 mm than from 10 to 20 mm
+ * (square wounds, 1 mm deep: t95 6.09, 9.88, 21.9 days; 0.76 and 1.20 day
+ * per mm); now 0.94x (6.09, 9.36, 15.5 days). */
+static void test_large_wound_front(void **state) {
+    (void)state;
+    ss_error err;
+    ss_heal_params *p = ss_heal_params_preset("clean", &err);
+    assert_non_null(p);
+    const double side[3] = {10, 20, 40};
+    double t95[3];
+    for (int k = 0; k < 3; k++) {
+        ss_heal_course c;
+        ss_heal_course_opts o = {side[k] + 8, side[k], 1.0, 0.5, 40, 0.1, 0, -1, 0, {0, 0}};
+        assert_int_equal(ss_heal_course_run(p, &o, &c, &err), SS_OK);
+        t95[k] = c.t95;
+        print_message("large wound: %g mm square t50 %.3f t95 %.3f\n", side[k], c.t50, c.t95);
+        assert_true(c.t95 > 0);
+    }
+    const double s1 = (t95[1] - t95[0]) / 5.0, s2 = (t95[2] - t95[1]) / 10.0; /* day/mm */
+    print_message("large wound: t95 per mm of half width %.3f (10-20 mm), %.3f (20-40 mm)\n", s1,
+                  s2);
+    assert_true(s2 < 1.2 * s1 && s2 > 0.7 * s1);
+    ss_heal_params_free(p);
+}
+
 /* The packing limit rho_sat holds whatever deposits the collagen: the
  * ordinary deposition (lamnrho) is not saturated, and four times its rate on
  * the scab's 10 mm wound would pack ~4.5 (issue 25: 3.33 in a 4 cm circle). */
@@ -833,6 +862,7 @@ static void test_fig4_convergence(void **state) {
 }
 
 int main(void) {
+    /* clang-format off */
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_params),
         cmocka_unit_test(test_grid_init),
@@ -845,6 +875,7 @@ int main(void) {
         cmocka_unit_test(test_remodelling),
         cmocka_unit_test(test_mature_scar),
         cmocka_unit_test(test_adnexa),
+        cmocka_unit_test(test_large_wound_front),
         cmocka_unit_test(test_packing_limit),
         cmocka_unit_test(test_keloid),
         cmocka_unit_test(test_keloid_stop),
@@ -852,5 +883,6 @@ int main(void) {
         cmocka_unit_test(test_scab_crust),
         cmocka_unit_test(test_bed_window_uneven),
     };
+    /* clang-format on */
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

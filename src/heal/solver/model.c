@@ -84,21 +84,20 @@ struct ss_heal_solver {
 
 static inline float pos(float v) { return v > 0.0f ? v : 0.0f; }
 
-/* The seed's epithelial window Q(u3) (§4.1.6): rising to 1 at gamma1, then
- * falling; it is held at its value at u3 = (1 + gamma1)/2 (one half) above
- * that. The seed's falling branch reaches zero at the healthy density u3 = 1,
- * which a bed compacted by wound contraction passes (the mechanics'
- * convection concentrates the capillaries) and then only leaves by the slow
- * logistic decay, so the epithelium stopped for good short of closure; the
- * new epidermis keeps migrating over a fully vascularised bed, as it does
- * over healthy granulation tissue. Runs without mechanics close before the
- * bed passes (1 + gamma1)/2 (docs/heal-model.md, docs/mech.md). */
-static inline float qwin(float u3, float g1, float ig1, float ig2) {
-    const float hold = 0.5f * (1.0f + g1);
-    if (u3 > hold) u3 = hold;
-    const float qa = u3 * ig1, qb = (1.0f - u3) * ig2;
-    return pos(u3 < g1 ? qa : qb);
-}
+/* The seed's epithelial window Q(u3) (§4.1.6), rising to 1 at gamma1, and
+ * held at 1 above it. The seed's falling branch (1 - u3)/(1 - gamma1) reaches
+ * zero at the healthy density u3 = 1: a bed compacted by wound contraction
+ * passes it (the mechanics' convection concentrates the capillaries), and the
+ * epithelium stopped for good short of closure; held at one half above
+ * (1 + gamma1)/2, as before issue 25, it still stalled large wounds, whose
+ * centre the front reaches only once the bed has matured (t95 grew 0.70
+ * day/mm of radius from 1 to 2 cm, 1.17 from 2 to 4 cm). The margin of a
+ * wound advances at a rate independent of its size (Cukjati et al. 2001,
+ * Med Biol Eng Comput 39:263, 300 wounds: the advance of the margin towards
+ * the centre per day, unlike the area healed per day), and the new
+ * epidermis migrates over a fully vascularised bed as over healthy
+ * granulation tissue: 0.63 and 0.61 day/mm now (docs/heal-model.md [D3]). */
+static inline float qwin(float u3, float g1, float ig1) { return u3 < g1 ? pos(u3 * ig1) : 1.0f; }
 
 /* One row of the reaction. `deep` (a constant at each call, so the compiler
  * emits two loops): no cell of the row is a surface cell or inside the scab
@@ -126,7 +125,7 @@ react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep, const i
     _Static_assert(SS_HEAL_OXYGEN == 0 && SS_HEAL_PLASMA == 7, "field order");
     const float Rs = m->scab ? m->Rs : 0.0f;
     const float pmin = (float)SS_HEAL_P_MIN;
-    const float g1 = m->gamma1, ig1 = 1.0f / m->gamma1, ig2 = 1.0f / (1.0f - m->gamma1);
+    const float g1 = m->gamma1, ig1 = 1.0f / m->gamma1;
     const float ppos = pos(m->lampp), pneg = pos(-m->lampp);
     const float dyn = m->static_region ? 0.0f : 1.0f;
     const float ibeta = 1.0f / m->beta2;
@@ -186,7 +185,7 @@ react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep, const i
          * intact epidermis holds e = 1 at the margin, the face of its cell,
          * half a voxel nearer than its centre: KF (1 - e) adds the other
          * half of such a face's conductance [D8] */
-        const float me = deep ? 0.0f : surf * pos(1.0f - kscab * s) * qwin(BED[i], g1, ig1, ig2);
+        const float me = deep ? 0.0f : surf * pos(1.0f - kscab * s) * qwin(BED[i], g1, ig1);
         p6[i] = deep ? 0.0f : me * (lamge * e + KF[i]);
         l6[i] = deep ? 0.0f : surf * lamee + me * KF[i];
         /* 4.1.7 scar, restricted to omega:

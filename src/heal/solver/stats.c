@@ -129,27 +129,87 @@ static void add_column(ss_heal_stats_acc *a, int initial, int region, float smax
     }
 }
 
+/* Exact sums of many floats in exponent buckets: bucket[E] adds the signed
+ * 24-bit mantissas of the terms with biased exponent E (E = 0: subnormals,
+ * weighed as E = 1), at most 2^30 terms between folds (< 2^54 per bucket).
+ * Folding a bucket into the limbs adds the same integer the terms would have
+ * added one by one, so the normalised limbs, and every figure, are the same
+ * as with limbs_add; a term costs a load, a mask and an add (the per-row
+ * statistics of issue 25: about 3x cheaper than limbs_add on the fields). */
+typedef struct {
+    int64_t b[SS_HEAL_NFIELDS][256];
+    int64_t nonfinite, adds;
+} bucket_sums;
+
+static void limbs_add_u64(int64_t *l, int pos, uint64_t x, int neg) {
+    /* x 2^(pos - LIMB_BIAS) into the limbs: x split in 32-bit halves, each
+     * shifted by pos % 32 (< 2^64) into the limbs it spans */
+    const int sh = pos % 32;
+    const uint64_t part[2] = {x & 0xffffffffu, x >> 32};
+    for (int h = 0; h < 2; h++) {
+        const uint64_t t = part[h] << sh;
+        int64_t *q = l + pos / 32 + h;
+        const int64_t lo = (int64_t)(t & 0xffffffffu), hi = (int64_t)(t >> 32);
+        if (neg) {
+            q[0] -= lo;
+            q[1] -= hi;
+        } else {
+            q[0] += lo;
+            q[1] += hi;
+        }
+    }
+}
+
+static void buckets_fold(ss_heal_stats_acc *a, bucket_sums *bs) {
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++) {
+        for (int ex = 0; ex < 255; ex++) {
+            const int64_t v = bs->b[f][ex];
+            if (!v) continue;
+            const int pos = (ex ? ex : 1) - 150 + LIMB_BIAS;
+            limbs_add_u64(a->sum[f], pos, v < 0 ? (uint64_t)0 - (uint64_t)v : (uint64_t)v, v < 0);
+            bs->b[f][ex] = 0;
+        }
+        limbs_normalise(a->sum[f]);
+    }
+    a->n_nonfinite += bs->nonfinite;
+    bs->nonfinite = 0;
+    bs->adds = 0;
+}
+
+static inline void bucket_add(bucket_sums *bs, int f, float v) {
+    uint32_t b;
+    memcpy(&b, &v, sizeof b);
+    const uint32_t ex = (b >> 23) & 0xffu, mant = b & 0x7fffffu;
+    const int64_t M = (int64_t)(ex ? mant | 0x800000u : mant), neg = -(int64_t)(b >> 31);
+    bs->nonfinite += ex == 0xffu; /* counted, and its bucket 255 never folded */
+    bs->b[f][ex] += (M ^ neg) - neg;
+}
+
 /* The tissue cells of columns [x0, x1) x [y0, y1), plane by plane in memory
  * order (the sums are exact, so the order is free; a column-by-column walk
  * strided through every plane), and each column's elevation, top down in
  * float into elev (row-major over the range) as ss_heal_elevation_scan. */
 static void add_planes(ss_heal_stats_acc *a, const ss_heal_grid *g, int x0, int x1, int y0, int y1,
-                       float *elev) {
+                       float *elev, bucket_sums *bs) {
     const float k = elev_k(g), *rho = g->field[SS_HEAL_SCAR];
     const int w = x1 - x0;
+    memset(bs, 0, sizeof *bs);
     for (int z = g->nz - 1; z >= 0; z--)
         for (int y = y0; y < y1; y++) {
             const size_t r = ss_heal_idx(g, 0, y, z);
             float *ev = elev + (size_t)(y - y0) * (size_t)w;
+            if (bs->adds > ADDS_MAX - g->nx) buckets_fold(a, bs);
             for (int x = x0; x < x1; x++) {
                 const size_t c = r + (size_t)x;
                 if (!is_tissue(g->cell[c])) continue;
                 a->n_tissue++;
-                for (int f = 0; f < SS_HEAL_NFIELDS; f++) limbs_add(a, f, g->field[f][c]);
+                bs->adds++;
+                for (int f = 0; f < SS_HEAL_NFIELDS; f++) bucket_add(bs, f, g->field[f][c]);
                 if (rho[c] > a->scar_max) a->scar_max = rho[c];
                 ev[x - x0] += ss_heal_elevation_term(rho[c], g->cell[c], k);
             }
         }
+    buckets_fold(a, bs);
 }
 
 void ss_heal_stats_acc_add(ss_heal_stats_acc *a, const ss_heal_grid *g, int x0, int x1, int y0,
@@ -162,11 +222,15 @@ void ss_heal_stats_acc_add(ss_heal_stats_acc *a, const ss_heal_grid *g, int x0, 
     if (y1 > g->ny) y1 = g->ny;
     if (x1 <= x0 || y1 <= y0) return;
     float *elev = calloc((size_t)(x1 - x0) * (size_t)(y1 - y0), sizeof *elev);
-    if (!elev) { /* no memory: a NaN figure rather than a wrong one */
+    bucket_sums *bs = malloc(sizeof *bs);
+    if (!elev || !bs) { /* no memory: a NaN figure rather than a wrong one */
         a->n_nonfinite++;
+        free(elev);
+        free(bs);
         return;
     }
-    add_planes(a, g, x0, x1, y0, y1, elev);
+    add_planes(a, g, x0, x1, y0, y1, elev, bs);
+    free(bs);
     for (int y = y0; y < y1; y++) {
         for (int x = x0; x < x1; x++) {
             /* columns: the epithelium is a sheet on the tissue surface, so a
