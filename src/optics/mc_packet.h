@@ -1,0 +1,207 @@
+/* The vector half of the packet path of src/optics/mc.c (seed 003 §4.4; issue
+ * 28): PK_W = 4 photons advanced together in structure-of-arrays lanes, one
+ * hop-drop-spin event per lane per step, without branches (masks and blends).
+ * Boundary crossings, roulette, launches and tallies that scatter into arrays
+ * run per lane in mc.c's scalar helpers. Included twice by mc.c: once under
+ * `#pragma GCC target("avx2")` and once for the x86-64 baseline (SSE2; GCC
+ * splits each 4-wide operation in two), with PK_SUFFIX naming the copy. Both
+ * copies perform the same IEEE operations in the same order (no FMA
+ * contraction: the avx2 target has no fma, and mc.c is built with
+ * -ffp-contract=off), so they give bit-identical results.
+ *
+ * Needs from mc.c: pk_vd / pk_vl / pk_vu (4-lane double, int64, uint64
+ * vectors), pk_state, the per-lane helpers pk_boundary, pk_roulette,
+ * pk_fill, pk_absorb_mcml, pk_phase_fix and PK_SEL. */
+
+#define PK_CAT2(a, b) a##b
+#define PK_CAT(a, b) PK_CAT2(a, b)
+#define PK(name) PK_CAT(name, PK_SUFFIX)
+
+static inline pk_vd PK(pk_sqrt)(pk_vd a) {
+#if defined(__AVX__)
+    return (pk_vd)_mm256_sqrt_pd((__m256d)a);
+#elif defined(__SSE2__)
+    __m128d h[2];
+    memcpy(h, &a, sizeof h);
+    h[0] = _mm_sqrt_pd(h[0]);
+    h[1] = _mm_sqrt_pd(h[1]);
+    memcpy(&a, h, sizeof h);
+    return a;
+#else
+    for (int k = 0; k < PK_W; k++) a[k] = sqrt(a[k]);
+    return a;
+#endif
+}
+
+static inline pk_vu PK(pk_rotl)(pk_vu x, int k) { return (x << k) | (x >> (64 - k)); }
+
+/* xoroshiro128++ on every lane (the scalar prng_next, lane-wise). */
+static inline pk_vu PK(pk_next)(pk_state *P) {
+    const pk_vu s0 = P->s0;
+    pk_vu s1 = P->s1;
+    const pk_vu out = PK(pk_rotl)(s0 + s1, 17) + s0;
+    s1 ^= s0;
+    P->s0 = PK(pk_rotl)(s0, 49) ^ s1 ^ (s1 << 21);
+    P->s1 = PK(pk_rotl)(s1, 28);
+    return out;
+}
+
+/* Integer k < 2^52 (as uint64 lanes) to double, exactly: the bits of 2^52 + k
+ * minus 2^52 (there is no int64 -> double vector conversion before AVX-512). */
+static inline pk_vd PK(pk_u2d)(pk_vu k, double off) {
+    return (pk_vd)(k | 0x4330000000000000ull) - (4503599627370496.0 + off);
+}
+
+/* Natural logarithm of positive normal doubles: the reduction and the
+ * polynomial of fdlibm's e_log.c (Sun Microsystems 1993; log(1+f) = f - hfsq
+ * + s (hfsq + R(s^2)), s = f / (2 + f), R a degree-14 even minimax
+ * polynomial, error below 1 ulp) written lane-wise without branches. */
+static inline pk_vd PK(pk_log)(pk_vd x) {
+    const double ln2_hi = 6.93147180369123816490e-01, ln2_lo = 1.90821492927058770002e-10;
+    const double Lg1 = 6.666666666666735130e-01, Lg2 = 3.999999999940941908e-01,
+                 Lg3 = 2.857142874366239149e-01, Lg4 = 2.222219843214978396e-01,
+                 Lg5 = 1.818357216161805012e-01, Lg6 = 1.531383769920937332e-01,
+                 Lg7 = 1.479819860511658591e-01;
+    pk_vu b = (pk_vu)x;
+    pk_vu e = b >> 52;
+    pk_vd m = (pk_vd)((b & 0x000fffffffffffffull) | 0x3ff0000000000000ull); /* [1, 2) */
+    pk_vl big = m > 1.41421356237309504880;
+    m = PK_SEL(big, m * 0.5, m);
+    e += (pk_vu)big & 1u;
+    pk_vd k = PK(pk_u2d)(e, 1023.0);
+    pk_vd f = m - 1.0;
+    pk_vd s = f / (2.0 + f), z = s * s, w = z * z;
+    pk_vd t1 = w * (Lg2 + w * (Lg4 + w * Lg6));
+    pk_vd t2 = z * (Lg1 + w * (Lg3 + w * (Lg5 + w * Lg7)));
+    pk_vd R = t2 + t1, hfsq = 0.5 * f * f;
+    return k * ln2_hi - ((hfsq - (s * (hfsq + R) + k * ln2_lo)) - f);
+}
+
+/* Uniform azimuth (cos, sin) of 2 pi u from the low 32 bits of each lane:
+ * fast_azimuth of mc.c lane-wise (same quadrant split, same series). */
+static inline void PK(pk_azimuth)(pk_vu bits, pk_vd *cp, pk_vd *sp) {
+    pk_vu q = (bits >> 30) & 3u;
+    pk_vd f = PK(pk_u2d)(bits & 0x3fffffffu, -0.5) * (1.0 / 1073741824.0);
+    pk_vd a = (f - 0.5) * (M_PI / 2), a2 = a * a;
+    pk_vd ca =
+        1.0 + a2 * (-1.0 / 2 +
+                    a2 * (1.0 / 24 +
+                          a2 * (-1.0 / 720 +
+                                a2 * (1.0 / 40320 + a2 * (-1.0 / 3628800 +
+                                                          a2 * (1.0 / 479001600 +
+                                                                a2 * (-1.0 / 87178291200.0)))))));
+    pk_vd sa =
+        a * (1.0 +
+             a2 * (-1.0 / 6 +
+                   a2 * (1.0 / 120 +
+                         a2 * (-1.0 / 5040 + a2 * (1.0 / 362880 +
+                                                   a2 * (-1.0 / 39916800 +
+                                                         a2 * (1.0 / 6227020800.0 +
+                                                               a2 * (-1.0 / 1307674368000.0))))))));
+    const double h = 0.70710678118654752440;
+    pk_vd c = h * (ca - sa), s = h * (ca + sa);
+    /* quadrants 1 and 3: (c, s) -> (-s, c) then 2 and 3 negate both */
+    pk_vl odd = (pk_vl)(0u - (q & 1u));
+    pk_vd c1 = PK_SEL(odd, -s, c), s1 = PK_SEL(odd, c, s);
+    pk_vu neg = (q & 2u) << 62;
+    *cp = (pk_vd)((pk_vu)c1 ^ neg);
+    *sp = (pk_vd)((pk_vu)s1 ^ neg);
+}
+
+static inline int PK(pk_bits)(pk_vl m) {
+    int r = 0;
+    for (int k = 0; k < PK_W; k++) r |= (m[k] != 0) << k;
+    return r;
+}
+
+/* Runs photons [lo, hi) of one block into a (and pb). */
+static void PK(pk_run_block)(const mc_ctx *c, uint64_t lo, uint64_t hi, mc_acc *a, path_buf *pb) {
+    pk_state P;
+    pk_state_init(&P);
+    uint64_t next = lo;
+    for (int k = 0; k < PK_W; k++) pk_fill(c, a, pb, &P, k, &next, hi);
+    const int track = c->paths, hdist = c->path_dist, mcml = c->spec.mcml;
+    const pk_vd zero = {0, 0, 0, 0};
+    while (PK(pk_bits)(P.live)) {
+        /* ---- hop: a fresh optical depth where the last one was spent ---- */
+        pk_vu r1 = PK(pk_next)(&P), r2 = PK(pk_next)(&P);
+        pk_vd u1 = (pk_vd)((r1 >> 12) | 0x3ff0000000000000ull) - (1.0 - 0x1p-53); /* (0,1) */
+        P.tau = PK_SEL(P.need, -PK(pk_log)(u1), P.tau);
+        pk_vd uz = P.uz;
+        pk_vl up = uz > 0.0, flat = uz == 0.0;
+        pk_vd db = (PK_SEL(up, P.lz1, P.lz0) - P.z) / uz;
+        db = PK_SEL(flat, zero + HUGE_VAL, db);
+        pk_vl inside = P.tau < db * P.lmut; /* interaction before the boundary */
+        pk_vl hit = ~inside & P.live;
+        pk_vl act = inside & P.live;
+        pk_vd s = PK_SEL(inside, P.tau * P.linv, db);
+        s = PK_SEL(P.live, s, zero);
+        P.x += s * P.ux;
+        P.y += s * P.uy;
+        P.z += s * uz;
+        if (track) P.seg += s;
+        if (hdist) P.hp += s * PK(pk_sqrt)(P.ux * P.ux + P.uy * P.uy);
+        pk_vd tr = P.tau - db * P.lmut;
+        tr = PK_SEL(tr < 0.0, zero, tr);
+        P.tau = PK_SEL(inside, P.tau, tr);
+        P.need = inside;
+
+        /* ---- drop ---- */
+        pk_vd dw = PK_SEL(act, P.w * P.labs, zero);
+        P.w -= dw;
+        P.absacc += dw;
+        if (mcml) {
+            pk_vd rq = PK(pk_sqrt)(P.x * P.x + P.y * P.y) * c->inv_dr, zq = P.z * c->inv_dz;
+            int am = PK(pk_bits)(act);
+            for (int k = 0; k < PK_W; k++)
+                if (am >> k & 1) pk_absorb_mcml(c, a, rq[k], zq[k], dw[k]);
+        }
+
+        /* ---- spin: Henyey-Greenstein (tabulated phase functions per lane) ---- */
+        pk_vd u = PK(pk_u2d)(r2 >> 32, -0.5) * (1.0 / 4294967296.0);
+        pk_vd t = P.hgb / (P.hg1mg + P.hg2g * u);
+        pk_vd cost = P.hgc * (P.hga - t * t);
+        cost = PK_SEL(cost < -1.0, zero - 1.0, cost);
+        cost = PK_SEL(cost > 1.0, zero + 1.0, cost);
+        cost = PK_SEL(P.iso, 2.0 * u - 1.0, cost);
+        int tm = PK(pk_bits)(P.tab & act);
+        if (tm)
+            for (int k = 0; k < PK_W; k++)
+                if (tm >> k & 1) cost[k] = pk_phase_fix(c, P.layer[k], u[k]);
+        pk_vd sint = PK(pk_sqrt)(1.0 - cost * cost), cp, sp;
+        PK(pk_azimuth)(r2, &cp, &sp);
+        pk_vd ux = P.ux, uy = P.uy;
+        pk_vd tmp = PK(pk_sqrt)(1.0 - uz * uz), inv = 1.0 / tmp;
+        pk_vd nx = sint * (ux * uz * cp - uy * sp) * inv + ux * cost;
+        pk_vd ny = sint * (uy * uz * cp + ux * sp) * inv + uy * cost;
+        pk_vd nz = -sint * cp * tmp + uz * cost;
+        pk_vl pole = (uz > 1.0 - 1e-12) | (uz < -(1.0 - 1e-12));
+        nx = PK_SEL(pole, sint * cp, nx);
+        ny = PK_SEL(pole, sint * sp, ny);
+        nz = PK_SEL(pole, PK_SEL(uz > 0.0, cost, -cost), nz);
+        P.ux = PK_SEL(act, nx, ux);
+        P.uy = PK_SEL(act, ny, uy);
+        P.uz = PK_SEL(act, nz, uz);
+
+        /* ---- roulette, then the lanes that reached a boundary ---- */
+        int rm = PK(pk_bits)(act & (P.w < 1e-4));
+        int hm = PK(pk_bits)(hit);
+        if (rm | hm) {
+            for (int k = 0; k < PK_W; k++) {
+                int alive = 1;
+                if (rm >> k & 1)
+                    alive = pk_roulette(a, &P, k);
+                else if (hm >> k & 1)
+                    alive = pk_boundary(c, a, pb, &P, k, db[k]);
+                if (!alive) {
+                    pk_finish(a, &P, k);
+                    pk_fill(c, a, pb, &P, k, &next, hi);
+                }
+            }
+        }
+    }
+}
+
+#undef PK
+#undef PK_CAT
+#undef PK_CAT2
