@@ -802,6 +802,7 @@ done:
 typedef double pk_vd __attribute__((vector_size(32)));
 typedef int64_t pk_vl __attribute__((vector_size(32)));
 typedef uint64_t pk_vu __attribute__((vector_size(32)));
+typedef int32_t pk_vi __attribute__((vector_size(16)));
 /* lane-wise m ? a : b for a mask m of all-ones / all-zeros lanes */
 #define PK_SEL(m, a, b) ((pk_vd)(((pk_vl)(a) & (m)) | ((pk_vl)(b) & ~(m))))
 
@@ -950,14 +951,6 @@ static double pk_phase_fix(const mc_ctx *c, int l, double u) {
     return L->phase_cos[k] + f * (L->phase_cos[k + 1] - L->phase_cos[k]);
 }
 
-/* A(r, z) bin of mcml_absorb from r / dr and z / dz. */
-static inline void pk_absorb_mcml(const mc_ctx *c, mc_acc *a, double rq, double zq, double dw) {
-    int iz = zq < (double)c->spec.nz ? (int)zq : c->spec.nz - 1;
-    if (iz < 0) iz = 0;
-    int ir = rq < (double)c->spec.rad_n ? (int)rq : c->spec.rad_n - 1;
-    a->a_rz[(size_t)ir * c->spec.nz + iz] += dw;
-}
-
 static void pk_path_record(const mc_ctx *c, const pk_state *P, int k, path_buf *pb, int up,
                            int brdf, int rad) {
     path_rec pr;
@@ -971,17 +964,31 @@ static void pk_path_record(const mc_ctx *c, const pk_state *P, int k, path_buf *
     path_push(pb, &pr);
 }
 
-/* Lane k has moved by db to its layer's boundary (tau already reduced): the
+/* Lane k reaches its layer's boundary before its optical depth is spent: the
  * boundary part of run_photon's hop, weighted mode. 0 if the photon ends. */
-static int pk_boundary(const mc_ctx *c, mc_acc *a, path_buf *pb, pk_state *P, int k, double db) {
+static int pk_boundary(const mc_ctx *c, mc_acc *a, path_buf *pb, pk_state *P, int k) {
     const int layer = P->layer[k];
     const mc_layer *L = &c->L[layer];
     const double w = P->w[k];
+    double uz0 = P->uz[k], db;
+    if (uz0 > 0.0)
+        db = (L->z1 - P->z[k]) / uz0;
+    else if (uz0 < 0.0)
+        db = (L->z0 - P->z[k]) / uz0;
+    else
+        db = HUGE_VAL;
     pk_flush(a, P, k);
     if (db == HUGE_VAL) { /* clear layer, horizontal: cannot move */
         a->abs_layer[layer] += w;
         return 0;
     }
+    /* move to the boundary, spending db mut of the optical depth */
+    P->x[k] += db * P->ux[k];
+    P->y[k] += db * P->uy[k];
+    if (c->paths) P->plen[k][layer] += db;
+    if (c->path_dist) P->hp[k] += db * sqrt(P->ux[k] * P->ux[k] + P->uy[k] * P->uy[k]);
+    double tr = P->tau[k] - db * L->mut;
+    P->tau[k] = tr < 0.0 ? 0.0 : tr;
     prng r;
     pk_get_rng(P, k, &r);
     double ux = P->ux[k], uy = P->uy[k], uz = P->uz[k];

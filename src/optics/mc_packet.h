@@ -11,7 +11,7 @@
  *
  * Needs from mc.c: pk_vd / pk_vl / pk_vu (4-lane double, int64, uint64
  * vectors), pk_state, the per-lane helpers pk_boundary, pk_roulette,
- * pk_fill, pk_absorb_mcml, pk_phase_fix and PK_SEL. */
+ * pk_fill, pk_phase_fix and PK_SEL. */
 
 #define PK_CAT2(a, b) a##b
 #define PK_CAT(a, b) PK_CAT2(a, b)
@@ -127,34 +127,38 @@ static void PK(pk_run_block)(const mc_ctx *c, uint64_t lo, uint64_t hi, mc_acc *
         pk_vu r1 = PK(pk_next)(&P), r2 = PK(pk_next)(&P);
         pk_vd u1 = (pk_vd)((r1 >> 12) | 0x3ff0000000000000ull) - (1.0 - 0x1p-53); /* (0,1) */
         P.tau = PK_SEL(P.need, -PK(pk_log)(u1), P.tau);
+        /* interaction before the boundary: s |uz| < |z_b - z| with s = tau / mut
+         * (the scalar test tau < mut (z_b - z) / uz without its division);
+         * a clear layer (mut = 0) has no interaction */
         pk_vd uz = P.uz;
-        pk_vl up = uz > 0.0, flat = uz == 0.0;
-        pk_vd db = (PK_SEL(up, P.lz1, P.lz0) - P.z) / uz;
-        db = PK_SEL(flat, zero + HUGE_VAL, db);
-        pk_vl inside = P.tau < db * P.lmut; /* interaction before the boundary */
+        pk_vl up = uz > 0.0;
+        pk_vd s = P.tau * P.linv;
+        pk_vd gap = PK_SEL(up, P.lz1 - P.z, P.z - P.lz0), auz = PK_SEL(up, uz, -uz);
+        pk_vl inside = ((s * auz < gap) | (auz == 0.0)) & (P.lmut > 0.0);
         pk_vl hit = ~inside & P.live;
         pk_vl act = inside & P.live;
-        pk_vd s = PK_SEL(inside, P.tau * P.linv, db);
-        s = PK_SEL(P.live, s, zero);
+        s = PK_SEL(act, s, zero);
         P.x += s * P.ux;
         P.y += s * P.uy;
         P.z += s * uz;
         if (track) P.seg += s;
         if (hdist) P.hp += s * PK(pk_sqrt)(P.ux * P.ux + P.uy * P.uy);
-        pk_vd tr = P.tau - db * P.lmut;
-        tr = PK_SEL(tr < 0.0, zero, tr);
-        P.tau = PK_SEL(inside, P.tau, tr);
-        P.need = inside;
+        P.need = act;
 
         /* ---- drop ---- */
         pk_vd dw = PK_SEL(act, P.w * P.labs, zero);
         P.w -= dw;
         P.absacc += dw;
-        if (mcml) {
+        if (mcml) { /* A(r, z): the bins of mcml_absorb, lane-wise; the adds per lane */
+            const double nzd = c->spec.nz, nrd = c->spec.rad_n;
             pk_vd rq = PK(pk_sqrt)(P.x * P.x + P.y * P.y) * c->inv_dr, zq = P.z * c->inv_dz;
+            zq = PK_SEL(zq < nzd, zq, zero + (nzd - 1.0));
+            zq = PK_SEL(zq < 0.0, zero, zq);
+            rq = PK_SEL(rq < nrd, rq, zero + (nrd - 1.0));
+            pk_vi iz = __builtin_convertvector(zq, pk_vi), ir = __builtin_convertvector(rq, pk_vi);
             int am = PK(pk_bits)(act);
             for (int k = 0; k < PK_W; k++)
-                if (am >> k & 1) pk_absorb_mcml(c, a, rq[k], zq[k], dw[k]);
+                if (am >> k & 1) a->a_rz[(size_t)ir[k] * c->spec.nz + (size_t)iz[k]] += dw[k];
         }
 
         /* ---- spin: Henyey-Greenstein (tabulated phase functions per lane) ---- */
@@ -192,7 +196,7 @@ static void PK(pk_run_block)(const mc_ctx *c, uint64_t lo, uint64_t hi, mc_acc *
                 if (rm >> k & 1)
                     alive = pk_roulette(a, &P, k);
                 else if (hm >> k & 1)
-                    alive = pk_boundary(c, a, pb, &P, k, db[k]);
+                    alive = pk_boundary(c, a, pb, &P, k);
                 if (!alive) {
                     pk_finish(a, &P, k);
                     pk_fill(c, a, pb, &P, k, &next, hi);
