@@ -153,6 +153,7 @@ typedef struct ss_mci_run {
     double dz_cm, dr_cm;
     int nz, nr, na;
     ss_optics_slab slab;
+    int kernel; /* SS_MC_KERNEL_*: not in the file (the parser sets AUTO) */
 } ss_mci_run;
 typedef struct ss_mci_file {
     int nruns;
