@@ -108,10 +108,19 @@ static inline void PK(pk_azimuth)(pk_vu bits, pk_vd *cp, pk_vd *sp) {
     *sp = (pk_vd)((pk_vu)s1 ^ neg);
 }
 
+/* Lane k's mask (all ones or zero) as bit k. */
 static inline int PK(pk_bits)(pk_vl m) {
+#if defined(__AVX__)
+    return _mm256_movemask_pd((__m256d)m);
+#elif defined(__SSE2__)
+    __m128d h[2];
+    memcpy(h, &m, sizeof h);
+    return _mm_movemask_pd(h[0]) | _mm_movemask_pd(h[1]) << 2;
+#else
     int r = 0;
     for (int k = 0; k < PK_W; k++) r |= (m[k] != 0) << k;
     return r;
+#endif
 }
 
 /* Runs photons [lo, hi) of one block into a (and pb). */
