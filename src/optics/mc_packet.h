@@ -158,16 +158,15 @@ static void PK(pk_run_block)(const mc_ctx *c, uint64_t lo, uint64_t hi, mc_acc *
         pk_vd dw = PK_SEL(act, P.w * P.labs, zero);
         P.w -= dw;
         P.absacc += dw;
+        pk_vi iz = {0}, ir = {0};
         if (mcml) { /* A(r, z): the bins of mcml_absorb, lane-wise; the adds per lane */
             const double nzd = c->spec.nz, nrd = c->spec.rad_n;
             pk_vd rq = PK(pk_sqrt)(P.x * P.x + P.y * P.y) * c->inv_dr, zq = P.z * c->inv_dz;
             zq = PK_SEL(zq < nzd, zq, zero + (nzd - 1.0));
             zq = PK_SEL(zq < 0.0, zero, zq);
             rq = PK_SEL(rq < nrd, rq, zero + (nrd - 1.0));
-            pk_vi iz = __builtin_convertvector(zq, pk_vi), ir = __builtin_convertvector(rq, pk_vi);
-            int am = PK(pk_bits)(act);
-            for (int k = 0; k < PK_W; k++)
-                if (am >> k & 1) a->a_rz[(size_t)ir[k] * c->spec.nz + (size_t)iz[k]] += dw[k];
+            iz = __builtin_convertvector(zq, pk_vi);
+            ir = __builtin_convertvector(rq, pk_vi);
         }
 
         /* ---- spin: Henyey-Greenstein (tabulated phase functions per lane) ---- */
@@ -195,6 +194,12 @@ static void PK(pk_run_block)(const mc_ctx *c, uint64_t lo, uint64_t hi, mc_acc *
         P.ux = PK_SEL(act, nx, ux);
         P.uy = PK_SEL(act, ny, uy);
         P.uz = PK_SEL(act, nz, uz);
+
+        if (mcml) {
+            int am = PK(pk_bits)(act);
+            for (int k = 0; k < PK_W; k++)
+                if (am >> k & 1) a->a_rz[(size_t)ir[k] * c->spec.nz + (size_t)iz[k]] += dw[k];
+        }
 
         /* ---- roulette, then the lanes that reached a boundary ---- */
         int rm = PK(pk_bits)(act & (P.w < 1e-4));
