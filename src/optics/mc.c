@@ -807,7 +807,7 @@ typedef int32_t pk_vi __attribute__((vector_size(16)));
 #define PK_SEL(m, a, b) ((pk_vd)(((pk_vl)(a) & (m)) | ((pk_vl)(b) & ~(m))))
 
 typedef struct pk_state {
-    pk_vd x, y, z, ux, uy, uz, w, tau, absacc, seg, hp;
+    pk_vd x, y, z, ux, uy, uz, w, tau, tnext, absacc, seg, hp;
     pk_vd lz0, lz1, lmut, linv, labs, hga, hgb, hgc, hg1mg, hg2g; /* the lane's layer */
     pk_vl iso, tab, live, need;
     pk_vu s0, s1;
@@ -815,6 +815,32 @@ typedef struct pk_state {
     double dsum[PK_W], tsum[PK_W];
     double plen[PK_W][SS_OPTICS_MAX_LAYERS];
 } pk_state;
+
+/* -ln of u in (0, 1): the operations of mc_packet.h's pk_log on one lane, in
+ * the same order, so a lane gets the same bits from either. */
+static double pk_log1(double x) {
+    const double ln2_hi = 6.93147180369123816490e-01, ln2_lo = 1.90821492927058770002e-10;
+    const double Lg1 = 6.666666666666735130e-01, Lg2 = 3.999999999940941908e-01,
+                 Lg3 = 2.857142874366239149e-01, Lg4 = 2.222219843214978396e-01,
+                 Lg5 = 1.818357216161805012e-01, Lg6 = 1.531383769920937332e-01,
+                 Lg7 = 1.479819860511658591e-01;
+    uint64_t b;
+    memcpy(&b, &x, sizeof b);
+    uint64_t e = b >> 52, mb = (b & 0x000fffffffffffffull) | 0x3ff0000000000000ull;
+    double m;
+    memcpy(&m, &mb, sizeof m);
+    if (m > 1.41421356237309504880) {
+        m = m * 0.5;
+        e += 1;
+    }
+    double k = (double)(int64_t)e - 1023.0;
+    double f = m - 1.0;
+    double s = f / (2.0 + f), z = s * s, w = z * z;
+    double t1 = w * (Lg2 + w * (Lg4 + w * Lg6));
+    double t2 = z * (Lg1 + w * (Lg3 + w * (Lg5 + w * Lg7)));
+    double R = t2 + t1, hfsq = 0.5 * f * f;
+    return k * ln2_hi - ((hfsq - (s * (hfsq + R) + k * ln2_lo)) - f);
+}
 
 static void pk_state_init(pk_state *P) {
     memset(P, 0, sizeof *P);
@@ -898,6 +924,11 @@ static int pk_launch(const mc_ctx *c, mc_acc *a, pk_state *P, int k, uint64_t id
         d[1] = o[1];
         d[2] = o[2];
     }
+    /* the first optical depth, as the vector step draws the later ones */
+    uint64_t ub = prng_next(&r) >> 12 | 0x3ff0000000000000ull;
+    double u;
+    memcpy(&u, &ub, sizeof u);
+    P->tnext[k] = -pk_log1(u - (1.0 - 0x1p-53));
     pk_put_rng(P, k, &r);
     P->x[k] = P->y[k] = P->z[k] = 0.0;
     P->ux[k] = d[0];

@@ -55,7 +55,8 @@ static inline pk_vd PK(pk_u2d)(pk_vu k, double off) {
 /* Natural logarithm of positive normal doubles: the reduction and the
  * polynomial of fdlibm's e_log.c (Sun Microsystems 1993; log(1+f) = f - hfsq
  * + s (hfsq + R(s^2)), s = f / (2 + f), R a degree-14 even minimax
- * polynomial, error below 1 ulp) written lane-wise without branches. */
+ * polynomial, error below 1 ulp) written lane-wise without branches; mc.c's
+ * pk_log1 is the same sequence of operations on one double. */
 static inline pk_vd PK(pk_log)(pk_vd x) {
     const double ln2_hi = 6.93147180369123816490e-01, ln2_lo = 1.90821492927058770002e-10;
     const double Lg1 = 6.666666666666735130e-01, Lg2 = 3.999999999940941908e-01,
@@ -135,7 +136,11 @@ static void PK(pk_run_block)(const mc_ctx *c, uint64_t lo, uint64_t hi, mc_acc *
         /* ---- hop: a fresh optical depth where the last one was spent ---- */
         pk_vu r1 = PK(pk_next)(&P), r2 = PK(pk_next)(&P);
         pk_vd u1 = (pk_vd)((r1 >> 12) | 0x3ff0000000000000ull) - (1.0 - 0x1p-53); /* (0,1) */
-        P.tau = PK_SEL(P.need, -PK(pk_log)(u1), P.tau);
+        /* each lane keeps its next optical depth ready (drawn a step ahead, or
+         * at launch), so the logarithm's latency is off the critical path */
+        pk_vd tn = -PK(pk_log)(u1);
+        P.tau = PK_SEL(P.need, P.tnext, P.tau);
+        P.tnext = PK_SEL(P.need, tn, P.tnext);
         /* interaction before the boundary: s |uz| < |z_b - z| with s = tau / mut
          * (the scalar test tau < mut (z_b - z) / uz without its division);
          * a clear layer (mut = 0) has no interaction */
