@@ -150,7 +150,7 @@ static void test_simulate_van_de_hulst(void **state) {
     assert_true(fabs(sp + rd + a + tt - 1.0) < 0.01);
     double *al = array(mco, "A_l #", 1);
     assert_true(fabs(al[0] - a) <= 5e-4 * a); /* 4 significant digits, as MCML */
-    { /* A_l in MCML's %12.4G, e.g. "      0.2417" */
+    {                                         /* A_l in MCML's %12.4G, e.g. "      0.2417" */
         const char *l = strchr(strstr(mco, "A_l #"), '\n') + 1;
         char want[32];
         snprintf(want, sizeof want, "%12.4G\n", al[0]);
