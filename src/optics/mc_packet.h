@@ -33,6 +33,44 @@ static inline pk_vd PK(pk_sqrt)(pk_vd a) {
 #endif
 }
 
+/* Lane-wise a < b and a == b as masks (all ones / zero). Written with the
+ * target's compare instructions: GCC lowers a 4-wide double compare to
+ * per-lane branches when the target has no 256-bit compare (the baseline). */
+static inline pk_vl PK(pk_lt)(pk_vd a, pk_vd b) {
+#if defined(__AVX__)
+    return (pk_vl)_mm256_cmp_pd((__m256d)a, (__m256d)b, _CMP_LT_OQ);
+#elif defined(__SSE2__)
+    __m128d x[2], y[2];
+    memcpy(x, &a, sizeof x);
+    memcpy(y, &b, sizeof y);
+    x[0] = _mm_cmplt_pd(x[0], y[0]);
+    x[1] = _mm_cmplt_pd(x[1], y[1]);
+    pk_vl r;
+    memcpy(&r, x, sizeof r);
+    return r;
+#else
+    return a < b;
+#endif
+}
+static inline pk_vl PK(pk_eq)(pk_vd a, pk_vd b) {
+#if defined(__AVX__)
+    return (pk_vl)_mm256_cmp_pd((__m256d)a, (__m256d)b, _CMP_EQ_OQ);
+#elif defined(__SSE2__)
+    __m128d x[2], y[2];
+    memcpy(x, &a, sizeof x);
+    memcpy(y, &b, sizeof y);
+    x[0] = _mm_cmpeq_pd(x[0], y[0]);
+    x[1] = _mm_cmpeq_pd(x[1], y[1]);
+    pk_vl r;
+    memcpy(&r, x, sizeof r);
+    return r;
+#else
+    return a == b;
+#endif
+}
+#define PK_LT(a, b) PK(pk_lt)((a), (b))
+#define PK_B(x) ((pk_vd){0} + (x)) /* broadcast */
+
 static inline pk_vu PK(pk_rotl)(pk_vu x, int k) { return (x << k) | (x >> (64 - k)); }
 
 /* xoroshiro128++ on every lane (the scalar prng_next, lane-wise). */
@@ -66,7 +104,7 @@ static inline pk_vd PK(pk_log)(pk_vd x) {
     pk_vu b = (pk_vu)x;
     pk_vu e = b >> 52;
     pk_vd m = (pk_vd)((b & 0x000fffffffffffffull) | 0x3ff0000000000000ull); /* [1, 2) */
-    pk_vl big = m > 1.41421356237309504880;
+    pk_vl big = PK_LT(PK_B(1.41421356237309504880), m);
     m = PK_SEL(big, m * 0.5, m);
     e += (pk_vu)big & 1u;
     pk_vd k = PK(pk_u2d)(e, 1023.0);
@@ -145,10 +183,10 @@ static void PK(pk_run_block)(const mc_ctx *c, uint64_t lo, uint64_t hi, mc_acc *
          * (the scalar test tau < mut (z_b - z) / uz without its division);
          * a clear layer (mut = 0) has no interaction */
         pk_vd uz = P.uz;
-        pk_vl up = uz > 0.0;
+        pk_vl up = PK_LT(zero, uz);
         pk_vd s = P.tau * P.linv;
         pk_vd gap = PK_SEL(up, P.lz1 - P.z, P.z - P.lz0), auz = PK_SEL(up, uz, -uz);
-        pk_vl inside = ((s * auz < gap) | (auz == 0.0)) & (P.lmut > 0.0);
+        pk_vl inside = (PK_LT(s * auz, gap) | PK(pk_eq)(auz, zero)) & PK_LT(zero, P.lmut);
         pk_vl hit = ~inside & P.live;
         pk_vl act = inside & P.live;
         s = PK_SEL(act, s, zero);
@@ -167,9 +205,9 @@ static void PK(pk_run_block)(const mc_ctx *c, uint64_t lo, uint64_t hi, mc_acc *
         if (mcml) { /* A(r, z): the bins of mcml_absorb, lane-wise; the adds per lane */
             const double nzd = c->spec.nz, nrd = c->spec.rad_n;
             pk_vd rq = PK(pk_sqrt)(P.x * P.x + P.y * P.y) * c->inv_dr, zq = P.z * c->inv_dz;
-            zq = PK_SEL(zq < nzd, zq, zero + (nzd - 1.0));
-            zq = PK_SEL(zq < 0.0, zero, zq);
-            rq = PK_SEL(rq < nrd, rq, zero + (nrd - 1.0));
+            zq = PK_SEL(PK_LT(zq, PK_B(nzd)), zq, zero + (nzd - 1.0));
+            zq = PK_SEL(PK_LT(zq, zero), zero, zq);
+            rq = PK_SEL(PK_LT(rq, PK_B(nrd)), rq, zero + (nrd - 1.0));
             iz = __builtin_convertvector(zq, pk_vi);
             ir = __builtin_convertvector(rq, pk_vi);
         }
@@ -178,8 +216,8 @@ static void PK(pk_run_block)(const mc_ctx *c, uint64_t lo, uint64_t hi, mc_acc *
         pk_vd u = PK(pk_u2d)(r2 >> 32, -0.5) * (1.0 / 4294967296.0);
         pk_vd t = P.hgb / (P.hg1mg + P.hg2g * u);
         pk_vd cost = P.hgc * (P.hga - t * t);
-        cost = PK_SEL(cost < -1.0, zero - 1.0, cost);
-        cost = PK_SEL(cost > 1.0, zero + 1.0, cost);
+        cost = PK_SEL(PK_LT(cost, PK_B(-1.0)), zero - 1.0, cost);
+        cost = PK_SEL(PK_LT(PK_B(1.0), cost), zero + 1.0, cost);
         cost = PK_SEL(P.iso, 2.0 * u - 1.0, cost);
         int tm = PK(pk_bits)(P.tab & act);
         if (tm)
@@ -192,10 +230,10 @@ static void PK(pk_run_block)(const mc_ctx *c, uint64_t lo, uint64_t hi, mc_acc *
         pk_vd nx = sint * (ux * uz * cp - uy * sp) * inv + ux * cost;
         pk_vd ny = sint * (uy * uz * cp + ux * sp) * inv + uy * cost;
         pk_vd nz = -sint * cp * tmp + uz * cost;
-        pk_vl pole = (uz > 1.0 - 1e-12) | (uz < -(1.0 - 1e-12));
+        pk_vl pole = PK_LT(PK_B(1.0 - 1e-12), uz) | PK_LT(uz, PK_B(-(1.0 - 1e-12)));
         nx = PK_SEL(pole, sint * cp, nx);
         ny = PK_SEL(pole, sint * sp, ny);
-        nz = PK_SEL(pole, PK_SEL(uz > 0.0, cost, -cost), nz);
+        nz = PK_SEL(pole, PK_SEL(up, cost, -cost), nz);
         P.ux = PK_SEL(act, nx, ux);
         P.uy = PK_SEL(act, ny, uy);
         P.uz = PK_SEL(act, nz, uz);
@@ -207,7 +245,7 @@ static void PK(pk_run_block)(const mc_ctx *c, uint64_t lo, uint64_t hi, mc_acc *
         }
 
         /* ---- roulette, then the lanes that reached a boundary ---- */
-        int rm = PK(pk_bits)(act & (P.w < 1e-4));
+        int rm = PK(pk_bits)(act & PK_LT(P.w, PK_B(1e-4)));
         int hm = PK(pk_bits)(hit);
         if (rm | hm) {
             for (int k = 0; k < PK_W; k++) {
@@ -225,6 +263,8 @@ static void PK(pk_run_block)(const mc_ctx *c, uint64_t lo, uint64_t hi, mc_acc *
     }
 }
 
+#undef PK_LT
+#undef PK_B
 #undef PK
 #undef PK_CAT
 #undef PK_CAT2
