@@ -49,6 +49,8 @@ static const char COMMON_HELP[] =
     "  --roughness S            Trowbridge-Reitz surface roughness sigma, 0 = smooth\n"
     "                           (0.75, BioSpec)\n"
     "  --stochastic             absorb-or-scatter packets (seed §4.4) instead of weights\n"
+    "  --scalar                 trace one photon at a time instead of 4 in SIMD lanes\n"
+    "                           (for comparison; agrees within Monte Carlo error)\n"
     "  --wl-min NM --wl-max NM --wl-step NM   wavelengths, nm (380, 780, %g)\n"
     "  --quiet                  no progress output\n";
 
@@ -376,7 +378,7 @@ static int optics_brdf(int argc, char **argv) {
 /* ---- mci -------------------------------------------------------------------------- */
 static void mci_help(FILE *f) {
     fprintf(f, "usage: skinsim optics mci FILE.mci [--seed S] [--threads N] [--json]\n"
-               "                                  [--allow-outside-paths]\n\n"
+               "                                  [--allow-outside-paths] [--scalar]\n\n"
                "Runs an MCML input file unchanged (MCML 1.2 format: version, number of runs;\n"
                "per run: output name and type A, photon count, dz dr [cm], nz nr na, number of\n"
                "layers, n above, one 'n mua mus g d' line per layer [1/cm, cm], n below).\n"
@@ -389,7 +391,9 @@ static void mci_help(FILE *f) {
                "outputs appear together at the end, each whole.\n"
                "  --seed S      random seed (1)\n  --threads N   worker threads\n"
                "  --json        print a summary of each run on stdout\n"
-               "  --allow-outside-paths   let the .mci name outputs anywhere\n\n"
+               "  --allow-outside-paths   let the .mci name outputs anywhere\n"
+               "  --scalar      trace one photon at a time instead of 4 in SIMD lanes (for\n"
+               "                comparison; agrees within Monte Carlo error)\n\n"
                "Example (the .mco lands next to the .mci):\n"
                "  cp data/examples/sample.mci . && skinsim optics mci sample.mci\n");
 }
@@ -399,7 +403,7 @@ static int optics_mci(int argc, char **argv) {
     const char *file = NULL;
     uint64_t seed = 1;
     long threads = 0;
-    int json = 0, outside = 0;
+    int json = 0, outside = 0, scalar = 0;
     ss_error e;
     ss_error_clear(&e);
     for (int i = 1; i < argc; i++) {
@@ -415,6 +419,8 @@ static int optics_mci(int argc, char **argv) {
             json = 1;
         else if (!strcmp(argv[i], "--allow-outside-paths"))
             outside = 1;
+        else if (!strcmp(argv[i], "--scalar"))
+            scalar = 1;
         else if (!strcmp(argv[i], "--quiet"))
             ;
         else if (argv[i][0] == '-')
@@ -459,6 +465,7 @@ static int optics_mci(int argc, char **argv) {
     if (!st) st = ss_outputs_begin(outs, &e);
     for (int r = 0; r < mf.nruns && !st; r++) {
         char *mco = NULL;
+        if (scalar) mf.runs[r].kernel = SS_MC_KERNEL_SCALAR;
         st = ss_mci_simulate(&mf.runs[r], seed, &mco, &e);
         if (!st) st = ss_write_file_atomic(ss_outputs_path(outs, r), mco, strlen(mco), &e);
         /* RAT lines follow "RAT #" in the text */

@@ -46,6 +46,7 @@ static const char *MC_HELP =
     "  --photons N              photon packets per wavelength and incidence bin (%llu)\n"
     "  --seed S                 random seed (1); same seed, same result for any thread count\n"
     "  --roughness S            Trowbridge-Reitz surface roughness sigma (0.75)\n"
+    "  --scalar                 trace one photon at a time instead of 4 in SIMD lanes\n"
     "  --wl-min NM --wl-max NM --wl-step NM   wavelengths, nm (%g, %g, %g)\n"
     "  --theta-i N --theta-r N --phi N        BRDF bins (8, 8, 8): theta uniform over\n"
     "                           [0, 90) deg, dphi over [0, 180] deg, mirror at 180\n"

@@ -11,6 +11,10 @@ int optics_parse_shared(const char *cmd, int argc, char **argv, int *i, ss_bio_p
     const char *a = argv[*i];
     ss_error e;
     ss_error_clear(&e);
+    if (!strcmp(a, "--scalar")) { /* the one-photon-at-a-time loop, for comparison */
+        spec->mc.kernel = SS_MC_KERNEL_SCALAR;
+        return 1;
+    }
     struct {
         const char *name;
         double *dst;

@@ -2,19 +2,22 @@
  * photons/s on one and two threads for (a) the four-layer skin input of
  * docs/optics.md as an MCML-style slab (smooth surface, transmitting bottom),
  * (b) the same skin as the seed models it (rough surface sigma 0.75, white fat
- * reflector), (c) the van de Hulst slab. Anchor: MCML runs about 55,000
- * photons/s/core on such a skin input on these machines; target >= 2x.
- * Figures only, never asserted. Usage: bench_optics [photons]
+ * reflector), (c) the van de Hulst slab, on the packet path (the default) and
+ * per CPU-second on the scalar loop (`--scalar`) beside it. Target: >= 3x
+ * MCML per core, measured side by side (below). Figures only, never asserted.
+ * Usage: bench_optics [photons]
  *
  * Side-by-side mode: bench_optics --mcml PATH/TO/mcml [--repeat N] FILE.mci...
  * runs a user-built MCML binary (none is shipped; build one from the public
- * MCML 1.2 sources) and skinsim's MCML runner (one thread) back to back on the
- * same .mci inputs, N times alternating, and prints the CPU seconds of each
- * (MCML: the child's user + system time from wait4; skinsim: this process's
- * CPU time around parse + simulate), the best-of-N ratio MCML / skinsim and
- * the range of the per-pair ratios, and both runs' RAT. skinsim is also run on
- * two threads to show that its output is identical. MCML writes its .mco in a
- * temporary directory that is removed afterwards. */
+ * MCML 1.2 sources) and skinsim's MCML runner (one thread) on both of its paths
+ * back to back on the same .mci inputs, N rounds alternating MCML, packet,
+ * scalar, and prints the CPU seconds of each (MCML: the child's user + system
+ * time from wait4; skinsim: this process's CPU time around parse + simulate),
+ * the best-of-N ratios MCML / packet and MCML / scalar, the range of the
+ * per-round ratios MCML / packet, and the diffuse reflectance of each. The
+ * packet path is also run on two threads to show that its output is
+ * identical. MCML writes its .mco in a temporary directory that is removed
+ * afterwards. */
 #define _DEFAULT_SOURCE
 #include <omp.h>
 #include <stdio.h>
@@ -56,7 +59,7 @@ static double run_mcml(const char *mcml, const char *dir, const char *mci_name) 
 
 /* skinsim on every run of the file with `threads` threads; returns CPU
  * seconds and the first run's .mco text in *mco (malloc'd). */
-static double run_skinsim(const char *text, const char *name, int threads, char **mco) {
+static double run_skinsim(const char *text, const char *name, int threads, int kernel, char **mco) {
     omp_set_num_threads(threads);
     ss_error e;
     ss_mci_file f;
@@ -68,6 +71,7 @@ static double run_skinsim(const char *text, const char *name, int threads, char 
     *mco = NULL;
     for (int r = 0; r < f.nruns; r++) {
         char *t = NULL;
+        f.runs[r].kernel = kernel;
         if (ss_mci_simulate(&f.runs[r], 1, &t, &e)) {
             fprintf(stderr, "bench_optics: %s\n", e.msg);
             exit(1);
@@ -114,10 +118,12 @@ static int compare_mcml(int argc, char **argv) {
     }
     double la[3] = {0, 0, 0};
     if (getloadavg(la, 3) < 0) la[0] = -1;
-    printf("side by side, one thread each, best of %d alternating pairs (load average %.2f)\n",
+    printf("side by side, one thread each, best of %d alternating rounds (load average %.2f)\n"
+           "packet = skinsim's default path (4 photons in SIMD lanes), scalar = --scalar\n",
            repeat, la[0]);
-    printf("%-28s %10s %12s %12s %8s %15s  %s\n", "input", "photons", "MCML CPU-s", "skinsim CPU-s",
-           "ratio", "pair ratios", "Rd MCML / skinsim; 2-thread output");
+    printf("%-24s %9s %8s %8s %8s %8s %15s %8s  %s\n", "input", "photons", "MCML s", "packet s",
+           "scalar s", "MCML/pk", "pair MCML/pk", "MCML/sc",
+           "Rd MCML / packet / scalar; 2 threads");
     for (int fi = first; fi < argc; fi++) {
         size_t len;
         ss_error e;
@@ -151,8 +157,8 @@ static int compare_mcml(int argc, char **argv) {
             return 1;
         }
         fclose(fo);
-        double best_m = 1e300, best_s = 1e300, rmin = 1e300, rmax = 0;
-        char *mco1 = NULL;
+        double best_m = 1e300, best_s = 1e300, best_c = 1e300, rmin = 1e300, rmax = 0;
+        char *mco1 = NULL, *mcoc = NULL;
         for (int k = 0; k < repeat; k++) {
             double m = run_mcml(mcml, dir, "in.mci");
             if (m < 0) {
@@ -161,21 +167,28 @@ static int compare_mcml(int argc, char **argv) {
                 return 1;
             }
             char *mco = NULL;
-            double s = run_skinsim(text, argv[fi], 1, &mco);
+            double s = run_skinsim(text, argv[fi], 1, SS_MC_KERNEL_AUTO, &mco);
             if (k == 0)
                 mco1 = mco;
             else
                 free(mco);
+            double sc = run_skinsim(text, argv[fi], 1, SS_MC_KERNEL_SCALAR, &mco);
+            if (k == 0)
+                mcoc = mco;
+            else
+                free(mco);
             if (m < best_m) best_m = m;
             if (s < best_s) best_s = s;
+            if (sc < best_c) best_c = sc;
             if (m / s < rmin) rmin = m / s;
             if (m / s > rmax) rmax = m / s;
         }
         char *mco2 = NULL;
-        run_skinsim(text, argv[fi], 2, &mco2);
+        run_skinsim(text, argv[fi], 2, SS_MC_KERNEL_AUTO, &mco2);
         /* MCML's output: the first run's file named in the .mci, in dir */
-        double rm[4] = {-1, -1, -1, -1}, rs[4];
+        double rm[4] = {-1, -1, -1, -1}, rs[4], rc[4];
         rat_of(mco1, rs);
+        rat_of(mcoc, rc);
         if (ss_mci_parse(text, argv[fi], &f, &e) == SS_OK) {
             char op[6000];
             snprintf(op, sizeof op, "%s/%s", dir, f.runs[0].out_name);
@@ -203,10 +216,12 @@ static int compare_mcml(int argc, char **argv) {
         const char *a1 = mco1 ? strstr(mco1, "\nInParm") : NULL;
         const char *a2 = mco2 ? strstr(mco2, "\nInParm") : NULL;
         int same = a1 && a2 && !strcmp(a1, a2);
-        printf("%-28s %10llu %12.2f %12.2f %7.2fx %6.2f-%5.2fx   %.5f / %.5f; %s\n", argv[fi],
-               photons, best_m, best_s, best_m / best_s, rmin, rmax, rm[1], rs[1],
-               same ? "identical" : "DIFFERENT");
+        const char *base = strrchr(argv[fi], '/');
+        printf("%-24s %9llu %8.2f %8.2f %8.2f %7.2fx %6.2f-%5.2fx %7.2fx  %.5f / %.5f / %.5f; %s\n",
+               base ? base + 1 : argv[fi], photons, best_m, best_s, best_c, best_m / best_s, rmin,
+               rmax, best_m / best_c, rm[1], rs[1], rc[1], same ? "identical" : "DIFFERENT");
         free(mco1);
+        free(mcoc);
         free(mco2);
         free(text);
     }
@@ -217,6 +232,7 @@ static int compare_mcml(int argc, char **argv) {
  * time over all threads), which is less sensitive to a shared machine. */
 static double rate(const ss_optics_slab *s, const ss_mc_options *o, int threads, double *rd,
                    double *cpu_rate) {
+    /* (o->kernel selects the packet path or the scalar loop) */
     omp_set_num_threads(threads);
     ss_mc_result r;
     ss_error e;
@@ -234,10 +250,14 @@ static double rate(const ss_optics_slab *s, const ss_mc_options *o, int threads,
 }
 
 static void row(const char *name, const ss_optics_slab *s, const ss_mc_options *o) {
-    double rd1, rd2, c1, c2;
+    ss_mc_options sc = *o;
+    sc.kernel = SS_MC_KERNEL_SCALAR;
+    double rd1, rd2, c1, c2, rds, cs;
     double r1 = rate(s, o, 1, &rd1, &c1), r2 = rate(s, o, 2, &rd2, &c2);
-    printf("%-44s %12.0f %12.0f %6.2fx %14.0f %14.0f  (Rd %.4f, identical %s)\n", name, r1, r2,
-           r2 / r1, c1, c2, rd1, rd1 == rd2 ? "yes" : "NO");
+    rate(s, &sc, 1, &rds, &cs);
+    printf("%-44s %12.0f %12.0f %6.2fx %12.0f %12.0f %12.0f %6.2fx  (Rd %.4f / %.4f, 1 = 2 "
+           "threads: %s)\n",
+           name, r1, r2, r2 / r1, c1, c2, cs, c1 / cs, rd1, rds, rd1 == rd2 ? "yes" : "NO");
 }
 
 int main(int argc, char **argv) {
@@ -264,8 +284,9 @@ int main(int argc, char **argv) {
     ss_mc_options_default(&o);
     o.photons = n;
     printf("photons per run: %llu (machine shared: figures are noisy)\n", (unsigned long long)n);
-    printf("%-44s %12s %12s %7s %14s %14s\n", "input", "1 thread/s", "2 threads/s", "scale",
-           "1t per CPU-s", "2t per CPU-s");
+    printf("%-44s %12s %12s %7s %12s %12s %12s %7s\n", "input (packet path unless said)",
+           "1 thread/s", "2 threads/s", "scale", "1t /CPU-s", "2t /CPU-s", "scalar /CPU-s",
+           "pk/sc");
     row("4-layer skin, MCML-style (smooth, transmit)", &skin, &o);
     /* (b) the seed's model at 550 nm */
     ss_bio_params b;
@@ -289,6 +310,6 @@ int main(int argc, char **argv) {
     ss_mc_options ov = o;
     ov.photons = n * 10;
     row("van de Hulst slab", &v, &ov);
-    printf("anchor: MCML ~55,000 photons/s/core on a 4-layer skin input; target >= 110,000\n");
+    printf("MCML: measure side by side (bench_optics --mcml PATH bench/mci/*.mci); target >= 3x\n");
     return 0;
 }

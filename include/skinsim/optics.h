@@ -88,7 +88,19 @@ typedef struct ss_mc_options {
     int radial_bins;
     double radial_max_cm; /* if > 0, fill result.radial (Rd(r)) */
     int radial_distance;  /* SS_RADIAL_NET (default) or SS_RADIAL_PATH */
+    int kernel;           /* SS_MC_KERNEL_AUTO (default), _SCALAR, _PACKET_BASE */
 } ss_mc_options;
+/* Which transport loop runs: AUTO, the packet path (4 photons in SIMD lanes;
+ * its AVX2 copy where the processor has AVX2, else the baseline x86-64 copy,
+ * with identical results); SCALAR, one photon at a time (the earlier loop,
+ * kept for comparison; `--scalar` on the command line); PACKET_BASE, the
+ * packet path's baseline copy even where AVX2 exists (for tests). The two
+ * paths differ in their samplers, so their results differ bitwise but agree
+ * within Monte Carlo error; each is bit-identical for any thread count.
+ * Stochastic mode always runs the scalar loop. */
+#define SS_MC_KERNEL_AUTO 0
+#define SS_MC_KERNEL_SCALAR 1
+#define SS_MC_KERNEL_PACKET_BASE 2
 /* The distance Rd(r) is binned by: NET, the distance from the entry point to
  * the exit point (the diffusion profile renderers use); PATH, seed 003
  * §4.7.1's D, the length of the path's horizontal projection summed over
@@ -141,6 +153,7 @@ typedef struct ss_mci_run {
     double dz_cm, dr_cm;
     int nz, nr, na;
     ss_optics_slab slab;
+    int kernel; /* SS_MC_KERNEL_*: not in the file (the parser sets AUTO) */
 } ss_mci_run;
 typedef struct ss_mci_file {
     int nruns;

@@ -247,9 +247,9 @@ static void sb_array2(sbuf *b, const char *header, const double *raw, int n1, in
     sb_printf(b, "\n");
 }
 
-static void sb_array(sbuf *b, const char *head, const double *v, int n) {
+static void sb_array(sbuf *b, const char *head, const char *fmt, const double *v, int n) {
     sb_printf(b, "%s\n", head);
-    for (int i = 0; i < n; i++) sb_printf(b, "%12.4E\n", v[i]);
+    for (int i = 0; i < n; i++) sb_printf(b, fmt, v[i]);
     sb_printf(b, "\n");
 }
 
@@ -260,6 +260,7 @@ ss_status ss_mci_simulate(const ss_mci_run *run, uint64_t seed, char **mco_text,
     ss_mc_options_default(&o);
     o.photons = run->photons;
     o.seed = seed;
+    o.kernel = run->kernel;
     ss_mc_tally_spec sp;
     memset(&sp, 0, sizeof sp);
     sp.mcml = 1;
@@ -305,20 +306,20 @@ ss_status ss_mci_simulate(const ss_mci_run *run, uint64_t seed, char **mco_text,
     sb_printf(&b, "%-14.6G \t#Absorbed fraction [-]\n", t.absorbed / N);
     sb_printf(&b, "%-14.6G \t#Transmittance [-]\n\n", t.transmit / N);
     for (int l = 0; l < sl->nlayers; l++) tmp[l] = t.abs_layer[l] / N;
-    sb_array(&b, "A_l #Absorption as a function of layer. [-]", tmp, sl->nlayers);
+    sb_array(&b, "A_l #Absorption as a function of layer. [-]", "%12.4G\n", tmp, sl->nlayers);
     for (int i = 0; i < run->nz; i++) tmp[i] = t.a_z[i] / (run->dz_cm * N);
-    sb_array(&b, "A_z #A[0], [1],..A[nz-1]. [1/cm]", tmp, run->nz);
+    sb_array(&b, "A_z #A[0], [1],..A[nz-1]. [1/cm]", "%12.4E\n", tmp, run->nz);
     double dr = run->dr_cm, da = M_PI / (2.0 * run->na);
     for (int i = 0; i < run->nr; i++) tmp[i] = t.rd_r[i] / (2.0 * M_PI * (i + 0.5) * dr * dr * N);
-    sb_array(&b, "Rd_r #Rd[0], [1],..Rd[nr-1]. [1/cm2]", tmp, run->nr);
+    sb_array(&b, "Rd_r #Rd[0], [1],..Rd[nr-1]. [1/cm2]", "%12.4E\n", tmp, run->nr);
     for (int i = 0; i < run->na; i++)
         tmp[i] = t.rd_a[i] / (2.0 * M_PI * sin((i + 0.5) * da) * da * N);
-    sb_array(&b, "Rd_a #Rd[0], [1],..Rd[na-1]. [sr-1]", tmp, run->na);
+    sb_array(&b, "Rd_a #Rd[0], [1],..Rd[na-1]. [sr-1]", "%12.4E\n", tmp, run->na);
     for (int i = 0; i < run->nr; i++) tmp[i] = t.tt_r[i] / (2.0 * M_PI * (i + 0.5) * dr * dr * N);
-    sb_array(&b, "Tt_r #Tt[0], [1],..Tt[nr-1]. [1/cm2]", tmp, run->nr);
+    sb_array(&b, "Tt_r #Tt[0], [1],..Tt[nr-1]. [1/cm2]", "%12.4E\n", tmp, run->nr);
     for (int i = 0; i < run->na; i++)
         tmp[i] = t.tt_a[i] / (2.0 * M_PI * sin((i + 0.5) * da) * da * N);
-    sb_array(&b, "Tt_a #Tt[0], [1],..Tt[na-1]. [sr-1]", tmp, run->na);
+    sb_array(&b, "Tt_a #Tt[0], [1],..Tt[na-1]. [sr-1]", "%12.4E\n", tmp, run->na);
     /* 2-D arrays with MCML's scalings: A_rz / (2 pi (ir+0.5) dr^2 dz N),
      * Rd_ra, Tt_ra / (4 pi^2 dr^2 sin(da/2) N (ir+0.5) sin(2 (ia+0.5) da)) */
     double *sr = malloc(sizeof(double) * (size_t)run->nr * 2);
