@@ -5,7 +5,7 @@ ASAN     ?= build-asan
 JOBS     ?= $(shell nproc)
 DEPS      = build-essential cmake pkg-config libpng-dev libopenexr-dev zlib1g-dev \
             libcjson-dev libcmocka-dev libcairo2-dev fonts-dejavu-core python3 \
-            python3-numpy $(VIEW_DEPS) $(MPI_DEPS) $(GLTF_DEPS)
+            python3-numpy python3-venv python3-setuptools python3-wheel $(VIEW_DEPS) $(MPI_DEPS) $(GLTF_DEPS)
 # gltfpack (meshoptimizer) reads and validates (cgltf) the heal run's .glb in tests
 GLTF_DEPS = gltfpack
 # MPI for the distributed healing solver and optics table (docs/scaling.md)

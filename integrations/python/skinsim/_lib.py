@@ -14,7 +14,9 @@ so the C memory) alive; images the caller passes or receives are numpy
 float32 arrays whose buffers the library reads or writes directly through an
 ss_image header that points into them.
 
-Which library: $SKINSIM_LIB (a path) if set; else the one an installed copy
+Which library: $SKINSIM_LIB (a path) if set; else the one bundled into the
+package by `pip install .` (_native/lib/libskinsim.so.0, with its data in
+_native/share/skinsim); else the one an installed copy
 of this package was installed with (_installed.py, written by cmake
 --install); else build/libskinsim.so.0 of the source tree this file is in;
 else the system's (ldconfig).
@@ -42,13 +44,16 @@ def _candidates():
     if env:
         return [env]
     out = []
+    here = os.path.dirname(os.path.abspath(__file__))
+    bundled = os.path.join(here, "_native", "lib", "libskinsim.so.0")
+    if os.path.isfile(bundled):
+        out.append(bundled)
     try:
         from . import _installed  # written by cmake --install
 
         out.append(os.path.normpath(_installed.LIBRARY))
     except ImportError:
         pass
-    here = os.path.dirname(os.path.abspath(__file__))
     src = os.path.normpath(os.path.join(here, "..", "..", ".."))
     out.append(os.path.join(src, "build", "libskinsim.so.0"))
     found = ctypes.util.find_library("skinsim")
