@@ -7,6 +7,9 @@ lib/../share/skinsim next to itself, as in an install prefix). The library is
 $SKINSIM_LIB when set, else build/libskinsim.so.0 of this source tree, else
 one built here with CMake (build-python/, shared library target only). The
 version is the CMake project's. Nothing is fetched from a network.
+
+setuptools' own build folders go to build-python/ (not build/, the CMake
+build folder, and not the source tree's package folder).
 """
 
 import os
@@ -56,4 +59,8 @@ class BuildWithLibrary(build_py):
         shutil.copytree(os.path.join(HERE, "data"), os.path.join(native, "share", "skinsim"))
 
 
-setup(version=_version(), cmdclass={"build_py": BuildWithLibrary})
+_WORK = os.path.join(HERE, "build-python")
+os.makedirs(_WORK, exist_ok=True)
+setup(version=_version(), cmdclass={"build_py": BuildWithLibrary},
+      options={"build": {"build_base": os.path.join(_WORK, "setuptools")},
+               "egg_info": {"egg_base": _WORK}})
