@@ -88,6 +88,14 @@ typedef struct ss_mc_options {
     int radial_bins;
     double radial_max_cm; /* if > 0, fill result.radial (Rd(r)) */
     int radial_distance;  /* SS_RADIAL_NET (default) or SS_RADIAL_PATH */
+    /* optional (NULL, the default: never cancelled): polled from the calling
+     * thread only, after each block of about 2,048 photons it traced; a
+     * non-zero return stops the run, which then returns SS_ERR_RUNTIME
+     * ("cancelled") with nothing in its result. Every call built on ss_mc_run
+     * (spectra, BRDFs, tables) copies these options, so one callback cancels
+     * them all. Results of runs that are not cancelled do not depend on it. */
+    int (*cancel)(void *user);
+    void *cancel_user;
 } ss_mc_options;
 /* The distance Rd(r) is binned by: NET, the distance from the entry point to
  * the exit point (the diffusion profile renderers use); PATH, seed 003

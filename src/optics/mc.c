@@ -30,6 +30,9 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 #include "optics_internal.h"
 
@@ -212,8 +215,10 @@ typedef struct mc_ctx {
     int rough, stochastic, paths;
     int path_dist; /* bin Rd(r) by the summed horizontal path (seed's D) */
     ss_mc_tally_spec spec;
-    double inv_dr, inv_dz; /* 1 / spec.rad_dr, 1 / spec.dz (0 if unused) */
-    zig_exp zig;           /* exponential sampler tables */
+    double inv_dr, inv_dz;     /* 1 / spec.rad_dr, 1 / spec.dz (0 if unused) */
+    zig_exp zig;               /* exponential sampler tables */
+    int (*cancel)(void *user); /* ss_mc_options.cancel: polled by the calling thread */
+    void *cancel_user;
 } mc_ctx;
 
 /* Unpolarised Fresnel reflectance from n1 into n2 at incidence cosine ci (>0);
@@ -836,6 +841,8 @@ static ss_status ctx_init(mc_ctx *c, const ss_optics_slab *s, const ss_mc_option
     c->n_below = s->n_below;
     c->albedo = s->bottom_albedo;
     c->seed = o->seed;
+    c->cancel = o->cancel;
+    c->cancel_user = o->cancel_user;
     c->sin_ti = sin(o->theta_i_rad);
     c->cos_ti = cos(o->theta_i_rad);
     c->rough = o->roughness_sigma > 0.0;
@@ -922,10 +929,39 @@ static ss_status run_blocks(const mc_ctx *c, uint64_t photons, run_out *out, ss_
     }
     for (uint64_t b = 0; b < nb; b++) acc_bind(&acc[b], sp, mem ? mem + b * asz : NULL);
     long long nbl = (long long)nb;
+    /* Cancellation: only the calling thread (thread 0 of the team) calls
+     * c->cancel, after each block it traced, so a caller's callback (a Python
+     * interpreter's signal check) never runs on a worker thread; once it says
+     * stop, the remaining blocks are skipped and the run returns an error.
+     * A run that is not cancelled is unchanged (the poll reads nothing the
+     * photons use). */
+    int stop = 0;
 #pragma omp parallel for schedule(dynamic, 1)
     for (long long b = 0; b < nbl; b++) {
+        int halted;
+#pragma omp atomic read
+        halted = stop;
+        if (halted) continue;
         uint64_t lo = photons * (uint64_t)b / nb, hi = photons * (uint64_t)(b + 1) / nb;
         for (uint64_t i = lo; i < hi; i++) run_photon(c, i, &acc[b], pbs ? &pbs[b] : NULL);
+#ifdef _OPENMP
+        int caller = omp_get_thread_num() == 0;
+#else
+        int caller = 1;
+#endif
+        if (c->cancel && caller && c->cancel(c->cancel_user)) {
+#pragma omp atomic write
+            stop = 1;
+        }
+    }
+    if (stop) {
+        if (pbs)
+            for (uint64_t b = 0; b < nb; b++) free(pbs[b].r);
+        free(pbs);
+        free(acc);
+        free(mem);
+        memset(out, 0, sizeof *out);
+        return ss_error_set(err, SS_ERR_RUNTIME, "Monte Carlo run cancelled by the caller");
     }
     /* reduce in block order */
     memset(out, 0, sizeof *out);
