@@ -73,11 +73,11 @@ class Abrasion:
             raise L.InputError("hull: %r is not convex or concave" % (hull,), L.SS_ERR_INPUT)
         s = L.ss_abrasion_settings()
         L.lib.ss_abrasion_settings_default(ctypes.byref(s))
-        s.size = int(size)
+        s.size = L.as_int("size", size, lo=1)
         if seed is not None:
-            s.seed = int(seed)
+            s.seed = L.as_u64("seed", seed)
         if world_size_cm is not None:
-            s.world_size_cm = float(world_size_cm)
+            s.world_size_cm = L.as_float("world_size_cm", world_size_cm, lo=0.0, lo_open=True)
         self.size = s.size
         t = L.ss_timeline()
         L.lib.ss_timeline_default(ctypes.byref(t))
@@ -93,9 +93,9 @@ class Abrasion:
                     raise L.InputError("timeline: unknown phase %r (known: %s)"
                                        % (ph, ", ".join(phases())), L.SS_ERR_INPUT)
                 t.key[i].phase = pid
-                t.key[i].day = float(day)
+                t.key[i].day = L.as_float("timeline[%d] day" % i, day)
         if end_day is not None:
-            t.end_day = float(end_day)
+            t.end_day = L.as_float("end_day", end_day)
         L.check(L.lib.ss_timeline_validate, ctypes.byref(t))
         self._timeline = t
 
@@ -125,7 +125,7 @@ class Abrasion:
                 try:
                     L.check(L.lib.ss_wound_shape_from_strokes, ctypes.byref(ss),
                             1 if hull == "concave" else 0,
-                            int(concave_k) if hull == "concave" else 0, s.size, s.seed,
+                            L.as_int("concave_k", concave_k, lo=0) if hull == "concave" else 0, s.size, s.seed,
                             ctypes.byref(shape))
                 except L.SkinsimError as e:
                     # name the input, as the command line does
@@ -208,9 +208,7 @@ class Abrasion:
         the library renders into. out: arrays of an earlier frame to reuse
         (only the maps present in it are rendered)."""
         self._need_open()
-        day = float(day)
-        if not np.isfinite(day) or day < 0:
-            raise L.InputError("day: must be a finite number >= 0, got %r" % day, L.SS_ERR_INPUT)
+        day = L.as_float("day", day, lo=0.0)
         if out is None:
             out = self.new_frame(maps)
         ts = L.ss_texture_set()
