@@ -89,7 +89,7 @@ typedef struct ss_mc_options {
     double radial_max_cm; /* if > 0, fill result.radial (Rd(r)) */
     int radial_distance;  /* SS_RADIAL_NET (default) or SS_RADIAL_PATH */
     /* optional (NULL, the default: never cancelled): polled from the calling
-     * thread only, after each block of about 2,048 photons it traced; a
+     * thread only, every 4,096 photons it traces; a
      * non-zero return stops the run, which then returns SS_ERR_RUNTIME
      * ("cancelled") with nothing in its result. Every call built on ss_mc_run
      * (spectra, BRDFs, tables) copies these options, so one callback cancels

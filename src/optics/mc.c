@@ -930,28 +930,33 @@ static ss_status run_blocks(const mc_ctx *c, uint64_t photons, run_out *out, ss_
     for (uint64_t b = 0; b < nb; b++) acc_bind(&acc[b], sp, mem ? mem + b * asz : NULL);
     long long nbl = (long long)nb;
     /* Cancellation: only the calling thread (thread 0 of the team) calls
-     * c->cancel, after each block it traced, so a caller's callback (a Python
-     * interpreter's signal check) never runs on a worker thread; once it says
-     * stop, the remaining blocks are skipped and the run returns an error.
-     * A run that is not cancelled is unchanged (the poll reads nothing the
-     * photons use). */
+     * c->cancel, every 4,096 photons it traces, so a caller's callback (a
+     * Python interpreter's signal check) never runs on a worker thread; once
+     * it says stop, every thread leaves its block at its next 4,096-photon
+     * mark and the run returns an error. A run that is not cancelled is
+     * unchanged (the poll reads nothing the photons use). */
     int stop = 0;
 #pragma omp parallel for schedule(dynamic, 1)
     for (long long b = 0; b < nbl; b++) {
-        int halted;
-#pragma omp atomic read
-        halted = stop;
-        if (halted) continue;
-        uint64_t lo = photons * (uint64_t)b / nb, hi = photons * (uint64_t)(b + 1) / nb;
-        for (uint64_t i = lo; i < hi; i++) run_photon(c, i, &acc[b], pbs ? &pbs[b] : NULL);
 #ifdef _OPENMP
-        int caller = omp_get_thread_num() == 0;
+        const int caller = omp_get_thread_num() == 0;
 #else
-        int caller = 1;
+        const int caller = 1;
 #endif
-        if (c->cancel && caller && c->cancel(c->cancel_user)) {
+        uint64_t lo = photons * (uint64_t)b / nb, hi = photons * (uint64_t)(b + 1) / nb;
+        for (uint64_t i = lo; i < hi; i++) {
+            if (c->cancel && ((i - lo) & 4095) == 0) {
+                int halted;
+#pragma omp atomic read
+                halted = stop;
+                if (!halted && caller && c->cancel(c->cancel_user)) {
 #pragma omp atomic write
-            stop = 1;
+                    stop = 1;
+                    halted = 1;
+                }
+                if (halted) break;
+            }
+            run_photon(c, i, &acc[b], pbs ? &pbs[b] : NULL);
         }
     }
     if (stop) {

@@ -14,6 +14,7 @@ pass `out=` to reuse the arrays of an earlier frame, as a time slider would.
 
 import ctypes
 import os
+from typing import Any, List, Tuple
 
 import numpy as np
 
@@ -23,7 +24,8 @@ MAPS = ("color", "reflection", "height", "normal")
 _CHANNELS = {"color": 3, "reflection": 1, "height": 1, "normal": 3}
 
 
-def phases():
+def phases() -> List[str]:
+    """The five abrasion phases' names, in order (seed 000 §4)."""
     return [L.lib.ss_phase_name(i).decode() for i in range(L.SS_PHASE_COUNT)]
 
 
@@ -150,10 +152,12 @@ class Abrasion:
         no view of a key texture or the mask is left either."""
         self._h = None
 
-    def __enter__(self):
+    def __enter__(self) -> "Abrasion":
+        """The object itself (closed on leaving the with block)."""
         return self
 
-    def __exit__(self, *exc):
+    def __exit__(self, *exc: Any) -> None:
+        """Closes it."""
         self.close()
 
     def _need_open(self):
@@ -169,12 +173,14 @@ class Abrasion:
         return v
 
     @property
-    def nwounds(self):
+    def nwounds(self) -> int:
+        """How many separate wounds the shape holds."""
         self._need_open()
         return self._shape.contents.nwounds
 
     @property
-    def timeline(self):
+    def timeline(self) -> Tuple[List[Tuple[str, float]], float]:
+        """The timeline as ([(phase, day), ...], end_day)."""
         t = self._timeline
         keys = [(L.lib.ss_phase_name(t.key[i].phase).decode(), t.key[i].day)
                 for i in range(t.nkeys)]
