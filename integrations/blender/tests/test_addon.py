@@ -56,6 +56,7 @@ other = bpy.data.objects.new("other_settings", obj.data.copy())
 scene.collection.objects.link(other)
 other.skinsim.wound_u = 0.75
 check(st.wound_u != 0.75 and other.skinsim.wound_u == 0.75, "each object has its own settings")
+bpy.data.objects.remove(other)  # not in the renders below
 st.size = 256
 st.days = "0,3,20"
 st.frames_per_day = 1.0
