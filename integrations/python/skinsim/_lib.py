@@ -31,7 +31,7 @@ import re
 import signal
 import sys
 import threading
-from typing import Any, Callable, Dict, Iterable, Optional, Union
+from typing import Any, Callable, Dict, Optional, Union
 
 import numpy as np
 
