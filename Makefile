@@ -5,7 +5,7 @@ ASAN     ?= build-asan
 JOBS     ?= $(shell nproc)
 DEPS      = build-essential cmake pkg-config libpng-dev libopenexr-dev zlib1g-dev \
             libcjson-dev libcmocka-dev libcairo2-dev fonts-dejavu-core python3 \
-            python3-numpy $(VIEW_DEPS) $(MPI_DEPS) $(GLTF_DEPS)
+            python3-numpy python3-venv python3-setuptools python3-wheel $(VIEW_DEPS) $(MPI_DEPS) $(GLTF_DEPS)
 # gltfpack (meshoptimizer) reads and validates (cgltf) the heal run's .glb in tests
 GLTF_DEPS = gltfpack
 # MPI for the distributed healing solver and optics table (docs/scaling.md)
@@ -15,7 +15,7 @@ MPI_DEPS  = libopenmpi-dev openmpi-bin
 VIEW_DEPS = libgtk-4-dev libepoxy-dev libgl1-mesa-dri libegl-mesa0 xvfb
 DEMO_OUT ?= demo-out
 
-.PHONY: all deps build demo test test-asan bench fuzz clean install test-blender demo-mpi bench-mpi
+.PHONY: all deps build demo test test-asan bench fuzz clean install test-blender blender-extension demo-mpi bench-mpi
 
 all: build
 
@@ -72,6 +72,13 @@ test-blender: build
 	  SUDO=""; [ "$$(id -u)" = 0 ] || SUDO=sudo; \
 	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq blender; }
 	cd $(BUILD) && SKINSIM_TEST_BLENDER=1 ctest --output-on-failure -R '^e2e_blender'
+
+# The add-on as a Blender 4.2+ extension (blender_manifest.toml + __init__.py
+# zipped; install it from Blender's Preferences > Get Extensions > Install
+# from Disk). The legacy add-on is the folder integrations/blender/skinsim_blender.
+blender-extension: deps
+	@mkdir -p $(BUILD)
+	/usr/bin/python3 integrations/blender/build_extension.py $(BUILD)/skinsim_blender-$$(sed -n 's/^version = "\(.*\)"/\1/p' integrations/blender/skinsim_blender/blender_manifest.toml).zip
 
 # The healing solver and the ModelMatch table on 4 MPI ranks (docs/scaling.md).
 # OpenMPI refuses to run as root without --allow-run-as-root; --oversubscribe

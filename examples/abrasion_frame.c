@@ -7,6 +7,8 @@
  * Renders the five key positions for the built-in example stroke at 256 px,
  * blends the frame at the given day, and writes its colour (sRGB) and normal
  * map as PNG. Prints the mean colour inside and outside the wound. */
+#include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 
@@ -14,7 +16,20 @@
 #include <skinsim/core.h>
 
 int main(int argc, char **argv) {
-    double day = argc > 1 ? atof(argv[1]) : 3.0;
+    double day = 3.0;
+    if (argc > 3) {
+        fprintf(stderr, "usage: abrasion_frame [DAY [FOLDER]]\n");
+        return 2;
+    }
+    if (argc > 1) {
+        char *end = NULL;
+        errno = 0;
+        day = strtod(argv[1], &end);
+        if (end == argv[1] || *end != '\0' || errno == ERANGE || !isfinite(day)) {
+            fprintf(stderr, "abrasion_frame: day '%s' is not a number\n", argv[1]);
+            return 2;
+        }
+    }
     const char *dir = argc > 2 ? argv[2] : ".";
     ss_abrasion_settings set;
     ss_abrasion_settings_default(&set);

@@ -3,8 +3,11 @@
 # a temporary prefix, moves the prefix (an install must be relocatable), builds
 # examples/ against it with pkg-config (shared and static) and with CMake's
 # find_package, runs them, and checks that the installed copy reads its data
-# from its own prefix, that SKINSIM_DATA still overrides it and that bad input
-# gets the library's message and exit 2.
+# from its own prefix (shared and static, the static program kept outside
+# the prefix and the source tree's data never used), that SKINSIM_DATA still
+# overrides it, that bad input gets the library's message and exit 2, that
+# every installed header's functions link from both libraries, and that
+# pkg-config --cflags emits only the include folder.
 set -u
 CLI="$(cd "$(dirname "$1")" && pwd)/$(basename "$1")"
 SRC="$(cd "$2" && pwd)"
@@ -34,7 +37,34 @@ readelf -d "$LIBDIR/libskinsim.so" | grep -q 'SONAME.*\[libskinsim\.so\.0\]' || 
 bad=$(nm -D --defined-only "$LIBDIR/libskinsim.so" | awk '$2 ~ /[TDBR]/ && $3 !~ /^ss_/' | head -3)
 [ -z "$bad" ] || fail "non-API symbols exported: $bad"
 
+[ -e "$P/include/skinsim/dist.h" ] && fail "dist.h installed, but its ss_dist_* functions are in no installed library"
+
 export PKG_CONFIG_PATH="$LIBDIR/pkgconfig"
+# the public headers include only libc's: no cairo, glib, libpng folders
+cf=$(pkg-config --cflags skinsim | sed 's/-fsanitize=[^ ]*//; s/ *$//')
+case "$cf" in -I*" "*|"") false ;; -I*) [ "$(realpath "${cf#-I}")" = "$(realpath "$P/include")" ] ;; *) false ;; esac \
+  || fail "pkg-config --cflags: '$(pkg-config --cflags skinsim)', want only -I$P/include"
+# every function declared in an installed header is in the installed
+# libraries: a program taking the address of each links (shared and static)
+{
+  echo '#include <stdio.h>'
+  for h in "$P"/include/skinsim/*.h; do echo "#include <skinsim/$(basename "$h")>"; done
+  echo 'typedef void (*fn)(void);'
+  echo 'int main(void) { static const fn all[] = {'
+  for h in "$P"/include/skinsim/*.h; do
+    cc -std=c17 -I"$P/include" -E -P "$h" 2>/dev/null | tr '\n' ' ' | grep -oE '[ *](ss_[a-z0-9_]+) *\([^*]' \
+      | grep -oE 'ss_[a-z0-9_]+'
+  done | sort -u | sed 's/.*/(fn)\&&,/'
+  echo '}; printf("%zu functions\n", sizeof all / sizeof *all); return all[0] == 0; }'
+} >"$T/all_api.c"
+nfn=$(grep -c '^(fn)' "$T/all_api.c")
+[ "$nfn" -gt 100 ] || fail "found only $nfn functions in the installed headers"
+cc -std=c17 -Wno-cast-function-type "$T/all_api.c" $(pkg-config --cflags --libs skinsim) -o "$T/all_api" 2>"$T/all_api.log" \
+  || { grep -oE "(undefined reference to .[a-z0-9_]*|error: .*)" "$T/all_api.log" | sort -u | head; fail "an installed header declares functions the shared library lacks"; }
+LD_LIBRARY_PATH="$LIBDIR" "$T/all_api" | grep -q "^$nfn functions" || fail "all_api did not run"
+cc -std=c17 -Wno-cast-function-type "$T/all_api.c" $(pkg-config --cflags skinsim) \
+  $(pkg-config --static --libs skinsim | sed 's/-lskinsim/-l:libskinsim.a/') -o "$T/all_api_static" 2>"$T/all_api.log" \
+  || { grep -oE "(undefined reference to .[a-z0-9_]*|error: .*)" "$T/all_api.log" | sort -u | head; fail "an installed header declares functions the static library lacks"; }
 [ "$(pkg-config --modversion skinsim)" = "$("$CLI" --version | awk '{print $2}')" ] || fail "pkg-config version"
 CFLAGS_SS=$(pkg-config --cflags skinsim)
 LIBS_SS=$(pkg-config --libs skinsim)
@@ -64,8 +94,9 @@ read -r r g b < <(awk '/linear sRGB albedo/ {print $4, $5, $6}' "$T/sc.txt")
 awk -v r="$r" -v g="$g" -v b="$b" 'BEGIN { exit !(r > g && g > b && r < 0.6 && b > 0.01) }' || fail "implausible skin colour $r $g $b"
 if [ -z "$QUICK" ]; then
 "$T/skin_colour_static" 0.08 0.02 $PH >"$T/scs.txt" || fail "static skin_colour"
-# (a static program kept outside the prefix cannot know it: it reads the
-# source tree's data while that exists, else the configured prefix's)
+# the static program, kept outside the prefix, reads the prefix's data (from
+# the lib folder pkg-config gave it), not the source tree's or the configured one
+grep -q "data in $P/share/skinsim\$" "$T/scs.txt" || { cat "$T/scs.txt"; fail "static program does not read its prefix's data"; }
 # the same result through both libraries
 [ "$(grep albedo "$T/sc.txt")" = "$(grep albedo "$T/scs.txt")" ] || fail "static and shared results differ"
 fi
@@ -79,6 +110,34 @@ grep -q "$T/nowhere" "$T/e.txt" || { cat "$T/e.txt"; fail "message does not name
 rc=$?
 [ $rc -eq 2 ] || fail "negative melanin: exit $rc, want 2"
 grep -qi "melanin" "$T/e.txt" || { cat "$T/e.txt"; fail "message does not name melanin"; }
+# an argument that is not a number: refused, exit 2, naming it
+for bad in "abc" "0.1x" ""; do
+  "$T/skin_colour" 0.05 "$bad" >"$T/o.txt" 2>"$T/e.txt"
+  rc=$?
+  [ $rc -eq 2 ] || fail "skin_colour blood '$bad': exit $rc, want 2"
+  grep -q "blood '$bad' is not a number" "$T/e.txt" || { cat "$T/e.txt"; fail "message does not name blood '$bad'"; }
+done
+"$T/skin_colour" 0.05 0.02 3.5 >"$T/o.txt" 2>"$T/e.txt"
+[ $? -eq 2 ] && grep -q "photons" "$T/e.txt" || fail "skin_colour photons 3.5 not refused"
+"$T/abrasion_frame" abc "$T/nf" >"$T/o.txt" 2>"$T/e.txt"
+[ $? -eq 2 ] && grep -q "day 'abc'" "$T/e.txt" || fail "abrasion_frame day abc not refused"
+# ss_data_path: the shipped default table through the public call
+cat >"$T/dp.c" <<'CEOF'
+#include <stdio.h>
+#include <skinsim/core.h>
+int main(void) {
+    char path[4096];
+    ss_error err = {0};
+    if (ss_data_path(SS_DATA_DEFAULT_TABLE, path, sizeof path, &err)) return 3;
+    printf("%s\n", path);
+    if (ss_data_path("no/such.file", path, sizeof path, &err) != SS_ERR_INPUT) return 4;
+    fprintf(stderr, "%s\n", err.msg);
+    return 0;
+}
+CEOF
+cc -std=c17 -Wall -Wextra -Werror "$T/dp.c" $CFLAGS_SS $LIBS_SS -o "$T/dp" || fail "build ss_data_path program"
+[ "$("$T/dp" 2>"$T/e.txt")" = "$P/share/skinsim/modelmatch_default.sstab" ] || fail "ss_data_path(SS_DATA_DEFAULT_TABLE)"
+grep -q "no/such.file" "$T/e.txt" || fail "ss_data_path message does not name the file"
 
 "$T/abrasion_frame" 3 "$T/frame" >"$T/af.txt" || { cat "$T/af.txt"; fail "abrasion_frame"; }
 for f in frame_color.png frame_normal.png; do [ -s "$T/frame/$f" ] || fail "abrasion_frame did not write $f"; done

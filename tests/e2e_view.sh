@@ -168,6 +168,24 @@ check '[ $? -eq 0 ] && grep -q "no texture coordinates" "$T/nouv.err"' "mesh wit
 "$CLI" view --help >/dev/null
 check '[ $? -eq 0 ]' "view --help"
 
+# The window itself (GTK path only): Escape quits (without it the window
+# stays open and timeout ends it with 124); F1 shows the help over the 3D
+# view; a mesh without UVs refuses Generate at once, in the window's status
+# line. (Where the keyboard focus starts cannot be seen in a shot: Xvfb has
+# no window manager, so GTK draws every window unfocused.)
+if [ $GTK -eq 1 ]; then
+  printf 'key Escape\n' >"$T/esc.txt"
+  timeout 300 "$CLI" view --size 480x270 --texture-size 256 --script "$T/esc.txt" --quiet \
+    >/dev/null 2>"$T/esc.err"
+  check '[ $? -eq 0 ]' "Escape does not close the window ($(cat "$T/esc.err"))"
+  printf 'key g\nkey F1\n' >"$T/f1.txt"
+  timeout 300 "$CLI" view --size 480x270 --texture-size 256 --mesh "$T/nouv.obj" \
+    --script "$T/f1.txt" --window-shot "$T/help.png" >/dev/null 2>"$T/f1.err"
+  check '[ $? -eq 0 ] && $CHECK help "$T/help.png"' "F1 help ($(tail -2 "$T/f1.err"))"
+  check 'grep -q "Generate: the mesh has no texture coordinates" "$T/f1.err"' \
+    "Generate on a mesh without UVs is not refused: $(cat "$T/f1.err")"
+fi
+
 # Keep the pictures for a person to look at when asked.
 [ -n "${SKINSIM_VIEW_KEEP:-}" ] && cp "$T"/*.png "$SKINSIM_VIEW_KEEP"/
 echo "e2e_view: $pass passed, $fail failed (GTK path: $GTK)"

@@ -406,11 +406,48 @@ static void test_run_distributed(void **state) {
     ss_heal_run_free(r);
 }
 
+/* ss_heal_run_set_progress: called after every step with the run's day; a
+ * non-zero answer stops advance_to after that step, and advancing to the
+ * same day again ends where an uninterrupted run ends, bit for bit. */
+typedef struct day_poll {
+    int calls;
+    double last, stop_day;
+} day_poll;
+static int poll_day(void *user, double day) {
+    day_poll *p = user;
+    assert_true(day > p->last);
+    p->last = day;
+    p->calls++;
+    return day >= p->stop_day - 1e-9;
+}
+static void test_run_cancel(void **state) {
+    (void)state;
+    ss_error err;
+    ss_heal_run_config c;
+    small_config(&c);
+    ss_heal_run *a, *b;
+    assert_int_equal(ss_heal_run_create(&c, &a, &err), SS_OK);
+    assert_int_equal(ss_heal_run_create(&c, &b, &err), SS_OK);
+    assert_int_equal(ss_heal_run_advance_to(a, 1.0, &err), SS_OK);
+    day_poll p = {0, -1.0, 0.3};
+    ss_heal_run_set_progress(b, poll_day, &p);
+    assert_int_equal(ss_heal_run_advance_to(b, 1.0, &err), SS_ERR_RUNTIME);
+    assert_non_null(strstr(err.msg, "cancelled"));
+    assert_int_equal(p.calls, 6); /* 0.05 .. 0.30 */
+    assert_true(fabs(ss_heal_run_day(b) - 0.3) < 1e-9);
+    ss_heal_run_set_progress(b, NULL, NULL);
+    assert_int_equal(ss_heal_run_advance_to(b, 1.0, &err), SS_OK);
+    assert_fields_equal(ss_heal_run_grid(a), ss_heal_run_grid(b));
+    ss_heal_run_free(a);
+    ss_heal_run_free(b);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_run_matches_solver), cmocka_unit_test(test_run_resume),
         cmocka_unit_test(test_run_adaptive),       cmocka_unit_test(test_run_footprint),
         cmocka_unit_test(test_run_bad_config),     cmocka_unit_test(test_run_distributed),
+        cmocka_unit_test(test_run_cancel),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

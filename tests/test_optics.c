@@ -517,9 +517,52 @@ static void test_radial_path_distance(void **state) {
     assert_int_equal(ss_mc_run(&s, &o, &net, &err), SS_ERR_INPUT);
 }
 
+/* ss_mc_options.cancel: polled by the calling thread only, after each block;
+ * a non-zero answer stops the run with an error and an empty result; a
+ * callback that never cancels leaves the result bit-identical. */
+typedef struct cancel_count {
+    int calls, stop_at;
+    int off_thread; /* calls from a thread other than the caller's */
+} cancel_count;
+static int count_cancel(void *user) {
+    cancel_count *c = user;
+    if (omp_in_parallel() && omp_get_thread_num() != 0) c->off_thread++;
+    return ++c->calls >= c->stop_at;
+}
+static void test_cancel(void **state) {
+    (void)state;
+    ss_optics_slab s = one_layer(1.4, 1, 100, 0.9, 0.1);
+    ss_mc_options o;
+    ss_mc_options_default(&o);
+    o.photons = 64 * 2048; /* 64 blocks */
+    o.seed = 5;
+    ss_mc_result plain, polled, stopped;
+    run_ok(&s, &o, &plain);
+    cancel_count never = {0, 1 << 30, 0};
+    o.cancel = count_cancel;
+    o.cancel_user = &never;
+    run_ok(&s, &o, &polled);
+    assert_true(never.calls >= 1);
+    assert_int_equal(never.off_thread, 0);
+    assert_true(plain.diffuse == polled.diffuse && plain.transmit == polled.transmit &&
+                plain.absorbed == polled.absorbed && plain.diffuse_se == polled.diffuse_se);
+    cancel_count soon = {0, 2, 0};
+    o.cancel_user = &soon;
+    ss_error err;
+    memset(&stopped, 0, sizeof stopped);
+    assert_int_equal(ss_mc_run(&s, &o, &stopped, &err), SS_ERR_RUNTIME);
+    assert_non_null(strstr(err.msg, "cancelled"));
+    assert_int_equal(soon.calls, 2);
+    assert_int_equal(soon.off_thread, 0);
+    assert_null(stopped.absorbed_per_layer);
+    ss_mc_result_free(&plain);
+    ss_mc_result_free(&polled);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_van_de_hulst),
+        cmocka_unit_test(test_cancel),
         cmocka_unit_test(test_unscattered),
         cmocka_unit_test(test_energy_conservation),
         cmocka_unit_test(test_semi_infinite_isotropic),

@@ -369,6 +369,26 @@ static void test_table_lookup(void **state) {
     ss_mm_table_lookup(t, xlo, o1);
     ss_mm_table_lookup(t, xlo2, o2);
     assert_memory_equal(o1, o2, sizeof o1);
+    /* many points at once: each equal to its single lookup, bit for bit */
+    enum { NP = 257 };
+    double *xs = malloc(NP * SS_MM_NAXES * sizeof *xs);
+    double *many = malloc(NP * SS_MM_NFIELDS * sizeof *many);
+    assert_non_null(xs);
+    assert_non_null(many);
+    for (int i = 0; i < NP; i++)
+        for (int a = 0; a < SS_MM_NAXES; a++) {
+            double u = 1.2 * ss_rng_uniform(9, (uint64_t)a, (uint64_t)i) - 0.1;
+            xs[i * SS_MM_NAXES + a] =
+                t->axis[a][0] + u * (t->axis[a][t->nsamples[a] - 1] - t->axis[a][0]);
+        }
+    ss_mm_table_lookup_many(t, xs, NP, many);
+    for (int i = 0; i < NP; i++) {
+        double one[SS_MM_NFIELDS];
+        ss_mm_table_lookup(t, xs + i * SS_MM_NAXES, one);
+        assert_memory_equal(one, many + i * SS_MM_NFIELDS, sizeof one);
+    }
+    free(xs);
+    free(many);
     ss_mm_table_free(t);
 }
 

@@ -192,10 +192,77 @@ static void test_paint_no_uvs(void **state) {
     ss_mesh_free(&m);
 }
 
+/* A UV cut inside one island: a cylinder (radius 1, height 2) unwrapped
+ * around its axis, u = angle / 2 pi, whose top cap joins every column (its
+ * centre has one UV), so the u = 0 and u = 1 columns are one island. A short
+ * stroke across the cut must become two strokes, each on its own side, and
+ * no brush ring may reach across. */
+static void test_paint_wrap_inside_island(void **state) {
+    (void)state;
+    enum { N = 32 };
+    float pos[3 * (2 * (N + 1) + 1)], uv[2 * (2 * (N + 1) + 1)];
+    uint32_t idx[3 * (2 * N + N)];
+    int nv = 0, nt = 0;
+    for (int row = 0; row < 2; row++)
+        for (int i = 0; i <= N; i++) {
+            double a = 2 * 3.14159265358979 * (i % N) / N;
+            pos[3 * nv] = (float)cos(a), pos[3 * nv + 1] = (float)(2 * row - 1),
+                    pos[3 * nv + 2] = (float)sin(a);
+            uv[2 * nv] = (float)i / N, uv[2 * nv + 1] = 0.25f + 0.5f * (float)row;
+            nv++;
+        }
+    int centre = nv;
+    pos[3 * nv] = 0, pos[3 * nv + 1] = 1, pos[3 * nv + 2] = 0;
+    uv[2 * nv] = 0.5f, uv[2 * nv + 1] = 0.95f;
+    nv++;
+    for (int i = 0; i < N; i++) {
+        uint32_t b0 = (uint32_t)i, b1 = (uint32_t)i + 1, t0 = b0 + N + 1, t1 = b1 + N + 1;
+        uint32_t tri[3][3] = {{b0, t0, b1}, {b1, t0, t1}, {t0, (uint32_t)centre, t1}};
+        for (int k = 0; k < 3; k++, nt++) memcpy(idx + 3 * nt, tri[k], sizeof tri[k]);
+    }
+    ss_mesh m;
+    ss_error err = {0};
+    assert_int_equal(ss_mesh_from_arrays(pos, NULL, uv, nv, idx, nt, "cylinder", &m, &err), SS_OK);
+    ss_paint p;
+    assert_int_equal(ss_paint_create(&m, 0.05, &p, &err), SS_OK);
+    assert_int_equal(p.nislands, 1);
+    ss_paint_begin(&p);
+    int hits = 0;
+    for (int k = -6; k <= 6; k++) { /* 12 degrees either side of the cut at angle 0 */
+        double a = k * 2.0 * 3.14159265358979 / 180;
+        float o[3] = {3 * (float)cos(a), 0, 3 * (float)sin(a)};
+        float d[3] = {-(float)cos(a), 0, -(float)sin(a)};
+        float r[3] = {-(float)sin(a), 0, (float)cos(a)}, u[3] = {0, 1, 0};
+        hits += ss_paint_add(&p, o, d, r, u, NULL);
+    }
+    ss_paint_end(&p);
+    assert_int_equal(hits, 13);
+    assert_true(p.next_stroke >= 2);
+    for (int st = 0; st < p.next_stroke; st++) {
+        float lo = 2, hi = -1;
+        for (int i = 0; i < p.n; i++)
+            if (p.s[i].stroke == st) {
+                if (p.s[i].uv[0] < lo) lo = p.s[i].uv[0];
+                if (p.s[i].uv[0] > hi) hi = p.s[i].uv[0];
+            }
+        if (hi < lo) continue;
+        /* each stroke on one side of the cut: a few degrees wide, not the island */
+        assert_true(hi - lo < 0.1f);
+    }
+    ss_stroke_set set;
+    int dropped = 0;
+    assert_int_equal(ss_paint_to_strokes(&p, &set, &dropped, &err), SS_OK);
+    assert_true(set.nstrokes >= 2);
+    ss_stroke_set_free(&set);
+    ss_paint_free(&p);
+    ss_mesh_free(&m);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_paint_islands),
         cmocka_unit_test(test_paint_no_uvs),
+        cmocka_unit_test(test_paint_wrap_inside_island),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

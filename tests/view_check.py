@@ -16,6 +16,9 @@
       painted spot; at a seam, on its outline).
   view_check.py changed A.png B.png X Y R
       the frames differ inside the disc of radius R around pixel (X, Y).
+  view_check.py help WINDOW.png
+      a window shot shows the F1 help: a dark box with light text over the
+      middle of the 3D view.
 """
 import json
 import struct
@@ -263,6 +266,16 @@ def check_changed(a_path, b_path, x, y, r):
     print("changed: %d of %d pixels around (%d,%d)" % (diff, n, x, y))
 
 
+def check_help(path):
+    w, h, px = pixels(path)
+    box = [px[y * w + x] for y in range(h * 3 // 8, h * 5 // 8) for x in range(w * 3 // 8, w * 5 // 8)]
+    dark = sum(1 for p in box if sum(p) < 3 * 30)
+    light = sum(1 for p in box if min(p) > 190)
+    assert dark > 0.4 * len(box) and light > 0.01 * len(box), \
+        "no help box in the middle: %d dark, %d light of %d" % (dark, light, len(box))
+    print("help: %d dark, %d light of %d pixels in the middle" % (dark, light, len(box)))
+
+
 if __name__ == "__main__":
     cmd = sys.argv[1]
     if cmd == "skin":
@@ -275,5 +288,7 @@ if __name__ == "__main__":
             sys.exit("expected strokes in at least %s islands, got %d" % (sys.argv[5], k))
     elif cmd == "changed":
         check_changed(sys.argv[2], sys.argv[3], int(sys.argv[4]), int(sys.argv[5]), int(sys.argv[6]))
+    elif cmd == "help":
+        check_help(sys.argv[2])
     else:
         sys.exit("unknown check " + cmd)

@@ -4,12 +4,25 @@
  * back as an ss_status with a message that names the input and what was
  * wrong.
  *
- * What is stable: every type and function declared in include/skinsim/ is the
- * library's API (one header per module). The shared library's soname
- * (libskinsim.so.MAJOR) changes whenever a declared struct layout or function
- * signature changes incompatibly; while MAJOR is 0, expect that between
- * minor releases. Names with a double underscore and the src/ headers
- * (*_internal.h) are not API. */
+ * What is stable, and what is not:
+ *   - Stable API (kept across minor releases once MAJOR is 1; the soname
+ *     libskinsim.so.MAJOR changes whenever one of these changes
+ *     incompatibly; while MAJOR is 0, expect changes between minor
+ *     releases): the error type and codes, ss_image and its PNG/EXR I/O,
+ *     colour encoding, the counter-based RNG, threads, progress,
+ *     ss_data_dir/ss_data_path/ss_version here, and the module headers
+ *     optics.h, optics_fit.h, skin.h, texture.h, abrasion.h, wound.h,
+ *     heal.h, heal_run.h, heal_io.h, mech.h, mesh.h, geom.h, paint.h,
+ *     shell.h.
+ *   - Exported for the skinsim programs, not stable (may change in any
+ *     release): the file I/O helpers, the output discipline (ss_outputs_*,
+ *     the staging and atomic-write helpers), the input checks (ss_input_*,
+ *     ss_image_check_alloc, ss_memory_available_bytes) and the text helpers
+ *     (ss_text_*). They are exported so the CLI and the examples share one
+ *     implementation; a program outside skinsim should not depend on them.
+ *   - Not API: names with a double underscore and the src/ headers
+ *     (*_internal.h). dist.h (the MPI solvers) is not installed: those
+ *     functions live only in the skinsim program (`mpirun skinsim ...`). */
 #ifndef SKINSIM_CORE_H
 #define SKINSIM_CORE_H
 
@@ -276,9 +289,19 @@ int ss_text_parse_number(const char *s, double *out);
 
 /* Directory with the shipped data files: $SKINSIM_DATA, else the
  * share/skinsim folder of an installed copy (found next to the library or
- * program file, so an installed tree can be moved), else the build-time
- * source data directory. */
+ * program file, else next to a libskinsim on the program's library search
+ * path, e.g. the RUNPATH `pkg-config --static --libs skinsim` sets; so an
+ * installed tree can be moved), else the source data directory for code
+ * running from its build folder, else the configured install folder. */
 const char *ss_data_dir(void);
+/* The shipped ModelMatch table, relative to ss_data_dir() (the table that
+ * `skinsim wound` and `skinsim skin` use when given none). */
+#define SS_DATA_DEFAULT_TABLE "modelmatch_default.sstab"
+/* Full path of the shipped data file `name` (relative to ss_data_dir(), e.g.
+ * SS_DATA_DEFAULT_TABLE or "spectra/d65.csv") in out[outsize]. Returns
+ * SS_ERR_INPUT naming the path when it cannot be read (or name is empty,
+ * absolute or climbs out with ".."), or when it does not fit in out. */
+ss_status ss_data_path(const char *name, char *out, size_t outsize, ss_error *err);
 /* The library's version, "MAJOR.MINOR.PATCH" (the shared library's soname
  * carries MAJOR). */
 const char *ss_version(void);

@@ -1,5 +1,7 @@
 /* skinsim dist: the MPI side of skinsim (built only when CMake finds MPI;
- * SKINSIM_HAVE_MPI is then defined for code linking skinsim_dist). The
+ * SKINSIM_HAVE_MPI is then defined for code linking skinsim_dist). Not
+ * installed and not API: skinsim_dist is linked into the skinsim program
+ * only (run it under mpirun), not into libskinsim. The
  * healing solver on a Cartesian decomposition of the grid (seed 001 §4.1 on
  * §5.1's grid, explicit and split schemes) and the ModelMatch table (seed 003 §4.8.6)
  * with entries shared out dynamically; both bit-identical to one process.

@@ -159,6 +159,12 @@ ss_status ss_heal_run_step(ss_heal_run *r, ss_error *err);
 /* Steps until the run reaches `day` (rounded to whole steps), at most to the
  * end; a day before the current time or after the end -> SS_ERR_INPUT. */
 ss_status ss_heal_run_advance_to(ss_heal_run *r, double day, ss_error *err);
+/* Optional: fn(user, day) is called from the calling thread after every solver
+ * step of ss_heal_run_advance_to with the run's new day; a non-zero return
+ * stops advance_to after that step with SS_ERR_RUNTIME ("cancelled"). The run
+ * stays valid at that step, and advancing to the same day again goes on as
+ * if it had not stopped. fn NULL removes it. */
+void ss_heal_run_set_progress(ss_heal_run *r, int (*fn)(void *user, double day), void *user);
 /* With out_dir: writes the outputs still due (the day-0 snapshot of a run
  * that never stepped), then area.csv, area.png and summary.json. Returns in
  * *summary_json (if not NULL) the summary as malloc'd JSON text without the

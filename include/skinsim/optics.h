@@ -89,6 +89,15 @@ typedef struct ss_mc_options {
     double radial_max_cm; /* if > 0, fill result.radial (Rd(r)) */
     int radial_distance;  /* SS_RADIAL_NET (default) or SS_RADIAL_PATH */
     int kernel;           /* SS_MC_KERNEL_AUTO (default), _SCALAR, _PACKET_BASE */
+    /* optional (NULL, the default: never cancelled): polled from the calling
+     * thread only, at the start of each photon block it takes (a block is at
+     * most 1/256 of the run) and every 4,096 photons on the scalar path; a
+     * non-zero return stops the run, which then returns SS_ERR_RUNTIME
+     * ("cancelled") with nothing in its result. Every call built on ss_mc_run
+     * (spectra, BRDFs, tables) copies these options, so one callback cancels
+     * them all. Results of runs that are not cancelled do not depend on it. */
+    int (*cancel)(void *user);
+    void *cancel_user;
 } ss_mc_options;
 /* Which transport loop runs: AUTO, the packet path (4 photons in SIMD lanes;
  * its AVX2 copy where the processor has AVX2, else the baseline x86-64 copy,

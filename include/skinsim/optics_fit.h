@@ -208,6 +208,10 @@ size_t ss_mm_table_index(const ss_mm_table *t, const int idx[SS_MM_NAXES]);
  * smooth (docs/modelmatch.md gives the errors against the transport). */
 void ss_mm_table_lookup(const ss_mm_table *t, const double x[SS_MM_NAXES],
                         double out[SS_MM_NFIELDS]);
+/* The same for n points at once (maps): x[i * SS_MM_NAXES + a] ->
+ * out[i * SS_MM_NFIELDS + f], in parallel; each point's values are those of
+ * ss_mm_table_lookup, bit for bit, at any thread count. */
+void ss_mm_table_lookup_many(const ss_mm_table *t, const double *x, size_t n, double *out);
 /* Same, with the coordinates taken from bio (validated first). */
 ss_status ss_mm_table_lookup_bio(const ss_mm_table *t, const ss_bio_params *bio, ss_mm_entry *out,
                                  ss_error *err);

@@ -35,6 +35,10 @@ typedef struct ss_paint {
     int cur_group, cur_stroke, cur_island; /* cur_group < 0: not painting */
     double brush_radius;                   /* on the surface, mesh units */
     int ring;                              /* ring samples per hit (default 8) */
+    /* the last centre hit of the current stroke: where its UV continuity
+     * is judged from (triangle, surface point, UV) */
+    int cur_tri;
+    float cur_pos[3], cur_uv[2];
 } ss_paint;
 
 /* A session on mesh m (which needs UVs: a mesh without them is an input

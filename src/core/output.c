@@ -390,6 +390,22 @@ static void free_entry(out_entry *e) {
 static void pop_entry(ss_outputs *o) { free_entry(&o->out[--o->nout]); }
 
 /* The checks of an existing or missing target that need no lock. */
+/* 1 when a folder can be made in dir (made and removed at once), else 0
+ * with the reason in *why. */
+static int probe_dir(const char *dir, int *why) {
+    char p[PATH_MAX];
+    if (snprintf(p, sizeof p, "%s/.skinsim-probe.XXXXXX", dir) >= (int)sizeof p) {
+        *why = ENAMETOOLONG;
+        return 0;
+    }
+    if (!mkdtemp(p)) {
+        *why = errno;
+        return 0;
+    }
+    rmdir(p);
+    return 1;
+}
+
 static ss_status check_target(const ss_outputs *o, out_entry *e, ss_error *err) {
     char sb[200];
     struct stat st;
@@ -427,6 +443,7 @@ static ss_status check_target(const ss_outputs *o, out_entry *e, ss_error *err) 
         return SS_OK;
     }
     /* Missing: the nearest existing folder above must be writable. */
+    int errno_probe = 0;
     char *d = strdup(e->parent);
     if (!d) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     while (stat(d, &st) != 0 && strcmp(d, "/")) {
@@ -439,6 +456,10 @@ static ss_status check_target(const ss_outputs *o, out_entry *e, ss_error *err) 
         s = OUTMSG(e, "%s is not a folder", d);
     else if (access(d, W_OK | X_OK) != 0)
         s = OUTMSG(e, "cannot be created: the folder %s is not writable", d);
+    else if (!probe_dir(d, &errno_probe))
+        /* access() says yes to root everywhere; /proc, /sys and read-only
+         * mounts refuse new entries all the same: try one */
+        s = OUTMSG(e, "cannot be created in %s: %s", d, strerror(errno_probe));
     free(d);
     return s;
 }

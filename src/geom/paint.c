@@ -14,7 +14,19 @@
  * press-drag-release), so undo removes the whole gesture but each island
  * gets its own hull. The seed's hand had one UV island per visible side;
  * skinsim's hand has three (DESIGN.md) and a wound across the palm/back
- * seam would otherwise get a hull spanning the empty UV space between them. */
+ * seam would otherwise get a hull spanning the empty UV space between them.
+ *
+ * Cuts inside an island: an island can also wrap (a UV sphere's u = 0/1
+ * meridian when the poles join its columns, a cylinder closed by a cap), so
+ * a short stroke across the cut would jump from u = 0.99 to u = 0.01 and its
+ * hull cover the whole island. Every step is therefore checked against the
+ * previous hit's triangle: its affine surface-to-UV map predicts where the
+ * new point should land in UV; a landing further from the prediction than
+ * twice the predicted step plus 0.02 (a smooth chart is close to linear over
+ * a brush step; a cut is off by the island's width) starts a new stroke, as
+ * an island change does. Ring samples are checked the same way against the
+ * centre hit, so a brush on the cut keeps only its own side. Gave up: a cut
+ * narrower than 0.02 in UV is not seen. */
 #include "skinsim/paint.h"
 
 #include <math.h>
@@ -73,6 +85,39 @@ static int push(ss_paint *p, const float uv[2], const float pos[3], int island) 
     return 0;
 }
 
+/* The UV that triangle t's own affine map gives the surface point q (its
+ * projection onto t's plane, extrapolated outside t); 0 for a degenerate t. */
+static int predict_uv(const ss_mesh *m, int t, const float q[3], float out[2]) {
+    const uint32_t *ix = m->indices + 3 * (size_t)t;
+    const float *a = m->positions + 3 * (size_t)ix[0], *b = m->positions + 3 * (size_t)ix[1],
+                *c = m->positions + 3 * (size_t)ix[2];
+    double v0[3], v1[3], v2[3], d00 = 0, d01 = 0, d11 = 0, d20 = 0, d21 = 0;
+    for (int k = 0; k < 3; k++) {
+        v0[k] = (double)b[k] - a[k], v1[k] = (double)c[k] - a[k], v2[k] = (double)q[k] - a[k];
+        d00 += v0[k] * v0[k], d01 += v0[k] * v1[k], d11 += v1[k] * v1[k];
+        d20 += v2[k] * v0[k], d21 += v2[k] * v1[k];
+    }
+    double den = d00 * d11 - d01 * d01;
+    if (!(den > 1e-30 * (d00 * d11))) return 0;
+    double wb = (d11 * d20 - d01 * d21) / den, wc = (d00 * d21 - d01 * d20) / den;
+    double wa = 1.0 - wb - wc;
+    const float *ua = m->uvs + 2 * (size_t)ix[0], *ub = m->uvs + 2 * (size_t)ix[1],
+                *uc = m->uvs + 2 * (size_t)ix[2];
+    for (int k = 0; k < 2; k++) out[k] = (float)(wa * ua[k] + wb * ub[k] + wc * uc[k]);
+    return 1;
+}
+
+/* 1 when going from uv0 (on triangle t0) to the surface point q1 with UV
+ * uv1 crosses no UV cut (see the top of this file). */
+static int uv_continuous(const ss_mesh *m, int t0, const float uv0[2], const float q1[3],
+                         const float uv1[2]) {
+    float pr[2];
+    if (!predict_uv(m, t0, q1, pr)) return 1; /* cannot tell: keep it */
+    double step = hypot((double)pr[0] - uv0[0], (double)pr[1] - uv0[1]);
+    double off = hypot((double)uv1[0] - pr[0], (double)uv1[1] - pr[1]);
+    return off <= 2.0 * step + 0.02;
+}
+
 void ss_paint_begin(ss_paint *p) {
     p->cur_group = p->next_group++;
     p->cur_stroke = -1;
@@ -88,12 +133,16 @@ int ss_paint_add(ss_paint *p, const float origin[3], const float dir[3], const f
     if (hit_out) *hit_out = hit;
     if (!ok || p->cur_group < 0) return ok;
     int isl = p->island[hit.triangle];
-    if (p->cur_stroke < 0 || isl != p->cur_island) {
+    float c[3];
+    for (int d = 0; d < 3; d++) c[d] = origin[d] + hit.t * dir[d];
+    if (p->cur_stroke < 0 || isl != p->cur_island ||
+        !uv_continuous(p->mesh, p->cur_tri, p->cur_uv, c, hit.uv)) {
         p->cur_stroke = p->next_stroke++;
         p->cur_island = isl;
     }
-    float c[3];
-    for (int d = 0; d < 3; d++) c[d] = origin[d] + hit.t * dir[d];
+    p->cur_tri = hit.triangle;
+    for (int d = 0; d < 3; d++) p->cur_pos[d] = c[d];
+    p->cur_uv[0] = hit.uv[0], p->cur_uv[1] = hit.uv[1];
     if (push(p, hit.uv, c, isl)) return ok;
     double r = p->brush_radius;
     for (int k = 0; k < p->ring; k++) {
@@ -111,6 +160,7 @@ int ss_paint_add(ss_paint *p, const float origin[3], const float dir[3], const f
             dist2 += (double)(q[d] - c[d]) * (q[d] - c[d]);
         }
         if (dist2 > 9 * r * r) continue;
+        if (!uv_continuous(p->mesh, hit.triangle, hit.uv, q, h.uv)) continue;
         if (push(p, h.uv, q, isl)) break;
     }
     return ok;

@@ -33,6 +33,9 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 #include "optics_internal.h"
 
@@ -215,9 +218,11 @@ typedef struct mc_ctx {
     int rough, stochastic, paths;
     int path_dist; /* bin Rd(r) by the summed horizontal path (seed's D) */
     ss_mc_tally_spec spec;
-    double inv_dr, inv_dz; /* 1 / spec.rad_dr, 1 / spec.dz (0 if unused) */
-    zig_exp zig;           /* exponential sampler tables */
-    int kernel;            /* SS_MC_KERNEL_* */
+    double inv_dr, inv_dz;     /* 1 / spec.rad_dr, 1 / spec.dz (0 if unused) */
+    zig_exp zig;               /* exponential sampler tables */
+    int kernel;                /* SS_MC_KERNEL_* */
+    int (*cancel)(void *user); /* ss_mc_options.cancel: polled by the calling thread */
+    void *cancel_user;
 } mc_ctx;
 
 /* Unpolarised Fresnel reflectance from n1 into n2 at incidence cosine ci (>0);
@@ -1215,6 +1220,8 @@ static ss_status ctx_init(mc_ctx *c, const ss_optics_slab *s, const ss_mc_option
     c->n_below = s->n_below;
     c->albedo = s->bottom_albedo;
     c->seed = o->seed;
+    c->cancel = o->cancel;
+    c->cancel_user = o->cancel_user;
     c->sin_ti = sin(o->theta_i_rad);
     c->cos_ti = cos(o->theta_i_rad);
     c->rough = o->roughness_sigma > 0.0;
@@ -1268,6 +1275,20 @@ static void acc_bind(mc_acc *a, const ss_mc_tally_spec *sp, double *mem) {
     }
 }
 
+/* One cancellation poll: has the run been stopped (by any thread), or does
+ * the caller's callback (asked on the calling thread only) stop it now? */
+static int poll_stop(const mc_ctx *c, int *stop, int caller) {
+    int halted;
+#pragma omp atomic read
+    halted = *stop;
+    if (!halted && caller && c->cancel(c->cancel_user)) {
+#pragma omp atomic write
+        *stop = 1;
+        halted = 1;
+    }
+    return halted;
+}
+
 /* Number of photon blocks: a function of the photon count and the tally size
  * only (never of the thread count); large tallies (MCML 2-D grids) get fewer
  * blocks so that the per-block copies stay below about 256 MB. */
@@ -1309,18 +1330,46 @@ static ss_status run_blocks(const mc_ctx *c, uint64_t photons, run_out *out, ss_
     if (kernel == SS_MC_KERNEL_AUTO && !__builtin_cpu_supports("avx2"))
         kernel = SS_MC_KERNEL_PACKET_BASE;
 #endif
+    /* Cancellation: only the calling thread (thread 0 of the team) calls
+     * c->cancel, so a caller's callback (a Python interpreter's signal check)
+     * never runs on a worker thread. It is polled at the start of every block
+     * (at most photons / 256 photons, or 2,048) and, on the scalar path, every
+     * 4,096 photons within one; once it says stop, every thread leaves at its
+     * next poll and the run returns an error. A run that is not cancelled is
+     * unchanged (the poll reads nothing the photons use). */
+    int stop = 0;
 #pragma omp parallel for schedule(dynamic, 1)
     for (long long b = 0; b < nbl; b++) {
+#ifdef _OPENMP
+        const int caller = omp_get_thread_num() == 0;
+#else
+        const int caller = 1;
+#endif
         uint64_t lo = photons * (uint64_t)b / nb, hi = photons * (uint64_t)(b + 1) / nb;
         path_buf *pb = pbs ? &pbs[b] : NULL;
-        if (kernel == SS_MC_KERNEL_SCALAR)
-            for (uint64_t i = lo; i < hi; i++) run_photon(c, i, &acc[b], pb);
+        if (c->cancel && poll_stop(c, &stop, caller)) continue;
+        if (kernel == SS_MC_KERNEL_SCALAR) {
+            for (uint64_t i = lo; i < hi; i++) {
+                if (c->cancel && i > lo && ((i - lo) & 4095) == 0 && poll_stop(c, &stop, caller))
+                    break;
+                run_photon(c, i, &acc[b], pb);
+            }
+        }
 #ifdef PK_HAVE_AVX2
         else if (kernel == SS_MC_KERNEL_AUTO)
             pk_run_block_avx2(c, lo, hi, &acc[b], pb);
 #endif
         else
             pk_run_block_base(c, lo, hi, &acc[b], pb);
+    }
+    if (stop) {
+        if (pbs)
+            for (uint64_t b = 0; b < nb; b++) free(pbs[b].r);
+        free(pbs);
+        free(acc);
+        free(mem);
+        memset(out, 0, sizeof *out);
+        return ss_error_set(err, SS_ERR_RUNTIME, "Monte Carlo run cancelled by the caller");
     }
     /* reduce in block order */
     memset(out, 0, sizeof *out);

@@ -218,6 +218,13 @@ void ss_mm_surface_lobe(const ss_mm_table *t, double sigma, double *specular, do
     if (diffuse_scale) *diffuse_scale = sc;
 }
 
+void ss_mm_table_lookup_many(const ss_mm_table *t, const double *x, size_t n, double *out) {
+    long long m = (long long)n;
+#pragma omp parallel for schedule(static)
+    for (long long i = 0; i < m; i++)
+        ss_mm_table_lookup(t, x + (size_t)i * SS_MM_NAXES, out + (size_t)i * SS_MM_NFIELDS);
+}
+
 /* ---- file ---------------------------------------------------------------- */
 
 static const unsigned char mm_magic[8] = {'S', 'S', 'M', 'M', 'T', 'A', 'B', '\n'};

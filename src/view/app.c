@@ -347,9 +347,11 @@ typedef struct app {
     char status[1024];
     /* GTK (NULL when headless) */
     GtkWidget *window, *area, *scale, *day_label, *progress_bar, *status_label, *paint_btn,
-        *play_btn, *gen_btn;
+        *play_btn, *gen_btn, *help_box;
     int updating_scale;
-    int quit;
+    int quit;    /* Escape or Ctrl+Q: close the window at the next tick */
+    int help;    /* the F1 help overlay is shown */
+    int focused; /* the 3D view took the keyboard focus once the window was up */
     /* batch outputs: where to write (staging paths of ss_outputs) */
     const char *shot_path, *csv_path;
 } app;
@@ -366,7 +368,17 @@ static void app_message(app *a, int is_error, const char *fmt, ...) {
     vsnprintf(a->status, sizeof a->status, fmt, ap);
     va_end(ap);
     if (is_error || !a->o.quiet) fprintf(stderr, "skinsim view: %s\n", a->status);
-    if (a->status_label) gtk_label_set_text(GTK_LABEL(a->status_label), a->status);
+    if (a->status_label) {
+        /* errors in the window as well as on stderr, in red */
+        char *esc = g_markup_escape_text(a->status, -1);
+        char *m =
+            is_error
+                ? g_strdup_printf("<span foreground=\"#d02020\" weight=\"bold\">%s</span>", esc)
+                : g_strdup(esc);
+        gtk_label_set_markup(GTK_LABEL(a->status_label), m);
+        g_free(m);
+        g_free(esc);
+    }
 }
 
 static void app_redraw(app *a) {
@@ -489,6 +501,13 @@ static void app_update_gen_widgets(app *a) {
  * nothing is painted). */
 static void app_generate(app *a) {
     if (a->generating) return;
+    if (!a->mesh.has_uvs) { /* the textures would land nowhere: refuse at once */
+        a->gen_failed = SS_ERR_INPUT;
+        app_message(a, 1,
+                    "Generate: the mesh has no texture coordinates (UVs), so textures cannot "
+                    "be put on it; open a mesh with a UV map");
+        return;
+    }
     ss_error err = {0};
     int dropped = 0;
     ss_status st;
@@ -629,8 +648,18 @@ static void app_key(app *a, const char *k) {
         view_camera_frame(&a->cam, &a->mesh);
     else if (!strcasecmp(k, "h"))
         a->hide_strokes = !a->hide_strokes;
+    else if (!strcasecmp(k, "F1") || !strcmp(k, "question") || !strcmp(k, "?"))
+        a->help = !a->help;
+    else if (!strcasecmp(k, "Escape")) {
+        if (a->help)
+            a->help = 0; /* Escape first closes the help, then the window */
+        else
+            a->quit = 1;
+    } else if (!strcasecmp(k, "ctrl+q"))
+        a->quit = 1;
     else
-        app_message(a, 0, "key '%s' does nothing", k);
+        app_message(a, 0, "key '%s' does nothing (F1: help)", k);
+    if (a->help_box) gtk_widget_set_visible(a->help_box, a->help);
     app_redraw(a);
 }
 
@@ -987,8 +1016,15 @@ static void on_realize(GtkGLArea *area, gpointer data) {
         return;
     }
     a->layers_dirty = a->strokes_dirty = 1;
-    app_message(a, 0, "%s | %s. P: paint, G: generate, drag: rotate, shift-drag: pan, wheel: zoom",
-                a->layers.source, view_renderer_gl_info(a->rend));
+    if (!a->mesh.has_uvs)
+        app_message(a, 1,
+                    "this mesh has no texture coordinates (UVs): painting and Generate are off; "
+                    "open a mesh with a UV map (F1: help)");
+    else
+        app_message(a, 0,
+                    "%s | %s. P: paint, G: generate, drag: rotate, shift-drag: pan, wheel: zoom, "
+                    "F1: help",
+                    a->layers.source, view_renderer_gl_info(a->rend));
 }
 
 static void on_unrealize(GtkGLArea *area, gpointer data) {
@@ -1037,6 +1073,14 @@ static gboolean on_key(GtkEventControllerKey *c, guint keyval, guint code, GdkMo
     app *a = ((gtk_run *)data)->a;
     const char *name = gdk_keyval_name(gdk_keyval_to_lower(keyval));
     if (!name) return FALSE;
+    if ((mods & GDK_CONTROL_MASK) && !strcmp(name, "q")) {
+        app_key(a, "ctrl+q");
+        return TRUE;
+    }
+    if (!strcmp(name, "Escape") || !strcmp(name, "F1") || !strcmp(name, "question")) {
+        app_key(a, name);
+        return TRUE;
+    }
     if ((mods & GDK_CONTROL_MASK) && strcmp(name, "z")) return FALSE;
     if (!strcmp(name, "Left") || !strcmp(name, "Right") || !strcmp(name, "space") ||
         strlen(name) == 1) {
@@ -1045,6 +1089,17 @@ static gboolean on_key(GtkEventControllerKey *c, guint keyval, guint code, GdkMo
     }
     return FALSE;
 }
+
+static const char HELP_TEXT[] =
+    "skinsim view\n\n"
+    "drag            rotate          shift-drag / middle   pan\n"
+    "wheel           zoom            R                     reset the view\n"
+    "P               paint mode (drag on the mesh to paint a wound)\n"
+    "Z  Ctrl+Z       undo a stroke   C                     clear the strokes\n"
+    "H               hide strokes    S                     save strokes\n"
+    "G               Generate (the abrasion timeline from the strokes)\n"
+    "Space           play / pause    Left / Right          previous / next key\n"
+    "F1  ?           this help       Escape  Ctrl+Q        close the help, quit";
 
 static void on_scale(GtkRange *r, gpointer data) {
     app *a = ((gtk_run *)data)->a;
@@ -1129,6 +1184,16 @@ static gboolean on_close(GtkWindow *w, gpointer data) {
 static gboolean on_tick(gpointer data) {
     gtk_run *g = data;
     app *a = g->a;
+    if (a->quit) { /* Escape / Ctrl+Q (also from a script) */
+        g->done = 1;
+        return G_SOURCE_CONTINUE;
+    }
+    /* GTK gives a new window's focus to its first focusable widget (the
+     * brush field) when it maps; once the 3D view is realised, take it */
+    if (!a->focused && a->rend && a->area) {
+        gtk_widget_grab_focus(a->area);
+        a->focused = 1;
+    }
     if (a->generating) {
         app_update_gen_widgets(a);
         if (app_generate_finish(a, 0)) app_redraw(a);
@@ -1215,6 +1280,25 @@ static int run_gtk(app *a, int batch) {
     g_signal_connect(a->area, "unrealize", G_CALLBACK(on_unrealize), &g);
     g_signal_connect(a->area, "render", G_CALLBACK(on_render), &g);
     g_signal_connect(a->area, "resize", G_CALLBACK(on_resize), &g);
+    /* the F1 help: a dark box over the 3D view, hidden until asked for */
+    GtkWidget *overlay = gtk_overlay_new();
+    gtk_overlay_set_child(GTK_OVERLAY(overlay), a->area);
+    GtkWidget *help = gtk_label_new(HELP_TEXT);
+    gtk_widget_add_css_class(help, "skinsim-help");
+    gtk_widget_set_halign(help, GTK_ALIGN_CENTER);
+    gtk_widget_set_valign(help, GTK_ALIGN_CENTER);
+    gtk_widget_set_can_target(help, FALSE);
+    gtk_widget_set_visible(help, a->help);
+    gtk_overlay_add_overlay(GTK_OVERLAY(overlay), help);
+    a->help_box = help;
+    GtkCssProvider *css = gtk_css_provider_new();
+    gtk_css_provider_load_from_data(css,
+                                    ".skinsim-help { background-color: rgba(0,0,0,0.8); "
+                                    "color: #ffffff; padding: 16px; font-family: monospace; }",
+                                    -1);
+    gtk_style_context_add_provider_for_display(gdk_display_get_default(), GTK_STYLE_PROVIDER(css),
+                                               GTK_STYLE_PROVIDER_PRIORITY_APPLICATION);
+    g_object_unref(css);
     GtkGesture *drag = gtk_gesture_drag_new();
     gtk_gesture_single_set_button(GTK_GESTURE_SINGLE(drag), 0);
     g_signal_connect(drag, "drag-begin", G_CALLBACK(on_drag_begin), &g);
@@ -1228,7 +1312,7 @@ static int run_gtk(app *a, int batch) {
     GtkEventController *keys = gtk_event_controller_key_new();
     g_signal_connect(keys, "key-pressed", G_CALLBACK(on_key), &g);
     gtk_widget_add_controller(win, keys);
-    gtk_box_append(GTK_BOX(vbox), a->area);
+    gtk_box_append(GTK_BOX(vbox), overlay);
 
     GtkWidget *timebar = gtk_box_new(GTK_ORIENTATION_HORIZONTAL, 4);
     gtk_box_append(GTK_BOX(vbox), timebar);
@@ -1254,6 +1338,8 @@ static int run_gtk(app *a, int batch) {
     g_signal_connect(win, "close-request", G_CALLBACK(on_close), &g);
     guint tick = g_timeout_add(33, on_tick, &g);
     gtk_window_present(GTK_WINDOW(win));
+    /* keys go to the 3D view from the start, not into the brush field */
+    gtk_widget_grab_focus(a->area);
     if (!batch && a->o.generate) app_generate(a);
     while (!g.done) g_main_context_iteration(NULL, TRUE);
     g_source_remove(tick);
@@ -1261,6 +1347,7 @@ static int run_gtk(app *a, int batch) {
     while (g_main_context_pending(NULL)) g_main_context_iteration(NULL, FALSE);
     a->window = a->area = NULL;
     a->scale = a->day_label = a->progress_bar = a->status_label = a->paint_btn = NULL;
+    a->help_box = NULL;
     a->play_btn = a->gen_btn = NULL;
     return g.rc;
 }

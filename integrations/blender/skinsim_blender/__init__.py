@@ -35,6 +35,20 @@ wound and places its timeline inside the UV square with a Mapping node,
 blended over the outer tenth of the block into `skinsim skin`'s textures;
 the block's base skin is the same procedural skin made at the block's scale
 (skinsim wound --skin).
+
+Settings live on each object (Object.skinsim), so two meshes keep their own
+wound, days and folder. From the UI the build runs as a modal job: the
+skinsim commands run one after another as child processes while Blender
+stays responsive, with a progress bar and the step in the status bar; Esc
+cancels (the running command is stopped, nothing in the scene changes).
+Called from a script (bpy.ops.skinsim.build_material()) or in background
+mode it runs to the end before returning. Every failure -- a bad day list,
+an output folder that cannot be made, a command that exits non-zero -- is
+reported with report() and kept in the object's last_error.
+
+The same file is a legacy add-on (bl_info, Blender 3.x-4.1) and, with
+blender_manifest.toml beside it, a Blender 4.2+ extension (`make
+blender-extension` zips the two).
 """
 
 bl_info = {
@@ -181,12 +195,17 @@ def _run(cmd, cli):
         raise RuntimeError(msg[-1] if msg else "skinsim exited with code %d" % p.returncode)
 
 
+def skin_command(cli, settings, out_dir, world_size_cm=None, size=None):
+    """The `skinsim skin` command (default: over the whole UV square)."""
+    return [cli, "skin", "--size", str(size or settings.size), "--world-size-cm",
+            repr(world_size_cm or settings.world_size_cm), "--seed", str(settings.seed),
+            "--quiet", "--out", out_dir]
+
+
 def run_skin(cli, settings, out_dir, world_size_cm=None, size=None):
-    """Runs `skinsim skin` (default: over the whole UV square); returns its folder."""
+    """Runs `skinsim skin`; returns its folder."""
     os.makedirs(os.path.dirname(os.path.abspath(out_dir)) or ".", exist_ok=True)
-    _run([cli, "skin", "--size", str(size or settings.size), "--world-size-cm",
-          repr(world_size_cm or settings.world_size_cm), "--seed", str(settings.seed),
-          "--quiet", "--out", out_dir], cli)
+    _run(skin_command(cli, settings, out_dir, world_size_cm, size), cli)
     return out_dir
 
 
@@ -196,53 +215,49 @@ def block_uv(settings):
     return side, (settings.wound_u - side / 2, settings.wound_v - side / 2)
 
 
-def run_wound(cli, settings, days, out_dir, skin_bio):
-    """Runs `skinsim wound` on a block of block_mm around the wound (the
-    circle, or the strokes CSV in the block's own 0..1 coordinates); returns
-    the frames folder."""
+def wound_command(cli, settings, days, out_dir, skin_bio, tmp):
+    """The `skinsim wound` command on a block of block_mm around the wound
+    (the circle, written into tmp, or the strokes CSV in the block's own 0..1
+    coordinates) and its frames folder."""
     side, _ = block_uv(settings)
-    os.makedirs(os.path.dirname(os.path.abspath(out_dir)) or ".", exist_ok=True)
-    with tempfile.TemporaryDirectory() as tmp:
-        if settings.stroke_csv:
-            stroke = bpy.path.abspath(settings.stroke_csv)
-        else:
-            r = settings.wound_radius / side
-            if not 0 < r < 0.45:
-                raise RuntimeError("Radius: the wound (%.1f mm across) must fit the block of "
-                                   "%g mm with a margin" % (2 * settings.wound_radius *
-                                                            settings.world_size_cm * 10,
-                                                            settings.block_mm))
-            stroke = os.path.join(tmp, "wound.csv")
-            with open(stroke, "w") as f:
-                f.write(circle_strokes(0.5, 0.5, r))
-        b = "%g" % settings.block_mm
-        _run([cli, "wound", "--stroke", stroke, "--size-mm", "%s,%s,4" % (b, b),
-              "--size", str(min(settings.size, 1024)), "--days",
-              ",".join("%g" % d for d in days), "--seed", str(settings.seed), "--no-compare",
-              "--quiet", "--out", out_dir] + (["--skin", skin_bio] if skin_bio else []), cli)
-    return os.path.join(out_dir, "frames")
+    if settings.stroke_csv:
+        stroke = bpy.path.abspath(settings.stroke_csv)
+    else:
+        r = settings.wound_radius / side
+        if not 0 < r < 0.45:
+            raise RuntimeError("Radius: the wound (%.1f mm across) must fit the block of "
+                               "%g mm with a margin" % (2 * settings.wound_radius *
+                                                        settings.world_size_cm * 10,
+                                                        settings.block_mm))
+        stroke = os.path.join(tmp, "wound_block.csv")
+        with open(stroke, "w") as f:
+            f.write(circle_strokes(0.5, 0.5, r))
+    b = "%g" % settings.block_mm
+    cmd = [cli, "wound", "--stroke", stroke, "--size-mm", "%s,%s,4" % (b, b),
+           "--size", str(min(settings.size, 1024)), "--days", ",".join("%g" % d for d in days),
+           "--seed", str(settings.seed), "--no-compare", "--quiet", "--out", out_dir]
+    if skin_bio:
+        cmd += ["--skin", skin_bio]
+    return cmd, os.path.join(out_dir, "frames")
 
 
-def run_abrasion(cli, settings, days, out_dir, upper=None):
-    """Runs `skinsim abrasion`; returns the frames folder. Raises
-    RuntimeError with the command's message when it fails."""
-    os.makedirs(os.path.dirname(os.path.abspath(out_dir)) or ".", exist_ok=True)
-    with tempfile.TemporaryDirectory() as tmp:
-        if settings.stroke_csv:
-            stroke = bpy.path.abspath(settings.stroke_csv)
-        else:
-            if settings.wound_radius <= 0:
-                raise RuntimeError("Radius: the wound radius must be > 0")
-            stroke = os.path.join(tmp, "wound.csv")
-            with open(stroke, "w") as f:
-                f.write(circle_strokes(settings.wound_u, settings.wound_v, settings.wound_radius))
-        cmd = [cli, "abrasion", "--stroke", stroke, "--size", str(settings.size),
-               "--world-size-cm", repr(settings.world_size_cm), "--seed", str(settings.seed),
-               "--times", ",".join("%g" % d for d in days), "--out", out_dir, "--quiet"]
-        if upper:
-            cmd += ["--upper", upper]
-        _run(cmd, cli)
-    return os.path.join(out_dir, "frames")
+def abrasion_command(cli, settings, days, out_dir, upper, tmp):
+    """The `skinsim abrasion` command (the circle written into tmp, or the
+    strokes CSV) and its frames folder."""
+    if settings.stroke_csv:
+        stroke = bpy.path.abspath(settings.stroke_csv)
+    else:
+        if settings.wound_radius <= 0:
+            raise RuntimeError("Radius: the wound radius must be > 0")
+        stroke = os.path.join(tmp, "wound.csv")
+        with open(stroke, "w") as f:
+            f.write(circle_strokes(settings.wound_u, settings.wound_v, settings.wound_radius))
+    cmd = [cli, "abrasion", "--stroke", stroke, "--size", str(settings.size),
+           "--world-size-cm", repr(settings.world_size_cm), "--seed", str(settings.seed),
+           "--times", ",".join("%g" % d for d in days), "--out", out_dir, "--quiet"]
+    if upper:
+        cmd += ["--upper", upper]
+    return cmd, os.path.join(out_dir, "frames")
 
 
 # ---- the material --------------------------------------------------------------------
@@ -563,6 +578,166 @@ def build_skin_material(obj, skin_dir, name=None):
     return mat
 
 
+def _out_dir(obj, st):
+    """The output folder, made now (RuntimeError naming it when it cannot be)."""
+    out_dir = bpy.path.abspath(st.out_dir) if st.out_dir else ""
+    if not out_dir:
+        base = (bpy.path.abspath("//") if bpy.data.filepath else
+                tempfile.mkdtemp(prefix="skinsim_"))
+        out_dir = os.path.join(base, "skinsim_" + bpy.path.clean_name(obj.name))
+    try:
+        os.makedirs(out_dir, exist_ok=True)
+    except OSError as e:
+        raise RuntimeError("Output folder %s cannot be made: %s" % (out_dir, e.strerror or e))
+    if not os.access(out_dir, os.W_OK | os.X_OK):
+        raise RuntimeError("Output folder %s is not writable" % out_dir)
+    return out_dir
+
+
+class Job:
+    """One build: the skinsim commands it needs, in order, then the
+    material. start()/poll()/cancel() run it step by step (the modal
+    operator); run() runs it to the end. Nothing in the scene changes until
+    every command has succeeded."""
+
+    def __init__(self, obj, st, cli):
+        self.obj, self.st, self.cli = obj, st, cli
+        if not obj.data.uv_layers:
+            raise RuntimeError("%s: the mesh has no UV map" % obj.name)
+        self.days = None
+        if st.source == "ABRASION":
+            self.days = parse_days(st.days)
+        elif st.source == "HEAL":
+            self.days = parse_days(st.heal_days)
+        self.out_dir = _out_dir(obj, st)
+        self.tmp = tempfile.mkdtemp(prefix="skinsim_job_")
+        self.steps = []  # (label, argv)
+        self.step = 0
+        self.proc = None
+        self._log = None
+        o = self.out_dir
+        if st.source == "HEAL":
+            skin = os.path.join(o, "skin")
+            block = os.path.join(o, "skin_block")
+            self.steps.append(("skin textures", skin_command(cli, st, skin)))
+            # the block's base skin: the same procedural skin at the block's
+            # scale (bio maps), so it matches the skin around the block
+            self.steps.append(("block skin", skin_command(cli, st, block,
+                                                          world_size_cm=st.block_mm / 10.0,
+                                                          size=min(st.size, 1024))))
+            cmd, frames = wound_command(cli, st, self.days, os.path.join(o, "wound"), block,
+                                        self.tmp)
+            self.steps.append(("healing simulation", cmd))
+            self._build = lambda: build_heal_material(obj, frames, self.days, skin, st)
+        elif st.source == "SKIN":
+            skin = os.path.join(o, "skin")
+            self.steps.append(("skin textures", skin_command(cli, st, skin)))
+            self._build = lambda: build_skin_material(obj, skin)
+        else:
+            upper = None
+            if st.skin_under_abrasion:
+                skin = os.path.join(o, "skin")
+                self.steps.append(("skin textures", skin_command(cli, st, skin)))
+                upper = os.path.join(skin, "base_color.png")
+            cmd, frames = abrasion_command(cli, st, self.days, os.path.join(o, "abrasion"),
+                                           upper, self.tmp)
+            self.steps.append(("abrasion timeline", cmd))
+            self._build = lambda: build_material(obj, frames, self.days, st)
+
+    @property
+    def label(self):
+        """What runs now, for the status bar."""
+        k = min(self.step, len(self.steps) - 1)
+        return "skinsim: %s (%d of %d) -- Esc to cancel" % (self.steps[k][0], k + 1,
+                                                             len(self.steps))
+
+    def start(self):
+        """Starts the current step's command (a child process)."""
+        label, cmd = self.steps[self.step]
+        self._log = open(os.path.join(self.tmp, "step%d.log" % self.step), "w+")
+        try:
+            self.proc = subprocess.Popen(cmd, stdout=self._log, stderr=subprocess.STDOUT)
+        except OSError as e:
+            self._close_log()
+            raise RuntimeError("cannot run skinsim (%s): %s; set its path in the add-on's "
+                               "preferences or $SKINSIM_CLI" % (self.cli, e.strerror))
+
+    def _close_log(self):
+        text = ""
+        if self._log:
+            self._log.seek(0)
+            text = self._log.read()
+            self._log.close()
+            self._log = None
+        return text
+
+    def poll(self):
+        """True once every command has finished (the next one is started
+        here); RuntimeError with the command's own message if one failed."""
+        if self.proc is None:
+            self.start()
+        rc = self.proc.poll()
+        if rc is None:
+            return False
+        self.proc = None
+        text = self._close_log()
+        if rc != 0:
+            lines = text.strip().splitlines()
+            raise RuntimeError(lines[-1] if lines else "skinsim exited with code %d" % rc)
+        self.step += 1
+        if self.step == len(self.steps):
+            return True
+        self.start()
+        return False
+
+    def fraction(self):
+        """Share of the commands finished (0..1)."""
+        return self.step / len(self.steps)
+
+    def cancel(self):
+        """Stops the running command and drops the job; the scene is untouched
+        (the command's own output discipline leaves no half-written folder)."""
+        if self.proc is not None:
+            self.proc.terminate()
+            try:
+                self.proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+            self.proc = None
+        self._close_log()
+        self.cleanup()
+
+    def cleanup(self):
+        """Removes the job's temporary files."""
+        shutil.rmtree(self.tmp, ignore_errors=True)
+
+    def run(self):
+        """Runs every command to the end (scripts, background mode)."""
+        try:
+            while not self.poll():
+                self.proc.wait()
+        except BaseException:
+            self.cancel()
+            raise
+        return self.finish()
+
+    def finish(self):
+        """Builds the material; returns it."""
+        try:
+            return self._build()
+        finally:
+            self.cleanup()
+
+
+def _frames(context, st, days):
+    scene = context.scene
+    scene.frame_start = st.start_frame
+    scene.frame_end = max(scene.frame_end,
+                          int(math.ceil(st.start_frame + days[-1] * st.frames_per_day)))
+    return scene.frame_start, scene.frame_end
+
+
 class SKINSIM_OT_build_material(bpy.types.Operator):
     """Run skinsim for the active mesh and build a time-driven skin material"""
 
@@ -570,69 +745,109 @@ class SKINSIM_OT_build_material(bpy.types.Operator):
     bl_label = "Build skinsim material"
     bl_options = {"REGISTER", "UNDO"}
 
+    _job = None
+    _timer = None
+
     @classmethod
     def poll(cls, context):
         o = context.active_object
         return o is not None and o.type == "MESH"
 
+    def _fail(self, st, e):
+        msg = str(e)
+        st.last_error = msg
+        self.report({"ERROR"}, msg if msg.startswith("skinsim") else "skinsim: " + msg)
+        return {"CANCELLED"}
+
+    def _done(self, context, st, job, mat):
+        if job.days is None:
+            self.report({"INFO"}, "skinsim: material %s (skin textures)" % mat.name)
+        else:
+            f0, f1 = _frames(context, st, job.days)
+            self.report({"INFO"}, "skinsim: material %s, days %g..%g over frames %d..%d" % (
+                mat.name, job.days[0], job.days[-1], f0, f1))
+        return {"FINISHED"}
+
     def execute(self, context):
         obj = context.active_object
-        st = context.scene.skinsim
+        st = obj.skinsim
         st.last_error = ""
         try:
-            if not obj.data.uv_layers:
-                raise RuntimeError("%s: the mesh has no UV map" % obj.name)
-            days = parse_days(st.days) if st.source == "ABRASION" else None
-            out_dir = bpy.path.abspath(st.out_dir) if st.out_dir else ""
-            if not out_dir:
-                base = (bpy.path.abspath("//") if bpy.data.filepath else
-                        tempfile.mkdtemp(prefix="skinsim_"))
-                out_dir = os.path.join(base, "skinsim_" + bpy.path.clean_name(obj.name))
-            cli = find_cli(context)
-            if st.source == "HEAL":
-                days = parse_days(st.heal_days)
-                skin = run_skin(cli, st, os.path.join(out_dir, "skin"))
-                # the block's base skin: the same procedural skin at the block's
-                # scale (bio maps), so it matches the skin around the block
-                block_skin = run_skin(cli, st, os.path.join(out_dir, "skin_block"),
-                                      world_size_cm=st.block_mm / 10.0,
-                                      size=min(st.size, 1024))
-                frames = run_wound(cli, st, days, os.path.join(out_dir, "wound"), block_skin)
-                mat = build_heal_material(obj, frames, days, skin, st)
-            elif st.source == "SKIN":
-                mat = build_skin_material(obj, run_skin(cli, st, os.path.join(out_dir, "skin")))
-                self.report({"INFO"}, "skinsim: material %s (skin textures)" % mat.name)
-                return {"FINISHED"}
-            else:
-                upper = None
-                if st.skin_under_abrasion:
-                    upper = os.path.join(run_skin(cli, st, os.path.join(out_dir, "skin")),
-                                         "base_color.png")
-                frames = run_abrasion(cli, st, days, os.path.join(out_dir, "abrasion"), upper)
-                mat = build_material(obj, frames, days, st)
-        except (RuntimeError, ValueError) as e:
-            st.last_error = str(e)
-            msg = str(e)
-            self.report({"ERROR"}, msg if msg.startswith("skinsim") else "skinsim: " + msg)
+            job = Job(obj, st, find_cli(context))
+            mat = job.run()
+        except (RuntimeError, ValueError, OSError) as e:
+            return self._fail(st, e)
+        return self._done(context, st, job, mat)
+
+    def invoke(self, context, event):
+        if bpy.app.background or context.window is None:
+            return self.execute(context)
+        obj = context.active_object
+        st = obj.skinsim
+        st.last_error = ""
+        try:
+            self._job = Job(obj, st, find_cli(context))
+            self._job.start()
+        except (RuntimeError, ValueError, OSError) as e:
+            return self._fail(st, e)
+        self._obj_name = obj.name
+        wm = context.window_manager
+        self._timer = wm.event_timer_add(0.25, window=context.window)
+        wm.progress_begin(0, 100)
+        context.workspace.status_text_set(self._job.label)
+        wm.modal_handler_add(self)
+        return {"RUNNING_MODAL"}
+
+    def _end(self, context):
+        wm = context.window_manager
+        if self._timer is not None:
+            wm.event_timer_remove(self._timer)
+            self._timer = None
+        wm.progress_end()
+        context.workspace.status_text_set(None)
+
+    def modal(self, context, event):
+        job = self._job
+        st = job.obj.skinsim
+        if event.type == "ESC":
+            job.cancel()
+            self._end(context)
+            self.report({"WARNING"}, "skinsim: cancelled; the scene is unchanged")
             return {"CANCELLED"}
-        scene = context.scene
-        scene.frame_start = st.start_frame
-        scene.frame_end = max(scene.frame_end,
-                              int(math.ceil(st.start_frame + days[-1] * st.frames_per_day)))
-        self.report({"INFO"}, "skinsim: material %s, days %g..%g over frames %d..%d" % (
-            mat.name, days[0], days[-1], scene.frame_start, scene.frame_end))
-        return {"FINISHED"}
+        if event.type != "TIMER":
+            return {"PASS_THROUGH"}
+        try:
+            done = job.poll()
+            context.window_manager.progress_update(int(100 * job.fraction()))
+            if not done:
+                context.workspace.status_text_set(job.label)
+                return {"RUNNING_MODAL"}
+            self._end(context)
+            mat = job.finish()
+        except (RuntimeError, ValueError, OSError) as e:
+            job.cancel()
+            self._end(context)
+            return self._fail(st, e)
+        return self._done(context, st, job, mat)
 
 
 class SKINSIM_PT_panel(bpy.types.Panel):
+    """The active object's skinsim settings (Properties > Material)."""
+
     bl_label = "skinsim"
     bl_space_type = "PROPERTIES"
     bl_region_type = "WINDOW"
     bl_context = "material"
 
+    @classmethod
+    def poll(cls, context):
+        o = context.object
+        return o is not None and o.type == "MESH"
+
     def draw(self, context):
-        st = context.scene.skinsim
+        st = context.object.skinsim
         col = self.layout.column()
+        col.label(text="Settings of %s" % context.object.name)
         for p in ("source", "skin_under_abrasion", "wound_u", "wound_v", "wound_radius",
                   "stroke_csv", "size", "world_size_cm", "days", "heal_days", "block_mm",
                   "start_frame", "frames_per_day", "seed", "out_dir"):
@@ -648,10 +863,10 @@ CLASSES = (SkinsimPreferences, SkinsimSettings, SKINSIM_OT_build_material, SKINS
 def register():
     for c in CLASSES:
         bpy.utils.register_class(c)
-    bpy.types.Scene.skinsim = bpy.props.PointerProperty(type=SkinsimSettings)
+    bpy.types.Object.skinsim = bpy.props.PointerProperty(type=SkinsimSettings)
 
 
 def unregister():
-    del bpy.types.Scene.skinsim
+    del bpy.types.Object.skinsim
     for c in reversed(CLASSES):
         bpy.utils.unregister_class(c)

@@ -40,8 +40,8 @@ sys.path.insert(0, os.path.join(SRC, "integrations", "blender"))
 import skinsim_blender  # noqa: E402
 
 skinsim_blender.register()
-check(hasattr(bpy.ops.skinsim, "build_material") and hasattr(bpy.types.Scene, "skinsim"),
-      "add-on registers its operator and settings")
+check(hasattr(bpy.ops.skinsim, "build_material") and hasattr(bpy.types.Object, "skinsim"),
+      "add-on registers its operator and per-object settings")
 
 # Debian 12's Blender 3.4 glTF importer needs SMOOTH shading (DESIGN.md pitfalls)
 bpy.ops.import_scene.gltf(filepath=MESH, import_shading="SMOOTH")
@@ -50,7 +50,13 @@ for o in bpy.context.view_layer.objects:
     o.select_set(o == obj)
 bpy.context.view_layer.objects.active = obj
 scene = bpy.context.scene
-st = scene.skinsim
+st = obj.skinsim
+# settings are per object: another object keeps its own
+other = bpy.data.objects.new("other_settings", obj.data.copy())
+scene.collection.objects.link(other)
+other.skinsim.wound_u = 0.75
+check(st.wound_u != 0.75 and other.skinsim.wound_u == 0.75, "each object has its own settings")
+bpy.data.objects.remove(other)  # not in the renders below
 st.size = 256
 st.days = "0,3,20"
 st.frames_per_day = 1.0
@@ -78,6 +84,26 @@ except RuntimeError:
           "bad stroke file: skinsim's message names file and line (%s)" % st.last_error)
 check(len(bpy.data.materials) == mats_before, "a failed run builds no material")
 st.stroke_csv = ""
+# an output folder that cannot be made: report(), no traceback, nothing built
+st.out_dir = "/proc/skinsim_cannot_be_here"
+try:
+    bpy.ops.skinsim.build_material()
+    check(False, "an output folder that cannot be made is refused")
+except RuntimeError as e:
+    check("cannot be made" in st.last_error and "Traceback" not in str(e),
+          "output folder that cannot be made: reported (%s)" % st.last_error)
+check(len(bpy.data.materials) == mats_before, "a refused folder builds no material")
+st.out_dir = os.path.join(OUT, "textures")
+# the job the modal operator runs: cancel stops the running command and
+# leaves the scene and the output as they were
+job = skinsim_blender.Job(obj, st, CLI)
+job.start()
+check(job.proc is not None and job.proc.poll() is None, "a job's command runs as a child process")
+job.cancel()
+check(job.proc is None and not os.path.exists(job.tmp), "cancel stops it and cleans up")
+check(len(bpy.data.materials) == mats_before, "a cancelled job builds no material")
+check(not os.path.exists(os.path.join(st.out_dir, "abrasion", "frames")),
+      "a cancelled job leaves no frames")
 
 # ---- the material ----
 res = bpy.ops.skinsim.build_material()

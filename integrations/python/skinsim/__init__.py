@@ -62,14 +62,12 @@ def write_png(path, image, bits=8, srgb=None):
     if srgb is None:
         srgb = a.ndim == 3 and a.shape[2] >= 3
     hdr = _lib.image_header(a)
-    _lib.check(_lib.lib.ss_png_write, os.fsencode(os.fspath(path)), hdr, int(bits),
+    _lib.check(_lib.lib.ss_png_write, os.fsencode(os.fspath(path)), hdr, _lib.as_int("bits", bits, lo=8, hi=16),
                1 if srgb else 0)
 
 
 def set_threads(n=0):
     """Worker threads for parallel work (0: $SKINSIM_THREADS, else all
     cores). Results are identical for any count. Returns the count in force."""
-    n = int(n)
-    if n < 0:
-        raise InputError("set_threads: thread count must be >= 0, got %d" % n, 2)
+    n = _lib.as_int("n", n, lo=0, hi=4096)
     return _lib.lib.ss_threads_set(n)

@@ -14,7 +14,9 @@ so the C memory) alive; images the caller passes or receives are numpy
 float32 arrays whose buffers the library reads or writes directly through an
 ss_image header that points into them.
 
-Which library: $SKINSIM_LIB (a path) if set; else the one an installed copy
+Which library: $SKINSIM_LIB (a path) if set; else the one bundled into the
+package by `pip install .` (_native/lib/libskinsim.so.0, with its data in
+_native/share/skinsim); else the one an installed copy
 of this package was installed with (_installed.py, written by cmake
 --install); else build/libskinsim.so.0 of the source tree this file is in;
 else the system's (ldconfig).
@@ -22,7 +24,14 @@ else the system's (ldconfig).
 
 import ctypes
 import ctypes.util
+import math
+import numbers
 import os
+import re
+import signal
+import sys
+import threading
+from typing import Any, Callable, Dict, Optional, Union
 
 import numpy as np
 
@@ -42,13 +51,16 @@ def _candidates():
     if env:
         return [env]
     out = []
+    here = os.path.dirname(os.path.abspath(__file__))
+    bundled = os.path.join(here, "_native", "lib", "libskinsim.so.0")
+    if os.path.isfile(bundled):
+        out.append(bundled)
     try:
         from . import _installed  # written by cmake --install
 
         out.append(os.path.normpath(_installed.LIBRARY))
     except ImportError:
         pass
-    here = os.path.dirname(os.path.abspath(__file__))
     src = os.path.normpath(os.path.join(here, "..", "..", ".."))
     out.append(os.path.join(src, "build", "libskinsim.so.0"))
     found = ctypes.util.find_library("skinsim")
@@ -106,22 +118,235 @@ def raise_for(code, message):
     raise SkinsimError(message, code)
 
 
-def check(fn, *args):
-    """Calls fn(*args, &err) and raises on a non-zero status."""
+def check(fn, *args, rename=None):
+    """Calls fn(*args, &err) and raises on a non-zero status, with the
+    library's message in Python terms (python_terms)."""
     err = ss_error()
     st = fn(*args, byref(err))
     if st != SS_OK:
-        raise_for(st, err.msg.decode("utf-8", "replace"))
+        raise_for(st, python_terms(err.msg.decode("utf-8", "replace"), rename))
     return st
 
 
-def check_ptr(fn, *args):
+def check_ptr(fn, *args, rename=None):
     """Calls fn(*args, &err) for a function returning a pointer; raises when NULL."""
     err = ss_error()
     p = fn(*args, byref(err))
     if not p:
-        raise_for(err.code or SS_ERR_RUNTIME, err.msg.decode("utf-8", "replace"))
+        raise_for(err.code or SS_ERR_RUNTIME,
+                  python_terms(err.msg.decode("utf-8", "replace"), rename))
     return p
+
+
+# ---- Python values -> C values, checked before conversion --------------------
+#
+# ctypes wraps a too-large int and truncates a float without a word (size
+# 2**40 -> 0, 3.7 -> 3), so every number a caller passes goes through one of
+# these first: the error names the Python parameter and says what was wrong.
+
+INT_MIN, INT_MAX = -(2**31), 2**31 - 1
+U64_MAX = 2**64 - 1
+
+
+def _bad(name, what, v):
+    raise InputError("%s: %s, got %r" % (name, what, v), SS_ERR_INPUT)
+
+
+def as_int(name: str, v: Any, lo: Optional[int] = None, hi: Optional[int] = None,
+           c_max: int = INT_MAX) -> int:
+    """v as a whole number in [lo, hi] (and in the C type's range): an
+    integral float such as 4.0 is accepted, 3.7, NaN, a string or a bool
+    are not (TypeError for non-numbers, InputError otherwise)."""
+    if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real):
+        raise TypeError("%s: want a whole number, got %r" % (name, v))
+    if isinstance(v, numbers.Integral):
+        n = int(v)
+    else:
+        f = float(v)
+        if not math.isfinite(f) or not f.is_integer():
+            _bad(name, "want a whole number", v)
+        n = int(f)
+    lo = (INT_MIN if c_max == INT_MAX else 0) if lo is None else lo
+    hi = c_max if hi is None else min(hi, c_max)
+    if not lo <= n <= hi:
+        raise InputError("%s: %d is outside %d..%d" % (name, n, lo, hi), SS_ERR_INPUT)
+    return n
+
+
+def as_u64(name: str, v: Any, lo: int = 0) -> int:
+    """v as a whole number for a uint64_t (seeds, photon counts)."""
+    return as_int(name, v, lo, U64_MAX, c_max=U64_MAX)
+
+
+def as_float(name: str, v: Any, lo: Optional[float] = None, hi: Optional[float] = None,
+             lo_open: bool = False) -> float:
+    """v as a finite float in [lo, hi] ((lo, hi] with lo_open): NaN and
+    infinities are refused (InputError), non-numbers are a TypeError."""
+    if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real):
+        raise TypeError("%s: want a number, got %r" % (name, v))
+    f = float(v)
+    if not math.isfinite(f):
+        _bad(name, "want a finite number", v)
+    if lo is not None and (f <= lo if lo_open else f < lo):
+        _bad(name, "want a value %s %g" % (">" if lo_open else ">=", lo), v)
+    if hi is not None and f > hi:
+        _bad(name, "want a value <= %g" % hi, v)
+    return f
+
+
+def python_terms(message: str, rename: Optional[Dict[str, str]] = None) -> str:
+    """A library message in Python terms: command-line options become the
+    keyword arguments they correspond to ("--days -1: need ..." ->
+    "days=-1: need ...", "--mesh" -> "skin_mesh" with rename)."""
+    rename = rename or {}
+
+    def name(opt):
+        return rename.get(opt, opt.replace("-", "_"))
+
+    message = re.sub(r"--([a-z][a-z0-9-]*) ([^\s:]+):",
+                     lambda m: "%s=%s:" % (name(m.group(1)), m.group(2)), message)
+    return re.sub(r"--([a-z][a-z0-9-]*)", lambda m: name(m.group(1)), message)
+
+
+# ---- long calls: progress, and Ctrl-C between blocks of work ---------------------
+#
+# A long call (Monte Carlo transport, a heal run's steps) runs inside the C
+# library, where Python cannot deliver KeyboardInterrupt. The library polls a
+# callback from the calling thread (ss_mc_options.cancel after each photon
+# block, ss_heal_run_set_progress after each step, the spectrum progress after
+# each wavelength). While such a call runs on the main thread, SIGINT only
+# sets a flag (a Python handler that does not raise, so it cannot fire in the
+# middle of a callback); the next poll sees it and tells the library to stop,
+# and the call raises KeyboardInterrupt once the library has cleaned up.
+
+PROGRESS_FN = ctypes.CFUNCTYPE(None, c_void_p, c_double)
+CANCEL_FN = ctypes.CFUNCTYPE(c_int, c_void_p)
+DAY_FN = ctypes.CFUNCTYPE(c_int, c_void_p, c_double)
+_check_signals = ctypes.pythonapi.PyErr_CheckSignals
+_check_signals.restype = c_int
+_check_signals.argtypes = []
+
+ProgressArg = Union[None, bool, Callable[[float], Any]]
+
+
+class ProgressBar:
+    """A text progress bar on stderr: what progress=True draws."""
+
+    def __init__(self, label: str = "skinsim", stream: Any = None) -> None:
+        self.label = label
+        self.stream = stream if stream is not None else sys.stderr
+        self._last = -1
+
+    def __call__(self, fraction: float) -> None:
+        pct = int(max(0.0, min(1.0, fraction)) * 100)
+        if pct == self._last:
+            return
+        self._last = pct
+        bar = "#" * (pct // 4) + "." * (25 - pct // 4)
+        self.stream.write("\r%s [%s] %3d%%%s" % (self.label, bar, pct, "\n" if pct == 100 else ""))
+        self.stream.flush()
+
+
+def progress_callable(progress: ProgressArg, label: str) -> Optional[Callable[[float], Any]]:
+    """None/False: none; True: a ProgressBar; else a callable(fraction 0..1)."""
+    if progress is None or progress is False:
+        return None
+    if progress is True:
+        return ProgressBar(label)
+    if not callable(progress):
+        raise TypeError("progress: want None, True or a callable(fraction), got %r" % (progress,))
+    return progress
+
+
+class Poll:
+    """The callbacks one long library call polls, and what they saw: use as
+    `with Poll(progress) as p: p.check(fn, ...)`. A KeyboardInterrupt (or an
+    exception from the progress callable) stops the library at its next poll
+    and is raised when the call returns."""
+
+    def __init__(self, progress: ProgressArg = None, label: str = "skinsim",
+                 span: Optional[tuple] = None) -> None:
+        self.progress = progress_callable(progress, label)
+        self.span = span  # (first, last) day for the heal callback's fraction
+        self.error: Optional[BaseException] = None
+        self.interrupted = False
+        self._prev = None
+        self.cancel = CANCEL_FN(self._cancel)
+        self.fraction = PROGRESS_FN(self._fraction)
+        self.day = DAY_FN(self._day)
+
+    def __enter__(self) -> "Poll":
+        if threading.current_thread() is threading.main_thread():
+            try:
+                if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+                    self._prev = signal.signal(signal.SIGINT, self._on_sigint)
+            except (ValueError, OSError):
+                self._prev = None
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        if self._prev is not None:
+            signal.signal(signal.SIGINT, self._prev)
+            self._prev = None
+
+    def _on_sigint(self, signum: int, frame: Any) -> None:
+        self.interrupted = True
+
+    def _stop(self) -> int:
+        try:
+            _check_signals()  # runs the SIGINT handler above if a signal is pending
+        except BaseException as e:  # another handler raised: stop and re-raise it later
+            if self.error is None:
+                self.error = e
+        return 1 if (self.interrupted or self.error is not None) else 0
+
+    def _report(self, fraction: float) -> None:
+        if self.progress is not None and self.error is None:
+            try:
+                self.progress(fraction)
+            except BaseException as e:
+                self.error = e
+
+    def _cancel(self, user: Any) -> int:
+        try:
+            return self._stop()
+        except BaseException:
+            return 1
+
+    def _fraction(self, user: Any, fraction: float) -> None:
+        try:
+            self._report(fraction)
+        except BaseException:
+            pass
+
+    def _day(self, user: Any, day: float) -> int:
+        try:
+            if self.span is not None:
+                a, b = self.span
+                self._report(1.0 if b <= a else (day - a) / (b - a))
+            return self._stop()
+        except BaseException:
+            return 1
+
+    def raise_pending(self) -> None:
+        """Raises what stopped the call (KeyboardInterrupt on Ctrl-C)."""
+        if self.error is not None:
+            e, self.error = self.error, None
+            raise e
+        if self.interrupted:
+            self.interrupted = False
+            raise KeyboardInterrupt
+
+    def check(self, fn: Any, *args: Any, rename: Optional[Dict[str, str]] = None) -> int:
+        """check(fn, *args) that raises KeyboardInterrupt (or the progress
+        callable's exception) instead of the library's "cancelled"."""
+        try:
+            st = check(fn, *args, rename=rename)
+        except SkinsimError:
+            self.raise_pending()
+            raise
+        self.raise_pending()
+        return st
 
 
 class Handle:
@@ -283,10 +508,10 @@ class ss_mc_options(ctypes.Structure):
         ("radial_bins", c_int),
         ("radial_max_cm", c_double),
         ("radial_distance", c_int),
+        ("kernel", c_int),
+        ("cancel", ctypes.CFUNCTYPE(c_int, c_void_p)),
+        ("cancel_user", c_void_p),
     ]
-
-
-PROGRESS_FN = ctypes.CFUNCTYPE(None, c_void_p, c_double)
 
 
 class ss_spectrum_options(ctypes.Structure):
@@ -363,6 +588,51 @@ class ss_mm_entry(ctypes.Structure):
 
 SS_MM_MAX_SURFACE = 32
 
+SS_OPTICS_MAX_LAYERS = 16
+SS_OPTICS_PHASE_MAX = 65
+
+
+class ss_optics_layer(ctypes.Structure):
+    _fields_ = [
+        ("n", c_double),
+        ("mua_per_cm", c_double),
+        ("mus_per_cm", c_double),
+        ("g", c_double),
+        ("d_cm", c_double),
+        ("phase_n", c_int),
+        ("phase_theta", c_double * SS_OPTICS_PHASE_MAX),
+    ]
+
+
+class ss_optics_slab(ctypes.Structure):
+    _fields_ = [
+        ("nlayers", c_int),
+        ("layer", ss_optics_layer * SS_OPTICS_MAX_LAYERS),
+        ("n_above", c_double),
+        ("n_below", c_double),
+        ("bottom_albedo", c_double),
+    ]
+
+
+class ss_mc_result(ctypes.Structure):
+    _fields_ = [
+        ("specular", c_double),
+        ("diffuse", c_double),
+        ("transmit", c_double),
+        ("absorbed", c_double),
+        ("diffuse_se", c_double),
+        ("transmit_se", c_double),
+        ("brdf_exit", POINTER(c_double)),
+        ("radial", POINTER(c_double)),
+        ("absorbed_per_layer", POINTER(c_double)),
+        ("roulette_net", c_double),
+        ("nlayers", c_int),
+        ("brdf_n_theta", c_int),
+        ("brdf_n_phi", c_int),
+        ("radial_bins", c_int),
+        ("radial_dr_cm", c_double),
+    ]
+
 
 class ss_mm_table(ctypes.Structure):
     _fields_ = [
@@ -431,6 +701,12 @@ _fn("ss_mm_sample_fast", c_int, P_BIO, POINTER(ss_mm_build_options), POINTER(ss_
 _fn("ss_mm_table_read", P_TABLE, c_char_p, P_ERR)
 _fn("ss_mm_table_free", None, P_TABLE)
 _fn("ss_mm_table_lookup", None, P_TABLE, POINTER(c_double), POINTER(c_double))
+_fn("ss_mm_table_lookup_many", None, P_TABLE, POINTER(c_double), c_size_t, POINTER(c_double))
+_fn("ss_mc_options_default", None, POINTER(ss_mc_options))
+_fn("ss_optics_slab_validate", c_int, POINTER(ss_optics_slab), P_ERR)
+_fn("ss_mc_run", c_int, POINTER(ss_optics_slab), POINTER(ss_mc_options), POINTER(ss_mc_result),
+    P_ERR)
+_fn("ss_mc_result_free", None, POINTER(ss_mc_result))
 _fn("ss_mm_table_lookup_bio", c_int, P_TABLE, P_BIO, POINTER(ss_mm_entry), P_ERR)
 _fn("ss_mm_entry_unpack", None, POINTER(c_double), POINTER(ss_mm_entry))
 _fn("ss_mm_axis_name", c_char_p, c_int)
@@ -628,6 +904,7 @@ _fn("ss_heal_run_create", c_int, POINTER(ss_heal_run_config), POINTER(P_RUN), P_
 _fn("ss_heal_run_free", None, P_RUN)
 _fn("ss_heal_run_step", c_int, P_RUN, P_ERR)
 _fn("ss_heal_run_advance_to", c_int, P_RUN, c_double, P_ERR)
+_fn("ss_heal_run_set_progress", None, P_RUN, DAY_FN, c_void_p)
 _fn("ss_heal_run_finish", c_int, P_RUN, POINTER(c_void_p), P_ERR)
 _fn("ss_heal_run_grid", P_GRID, P_RUN)
 _fn("ss_heal_run_scenario", c_char_p, P_RUN)

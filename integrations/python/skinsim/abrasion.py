@@ -14,6 +14,7 @@ pass `out=` to reuse the arrays of an earlier frame, as a time slider would.
 
 import ctypes
 import os
+from typing import Any, List, Tuple
 
 import numpy as np
 
@@ -23,7 +24,8 @@ MAPS = ("color", "reflection", "height", "normal")
 _CHANNELS = {"color": 3, "reflection": 1, "height": 1, "normal": 3}
 
 
-def phases():
+def phases() -> List[str]:
+    """The five abrasion phases' names, in order (seed 000 §4)."""
     return [L.lib.ss_phase_name(i).decode() for i in range(L.SS_PHASE_COUNT)]
 
 
@@ -73,11 +75,11 @@ class Abrasion:
             raise L.InputError("hull: %r is not convex or concave" % (hull,), L.SS_ERR_INPUT)
         s = L.ss_abrasion_settings()
         L.lib.ss_abrasion_settings_default(ctypes.byref(s))
-        s.size = int(size)
+        s.size = L.as_int("size", size, lo=1)
         if seed is not None:
-            s.seed = int(seed)
+            s.seed = L.as_u64("seed", seed)
         if world_size_cm is not None:
-            s.world_size_cm = float(world_size_cm)
+            s.world_size_cm = L.as_float("world_size_cm", world_size_cm, lo=0.0, lo_open=True)
         self.size = s.size
         t = L.ss_timeline()
         L.lib.ss_timeline_default(ctypes.byref(t))
@@ -93,9 +95,9 @@ class Abrasion:
                     raise L.InputError("timeline: unknown phase %r (known: %s)"
                                        % (ph, ", ".join(phases())), L.SS_ERR_INPUT)
                 t.key[i].phase = pid
-                t.key[i].day = float(day)
+                t.key[i].day = L.as_float("timeline[%d] day" % i, day)
         if end_day is not None:
-            t.end_day = float(end_day)
+            t.end_day = L.as_float("end_day", end_day)
         L.check(L.lib.ss_timeline_validate, ctypes.byref(t))
         self._timeline = t
 
@@ -125,7 +127,7 @@ class Abrasion:
                 try:
                     L.check(L.lib.ss_wound_shape_from_strokes, ctypes.byref(ss),
                             1 if hull == "concave" else 0,
-                            int(concave_k) if hull == "concave" else 0, s.size, s.seed,
+                            L.as_int("concave_k", concave_k, lo=0) if hull == "concave" else 0, s.size, s.seed,
                             ctypes.byref(shape))
                 except L.SkinsimError as e:
                     # name the input, as the command line does
@@ -150,10 +152,12 @@ class Abrasion:
         no view of a key texture or the mask is left either."""
         self._h = None
 
-    def __enter__(self):
+    def __enter__(self) -> "Abrasion":
+        """The object itself (closed on leaving the with block)."""
         return self
 
-    def __exit__(self, *exc):
+    def __exit__(self, *exc: Any) -> None:
+        """Closes it."""
         self.close()
 
     def _need_open(self):
@@ -169,12 +173,14 @@ class Abrasion:
         return v
 
     @property
-    def nwounds(self):
+    def nwounds(self) -> int:
+        """How many separate wounds the shape holds."""
         self._need_open()
         return self._shape.contents.nwounds
 
     @property
-    def timeline(self):
+    def timeline(self) -> Tuple[List[Tuple[str, float]], float]:
+        """The timeline as ([(phase, day), ...], end_day)."""
         t = self._timeline
         keys = [(L.lib.ss_phase_name(t.key[i].phase).decode(), t.key[i].day)
                 for i in range(t.nkeys)]
@@ -208,9 +214,7 @@ class Abrasion:
         the library renders into. out: arrays of an earlier frame to reuse
         (only the maps present in it are rendered)."""
         self._need_open()
-        day = float(day)
-        if not np.isfinite(day) or day < 0:
-            raise L.InputError("day: must be a finite number >= 0, got %r" % day, L.SS_ERR_INPUT)
+        day = L.as_float("day", day, lo=0.0)
         if out is None:
             out = self.new_frame(maps)
         ts = L.ss_texture_set()

@@ -23,15 +23,24 @@ alive. Units: mm and days.
 import ctypes
 import json
 import os
+from typing import Any, Dict, Optional, Sequence, Union
 
 import numpy as np
 
 from . import _lib as L
 
+#: the eight species fields, by name, in the library's order
 FIELDS = [L.lib.ss_heal_field_name(i).decode() for i in range(L.SS_HEAL_NFIELDS)]
+#: cell state codes of Run.cells
 CELL_STATES = {"air": 0, "epidermis": 1, "dermis": 2, "wound": 3, "bound": 4}
 _SURFACE_MODES = {"top": 0, "max": 1, "layer": 2}
 _SCHEMES = {"explicit": 0, "split": 1}
+# the library names settings by their `skinsim heal` options; these differ
+# from the keyword arguments by more than - and _ (python_terms)
+_RENAME = {"mesh": "skin_mesh", "dt": "dt_days", "out": "out_dir", "resume": "resume_dir",
+           "params": "params_path", "mask": "wound_mask", "stroke": "wound_stroke"}
+
+PathLike = Union[str, bytes, "os.PathLike[str]"]
 
 
 def _field_index(name):
@@ -41,13 +50,13 @@ def _field_index(name):
     return FIELDS.index(name)
 
 
-def _triple(name, v, kind):
+def _triple(name, v, conv):
     if v is None:
         return None
     t = tuple(v)
     if len(t) != 3:
         raise L.InputError("%s: want three values (x, y, z), got %r" % (name, v), L.SS_ERR_INPUT)
-    return tuple(kind(x) for x in t)
+    return tuple(conv("%s[%d]" % (name, i), x) for i, x in enumerate(t))
 
 
 class Run:
@@ -69,17 +78,29 @@ class Run:
                    with the wound as wound_uv (strokes CSV in the mesh's UV
                    space) or wound_mesh (closed mesh in the mesh's units);
                    voxel_mm, skin_thickness_mm, mesh_units_mm as the options
-    Bad input raises InputError with the library's message, which names the
-    setting by its command-line option.
+    Numbers are checked before they reach the library (a whole number where
+    one is needed, finite, in range: InputError naming the keyword). Bad
+    input raises InputError with the library's message, in which settings
+    are named by these keywords (`days=-1: ...`). out_dir is checked here,
+    at construction: a folder that cannot be made, or one holding something
+    else than a heal run, raises before any work.
     """
 
-    def __init__(self, scenario=None, days=None, grid=None, size_mm=None, wound_mask=None,
-                 wound_stroke=None, wound_mesh=None, wound_depth_mm=None, scheme=None,
-                 dt_days=None, area_every=None, snapshot_every=None, checkpoint_every=None,
-                 params_path=None, no_scab=False, static_region=False, out_dir=None,
-                 force=False, resume_dir=None, seed=None, concave_k=None, skin_top_mm=None,
-                 epidermis_mm=None, mechanics=False, skin_mesh=None, wound_uv=None,
-                 voxel_mm=None, skin_thickness_mm=None, mesh_units_mm=None):
+    def __init__(self, scenario: Optional[str] = None, days: Optional[float] = None,
+                 grid: Optional[Sequence[int]] = None, size_mm: Optional[Sequence[float]] = None,
+                 wound_mask: Any = None, wound_stroke: Optional[PathLike] = None,
+                 wound_mesh: Optional[PathLike] = None, wound_depth_mm: Optional[float] = None,
+                 scheme: Optional[str] = None, dt_days: Optional[float] = None,
+                 area_every: Optional[float] = None, snapshot_every: Optional[float] = None,
+                 checkpoint_every: Optional[float] = None, params_path: Optional[PathLike] = None,
+                 no_scab: bool = False, static_region: bool = False,
+                 out_dir: Optional[PathLike] = None, force: bool = False,
+                 resume_dir: Optional[PathLike] = None, seed: Optional[int] = None,
+                 concave_k: Optional[int] = None, skin_top_mm: Optional[float] = None,
+                 epidermis_mm: Optional[float] = None, mechanics: bool = False,
+                 skin_mesh: Optional[PathLike] = None, wound_uv: Optional[PathLike] = None,
+                 voxel_mm: Optional[float] = None, skin_thickness_mm: Optional[float] = None,
+                 mesh_units_mm: Optional[float] = None) -> None:
         self._h = None
         c = L.ss_heal_run_config()
         L.lib.ss_heal_run_config_default(ctypes.byref(c))
@@ -96,10 +117,10 @@ class Run:
         c.params_path = text(params_path)
         c.no_scab = 1 if no_scab else 0
         c.static_region = 1 if static_region else 0
-        g = _triple("grid", grid, int)
+        g = _triple("grid", grid, lambda n, v: L.as_int(n, v, lo=1))
         if g:
             c.grid[:] = g
-        sz = _triple("size_mm", size_mm, float)
+        sz = _triple("size_mm", size_mm, L.as_float)
         if sz:
             c.size_mm[:] = sz
         for name, v in (("skin_top_mm", skin_top_mm), ("epidermis_mm", epidermis_mm),
@@ -108,7 +129,7 @@ class Run:
                         ("snapshot_every", snapshot_every),
                         ("checkpoint_every", checkpoint_every)):
             if v is not None:
-                setattr(c, name, float(v))
+                setattr(c, name, L.as_float(name, v))
         if wound_mask is not None and not isinstance(wound_mask, (str, bytes, os.PathLike)):
             m = L.as_image_input(wound_mask, "wound_mask", channels=(1,))
             if m.ndim == 3:
@@ -125,10 +146,10 @@ class Run:
         for name, v in (("voxel_mm", voxel_mm), ("skin_thickness_mm", skin_thickness_mm),
                         ("mesh_units_mm", mesh_units_mm)):
             if v is not None:
-                setattr(c, name, float(v))
+                setattr(c, name, L.as_float(name, v))
         c.wound_mesh = text(wound_mesh)
         if concave_k is not None:
-            c.concave_k = int(concave_k)
+            c.concave_k = L.as_int("concave_k", concave_k, lo=0)
         if scheme is not None:
             if scheme not in _SCHEMES:
                 raise L.InputError("scheme: %r is not split or explicit" % (scheme,),
@@ -138,71 +159,91 @@ class Run:
         c.force = 1 if force else 0
         c.resume_dir = text(resume_dir)
         if seed is not None:
-            c.seed = int(seed)
+            c.seed = L.as_u64("seed", seed)
         r = L.P_RUN()
-        L.check(L.lib.ss_heal_run_create, ctypes.byref(c), ctypes.byref(r))
+        L.check(L.lib.ss_heal_run_create, ctypes.byref(c), ctypes.byref(r), rename=_RENAME)
         self._h = L.Handle()
         self._r = self._h.own(L.lib.ss_heal_run_free, r)
         self.out_dir = out_dir
 
-    def _run(self):
+    def _run(self) -> Any:
         if self._h is None:
             raise L.SkinsimError("this Run was closed", L.SS_ERR_INPUT)
         return self._r
 
-    def close(self):
+    def close(self) -> None:
         """Drops this object's hold on the run (memory goes with the last view)."""
         self._h = None
 
-    def __enter__(self):
+    def __enter__(self) -> "Run":
+        """The run itself (closed on leaving the with block)."""
         return self
 
-    def __exit__(self, *exc):
+    def __exit__(self, *exc: Any) -> None:
+        """Closes the run."""
         self.close()
 
     # ---- time ----
     @property
-    def day(self):
+    def day(self) -> float:
+        """The run's current time, days."""
         return L.lib.ss_heal_run_day(self._run())
 
     @property
-    def dt(self):
+    def dt(self) -> float:
+        """The solver's time step, days."""
         return L.lib.ss_heal_run_dt(self._run())
 
     @property
-    def end_day(self):
+    def end_day(self) -> float:
+        """The day the run ends (steps_total x dt)."""
         return L.lib.ss_heal_run_end_day(self._run())
 
     @property
-    def step_index(self):
+    def step_index(self) -> int:
+        """Steps taken so far."""
         return L.lib.ss_heal_run_step_index(self._run())
 
     @property
-    def steps_total(self):
+    def steps_total(self) -> int:
+        """Steps from day 0 to the end."""
         return L.lib.ss_heal_run_steps_total(self._run())
 
     @property
-    def done(self):
+    def done(self) -> bool:
+        """True once the run has reached its end."""
         return bool(L.lib.ss_heal_run_done(self._run()))
 
     @property
-    def scenario(self):
+    def scenario(self) -> str:
+        """The scenario's name ("clean", "scab", "keloid")."""
         return L.lib.ss_heal_run_scenario(self._run()).decode()
 
-    def step(self, n=1):
+    def step(self, n: int = 1) -> "Run":
         """n solver steps with the run's bookkeeping (area rows, snapshots,
         checkpoints). Stepping past the end raises InputError."""
         r = self._run()
-        for _ in range(int(n)):
-            L.check(L.lib.ss_heal_run_step, r)
+        for _ in range(L.as_int("n", n, lo=0)):
+            L.check(L.lib.ss_heal_run_step, r, rename=_RENAME)
         return self
 
-    def advance_to(self, day):
-        """Steps until the run reaches `day` (rounded to whole steps)."""
-        L.check(L.lib.ss_heal_run_advance_to, self._run(), float(day))
+    def advance_to(self, day: float, progress: L.ProgressArg = None) -> "Run":
+        """Steps until the run reaches `day` (rounded to whole steps).
+        progress: True for a bar on stderr, or a callable(fraction 0..1)
+        called after every step. Ctrl-C stops after the current step with
+        KeyboardInterrupt; the run stays valid there, and advance_to(day)
+        again goes on as if it had not stopped."""
+        r = self._run()
+        day = L.as_float("day", day, lo=0.0)
+        with L.Poll(progress, "heal", span=(self.day, day)) as poll:
+            L.lib.ss_heal_run_set_progress(r, poll.day, None)
+            try:
+                poll.check(L.lib.ss_heal_run_advance_to, r, day, rename=_RENAME)
+            finally:
+                L.lib.ss_heal_run_set_progress(r, L.DAY_FN(), None)
         return self
 
-    def finish(self):
+    def finish(self) -> Dict[str, Any]:
         """Closing tables (area.csv, area.png and summary.json when the run
         has an out_dir); returns the summary as a dict."""
         p = ctypes.c_void_p()
@@ -214,20 +255,21 @@ class Run:
                 L.libc_free(p)
 
     # ---- state ----
-    def _grid(self):
+    def _grid(self) -> L.ss_heal_grid:
         return L.lib.ss_heal_run_grid(self._run()).contents
 
     @property
-    def shape(self):
+    def shape(self) -> tuple:
         """(nz, ny, nx): the axis order of every field array."""
         g = self._grid()
         return (g.nz, g.ny, g.nx)
 
     @property
-    def dx_mm(self):
+    def dx_mm(self) -> float:
+        """Voxel edge, mm."""
         return self._grid().dx_mm
 
-    def field(self, name, copy=False):
+    def field(self, name: str, copy: bool = False) -> np.ndarray:
         """A species field (see FIELDS) as a (nz, ny, nx) float32 array: a
         view of the grid (valid until the next step) or, with copy=True, a
         copy. Writing into the view changes the simulation's state, as the
@@ -237,11 +279,12 @@ class Run:
         v = L.float_view(g.field[f], g.nx * g.ny * g.nz, self._h, (g.nz, g.ny, g.nx))
         return v.copy() if copy else v
 
-    def fields(self, copy=False):
+    def fields(self, copy: bool = False) -> Dict[str, np.ndarray]:
+        """Every species field by name (views, or copies with copy=True)."""
         return {n: self.field(n, copy) for n in FIELDS}
 
     @property
-    def cells(self):
+    def cells(self) -> np.ndarray:
         """Cell states (CELL_STATES codes) as a read-only (nz, ny, nx) uint8 view."""
         g = self._grid()
         n = g.nx * g.ny * g.nz
@@ -251,7 +294,7 @@ class Run:
         a.flags.writeable = False
         return a
 
-    def surface(self, name, mode="layer"):
+    def surface(self, name: str, mode: str = "layer") -> np.ndarray:
         """Top view of a field, (ny, nx), oriented like a footprint image
         (row 0 = the far y edge): "layer" the epithelial layer the open area
         is measured on, "top" the topmost tissue cell, "max" the column
@@ -266,7 +309,7 @@ class Run:
         finally:
             L.lib.ss_image_free(p)
 
-    def area(self):
+    def area(self) -> Dict[str, np.ndarray]:
         """The wound-area curve so far (seed 001 Fig. 4), one row per
         area_every: arrays t_days, open_area_mm2, normalised_area,
         wound_region_area_mm2 and mean_<field> per field (copies)."""
@@ -287,9 +330,9 @@ class Run:
             out["mean_" + name] = means[:, k].copy()
         return out
 
-    def time_to_closure(self, level=0.05):
+    def time_to_closure(self, level: float = 0.05) -> Optional[float]:
         """First day the normalised open area drops to <= level (None if not yet)."""
         n = ctypes.c_int()
         rows = L.lib.ss_heal_run_area(self._run(), ctypes.byref(n))
-        t = L.lib.ss_heal_time_to_closure(rows, n.value, float(level))
+        t = L.lib.ss_heal_time_to_closure(rows, n.value, L.as_float("level", level, 0.0, 1.0))
         return None if t < 0 else t

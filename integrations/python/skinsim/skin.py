@@ -14,6 +14,7 @@ down); see docs/skin.md.
 """
 
 import ctypes
+from typing import Any, Dict, List, Mapping, Optional, Union
 
 import numpy as np
 
@@ -23,12 +24,15 @@ from . import optics
 if not L.HAVE_SKIN:
     raise ImportError("skinsim.skin: the loaded library %s has no skin module" % L.library_path)
 
+#: feature type names (moles, freckles, ...), in the library's order
 FEATURE_TYPES = [L.lib.ss_feature_type_name(i).decode() for i in range(L.SS_FEAT_NTYPES)]
+#: channels of the bio map (t["bio"][..., k]), in order
 BIO_CHANNELS = [L.lib.ss_bio_channel_name(i).decode() for i in range(L.SS_BIO_NCHANNELS)]
+#: base-skin parameters settable with base={...}
 BASE_NAMES = ["melanin", "pheomelanin", "blood", "oxygenation", "sc", "epidermis"]
 
 
-def param_names():
+def param_names() -> List[str]:
     """Names of the distribution constants (`--param` of the CLI)."""
     p = L.lib.ss_skin_dist_names()
     out, i = [], 0
@@ -38,19 +42,24 @@ def param_names():
     return out
 
 
-def settings(size=512, preset="forearm", world_size_cm=None, seed=1, counts=None, params=None,
-             base=None, wrap=True, sampler="alias"):
+def settings(size: int = 512, preset: str = "forearm", world_size_cm: Optional[float] = None,
+             seed: int = 1, counts: Optional[Mapping[str, int]] = None,
+             params: Optional[Mapping[str, float]] = None,
+             base: Optional[Mapping[str, float]] = None, wrap: bool = True,
+             sampler: str = "alias") -> L.ss_skin_settings:
     """The ss_skin_settings `skinsim skin` would use for these options,
-    validated by the library."""
+    validated (numbers first in Python: size a whole number, values finite;
+    then by the library)."""
     s = L.ss_skin_settings()
-    L.check(L.lib.ss_skin_settings_preset, ctypes.byref(s), str(preset).encode(), int(size))
-    s.seed = int(seed)
+    L.check(L.lib.ss_skin_settings_preset, ctypes.byref(s), str(preset).encode(),
+            L.as_int("size", size, lo=1))
+    s.seed = L.as_u64("seed", seed)
     s.wrap = 1 if wrap else 0
     if sampler not in ("alias", "rejection"):
         raise L.InputError("sampler: %r is not alias or rejection" % (sampler,), L.SS_ERR_INPUT)
     s.sampler = 0 if sampler == "alias" else 1
     if world_size_cm is not None:
-        s.world_size_cm = float(world_size_cm)
+        s.world_size_cm = L.as_float("world_size_cm", world_size_cm, lo=0.0, lo_open=True)
         if preset == "forearm":  # counts follow the area, as on the command line
             L.lib.ss_skin_forearm_counts(s.world_size_cm, s.count)
     for name, n in (counts or {}).items():
@@ -58,22 +67,21 @@ def settings(size=512, preset="forearm", world_size_cm=None, seed=1, counts=None
         if t < 0:
             raise L.InputError("counts: unknown feature %r (%s)" % (name, ", ".join(FEATURE_TYPES)),
                                L.SS_ERR_INPUT)
-        if int(n) < 0:
-            raise L.InputError("counts: %s=%r must be >= 0" % (name, n), L.SS_ERR_INPUT)
-        s.count[t] = int(n)
+        s.count[t] = L.as_int("counts[%s]" % name, n, lo=0, hi=2**62, c_max=2**63 - 1)
     for name, v in (params or {}).items():
-        L.check(L.lib.ss_skin_dist_set, ctypes.byref(s.dist), str(name).encode(), float(v))
+        L.check(L.lib.ss_skin_dist_set, ctypes.byref(s.dist), str(name).encode(),
+                L.as_float("params[%s]" % name, v))
     for name, v in (base or {}).items():
         if name not in BASE_NAMES:
             raise L.InputError("base: unknown parameter %r (%s)" % (name, ", ".join(BASE_NAMES)),
                                L.SS_ERR_INPUT)
         a = BASE_NAMES.index(name)
-        if not 0 <= float(v) <= s.base_hi[a]:
-            raise L.InputError("base: %s=%r outside [0, %g]" % (name, v, s.base_hi[a]),
-                               L.SS_ERR_INPUT)
-        s.base_lo[a] = float(v)
-    L.check(L.lib.ss_skin_settings_validate, ctypes.byref(s))
+        s.base_lo[a] = L.as_float("base[%s]" % name, v, 0.0, s.base_hi[a])
+    L.check(L.lib.ss_skin_settings_validate, ctypes.byref(s), rename=_RENAME)
     return s
+
+
+_RENAME = {"size": "size", "param": "params", "count": "counts"}
 
 
 def _features_dict(lst):
@@ -93,13 +101,18 @@ def _features_dict(lst):
     return out
 
 
-def textures(size=512, preset="forearm", world_size_cm=None, seed=1, counts=None, params=None,
-             base=None, wrap=True, sampler="alias", fields=None, table=None,
-             normal_directx=False):
+def textures(size: int = 512, preset: str = "forearm", world_size_cm: Optional[float] = None,
+             seed: int = 1, counts: Optional[Mapping[str, int]] = None,
+             params: Optional[Mapping[str, float]] = None,
+             base: Optional[Mapping[str, float]] = None, wrap: bool = True,
+             sampler: str = "alias", fields: Optional[Mapping[str, Any]] = None,
+             table: Union[None, str, "optics.Table"] = None,
+             normal_directx: bool = False) -> Dict[str, Any]:
     """Skin textures. fields: optional arrays by name -- a feature type
     ("moles", ...) for its probability field (h, w) 0..1, "lips" (h, w) lip
     weight, "vectors" (h, w, 3) wrinkle vector field. table: an
-    optics.Table or a path (default: the shipped table)."""
+    optics.Table or a path (default: the shipped table, opened once per
+    process: optics.default_table())."""
     s = settings(size, preset, world_size_cm, seed, counts, params, base, wrap, sampler)
     fl = L.ss_skin_fields()
     keep = []
@@ -122,7 +135,9 @@ def textures(size=512, preset="forearm", world_size_cm=None, seed=1, counts=None
                                        % (name, ", ".join(FEATURE_TYPES)), L.SS_ERR_INPUT)
                 fl.density[t] = ctypes.pointer(hdr)
         keep.append((a, hdr))
-    if table is None or not isinstance(table, optics.Table):
+    if table is None:
+        table = optics.default_table()
+    elif not isinstance(table, optics.Table):
         table = optics.Table(table)
     h = L.Handle()
     lst = L.ss_skin_feature_list()
@@ -136,13 +151,9 @@ def textures(size=512, preset="forearm", world_size_cm=None, seed=1, counts=None
     finally:
         L.lib.ss_skin_feature_list_free(ctypes.byref(lst))
     h.own(L.lib.ss_image_free, bio)
-    lut = L.check_ptr(L.lib.ss_skin_lut_create, table._t)
-    try:
-        maps = L.ss_skin_maps()
-        L.check(L.lib.ss_skin_render_maps, bio, lut, s.world_size_cm, 1 if normal_directx else 0,
-                ctypes.byref(maps))
-    finally:
-        L.lib.ss_skin_lut_free(lut)
+    maps = L.ss_skin_maps()
+    L.check(L.lib.ss_skin_render_maps, bio, table._skin_lut(), s.world_size_cm,
+            1 if normal_directx else 0, ctypes.byref(maps))
     h.own(L.lib.ss_skin_maps_free, ctypes.pointer(maps))
     out = {m: L.image_view(getattr(maps, m), h)
            for m in ("base_color", "roughness", "specular", "height_mm", "normal")}

@@ -43,9 +43,7 @@ class Textures:
         if abs(g.ny * g.dx_mm - self.side_mm) > 1e-9 * self.side_mm:
             raise L.InputError("the heal block is %g x %g mm; the texture needs a square block"
                                % (self.side_mm, g.ny * g.dx_mm), L.SS_ERR_INPUT)
-        self.size = int(size)
-        if not 16 <= self.size <= 16384:
-            raise L.InputError("size: %d is outside 16..16384" % self.size, L.SS_ERR_INPUT)
+        self.size = L.as_int("size", size, lo=16, hi=16384)
         self.exact = run.step_index == 0
         rec = L.ss_wound_recipe()
         L.lib.ss_wound_recipe_default(ctypes.byref(rec))
@@ -55,7 +53,7 @@ class Textures:
         h.own(lambda _: None, run._h)  # the tissue reads the run's grid: keep it alive
         if skin is None:
             sk = L.check_ptr(L.lib.ss_skin_bio_default, self.size, self.side_mm / 10.0,
-                             int(seed))
+                             L.as_u64("seed", seed))
             h.own(L.lib.ss_image_free, sk)
             skin_hdr = sk
         elif isinstance(skin, (str, bytes, os.PathLike)):
@@ -73,7 +71,9 @@ class Textures:
             L.check(L.lib.ss_wound_skin_validate, ctypes.byref(hdr), b"skin")
             self._skin = (a, hdr)
             skin_hdr = ctypes.pointer(hdr)
-        if table is None or not isinstance(table, optics.Table):
+        if table is None:
+            table = optics.default_table()
+        elif not isinstance(table, optics.Table):
             table = optics.Table(table)
         self._table = table
         o = L.ss_wound_render_options()
@@ -83,9 +83,9 @@ class Textures:
         o.skin = skin_hdr
         o.table = table._t
         o.recipe = rec
-        o.seed = int(seed)
+        o.seed = L.as_u64("seed", seed)
         if scab_photons is not None:
-            o.scab_photons = int(scab_photons)
+            o.scab_photons = L.as_u64("scab_photons", scab_photons, lo=1)
         rd = ctypes.c_void_p()
         L.check(L.lib.ss_wound_renderer_create, ctypes.byref(o), ctypes.byref(rd))
         self._renderer = h.own(L.lib.ss_wound_renderer_free, rd)
@@ -102,7 +102,7 @@ class Textures:
     def advance_to(self, day):
         """Steps the run to `day`, observing the tissue after every step."""
         r = self.run._run()
-        target = int(round(float(day) / L.lib.ss_heal_run_dt(r)))
+        target = int(round(L.as_float("day", day, lo=0.0) / L.lib.ss_heal_run_dt(r)))
         if target > L.lib.ss_heal_run_steps_total(r) or target < L.lib.ss_heal_run_step_index(r):
             raise L.InputError("day: %g is before the run's current day %g or after its end %g"
                                % (day, self.run.day, self.run.end_day), L.SS_ERR_INPUT)

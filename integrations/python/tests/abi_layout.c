@@ -34,7 +34,15 @@ int main(void) {
     S(ss_mc_options), F(ss_mc_options, photons), F(ss_mc_options, seed),
         F(ss_mc_options, theta_i_rad), F(ss_mc_options, roughness_sigma),
         F(ss_mc_options, stochastic_absorb), F(ss_mc_options, radial_bins),
-        F(ss_mc_options, radial_max_cm), F(ss_mc_options, radial_distance);
+        F(ss_mc_options, radial_max_cm), F(ss_mc_options, radial_distance),
+        F(ss_mc_options, cancel), F(ss_mc_options, cancel_user);
+    S(ss_optics_layer), F(ss_optics_layer, d_cm), F(ss_optics_layer, phase_n),
+        F(ss_optics_layer, phase_theta);
+    S(ss_optics_slab), F(ss_optics_slab, layer), F(ss_optics_slab, n_above),
+        F(ss_optics_slab, bottom_albedo);
+    S(ss_mc_result), F(ss_mc_result, transmit_se), F(ss_mc_result, brdf_exit),
+        F(ss_mc_result, absorbed_per_layer), F(ss_mc_result, roulette_net),
+        F(ss_mc_result, radial_bins), F(ss_mc_result, radial_dr_cm);
     S(ss_spectrum_options), F(ss_spectrum_options, wl_step_nm), F(ss_spectrum_options, mc),
         F(ss_spectrum_options, progress), F(ss_spectrum_options, progress_user);
     S(ss_reflectance_spectrum), F(ss_reflectance_spectrum, wavelength_nm),

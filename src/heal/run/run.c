@@ -389,8 +389,19 @@ ss_status ss_heal_run_advance_to(ss_heal_run *r, double day, ss_error *err) {
         return ss_error_set(err, SS_ERR_INPUT, "heal run: day %g is after the run's end (day %g)",
                             day, ss_heal_run_end_day(r));
     ss_status st = SS_OK;
-    while (!st && (long long)r->g->step < k) st = run_step(r, k, err);
+    while (!st && (long long)r->g->step < k) {
+        st = run_step(r, k, err);
+        /* the caller's poll, between whole steps: a stop leaves a valid run */
+        if (!st && r->progress && r->progress(r->progress_user, r->g->t_days))
+            st = ss_error_set(err, SS_ERR_RUNTIME, "heal run: cancelled by the caller at day %g",
+                              r->g->t_days);
+    }
     return st;
+}
+
+void ss_heal_run_set_progress(ss_heal_run *r, int (*fn)(void *user, double day), void *user) {
+    r->progress = fn;
+    r->progress_user = user;
 }
 
 ss_status ss_heal_run_finish(ss_heal_run *r, char **summary_json, ss_error *err) {

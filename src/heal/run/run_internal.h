@@ -77,6 +77,8 @@ struct ss_heal_run {
     ss_heal_run_checkpoint_fn
         ckpt_fn; /* a checkpoint writer instead of the run's own; NULL = none */
     void *ckpt_ctx;
+    int (*progress)(void *user, double day); /* ss_heal_run_set_progress; NULL = none */
+    void *progress_user;
 };
 /* Brings r->g's fields up to date when an external solver steps it. */
 ss_status ss_heal_run__sync(ss_heal_run *r, ss_error *err);

@@ -429,6 +429,9 @@ ss_status ss_heal_run__setup_fresh(ss_heal_run *r, ss_error *err) {
     geometry gm;
     if (!st) st = setup_geometry(c, &gm, err);
     if (!st) st = check_wound_options(c, &gm, err);
+    /* the output folder is checked now, not at the first step: a library
+     * caller learns of a bad out_dir from create, before any work */
+    if (!st && !c->distributed) st = ss_heal_run__outputs_precheck(r, err);
     if (st) return st;
     r->days = c->days != 0 ? c->days : SS_HEAL_RUN_DEFAULT_DAYS;
     r->scheme = c->scheme;
