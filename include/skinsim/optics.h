@@ -90,8 +90,8 @@ typedef struct ss_mc_options {
     int radial_distance;  /* SS_RADIAL_NET (default) or SS_RADIAL_PATH */
     int kernel;           /* SS_MC_KERNEL_AUTO (default), _SCALAR, _PACKET_BASE */
     /* optional (NULL, the default: never cancelled): polled from the calling
-     * thread only, at the start of each photon block it takes (a block is at
-     * most 1/256 of the run) and every 4,096 photons on the scalar path; a
+     * thread only, every 4,096 photons (scalar path) or 65,536 photons
+     * (packet path, about 0.1 s) it traces; a
      * non-zero return stops the run, which then returns SS_ERR_RUNTIME
      * ("cancelled") with nothing in its result. Every call built on ss_mc_run
      * (spectra, BRDFs, tables) copies these options, so one callback cancels

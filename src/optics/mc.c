@@ -1275,6 +1275,9 @@ static void acc_bind(mc_acc *a, const ss_mc_tally_spec *sp, double *mem) {
     }
 }
 
+/* Photons the packet path runs between two cancellation polls (about 0.1 s). */
+#define PK_CHUNK 65536u
+
 /* One cancellation poll: has the run been stopped (by any thread), or does
  * the caller's callback (asked on the calling thread only) stop it now? */
 static int poll_stop(const mc_ctx *c, int *stop, int caller) {
@@ -1333,8 +1336,8 @@ static ss_status run_blocks(const mc_ctx *c, uint64_t photons, run_out *out, ss_
     /* Cancellation: only the calling thread (thread 0 of the team) calls
      * c->cancel, so a caller's callback (a Python interpreter's signal check)
      * never runs on a worker thread. It is polled at the start of every block
-     * (at most photons / 256 photons, or 2,048) and, on the scalar path, every
-     * 4,096 photons within one; once it says stop, every thread leaves at its
+     * and within one every 4,096 photons (scalar path) or PK_CHUNK photons
+     * (packet path); once it says stop, every thread leaves at its
      * next poll and the run returns an error. A run that is not cancelled is
      * unchanged (the poll reads nothing the photons use). */
     int stop = 0;
@@ -1354,13 +1357,20 @@ static ss_status run_blocks(const mc_ctx *c, uint64_t photons, run_out *out, ss_
                     break;
                 run_photon(c, i, &acc[b], pb);
             }
-        }
+        } else
+            /* the packet path takes a block in chunks of PK_CHUNK photons (for
+             * every run, so a cancellable run gives the same bits) and polls
+             * between them */
+            for (uint64_t s = lo; s < hi; s += PK_CHUNK) {
+                uint64_t e = hi - s > PK_CHUNK ? s + PK_CHUNK : hi;
+                if (c->cancel && s > lo && poll_stop(c, &stop, caller)) break;
 #ifdef PK_HAVE_AVX2
-        else if (kernel == SS_MC_KERNEL_AUTO)
-            pk_run_block_avx2(c, lo, hi, &acc[b], pb);
+                if (kernel == SS_MC_KERNEL_AUTO)
+                    pk_run_block_avx2(c, s, e, &acc[b], pb);
+                else
 #endif
-        else
-            pk_run_block_base(c, lo, hi, &acc[b], pb);
+                    pk_run_block_base(c, s, e, &acc[b], pb);
+            }
     }
     if (stop) {
         if (pbs)
