@@ -145,12 +145,22 @@ edge_distance(const float *p, int m, double world_mm, double u, double v, double
             bx[nb] = a;
             by[nb] = b;
             bz[nb] = q[2];
-            double dd = a * a + b * b;
-            bd2[nb] = dd;
-            if (dd < bd) bd = dd, best = nb;
+            bd2[nb] = a * a + b * b;
             nb++;
         }
     }
+    /* the nearest point: the minimum by a tree (no serial dependence), then
+     * its first index, as a running strict minimum would find it */
+    double mn[SIDE];
+    for (int d = 0; d < SIDE; d++) {
+        const double *r5 = bd2 + d * SIDE;
+        double x = r5[0] < r5[1] ? r5[0] : r5[1], y = r5[2] < r5[3] ? r5[2] : r5[3];
+        x = x < y ? x : y;
+        mn[d] = x < r5[4] ? x : r5[4];
+    }
+    for (int d = 0; d < SIDE; d++)
+        if (mn[d] < bd) bd = mn[d];
+    while (bd2[best] != bd) best++;
     const double lim = sqrt(bd) + 2.0 * reach_mm, lim2 = lim * lim;
     double e = INFINITY;
     float dep = 0.0f;
