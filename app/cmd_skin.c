@@ -469,21 +469,19 @@ static ss_status read_inputs(const opts *o, inputs *in, cJSON *notes, ss_error *
     return st;
 }
 
+/* scratch: 4 floats a texel, the caller's (shared with write_sheet: fresh
+ * memory costs page faults) */
 static ss_status write_maps(const char *dir, const ss_skin_maps *m, const ss_image *bio,
                             int bio_half, const ss_image *mr, const ss_image *normal_gl,
-                            ss_error *err) {
+                            float *scratch, ss_error *err) {
     enum { N = 10 };
     static const char *names[N] = {
         "base_color.png", "roughness.png",   "specular.png",     "height.png", "normal.png",
         "bio.exr",        "metal_rough.png", "translucency.png", "cavity.png", "normal_gl.png"};
     const size_t n = (size_t)m->height_mm->width * m->height_mm->height;
-    ss_image *h16 = ss_image_create_uninit(m->height_mm->width, m->height_mm->height, 1, err);
-    ss_image *tr =
-        h16 ? ss_image_create_uninit(m->height_mm->width, m->height_mm->height, 3, err) : NULL;
-    if (!tr) {
-        ss_image_free(h16);
-        return err->code;
-    }
+    ss_image h16v = {m->height_mm->width, m->height_mm->height, 1, scratch},
+             trv = {m->height_mm->width, m->height_mm->height, 3, scratch + n}, *h16 = &h16v,
+             *tr = &trv;
     double lo = m->height_min_mm, span = m->height_max_mm - m->height_min_mm;
     for (size_t i = 0; i < n; i++)
         h16->data[i] = span > 0 ? (float)((m->height_mm->data[i] - lo) / span) : 0.5f;
@@ -533,8 +531,6 @@ static ss_status write_maps(const char *dir, const ss_skin_maps *m, const ss_ima
             break;
         }
     }
-    ss_image_free(h16);
-    ss_image_free(tr);
     for (int k = 0; k < N; k++)
         if (sts[k]) {
             *err = errs[k];
@@ -582,7 +578,7 @@ static void display_grey(const ss_image *src, int C, int ch, float *out) {
  * time in one scratch buffer and shrunk to their tile before the next
  * (fresh memory costs page faults: ~130 MB fewer at 2048). */
 static ss_status write_sheet(const char *dir, const ss_skin_maps *m, const ss_image *bio,
-                             ss_error *err) {
+                             float *buf, ss_error *err) {
     enum { N = 10 };
     const int S = m->base_color->width, T = S < 512 ? S : 512, CROP = S < 256 ? S : 256;
     ss_image *tiles[N] = {0};
@@ -590,8 +586,6 @@ static ss_status write_sheet(const char *dir, const ss_skin_maps *m, const ss_im
                                     "height",       "normal 1:1",      "melanin",   "blood",
                                     "translucency", "cavity 1:1"};
     const size_t n = (size_t)S * m->base_color->height;
-    float *buf = malloc(n * 3 * sizeof(float));
-    if (!buf) return ss_error_set(err, SS_ERR_NOMEM, "contact sheet: out of memory");
     ss_status st = SS_OK;
     for (int k = 0; k < N && !st; k++) {
         ss_image view = {S, m->base_color->height, 1, buf}, *own = NULL;
@@ -651,7 +645,6 @@ static ss_status write_sheet(const char *dir, const ss_skin_maps *m, const ss_im
         ss_image_free(own);
         if (!tiles[k]) st = err->code;
     }
-    free(buf);
     if (!st) {
         ss_image *sheet = ss_contact_sheet((const ss_image *const *)tiles, labels, N, 256, 5, err);
         if (!sheet)
@@ -729,13 +722,20 @@ static ss_status run(const opts *o, const ss_skin_settings *s, inputs *in, const
             maps.normal = dx;
         }
     }
-    if (!st) st = write_maps(dir, &maps, o->no_bio ? NULL : bio, !o->bio_float, mr, normal_gl, err);
+    /* one scratch for the write copies and the contact sheet's display images */
+    float *scratch = NULL;
+    if (!st && !(scratch = malloc((size_t)s->size * s->size * 4 * sizeof(float))))
+        st = ss_error_set(err, SS_ERR_NOMEM, "skin: out of memory for the write buffers");
+    if (!st)
+        st = write_maps(dir, &maps, o->no_bio ? NULL : bio, !o->bio_float, mr, normal_gl, scratch,
+                        err);
     char path[4200];
     if (!st) {
         snprintf(path, sizeof path, "%s/features.csv", dir);
         st = ss_skin_features_write_csv(path, &in->features, err);
     }
-    if (!st) st = write_sheet(dir, &maps, bio, err);
+    if (!st) st = write_sheet(dir, &maps, bio, scratch, err);
+    free(scratch);
     const char *gl_normal = o->directx ? "normal_gl.png" : "normal.png";
     if (!st && o->gltf) {
         snprintf(path, sizeof path, "%s/skin.gltf", dir);
