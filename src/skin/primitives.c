@@ -13,6 +13,7 @@
  * Profiles: the printed wrinkle profile and follicle fade are garbled or
  * negative in the seed's text; the readings used are documented in
  * docs/skin.md and next to each function. */
+#include "skin_internal.h"
 #include "skinsim/skin.h"
 
 #include <math.h>
@@ -35,17 +36,21 @@ typedef struct poly3 {
     double ax, bx, cx, dx, ay, by, cy, dy;
 } poly3;
 
-static poly3 to_poly(const ss_bezier3 *b, double px, double py) {
-    poly3 p;
-    p.ax = -b->x[0] + 3.0 * b->x[1] - 3.0 * b->x[2] + b->x[3];
-    p.bx = 3.0 * b->x[0] - 6.0 * b->x[1] + 3.0 * b->x[2];
-    p.cx = -3.0 * b->x[0] + 3.0 * b->x[1];
-    p.dx = b->x[0] - px;
-    p.ay = -b->y[0] + 3.0 * b->y[1] - 3.0 * b->y[2] + b->y[3];
-    p.by = 3.0 * b->y[0] - 6.0 * b->y[1] + 3.0 * b->y[2];
-    p.cy = -3.0 * b->y[0] + 3.0 * b->y[1];
-    p.dy = b->y[0] - py;
-    return p;
+void skin_bezier3_prepare(const ss_bezier3 *b, skin_bezier3_prep *q) {
+    q->ax = -b->x[0] + 3.0 * b->x[1] - 3.0 * b->x[2] + b->x[3];
+    q->bx = 3.0 * b->x[0] - 6.0 * b->x[1] + 3.0 * b->x[2];
+    q->cx = -3.0 * b->x[0] + 3.0 * b->x[1];
+    q->x0 = b->x[0];
+    q->ay = -b->y[0] + 3.0 * b->y[1] - 3.0 * b->y[2] + b->y[3];
+    q->by = 3.0 * b->y[0] - 6.0 * b->y[1] + 3.0 * b->y[2];
+    q->cy = -3.0 * b->y[0] + 3.0 * b->y[1];
+    q->y0 = b->y[0];
+    /* |B'| <= 3 max |P_k+1 - P_k| (the hodograph's hull) */
+    q->sp = 0.0;
+    for (int k = 0; k < 3; k++) {
+        double l = hypot(b->x[k + 1] - b->x[k], b->y[k + 1] - b->y[k]);
+        if (l > q->sp) q->sp = l;
+    }
 }
 
 static inline double pdist2(const poly3 *p, double t) {
@@ -85,26 +90,21 @@ static double golden(const poly3 *p, double lo, double hi, double tol, double *t
     return pdist2(p, *t_out);
 }
 
-double ss_bezier3_distance(const ss_bezier3 *b, double px, double py, int coarse, double tol,
-                           double reach, double *t_out) {
+double skin_bezier3_distance_prep(const skin_bezier3_prep *q, double px, double py, int coarse,
+                                  double tol, double reach, double *t_out) {
     if (coarse < 2) coarse = 2;
     if (coarse > 64) coarse = 64;
     if (!(tol > 0.0)) tol = 1e-6;
-    const poly3 p = to_poly(b, px, py);
+    const poly3 p = {q->ax, q->bx, q->cx, q->x0 - px, q->ay, q->by, q->cy, q->y0 - py};
     double f[65], fmin = INFINITY;
     for (int i = 0; i <= coarse; i++) {
         f[i] = pdist2(&p, (double)i / coarse);
         if (f[i] < fmin) fmin = f[i];
     }
     if (reach < INFINITY) {
-        /* |B'| <= 3 max |P_k+1 - P_k| (the hodograph's hull), so between two
-         * samples the curve is within 1.5 max |dP| / coarse of one of them */
-        double sp = 0.0;
-        for (int k = 0; k < 3; k++) {
-            double l = hypot(b->x[k + 1] - b->x[k], b->y[k + 1] - b->y[k]);
-            if (l > sp) sp = l;
-        }
-        double lb = sqrt(fmin) - 1.5 * sp / coarse;
+        /* between two samples the curve is within 1.5 max |dP| / coarse of
+         * one of them */
+        double lb = sqrt(fmin) - 1.5 * q->sp / coarse;
         if (lb > reach) {
             if (t_out) *t_out = 0.0;
             return INFINITY;
@@ -122,6 +122,13 @@ double ss_bezier3_distance(const ss_bezier3 *b, double px, double py, int coarse
     }
     if (t_out) *t_out = bt;
     return sqrt(best);
+}
+
+double ss_bezier3_distance(const ss_bezier3 *b, double px, double py, int coarse, double tol,
+                           double reach, double *t_out) {
+    skin_bezier3_prep q;
+    skin_bezier3_prepare(b, &q);
+    return skin_bezier3_distance_prep(&q, px, py, coarse, tol, reach, t_out);
 }
 
 static double sigmoid(double x) { return 1.0 / (1.0 + exp(-x)); }

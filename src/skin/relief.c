@@ -110,34 +110,57 @@ ss_status skin_relief_init(skin_relief *r, const ss_skin_settings *s, const ss_i
  * edges nearer than `reach_mm` are looked for (+INFINITY: none). A rival k
  * can only be the edge's other side when |p_k| - |p_best| < 2 reach (the
  * bisector distance is at least half that difference), which skips most. */
-static double edge_distance(const float *p, int m, double world_mm, double u, double v, double tx,
-                            double ty, double inv_stretch, int reach, double reach_mm,
-                            float *depth) {
+static inline __attribute__((always_inline)) double
+edge_distance(const float *p, int m, double world_mm, double u, double v, double tx, double ty,
+              double inv_stretch, int iso, double reach_mm, float *depth) {
+    enum { REACH = 2, SIDE = 2 * REACH + 1 };
     const int ci = (int)floor(u * m), cj = (int)floor(v * m);
-    double bx[49], by[49], bd2[49];
-    float bz[49];
+    double bx[SIDE * SIDE], by[SIDE * SIDE], bd2[SIDE * SIDE];
+    float bz[SIDE * SIDE];
+    int col[SIDE];
+    double cox[SIDE];
+    for (int d = 0; d < SIDE; d++) { /* the periodic wrap, once per column */
+        int i = ci + d - REACH;
+        double ox = 0;
+        if (i < 0) i += m, ox = -1;
+        if (i >= m) i -= m, ox = 1;
+        col[d] = i;
+        cox[d] = ox;
+    }
     int nb = 0, best = 0;
     double bd = INFINITY;
-    for (int dj = -reach; dj <= reach; dj++)
-        for (int di = -reach; di <= reach; di++) {
-            int i = ci + di, j = cj + dj;
-            double ox = 0, oy = 0;
-            if (i < 0) i += m, ox = -1;
-            if (i >= m) i -= m, ox = 1;
-            if (j < 0) j += m, oy = -1;
-            if (j >= m) j -= m, oy = 1;
-            const float *q = p + ((size_t)j * m + i) * 3;
-            double dx = (q[0] + ox - u) * world_mm, dy = (q[1] + oy - v) * world_mm;
-            /* into the metric: shrink the component along the direction */
-            double a = (dx * tx + dy * ty) * inv_stretch, b = -dx * ty + dy * tx;
+    for (int dj = 0; dj < SIDE; dj++) {
+        int j = cj + dj - REACH;
+        double oy = 0;
+        if (j < 0) j += m, oy = -1;
+        if (j >= m) j -= m, oy = 1;
+        const float *row = p + (size_t)j * m * 3;
+        for (int di = 0; di < SIDE; di++) {
+            const float *q = row + (size_t)col[di] * 3;
+            double dx = (q[0] + cox[di] - u) * world_mm, dy = (q[1] + oy - v) * world_mm;
+            /* into the metric: shrink the component along the direction
+             * (iso: the identity, whose products by 1 and 0 are exact) */
+            double a = dx, b = dy;
+            if (!iso) a = (dx * tx + dy * ty) * inv_stretch, b = -dx * ty + dy * tx;
             bx[nb] = a;
             by[nb] = b;
             bz[nb] = q[2];
-            double dd = a * a + b * b;
-            bd2[nb] = dd;
-            if (dd < bd) bd = dd, best = nb;
+            bd2[nb] = a * a + b * b;
             nb++;
         }
+    }
+    /* the nearest point: the minimum by a tree (no serial dependence), then
+     * its first index, as a running strict minimum would find it */
+    double mn[SIDE];
+    for (int d = 0; d < SIDE; d++) {
+        const double *r5 = bd2 + d * SIDE;
+        double x = r5[0] < r5[1] ? r5[0] : r5[1], y = r5[2] < r5[3] ? r5[2] : r5[3];
+        x = x < y ? x : y;
+        mn[d] = x < r5[4] ? x : r5[4];
+    }
+    for (int d = 0; d < SIDE; d++)
+        if (mn[d] < bd) bd = mn[d];
+    while (bd2[best] != bd) best++;
     const double lim = sqrt(bd) + 2.0 * reach_mm, lim2 = lim * lim;
     double e = INFINITY;
     float dep = 0.0f;
@@ -181,9 +204,9 @@ float skin_relief_eval(const skin_relief *r, double u, double v, float *groove) 
                  ty = (s2 < 0 ? -1.0 : 1.0) * sqrt(fmax(0.0, 0.5 * (1.0 - c)));
     float dep1, dep2;
     const double e1 =
-        edge_distance(r->p1, r->m1, r->world_mm, u, v, tx, ty, 1.0 / r->stretch, 2, r->w1, &dep1);
+        edge_distance(r->p1, r->m1, r->world_mm, u, v, tx, ty, 1.0 / r->stretch, 0, r->w1, &dep1);
     const double e2 =
-        edge_distance(r->p2, r->m2, r->world_mm, u, v, 1.0, 0.0, 1.0, 2, r->w2, &dep2);
+        edge_distance(r->p2, r->m2, r->world_mm, u, v, 1.0, 0.0, 1.0, 1, r->w2, &dep2);
     double g1 = e1 < r->w1 ? (1.0 - e1 / r->w1) : 0.0, g2 = e2 < r->w2 ? (1.0 - e2 / r->w2) : 0.0;
     g1 *= g1;
     g2 *= g2;

@@ -264,6 +264,9 @@ static ss_status cavity_map(const ss_image *h, double texel_mm, ss_image *out, s
     if (2 * R + 1 > H) R = (H - 1) / 2;
     float *tmp = malloc((size_t)W * H * sizeof(float));
     if (!tmp) return ss_error_set(err, SS_ERR_NOMEM, "cavity map: out of memory");
+        /* the wraps by compare, not %, and the column pass over blocks of
+         * columns a row at a time (each column's sum is updated in the same
+         * order as one column at a time, so the values are the same) */
 #pragma omp parallel for schedule(static)
     for (int y = 0; y < H; y++) {
         const float *row = h->data + (size_t)y * W;
@@ -271,19 +274,36 @@ static ss_status cavity_map(const ss_image *h, double texel_mm, ss_image *out, s
         for (int k = -R; k <= R; k++) s += row[((k % W) + W) % W];
         for (int x = 0; x < W; x++) {
             tmp[(size_t)y * W + x] = (float)(s / (2 * R + 1));
-            s += row[(x + R + 1) % W] - row[((x - R) % W + W) % W];
+            int xa = x + R + 1, xb = x - R;
+            if (xa >= W) xa -= W;
+            if (xb < 0) xb += W;
+            s += row[xa] - row[xb];
         }
     }
+    enum { CB = 64 };
+    const int nblk = (W + CB - 1) / CB;
 #pragma omp parallel for schedule(static)
-    for (int x = 0; x < W; x++) {
-        double s = 0;
-        for (int k = -R; k <= R; k++) s += tmp[(size_t)(((k % H) + H) % H) * W + x];
+    for (int blk = 0; blk < nblk; blk++) {
+        const int x0 = blk * CB, nx = W - x0 < CB ? W - x0 : CB;
+        double s[CB];
+        for (int i = 0; i < nx; i++) s[i] = 0;
+        for (int k = -R; k <= R; k++) {
+            const float *t = tmp + (size_t)(((k % H) + H) % H) * W + x0;
+            for (int i = 0; i < nx; i++) s[i] += t[i];
+        }
         for (int y = 0; y < H; y++) {
-            const double mean = s / (2 * R + 1);
-            const double d = (mean - h->data[(size_t)y * W + x]) / CAVITY_DEPTH_MM;
-            out->data[(size_t)y * W + x] = (float)(d <= 0 ? 1.0 : d >= 1 ? 0.0 : 1.0 - d);
-            s += tmp[(size_t)((y + R + 1) % H) * W + x] -
-                 tmp[(size_t)(((y - R) % H + H) % H) * W + x];
+            int ya = y + R + 1, yb = y - R;
+            if (ya >= H) ya -= H;
+            if (yb < 0) yb += H;
+            const float *hr = h->data + (size_t)y * W + x0, *ta = tmp + (size_t)ya * W + x0,
+                        *tb = tmp + (size_t)yb * W + x0;
+            float *o = out->data + (size_t)y * W + x0;
+            for (int i = 0; i < nx; i++) {
+                const double mean = s[i] / (2 * R + 1);
+                const double d = (mean - hr[i]) / CAVITY_DEPTH_MM;
+                o[i] = (float)(d <= 0 ? 1.0 : d >= 1 ? 0.0 : 1.0 - d);
+                s[i] += ta[i] - tb[i];
+            }
         }
     }
     free(tmp);

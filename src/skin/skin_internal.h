@@ -10,6 +10,15 @@
 #define MOTTLE_F 8    /* fields: the 6 optical parameters, height, sebum */
 #define MOTTLE_OCT 12 /* at most this many octaves */
 enum { MOT_HEIGHT = 6, MOT_SEBUM = 7 };
+/* A cubic Bezier in power form, made once per curve for the distance
+ * search (ss_bezier3_distance prepares it on every call). */
+typedef struct skin_bezier3_prep {
+    double ax, bx, cx, x0, ay, by, cy, y0, sp; /* sp: max control-polygon leg */
+} skin_bezier3_prep;
+void skin_bezier3_prepare(const ss_bezier3 *b, skin_bezier3_prep *q);
+double skin_bezier3_distance_prep(const skin_bezier3_prep *q, double px, double py, int coarse,
+                                  double tol, double reach, double *t_out);
+
 typedef struct skin_mottle {
     int noct;
     int n[MOTTLE_OCT];             /* lattice points per side of octave k */

@@ -264,6 +264,8 @@ static void apply_feature(const ss_skin_settings *s, const ss_skin_feature *f, u
          * reach (the width, plus a texel for the flattening) meets the row;
          * only those texels get the golden-section distance */
         const float R = (float)(f->w / mm_per_unit) + 1.0f / (float)size;
+        skin_bezier3_prep bq;
+        skin_bezier3_prepare(&f->curve, &bq);
         for (int y = y0; y <= y1; y++) {
             const double v = (y + 0.5) / size;
             const float fv = (float)(v - oy);
@@ -282,8 +284,8 @@ static void apply_feature(const ss_skin_settings *s, const ss_skin_feature *f, u
             for (int x = xa; x <= xb; x++) {
                 const double u = (x + 0.5) / size;
                 double t;
-                double dist = ss_bezier3_distance(&f->curve, u - ox, v - oy, 8, 2e-3,
-                                                  f->w / mm_per_unit, &t) *
+                double dist = skin_bezier3_distance_prep(&bq, u - ox, v - oy, 8, 2e-3,
+                                                         f->w / mm_per_unit, &t) *
                               mm_per_unit;
                 double prof = ss_profile_wrinkle(dist, ss_wrinkle_taper(t, f->w));
                 if (prof > 0.0) {
