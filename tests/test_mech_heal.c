@@ -165,9 +165,11 @@ static void test_anisotropic(void **state) {
         assert_true(rx.contr[2] >= 0 && rx.contr[2] < 0.01 && rx.myo[2] < 0.02);
     } else {
         assert_true(rx.t_close > 0 && ry.t_close > 0);
-        /* at 95 % closure and at day 15 */
-        assert_true(rx.close.extent_y_mm / rx.close.extent_x_mm > 1.15);
-        assert_true(ry.close.extent_y_mm / ry.close.extent_x_mm < 1.0 / 1.15);
+        /* at 95 % closure and at day 15; closure comes earlier since the
+         * epithelial window no longer stalls ([D13]; day 7.65 in this case),
+         * so less contraction has happened by then than by day 15 */
+        assert_true(rx.close.extent_y_mm / rx.close.extent_x_mm > 1.10);
+        assert_true(ry.close.extent_y_mm / ry.close.extent_x_mm < 1.0 / 1.10);
         assert_true(arx > 1.15);
         assert_true(ary < 1.0 / 1.15); /* day 10 */
         /* the principal (major) axis lies across the fibres */
