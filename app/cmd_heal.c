@@ -73,7 +73,9 @@ static void help(FILE *f) {
                "                         --wound-mesh above)\n"
                "  --skin-thickness-mm T  skin shell thickness (default 3)\n"
                "  --voxel-mm H           voxel edge of the patch (default 0.5)\n"
-               "  --mesh-units-mm U      one mesh unit in mm (default: glTF 1000, OBJ 1)\n"
+               "  --mesh-units-mm U      one mesh unit in mm (default: glTF 1000; an OBJ by\n"
+               "                         its bounding-box diagonal D: D < 3 metres (with a\n"
+               "                         note), D >= 60 mm, 3..60 refused as mm or cm)\n"
                "  writes surface/skin_NNNN.vtu (+ skin.pvd): the fields and the deformation\n"
                "  on the undeformed mesh's vertices\n"
                "\n");

@@ -8,7 +8,8 @@
 # open mesh, a self-intersecting mesh, strokes outside the UV islands, a
 # stroke across two islands, a wound mesh away from the skin, a wound wrapping
 # around a finger, --wound-uv without --mesh) exits 2 naming the input and
-# writes nothing.
+# writes nothing; an OBJ in metres is read as metres with a note, one whose
+# size leaves mm or cm open is refused naming --mesh-units-mm.
 # usage: e2e_heal_mesh.sh <skinsim> <source dir>
 set -u
 CLI=$1
@@ -178,4 +179,60 @@ for f in ((1,3,5),(3,2,5),(2,4,5),(4,1,5),(3,1,6),(2,3,6),(4,2,6),(1,4,6)): prin
 " >"$T/ring.obj"
 bad "ring.obj: the wound wraps around" --mesh "$HAND" --wound-mesh "$T/ring.obj" --mesh-units-mm 1000
 bad "need --mesh" --wound-uv "$T/cut.csv"
+
+# --- OBJ units from the mesh's size (docs/mesh.md "Units"): a forearm-sized
+# ellipsoid (0.24 x 0.08 x 0.06 m) with an octahedral wound on its top,
+# written in metres, mm and cm. Metres (diagonal 0.26) is read as metres with
+# a note and cuts the same voxels as mm (to float rounding) (diagonal 260, the default); cm
+# (diagonal 26) is ambiguous: refused naming --mesh-units-mm, and with
+# --mesh-units-mm 10 it cuts the same voxels again.
+for u in m mm cm; do
+    python3 - "$u" "$T/arm_$u.obj" "$T/cut_$u.obj" <<'PY'
+import math, sys
+s = {"m": 1.0, "mm": 1000.0, "cm": 100.0}[sys.argv[1]]
+a, b, c, nu, nv = 0.12, 0.04, 0.03, 48, 24
+with open(sys.argv[2], "w") as o:
+    for j in range(nv + 1):
+        th = math.pi * j / nv
+        for i in range(nu + 1):
+            ph = 2 * math.pi * i / nu
+            p = (a * math.sin(th) * math.cos(ph), b * math.sin(th) * math.sin(ph), c * math.cos(th))
+            o.write("v %.9g %.9g %.9g\nvt %.6f %.6f\n" % (p[0] * s, p[1] * s, p[2] * s, i / nu, j / nv))
+    k = lambda i, j: j * (nu + 1) + i + 1
+    for j in range(nv):
+        for i in range(nu):
+            q = (k(i, j), k(i, j + 1), k(i + 1, j + 1), k(i + 1, j))
+            if j < nv - 1: o.write("f %d/%d %d/%d %d/%d\n" % (q[0], q[0], q[1], q[1], q[2], q[2]))
+            if j > 0: o.write("f %d/%d %d/%d %d/%d\n" % (q[0], q[0], q[2], q[2], q[3], q[3]))
+r, z = 0.004, c - 0.0015
+with open(sys.argv[3], "w") as o:
+    for p in ((r,0,z),(-r,0,z),(0,r,z),(0,-r,z),(0,0,z+r),(0,0,z-r)):
+        o.write("v %.9g %.9g %.9g\n" % tuple(x * s for x in p))
+    for f in ((1,3,5),(3,2,5),(2,4,5),(4,1,5),(3,1,6),(2,3,6),(4,2,6),(1,4,6)):
+        o.write("f %d %d %d\n" % f)
+PY
+done
+units_run() { # name, then the options
+    local n=$1
+    shift
+    "$CLI" heal --voxel-mm 1 --days 0.1 --snapshot-every 0 --out "$T/u_$n" --json "$@" \
+        >"$T/u_$n.json" 2>"$T/u_$n.err" || fail "units run $n: $(cat "$T/u_$n.err")"
+}
+units_run mm --mesh "$T/arm_mm.obj" --wound-mesh "$T/cut_mm.obj"
+units_run m --mesh "$T/arm_m.obj" --wound-mesh "$T/cut_m.obj"
+grep -q "arm_m.obj: read in metres" "$T/u_m.err" || fail "no metre note: $(cat "$T/u_m.err")"
+! grep -q "metres" "$T/u_mm.err" || fail "a mm OBJ got a metre note"
+bad "arm_cm.obj: .*--mesh-units-mm" --mesh "$T/arm_cm.obj" --wound-mesh "$T/cut_cm.obj"
+units_run cm --mesh "$T/arm_cm.obj" --wound-mesh "$T/cut_cm.obj" --mesh-units-mm 10
+python3 - "$T" <<'PY' || fail "the unit readings disagree"
+import json, sys
+w = {u: json.load(open("%s/u_%s.json" % (sys.argv[1], u)))["wound"] for u in ("mm", "m", "cm")}
+s = json.load(open(sys.argv[1] + "/u_m/summary.json"))["skin_mesh"]
+assert s["units_mm"] == 1000, s
+assert w["mm"]["voxels"] > 20, w
+for u in ("m", "cm"):
+    # the same cut up to a voxel or two on its boundary (float rounding of the scaled positions)
+    assert abs(w[u]["voxels"] - w["mm"]["voxels"]) <= 0.05 * w["mm"]["voxels"], w
+    assert abs(w[u]["radius_mm"] - w["mm"]["radius_mm"]) < 1e-6 * w["mm"]["radius_mm"], w
+PY
 echo "e2e_heal_mesh: OK"

@@ -441,11 +441,44 @@ static void test_refine(void **state) {
     ss_mesh_free(&m);
 }
 
+/* OBJ units from the bounding-box diagonal (docs/mesh.md "Units"): a
+ * forearm-sized block in metres, cm and mm; glTF and an explicit unit win. */
+static void test_units(void **state) {
+    (void)state;
+    ss_error err;
+    ss_mesh m;
+    char note[512];
+    double u = 0;
+    cube(0.2, 0, &m); /* diagonal 0.35: metres, with a note naming the file */
+    assert_int_equal(ss_shell_units_resolve(&m, "arm.obj", 0, &u, note, sizeof note, &err), SS_OK);
+    assert_true(u == 1000);
+    assert_non_null(strstr(note, "arm.obj: read in metres"));
+    ss_mesh_free(&m);
+    cube(20, 0, &m); /* diagonal 35: mm or cm, refused naming the flag */
+    assert_int_equal(ss_shell_units_resolve(&m, "arm.obj", 0, &u, note, sizeof note, &err),
+                     SS_ERR_INPUT);
+    assert_non_null(strstr(err.msg, "arm.obj"));
+    assert_non_null(strstr(err.msg, "--mesh-units-mm"));
+    ss_shell_opts o;
+    ss_shell_opts_default(&o);
+    assert_null(ss_shell_patch_from_mesh(&m, "arm.obj", &m, "w.obj", &o, &err));
+    assert_non_null(strstr(err.msg, "--mesh-units-mm"));
+    assert_int_equal(ss_shell_units_resolve(&m, "arm.obj", 10, &u, note, sizeof note, &err), SS_OK);
+    assert_true(u == 10 && note[0] == 0);
+    assert_int_equal(ss_shell_units_resolve(&m, "arm.GLB", 0, &u, NULL, 0, &err), SS_OK);
+    assert_true(u == 1000);
+    ss_mesh_free(&m);
+    cube(200, 0, &m); /* diagonal 346: mm, no note */
+    assert_int_equal(ss_shell_units_resolve(&m, "arm.obj", 0, &u, note, sizeof note, &err), SS_OK);
+    assert_true(u == 1 && note[0] == 0);
+    ss_mesh_free(&m);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_closed),     cmocka_unit_test(test_uv_patch),
         cmocka_unit_test(test_wound_mesh), cmocka_unit_test(test_wrap),
-        cmocka_unit_test(test_refine),
+        cmocka_unit_test(test_refine),     cmocka_unit_test(test_units),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -46,12 +46,24 @@ typedef struct ss_shell_opts {
     double epidermis_mm; /* epidermis (default SS_HEAL_DEFAULT_EPIDERMIS_MM) */
     double depth_mm;     /* depth of a UV-stroke wound (default SS_HEAL_DEFAULT_DEPTH_MM) */
     double margin_mm;    /* intact skin around the wound (0 = the wound's radius, >= 5 mm) */
-    double units_mm;     /* one mesh unit in mm; 0 = by extension (.glb/.gltf 1000, .obj 1) */
+    double units_mm;     /* one mesh unit in mm; 0 = glTF 1000, OBJ by its size (below) */
     int concave_k;       /* stroke hulls: 0 convex, >= 3 k-nearest concave */
 } ss_shell_opts;
 void ss_shell_opts_default(ss_shell_opts *o);
 /* units_mm for a mesh file name (0 in opts): glTF is in metres, OBJ taken as mm. */
 double ss_shell_units_for(const char *path, double units_mm);
+
+/* OBJ skin meshes whose bounding-box diagonal (in file units) is below this
+ * are read in metres, at or above SS_SHELL_OBJ_MM_DIAG in mm; between the two
+ * mm and cm are both plausible and the unit must be given. */
+#define SS_SHELL_OBJ_METRE_DIAG 3.0
+#define SS_SHELL_OBJ_MM_DIAG 60.0
+/* One unit of `skin` (read from `path`) in mm: units_mm when > 0, glTF 1000,
+ * an OBJ by its size (above; the metre reading writes a note into `note`,
+ * which may be NULL; an ambiguous size is SS_ERR_INPUT naming `path` and
+ * --mesh-units-mm). */
+ss_status ss_shell_units_resolve(const ss_mesh *skin, const char *path, double units_mm,
+                                 double *out, char *note, size_t note_size, ss_error *err);
 
 /* A closed surface: every edge (vertices welded by position) is shared by
  * exactly two triangles, no triangle is degenerate, and no edge pierces a

@@ -31,7 +31,17 @@
  * - Closedness welds vertices by position (seams duplicate them) and asks
  *   every edge to have exactly two triangles; self-intersection casts every
  *   edge as a ray segment through the BVH: an edge that pierces a triangle
- *   not sharing its vertices means two triangles cross. */
+ *   not sharing its vertices means two triangles cross.
+ * - Units (ss_shell_units_resolve): glTF is metres by its specification; an
+ *   OBJ carries no unit, so its size decides. Body parts span 80 mm (a
+ *   finger) to 1.8 m (a body) across their bounding-box diagonal, so a
+ *   diagonal under SS_SHELL_OBJ_METRE_DIAG (3) can only be metres (in mm it
+ *   could not hold the 3 mm skin), one of SS_SHELL_OBJ_MM_DIAG (60) or more
+ *   is mm (in cm it would be 0.6 m..), and between them mm (a fingertip or a
+ *   test block) and cm (a finger to a leg) are both plausible: refused,
+ *   asking for --mesh-units-mm. Gave up: guessing from the wound (a wound
+ *   mesh is in the skin's units, a UV stroke has no size of its own, so
+ *   neither tells mm from cm). */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdio.h>
@@ -64,6 +74,40 @@ static int ends_with(const char *s, const char *suf) {
 double ss_shell_units_for(const char *path, double units_mm) {
     if (units_mm > 0) return units_mm;
     return path && (ends_with(path, ".glb") || ends_with(path, ".gltf")) ? 1000.0 : 1.0;
+}
+
+ss_status ss_shell_units_resolve(const ss_mesh *skin, const char *path, double units_mm,
+                                 double *out, char *note, size_t note_size, ss_error *err) {
+    if (note && note_size) note[0] = 0;
+    if (units_mm > 0 || (path && (ends_with(path, ".glb") || ends_with(path, ".gltf")))) {
+        *out = ss_shell_units_for(path, units_mm);
+        return SS_OK;
+    }
+    double d2 = 0;
+    for (int d = 0; d < 3; d++) {
+        double e = (double)skin->bbox_max[d] - skin->bbox_min[d];
+        d2 += e * e;
+    }
+    double diag = sqrt(d2);
+    if (diag < SS_SHELL_OBJ_METRE_DIAG) {
+        *out = 1000.0;
+        if (note && note_size)
+            snprintf(note, note_size,
+                     "note: %s: read in metres (its bounding-box diagonal is %g units: under %g, "
+                     "too small for mm); --mesh-units-mm sets the unit",
+                     path ? path : "mesh", diag, SS_SHELL_OBJ_METRE_DIAG);
+        return SS_OK;
+    }
+    if (diag < SS_SHELL_OBJ_MM_DIAG)
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "%s: an OBJ has no unit and its size does not tell one: its "
+                            "bounding-box diagonal is %g units, %g..%g mm (a fingertip or a test "
+                            "block) or cm (a finger to a leg); give the unit with --mesh-units-mm "
+                            "(1 for mm, 10 for cm, 1000 for metres)",
+                            path ? path : "mesh", diag, SS_SHELL_OBJ_METRE_DIAG,
+                            SS_SHELL_OBJ_MM_DIAG);
+    *out = 1.0;
+    return SS_OK;
 }
 
 /* ---- closedness and self-intersection ------------------------------------------- */
@@ -472,7 +516,8 @@ ss_shell_patch *ss_shell_patch_from_uv(const ss_mesh *skin, const char *skin_nam
     }
     ss_stroke_set s;
     if (ss_stroke_csv_read(csv, &s, err)) return NULL;
-    double units = ss_shell_units_for(skin_name, o->units_mm);
+    double units;
+    if (ss_shell_units_resolve(skin, skin_name, o->units_mm, &units, NULL, 0, err)) return NULL;
     int *island = malloc((size_t)skin->ntriangles * sizeof(int));
     int *pisl = malloc((size_t)s.nstrokes * sizeof(int));
     double(*pos)[3] = malloc((size_t)s.npoints * sizeof *pos);
@@ -592,7 +637,8 @@ ss_shell_patch *ss_shell_patch_from_mesh(const ss_mesh *skin, const char *skin_n
                                          const ss_mesh *wound, const char *wound_name,
                                          const ss_shell_opts *o, ss_error *err) {
     if (check_opts(o, err)) return NULL;
-    double units = ss_shell_units_for(skin_name, o->units_mm);
+    double units;
+    if (ss_shell_units_resolve(skin, skin_name, o->units_mm, &units, NULL, 0, err)) return NULL;
     double lo[3], hi[3], c[3], n[3] = {0, 0, 0};
     for (int d = 0; d < 3; d++) {
         lo[d] = wound->bbox_min[d] * units - o->voxel_mm;

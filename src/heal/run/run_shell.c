@@ -46,6 +46,15 @@ static ss_status build(ss_heal_run *r, ss_error *err) {
     if ((st = ss_shell_check_closed(&r->skin, r->skin_path, err))) return st;
     ss_shell_opts o;
     opts_from(r, &o);
+    /* an OBJ's unit from its size (skinsim/shell.h); the metre reading is a note */
+    char note[512];
+    if ((st = ss_shell_units_resolve(&r->skin, r->skin_path, o.units_mm, &o.units_mm, note,
+                                     sizeof note, err)))
+        return st;
+    if (note[0]) {
+        size_t n = strlen(r->note);
+        snprintf(r->note + n, sizeof r->note - n, "%s%s", n ? "\n" : "", note);
+    }
     if (r->wound_is_uv) {
         r->shell = ss_shell_patch_from_uv(&r->skin, r->skin_path, r->wound_path, &o, err);
     } else {
