@@ -251,6 +251,18 @@ static void bio_from_x(const ss_bio_params *base, const double x[SS_MM_NAXES], s
 }
 
 /* The answer's prior penalty, and the farthest near-equal fit on the grid. */
+/* Point q of the search grid: the table's nodes and the midpoints between
+ * them on every axis (ng[a] = 2 x nodes - 1), the last axis fastest. */
+static void search_point(const ss_mm_table *t, const int ng[SS_MM_NAXES], size_t q,
+                         double x[SS_MM_NAXES]) {
+    for (int a = SS_MM_NAXES - 1; a >= 0; a--) {
+        int g = (int)(q % (size_t)ng[a]);
+        q /= (size_t)ng[a];
+        int i0 = g / 2;
+        x[a] = (g % 2 == 0) ? t->axis[a][i0] : 0.5 * (t->axis[a][i0] + t->axis[a][i0 + 1]);
+    }
+}
+
 static void finish(const match_ctx *c, const ss_mm_table *t, const int ng[SS_MM_NAXES],
                    size_t total, const float *gde, ss_mm_match_result *out) {
     double ax[SS_MM_NAXES] = {out->bio.melanin,         out->bio.pheomelanin_ratio,
@@ -265,14 +277,8 @@ static void finish(const match_ctx *c, const ss_mm_table *t, const int ng[SS_MM_
     double far = -1.0, fx[SS_MM_NAXES] = {0}, fde = 0.0;
     for (size_t q = 0; q < total; q++) {
         if (!(gde[q] <= lim)) continue;
-        size_t r = q;
         double x[SS_MM_NAXES];
-        for (int a = SS_MM_NAXES - 1; a >= 0; a--) {
-            int g = (int)(r % (size_t)ng[a]);
-            r /= (size_t)ng[a];
-            int i0 = g / 2;
-            x[a] = (g % 2 == 0) ? t->axis[a][i0] : 0.5 * (t->axis[a][i0] + t->axis[a][i0 + 1]);
-        }
+        search_point(t, ng, q, x);
         double d2 = 0.0;
         for (int k = 0; k < 4; k++) {
             int a = TR_AX[k];
@@ -340,14 +346,8 @@ ss_status ss_mm_match(const ss_mm_table *t, const double target_lab[3],
     float *gde = malloc(total * sizeof(float)); /* each grid point's Delta-E00 */
     if (!gde) return ss_error_set(err, SS_ERR_NOMEM, "match: out of memory");
     for (size_t q = 0; q < total; q++) {
-        size_t r = q;
         double x[SS_MM_NAXES];
-        for (int a = SS_MM_NAXES - 1; a >= 0; a--) {
-            int g = (int)(r % (size_t)ng[a]);
-            r /= (size_t)ng[a];
-            int i0 = g / 2;
-            x[a] = (g % 2 == 0) ? t->axis[a][i0] : 0.5 * (t->axis[a][i0] + t->axis[a][i0 + 1]);
-        }
+        search_point(t, ng, q, x);
         double v0[SS_MM_NFIELDS];
         ss_mm_table_lookup(t, x, v0);
         double de = de_of_rgb(&c, v0 + 15), f = de + prior_pen(&c, x);
