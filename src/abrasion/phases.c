@@ -135,20 +135,25 @@ static void ctx_init(ctx *c, const ss_wound_shape *w, const ss_base_skin *skin,
 
 /* A value-noise texture over the wound's box only (noise is only read inside
  * the wound); index it with box_index. Same values as the whole texture. */
-static ss_status noise(const ctx *c, int octaves, float persistence, float bias, float gain,
-                       float stretch_y, uint64_t stream, ss_image **out, ss_error *err) {
+typedef struct noise_spec {
+    int octaves;
+    float persistence, bias, gain, stretch_y;
+    uint64_t stream;
+} noise_spec;
+static ss_status noise(const ctx *c, const noise_spec *q, ss_image **out, ss_error *err) {
     ss_noise_params p;
     ss_noise_params_default(&p);
-    p.octaves = octaves;
-    p.persistence = persistence;
-    p.bias = bias;
-    p.gain = gain;
-    p.stretch_y = stretch_y;
+    p.octaves = q->octaves;
+    p.persistence = q->persistence;
+    p.bias = q->bias;
+    p.gain = q->gain;
+    p.stretch_y = q->stretch_y;
     p.cell_px = c->k;
     *out = ss_image_create_uninit(c->bw > 0 ? c->bw : 1, c->bh > 0 ? c->bh : 1, 1, err);
     if (!*out) return err->code;
     if (c->bw == 0) return SS_OK;
-    ss_status st = ss_value_noise_rect(&p, c->s->seed, stream, c->n, c->n, c->bx, c->by, *out, err);
+    ss_status st =
+        ss_value_noise_rect(&p, c->s->seed, q->stream, c->n, c->n, c->bx, c->by, *out, err);
     if (st) {
         ss_image_free(*out);
         *out = NULL;
@@ -239,7 +244,8 @@ static ss_status noise_mm(const ctx *c, int octaves, double period_mm, uint64_t 
     *out = ss_image_create_uninit(c->rw > 0 ? c->rw : 1, c->rh > 0 ? c->rh : 1, 1, err);
     if (!*out) return err->code;
     if (c->rw == 0) return SS_OK;
-    ss_status st = ss_value_noise_rect(&p, c->s->seed, stream, c->n, c->n, c->rx, c->ry, *out, err);
+    ss_status st =
+        ss_value_noise_rect(&p, c->s->seed, stream, c->n, c->n, c->rx, c->ry, *out, err);
     if (st) {
         ss_image_free(*out);
         *out = NULL;
@@ -277,6 +283,29 @@ static ss_status look_create(const ctx *c, look *l, ss_error *err) {
     if (!st) st = noise_mm(c, 4, 2.5, ST_PATCH, &l->patch, err);
     if (!st) st = noise_mm(c, 3, 1.2, ST_BLEED, &l->bleed, err);
     if (st) look_free(l);
+    return st;
+}
+
+/* A phase's noises: the shared look and count of its own (box-sized, index
+ * with box_index_clamped), made together and freed together. */
+#define MAX_PHASE_NOISES 4
+typedef struct phase_noises {
+    look l;
+    ss_image *n[MAX_PHASE_NOISES];
+    int count;
+} phase_noises;
+static void phase_noises_free(phase_noises *p) {
+    for (int k = 0; k < p->count; k++) ss_image_free(p->n[k]);
+    look_free(&p->l);
+}
+static ss_status phase_noises_create(const ctx *c, const noise_spec *spec, int count,
+                                     phase_noises *p, ss_error *err) {
+    memset(p, 0, sizeof *p);
+    p->count = count;
+    ss_status st = SS_OK;
+    for (int k = 0; k < count && !st; k++) st = noise(c, &spec[k], &p->n[k], err);
+    if (!st) st = look_create(c, &p->l, err);
+    if (st) phase_noises_free(p);
     return st;
 }
 
@@ -372,25 +401,23 @@ static ss_status render_vasodilation(const ctx *c, ss_texture_set *out, ss_error
      * bleeding along the scrape lines and in spots, a wet film (shiny), the
      * erythema of the glow around; the seed's scrape lines as reflection and
      * relief. */
-    ss_image *scrape = NULL;
-    look l;
-    ss_status st = noise(c, 5, 0.09f, 0.5f, 0.43f, 64.0f, ST_SCRAPE, &scrape, err);
-    if (!st) st = look_create(c, &l, err);
-    if (st) {
-        ss_image_free(scrape);
-        return st;
-    }
+    static const noise_spec spec[] = {{5, 0.09f, 0.5f, 0.43f, 64.0f, ST_SCRAPE}};
+    phase_noises p;
+    ss_status st = phase_noises_create(c, spec, 1, &p, err);
+    if (st) return st;
+    const look *l = &p.l;
+    const ss_image *scrape = p.n[0];
     const ss_abrasion_palette *P = c->P;
     FOR_REGION(c) {
-        where w = locate_px(c, &l, i);
+        where w = locate_px(c, l, i);
         if (w.s <= 0.0f) {
             if (w.glow > 0.0f) glow_color(c, i, w.glow, 1.0f, out->color->data + i * 3);
             continue;
         }
         float sc = scrape->data[box_index_clamped(c, i)];
-        float m = lower_mod(c, i), dots = capillary_dots(&l, w.r), bed[3];
+        float m = lower_mod(c, i), dots = capillary_dots(l, w.r), bed[3];
         float bl =
-            0.55f * smooth01(0.55f, 0.85f, l.bleed->data[w.r]) + 0.25f * smooth01(0.55f, 0.8f, sc);
+            0.55f * smooth01(0.55f, 0.85f, l->bleed->data[w.r]) + 0.25f * smooth01(0.55f, 0.8f, sc);
         bl = clampf(bl, 0.0f, 0.7f);
         for (int k = 0; k < 3; k++) {
             float v = P->bed[k] * m;
@@ -400,8 +427,7 @@ static ss_status render_vasodilation(const ctx *c, ss_texture_set *out, ss_error
         put_px(c, i, &w, 1.0f, bed, 0.55f + 0.4f * sc,
                0.5f - WOUND_DEPTH + SCRAPE_RELIEF * (sc - 0.5f) + 0.008f * (dots - 0.5f), out);
     }
-    look_free(&l);
-    ss_image_free(scrape);
+    phase_noises_free(&p);
     return SS_OK;
 }
 
@@ -410,28 +436,24 @@ static ss_status render_scab_forming(const ctx *c, ss_texture_set *out, ss_error
      * in patches (the seed's Eq. 4.5 mix, its low noise as the fibrin
      * weight), dark-red speckles of drying blood (its Eq. 4.6 speckles),
      * drying, so less shiny where fibrin has set; the glow fades. */
-    ss_image *low = NULL, *speck = NULL, *scrape = NULL;
-    look l;
-    ss_status st = noise(c, 5, 0.85f, 0.54f, 0.21f, 1.0f, ST_SCABFORM_LOW, &low, err);
-    if (!st) st = noise(c, 5, 0.48f, 0.16f, 0.15f, 1.0f, ST_SCABFORM_SPECKLE, &speck, err);
-    if (!st) st = noise(c, 5, 0.09f, 0.5f, 0.43f, 64.0f, ST_SCRAPE, &scrape, err);
-    if (!st) st = look_create(c, &l, err);
-    if (st) {
-        ss_image_free(low);
-        ss_image_free(speck);
-        ss_image_free(scrape);
-        return st;
-    }
+    static const noise_spec spec[] = {{5, 0.85f, 0.54f, 0.21f, 1.0f, ST_SCABFORM_LOW},
+                                      {5, 0.48f, 0.16f, 0.15f, 1.0f, ST_SCABFORM_SPECKLE},
+                                      {5, 0.09f, 0.5f, 0.43f, 64.0f, ST_SCRAPE}};
+    phase_noises p;
+    ss_status st = phase_noises_create(c, spec, 3, &p, err);
+    if (st) return st;
+    const look *l = &p.l;
+    const ss_image *low = p.n[0], *speck = p.n[1], *scrape = p.n[2];
     const ss_abrasion_palette *P = c->P;
     FOR_REGION(c) {
-        where w = locate_px(c, &l, i);
+        where w = locate_px(c, l, i);
         if (w.s <= 0.0f) {
             if (w.glow > 0.0f) glow_color(c, i, w.glow, 0.8f, out->color->data + i * 3);
             continue;
         }
         size_t b = box_index_clamped(c, i);
-        float m = lower_mod(c, i), dots = capillary_dots(&l, w.r), bed[3];
-        float fib = 0.45f * smooth01(0.5f, 0.85f, 0.5f * low->data[b] + 0.5f * l.patch->data[w.r]);
+        float m = lower_mod(c, i), dots = capillary_dots(l, w.r), bed[3];
+        float fib = 0.45f * smooth01(0.5f, 0.85f, 0.5f * low->data[b] + 0.5f * l->patch->data[w.r]);
         float sp = smooth01(0.25f, 0.6f, speck->data[b]) * 0.8f;
         for (int k = 0; k < 3; k++) {
             float v = P->bed[k] * m;
@@ -444,10 +466,7 @@ static ss_status render_scab_forming(const ctx *c, ss_texture_set *out, ss_error
         put_px(c, i, &w, 0.8f, bed, 0.75f * (1.0f - 0.6f * fib) * (0.6f + 0.4f * scrape->data[b]),
                0.5f - WOUND_DEPTH * (0.5f + low->data[b]) - WOUND_DEPTH * sp + 0.02f * fib, out);
     }
-    look_free(&l);
-    ss_image_free(low);
-    ss_image_free(speck);
-    ss_image_free(scrape);
+    phase_noises_free(&p);
     return SS_OK;
 }
 
@@ -457,23 +476,18 @@ static ss_status render_scab(const ctx *c, ss_texture_set *out, ss_error *err) {
      * with the height; within 100 reference px of the edge a redder, thinner
      * crust where the red-detail noise is high (the seed's inward red
      * gradient); matte (reflection noise x 0.4); the glow fades. */
-    ss_image *mask_n = NULL, *mid = NULL, *redn = NULL, *refl = NULL;
-    look l;
-    ss_status st = noise(c, 7, 1.0f, 0.44f, 0.02f, 1.0f, ST_SCAB_MASK, &mask_n, err);
-    if (!st) st = noise(c, 5, 0.54f, 0.3f, 0.69f, 1.0f, ST_SCAB_MIDDLE, &mid, err);
-    if (!st) st = noise(c, 5, 0.33f, 0.60f, 0.59f, 1.0f, ST_SCAB_RED, &redn, err);
-    if (!st) st = noise(c, 10, 1.0f, 0.25f, 0.95f, 1.0f, ST_SCAB_REFLECT, &refl, err);
-    if (!st) st = look_create(c, &l, err);
-    if (st) {
-        ss_image_free(mask_n);
-        ss_image_free(mid);
-        ss_image_free(redn);
-        ss_image_free(refl);
-        return st;
-    }
+    static const noise_spec spec[] = {{7, 1.0f, 0.44f, 0.02f, 1.0f, ST_SCAB_MASK},
+                                      {5, 0.54f, 0.3f, 0.69f, 1.0f, ST_SCAB_MIDDLE},
+                                      {5, 0.33f, 0.60f, 0.59f, 1.0f, ST_SCAB_RED},
+                                      {10, 1.0f, 0.25f, 0.95f, 1.0f, ST_SCAB_REFLECT}};
+    phase_noises p;
+    ss_status st = phase_noises_create(c, spec, 4, &p, err);
+    if (st) return st;
+    const look *l = &p.l;
+    const ss_image *mask_n = p.n[0], *mid = p.n[1], *redn = p.n[2], *refl = p.n[3];
     const ss_abrasion_palette *P = c->P;
     FOR_REGION(c) {
-        where w = locate_px(c, &l, i);
+        where w = locate_px(c, l, i);
         if (w.s <= 0.0f) {
             if (w.glow > 0.0f) glow_color(c, i, w.glow, 0.5f, out->color->data + i * 3);
             continue;
@@ -490,11 +504,7 @@ static ss_status render_scab(const ctx *c, ss_texture_set *out, ss_error *err) {
         }
         put_px(c, i, &w, 0.5f, crust, 0.4f * refl->data[b], 0.5f + 0.5f * h, out);
     }
-    look_free(&l);
-    ss_image_free(mask_n);
-    ss_image_free(mid);
-    ss_image_free(redn);
-    ss_image_free(refl);
+    phase_noises_free(&p);
     return SS_OK;
 }
 
