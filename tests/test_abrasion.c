@@ -241,6 +241,18 @@ static void scene_from(scene *sc, const ss_stroke_set *st, int n, double world_c
     sc->s.world_size_cm = world_cm;
 }
 
+/* Trial 0 of a look test: the seed's example scrape; trial k > 0: random
+ * strokes (seed base + k) on a 10 cm patch. */
+static void scene_trial(scene *sc, int n, int trial, uint64_t seed_base) {
+    if (trial == 0) {
+        scene_make(sc, n);
+        return;
+    }
+    ss_stroke_set st = random_strokes(seed_base + (uint64_t)trial);
+    scene_from(sc, &st, n, 10);
+    ss_stroke_set_free(&st);
+}
+
 static double lum3(const float *c) { return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; }
 static int enc8(float v) { return (int)lroundf(255.0f * ss_srgb_encode(v)); }
 
@@ -254,13 +266,7 @@ static void test_bed_is_tissue(void **state) {
     int n = 256;
     for (int trial = 0; trial < 4; trial++) {
         scene sc;
-        if (trial == 0) {
-            scene_make(&sc, n);
-        } else {
-            ss_stroke_set st = random_strokes(100 + (uint64_t)trial);
-            scene_from(&sc, &st, n, 10);
-            ss_stroke_set_free(&st);
-        }
+        scene_trial(&sc, n, trial, 100);
         ss_texture_set t;
         ss_error err;
         assert_int_equal(ss_texture_set_create(n, &t, &err), SS_OK);
@@ -301,13 +307,7 @@ static void test_no_ring(void **state) {
     int n = 512;
     for (int trial = 0; trial < 3; trial++) {
         scene sc;
-        if (trial == 0) {
-            scene_make(&sc, n);
-        } else {
-            ss_stroke_set st = random_strokes(200 + (uint64_t)trial);
-            scene_from(&sc, &st, n, 10);
-            ss_stroke_set_free(&st);
-        }
+        scene_trial(&sc, n, trial, 200);
         ss_texture_set t;
         ss_error err;
         assert_int_equal(ss_texture_set_create(n, &t, &err), SS_OK);
@@ -393,13 +393,7 @@ static void test_scar_at_a_year(void **state) {
     int n = 128;
     for (int trial = 0; trial < 3; trial++) {
         scene sc;
-        if (trial == 0) {
-            scene_make(&sc, n);
-        } else {
-            ss_stroke_set st = random_strokes(300 + (uint64_t)trial);
-            scene_from(&sc, &st, n, 10);
-            ss_stroke_set_free(&st);
-        }
+        scene_trial(&sc, n, trial, 300);
         ss_timeline tl;
         ss_timeline_default(&tl);
         ss_abrasion *a;
