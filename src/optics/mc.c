@@ -470,6 +470,39 @@ static inline void mcml_absorb(const mc_ctx *c, mc_acc *a, double x, double y, d
     a->a_rz[(size_t)ir * c->spec.nz + iz] += dw; /* A(z) is summed from A(r, z) at the end */
 }
 
+/* The tallies of a photon leaving through the air surface with weight w in
+ * direction o (tissue frame): BRDF bin, R_d(r) (at the lateral offset, or the
+ * horizontal path length hpath with path_dist) and MCML's R_d(a), R_d(r, a).
+ * Shared by the scalar and the packet paths (the same adds in the same order). */
+static inline void tally_escape(const mc_ctx *c, mc_acc *a, double x, double y, double hpath,
+                                const double *o, double w) {
+    const int mcml = c->spec.mcml;
+    if (a->brdf) a->brdf[brdf_bin(c, o[0], o[1], -o[2])] += w;
+    if (a->rd_r) {
+        int ir = c->path_dist ? radial_bin(c, hpath, 0.0, c->spec.rad_n, mcml)
+                              : radial_bin(c, x, y, c->spec.rad_n, mcml);
+        if (ir >= 0) a->rd_r[ir] += w;
+    }
+    if (mcml) {
+        int ir = radial_bin(c, x, y, c->spec.rad_n, 1);
+        int ia = angle_bin(c->spec.na, -o[2]);
+        a->rd_a[ia] += w;
+        a->rd_ra[(size_t)ir * c->spec.na + ia] += w;
+    }
+}
+
+/* MCML's T_t(r), T_t(a), T_t(r, a) of a photon transmitted through the bottom
+ * with weight w, ct the cosine of its refracted angle. */
+static inline void tally_transmit(const mc_ctx *c, mc_acc *a, double x, double y, double ct,
+                                  double w) {
+    if (!c->spec.mcml) return;
+    int ir = radial_bin(c, x, y, c->spec.rad_n, 1);
+    int ia = angle_bin(c->spec.na, ct);
+    a->tt_r[ir] += w;
+    a->tt_a[ia] += w;
+    a->tt_ra[(size_t)ir * c->spec.na + ia] += w;
+}
+
 /* Traces one photon. */
 static void run_photon(const mc_ctx *c, uint64_t idx, mc_acc *a, path_buf *pb) {
     prng r;
@@ -628,13 +661,7 @@ static void run_photon(const mc_ctx *c, uint64_t idx, mc_acc *a, path_buf *pb) {
                     pr.w0 = (float)w;
                     path_push(pb, &pr);
                 }
-                if (mcml) {
-                    int ir = radial_bin(c, x, y, c->spec.rad_n, 1);
-                    int ia = angle_bin(c->spec.na, ct);
-                    a->tt_r[ir] += w;
-                    a->tt_a[ia] += w;
-                    a->tt_ra[(size_t)ir * c->spec.na + ia] += w;
-                }
+                tally_transmit(c, a, x, y, ct, w);
                 (void)tx;
                 (void)ty;
                 goto done;
@@ -699,18 +726,7 @@ static void run_photon(const mc_ctx *c, uint64_t idx, mc_acc *a, path_buf *pb) {
                     pr.w0 = (float)w;
                     path_push(pb, &pr);
                 } else {
-                    if (a->brdf) a->brdf[brdf_bin(c, o[0], o[1], -o[2])] += w;
-                    if (a->rd_r) {
-                        int ir = c->path_dist ? radial_bin(c, hpath, 0.0, c->spec.rad_n, mcml)
-                                              : radial_bin(c, x, y, c->spec.rad_n, mcml);
-                        if (ir >= 0) a->rd_r[ir] += w;
-                    }
-                    if (mcml) {
-                        int ir = radial_bin(c, x, y, c->spec.rad_n, 1);
-                        int ia = angle_bin(c->spec.na, -o[2]);
-                        a->rd_a[ia] += w;
-                        a->rd_ra[(size_t)ir * c->spec.na + ia] += w;
-                    }
+                    tally_escape(c, a, x, y, hpath, o, w);
                 }
                 goto done;
             }
@@ -1066,13 +1082,7 @@ static int pk_boundary(const mc_ctx *c, mc_acc *a, path_buf *pb, pk_state *P, in
                 a->transmit += w;
                 P->tsum[k] += w;
                 if (c->paths) pk_path_record(c, P, k, pb, 0, -1, -1);
-                if (c->spec.mcml) {
-                    int ir = radial_bin(c, P->x[k], P->y[k], c->spec.rad_n, 1);
-                    int ia = angle_bin(c->spec.na, ct);
-                    a->tt_r[ir] += w;
-                    a->tt_a[ia] += w;
-                    a->tt_ra[(size_t)ir * c->spec.na + ia] += w;
-                }
+                tally_transmit(c, a, P->x[k], P->y[k], ct, w);
                 alive = 0;
             }
         }
@@ -1115,7 +1125,6 @@ static int pk_boundary(const mc_ctx *c, mc_acc *a, path_buf *pb, pk_state *P, in
                 }
             }
             if (escape) {
-                const int mcml = c->spec.mcml;
                 double x = P->x[k], y = P->y[k], hp = P->hp[k];
                 a->diffuse += w;
                 P->dsum[k] += w;
@@ -1124,18 +1133,7 @@ static int pk_boundary(const mc_ctx *c, mc_acc *a, path_buf *pb, pk_state *P, in
                                           : radial_bin(c, x, y, c->spec.rad_n, 0);
                     pk_path_record(c, P, k, pb, 1, brdf_bin(c, o[0], o[1], -o[2]), rb);
                 } else {
-                    if (a->brdf) a->brdf[brdf_bin(c, o[0], o[1], -o[2])] += w;
-                    if (a->rd_r) {
-                        int ir = c->path_dist ? radial_bin(c, hp, 0.0, c->spec.rad_n, mcml)
-                                              : radial_bin(c, x, y, c->spec.rad_n, mcml);
-                        if (ir >= 0) a->rd_r[ir] += w;
-                    }
-                    if (mcml) {
-                        int ir = radial_bin(c, x, y, c->spec.rad_n, 1);
-                        int ia = angle_bin(c->spec.na, -o[2]);
-                        a->rd_a[ia] += w;
-                        a->rd_ra[(size_t)ir * c->spec.na + ia] += w;
-                    }
+                    tally_escape(c, a, x, y, hp, o, w);
                 }
                 alive = 0;
             }
