@@ -148,25 +148,31 @@ static inline double zig_exp_draw(const zig_exp *z, prng *r) {
  * 1.5e-9 rad), cos a and sin a by their Taylor series to a^14 and a^15
  * (truncation below 1e-15, so cos^2 + sin^2 = 1 to rounding), then the
  * rotation by the centre angle pi/4 + quadrant x pi/2. */
+/* The series, as macros so mc_packet.h's lane-wise copy evaluates the very
+ * same operations on vectors (the packet path must equal this one bit for bit). */
+#define AZ_COS_SERIES(a2)                                                                          \
+    (1.0 + (a2) * (-1.0 / 2 +                                                                      \
+                   (a2) * (1.0 / 24 +                                                              \
+                           (a2) * (-1.0 / 720 +                                                    \
+                                   (a2) * (1.0 / 40320 +                                           \
+                                           (a2) * (-1.0 / 3628800 +                                \
+                                                   (a2) * (1.0 / 479001600 +                       \
+                                                           (a2) * (-1.0 / 87178291200.0))))))))
+#define AZ_SIN_SERIES(a, a2)                                                                       \
+    ((a) *                                                                                         \
+     (1.0 +                                                                                        \
+      (a2) * (-1.0 / 6 +                                                                           \
+              (a2) * (1.0 / 120 +                                                                  \
+                      (a2) * (-1.0 / 5040 +                                                        \
+                              (a2) * (1.0 / 362880 +                                               \
+                                      (a2) * (-1.0 / 39916800 +                                    \
+                                              (a2) * (1.0 / 6227020800.0 +                         \
+                                                      (a2) * (-1.0 / 1307674368000.0)))))))))
 static inline void fast_azimuth(uint32_t bits, double *cp, double *sp) {
     int q = (int)(bits >> 30);
     double f = ((double)(bits & 0x3fffffffu) + 0.5) * (1.0 / 1073741824.0);
     double a = (f - 0.5) * (M_PI / 2), a2 = a * a;
-    double ca =
-        1.0 + a2 * (-1.0 / 2 +
-                    a2 * (1.0 / 24 +
-                          a2 * (-1.0 / 720 +
-                                a2 * (1.0 / 40320 + a2 * (-1.0 / 3628800 +
-                                                          a2 * (1.0 / 479001600 +
-                                                                a2 * (-1.0 / 87178291200.0)))))));
-    double sa =
-        a * (1.0 +
-             a2 * (-1.0 / 6 +
-                   a2 * (1.0 / 120 +
-                         a2 * (-1.0 / 5040 + a2 * (1.0 / 362880 +
-                                                   a2 * (-1.0 / 39916800 +
-                                                         a2 * (1.0 / 6227020800.0 +
-                                                               a2 * (-1.0 / 1307674368000.0))))))));
+    double ca = AZ_COS_SERIES(a2), sa = AZ_SIN_SERIES(a, a2);
     const double h = 0.70710678118654752440;
     double c = h * (ca - sa), s = h * (ca + sa); /* angle pi/4 + a */
     switch (q) {

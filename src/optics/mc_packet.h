@@ -122,21 +122,7 @@ static inline void PK(pk_azimuth)(pk_vu bits, pk_vd *cp, pk_vd *sp) {
     pk_vu q = (bits >> 30) & 3u;
     pk_vd f = PK(pk_u2d)(bits & 0x3fffffffu, -0.5) * (1.0 / 1073741824.0);
     pk_vd a = (f - 0.5) * (M_PI / 2), a2 = a * a;
-    pk_vd ca =
-        1.0 + a2 * (-1.0 / 2 +
-                    a2 * (1.0 / 24 +
-                          a2 * (-1.0 / 720 +
-                                a2 * (1.0 / 40320 + a2 * (-1.0 / 3628800 +
-                                                          a2 * (1.0 / 479001600 +
-                                                                a2 * (-1.0 / 87178291200.0)))))));
-    pk_vd sa =
-        a * (1.0 +
-             a2 * (-1.0 / 6 +
-                   a2 * (1.0 / 120 +
-                         a2 * (-1.0 / 5040 + a2 * (1.0 / 362880 +
-                                                   a2 * (-1.0 / 39916800 +
-                                                         a2 * (1.0 / 6227020800.0 +
-                                                               a2 * (-1.0 / 1307674368000.0))))))));
+    pk_vd ca = AZ_COS_SERIES(a2), sa = AZ_SIN_SERIES(a, a2);
     const double h = 0.70710678118654752440;
     pk_vd c = h * (ca - sa), s = h * (ca + sa);
     /* quadrants 1 and 3: (c, s) -> (-s, c) then 2 and 3 negate both */
