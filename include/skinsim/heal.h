@@ -99,9 +99,13 @@ typedef struct ss_heal_params {
     double rho_sat; /* 1, packing limit of collagen (x normal dermis): keloid deposition
                        saturates as (1 - rho/rho_sat) */
     /* keloid invasion (docs/heal-model.md §2 [D6]) */
-    double keloid_tau; /* day, e-folding time of the invasion signal a(t) = exp(-t/keloid_tau):
-                          keloid deposition in tissue not yet keloid (rho < rho_max) is scaled
-                          by a(t), so the front slows and stops; 0 = no decay (a = 1) */
+    double keloid_tau;   /* day, e-folding time of the invasion signal a(t) = exp(-t/keloid_tau):
+                            keloid deposition in tissue not yet keloid (rho < rho_max) is scaled
+                            by a(t); 0 = no decay (a = 1) */
+    double keloid_floor; /* 1, share of the invasion signal that persists (the chronic
+                            inflammation of the keloid's leading edge): a(t) = floor +
+                            (1 - floor) exp(-t/keloid_tau), so the front slows after the
+                            injury's acute phase and then keeps invading; 0 = it stops */
     /* scar maturation (docs/heal-model.md §2 [D10]) */
     double rho_mature; /* 1, collagen of a mature scar (x normal dermis): remodelling resorbs
                           only the excess above it, so the scar stays */

@@ -862,11 +862,13 @@ void ss_heal_solver_free(ss_heal_solver *s) {
 }
 
 /* The keloid's invasion signal over a step from day t of length dt, at the
- * step's midpoint: a = exp(-t_mid / keloid_tau), 1 without decay. A function
+ * step's midpoint: a = floor + (1 - floor) exp(-t_mid / keloid_tau), 1
+ * without decay. A function
  * of the grid's day only, so resumed runs and any rank count see the same. */
 static float keloid_signal(const ss_heal_params *p, double t, double dt) {
     if (!(p->keloid_tau > 0)) return 1.0f;
-    return (float)exp(-(t + 0.5 * dt) / p->keloid_tau);
+    const double f = p->keloid_floor;
+    return (float)(f + (1.0 - f) * exp(-(t + 0.5 * dt) / p->keloid_tau));
 }
 
 ss_status ss_heal_step_phase(ss_heal_solver *s, ss_heal_grid *g, int phase, ss_error *err) {
