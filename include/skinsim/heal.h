@@ -347,6 +347,12 @@ typedef struct ss_heal_stats {
 /* Epithelium level below which a column counts as open: 0.5. */
 double ss_heal_open_threshold(void);
 void ss_heal_stats_compute(const ss_heal_grid *g, ss_heal_stats *st);
+/* The largest eschar a voxel of edge dx_mm at the surface can hold: the share
+ * of it inside the crust layer, min(1, scab_mm / dx_mm) (1 with the scab
+ * switch off). On voxels coarser than scab_mm the crust is a sub-voxel layer
+ * (docs/heal-model.md [D14]); the callers divide eschar_wound_mean by it, so
+ * the figure is the crust's share of its layer on every voxel size. */
+double ss_heal_crust_voxel_share(const ss_heal_params *p, double dx_mm);
 /* The same in parts (the MPI driver's reductions): sums of float values are
  * kept exactly (fixed-point limbs), so the result does not depend on how the
  * columns are split or in which order the parts are merged. */

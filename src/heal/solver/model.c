@@ -148,7 +148,6 @@ react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep, const i
         const float u1 = U1[i], u2 = U2[i], u3 = U3[i], nn = N[i], s = S[i], e = E[i];
         const float rho = RHO[i], p = P[i];
         const float om = (float)(p > pmin);
-        const float ns = pos(1.0f - s);
         const float open3 = pos(1.0f - u3);
         /* depth level below the surface cell (0 = surface, < 0: no surface) and
          * the fraction of the level inside the top scab_mm (arithmetic, no
@@ -156,6 +155,15 @@ react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep, const i
         const float kf = deep ? 1.0f : (float)(ZT[i] - z);
         const float surf = deep ? 0.0f : (float)(kf == 0.0f);
         const float wsc = deep ? 0.0f : (float)(kf >= 0.0f) * clampf(scab_h - kf, 0.0f, 1.0f);
+        /* a voxel the crust layer's floor cuts (0 < wsc < 1, voxels coarser
+         * than scab_mm or not a divisor of it) holds a sub-voxel crust on top
+         * of tissue [D14]: its tissue species are those of the tissue part,
+         * which grows at the full rate (the tissue under a crust does on a
+         * fine grid: s = 0 there), and the crust's own fraction of the layer
+         * part is s / wsc (1 when the crust is complete) */
+        const float part = deep ? 0.0f : (float)(wsc > 0.0f && wsc < 1.0f);
+        const float ns = part > 0.0f ? 1.0f : pos(1.0f - s);
+        const float sl = part > 0.0f ? clampf(s / (wsc > 0.0f ? wsc : 1.0f), 0.0f, 1.0f) : s;
         const float ecl = EC[i], necl = pos(1.0f - ecl);
         /* 4.1.1 oxygen: (1-s)(D1 lap u1 + lam31 u3) - lam11 u1 */
         p1[i] = ns * m->lam31 * u3;
@@ -185,7 +193,7 @@ react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep, const i
          * intact epidermis holds e = 1 at the margin, the face of its cell,
          * half a voxel nearer than its centre: KF (1 - e) adds the other
          * half of such a face's conductance [D8] */
-        const float me = deep ? 0.0f : surf * pos(1.0f - kscab * s) * qwin(BED[i], g1, ig1);
+        const float me = deep ? 0.0f : surf * pos(1.0f - kscab * sl) * qwin(BED[i], g1, ig1);
         p6[i] = deep ? 0.0f : me * (lamge * e + KF[i]);
         l6[i] = deep ? 0.0f : surf * lamee + me * KF[i];
         /* 4.1.7 scar, restricted to omega:
@@ -209,7 +217,7 @@ react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep, const i
         const float C = pos(rho - m->rhomax) * m->inv_rhomax;
         p8[i] = dyn * (C + ppos * p);
         l8[i] = dyn * (C + pneg);
-        m0[i] = face_m(s, crust);
+        m0[i] = part > 0.0f ? 1.0f : face_m(s, crust);
         m1[i] = me;
         (void)e;
     }

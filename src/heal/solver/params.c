@@ -258,6 +258,11 @@ ss_status ss_heal_params_set_switches(ss_heal_params *p, int scab, int static_re
     return SS_OK;
 }
 
+double ss_heal_crust_voxel_share(const ss_heal_params *p, double dx_mm) {
+    if (!p || !p->scab || !(dx_mm > 0) || !(p->scab_mm > 0)) return 1.0;
+    return p->scab_mm < dx_mm ? p->scab_mm / dx_mm : 1.0;
+}
+
 void ss_heal_params_healthy(const ss_heal_params *p, float h[SS_HEAL_NFIELDS]) {
     for (int f = 0; f < SS_HEAL_NFIELDS; f++) h[f] = 0.0f;
     double u3 = p->u3_eq;
