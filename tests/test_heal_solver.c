@@ -82,6 +82,7 @@ static void test_params(void **state) {
         {"{\"params\": {\"rho_sat\": {\"value\": 0, \"unit\": \"1\"}}}", "'rho_sat'"},
         {"{\"params\": {\"keloid_tau\": {\"value\": -1, \"unit\": \"day\"}}}", "'keloid_tau'"},
         {"{\"params\": {\"keloid_tau\": {\"value\": 20, \"unit\": \"1/day\"}}}", "'keloid_tau'"},
+        {"{\"params\": {\"keloid_floor\": {\"value\": 1.5, \"unit\": \"1\"}}}", "'keloid_floor'"},
         {"{\"switches\": {\"scab\": 3}}", "'scab'"},
         {"{\"scenario\": \"burn\"}", "burn"},
         {"[1, 2]", "malformed"},
