@@ -17,10 +17,12 @@
  * the (1 - s) of u1..n weights the cell faces (a full crust insulates the
  * bed instead of draining it), and a dry factor from the column's crust
  * thickness slows capillary and fibroblast growth in the wound below. The
- * bed the sheet reads is the granulation tissue (omega) under the crust. These
+ * bed the sheet reads is the granulation tissue (omega) under the crust. A
+ * voxel the crust layer's floor cuts (voxels coarser than scab_mm) holds a
+ * sub-voxel crust over tissue that grows at the full rate. These
  * column inputs are gathered before each reaction pass (prepare hook), so
  * rows stay independent and results bit-identical for any thread count.
- * The keloid's invasion signal a(t) (keloid_tau) depends on the grid's day
+ * The keloid's invasion signal a(t) (keloid_tau, keloid_floor) depends on the grid's day
  * only and is set before each step, so resumes and rank counts agree.
  * docs/heal-model.md §2 lists where and why this departs from §4.1 as printed. */
 /* The hot loops are written branch-free for SIMD. At -O2 GCC vectorises
