@@ -82,6 +82,7 @@ static void test_params(void **state) {
         {"{\"params\": {\"rho_sat\": {\"value\": 0, \"unit\": \"1\"}}}", "'rho_sat'"},
         {"{\"params\": {\"keloid_tau\": {\"value\": -1, \"unit\": \"day\"}}}", "'keloid_tau'"},
         {"{\"params\": {\"keloid_tau\": {\"value\": 20, \"unit\": \"1/day\"}}}", "'keloid_tau'"},
+        {"{\"params\": {\"keloid_floor\": {\"value\": 1.5, \"unit\": \"1\"}}}", "'keloid_floor'"},
         {"{\"switches\": {\"scab\": 3}}", "'scab'"},
         {"{\"scenario\": \"burn\"}", "burn"},
         {"[1, 2]", "malformed"},
@@ -504,44 +505,52 @@ static void test_keloid(void **state) {
     ss_heal_params_free(p);
 }
 
-/* Keloid stop: the invasion signal decays (keloid_tau), so the front slows
- * and stops at a finite extent set by the biology, not by the block walls.
- * A 6 mm wound in two blocks run for a year (quick: 170 days): the extent
- * still grows after day 60, has stopped between the second reading and the
- * end, never regresses (extent and peak density), and is the same in both
- * blocks (within 10 %, the issue's bound). Without the stop (keloid_tau = 0)
- * the front runs into the walls and the blocks disagree. */
-static void test_keloid_stop(void **state) {
+/* Keloid invasion: the acute invasion signal decays (keloid_tau) but a share
+ * persists (keloid_floor, the chronic inflammation of the leading edge), so
+ * the front keeps invading the surrounding dermis for months (Bayat et al.
+ * 2003) instead of stopping ~3 mm beyond the margin by day 120 (the old
+ * behaviour: no advance after day 90). A 6 mm wound in two blocks (quick:
+ * 20 and 24 mm blocks, 180 days, readings at days 90 and 135; full: 24 and
+ * 30 mm, a year, 90 and 180): the
+ * extent grows after closure and keeps growing from the first reading to the
+ * second and on to the end, never regresses, stays clear of the walls, keeps
+ * out of the deep dermis, and is the same in both blocks (within 10 %: the
+ * far field, not the block, sets it). */
+static void test_keloid_invasion(void **state) {
     (void)state;
     const int quick = tu_quick();
-    const double days = quick ? 170 : 365, blk[2] = {16, quick ? 20 : 24};
+    const double days = quick ? 180 : 365, blk[2] = {quick ? 20 : 24, quick ? 24 : 30};
     ss_heal_course c[2];
     ss_error err;
     ss_heal_params *p = ss_heal_params_preset("keloid", &err);
     assert_non_null(p);
-    assert_true(p->keloid_tau > 0);
+    assert_true(p->keloid_tau > 0 && p->keloid_floor > 0);
     for (int k = 0; k < 2; k++) {
         ss_heal_course_opts o = {blk[k], 6,   1.0, 0.5, days,
-                                 0.05,   1.0, -1,  1.6, {60, quick ? 135 : 180}};
+                                 0.05,   1.0, -1,  1.6, {90, quick ? 135 : 180}};
         assert_int_equal(ss_heal_course_run(p, &o, &c[k], &err), SS_OK);
         print_message(
-            "keloid stop, block %g: t95 %.2f extent %.2f (t95) %.2f (day 60) %.2f (day "
-            "%g) %.2f (day %g, max %.2f), area %.0f mm2, rho peak %.3f end %.3f, %.1f s\n",
+            "keloid invasion, block %g: t95 %.2f extent %.2f (t95) %.2f (day 90) %.2f (day "
+            "%g) %.2f (day %g, max %.2f), area %.0f mm2, rho peak %.3f end %.3f deep %.3f, "
+            "elevation %.3f mm, %.1f s\n",
             blk[k], c[k].t95, c[k].keloid_beyond_t95, c[k].keloid_beyond_day[0],
             c[k].keloid_beyond_day[1], o.keloid_day[1], c[k].keloid_beyond_mm, days,
             c[k].keloid_beyond_max, c[k].keloid_area_mm2, c[k].scar_max_peak, c[k].scar_max_end,
-            c[k].wall_s);
+            c[k].scar_deep_max, c[k].elev_end_max_mm, c[k].wall_s);
         assert_true(c[k].bounds_ok && c[k].t95 > 0);
-        /* grows after closure and after day 60 */
-        assert_true(c[k].keloid_beyond_day[0] > c[k].keloid_beyond_t95);
-        assert_true(c[k].keloid_beyond_day[1] > c[k].keloid_beyond_day[0]);
-        /* stopped: no advance from the second reading to the end */
-        assert_true(c[k].keloid_beyond_mm - c[k].keloid_beyond_day[1] < 0.25);
+        /* grows after closure, and keeps growing after day 90: at least
+         * 0.2 mm per month (keloid_floor = 0 stops by day 120: no advance) */
+        assert_true(c[k].keloid_beyond_day[0] > c[k].keloid_beyond_t95 + 1.0);
+        const double months1 = (o.keloid_day[1] - 90) / 30.0, months2 = (days - 90) / 30.0;
+        assert_true(c[k].keloid_beyond_day[1] - c[k].keloid_beyond_day[0] >= 0.2 * months1);
+        assert_true(c[k].keloid_beyond_mm - c[k].keloid_beyond_day[0] >= 0.2 * months2);
         /* does not regress */
         assert_true(c[k].keloid_beyond_mm >= c[k].keloid_beyond_max - 1e-9);
         assert_true(c[k].scar_max_end >= 0.99 * c[k].scar_max_peak);
-        /* the stop lies inside the smaller block, clear of its walls */
+        /* the front lies inside the smaller block, clear of its walls */
         assert_true(c[k].keloid_beyond_mm + 1.5 < 0.5 * (blk[0] - 6));
+        /* the deep dermis below keloid_mm stays intact */
+        assert_true(c[k].scar_deep_max < p->rho_max);
     }
     assert_true(fabs(c[0].keloid_beyond_mm - c[1].keloid_beyond_mm) <= 0.1 * c[1].keloid_beyond_mm);
     assert_true(fabs(c[0].keloid_area_mm2 - c[1].keloid_area_mm2) <= 0.1 * c[1].keloid_area_mm2);
@@ -766,6 +775,64 @@ static void test_scab_crust(void **state) {
     ss_heal_params_free(p);
 }
 
+/* The crust on voxels coarser than its layer [D14]: at 1 mm voxels the
+ * 0.5 mm crust is a sub-voxel layer in the surface voxel. By day 2 it is as
+ * thick as on 0.5 mm voxels (the depth integral of s at the wound centre
+ * within 5 % of scab_mm on both grids), the wound's mean crust, divided by
+ * the surface voxel's share of the layer, exceeds 0.9 on both (the scab
+ * forms: on 1 mm voxels it stayed at 0.5, below the 0.5 the summaries
+ * require). The fibroblasts of the tissue under it are printed, not
+ * asserted: the cut voxel refills from the dermis below over a whole voxel
+ * (0.07 against 0.21 on 0.5 mm voxels at day 2; docs/heal-model.md [D14]). */
+static void test_scab_subvoxel(void **state) {
+    (void)state;
+    ss_error err;
+    ss_heal_params *p = ss_heal_params_preset("scab", &err);
+    assert_non_null(p);
+    const double dxs[2] = {1.0, 0.5};
+    double fib[2] = {0, 0}; /* printed only */
+    for (int k = 0; k < 2; k++) {
+        const double dx = dxs[k];
+        const int n = (int)lround(12.0 / dx), nz = (int)lround(6.0 / dx);
+        ss_heal_grid *g = ss_heal_grid_create(n, n, nz, dx, &err);
+        assert_non_null(g);
+        uint8_t *w = ss_heal_wound_box(g, 4.0, 6.0, 6.0, 1.0, &err);
+        assert_non_null(w);
+        assert_int_equal(ss_heal_grid_init(g, 4.0, 0.1, w, p, &err), SS_OK);
+        free(w);
+        ss_heal_solver *sv = ss_heal_solver_create(g, p, SS_HEAL_SPLIT, 0.05, &err);
+        assert_non_null(sv);
+        for (int i = 0; i < 40; i++) assert_int_equal(ss_heal_step(sv, g, &err), SS_OK);
+        const int cx = g->nx / 2, cy = g->ny / 2;
+        double c = 0.0, nsum = 0.0, nw = 0.0;
+        for (int z = 1; z < g->nz - 1; z++) {
+            const size_t i = ss_heal_idx(g, cx, cy, z);
+            c += g->field[SS_HEAL_ESCHAR][i] * dx;
+            const double top = (z + 1) * dx, bot = z * dx; /* the voxel's extent */
+            /* fibroblasts of the wound tissue under the crust layer (depth 0.5..1 mm) */
+            const double lo = bot > 3.0 ? bot : 3.0, hi = top < 3.5 ? top : 3.5;
+            if (hi > lo) {
+                nsum += g->field[SS_HEAL_FIBROBLAST][i] * (hi - lo);
+                nw += hi - lo;
+            }
+        }
+        fib[k] = nw > 0 ? nsum / nw : 0;
+        ss_heal_stats st;
+        ss_heal_stats_compute(g, &st);
+        const double share = ss_heal_crust_voxel_share(p, dx);
+        print_message("dx %g: day 2: crust %.3f mm (layer %.2f), wound mean %.3f / share %.2f "
+                      "= %.3f, fibroblasts under it %.3f\n",
+                      dx, c, p->scab_mm, st.eschar_wound_mean, share, st.eschar_wound_mean / share,
+                      fib[k]);
+        assert_true(fabs(c - p->scab_mm) <= 0.05 * p->scab_mm);
+        assert_true(st.eschar_wound_mean / share > 0.9);
+        ss_heal_solver_free(sv);
+        ss_heal_grid_free(g);
+    }
+    assert_true(fabs(ss_heal_crust_voxel_share(p, 1.0) - 0.5) < 1e-12);
+    ss_heal_params_free(p);
+}
+
 /* Smooth normalised open area: mean epithelial deficit 1 - max(e) over the
  * surface layer of the initial wound columns (1 at t = 0, 0 when closed). */
 static double deficit(const ss_heal_grid *g, const uint8_t *wcol) {
@@ -878,9 +945,10 @@ int main(void) {
         cmocka_unit_test(test_large_wound_front),
         cmocka_unit_test(test_packing_limit),
         cmocka_unit_test(test_keloid),
-        cmocka_unit_test(test_keloid_stop),
+        cmocka_unit_test(test_keloid_invasion),
         cmocka_unit_test(test_grid_convergence),
         cmocka_unit_test(test_scab_crust),
+        cmocka_unit_test(test_scab_subvoxel),
         cmocka_unit_test(test_bed_window_uneven),
     };
     /* clang-format on */

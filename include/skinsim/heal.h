@@ -99,9 +99,13 @@ typedef struct ss_heal_params {
     double rho_sat; /* 1, packing limit of collagen (x normal dermis): keloid deposition
                        saturates as (1 - rho/rho_sat) */
     /* keloid invasion (docs/heal-model.md §2 [D6]) */
-    double keloid_tau; /* day, e-folding time of the invasion signal a(t) = exp(-t/keloid_tau):
-                          keloid deposition in tissue not yet keloid (rho < rho_max) is scaled
-                          by a(t), so the front slows and stops; 0 = no decay (a = 1) */
+    double keloid_tau;   /* day, e-folding time of the invasion signal a(t) = exp(-t/keloid_tau):
+                            keloid deposition in tissue not yet keloid (rho < rho_max) is scaled
+                            by a(t); 0 = no decay (a = 1) */
+    double keloid_floor; /* 1, share of the invasion signal that persists (the chronic
+                            inflammation of the keloid's leading edge): a(t) = floor +
+                            (1 - floor) exp(-t/keloid_tau), so the front slows after the
+                            injury's acute phase and then keeps invading; 0 = it stops */
     /* scar maturation (docs/heal-model.md §2 [D10]) */
     double rho_mature; /* 1, collagen of a mature scar (x normal dermis): remodelling resorbs
                           only the excess above it, so the scar stays */
@@ -343,6 +347,12 @@ typedef struct ss_heal_stats {
 /* Epithelium level below which a column counts as open: 0.5. */
 double ss_heal_open_threshold(void);
 void ss_heal_stats_compute(const ss_heal_grid *g, ss_heal_stats *st);
+/* The largest eschar a voxel of edge dx_mm at the surface can hold: the share
+ * of it inside the crust layer, min(1, scab_mm / dx_mm) (1 with the scab
+ * switch off). On voxels coarser than scab_mm the crust is a sub-voxel layer
+ * (docs/heal-model.md [D14]); the callers divide eschar_wound_mean by it, so
+ * the figure is the crust's share of its layer on every voxel size. */
+double ss_heal_crust_voxel_share(const ss_heal_params *p, double dx_mm);
 /* The same in parts (the MPI driver's reductions): sums of float values are
  * kept exactly (fixed-point limbs), so the result does not depend on how the
  * columns are split or in which order the parts are merged. */

@@ -68,6 +68,8 @@ ss_status ss_heal_run__add_row(ss_heal_run *r, ss_error *err) {
         ss_heal_stats_compute(r->g, &row->st);
     else /* distributed, rows restored from a checkpoint: filled in by the caller */
         memset(&row->st, 0, sizeof row->st);
+    /* the crust's share of its layer, also on voxels coarser than the layer */
+    row->st.eschar_wound_mean /= ss_heal_crust_voxel_share(r->p, r->g->dx_mm);
     return ss_heal_run__mech_row(r, err);
 }
 

@@ -130,6 +130,9 @@ ss_status ss_heal_course_run(const ss_heal_params *p, const ss_heal_course_opts 
     double t0 = ss_now();
     ss_heal_stats stt;
     ss_heal_stats_compute(g, &stt);
+    /* the crust's share of its layer, also on voxels coarser than it [D14] */
+    const double cshare = ss_heal_crust_voxel_share(p, dx);
+    stt.eschar_wound_mean /= cshare;
     const double a0 = stt.initial_area_mm2;
     int ns = 0;
     sm[ns++] = (sample){0, 1, stt.eschar_wound_mean, stt.scar_volume_mm3, 0};
@@ -146,6 +149,7 @@ ss_status ss_heal_course_run(const ss_heal_params *p, const ss_heal_course_opts 
             deep_done = 1;
         }
         ss_heal_stats_compute(g, &stt);
+        stt.eschar_wound_mean /= cshare;
         if (ns == cap) break;
         sample *q = &sm[ns++];
         *q = (sample){g->t_days, a0 > 0 ? stt.open_area_mm2 / a0 : 0, stt.eschar_wound_mean,

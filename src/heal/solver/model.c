@@ -17,10 +17,12 @@
  * the (1 - s) of u1..n weights the cell faces (a full crust insulates the
  * bed instead of draining it), and a dry factor from the column's crust
  * thickness slows capillary and fibroblast growth in the wound below. The
- * bed the sheet reads is the granulation tissue (omega) under the crust. These
+ * bed the sheet reads is the granulation tissue (omega) under the crust. A
+ * voxel the crust layer's floor cuts (voxels coarser than scab_mm) holds a
+ * sub-voxel crust over tissue that grows at the full rate. These
  * column inputs are gathered before each reaction pass (prepare hook), so
  * rows stay independent and results bit-identical for any thread count.
- * The keloid's invasion signal a(t) (keloid_tau) depends on the grid's day
+ * The keloid's invasion signal a(t) (keloid_tau, keloid_floor) depends on the grid's day
  * only and is set before each step, so resumes and rank counts agree.
  * docs/heal-model.md §2 lists where and why this departs from §4.1 as printed. */
 /* The hot loops are written branch-free for SIMD. At -O2 GCC vectorises
@@ -148,7 +150,6 @@ react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep, const i
         const float u1 = U1[i], u2 = U2[i], u3 = U3[i], nn = N[i], s = S[i], e = E[i];
         const float rho = RHO[i], p = P[i];
         const float om = (float)(p > pmin);
-        const float ns = pos(1.0f - s);
         const float open3 = pos(1.0f - u3);
         /* depth level below the surface cell (0 = surface, < 0: no surface) and
          * the fraction of the level inside the top scab_mm (arithmetic, no
@@ -156,6 +157,15 @@ react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep, const i
         const float kf = deep ? 1.0f : (float)(ZT[i] - z);
         const float surf = deep ? 0.0f : (float)(kf == 0.0f);
         const float wsc = deep ? 0.0f : (float)(kf >= 0.0f) * clampf(scab_h - kf, 0.0f, 1.0f);
+        /* a voxel the crust layer's floor cuts (0 < wsc < 1, voxels coarser
+         * than scab_mm or not a divisor of it) holds a sub-voxel crust on top
+         * of tissue [D14]: its tissue species are those of the tissue part,
+         * which grows at the full rate (the tissue under a crust does on a
+         * fine grid: s = 0 there), and the crust's own fraction of the layer
+         * part is s / wsc (1 when the crust is complete) */
+        const float part = deep ? 0.0f : (float)(wsc > 0.0f && wsc < 1.0f);
+        const float ns = part > 0.0f ? 1.0f : pos(1.0f - s);
+        const float sl = part > 0.0f ? clampf(s / (wsc > 0.0f ? wsc : 1.0f), 0.0f, 1.0f) : s;
         const float ecl = EC[i], necl = pos(1.0f - ecl);
         /* 4.1.1 oxygen: (1-s)(D1 lap u1 + lam31 u3) - lam11 u1 */
         p1[i] = ns * m->lam31 * u3;
@@ -185,7 +195,7 @@ react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep, const i
          * intact epidermis holds e = 1 at the margin, the face of its cell,
          * half a voxel nearer than its centre: KF (1 - e) adds the other
          * half of such a face's conductance [D8] */
-        const float me = deep ? 0.0f : surf * pos(1.0f - kscab * s) * qwin(BED[i], g1, ig1);
+        const float me = deep ? 0.0f : surf * pos(1.0f - kscab * sl) * qwin(BED[i], g1, ig1);
         p6[i] = deep ? 0.0f : me * (lamge * e + KF[i]);
         l6[i] = deep ? 0.0f : surf * lamee + me * KF[i];
         /* 4.1.7 scar, restricted to omega:
@@ -209,7 +219,7 @@ react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep, const i
         const float C = pos(rho - m->rhomax) * m->inv_rhomax;
         p8[i] = dyn * (C + ppos * p);
         l8[i] = dyn * (C + pneg);
-        m0[i] = face_m(s, crust);
+        m0[i] = part > 0.0f ? 1.0f : face_m(s, crust);
         m1[i] = me;
         (void)e;
     }
@@ -862,11 +872,13 @@ void ss_heal_solver_free(ss_heal_solver *s) {
 }
 
 /* The keloid's invasion signal over a step from day t of length dt, at the
- * step's midpoint: a = exp(-t_mid / keloid_tau), 1 without decay. A function
+ * step's midpoint: a = floor + (1 - floor) exp(-t_mid / keloid_tau), 1
+ * without decay. A function
  * of the grid's day only, so resumed runs and any rank count see the same. */
 static float keloid_signal(const ss_heal_params *p, double t, double dt) {
     if (!(p->keloid_tau > 0)) return 1.0f;
-    return (float)exp(-(t + 0.5 * dt) / p->keloid_tau);
+    const double f = p->keloid_floor;
+    return (float)(f + (1.0 - f) * exp(-(t + 0.5 * dt) / p->keloid_tau));
 }
 
 ss_status ss_heal_step_phase(ss_heal_solver *s, ss_heal_grid *g, int phase, ss_error *err) {

@@ -103,7 +103,8 @@ static const pdef PDEFS[] = {
      "keloid fibroblasts in the wound region, independent of vascularisation and closure; in "
      "tissue not yet keloid (rho < rho_max) scaled by the invasion signal (keloid_tau). "
      "Calibrated with keloid_tau: scar denser than the clean peak >= 2 mm beyond the margin by "
-     "day 60, a plateau of ~3 mm (docs/heal-model.md §6); keloid fibroblasts synthesise ~20x the "
+     "day 60, then slower invasion (keloid_floor, docs/heal-model.md §6); keloid fibroblasts "
+     "synthesise ~20x the "
      "collagen of normal ones (Craig et al. 1975, Eur J Clin Invest 5:69)",
      0, 0, 0.6},
     {"Dp", OFF(Dp), "mm^2/day",
@@ -148,14 +149,23 @@ static const pdef PDEFS[] = {
      "deposition (lamkrho) saturates as (1 - rho/rho_sat)",
      3.0, 3.0, 3.0},
     {"keloid_tau", OFF(keloid_tau), "day",
-     "keloid only (docs/heal-model.md §2 [D6]): e-folding time of the invasion signal (the "
-     "chronic inflammation at the keloid's leading edge, Eura et al. 2022, PRS Glob Open "
+     "keloid only (docs/heal-model.md §2 [D6]): e-folding time of the acute part of the invasion "
+     "signal (the inflammation at the keloid's leading edge, Eura et al. 2022, PRS Glob Open "
      "10:e4374; Limandjaja et al. 2020, Front Cell Dev Biol 8:360) that converts normal dermis "
      "at the margin into keloid; established keloid (rho > rho_max) deposits without it. "
-     "Calibrated (no published growth rate found): the front keeps advancing for ~4 months "
-     "after closure, then stops ~3 mm beyond the margin, which the default 30 mm block holds "
-     "(docs/heal-model.md §6); 0 = no decay (the front never stops)",
+     "Calibrated with keloid_floor (no published growth rate found): the front advances ~1.3 mm "
+     "in the first month, as before; 0 = no decay (the full signal persists)",
      20.0, 20.0, 20.0},
+    {"keloid_floor", OFF(keloid_floor), "1",
+     "keloid only (docs/heal-model.md §2 [D6]): share of the invasion signal that persists after "
+     "the acute phase. Keloids are driven by a chronic inflammation in the reticular dermis with "
+     "neovascularisation at the leading edge that does not resolve (Eura et al. 2022; Ogawa "
+     "2017, Int J Mol Sci 18:606) and keep invading the surrounding dermis for months to years "
+     "(Bayat et al. 2003, BMJ 326:88), so the front keeps advancing at a slow steady rate "
+     "(calibrated, no measured lateral rate found: ~0.4-0.5 mm per month after the first three "
+     "months, docs/heal-model.md §6); 0 = the signal wanes and the front stops ~3 mm beyond the "
+     "margin",
+     0.02, 0.02, 0.02},
     {"rho_mature", OFF(rho_mature), "1",
      "collagen of a mature scar, x normal dermis (docs/heal-model.md §2 [D10]): remodelling "
      "(lamrhop) resorbs only the excess above it, so the scar matures to a permanent plateau "
@@ -248,6 +258,11 @@ ss_status ss_heal_params_set_switches(ss_heal_params *p, int scab, int static_re
     return SS_OK;
 }
 
+double ss_heal_crust_voxel_share(const ss_heal_params *p, double dx_mm) {
+    if (!p || !p->scab || !(dx_mm > 0) || !(p->scab_mm > 0)) return 1.0;
+    return p->scab_mm < dx_mm ? p->scab_mm / dx_mm : 1.0;
+}
+
 void ss_heal_params_healthy(const ss_heal_params *p, float h[SS_HEAL_NFIELDS]) {
     for (int f = 0; f < SS_HEAL_NFIELDS; f++) h[f] = 0.0f;
     double u3 = p->u3_eq;
@@ -272,6 +287,9 @@ static ss_status check_value(const char *what, const pdef *d, double v, ss_error
     if (!strcmp(d->key, "rho_open") && !(v >= 0 && v <= 1))
         return ss_error_set(err, SS_ERR_INPUT, "%s: parameter 'rho_open' = %g must be in [0, 1]",
                             what, v);
+    if (!strcmp(d->key, "keloid_floor") && !(v >= 0 && v <= 1))
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "%s: parameter 'keloid_floor' = %g must be in [0, 1]", what, v);
     if (!strcmp(d->key, "kscab") && !(v >= 0 && v < 1))
         return ss_error_set(err, SS_ERR_INPUT, "%s: parameter 'kscab' = %g must be in [0, 1)", what,
                             v);
