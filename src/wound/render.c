@@ -462,11 +462,14 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
         R[c] = lerp(R3[c], R[c], dry), T[c] = lerp(T3[c], T[c], dry);
     }
     ss_layer_over(R, T, mid, o->rgb);
-    for (int c = 0; c < 3; c++) o->rgb[c] = lerp(mid[c], o->rgb[c], edge_c);
     /* the edge lifts where new epithelium has slid under it (Winter 1962):
-     * raised, drier and paler, before it comes off */
+     * raised, drier and paler, before it comes off; the cracks' shadow and
+     * the lifted edge's pallor are the crust's own, so they apply before its
+     * coverage (applied after, they brightened the skin beside a crust into
+     * a white halo) */
     double lift = v[SS_WR_CRUST_LIFT_MM] > 0 ? cover * scab_cover * exp(-s->crust_in / 0.8) : 0;
-    for (int c = 0; c < 3; c++) o->rgb[c] *= (1 - 0.65 * crack) * (1 + 0.5 * lift);
+    for (int c = 0; c < 3; c++)
+        o->rgb[c] = lerp(mid[c], o->rgb[c] * (1 - 0.65 * crack) * (1 + 0.5 * lift), edge_c);
     /* the extra colour (hair) over everything, gone where the tissue was destroyed */
     double ea = k[SS_BIO_EXTRA_A] * (1 - reg);
     for (int c = 0; c < 3; c++)
