@@ -240,7 +240,11 @@ static double ramp(double v, double lo, double hi) {
 static double clamp01(double v) { return v < 0 ? 0 : v > 1 ? 1 : v; }
 static double lerp(double a, double b, double t) { return a + (b - a) * t; }
 
-/* The tissue at one texel (bilinear between column centres, clamped at the edges). */
+/* The tissue at one texel (bilinear between column centres, clamped at the
+ * edges). The age (days since a column closed) is the mean over the wounded
+ * columns only: intact columns hold the sentinel SS_WOUND_AGE_INTACT (1e5
+ * days), and mixing it in made the margin of a healed region look a
+ * century old (a bright rim of mature scar around a 90-day-old one). */
 typedef struct texel_tissue {
     double e, cap, oxy, plasma, scab, scar, keloid, depth, age, elev;
     double crust_in; /* mm from the crust's edge inwards (0 outside the crust) */
@@ -290,7 +294,13 @@ static void sample_tissue_smooth(const ss_wound_tissue *t, const float *crust_in
     BS(t->keloid_mm, s->keloid);
     BS(t->elevation_mm, s->elev);
     BS(t->depth_mm, s->depth);
-    BS(t->age_days, s->age);
+    {
+        double acc = 0, ws = 0;
+        for (int q = 0; q < 16; q++)
+            if (t->age_days[idx[q]] < SS_WOUND_AGE_INTACT)
+                acc += wt[q] * (double)t->age_days[idx[q]], ws += wt[q];
+        s->age = ws > 1e-12 ? acc / ws : (double)SS_WOUND_AGE_INTACT;
+    }
     BS(crust_in, s->crust_in);
 #undef BS
 }
@@ -318,7 +328,15 @@ static void sample_tissue(const ss_wound_tissue *t, const float *crust_in, doubl
     s->keloid = BL(t->keloid_mm);
     s->elev = BL(t->elevation_mm);
     s->depth = BL(t->depth_mm);
-    s->age = BL(t->age_days);
+    { /* the mean age of the wounded columns only (module comment) */
+        const size_t ix[4] = {i00, i01, i10, i11};
+        const double wq[4] = {(1 - fy) * (1 - fx), (1 - fy) * fx, fy * (1 - fx), fy * fx};
+        double acc = 0, ws = 0;
+        for (int q = 0; q < 4; q++)
+            if (t->age_days[ix[q]] < SS_WOUND_AGE_INTACT)
+                acc += wq[q] * (double)t->age_days[ix[q]], ws += wq[q];
+        s->age = ws > 1e-12 ? acc / ws : (double)SS_WOUND_AGE_INTACT;
+    }
     s->crust_in = BL(crust_in);
 #undef BL
 }
