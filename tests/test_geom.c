@@ -8,11 +8,16 @@
  * threads bit-identical. */
 #include "testutil.h"
 #include "skinsim/geom.h"
+#include "skinsim/mesh.h"
 
 #include <math.h>
 #include <omp.h>
 #include <stdlib.h>
 #include <string.h>
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
 
 static double det3(ss_vec2 a, ss_vec2 b, ss_vec2 c) {
     return (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
@@ -392,12 +397,143 @@ static void test_hull_nearly_collinear(void **state) {
     }
 }
 
+/* Rounded corners (src/geom/round.c): a 100 px square with r = 20 keeps its
+ * orientation, loses exactly (4 - pi) r^2 of area (the chords stray < 0.05 px
+ * from the circles), every vertex is on an edge or r from a corner's centre;
+ * fillets are clamped on a thin triangle (it stays inside the triangle);
+ * radius 0 copies; a negative radius is an input error. */
+static double shoelace(const ss_polygon *p) {
+    double a = 0;
+    for (int i = 0; i < p->count; i++) {
+        ss_vec2 u = p->pts[i], v = p->pts[(i + 1) % p->count];
+        a += u.x * v.y - v.x * u.y;
+    }
+    return 0.5 * a;
+}
+
+static void test_polygon_round(void **state) {
+    (void)state;
+    ss_error err;
+    ss_vec2 sq[4] = {{0, 0}, {100, 0}, {100, 100}, {0, 100}};
+    ss_polygon h, r;
+    assert_int_equal(ss_convex_hull(sq, 4, &h, &err), SS_OK);
+    assert_int_equal(ss_polygon_round(&h, 20, &r, &err), SS_OK);
+    assert_true(r.count > 4 * 8);
+    assert_true(shoelace(&r) > 0);
+    assert_float_equal(shoelace(&r), 10000 - (4 - M_PI) * 400, 0.05 * 4 * 2 * M_PI * 20 / 4);
+    for (int i = 0; i < r.count; i++) {
+        ss_vec2 p = r.pts[i];
+        double cx = p.x < 20 ? 20 : p.x > 80 ? 80 : p.x, cy = p.y < 20 ? 20 : p.y > 80 ? 80 : p.y;
+        double d = hypot(p.x - cx, p.y - cy); /* from the inner square grown by r */
+        assert_float_equal(d, 20, 1e-9);
+        /* chords: the midpoint of each stays within 0.05 px of the circle */
+        ss_vec2 q = r.pts[(i + 1) % r.count], m = {(p.x + q.x) / 2, (p.y + q.y) / 2};
+        double mx = m.x < 20 ? 20 : m.x > 80 ? 80 : m.x, my = m.y < 20 ? 20 : m.y > 80 ? 80 : m.y;
+        assert_true(hypot(m.x - mx, m.y - my) > 20 - 0.05 - 1e-9);
+    }
+    ss_polygon_free(&r);
+    assert_int_equal(ss_polygon_round(&h, 0, &r, &err), SS_OK);
+    assert_int_equal(r.count, h.count);
+    for (int i = 0; i < h.count; i++) assert_memory_equal(&r.pts[i], &h.pts[i], sizeof(ss_vec2));
+    ss_polygon_free(&r);
+    assert_int_equal(ss_polygon_round(&h, -1, &r, &err), SS_ERR_INPUT);
+    assert_int_equal(ss_polygon_round(&h, NAN, &r, &err), SS_ERR_INPUT);
+    ss_polygon_free(&h);
+    /* a thin streak: the tips are rounded with their own width, inside it */
+    ss_vec2 th[3] = {{0, 0}, {100, 0}, {50, 4}};
+    assert_int_equal(ss_convex_hull(th, 3, &h, &err), SS_OK);
+    assert_int_equal(ss_polygon_round(&h, 50, &r, &err), SS_OK);
+    double a0 = shoelace(&h), a1 = shoelace(&r);
+    assert_true(a1 > 0.5 * a0 && a1 < a0);
+    for (int i = 0; i < r.count; i++) {
+        ss_vec2 p = r.pts[i];
+        assert_true(p.y >= -1e-9 && p.y <= 4 * (1 - fabs(p.x - 50) / 50) + 1e-6);
+    }
+    ss_polygon_free(&r);
+    ss_polygon_free(&h);
+}
+
+/* A rounded stroke has the same shape at every texture size: its footprint
+ * covers the same fraction at 256 and 1024 (within the outline's pixels),
+ * and less than the sharp hull does. */
+static void test_stroke_round_sizes(void **state) {
+    (void)state;
+    ss_error err;
+    ss_stroke_set s;
+    assert_int_equal(ss_stroke_csv_parse("0.2,0.3\n0.7,0.2\n0.8,0.7\n0.3,0.8\n", "q.csv", &s, &err),
+                     SS_OK);
+    double frac[2], sharp = 0;
+    const int sizes[2] = {256, 1024};
+    for (int k = 0; k < 2; k++) {
+        int n = sizes[k];
+        ss_image *f = ss_stroke_footprint_rounded(&s, n, n, 0, SS_STROKE_ROUND, "q.csv", &err);
+        assert_non_null(f);
+        double a = 0;
+        for (int i = 0; i < n * n; i++) a += f->data[i];
+        frac[k] = a / ((double)n * n);
+        ss_image_free(f);
+    }
+    ss_image *f = ss_stroke_footprint(&s, 1024, 1024, 0, "q.csv", &err);
+    for (int i = 0; i < 1024 * 1024; i++) sharp += f->data[i];
+    sharp /= 1024.0 * 1024.0;
+    ss_image_free(f);
+    assert_float_equal(frac[0], frac[1], 0.004);
+    assert_true(frac[1] < sharp - 0.005);
+    assert_null(ss_stroke_footprint_rounded(&s, 64, 64, 0, 0.7, "q.csv", &err));
+    assert_int_equal(err.code, SS_ERR_INPUT);
+    ss_stroke_set_free(&s);
+}
+
+/* The UV triangle rasteriser: two triangles making the UV square
+ * [0.25, 0.75]^2 of a 16 x 16 texture visit exactly the 8 x 8 texels whose
+ * centres lie in it, those on the shared diagonal twice, and their
+ * barycentrics give back the texel centre; a degenerate triangle is skipped. */
+typedef struct raster_log {
+    int visits[16 * 16];
+    double worst;
+    const ss_mesh *m;
+} raster_log;
+
+static void raster_visit(int x, int y, int tri, double b0, double b1, double b2, void *ctx) {
+    raster_log *l = ctx;
+    l->visits[y * 16 + x]++;
+    const uint32_t *ix = l->m->indices + 3 * tri;
+    double u = b0 * l->m->uvs[2 * ix[0]] + b1 * l->m->uvs[2 * ix[1]] + b2 * l->m->uvs[2 * ix[2]];
+    double v = b0 * l->m->uvs[2 * ix[0] + 1] + b1 * l->m->uvs[2 * ix[1] + 1] +
+               b2 * l->m->uvs[2 * ix[2] + 1];
+    l->worst = fmax(l->worst, fmax(fabs(u * 16 - (x + 0.5)), fabs(v * 16 - (y + 0.5))));
+}
+
+static void test_uv_raster(void **state) {
+    (void)state;
+    float pos[15] = {0},
+          uv[10] = {0.25f, 0.25f, 0.75f, 0.25f, 0.75f, 0.75f, 0.25f, 0.75f, 0.5f, 0.5f};
+    uint32_t idx[9] = {0, 1, 2, 0, 2, 3, 0, 2, 4}; /* the last one is degenerate in UV */
+    ss_mesh m = {0};
+    m.nvertices = 5, m.ntriangles = 3, m.positions = pos, m.uvs = uv, m.indices = idx;
+    m.has_uvs = 1;
+    raster_log l = {{0}, 0, &m};
+    ss_uv_triangle_raster(&m, 16, 16, raster_visit, &l);
+    for (int y = 0; y < 16; y++)
+        for (int x = 0; x < 16; x++) {
+            int in = x >= 4 && x < 12 && y >= 4 && y < 12;
+            int expect = in ? (x == y ? 2 : 1) : 0;
+            assert_int_equal(l.visits[y * 16 + x], expect);
+        }
+    assert_true(l.worst < 1e-6);
+    unsigned char mask[16 * 16];
+    ss_error err;
+    assert_int_equal(ss_mesh_uv_coverage(&m, 16, 16, mask, &err), SS_OK);
+    for (int i = 0; i < 16 * 16; i++) assert_int_equal(mask[i], l.visits[i] > 0);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_hull_nearly_collinear), cmocka_unit_test(test_convex_hull),
         cmocka_unit_test(test_concave_hull),          cmocka_unit_test(test_fill),
         cmocka_unit_test(test_closing_and_segment),   cmocka_unit_test(test_edt),
-        cmocka_unit_test(test_outline_distance),
+        cmocka_unit_test(test_outline_distance),      cmocka_unit_test(test_polygon_round),
+        cmocka_unit_test(test_stroke_round_sizes),    cmocka_unit_test(test_uv_raster),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -110,6 +110,24 @@ ss_status ss_stroke_hulls(const ss_stroke_set *s, double width, double height, i
 ss_image *ss_stroke_footprint(const ss_stroke_set *s, int width, int height, int concave_k,
                               const char *name, ss_error *err);
 
+/* Corners rounded (src/geom/round.c): every vertex of `in` replaced by the
+ * circular fillet of radius `radius` (pixels) tangent to both edges, its
+ * tangent points clamped to half of each adjacent edge (the radius shrinks
+ * with them), sampled within 0.05 px of the circle. Orientation and the first
+ * vertex's place are kept; radius 0 copies the polygon. The caller frees out.
+ * Fewer than 3 vertices or a negative or non-finite radius: SS_ERR_INPUT. */
+ss_status ss_polygon_round(const ss_polygon *in, double radius, ss_polygon *out, ss_error *err);
+/* The fraction of a hull's closing distance (Alg. 4.3) that `skinsim
+ * abrasion` and a mesh's `--wound-uv` strokes round its corners by. */
+#define SS_STROKE_ROUND 0.15
+/* ss_stroke_hulls with every hull's corners rounded by round x its closing
+ * distance (round in [0, 0.5]; 0 is ss_stroke_hulls). */
+ss_status ss_stroke_outlines(const ss_stroke_set *s, double width, double height, int concave_k,
+                             double round, const char *name, ss_polygon **out, ss_error *err);
+/* ss_stroke_footprint of the rounded outlines (round 0: the same image). */
+ss_image *ss_stroke_footprint_rounded(const ss_stroke_set *s, int width, int height, int concave_k,
+                                      double round, const char *name, ss_error *err);
+
 /* ---- glTF -------------------------------------------------------------- */
 
 /* A glTF 2.0 file showing a texture set on a square of side_m metres (XY

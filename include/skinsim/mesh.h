@@ -76,6 +76,15 @@ ss_status ss_tri_mesh_check_closed(const ss_tri_mesh *m, const char *name, ss_er
  * -1 when the mesh has no UVs or memory runs out. */
 int ss_mesh_uv_islands(const ss_mesh *m, int *island);
 
+/* UV triangle rasteriser (src/geom/uvraster.c): for every triangle t in file
+ * order, fn(x, y, t, b0, b1, b2, ctx) for every texel of the width x height
+ * texture whose centre (x + 0.5, y + 0.5) lies in the triangle's UVs (within
+ * 1e-9 in barycentrics, so texels on a shared edge are visited by both
+ * triangles); b0..b2 weigh its corners indices[3t..3t+2]. Degenerate and
+ * non-finite UV triangles are skipped. The mesh needs UVs. */
+typedef void (*ss_uv_texel_fn)(int x, int y, int tri, double b0, double b1, double b2, void *ctx);
+void ss_uv_triangle_raster(const ss_mesh *m, int width, int height, ss_uv_texel_fn fn, void *ctx);
+
 /* UV coverage: mask[y * width + x] (caller-allocated) = 1 where the texel
  * centre lies in a UV triangle, else 0. No UVs -> SS_ERR_INPUT.
  * (src/geom/uvpad.c) */

@@ -1,9 +1,8 @@
 /* Wound shape at one texture size (seed 000 §4.2): hull per stroke (convex,
- * Alg. 4.1, or concave k-NN), filled by scanlines, the distance of every pixel
- * to the outline (what Alg. 3.4 and 4.4 loop over every hull edge for), and
- * per wound the closing distance of Alg. 4.3 and the rand(0.4, 0.8) of Eq. 4.8.
- * Mask input: each connected component is one wound and its outline is the
- * mask boundary. */
+ * Alg. 4.1, or concave k-NN) with its corners rounded (ss_stroke_outlines), filled by scanlines,
+ * the distance of every pixel to the outline (what Alg. 3.4 and 4.4 loop over every hull edge for),
+ * and per wound the closing distance of Alg. 4.3 and the rand(0.4, 0.8) of Eq. 4.8. Mask input:
+ * each connected component is one wound and its outline is the mask boundary. */
 #include "skinsim/abrasion.h"
 
 #include <math.h>
@@ -132,8 +131,10 @@ ss_status ss_wound_shape_from_strokes(const ss_stroke_set *s, ss_hull_kind kind,
     ss_wound_shape *w = shape_alloc(size, nids, err);
     if (!w) return err->code;
     /* No name: the caller knows the file and prefixes it. */
-    ss_status st = ss_stroke_hulls(s, size, size, kind == SS_HULL_CONCAVE ? concave_k : 0, NULL,
-                                   &w->polys, err);
+    /* the hulls with rounded corners (src/geom/round.c): a four-point stroke
+     * is a rounded quadrilateral, not a diamond */
+    ss_status st = ss_stroke_outlines(s, size, size, kind == SS_HULL_CONCAVE ? concave_k : 0,
+                                      SS_STROKE_ROUND, NULL, &w->polys, err);
     if (st) {
         ss_wound_shape_free(w);
         return st;

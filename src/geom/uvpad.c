@@ -4,9 +4,9 @@
  * texture baker leaves, so bilinear filtering and mipmaps at an island's
  * border read the island's own colour instead of whatever lies beyond.
  *
- * Design: coverage is the texel centre inside a triangle (the same test as
- * the wound's UV rasteriser). The nearest covered texel is found exactly,
- * in Euclidean distance, by the two-pass squared distance transform of
+ * Design: coverage is the texel centre inside a triangle
+ * (ss_uv_triangle_raster, the rasteriser the wound's UV columns use too). The nearest covered texel
+ * is found exactly, in Euclidean distance, by the two-pass squared distance transform of
  * Felzenszwalb and Huttenlocher ("Distance transforms of sampled
  * functions", Theory of Computing 2012) carrying the argmin along: per
  * column the nearest covered row, then per row the lower envelope of the
@@ -21,43 +21,24 @@
 #include <stdlib.h>
 #include <string.h>
 
+typedef struct coverage_ctx {
+    unsigned char *mask;
+    int width;
+} coverage_ctx;
+
+static void cover_texel(int x, int y, int tri, double b0, double b1, double b2, void *ctx) {
+    (void)tri, (void)b0, (void)b1, (void)b2;
+    coverage_ctx *c = ctx;
+    c->mask[(size_t)y * (size_t)c->width + (size_t)x] = 1;
+}
+
 ss_status ss_mesh_uv_coverage(const ss_mesh *m, int width, int height, unsigned char *mask,
                               ss_error *err) {
     if (!m->has_uvs)
         return ss_error_set(err, SS_ERR_INPUT, "the mesh has no texture coordinates (UVs)");
     memset(mask, 0, (size_t)width * (size_t)height);
-    for (int t = 0; t < m->ntriangles; t++) {
-        double U[3][2];
-        for (int k = 0; k < 3; k++) {
-            uint32_t vi = m->indices[3 * t + k];
-            U[k][0] = (double)m->uvs[2 * vi] * width;
-            U[k][1] = (double)m->uvs[2 * vi + 1] * height;
-        }
-        double det =
-            (U[1][0] - U[0][0]) * (U[2][1] - U[0][1]) - (U[2][0] - U[0][0]) * (U[1][1] - U[0][1]);
-        if (!(fabs(det) >= 1e-12)) continue; /* degenerate, or NaN */
-        double fx0 = floor(fmin(U[0][0], fmin(U[1][0], U[2][0]))),
-               fx1 = ceil(fmax(U[0][0], fmax(U[1][0], U[2][0]))),
-               fy0 = floor(fmin(U[0][1], fmin(U[1][1], U[2][1]))),
-               fy1 = ceil(fmax(U[0][1], fmax(U[1][1], U[2][1])));
-        int x0 = fx0 < 0 ? 0 : (int)fmin(fx0, width - 1.0),
-            y0 = fy0 < 0 ? 0 : (int)fmin(fy0, height - 1.0);
-        int x1 = fx1 > width - 1.0 ? width - 1 : (int)fmax(fx1, 0.0),
-            y1 = fy1 > height - 1.0 ? height - 1 : (int)fmax(fy1, 0.0);
-        for (int y = y0; y <= y1; y++)
-            for (int x = x0; x <= x1; x++) {
-                double px = x + 0.5, py = y + 0.5;
-                double b1 = ((px - U[0][0]) * (U[2][1] - U[0][1]) -
-                             (U[2][0] - U[0][0]) * (py - U[0][1])) /
-                            det,
-                       b2 = ((U[1][0] - U[0][0]) * (py - U[0][1]) -
-                             (px - U[0][0]) * (U[1][1] - U[0][1])) /
-                            det,
-                       b0 = 1 - b1 - b2;
-                if (b0 < -1e-9 || b1 < -1e-9 || b2 < -1e-9) continue;
-                mask[(size_t)y * (size_t)width + (size_t)x] = 1;
-            }
-    }
+    coverage_ctx c = {mask, width};
+    ss_uv_triangle_raster(m, width, height, cover_texel, &c);
     return SS_OK;
 }
 

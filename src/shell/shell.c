@@ -15,10 +15,10 @@
  *   Columns whose surface lies farther than the patch's half-width from the
  *   wound's height (a neighbouring finger, the palm under the back of the
  *   hand) count as air.
- * - The wound: UV strokes are hulled in UV space (geom's stroke hulls, as
- *   `skinsim abrasion` does) and a column is wounded when the UV of its
- *   surface hit lies in a hull; its voxels within depth_mm of the surface are
- *   cut out. A wound mesh is voxelised by ray parity along the column.
+ * - The wound: UV strokes are hulled in UV space (geom's stroke hulls with
+ *   rounded corners, ss_stroke_outlines, as `skinsim abrasion` does) and a column is wounded when
+ * the UV of its surface hit lies in a hull; its voxels within depth_mm of the surface are cut out.
+ * A wound mesh is voxelised by ray parity along the column.
  * - Mapping back (§5.4): a vertex takes the fields of its column's surface
  *   cell and the displacement there, rotated into the mesh frame.
  * - A wound that wraps around the body (a finger) is refused: its surface
@@ -560,7 +560,10 @@ ss_shell_patch *ss_shell_patch_from_uv(const ss_mesh *skin, const char *skin_nam
     }
     normalise(n);
     double rw = projected_radius(pos, s.npoints, c, n);
-    if (!(fp = ss_stroke_footprint(&s, 2048, 2048, o->concave_k, csv, err))) goto done;
+    /* the hulls with rounded corners, as `skinsim abrasion` draws them */
+    if (!(fp =
+              ss_stroke_footprint_rounded(&s, 2048, 2048, o->concave_k, SS_STROKE_ROUND, csv, err)))
+        goto done;
     /* how far the wound wraps: the smooth surface normal at every stroke
      * point and at every mesh vertex inside a hull (vertices far from the
      * strokes are skipped: a layout that mirrors UVs puts another part of

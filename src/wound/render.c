@@ -42,6 +42,17 @@
 #define MELANIN_FLOOR 0.0
 /* The jitter of the tissue sampling, in grid columns (docs/wound.md). */
 #define WARP_COLUMNS 0.7
+/* On a mesh's UV layout a texel is the mean of BOX_N x BOX_N samples of the
+ * tissue over a square of EDGE_BOX_MM on the skin: a filter of fixed size in
+ * mm, so a wound's edge is antialiased and equally wide at 512, 1024 and 2048
+ * (a 512 texel of the hand is 0.66 mm). */
+#define EDGE_BOX_MM 0.8
+#define BOX_N 4
+/* Its noise's period (mm), and the texels per period from which it is whole. */
+#define WARP_PERIOD_MM 0.6
+#define WARP_FULL_PX 6.0
+/* The crust's edge: its coverage rises over this many mm from its edge. */
+#define EDGE_MM 0.4
 
 struct ss_wound_renderer {
     ss_wound_render_options o;
@@ -167,7 +178,7 @@ ss_status ss_wound_renderer_create(const ss_wound_render_options *o, ss_wound_re
     for (int k = 0; k < 2 && !st; k++) {
         if (!(r->warp[k] = ss_image_create(o->size, o->size, 1, err))) st = err->code;
         if (!st)
-            st = ss_wound__noise(o->size, o->side_mm, 0.6, 2, o->seed, 204 + (uint64_t)k,
+            st = ss_wound__noise(o->size, o->side_mm, WARP_PERIOD_MM, 2, o->seed, 204 + (uint64_t)k,
                                  r->warp[k], err);
     }
     if (!st) st = render_base(r, err);
@@ -229,11 +240,70 @@ static double ramp(double v, double lo, double hi) {
 static double clamp01(double v) { return v < 0 ? 0 : v > 1 ? 1 : v; }
 static double lerp(double a, double b, double t) { return a + (b - a) * t; }
 
-/* The tissue at one texel (bilinear between column centres, clamped at the edges). */
+/* The tissue at one texel (bilinear between column centres, clamped at the
+ * edges). The age (days since a column closed) is the mean over the wounded
+ * columns only: intact columns hold the sentinel SS_WOUND_AGE_INTACT (1e5
+ * days), and mixing it in made the margin of a healed region look a
+ * century old (a bright rim of mature scar around a 90-day-old one). */
 typedef struct texel_tissue {
     double e, cap, oxy, plasma, scab, scar, keloid, depth, age, elev;
     double crust_in; /* mm from the crust's edge inwards (0 outside the crust) */
 } texel_tissue;
+
+/* On a mesh's UV layout: the same fields through a cubic B-spline (4 x 4
+ * columns, weights summing to 1, clamped at the edges). A texel there is
+ * 0.3-0.7 mm, close to a column: bilinear sampling of a step between two
+ * columns gave a transition narrower than a texel (stepped, aliased edges at
+ * 1024). The B-spline is C2, so a wound's edge is a smooth ramp about two
+ * columns wide, the same width in mm at every texture size. */
+static void sample_tissue_smooth(const ss_wound_tissue *t, const float *crust_in, double mx,
+                                 double my, texel_tissue *s) {
+    double fx0 = floor(mx), fy0 = floor(my), fx = mx - fx0, fy = my - fy0;
+    double wx[4], wy[4];
+    const double *f[2] = {&fx, &fy};
+    double *w[2] = {wx, wy};
+    for (int a = 0; a < 2; a++) {
+        double u = *f[a], v = 1 - u;
+        w[a][0] = v * v * v / 6;
+        w[a][1] = (3 * u * u * u - 6 * u * u + 4) / 6;
+        w[a][2] = (-3 * u * u * u + 3 * u * u + 3 * u + 1) / 6;
+        w[a][3] = u * u * u / 6;
+    }
+    size_t idx[16];
+    double wt[16];
+    for (int j = 0; j < 4; j++)
+        for (int i = 0; i < 4; i++) {
+            double xx = fx0 - 1 + i, yy = fy0 - 1 + j;
+            int xi = xx < 0 ? 0 : xx > t->nx - 1 ? t->nx - 1 : (int)xx;
+            int yi = yy < 0 ? 0 : yy > t->ny - 1 ? t->ny - 1 : (int)yy;
+            idx[j * 4 + i] = (size_t)yi * t->nx + (size_t)xi;
+            wt[j * 4 + i] = wx[i] * wy[j];
+        }
+#define BS(m, out)                                                                                 \
+    do {                                                                                           \
+        double acc_ = 0;                                                                           \
+        for (int q_ = 0; q_ < 16; q_++) acc_ += wt[q_] * (double)(m)[idx[q_]];                     \
+        (out) = acc_;                                                                              \
+    } while (0)
+    BS(t->epithelium, s->e);
+    BS(t->capillary, s->cap);
+    BS(t->oxygen, s->oxy);
+    BS(t->plasma, s->plasma);
+    BS(t->scab_mm, s->scab);
+    BS(t->scar, s->scar);
+    BS(t->keloid_mm, s->keloid);
+    BS(t->elevation_mm, s->elev);
+    BS(t->depth_mm, s->depth);
+    {
+        double acc = 0, ws = 0;
+        for (int q = 0; q < 16; q++)
+            if (t->age_days[idx[q]] < SS_WOUND_AGE_INTACT)
+                acc += wt[q] * (double)t->age_days[idx[q]], ws += wt[q];
+        s->age = ws > 1e-12 ? acc / ws : (double)SS_WOUND_AGE_INTACT;
+    }
+    BS(crust_in, s->crust_in);
+#undef BS
+}
 
 static void sample_tissue(const ss_wound_tissue *t, const float *crust_in, double mx, double my,
                           texel_tissue *s) {
@@ -258,9 +328,24 @@ static void sample_tissue(const ss_wound_tissue *t, const float *crust_in, doubl
     s->keloid = BL(t->keloid_mm);
     s->elev = BL(t->elevation_mm);
     s->depth = BL(t->depth_mm);
-    s->age = BL(t->age_days);
+    { /* the mean age of the wounded columns only (module comment) */
+        const size_t ix[4] = {i00, i01, i10, i11};
+        const double wq[4] = {(1 - fy) * (1 - fx), (1 - fy) * fx, fy * (1 - fx), fy * fx};
+        double acc = 0, ws = 0;
+        for (int q = 0; q < 4; q++)
+            if (t->age_days[ix[q]] < SS_WOUND_AGE_INTACT)
+                acc += wq[q] * (double)t->age_days[ix[q]], ws += wq[q];
+        s->age = ws > 1e-12 ? acc / ws : (double)SS_WOUND_AGE_INTACT;
+    }
     s->crust_in = BL(crust_in);
 #undef BL
+}
+
+/* 1 when sampled tissue is intact skin (the thresholds of column_healthy). */
+static int tissue_intact(const texel_tissue *s) {
+    return s->e >= 0.999 && fabs(s->cap - 1) < 1e-3 && fabs(s->oxy - 1) < 1e-3 &&
+           s->plasma < 1e-3 && s->scab < 1e-4 && s->scar < 1e-4 && s->keloid <= 0 &&
+           s->depth < 1e-4 && s->age >= SS_WOUND_AGE_INTACT;
 }
 
 /* 1 when a column is healthy skin: the mapping is the identity there. */
@@ -356,7 +441,13 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
                        ? (1 - ramp(fabs(nz->crack - 0.5), 0, v[SS_WR_CRACK_WIDTH])) *
                              lerp(0.45, 1, exp(-s->crust_in / v[SS_WR_CRACK_REACH_MM])) * dry
                        : 0;
-    double scab_cover = 1 - exp(-thick / 0.05); /* a 0.05 mm crust hides the bed */
+    /* the crust's edge as coverage, not as thickness: the layer's colour
+     * saturates within microns of blood, so a thickness that fades across
+     * the edge gave a one-texel step (and an orange rim); instead the crust
+     * covers a fraction of the texel that rises over EDGE_MM from its edge
+     * (crust_in, sampled smoothly), the same width in mm at any size */
+    double edge_c = ramp(s->crust_in, 0.02, EDGE_MM);
+    double scab_cover = (1 - exp(-thick / 0.05)) * edge_c; /* a 0.05 mm crust hides the bed */
     crack *= scab_cover;
     /* patches of serous (haemoglobin-poor, amber) crust among the bloody one */
     double serous = v[SS_WR_SCAB_SEROUS] * ramp(nz->mottle, 0.5, 0.8);
@@ -368,10 +459,15 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
     double room = s->depth - s->scab > 0 ? s->depth - s->scab : 0;
     double pool = lerp(1, 0.25 + 0.75 * ramp(nz->mottle, 0.3, 0.75) + 0.3 * dots,
                        fmin(1, v[SS_WR_BED_TEXTURE]));
-    double clot = open * reg * fmin(room, 0.25) * v[SS_WR_CLOT_SCALE] * pool;
+    /* the clot's full thickness, laid over the open part (open x reg) as
+     * coverage: a thickness fading with open x reg saturated to blood red
+     * within a texel of the wound's edge (a hard, stepped edge) */
+    double clot_full = fmin(room, 0.25) * v[SS_WR_CLOT_SCALE] * pool, a_clot = open * reg;
+    double clot = a_clot * clot_full;
     double exudate = bedtex * 0.04 * ramp(nz->thick, 0.45, 0.8) * (1 - exp(-day / 1.0));
-    ss_layer_table_eval(&r->clot, clot, R, T);
+    ss_layer_table_eval(&r->clot, clot_full, R, T);
     ss_layer_over(R, T, skin_rgb, mid);
+    for (int c = 0; c < 3; c++) mid[c] = lerp(skin_rgb[c], mid[c], a_clot);
     ss_layer_table_eval(&r->serous, exudate, R, T);
     ss_layer_over(R, T, mid, mid);
     /* the crust: the fresh one as whole blood of the same haemoglobin per
@@ -385,9 +481,13 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
     }
     ss_layer_over(R, T, mid, o->rgb);
     /* the edge lifts where new epithelium has slid under it (Winter 1962):
-     * raised, drier and paler, before it comes off */
+     * raised, drier and paler, before it comes off; the cracks' shadow and
+     * the lifted edge's pallor are the crust's own, so they apply before its
+     * coverage (applied after, they brightened the skin beside a crust into
+     * a white halo) */
     double lift = v[SS_WR_CRUST_LIFT_MM] > 0 ? cover * scab_cover * exp(-s->crust_in / 0.8) : 0;
-    for (int c = 0; c < 3; c++) o->rgb[c] *= (1 - 0.65 * crack) * (1 + 0.5 * lift);
+    for (int c = 0; c < 3; c++)
+        o->rgb[c] = lerp(mid[c], o->rgb[c] * (1 - 0.65 * crack) * (1 + 0.5 * lift), edge_c);
     /* the extra colour (hair) over everything, gone where the tissue was destroyed */
     double ea = k[SS_BIO_EXTRA_A] * (1 - reg);
     for (int c = 0; c < 3; c++)
@@ -414,7 +514,7 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
      * the keloid's raise */
     double fill = fmax(scab_cover, 0.0);
     o->height_mm = k[SS_BIO_HEIGHT_MM] - v[SS_WR_DEPTH_SCALE] * s->depth * (1 - fill) + clot +
-                   bedtex * 0.02 * (dots - 0.5) + thick * (1 - 0.7 * crack) +
+                   bedtex * 0.02 * (dots - 0.5) + thick * edge_c * (1 - 0.7 * crack) +
                    v[SS_WR_CRUST_LIFT_MM] * lift + keloid;
 }
 
@@ -458,6 +558,15 @@ ss_status ss_wound_render(ss_wound_renderer *r, const ss_wound_tissue *t,
         return err->code ? err->code : SS_ERR_NOMEM;
     }
     const double side_x = t->nx * t->dx_mm, side_y = t->ny * t->dx_mm;
+    /* the jitter's noise (0.6 mm) needs a few texels per period; where the
+     * texels are coarser (a mesh's UV layout at 1024: 0.33 mm) it would
+     * jump from texel to texel (a jagged rim with isolated texels), so it
+     * fades out: full from WARP_FULL_PX texels per period, none at 2 */
+    const double warp_px = WARP_PERIOD_MM * n / r->o.side_mm;
+    const double warp_amp = WARP_COLUMNS * clamp01((warp_px - 2.0) / (WARP_FULL_PX - 2.0));
+    /* on a mesh: the box's half width in columns, and its reach in whole columns */
+    const double box_h = 0.5 * EDGE_BOX_MM / t->dx_mm;
+    const int box_r = (int)ceil(box_h);
 #pragma omp parallel for schedule(dynamic, 8)
     for (int y = 0; y < n; y++) {
         for (int x = 0; x < n; x++) {
@@ -477,16 +586,25 @@ ss_status ss_wound_render(ss_wound_renderer *r, const ss_wound_tissue *t,
                 mx = cm[0], my = cm[1];
             }
             /* +-WARP_COLUMNS of a column, so a margin follows no voxel staircase */
-            mx += WARP_COLUMNS * (2.0 * r->warp[0]->data[i] - 1);
-            my += WARP_COLUMNS * (2.0 * r->warp[1]->data[i] - 1);
+            mx += warp_amp * (2.0 * r->warp[0]->data[i] - 1);
+            my += warp_amp * (2.0 * r->warp[1]->data[i] - 1);
             if (off) mx = my = 0;
             double cx = mx < 0 ? 0 : mx > t->nx - 1 ? t->nx - 1 : mx;
             double cy = my < 0 ? 0 : my > t->ny - 1 ? t->ny - 1 : my;
             int x0 = (int)cx, y0 = (int)cy;
             int x1 = x0 + 1 < t->nx ? x0 + 1 : x0, y1 = y0 + 1 < t->ny ? y0 + 1 : y0;
-            int base =
-                off || (healthy[(size_t)y0 * t->nx + x0] && healthy[(size_t)y0 * t->nx + x1] &&
-                        healthy[(size_t)y1 * t->nx + x0] && healthy[(size_t)y1 * t->nx + x1]);
+            int base = off;
+            if (!base && r->columns) { /* the B-spline's 4 x 4 columns, over the box */
+                base = 1;
+                for (int jj = y0 - 1 - box_r; jj <= y0 + 2 + box_r && base; jj++)
+                    for (int ii = x0 - 1 - box_r; ii <= x0 + 2 + box_r && base; ii++) {
+                        int a = ii < 0 ? 0 : ii > t->nx - 1 ? t->nx - 1 : ii;
+                        int b = jj < 0 ? 0 : jj > t->ny - 1 ? t->ny - 1 : jj;
+                        base = healthy[(size_t)b * t->nx + a];
+                    }
+            } else if (!base)
+                base = healthy[(size_t)y0 * t->nx + x0] && healthy[(size_t)y0 * t->nx + x1] &&
+                       healthy[(size_t)y1 * t->nx + x0] && healthy[(size_t)y1 * t->nx + x1];
             if (base) {
                 for (int c = 0; c < 3; c++)
                     out->base_color->data[i * 3 + c] = r->base.base_color->data[i * 3 + c];
@@ -495,11 +613,33 @@ ss_status ss_wound_render(ss_wound_renderer *r, const ss_wound_tissue *t,
                 continue;
             }
             texel_tissue s;
-            sample_tissue(t, crust_in->data, mx, my, &s);
             texel_out o;
             crust_noise nz = {r->crust->data[i], r->mottle->data[i], r->crack->data[i],
                               r->cap->data[i]};
-            render_texel(r, r->skin->data + i * SS_BIO_NCHANNELS, &nz, &s, t->day, &o);
+            if (r->columns) { /* the mean over a box of EDGE_BOX_MM (module comment) */
+                o = (texel_out){{0, 0, 0}, 0, 0};
+                for (int q = 0; q < BOX_N * BOX_N; q++) {
+                    double ox = box_h * ((2 * (q % BOX_N) + 1.0) / BOX_N - 1),
+                           oy = box_h * ((2 * (q / BOX_N) + 1.0) / BOX_N - 1);
+                    double sx = cx + ox, sy = cy + oy;
+                    sx = sx < 0 ? 0 : sx > t->nx - 1 ? t->nx - 1 : sx;
+                    sy = sy < 0 ? 0 : sy > t->ny - 1 ? t->ny - 1 : sy;
+                    texel_out os;
+                    sample_tissue_smooth(t, crust_in->data, sx, sy, &s);
+                    if (tissue_intact(&s)) { /* the base skin itself: no seam at the rim */
+                        for (int c = 0; c < 3; c++) os.rgb[c] = r->base.base_color->data[i * 3 + c];
+                        os.roughness = r->base.roughness->data[i];
+                        os.height_mm = r->base.height->data[i];
+                    } else
+                        render_texel(r, r->skin->data + i * SS_BIO_NCHANNELS, &nz, &s, t->day, &os);
+                    for (int c = 0; c < 3; c++) o.rgb[c] += os.rgb[c] / (BOX_N * BOX_N);
+                    o.roughness += os.roughness / (BOX_N * BOX_N);
+                    o.height_mm += os.height_mm / (BOX_N * BOX_N);
+                }
+            } else {
+                sample_tissue(t, crust_in->data, mx, my, &s);
+                render_texel(r, r->skin->data + i * SS_BIO_NCHANNELS, &nz, &s, t->day, &o);
+            }
             for (int c = 0; c < 3; c++) out->base_color->data[i * 3 + c] = (float)o.rgb[c];
             out->roughness->data[i] = (float)o.roughness;
             out->height->data[i] = (float)(o.height_mm + dz);

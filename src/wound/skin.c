@@ -14,6 +14,9 @@
 #include "skinsim/texture.h"
 #include "wound_internal.h"
 
+/* The finest noise period, in texels (Nyquist: 2). */
+#define NOISE_MIN_PX 2.0
+
 ss_status ss_wound__noise(int size, double side_mm, double period_mm, int octaves, uint64_t seed,
                           uint64_t stream, ss_image *out, ss_error *err) {
     ss_noise_params p;
@@ -22,7 +25,13 @@ ss_status ss_wound__noise(int size, double side_mm, double period_mm, int octave
     /* base cell of 2^octaves cells, the coarsest period about period_mm */
     double px_per_mm = size / side_mm;
     double cell = period_mm * px_per_mm / (double)(1 << octaves);
-    p.cell_px = (float)(cell < 1 ? 1 : cell);
+    /* band limit: the finest octave's period at least NOISE_MIN_PX texels.
+     * Finer octaves would alias into texel-sized speckle (on a mesh's UV
+     * layout a texel is 0.3-0.7 mm: the jitter of the tissue sampling then
+     * left isolated texels along a wound's rim); they are dropped, the
+     * coarser ones keep their period in mm. */
+    while (cell < NOISE_MIN_PX && p.octaves > 0) p.octaves--, cell *= 2;
+    p.cell_px = (float)(cell < NOISE_MIN_PX ? NOISE_MIN_PX : cell);
     return ss_value_noise(&p, seed, stream, out, err);
 }
 

@@ -9,7 +9,7 @@
  * below the column's surface), and texels in no UV triangle, are intact skin.
  *
  * Design: a per-texel map from texel to tissue-map coordinates, made once
- * per run by rasterising the UV triangles (one thread, triangles in file
+ * per run by rasterising the UV triangles (ss_uv_triangle_raster: one thread, triangles in file
  * order, so the later triangle wins where UV islands overlap); the renderer
  * then samples the tissue there instead of at its texel's place in a flat
  * block; texels just outside an island take their neighbour's columns (a
@@ -35,6 +35,57 @@ static double tri_area3(const double a[3], const double b[3], const double c[3])
     double x = u[1] * v[2] - u[2] * v[1], y = u[2] * v[0] - u[0] * v[2],
            z = u[0] * v[1] - u[1] * v[0];
     return 0.5 * sqrt(x * x + y * y + z * z);
+}
+
+/* A triangle's corners: positions in mm, UVs in texels. */
+static void tri_corners(const ss_mesh *m, int t, double units_mm, int size, double P[3][3],
+                        double U[3][2]) {
+    for (int k = 0; k < 3; k++) {
+        uint32_t vi = m->indices[3 * t + k];
+        for (int c = 0; c < 3; c++) P[k][c] = m->positions[3 * vi + c] * units_mm;
+        U[k][0] = (double)m->uvs[2 * vi] * size, U[k][1] = (double)m->uvs[2 * vi + 1] * size;
+    }
+}
+
+typedef struct column_ctx {
+    const ss_shell_patch *p;
+    const ss_mesh *m;
+    ss_image *out;
+    unsigned char *hit;
+    int size;
+} column_ctx;
+
+/* One texel of a UV triangle (ss_uv_triangle_raster): the skin point it
+ * shows, in the patch frame, and the tissue column under it. */
+static void column_texel(int x, int y, int tri, double b0, double b1, double b2, void *ctx) {
+    const column_ctx *cc = ctx;
+    const ss_shell_patch *p = cc->p;
+    double P[3][3], U[3][2];
+    tri_corners(cc->m, tri, p->units_mm, cc->size, P, U);
+    double loc[3];
+    for (int a = 0; a < 3; a++) {
+        double acc = 0;
+        for (int c = 0; c < 3; c++)
+            acc += (b0 * P[0][c] + b1 * P[1][c] + b2 * P[2][c] - p->origin_mm[c]) * p->axis[a][c];
+        loc[a] = acc / p->dx_mm;
+    }
+    double ci = loc[0] - 0.5, cj = loc[1] - 0.5;
+    size_t i = (size_t)y * (size_t)cc->size + (size_t)x;
+    float *o = cc->out->data + i * 2;
+    cc->hit[i] = 1;
+    int ii = (int)lround(ci), jj = (int)lround(cj);
+    /* the patch's outer columns are its boundary layer, not skin */
+    if (ci < 1.5 || cj < 1.5 || ci > p->nx - 2.5 || cj > p->ny - 2.5) {
+        o[0] = o[1] = NAN;
+        return;
+    }
+    float sz = p->surf_z[(size_t)jj * (size_t)p->nx + (size_t)ii];
+    if (!isfinite(sz) || fabs(loc[2] * p->dx_mm - sz) > SHEET_MM) {
+        o[0] = o[1] = NAN;
+        return;
+    }
+    o[0] = (float)ci;                 /* tissue maps: x = grid i */
+    o[1] = (float)((p->ny - 1) - cj); /* row 0 = grid y ny-1 */
 }
 
 /* Texels of no UV triangle next to the edge of an island take the columns of
@@ -80,65 +131,17 @@ ss_image *ss_wound_uv_columns(const ss_shell_patch *p, const ss_mesh *m, int siz
         ss_error_set(err, SS_ERR_NOMEM, "out of memory");
         return NULL;
     }
-    double area3 = 0, areauv = 0, u = p->units_mm;
+    double area3 = 0, areauv = 0;
     for (int t = 0; t < m->ntriangles; t++) {
         double P[3][3], U[3][2];
-        for (int k = 0; k < 3; k++) {
-            uint32_t vi = m->indices[3 * t + k];
-            for (int c = 0; c < 3; c++) P[k][c] = m->positions[3 * vi + c] * u;
-            U[k][0] = m->uvs[2 * vi] * size, U[k][1] = m->uvs[2 * vi + 1] * size;
-        }
+        tri_corners(m, t, p->units_mm, size, P, U);
         double det =
             (U[1][0] - U[0][0]) * (U[2][1] - U[0][1]) - (U[2][0] - U[0][0]) * (U[1][1] - U[0][1]);
         area3 += tri_area3(P[0], P[1], P[2]);
         areauv += fabs(det) * 0.5 / ((double)size * size);
-        if (fabs(det) < 1e-12) continue;
-        int x0 = (int)floor(fmin(U[0][0], fmin(U[1][0], U[2][0]))),
-            x1 = (int)ceil(fmax(U[0][0], fmax(U[1][0], U[2][0]))),
-            y0 = (int)floor(fmin(U[0][1], fmin(U[1][1], U[2][1]))),
-            y1 = (int)ceil(fmax(U[0][1], fmax(U[1][1], U[2][1])));
-        if (x0 < 0) x0 = 0;
-        if (y0 < 0) y0 = 0;
-        if (x1 > size - 1) x1 = size - 1;
-        if (y1 > size - 1) y1 = size - 1;
-        for (int y = y0; y <= y1; y++)
-            for (int x = x0; x <= x1; x++) {
-                double px = x + 0.5, py = y + 0.5;
-                double b1 = ((px - U[0][0]) * (U[2][1] - U[0][1]) -
-                             (U[2][0] - U[0][0]) * (py - U[0][1])) /
-                            det,
-                       b2 = ((U[1][0] - U[0][0]) * (py - U[0][1]) -
-                             (px - U[0][0]) * (U[1][1] - U[0][1])) /
-                            det,
-                       b0 = 1 - b1 - b2;
-                if (b0 < -1e-9 || b1 < -1e-9 || b2 < -1e-9) continue;
-                /* the skin point in the patch frame */
-                double loc[3];
-                for (int a = 0; a < 3; a++) {
-                    double acc = 0;
-                    for (int c = 0; c < 3; c++)
-                        acc += (b0 * P[0][c] + b1 * P[1][c] + b2 * P[2][c] - p->origin_mm[c]) *
-                               p->axis[a][c];
-                    loc[a] = acc / p->dx_mm;
-                }
-                double ci = loc[0] - 0.5, cj = loc[1] - 0.5;
-                float *o = out->data + ((size_t)y * (size_t)size + (size_t)x) * 2;
-                hit[(size_t)y * (size_t)size + (size_t)x] = 1;
-                int ii = (int)lround(ci), jj = (int)lround(cj);
-                /* the patch's outer columns are its boundary layer, not skin */
-                if (ci < 1.5 || cj < 1.5 || ci > p->nx - 2.5 || cj > p->ny - 2.5) {
-                    o[0] = o[1] = NAN;
-                    continue;
-                }
-                float sz = p->surf_z[(size_t)jj * (size_t)p->nx + (size_t)ii];
-                if (!isfinite(sz) || fabs(loc[2] * p->dx_mm - sz) > SHEET_MM) {
-                    o[0] = o[1] = NAN;
-                    continue;
-                }
-                o[0] = (float)ci;                 /* tissue maps: x = grid i */
-                o[1] = (float)((p->ny - 1) - cj); /* row 0 = grid y ny-1 */
-            }
     }
+    column_ctx cc = {p, m, out, hit, size};
+    ss_uv_triangle_raster(m, size, size, column_texel, &cc);
     pad_islands(out, hit, size);
     free(hit);
     *mm_per_uv = areauv > 0 ? sqrt(area3 / areauv) : 100.0;
