@@ -753,7 +753,16 @@ static ss_status app_load_textures(app *a, const char *dir, view_layers *l, ss_e
          * pass 512 MB (two RGBA8 maps a layer) */
         int size = ts;
         while (size > 256 && (double)l->nlayers * size * size * 8 > 512e6) size /= 2;
-        st = view_layers_place_block(l, &a->mesh, a->paint.island, size, a->o.seed, err);
+        /* centred where the start view looks: the back of the shipped hand */
+        view_camera c;
+        view_camera_frame(&c, &a->mesh);
+        c.width = a->o.width, c.height = a->o.height;
+        float o[3], d[3], r[3], u[3];
+        ss_ray_hit h;
+        view_camera_ray(&c, 0.5 * c.width, 0.5 * c.height, o, d, r, u);
+        int hit = ss_bvh_raycast(a->paint.bvh, o, d, 0, INFINITY, &h);
+        st = view_layers_place_block(l, &a->mesh, a->paint.island, hit ? h.uv : NULL, size,
+                                     a->o.seed, err);
         if (st) view_layers_free(l);
     }
     if (!st && l->skin) {

@@ -73,13 +73,14 @@ ss_status view_layers_load_dir(const char *dir, int heal_size, int quiet, view_l
                                ss_error *err);
 /* A block (block_mm > 0) mapped onto the mesh at its world size: every
  * layer becomes a size x size texture of the mesh's UV layout with the
- * procedural healthy skin (seed) and the block pasted, centred on the
- * surface point of UV (0.5, 0.5) (the back of the shipped hand) and scaled
+ * procedural healthy skin (seed) and the block pasted, centred on
+ * centre_uv (NULL: UV (0.5, 0.5); the viewer passes the surface point in
+ * the middle of the start view, the back of the shipped hand) and scaled
  * by the mesh's mm per UV unit in that point's UV island (mesh units are
  * metres), inside that island only, its outer 8 % blended into the skin.
  * island: per triangle (ss_paint's). Does nothing when block_mm == 0. */
-ss_status view_layers_place_block(view_layers *l, const ss_mesh *m, const int *island, int size,
-                                  uint64_t seed, ss_error *err);
+ss_status view_layers_place_block(view_layers *l, const ss_mesh *m, const int *island,
+                                  const float centre_uv[2], int size, uint64_t seed, ss_error *err);
 
 /* The Generate job: the abrasion timeline from strokes, at size, with
  * maturation re-rendered at extra positions so the slider can blend it.
