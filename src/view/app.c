@@ -34,7 +34,6 @@
 #include "cli.h"
 
 static const char *CMD = "view";
-static double view_t0;  /* when main started: for the first-frame time */
 #define VIEW_HISTORY 64 /* undo steps kept */
 #define RING_POINTS 48
 
@@ -45,6 +44,7 @@ typedef struct opts {
         *save_mask;
     int width, height, texture_size, bench_frames, generate, egl, json, quiet, hide_strokes, mirror;
     double day, brush_mm, displace;
+    double t_start; /* when main started (ss_now) */
     uint64_t seed;
 } opts;
 
@@ -1315,7 +1315,8 @@ static gboolean on_render(GtkGLArea *area, GdkGLContext *ctx, gpointer data) {
     if (!g->drawn) {
         g->drawn = 1;
         if (!a->o.quiet)
-            fprintf(stderr, "skinsim view: first frame %.2f s after start\n", ss_now() - view_t0);
+            fprintf(stderr, "skinsim view: first frame %.2f s after start\n",
+                    ss_now() - a->o.t_start);
     }
     return TRUE;
 }
@@ -1755,12 +1756,13 @@ int main(int argc, char **argv) {
      * it runs this program, so that costs nothing there). */
     if (!getenv("OMP_WAIT_POLICY") && setenv("OMP_WAIT_POLICY", "passive", 1) == 0)
         execv("/proc/self/exe", argv); /* on failure: carry on as we are */
-    view_t0 = ss_now();
+    double t_start = ss_now();         /* for the first-frame time */
     /* Called as "skinsim view ..." through the skinsim command, or directly. */
     if (argc > 1 && !strcmp(argv[1], "view")) argc--, argv++;
     opts o;
     ss_error err = {0};
     int r = parse(argc, argv, &o, &err);
+    o.t_start = t_start;
     if (r < 0) return 0;
     if (r) return cli_fail(CMD, &err);
     int batch = o.screenshot || o.bench_frames > 0 || o.save_strokes || o.save_mask;
