@@ -44,8 +44,8 @@ for r in $(seq "$RUNS"); do
   t1=$(now)
   gen=$(sed -n 's/.*day 30 (\(.*\))$/\1/p' "$T/gen.err")
   up=$(sed -n 's/.*uploaded in \([0-9]*\) ms.*/\1/p' "$T/gen.err")
-  printf 'run %d (load %s): EGL frame %.2f s; window first frame %s s (open to closed %s s); ' \
-    "$r" "$load" "$egl" "$first" "${win:--}"
+  printf 'run %d (load %s): EGL frame %.2f s; window first frame %s s (open to closed %.2f s); ' \
+    "$r" "$load" "$egl" "$first" "${win:-0}"
   printf 'Generate %d^2 %s, upload %s ms, whole command %.2f s\n' "$TS" "$gen" "$up" \
     "$(echo "$t1 - $t0" | bc)"
 done
