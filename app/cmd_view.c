@@ -23,6 +23,9 @@ int cmd_view(int argc, char **argv) {
     if (!args) return 1;
     args[0] = path;
     for (int i = 1; i < argc; i++) args[i] = argv[i];
+    /* skinsim-view would otherwise run itself again to set this (see its
+     * main): OpenMP threads that sleep at barriers instead of spinning */
+    if (!getenv("OMP_WAIT_POLICY")) setenv("OMP_WAIT_POLICY", "passive", 1);
     execv(path, args);
     int e = errno;
     free(args);

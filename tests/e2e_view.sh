@@ -9,7 +9,10 @@
 # abrasion` reads; paint + Generate + slider puts a wound where the paint
 # was; --bench-frames prints its figures; bad input exits 2 naming the input
 # and writes nothing; the window and EGL paths render the same frame, and
-# Generate equals `skinsim abrasion`. Skips (77) only when skinsim-view was not built or no
+# Generate equals `skinsim abrasion` (also on a loaded skin, as --upper); a
+# heal run folder renders as `skinsim wound --heal`; a wound block sits at
+# its world size; the brush ring, eraser, undo/redo, mirror symmetry and
+# the mask export do what they say. Skips (77) only when skinsim-view was not built or no
 # display and no EGL can be made. Checks use tests/view_check.py (python3).
 set -u
 CLI=$1
@@ -185,6 +188,89 @@ if [ $GTK -eq 1 ]; then
   check 'grep -q "Generate: the mesh has no texture coordinates" "$T/f1.err"' \
     "Generate on a mesh without UVs is not refused: $(cat "$T/f1.err")"
 fi
+
+# 7. Generate on loaded skin textures: a `skinsim skin` set loaded, then
+#    Generate, gives the same frame as `skinsim abrasion --upper` with that
+#    skin's colour (not the default skin's).
+"$CLI" skin --size 256 --base melanin=0.25 --out "$T/skin" --quiet
+"$CLI" abrasion --upper "$T/skin/base_color.png" --size 256 --times 1,20,30 --out "$T/abskin" --quiet
+V $G --load "$T/skin" --generate --time 5 --screenshot "$T/genskin5.png" --json --quiet >"$T/genskin.json"
+check '[ $? -eq 0 ] && grep -q "on the loaded skin" "$T/genskin.json"' "Generate does not use the loaded skin"
+V $G --load "$T/abskin" --time 5 --screenshot "$T/abskin5.png" --quiet
+check 'cmp -s "$T/genskin5.png" "$T/abskin5.png"' "Generate on the loaded skin differs from skinsim abrasion --upper"
+check '! cmp -s "$T/genskin5.png" "$T/gen5k.png"' "Generate on the loaded skin looks like the default skin"
+
+# 8. A heal run folder (`skinsim heal --out`) loads through `skinsim wound
+#    --heal`: every snapshot a stop, the same frame as loading the folder
+#    `skinsim wound --heal` writes.
+"$CLI" heal --grid 20x20x8 --scenario scab --days 4 --adapt-tol 0 --quiet --threads 1 --out "$T/heal"
+V $G --load "$T/heal" --time 2 --screenshot "$T/heal2.png" --json --quiet >"$T/heal.json"
+check '[ $? -eq 0 ] && python3 -c "import json,sys; d=json.load(open(sys.argv[1])); assert d[\"layers\"]==5 and d[\"end_day\"]==4 and \"heal run\" in d[\"textures\"]" "$T/heal.json"' "heal run folder: $(head -c 300 "$T/heal.json")"
+"$CLI" wound --heal "$T/heal" --days 0,1,2,3,4 --size 256 --no-compare --quiet --out "$T/woundheal"
+V $G --load "$T/woundheal" --time 2 --screenshot "$T/woundheal2.png" --quiet
+check 'cmp -s "$T/heal2.png" "$T/woundheal2.png"' "a heal run renders unlike skinsim wound --heal of it"
+check '$CHECK changed "$T/heal2.png" "$T/day0.png" 240 135 2' "no wound in the middle of the heal run's frame"
+
+# 9. The `skinsim wound` block of that run (1 cm of skin) sits on the mesh
+#    at its world size, centred in the start view: it is there, and nothing
+#    changes farther than 20 px from the centre (before, the block was
+#    stretched over the whole UV layout of the hand).
+V $G --load "$T/woundheal" --time 2 --json --quiet --screenshot "$T/blk.png" >"$T/blk.json"
+check '[ $? -eq 0 ] && python3 -c "import json,sys; b=json.load(open(sys.argv[1]))[\"block\"]; assert b[\"side_mm\"]==10 and 200<b[\"mm_per_uv\"]<500 and abs(b[\"side_uv\"]*b[\"mm_per_uv\"]-10)<1e-6 and abs(b[\"x\"]-240)<1 and abs(b[\"y\"]-135)<1" "$T/blk.json"' "block placement: $(grep -A8 block "$T/blk.json")"
+check '$CHECK confined "$T/woundheal2.png" "$T/day0.png" 240 135 20' "the wound block is not confined to 1 cm around the view's centre"
+
+# 10. Paint tools. The brush ring follows the cursor in paint mode at the
+#     brush's size (twice the brush, twice the ring), red for the eraser.
+printf 'key p\nmove 250 100\n' >"$T/ring.txt"
+V $G --script "$T/ring.txt" --screenshot "$T/ring4.png" --quiet
+V $G --script "$T/ring.txt" --brush-mm 8 --screenshot "$T/ring8.png" --quiet
+check '$CHECK ring-ratio "$T/ring4.png" "$T/ring8.png" "$T/day0.png" 250 100' "brush ring"
+printf 'key p\nkey e\nmove 250 100\n' >"$T/ringe.txt"
+V $G --script "$T/ringe.txt" --screenshot "$T/ringe.png" --quiet
+check '$CHECK eraser-ring "$T/ringe.png" "$T/day0.png" 250 100' "eraser ring"
+# Eraser, undo, redo: paint a band, erase its middle, undo, redo.
+printf 'key p\ndrag 220 100 280 100 20\n' >"$T/t1.txt"
+{ cat "$T/t1.txt"; printf 'key e\ndrag 240 100 260 100 10\n'; } >"$T/t2.txt"
+{ cat "$T/t2.txt"; printf 'key z\n'; } >"$T/t3.txt"
+{ cat "$T/t3.txt"; printf 'key y\n'; } >"$T/t4.txt"
+{ cat "$T/t4.txt"; printf 'key z\nkey z\nkey y\nkey y\n'; } >"$T/t5.txt"
+pts() { V $G --script "$1" --save-strokes "$2" --json --quiet | python3 -c "import json,sys; print(json.load(sys.stdin)['stroke_points'])"; }
+n1=$(pts "$T/t1.txt" "$T/t1.csv"); n2=$(pts "$T/t2.txt" "$T/t2.csv"); n3=$(pts "$T/t3.txt" "$T/t3.csv")
+n4=$(pts "$T/t4.txt" "$T/t4.csv"); n5=$(pts "$T/t5.txt" "$T/t5.csv")
+check '[ "$n1" -gt 50 ] && [ "$n2" -gt 0 ] && [ "$n2" -lt "$n1" ]' "eraser: $n1 points painted, $n2 after erasing"
+check 'cmp -s "$T/t1.csv" "$T/t3.csv" && cmp -s "$T/t2.csv" "$T/t4.csv" && cmp -s "$T/t4.csv" "$T/t5.csv"' "undo/redo of an erase: $n1 $n2 $n3 $n4 $n5"
+# Mirror symmetry on a flat square (u = x): a stroke painted left of the
+# middle is also painted at u -> 1 - u; without --mirror only on one side.
+python3 -c '
+import sys
+n, L = 8, 0.1
+with open(sys.argv[1], "w") as f:
+    for j in range(n + 1):
+        for i in range(n + 1):
+            f.write("v %g %g 0\nvt %g %g\n" % (L * i / n - L / 2, L * j / n - L / 2, i / n, j / n))
+    f.write("vn 0 0 1\n")
+    for j in range(n):
+        for i in range(n):
+            a = j * (n + 1) + i + 1
+            b, c, d = a + 1, a + n + 2, a + n + 1
+            f.write("f %d/%d/1 %d/%d/1 %d/%d/1\nf %d/%d/1 %d/%d/1 %d/%d/1\n" % (a, a, b, b, c, c, a, a, c, c, d, d))
+' "$T/plane.obj"
+printf 'key p\ndrag 150 100 190 160 20\n' >"$T/mir.txt"
+V $G --mesh "$T/plane.obj" --mirror --script "$T/mir.txt" --save-strokes "$T/mir.csv" --save-mask "$T/mask.png" --quiet
+check '[ $? -eq 0 ] && $CHECK mirrored "$T/mir.csv"' "mirror symmetry"
+V $G --mesh "$T/plane.obj" --script "$T/mir.txt" --save-strokes "$T/nomir.csv" --quiet
+check '! $CHECK mirrored "$T/nomir.csv" >/dev/null 2>&1' "strokes mirrored without --mirror"
+printf 'key p\nkey m\ndrag 150 100 190 160 20\n' >"$T/mirkey.txt"
+V $G --mesh "$T/plane.obj" --script "$T/mirkey.txt" --save-strokes "$T/mirkey.csv" --quiet
+check 'cmp -s "$T/mir.csv" "$T/mirkey.csv"' "the M key does not mirror as --mirror does"
+# The painted mask: white inside the strokes' hulls, what skinsim abrasion --mask reads.
+check '$CHECK mask "$T/mask.png" "$T/mir.csv"' "painted mask"
+"$CLI" abrasion --mask "$T/mask.png" --size 64 --times 1 --out "$T/ab_mask" --quiet
+check '[ $? -eq 0 ]' "skinsim abrasion cannot read the exported mask"
+rm -f "$T/empty_mask.png"
+V $G --save-mask "$T/empty_mask.png" --quiet 2>"$T/em.err"
+rc=$?
+check '[ $rc -eq 2 ] && [ ! -e "$T/empty_mask.png" ] && grep -q "no stroke" "$T/em.err"' "--save-mask with nothing painted: rc $rc, $(cat "$T/em.err")"
 
 # Keep the pictures for a person to look at when asked.
 [ -n "${SKINSIM_VIEW_KEEP:-}" ] && cp "$T"/*.png "$SKINSIM_VIEW_KEEP"/

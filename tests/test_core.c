@@ -1,11 +1,14 @@
 /* Core: RNG determinism and statistics, PNG round trips (8/16 bit, sRGB and
- * linear), bad-file errors, atomic writes, sRGB transfer, number parsing. */
+ * linear), bad-file errors, atomic writes, sRGB transfer, number parsing,
+ * progress lines for a parent process. */
+#define _POSIX_C_SOURCE 200809L /* setenv, pipe */
 #include "testutil.h"
 
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 static void test_rng_deterministic_and_uniform(void **state) {
     (void)state;
@@ -163,6 +166,39 @@ static void test_cli_basics(void **state) {
     assert_int_equal(tu_run_cli("no-such-command", NULL, NULL), 2);
 }
 
+/* SKINSIM_PROGRESS_FD: the progress reaches a parent as lines on its pipe,
+ * quiet or not, begin (0) to end (1); unset, nothing is written. */
+static void test_progress_lines(void **state) {
+    (void)state;
+    int fd[2];
+    assert_int_equal(pipe(fd), 0);
+    char num[16];
+    snprintf(num, sizeof num, "%d", fd[1]);
+    setenv("SKINSIM_PROGRESS_FD", num, 1);
+    ss_progress p;
+    ss_progress_begin(&p, "job", 4, 1);
+    ss_progress_update(&p, 2); /* the first update is drawn */
+    ss_progress_end(&p);
+    unsetenv("SKINSIM_PROGRESS_FD");
+    ss_progress_begin(&p, "off", 1, 1);
+    ss_progress_end(&p);
+    close(fd[1]);
+    char buf[256] = "";
+    ssize_t n = read(fd[0], buf, sizeof buf - 1);
+    close(fd[0]);
+    assert_true(n > 0);
+    buf[n] = '\0';
+    assert_string_equal(buf, "skinsim-progress job 0.0000\nskinsim-progress job "
+                             "0.5000\nskinsim-progress job 1.0000\n");
+    setenv("SKINSIM_PROGRESS_FD", "2", 1); /* never stderr or below */
+    ss_progress_begin(&p, "x", 1, 1);
+    assert_int_equal(p.enabled, 0);
+    setenv("SKINSIM_PROGRESS_FD", "7x", 1);
+    ss_progress_begin(&p, "x", 1, 1);
+    assert_int_equal(p.enabled, 0);
+    unsetenv("SKINSIM_PROGRESS_FD");
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_rng_deterministic_and_uniform),
@@ -173,6 +209,7 @@ int main(void) {
         cmocka_unit_test(test_image_create_limits),
         cmocka_unit_test(test_mkdir_and_writable),
         cmocka_unit_test(test_cli_basics),
+        cmocka_unit_test(test_progress_lines),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

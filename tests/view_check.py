@@ -19,6 +19,20 @@
   view_check.py help WINDOW.png
       a window shot shows the F1 help: a dark box with light text over the
       middle of the 3D view.
+  view_check.py ring RING.png PLAIN.png X Y
+      the brush ring: the pixels that differ are white (red with --eraser)
+      and lie on a circle around the cursor (X, Y) (their distances to it
+      spread by less than a third of the mean), the cursor itself unchanged;
+      prints the radius.
+  view_check.py confined A.png B.png X Y R
+      the frames differ (by more than 12 in the sum of R, G, B, on the mesh
+      in both), 95 % of those pixels within R pixels of (X, Y).
+  view_check.py mirrored STROKES.csv
+      the stroke points are symmetric in u: each (u, v) has a (1 - u, v)
+      within 1e-3, and there are points on both sides of u = 0.5.
+  view_check.py mask MASK.png STROKES.csv
+      a UV mask of the strokes: grey 8-bit, white in 0.1 %..50 % of it and
+      white at the centroid of each stroke's points, black at the corners.
 """
 import json
 import struct
@@ -36,8 +50,8 @@ def read_png(path):
         pos += 12 + n
         if kind == b"IHDR":
             w, h, depth, ctype = struct.unpack(">IIBB", body[:10])
-            assert depth == 8 and ctype in (2, 6), path + ": expected 8-bit RGB(A)"
-            ch = 3 if ctype == 2 else 4
+            assert depth == 8 and ctype in (0, 2, 6), path + ": expected 8-bit grey or RGB(A)"
+            ch = {0: 1, 2: 3, 6: 4}[ctype]
         elif kind == b"IDAT":
             idat += body
     raw = zlib.decompress(idat)
@@ -276,6 +290,86 @@ def check_help(path):
     print("help: %d dark, %d light of %d pixels in the middle" % (dark, light, len(box)))
 
 
+def changed_pixels(a_path, b_path, tol=0):
+    w, h, a = pixels(a_path)
+    w2, h2, b = pixels(b_path)
+    assert (w, h) == (w2, h2), "frames differ in size"
+    out = []
+    for i, (p, q) in enumerate(zip(a, b)):
+        if abs(p[0] - q[0]) + abs(p[1] - q[1]) + abs(p[2] - q[2]) > tol:
+            out.append((i % w, i // w, p, q))
+    return out
+
+
+def check_ring(ring, plain, x, y, eraser=False):
+    ch = changed_pixels(ring, plain)
+    assert len(ch) >= 12, "only %d pixels changed: no brush ring" % len(ch)
+    for px, py, p, _ in ch:
+        if eraser:
+            assert p[0] > 200 and p[1] < 120 and p[2] < 120, "ring pixel %s at %d,%d not red" % (p, px, py)
+        else:
+            assert min(p) > 200, "ring pixel %s at %d,%d not white" % (p, px, py)
+    d = [((px - x) ** 2 + (py - y) ** 2) ** 0.5 for px, py, _, _ in ch]
+    mean = sum(d) / len(d)
+    assert mean >= 2, "ring of radius %.1f px: a dot, not a ring" % mean
+    assert max(d) - min(d) < mean / 3 + 1.5, "changed pixels %.1f..%.1f px from the cursor: not a ring" % (min(d), max(d))
+    print("ring: %d pixels, radius %.2f px" % (len(ch), mean))
+    return mean
+
+
+def check_confined(a_path, b_path, x, y, r):
+    # a few 8-bit steps of shading elsewhere are not the wound (the height
+    # range of the loaded maps differs from the plain skin's), nor is the
+    # silhouette (displaced by the same difference); a pixel seen at a
+    # grazing angle samples a coarse mipmap level, which averages the block
+    # in: 95 % of the changed pixels must be within R
+    ch = changed_pixels(a_path, b_path, 12)
+    bg = pixels(b_path)[2][0]
+    ch = [c for c in ch if not is_background(c[2], bg) and not is_background(c[3], bg)]
+    assert len(ch) >= 20, "only %d pixels changed" % len(ch)
+    far = [c for c in ch if (c[0] - x) ** 2 + (c[1] - y) ** 2 > r * r]
+    assert len(far) <= 0.05 * len(ch), "%d of %d changed pixels lie more than %d px from (%d,%d), e.g. %s" % (
+        len(far), len(ch), r, x, y, far[0][:2])
+    print("confined: %d of %d changed pixels within %d px of (%d,%d)" % (len(ch) - len(far), len(ch), r, x, y))
+
+
+def read_csv_points(path):
+    rows = [l.strip().split(",") for l in open(path) if l.strip()]
+    head = rows[0]
+    iu, iv = head.index("u"), head.index("v")
+    ist = head.index("stroke") if "stroke" in head else None
+    return [(float(r[iu]), float(r[iv]), int(r[ist]) if ist is not None else 0) for r in rows[1:]]
+
+
+def check_mirrored(csv):
+    pts = read_csv_points(csv)
+    assert pts, csv + ": no points"
+    left = sum(1 for u, v, _ in pts if u < 0.5)
+    right = sum(1 for u, v, _ in pts if u > 0.5)
+    assert left and right, "points only on one side of u = 0.5 (%d left, %d right)" % (left, right)
+    for u, v, _ in pts:
+        assert any(abs(1 - u - u2) < 1e-3 and abs(v - v2) < 1e-3 for u2, v2, _ in pts), \
+            "point (%.4f, %.4f) has no mirror image" % (u, v)
+    print("mirrored: %d points, %d left and %d right of u = 0.5" % (len(pts), left, right))
+
+
+def check_mask(mask, csv):
+    w, h, ch, buf = read_png(mask)
+    assert ch == 1, mask + ": not a grey mask"
+    white = sum(1 for b in buf if b > 127)
+    assert 0.001 * w * h < white < 0.5 * w * h, "%d of %d mask pixels white" % (white, w * h)
+    for x, y in ((0, 0), (w - 1, 0), (0, h - 1), (w - 1, h - 1)):
+        assert buf[y * w + x] < 128, "mask corner %d,%d is white" % (x, y)
+    pts = read_csv_points(csv)
+    for s in sorted(set(p[2] for p in pts)):
+        sp = [p for p in pts if p[2] == s]
+        u = sum(p[0] for p in sp) / len(sp)
+        v = sum(p[1] for p in sp) / len(sp)
+        x, y = min(w - 1, int(u * w)), min(h - 1, int(v * h))
+        assert buf[y * w + x] > 127, "stroke %d: centroid (%.3f, %.3f) is black in the mask" % (s, u, v)
+    print("mask: %d of %d pixels white, every stroke's centroid inside" % (white, w * h))
+
+
 if __name__ == "__main__":
     cmd = sys.argv[1]
     if cmd == "skin":
@@ -290,5 +384,18 @@ if __name__ == "__main__":
         check_changed(sys.argv[2], sys.argv[3], int(sys.argv[4]), int(sys.argv[5]), int(sys.argv[6]))
     elif cmd == "help":
         check_help(sys.argv[2])
+    elif cmd in ("ring", "eraser-ring"):
+        check_ring(sys.argv[2], sys.argv[3], float(sys.argv[4]), float(sys.argv[5]), cmd != "ring")
+    elif cmd == "ring-ratio":  # ring SMALL.png BIG.png PLAIN.png X Y: BIG's radius ~2x SMALL's
+        r1 = check_ring(sys.argv[2], sys.argv[4], float(sys.argv[5]), float(sys.argv[6]))
+        r2 = check_ring(sys.argv[3], sys.argv[4], float(sys.argv[5]), float(sys.argv[6]))
+        assert 1.6 < r2 / r1 < 2.5, "brush x2 gave a ring %.2f times as wide" % (r2 / r1)
+        print("ring-ratio: %.2f" % (r2 / r1))
+    elif cmd == "confined":
+        check_confined(sys.argv[2], sys.argv[3], float(sys.argv[4]), float(sys.argv[5]), float(sys.argv[6]))
+    elif cmd == "mirrored":
+        check_mirrored(sys.argv[2])
+    elif cmd == "mask":
+        check_mask(sys.argv[2], sys.argv[3])
     else:
         sys.exit("unknown check " + cmd)

@@ -350,7 +350,11 @@ int ss_threads_get(void);
 
 /* ---- progress ------------------------------------------------------------ */
 
-/* A progress bar on stderr, drawn only when stderr is a terminal and not quiet. */
+/* A progress bar on stderr, drawn only when stderr is a terminal and not quiet.
+ * With SKINSIM_PROGRESS_FD=N (N >= 3) in the environment each redraw (at most
+ * 10 a second, and at the end) also writes "skinsim-progress LABEL FRACTION\n"
+ * to descriptor N, quiet or not: how a parent process (the Blender add-on)
+ * follows a command. enabled: 0 off, 1 the bar, 2 the lines, 3 both. */
 typedef struct ss_progress {
     const char *label;
     double total, done;

@@ -29,17 +29,22 @@
 #include <string.h>
 #include <strings.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "cli.h"
 
 static const char *CMD = "view";
+#define VIEW_HISTORY 64 /* undo steps kept */
+#define RING_POINTS 48
 
 /* ---- options ------------------------------------------------------------------ */
 
 typedef struct opts {
-    const char *mesh, *load, *strokes, *screenshot, *script, *save_strokes, *window_shot;
-    int width, height, texture_size, bench_frames, generate, egl, json, quiet, hide_strokes;
+    const char *mesh, *load, *strokes, *screenshot, *script, *save_strokes, *window_shot,
+        *save_mask;
+    int width, height, texture_size, bench_frames, generate, egl, json, quiet, hide_strokes, mirror;
     double day, brush_mm, displace;
+    double t_start; /* when main started (ss_now) */
     uint64_t seed;
 } opts;
 
@@ -59,7 +64,9 @@ static void help(void) {
            "  --brush-mm R         brush radius on the surface in mm (default 4)\n"
            "  --displace X         height displacement scale (default 1 = true size)\n"
            "  --seed S             random seed (default 1)\n"
-           "  --hide-strokes       do not draw the painted strokes (H toggles)\n\n"
+           "  --hide-strokes       do not draw the painted strokes (H toggles)\n"
+           "  --mirror             mirror symmetry: every stroke is also painted mirrored\n"
+           "                       in the plane x = the mesh's centre (M toggles)\n\n"
            "Batch (no window needed; exits when done):\n"
            "  --screenshot FILE.png  render one frame to FILE\n"
            "  --size WxH           frame size (default 1280x720)\n"
@@ -67,6 +74,8 @@ static void help(void) {
            "                       release X Y | drag X1 Y1 X2 Y2 STEPS | scroll DY |\n"
            "                       key NAME | slider DAYS | wait (window pixels)\n"
            "  --save-strokes FILE  write the painted strokes (CSV) at the end\n"
+           "  --save-mask FILE.png write the painted wound as a UV mask (white = wound,\n"
+           "                       --texture-size; what skinsim abrasion --mask reads)\n"
            "  --bench-frames N     render N frames across the timeline; print ms/frame\n"
            "                       (median, 95th percentile) and the resolution\n"
            "  --egl                headless OpenGL through EGL (no display needed)\n"
@@ -75,9 +84,10 @@ static void help(void) {
            "  --json               print a JSON summary on stdout\n"
            "  --quiet              no messages on stderr but errors\n\n"
            "Controls: drag rotates, shift-drag or right/middle drag pans, wheel zooms;\n"
-           "P paint mode (drag paints), Z or Ctrl+Z undo, C clear, G generate,\n"
-           "Space play/pause, Left/Right previous/next key, S save strokes, H hide/show\n"
-           "strokes, R reset view.\n\n"
+           "P paint mode (drag paints; a ring shows the brush), E eraser, M mirror,\n"
+           "Z or Ctrl+Z undo, Y, Ctrl+Y or Ctrl+Shift+Z redo, C clear, G generate,\n"
+           "Space play/pause, Left/Right previous/next key, S save strokes, X save the\n"
+           "mask, H hide/show strokes, R reset view, F1 help, Escape or Ctrl+Q quit.\n\n"
            "Example (scrub a `skinsim abrasion --out abrasion-out` result):\n"
            "  skinsim view --load abrasion-out\n");
 }
@@ -90,14 +100,29 @@ static int parse_size(const char *s, int *w, int *h, ss_error *err) {
 }
 
 static int parse(int argc, char **argv, opts *o, ss_error *err) {
-    static const struct option lo[] = {
-        {"mesh", 1, 0, 'm'},        {"load", 1, 0, 'l'},         {"strokes", 1, 0, 's'},
-        {"screenshot", 1, 0, 'o'},  {"script", 1, 0, 'x'},       {"save-strokes", 1, 0, 'w'},
-        {"size", 1, 0, 'z'},        {"texture-size", 1, 0, 'n'}, {"bench-frames", 1, 0, 'b'},
-        {"generate", 0, 0, 'g'},    {"egl", 0, 0, 'e'},          {"json", 0, 0, 'J'},
-        {"quiet", 0, 0, 'q'},       {"time", 1, 0, 't'},         {"brush-mm", 1, 0, 'r'},
-        {"displace", 1, 0, 'd'},    {"seed", 1, 0, 'S'},         {"help", 0, 0, 'h'},
-        {"window-shot", 1, 0, 'W'}, {"hide-strokes", 0, 0, 'H'}, {0, 0, 0, 0}};
+    static const struct option lo[] = {{"mesh", 1, 0, 'm'},
+                                       {"load", 1, 0, 'l'},
+                                       {"strokes", 1, 0, 's'},
+                                       {"screenshot", 1, 0, 'o'},
+                                       {"script", 1, 0, 'x'},
+                                       {"save-strokes", 1, 0, 'w'},
+                                       {"size", 1, 0, 'z'},
+                                       {"texture-size", 1, 0, 'n'},
+                                       {"bench-frames", 1, 0, 'b'},
+                                       {"generate", 0, 0, 'g'},
+                                       {"egl", 0, 0, 'e'},
+                                       {"json", 0, 0, 'J'},
+                                       {"quiet", 0, 0, 'q'},
+                                       {"time", 1, 0, 't'},
+                                       {"brush-mm", 1, 0, 'r'},
+                                       {"displace", 1, 0, 'd'},
+                                       {"seed", 1, 0, 'S'},
+                                       {"help", 0, 0, 'h'},
+                                       {"window-shot", 1, 0, 'W'},
+                                       {"hide-strokes", 0, 0, 'H'},
+                                       {"save-mask", 1, 0, 'M'},
+                                       {"mirror", 0, 0, 'X'},
+                                       {0, 0, 0, 0}};
     memset(o, 0, sizeof *o);
     o->width = 1280, o->height = 720, o->texture_size = 2048;
     o->brush_mm = 4, o->displace = 1, o->seed = 1;
@@ -131,6 +156,12 @@ static int parse(int argc, char **argv, opts *o, ss_error *err) {
             break;
         case 'H':
             o->hide_strokes = 1;
+            break;
+        case 'M':
+            o->save_mask = optarg;
+            break;
+        case 'X':
+            o->mirror = 1;
             break;
         case 'z':
             st = parse_size(optarg, &o->width, &o->height, err);
@@ -326,11 +357,23 @@ typedef struct app {
     int can_paint;
     view_camera cam;
     view_layers layers;
+    ss_image *skin; /* a loaded `skinsim skin` colour: Generate draws on it */
     view_renderer *rend;
     double day;
     int playing, paint_mode, strokes_dirty, layers_dirty, hide_strokes;
     int drag_button, drag_shift, dragging, painting;
     double lx, ly;
+    /* paint tools: eraser, mirror (about the plane x = the mesh's centre),
+     * the cursor (for the brush ring), undo/redo history of the samples */
+    int erase_mode, mirror, hover, changed;
+    double hx, hy;
+    float *gesture; /* the current gesture's rays (origin, dir, right, up): mirrored at release */
+    int ngesture, capgesture;
+    struct paint_snap {
+        ss_paint_sample *s;
+        int n;
+    } undo[VIEW_HISTORY], redo[VIEW_HISTORY];
+    int nundo, nredo;
     /* Generate worker */
     pthread_t worker;
     int generating;
@@ -347,13 +390,13 @@ typedef struct app {
     char status[1024];
     /* GTK (NULL when headless) */
     GtkWidget *window, *area, *scale, *day_label, *progress_bar, *status_label, *paint_btn,
-        *play_btn, *gen_btn, *help_box;
+        *play_btn, *gen_btn, *help_box, *erase_btn, *mirror_btn;
     int updating_scale;
     int quit;    /* Escape or Ctrl+Q: close the window at the next tick */
     int help;    /* the F1 help overlay is shown */
     int focused; /* the 3D view took the keyboard focus once the window was up */
     /* batch outputs: where to write (staging paths of ss_outputs) */
-    const char *shot_path, *csv_path;
+    const char *shot_path, *csv_path, *mask_path;
 } app;
 
 static void app_message(app *a, int is_error, const char *fmt, ...)
@@ -415,13 +458,127 @@ static void app_set_time(app *a, double day) {
     app_redraw(a);
 }
 
-/* A ray through pixel (x, y) paints; returns 1 on a hit. */
+/* ---- paint history: snapshots of the samples (undo/redo any action) ---- */
+
+static void snap_free(struct paint_snap *q) {
+    free(q->s);
+    q->s = NULL;
+    q->n = 0;
+}
+
+static int snap_take(const ss_paint *p, struct paint_snap *q) {
+    q->n = p->n;
+    q->s = malloc(sizeof *q->s * (size_t)(p->n > 0 ? p->n : 1));
+    if (!q->s) return 0;
+    if (p->n) memcpy(q->s, p->s, sizeof *q->s * (size_t)p->n);
+    return 1;
+}
+
+/* Replaces the samples by the snapshot's (the snapshot is consumed). */
+static void snap_restore(ss_paint *p, struct paint_snap *q) {
+    free(p->s);
+    p->s = q->s;
+    p->n = p->cap = q->n;
+    if (p->cap == 0) {
+        free(p->s);
+        p->s = NULL;
+    }
+    q->s = NULL;
+    q->n = 0;
+}
+
+/* Before an action that changes the samples: the current ones can come back. */
+static void app_history_push(app *a) {
+    if (!a->can_paint) return;
+    if (a->nundo == VIEW_HISTORY) { /* the oldest step is forgotten */
+        snap_free(&a->undo[0]);
+        memmove(a->undo, a->undo + 1, sizeof a->undo[0] * (VIEW_HISTORY - 1));
+        a->nundo--;
+    }
+    if (!snap_take(&a->paint, &a->undo[a->nundo])) return;
+    a->nundo++;
+    for (int i = 0; i < a->nredo; i++) snap_free(&a->redo[i]);
+    a->nredo = 0;
+}
+
+/* An action that changed nothing leaves no undo step. */
+static void app_history_drop_last(app *a) {
+    if (a->nundo > 0) snap_free(&a->undo[--a->nundo]);
+}
+
+static int app_undo_redo(app *a, int redo) {
+    struct paint_snap *from = redo ? a->redo : a->undo, *to = redo ? a->undo : a->redo;
+    int *nfrom = redo ? &a->nredo : &a->nundo, *nto = redo ? &a->nundo : &a->nredo;
+    if (*nfrom == 0 || a->painting) return 0;
+    if (*nto == VIEW_HISTORY) {
+        snap_free(&to[0]);
+        memmove(to, to + 1, sizeof to[0] * (VIEW_HISTORY - 1));
+        (*nto)--;
+    }
+    if (!snap_take(&a->paint, &to[*nto])) return 0;
+    (*nto)++;
+    snap_restore(&a->paint, &from[--*nfrom]);
+    a->strokes_dirty = 1;
+    return 1;
+}
+
+/* Removes the samples within the brush radius of the surface point the ray
+ * hits; returns 1 on a hit. */
+static int app_erase_ray(app *a, const float o[3], const float d[3]) {
+    ss_ray_hit h;
+    if (!ss_bvh_raycast(a->paint.bvh, o, d, 0, INFINITY, &h)) return 0;
+    float q[3];
+    for (int k = 0; k < 3; k++) q[k] = o[k] + h.t * d[k];
+    double r2 = a->paint.brush_radius * a->paint.brush_radius;
+    int k = 0;
+    for (int i = 0; i < a->paint.n; i++) {
+        const float *p = a->paint.s[i].pos;
+        double dx = p[0] - q[0], dy = p[1] - q[1], dz = p[2] - q[2];
+        if (!isnan(p[0]) && dx * dx + dy * dy + dz * dz <= r2) continue;
+        a->paint.s[k++] = a->paint.s[i];
+    }
+    if (k != a->paint.n) a->strokes_dirty = a->changed = 1;
+    a->paint.n = k;
+    return 1;
+}
+
+/* The mirror image of a ray in the plane x = centre of the mesh's box. */
+static void mirror_vec(const app *a, const float in[3], float out[3], int is_point) {
+    float cx = 0.5f * (a->mesh.bbox_min[0] + a->mesh.bbox_max[0]);
+    out[0] = is_point ? 2 * cx - in[0] : -in[0];
+    out[1] = in[1];
+    out[2] = in[2];
+}
+
+/* A ray through pixel (x, y) paints (or erases); returns 1 on a hit. */
 static int app_paint_at(app *a, double x, double y) {
     float o[3], d[3], r[3], u[3];
     view_camera_ray(&a->cam, x, y, o, d, r, u);
+    if (a->erase_mode) {
+        int hit = app_erase_ray(a, o, d);
+        if (a->mirror) {
+            float mo[3], md[3];
+            mirror_vec(a, o, mo, 1), mirror_vec(a, d, md, 0);
+            app_erase_ray(a, mo, md);
+        }
+        return hit;
+    }
+    if (a->mirror) { /* kept, to paint its mirror image at release */
+        if (a->ngesture == a->capgesture) {
+            int cap = a->capgesture ? 2 * a->capgesture : 256;
+            float *g = realloc(a->gesture, sizeof *g * 12 * (size_t)cap);
+            if (g) a->gesture = g, a->capgesture = cap;
+        }
+        if (a->ngesture < a->capgesture) {
+            float *g = a->gesture + 12 * a->ngesture++;
+            memcpy(g, o, sizeof o), memcpy(g + 3, d, sizeof d);
+            memcpy(g + 6, r, sizeof r), memcpy(g + 9, u, sizeof u);
+        }
+    }
     ss_ray_hit h;
     int n0 = a->paint.n;
     int hit = ss_paint_add(&a->paint, o, d, r, u, &h);
+    if (a->paint.n != n0) a->changed = 1;
     if (hit && a->picks) {
         cJSON *p = cJSON_CreateObject();
         cJSON_AddNumberToObject(p, "x", x);
@@ -444,14 +601,21 @@ static void app_press(app *a, double x, double y, int button, int shift) {
     a->lx = x, a->ly = y;
     a->painting = button == 1 && !shift && a->paint_mode && a->can_paint;
     if (a->painting) {
-        ss_paint_begin(&a->paint);
+        app_history_push(a);
+        a->changed = 0;
+        a->ngesture = 0;
+        if (!a->erase_mode) ss_paint_begin(&a->paint);
         app_paint_at(a, x, y);
         app_redraw(a);
     }
 }
 
 static void app_motion(app *a, double x, double y) {
-    if (!a->dragging) return;
+    a->hover = 1, a->hx = x, a->hy = y; /* the brush ring follows the cursor */
+    if (!a->dragging) {
+        if (a->paint_mode) app_redraw(a);
+        return;
+    }
     if (a->painting) {
         /* Samples no farther apart than half the brush, so the band has no gaps. */
         double d = hypot(x - a->lx, y - a->ly);
@@ -472,7 +636,24 @@ static void app_motion(app *a, double x, double y) {
 static void app_release(app *a, double x, double y) {
     if (!a->dragging) return;
     app_motion(a, x, y);
-    if (a->painting) ss_paint_end(&a->paint);
+    if (a->painting && !a->erase_mode) {
+        ss_paint_end(&a->paint);
+        if (a->mirror && a->ngesture > 0) { /* the same gesture in the mirror */
+            ss_paint_begin(&a->paint);
+            int n0 = a->paint.n;
+            for (int i = 0; i < a->ngesture; i++) {
+                const float *g = a->gesture + 12 * i;
+                float mo[3], md[3], mr[3], mu[3];
+                ss_ray_hit h;
+                mirror_vec(a, g, mo, 1), mirror_vec(a, g + 3, md, 0);
+                mirror_vec(a, g + 6, mr, 0), mirror_vec(a, g + 9, mu, 0);
+                ss_paint_add(&a->paint, mo, md, mr, mu, &h);
+            }
+            ss_paint_end(&a->paint);
+            if (a->paint.n != n0) a->changed = a->strokes_dirty = 1;
+        }
+    }
+    if (a->painting && !a->changed) app_history_drop_last(a);
     a->dragging = a->painting = 0;
     app_redraw(a);
 }
@@ -484,8 +665,9 @@ static void app_scroll(app *a, double dy) {
 
 static void *generate_worker(void *arg) {
     app *a = arg;
-    a->worker_status = view_layers_generate(&a->worker_strokes, a->o.texture_size, a->o.seed,
-                                            &a->progress, &a->worker_layers, &a->worker_err);
+    a->worker_status =
+        view_layers_generate(&a->worker_strokes, a->skin, a->o.texture_size, a->o.seed,
+                             &a->progress, &a->worker_layers, &a->worker_err);
     __atomic_store_n(&a->worker_done, 1, __ATOMIC_RELEASE);
     return NULL;
 }
@@ -552,12 +734,67 @@ static int app_generate_finish(app *a, int wait) {
         a->layers = a->worker_layers;
         memset(&a->worker_layers, 0, sizeof a->worker_layers);
         a->layers_dirty = 1;
-        app_message(a, 0, "generated: %s; slide from injury (day 0) to day %g", a->layers.source,
-                    a->layers.end_day);
+        app_message(a, 0, "generated: %s; slide from injury (day 0) to day %g (%s)",
+                    a->layers.source, a->layers.end_day, a->layers.timing);
     }
     app_update_gen_widgets(a);
     app_set_time(a, a->day);
     return 1;
+}
+
+/* Loads a texture folder into l: a heal run is rendered first, a wound
+ * block is put on the mesh at its world size, a skin set's colour becomes
+ * the skin Generate draws on (*skin, replaced only on success). */
+static ss_status app_load_textures(app *a, const char *dir, view_layers *l, ss_error *err) {
+    int ts = a->o.texture_size;
+    ss_status st = view_layers_load_dir(dir, ts < 512 ? ts : 512, a->o.quiet, l, err);
+    if (!st && l->block_mm > 0 && a->can_paint) {
+        /* the mesh's texture at Generate's size, smaller when the stack would
+         * pass 512 MB (two RGBA8 maps a layer) */
+        int size = ts;
+        while (size > 256 && (double)l->nlayers * size * size * 8 > 512e6) size /= 2;
+        /* centred where the start view looks: the back of the shipped hand */
+        view_camera c;
+        view_camera_frame(&c, &a->mesh);
+        c.width = a->o.width, c.height = a->o.height;
+        float o[3], d[3], r[3], u[3];
+        ss_ray_hit h;
+        view_camera_ray(&c, 0.5 * c.width, 0.5 * c.height, o, d, r, u);
+        int hit = ss_bvh_raycast(a->paint.bvh, o, d, 0, INFINITY, &h);
+        st = view_layers_place_block(l, &a->mesh, a->paint.island, hit ? h.uv : NULL, size,
+                                     a->o.seed, err);
+        if (st) view_layers_free(l);
+    }
+    if (!st && l->skin) {
+        ss_image_free(a->skin);
+        a->skin = l->skin;
+        l->skin = NULL;
+    }
+    return st;
+}
+
+/* The painted wound as a UV mask PNG (white = wound) at the texture size:
+ * what Generate fills, and what `skinsim abrasion --mask` reads. */
+static ss_status save_mask(app *a, const char *path, ss_error *err) {
+    ss_stroke_set ss = {0};
+    int dropped = 0;
+    ss_status st = ss_paint_to_strokes(&a->paint, &ss, &dropped, err);
+    ss_image *m = st ? NULL : view_strokes_mask(&ss, a->o.texture_size, a->o.seed, err);
+    ss_stroke_set_free(&ss);
+    if (!m) return err->code;
+    st = ss_png_write(path, m, 8, SS_ENC_LINEAR, err);
+    ss_image_free(m);
+    return st;
+}
+
+static void app_save_mask(app *a, const char *path) {
+    ss_error err = {0};
+    if (!a->can_paint)
+        app_message(a, 1, "%s: the mesh has no UVs, so there is no mask to save", path);
+    else if (save_mask(a, path, &err))
+        app_message(a, 1, "%s: %s", path, err.msg);
+    else
+        app_message(a, 0, "mask (%d^2, white = wound) saved to %s", a->o.texture_size, path);
 }
 
 static void app_save_strokes(app *a, const char *path) {
@@ -576,7 +813,9 @@ static void app_load_strokes(app *a, const char *path) {
         app_message(a, 1, "%s: the mesh has no UVs; strokes cannot be shown", path);
         return;
     }
+    app_history_push(a);
     if (ss_paint_load_csv(&a->paint, path, &outside, &err)) {
+        app_history_drop_last(a);
         app_message(a, 1, "%s", err.msg);
         return;
     }
@@ -629,12 +868,33 @@ static void app_set_playing(app *a, int on) {
 static void app_key(app *a, const char *k) {
     if (!strcasecmp(k, "p"))
         app_set_paint_mode(a, !a->paint_mode);
-    else if (!strcasecmp(k, "z")) {
-        if (ss_paint_undo(&a->paint)) a->strokes_dirty = 1;
+    else if (!strcasecmp(k, "z") || !strcasecmp(k, "ctrl+z")) {
+        if (!app_undo_redo(a, 0)) app_message(a, 0, "nothing to undo");
+    } else if (!strcasecmp(k, "y") || !strcasecmp(k, "ctrl+y") || !strcasecmp(k, "ctrl+shift+z")) {
+        if (!app_undo_redo(a, 1)) app_message(a, 0, "nothing to redo");
     } else if (!strcasecmp(k, "c")) {
-        ss_paint_clear(&a->paint);
-        a->strokes_dirty = 1;
-    } else if (!strcasecmp(k, "g"))
+        if (a->paint.n > 0) {
+            app_history_push(a);
+            ss_paint_clear(&a->paint);
+            a->strokes_dirty = 1;
+        }
+    } else if (!strcasecmp(k, "e")) {
+        a->erase_mode = !a->erase_mode;
+        if (a->erase_btn)
+            gtk_toggle_button_set_active(GTK_TOGGLE_BUTTON(a->erase_btn), a->erase_mode);
+        app_message(a, 0,
+                    a->erase_mode ? "eraser: dragging in paint mode removes paint (E: brush)"
+                                  : "brush: dragging in paint mode paints");
+    } else if (!strcasecmp(k, "m")) {
+        a->mirror = !a->mirror;
+        if (a->mirror_btn)
+            gtk_toggle_button_set_active(GTK_TOGGLE_BUTTON(a->mirror_btn), a->mirror);
+        app_message(a, 0,
+                    a->mirror ? "mirror: strokes are also painted mirrored in x (M: off)"
+                              : "mirror off");
+    } else if (!strcasecmp(k, "x"))
+        app_save_mask(a, a->o.save_mask ? a->o.save_mask : "mask.png");
+    else if (!strcasecmp(k, "g"))
         app_generate(a);
     else if (!strcasecmp(k, "space"))
         app_set_playing(a, !a->playing);
@@ -698,9 +958,48 @@ static int app_script_step(app *a, const script_ev *e) {
     return 1;
 }
 
+/* The brush ring under the cursor in paint mode: a circle of the brush
+ * radius in the plane of the triangle the cursor's ray hits. */
+static void app_update_ring(app *a) {
+    float pts[3 * RING_POINTS];
+    int n = 0;
+    ss_ray_hit h;
+    float o[3], d[3], r[3], u[3];
+    if (a->paint_mode && a->can_paint && a->hover) {
+        view_camera_ray(&a->cam, a->hx, a->hy, o, d, r, u);
+        if (ss_bvh_raycast(a->paint.bvh, o, d, 0, INFINITY, &h)) {
+            const uint32_t *ix = a->mesh.indices + 3 * h.triangle;
+            const float *p0 = a->mesh.positions + 3 * ix[0], *p1 = a->mesh.positions + 3 * ix[1],
+                        *p2 = a->mesh.positions + 3 * ix[2];
+            double e1[3], e2[3], nn[3], t1[3], t2[3];
+            for (int k = 0; k < 3; k++) e1[k] = p1[k] - p0[k], e2[k] = p2[k] - p0[k];
+            nn[0] = e1[1] * e2[2] - e1[2] * e2[1];
+            nn[1] = e1[2] * e2[0] - e1[0] * e2[2];
+            nn[2] = e1[0] * e2[1] - e1[1] * e2[0];
+            double ln = sqrt(nn[0] * nn[0] + nn[1] * nn[1] + nn[2] * nn[2]);
+            double le = sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]);
+            if (ln > 0 && le > 0) {
+                for (int k = 0; k < 3; k++) nn[k] /= ln, t1[k] = e1[k] / le;
+                t2[0] = nn[1] * t1[2] - nn[2] * t1[1];
+                t2[1] = nn[2] * t1[0] - nn[0] * t1[2];
+                t2[2] = nn[0] * t1[1] - nn[1] * t1[0];
+                double R = a->paint.brush_radius;
+                for (int i = 0; i < RING_POINTS; i++) {
+                    double ang = 6.283185307179586 * i / RING_POINTS, ca = cos(ang), sa = sin(ang);
+                    for (int k = 0; k < 3; k++)
+                        pts[3 * n + k] = (float)(o[k] + h.t * d[k] + R * (ca * t1[k] + sa * t2[k]));
+                    n++;
+                }
+            }
+        }
+    }
+    view_renderer_set_ring(a->rend, pts, n, a->erase_mode);
+}
+
 /* Uploads what changed; needs the GL context current. */
 static void app_sync_gl(app *a) {
     if (!a->rend) return;
+    app_update_ring(a);
     if (a->layers_dirty) {
         ss_error err = {0};
         double t0 = ss_now();
@@ -729,6 +1028,7 @@ static ss_status app_init(app *a, const opts *o, ss_error *err) {
     if (st) return st;
     a->can_paint = a->mesh.has_uvs;
     a->hide_strokes = o->hide_strokes;
+    a->mirror = o->mirror;
     if (a->can_paint) st = ss_paint_create(&a->mesh, o->brush_mm * 1e-3, &a->paint, err);
     if (st) return st;
     if (!a->mesh.has_uvs)
@@ -756,7 +1056,7 @@ static ss_status app_init(app *a, const opts *o, ss_error *err) {
         if (st) return st;
     }
     if (o->load) {
-        st = view_layers_load_dir(o->load, &a->layers, err);
+        st = app_load_textures(a, o->load, &a->layers, err);
     } else {
         st = view_layers_plain_skin(o->texture_size > 1024 ? 1024 : o->texture_size, o->seed,
                                     &a->layers, err);
@@ -775,6 +1075,10 @@ static void app_free(app *a) {
         view_layers_free(&a->worker_layers);
     }
     view_layers_free(&a->layers);
+    ss_image_free(a->skin);
+    for (int i = 0; i < a->nundo; i++) snap_free(&a->undo[i]);
+    for (int i = 0; i < a->nredo; i++) snap_free(&a->redo[i]);
+    free(a->gesture);
     ss_paint_free(&a->paint);
     ss_mesh_free(&a->mesh);
     free(a->ev);
@@ -830,6 +1134,27 @@ static int app_batch(app *a) {
     cJSON_AddNumberToObject(sum, "texture_size", a->layers.size);
     cJSON_AddNumberToObject(sum, "end_day", a->layers.end_day);
     cJSON_AddNumberToObject(sum, "day", a->day);
+    cJSON_AddBoolToObject(sum, "generate_skin_loaded", a->skin != NULL);
+    if (a->layers.block_mm > 0 && a->layers.block_side_uv > 0) {
+        cJSON *b = cJSON_AddObjectToObject(sum, "block");
+        cJSON_AddNumberToObject(b, "side_mm", a->layers.block_mm);
+        cJSON_AddNumberToObject(b, "mm_per_uv", a->layers.mm_per_uv);
+        cJSON_AddNumberToObject(b, "side_uv", a->layers.block_side_uv);
+        cJSON_AddNumberToObject(b, "u", a->layers.block_uv[0]);
+        cJSON_AddNumberToObject(b, "v", a->layers.block_uv[1]);
+        /* where its centre is in the frame (pixels, origin top-left) */
+        float uv[2] = {(float)a->layers.block_uv[0], (float)a->layers.block_uv[1]}, pos[3], mvp[16];
+        if (ss_mesh_locate_uv(&a->mesh, uv, pos) >= 0) {
+            view_camera_matrix(&a->cam, mvp);
+            float cl[4];
+            for (int r = 0; r < 4; r++)
+                cl[r] = mvp[r] * pos[0] + mvp[4 + r] * pos[1] + mvp[8 + r] * pos[2] + mvp[12 + r];
+            if (cl[3] > 0) {
+                cJSON_AddNumberToObject(b, "x", (cl[0] / cl[3] * 0.5 + 0.5) * a->cam.width);
+                cJSON_AddNumberToObject(b, "y", (0.5 - cl[1] / cl[3] * 0.5) * a->cam.height);
+            }
+        }
+    }
     if (!rc && a->o.bench_frames > 0) {
         int n = a->o.bench_frames;
         double *ms = malloc(sizeof *ms * (size_t)n);
@@ -886,6 +1211,12 @@ static int app_batch(app *a) {
             rc = cli_fail(CMD, &err);
         else
             cJSON_AddStringToObject(sum, "strokes", a->o.save_strokes);
+    }
+    if (!rc && a->o.save_mask) {
+        if (save_mask(a, a->mask_path, &err))
+            rc = cli_fail(CMD, &err);
+        else
+            cJSON_AddStringToObject(sum, "mask", a->o.save_mask);
     }
     cJSON_AddNumberToObject(sum, "stroke_points", a->paint.n);
     cJSON_AddItemReferenceToObject(sum, "picks", a->picks);
@@ -944,7 +1275,7 @@ static int run_egl(app *a) {
 
 typedef struct gtk_run {
     app *a;
-    int batch, rc, done, idle_ticks;
+    int batch, rc, done, idle_ticks, drawn;
 } gtk_run;
 
 /* --window-shot: the window as drawn (widgets and the GL frame) to a PNG. */
@@ -981,6 +1312,12 @@ static gboolean on_render(GtkGLArea *area, GdkGLContext *ctx, gpointer data) {
     c.height = gtk_widget_get_height(GTK_WIDGET(area)) * scale;
     if (c.width < 1 || c.height < 1) return TRUE;
     view_renderer_draw(a->rend, &c, &a->layers, a->day, (float)a->o.displace, !a->hide_strokes);
+    if (!g->drawn) {
+        g->drawn = 1;
+        if (!a->o.quiet)
+            fprintf(stderr, "skinsim view: first frame %.2f s after start\n",
+                    ss_now() - a->o.t_start);
+    }
     return TRUE;
 }
 
@@ -1081,7 +1418,15 @@ static gboolean on_key(GtkEventControllerKey *c, guint keyval, guint code, GdkMo
         app_key(a, name);
         return TRUE;
     }
-    if ((mods & GDK_CONTROL_MASK) && strcmp(name, "z")) return FALSE;
+    if ((mods & GDK_CONTROL_MASK) && !strcmp(name, "z")) {
+        app_key(a, (mods & GDK_SHIFT_MASK) ? "ctrl+shift+z" : "ctrl+z");
+        return TRUE;
+    }
+    if ((mods & GDK_CONTROL_MASK) && !strcmp(name, "y")) {
+        app_key(a, "ctrl+y");
+        return TRUE;
+    }
+    if (mods & GDK_CONTROL_MASK) return FALSE;
     if (!strcmp(name, "Left") || !strcmp(name, "Right") || !strcmp(name, "space") ||
         strlen(name) == 1) {
         app_key(a, name);
@@ -1095,7 +1440,9 @@ static const char HELP_TEXT[] =
     "drag            rotate          shift-drag / middle   pan\n"
     "wheel           zoom            R                     reset the view\n"
     "P               paint mode (drag on the mesh to paint a wound)\n"
-    "Z  Ctrl+Z       undo a stroke   C                     clear the strokes\n"
+    "E               eraser          M                     mirror symmetry (x)\n"
+    "Z  Ctrl+Z       undo            Y  Ctrl+Y  Ctrl+Shift+Z  redo\n"
+    "C               clear strokes   X                     save the mask (PNG)\n"
     "H               hide strokes    S                     save strokes\n"
     "G               Generate (the abrasion timeline from the strokes)\n"
     "Space           play / pause    Left / Right          previous / next key\n"
@@ -1113,9 +1460,30 @@ static void on_paint_toggled(GtkToggleButton *b, gpointer data) {
     if (on != a->paint_mode) app_set_paint_mode(a, on);
 }
 
+static void on_tool_toggled(GtkToggleButton *b, gpointer data) {
+    app *a = ((gtk_run *)data)->a;
+    const char *k = g_object_get_data(G_OBJECT(b), "key");
+    int on = gtk_toggle_button_get_active(b);
+    if (on != (k[0] == 'e' ? a->erase_mode : a->mirror)) app_key(a, k);
+}
+
+static void on_hover(GtkEventControllerMotion *c, double x, double y, gpointer data) {
+    (void)c;
+    app *a = ((gtk_run *)data)->a;
+    if (!a->dragging) app_motion(a, x, y);
+}
+
+static void on_leave(GtkEventControllerMotion *c, gpointer data) {
+    (void)c;
+    app *a = ((gtk_run *)data)->a;
+    a->hover = 0;
+    app_redraw(a);
+}
+
 static void on_brush(GtkSpinButton *s, gpointer data) {
     app *a = ((gtk_run *)data)->a;
     a->paint.brush_radius = gtk_spin_button_get_value(s) * 1e-3;
+    app_redraw(a); /* the ring shows the new size */
 }
 
 static void on_button(GtkButton *b, gpointer data) {
@@ -1127,16 +1495,19 @@ static void on_button(GtkButton *b, gpointer data) {
 static void on_file_response(GtkNativeDialog *d, int response, gpointer data) {
     app *a = ((gtk_run *)data)->a;
     int save = GPOINTER_TO_INT(g_object_get_data(G_OBJECT(d), "save"));
+    int mask = GPOINTER_TO_INT(g_object_get_data(G_OBJECT(d), "mask"));
     int folder = GPOINTER_TO_INT(g_object_get_data(G_OBJECT(d), "folder"));
     if (response == GTK_RESPONSE_ACCEPT) {
         GFile *f = gtk_file_chooser_get_file(GTK_FILE_CHOOSER(d));
         char *path = f ? g_file_get_path(f) : NULL;
-        if (path && save)
+        if (path && mask)
+            app_save_mask(a, path);
+        else if (path && save)
             app_save_strokes(a, path);
         else if (path && folder) {
             view_layers l;
             ss_error err = {0};
-            if (view_layers_load_dir(path, &l, &err))
+            if (app_load_textures(a, path, &l, &err))
                 app_message(a, 1, "%s", err.msg);
             else {
                 view_layers_free(&a->layers);
@@ -1157,9 +1528,11 @@ static void on_file_response(GtkNativeDialog *d, int response, gpointer data) {
 static void on_file_button(GtkButton *b, gpointer data) {
     gtk_run *g = data;
     const char *what = g_object_get_data(G_OBJECT(b), "file");
-    int save = !strcmp(what, "save"), folder = !strcmp(what, "folder");
+    int mask = !strcmp(what, "mask");
+    int save = !strcmp(what, "save") || mask, folder = !strcmp(what, "folder");
     GtkFileChooserNative *d =
-        gtk_file_chooser_native_new(save     ? "Save strokes"
+        gtk_file_chooser_native_new(mask     ? "Save the wound mask"
+                                    : save   ? "Save strokes"
                                     : folder ? "Open a texture folder"
                                              : "Load strokes",
                                     GTK_WINDOW(g->a->window),
@@ -1167,8 +1540,10 @@ static void on_file_button(GtkButton *b, gpointer data) {
                                     : folder ? GTK_FILE_CHOOSER_ACTION_SELECT_FOLDER
                                              : GTK_FILE_CHOOSER_ACTION_OPEN,
                                     save ? "Save" : "Open", "Cancel");
-    if (save) gtk_file_chooser_set_current_name(GTK_FILE_CHOOSER(d), "strokes.csv");
+    if (save)
+        gtk_file_chooser_set_current_name(GTK_FILE_CHOOSER(d), mask ? "mask.png" : "strokes.csv");
     g_object_set_data(G_OBJECT(d), "save", GINT_TO_POINTER(save));
+    g_object_set_data(G_OBJECT(d), "mask", GINT_TO_POINTER(mask));
     g_object_set_data(G_OBJECT(d), "folder", GINT_TO_POINTER(folder));
     g_signal_connect(d, "response", G_CALLBACK(on_file_response), g);
     gtk_native_dialog_show(GTK_NATIVE_DIALOG(d));
@@ -1237,7 +1612,7 @@ static GtkWidget *file_button(const char *label, const char *what, gtk_run *g) {
 }
 
 static int run_gtk(app *a, int batch) {
-    gtk_run g = {a, batch, 0, 0, 0};
+    gtk_run g = {a, batch, 0, 0, 0, 0};
     GtkWidget *win = gtk_window_new();
     a->window = win;
     gtk_window_set_title(GTK_WINDOW(win), "skinsim view");
@@ -1257,10 +1632,26 @@ static int run_gtk(app *a, int batch) {
     gtk_spin_button_set_value(GTK_SPIN_BUTTON(spin), a->o.brush_mm);
     g_signal_connect(spin, "value-changed", G_CALLBACK(on_brush), &g);
     gtk_box_append(GTK_BOX(tools), spin);
-    gtk_box_append(GTK_BOX(tools), button("Undo", "z", "undo the last stroke (Z)", &g));
+    a->erase_btn = gtk_toggle_button_new_with_label("Eraser");
+    a->mirror_btn = gtk_toggle_button_new_with_label("Mirror");
+    GtkWidget *toggles[2] = {a->erase_btn, a->mirror_btn};
+    const char *tkeys[2] = {"e", "m"};
+    const char *ttips[2] = {"eraser (E): dragging in paint mode removes paint",
+                            "mirror symmetry (M): strokes are also painted mirrored in x"};
+    for (int i = 0; i < 2; i++) {
+        gtk_widget_set_focusable(toggles[i], FALSE);
+        gtk_widget_set_tooltip_text(toggles[i], ttips[i]);
+        g_object_set_data(G_OBJECT(toggles[i]), "key", (gpointer)tkeys[i]);
+        g_signal_connect(toggles[i], "toggled", G_CALLBACK(on_tool_toggled), &g);
+        gtk_box_append(GTK_BOX(tools), toggles[i]);
+    }
+    gtk_toggle_button_set_active(GTK_TOGGLE_BUTTON(a->mirror_btn), a->mirror);
+    gtk_box_append(GTK_BOX(tools), button("Undo", "z", "undo (Z, Ctrl+Z)", &g));
+    gtk_box_append(GTK_BOX(tools), button("Redo", "y", "redo (Y, Ctrl+Y, Ctrl+Shift+Z)", &g));
     gtk_box_append(GTK_BOX(tools), button("Clear", "c", "remove all strokes (C)", &g));
     gtk_box_append(GTK_BOX(tools), file_button("Load strokes", "load", &g));
     gtk_box_append(GTK_BOX(tools), file_button("Save strokes", "save", &g));
+    gtk_box_append(GTK_BOX(tools), file_button("Save mask", "mask", &g));
     gtk_box_append(GTK_BOX(tools), file_button("Open textures", "folder", &g));
     a->gen_btn = button("Generate", "g", "render the abrasion timeline from the strokes (G)", &g);
     gtk_box_append(GTK_BOX(tools), a->gen_btn);
@@ -1309,6 +1700,10 @@ static int run_gtk(app *a, int batch) {
         gtk_event_controller_scroll_new(GTK_EVENT_CONTROLLER_SCROLL_VERTICAL);
     g_signal_connect(scroll, "scroll", G_CALLBACK(on_scroll), &g);
     gtk_widget_add_controller(a->area, scroll);
+    GtkEventController *motion = gtk_event_controller_motion_new();
+    g_signal_connect(motion, "motion", G_CALLBACK(on_hover), &g);
+    g_signal_connect(motion, "leave", G_CALLBACK(on_leave), &g);
+    gtk_widget_add_controller(a->area, motion);
     GtkEventController *keys = gtk_event_controller_key_new();
     g_signal_connect(keys, "key-pressed", G_CALLBACK(on_key), &g);
     gtk_widget_add_controller(win, keys);
@@ -1347,26 +1742,36 @@ static int run_gtk(app *a, int batch) {
     while (g_main_context_pending(NULL)) g_main_context_iteration(NULL, FALSE);
     a->window = a->area = NULL;
     a->scale = a->day_label = a->progress_bar = a->status_label = a->paint_btn = NULL;
-    a->help_box = NULL;
+    a->help_box = a->erase_btn = a->mirror_btn = NULL;
     a->play_btn = a->gen_btn = NULL;
     return g.rc;
 }
 
 int main(int argc, char **argv) {
+    /* OpenMP threads that spin at barriers (libgomp's default) take the CPU
+     * the GTK thread and the other team members need: on 2 busy cores the
+     * start-up took 6-24 s instead of 1.4-2.2 s (bench/view.md). libgomp
+     * reads OMP_WAIT_POLICY once, when it is loaded, so the policy is set
+     * here and the program runs itself again (`skinsim view` sets it before
+     * it runs this program, so that costs nothing there). */
+    if (!getenv("OMP_WAIT_POLICY") && setenv("OMP_WAIT_POLICY", "passive", 1) == 0)
+        execv("/proc/self/exe", argv); /* on failure: carry on as we are */
+    double t_start = ss_now();         /* for the first-frame time */
     /* Called as "skinsim view ..." through the skinsim command, or directly. */
     if (argc > 1 && !strcmp(argv[1], "view")) argc--, argv++;
     opts o;
     ss_error err = {0};
     int r = parse(argc, argv, &o, &err);
+    o.t_start = t_start;
     if (r < 0) return 0;
     if (r) return cli_fail(CMD, &err);
-    int batch = o.screenshot || o.bench_frames > 0 || o.save_strokes;
+    int batch = o.screenshot || o.bench_frames > 0 || o.save_strokes || o.save_mask;
     /* Batch outputs go through the project's output discipline: checked
      * now, staged after the inputs are read, swapped in only on success. */
     ss_outputs *outs = NULL;
-    int i_shot = -1, i_csv = -1;
+    int i_shot = -1, i_csv = -1, i_mask = -1;
     ss_status st = SS_OK;
-    if (o.screenshot || o.save_strokes) {
+    if (o.screenshot || o.save_strokes || o.save_mask) {
         outs = ss_outputs_create("view", &err);
         if (!outs) return cli_fail(CMD, &err);
         const char *ins[] = {o.mesh, o.strokes, o.script};
@@ -1380,6 +1785,11 @@ int main(int argc, char **argv) {
         if (!st && o.save_strokes) {
             i_csv = ss_outputs_count(outs);
             st = ss_outputs_add(outs, "--save-strokes", o.save_strokes, SS_OUTPUT_FILE, 0, &err);
+        }
+        if (!st && o.save_mask) {
+            i_mask = ss_outputs_count(outs);
+            st = ss_outputs_add(outs, "--save-mask", o.save_mask, SS_OUTPUT_FILE,
+                                (double)o.texture_size * o.texture_size, &err);
         }
         if (st) {
             ss_outputs_free(outs);
@@ -1396,6 +1806,7 @@ int main(int argc, char **argv) {
         st = ss_outputs_begin(outs, &err);
         if (i_shot >= 0) a->shot_path = ss_outputs_path(outs, i_shot);
         if (i_csv >= 0) a->csv_path = ss_outputs_path(outs, i_csv);
+        if (i_mask >= 0) a->mask_path = ss_outputs_path(outs, i_mask);
     }
     int rc;
     if (st) {

@@ -22,9 +22,13 @@
 #define _POSIX_C_SOURCE 200809L
 #include "view.h"
 
+#include "skinsim/heal_run.h"
+#include "skinsim/wound.h"
+
 #include <cjson/cJSON.h>
 #include <dirent.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -35,14 +39,17 @@ void view_layers_free(view_layers *l) {
     if (!l) return;
     free(l->cr);
     free(l->nh);
+    ss_image_free(l->skin);
     for (int i = 0; i < 16; i++) free(l->cr_mip[i]), free(l->nh_mip[i]);
     memset(l, 0, sizeof *l);
 }
 
 /* One 2x2 box step from src (side n) to dst (side n/2) for nlayers layers;
  * lin: channels 0-2 are sRGB bytes averaged in linear light. */
+#define ENC_LUT 16384 /* linear 0..1 -> sRGB byte; 0.2 of a step at most off */
+
 static void half(const unsigned char *src, unsigned char *dst, int n, int nlayers, int lin,
-                 const float *dec) {
+                 const float *dec, const unsigned char *enc) {
     int m = n / 2;
 #pragma omp parallel for schedule(static)
     for (int row = 0; row < nlayers * m; row++) {
@@ -55,7 +62,7 @@ static void half(const unsigned char *src, unsigned char *dst, int n, int nlayer
                 int i = 8 * x + k;
                 if (lin && k < 3) {
                     float v = 0.25f * (dec[s0[i]] + dec[s0[i + 4]] + dec[s1[i]] + dec[s1[i + 4]]);
-                    d[4 * x + k] = (unsigned char)(ss_srgb_encode(v) * 255.0f + 0.5f);
+                    d[4 * x + k] = enc[(int)(v * (ENC_LUT - 1) + 0.5f)];
                 } else {
                     d[4 * x + k] = (unsigned char)((s0[i] + s0[i + 4] + s1[i] + s1[i + 4] + 2) / 4);
                 }
@@ -66,6 +73,11 @@ static void half(const unsigned char *src, unsigned char *dst, int n, int nlayer
 ss_status view_layers_build_mips(view_layers *l, ss_error *err) {
     float dec[256];
     for (int i = 0; i < 256; i++) dec[i] = ss_srgb_decode(i / 255.0f);
+    /* a table instead of a power per texel (it was 2.2 s of Generate's 12 at 2048^2) */
+    unsigned char *enc = malloc(ENC_LUT);
+    if (!enc) return ss_error_set(err, SS_ERR_NOMEM, "viewer: out of memory for mipmaps");
+    for (int i = 0; i < ENC_LUT; i++)
+        enc[i] = (unsigned char)(ss_srgb_encode((float)i / (ENC_LUT - 1)) * 255.0f + 0.5f);
     int n = l->size, lv = 1;
     const unsigned char *cr = l->cr, *nh = l->nh;
     /* odd sides cannot be halved exactly: leave those to OpenGL */
@@ -79,14 +91,16 @@ ss_status view_layers_build_mips(view_layers *l, ss_error *err) {
                 l->cr_mip[i] = l->nh_mip[i] = NULL;
             }
             l->nlevels = 0;
+            free(enc);
             return ss_error_set(err, SS_ERR_NOMEM, "viewer: out of memory for mipmaps");
         }
-        half(cr, l->cr_mip[lv], n, l->nlayers, 1, dec);
-        half(nh, l->nh_mip[lv], n, l->nlayers, 0, dec);
+        half(cr, l->cr_mip[lv], n, l->nlayers, 1, dec, enc);
+        half(nh, l->nh_mip[lv], n, l->nlayers, 0, dec, enc);
         cr = l->cr_mip[lv], nh = l->nh_mip[lv];
         n /= 2;
         lv++;
     }
+    free(enc);
     l->nlevels = n == 1 ? lv : 0; /* a full chain, else let OpenGL make it */
     return SS_OK;
 }
@@ -137,12 +151,15 @@ static unsigned char to_byte(float v) {
 
 /* Packs one layer. Any map but colour may be NULL (defaults: reflection
  * 0.3, flat normal, height 0.5). colour is linear RGB (or grey). */
-static void pack_layer(view_layers *l, int layer, const ss_image *color, const ss_image *refl,
-                       const ss_image *height, const ss_image *normal) {
+/* Packs the rectangle x0..x0+w-1, y0..y0+h-1 of one layer. */
+static void pack_rect(view_layers *l, int layer, const ss_image *color, const ss_image *refl,
+                      const ss_image *height, const ss_image *normal, int x0, int y0, int w,
+                      int h) {
     size_t n = (size_t)l->size * (size_t)l->size;
     unsigned char *cr = l->cr + (size_t)layer * n * 4, *nh = l->nh + (size_t)layer * n * 4;
 #pragma omp parallel for schedule(static)
-    for (long long i = 0; i < (long long)n; i++) {
+    for (long long j = 0; j < (long long)w * h; j++) {
+        long long i = (long long)(y0 + j / w) * l->size + x0 + j % w;
         const float *c = color->data + (size_t)i * (size_t)color->channels;
         for (int k = 0; k < 3; k++)
             cr[4 * i + k] = to_byte(ss_srgb_encode(c[color->channels >= 3 ? k : 0]));
@@ -157,6 +174,11 @@ static void pack_layer(view_layers *l, int layer, const ss_image *color, const s
         }
         nh[4 * i + 3] = to_byte(height ? height->data[(size_t)i * (size_t)height->channels] : 0.5f);
     }
+}
+
+static void pack_layer(view_layers *l, int layer, const ss_image *color, const ss_image *refl,
+                       const ss_image *height, const ss_image *normal) {
+    pack_rect(l, layer, color, refl, height, normal, 0, 0, l->size, l->size);
 }
 
 static void add_stop(view_layers *l, double day, int layer, const char *name) {
@@ -186,8 +208,19 @@ ss_status view_layers_plain_skin(int size, uint64_t seed, view_layers *out, ss_e
 static const double MAT_POS[] = {0.0625, 0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 1.0};
 #define NMAT ((int)(sizeof MAT_POS / sizeof MAT_POS[0]))
 
-ss_status view_layers_generate(const ss_stroke_set *strokes, int size, uint64_t seed,
-                               volatile double *progress, view_layers *out, ss_error *err) {
+ss_image *view_strokes_mask(const ss_stroke_set *strokes, int size, uint64_t seed, ss_error *err) {
+    ss_wound_shape *shape = NULL;
+    if (ss_wound_shape_from_strokes(strokes, SS_HULL_CONVEX, 5, size, seed, &shape, err))
+        return NULL;
+    ss_image *m = shape->mask;
+    shape->mask = NULL;
+    ss_wound_shape_free(shape);
+    return m;
+}
+
+ss_status view_layers_generate(const ss_stroke_set *strokes, const ss_image *skin_in, int size,
+                               uint64_t seed, volatile double *progress, view_layers *out,
+                               ss_error *err) {
     memset(out, 0, sizeof *out);
     const double steps = 2 + SS_PHASE_COUNT + NMAT;
     double done = 0;
@@ -202,10 +235,14 @@ ss_status view_layers_generate(const ss_stroke_set *strokes, int size, uint64_t 
     ss_base_skin skin = {0};
     ss_texture_set ts = {0};
     ss_image *mat_color = NULL;
+    double t[6];
+    t[0] = ss_now();
     ss_status st = ss_wound_shape_from_strokes(strokes, SS_HULL_CONVEX, 5, size, seed, &shape, err);
     if (progress) *progress = ++done / steps;
-    if (!st) st = ss_base_skin_create(NULL, NULL, size, seed, &skin, err);
+    t[1] = ss_now();
+    if (!st) st = ss_base_skin_create(skin_in, NULL, size, seed, &skin, err);
     if (progress) *progress = ++done / steps;
+    t[2] = ss_now();
     if (!st) st = alloc_layers(out, size, SS_PHASE_COUNT + NMAT, err);
     if (!st) st = ss_texture_set_create(size, &ts, err);
     for (int p = 0; p < SS_PHASE_COUNT && !st; p++) {
@@ -213,18 +250,34 @@ ss_status view_layers_generate(const ss_stroke_set *strokes, int size, uint64_t 
         if (!st) pack_layer(out, p, ts.color, ts.reflection, ts.height, ts.normal);
         if (progress) *progress = ++done / steps;
     }
+    t[3] = ss_now();
     /* ts now holds maturation at position 0: re-render its colour at the
      * extra positions (only the wound's box changes). */
     if (!st) mat_color = ss_image_clone(ts.color, err);
     if (!st && !mat_color) st = err->code;
+    /* Only the changed region (the wound's box grown by the widest
+     * gradient) changes with the position: it is reset from the key's
+     * colour, re-rendered and packed; the rest of each layer is the
+     * maturation key's layer (the same bytes as packing it all). */
+    int bx = 0, by = 0, bw = 0, bh = 0;
+    if (!st) ss_abrasion_changed_region(shape, &set, &bx, &by, &bw, &bh);
+    size_t plane = (size_t)size * (size_t)size * 4, ch = st ? 3 : (size_t)ts.color->channels;
     for (int i = 0; i < NMAT && !st; i++) {
-        memcpy(mat_color->data, ts.color->data,
-               sizeof(float) * (size_t)size * (size_t)size * (size_t)ts.color->channels);
+        for (int y = by; y < by + bh; y++)
+            memcpy(mat_color->data + ((size_t)y * size + bx) * ch,
+                   ts.color->data + ((size_t)y * size + bx) * ch, sizeof(float) * bw * ch);
         st = ss_abrasion_maturation_color(shape, &skin, &set, MAT_POS[i], mat_color, err);
-        if (!st)
-            pack_layer(out, SS_PHASE_COUNT + i, mat_color, ts.reflection, ts.height, ts.normal);
+        if (!st) {
+            int layer = SS_PHASE_COUNT + i;
+            memcpy(out->cr + plane * layer, out->cr + plane * SS_PHASE_MATURATION, plane);
+            memcpy(out->nh + plane * layer, out->nh + plane * SS_PHASE_MATURATION, plane);
+            if (bw > 0 && bh > 0)
+                pack_rect(out, layer, mat_color, ts.reflection, ts.height, ts.normal, bx, by, bw,
+                          bh);
+        }
         if (progress) *progress = ++done / steps;
     }
+    t[4] = ss_now();
     if (!st) {
         double mat_day = 0;
         for (int k = 0; k < tl.nkeys; k++) {
@@ -236,9 +289,13 @@ ss_status view_layers_generate(const ss_stroke_set *strokes, int size, uint64_t 
                      "maturation");
         out->end_day = tl.end_day;
         out->height_mm = set.scab_height_mm;
-        snprintf(out->source, sizeof out->source, "%d painted stroke(s), %d^2", strokes->nstrokes,
-                 size);
+        snprintf(out->source, sizeof out->source, "%d painted stroke(s), %d^2%s", strokes->nstrokes,
+                 size, skin_in ? ", on the loaded skin" : "");
         view_layers_build_mips(out, NULL); /* on failure OpenGL makes the levels */
+        t[5] = ss_now();
+        snprintf(out->timing, sizeof out->timing,
+                 "%.2f s: shape %.2f, skin %.2f, phases %.2f, maturation %.2f, mipmaps %.2f",
+                 t[5] - t[0], t[1] - t[0], t[2] - t[1], t[3] - t[2], t[4] - t[3], t[5] - t[4]);
     } else {
         view_layers_free(out);
     }
@@ -282,7 +339,7 @@ typedef struct set_paths {
 
 /* Reads a set and packs it into layer (allocating the layers at the first). */
 static ss_status load_set(const set_paths *p, view_layers *l, int layer, int nlayers,
-                          ss_error *err) {
+                          ss_image **keep_color, ss_error *err) {
     int size = l->size;
     ss_image *c = read_map(p->color, SS_ENC_SRGB, &size, err);
     if (!c) return err->code;
@@ -304,6 +361,7 @@ static ss_status load_set(const set_paths *p, view_layers *l, int layer, int nla
     if (!st && p->normal[0] && !(n = read_map(p->normal, SS_ENC_LINEAR, &size, err)))
         st = err->code;
     if (!st) pack_layer(l, layer, c, r, h, n);
+    if (!st && keep_color) *keep_color = c, c = NULL;
     ss_image_free(c), ss_image_free(r), ss_image_free(h), ss_image_free(n);
     return st;
 }
@@ -423,7 +481,7 @@ static ss_status load_timeline_dir(const char *dir, const char *json_path, view_
     memset(out, 0, sizeof *out);
     for (int i = 0, next = 0; i < nc && !st; i++) {
         if (layer_of[i] == next) {
-            st = load_set(&cs[i].paths, out, next, nl, err);
+            st = load_set(&cs[i].paths, out, next, nl, NULL, err);
             next++;
         }
     }
@@ -440,6 +498,13 @@ static ss_status load_timeline_dir(const char *dir, const char *json_path, view_
         const cJSON *hr = cJSON_GetObjectItemCaseSensitive(root, "height_range_mm");
         if (cJSON_IsNumber(hr) && hr->valuedouble > 0 && isfinite(hr->valuedouble))
             out->height_mm = 2 * hr->valuedouble;
+        /* `skinsim wound` without --mesh: the textures cover a block of skin
+         * world_size_cm on a side, not the mesh's UV layout */
+        const char *cmd = json_str(root, "command");
+        const cJSON *ws = cJSON_GetObjectItemCaseSensitive(root, "world_size_cm");
+        if (cmd && !strcmp(cmd, "wound") && !json_str(root, "texture_space") &&
+            cJSON_IsNumber(ws) && ws->valuedouble > 0 && isfinite(ws->valuedouble))
+            out->block_mm = 10 * ws->valuedouble;
         if (seq)
             snprintf(out->source, sizeof out->source, "%s (healing sequence, %d days)", dir, nc);
         else
@@ -482,10 +547,12 @@ static ss_status load_single_set(const char *dir, view_layers *out, ss_error *er
         }
     }
     if (!p.color[0])
-        return ss_error_set(err, SS_ERR_INPUT,
-                            "%s: no textures found (expected timeline.json from skinsim abrasion, "
-                            "or base_color.png / *_color.png)",
-                            dir);
+        return ss_error_set(
+            err, SS_ERR_INPUT,
+            "%s: no textures found (expected timeline.json from skinsim abrasion or "
+            "skinsim wound, run.json of a skinsim heal run, or base_color.png / "
+            "*_color.png of skinsim skin)",
+            dir);
     struct {
         const char *name;
         char *dst;
@@ -501,7 +568,7 @@ static ss_status load_single_set(const char *dir, view_layers *out, ss_error *er
         if (!opt[i].dst[0] && file_exists(t)) snprintf(opt[i].dst, 4096, "%s", t);
     }
     memset(out, 0, sizeof *out);
-    ss_status st = load_set(&p, out, 0, 1, err);
+    ss_status st = load_set(&p, out, 0, 1, &out->skin, err);
     if (!st) {
         add_stop(out, 0, 0, "texture set");
         snprintf(out->source, sizeof out->source, "%s", p.color);
@@ -509,15 +576,242 @@ static ss_status load_single_set(const char *dir, view_layers *out, ss_error *er
     return st;
 }
 
-ss_status view_layers_load_dir(const char *dir, view_layers *out, ss_error *err) {
+/* A `skinsim heal --out DIR` run: rendered by `skinsim wound --heal`'s code
+ * (ss_wound_make) into a temporary folder, which is then loaded as any
+ * `skinsim wound` folder and removed. */
+static ss_status load_heal_run(const char *dir, int size, int quiet, view_layers *out,
+                               ss_error *err) {
+    ss_heal_saved_run *run = NULL;
+    ss_status st = ss_heal_saved_run_open(dir, &run, err);
+    if (st)
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "%s: looks like a skinsim heal run (run.json) but cannot be read: %s",
+                            dir, err->msg);
+    int n = ss_heal_saved_run_snapshot_count(run), k = 0;
+    double days[VIEW_HEAL_MAX_DAYS];
+    /* every snapshot, or VIEW_HEAL_MAX_DAYS of them evenly (first and last kept) */
+    for (int i = 0; i < n && k < VIEW_HEAL_MAX_DAYS; i++) {
+        int j = n <= VIEW_HEAL_MAX_DAYS
+                    ? i
+                    : (int)lround((double)i * (n - 1) / (VIEW_HEAL_MAX_DAYS - 1));
+        if (j >= n) break;
+        double d = ss_heal_saved_run_snapshot_day(run, j);
+        if (k == 0 || d > days[k - 1]) days[k++] = d;
+    }
+    ss_heal_saved_run_free(run);
+    if (k == 0) return ss_error_set(err, SS_ERR_INPUT, "%s: the heal run has no snapshots", dir);
+    char tmp[4096];
+    const char *td = getenv("TMPDIR");
+    snprintf(tmp, sizeof tmp, "%s/skinsim-view-heal-XXXXXX", td && *td ? td : "/tmp");
+    if (!mkdtemp(tmp))
+        return ss_error_set(err, SS_ERR_RUNTIME, "%s: cannot make a temporary folder", tmp);
+    char wdir[4200];
+    snprintf(wdir, sizeof wdir, "%s/wound", tmp);
+    ss_wound_make_config c;
+    ss_wound_make_config_default(&c);
+    c.heal_dir = dir;
+    c.days = days;
+    c.ndays = k;
+    c.size = size;
+    c.out_dir = wdir;
+    c.compare = 0;
+    c.quiet = 1;
+    if (!quiet)
+        fprintf(stderr,
+                "skinsim view: %s is a skinsim heal run: rendering %d day(s) at %d^2 as "
+                "`skinsim wound --heal` does\n",
+                dir, k, size);
+    st = ss_wound_make(&c, NULL, err);
+    if (!st) {
+        char json[4300];
+        snprintf(json, sizeof json, "%s/timeline.json", wdir);
+        st = load_timeline_dir(wdir, json, out, err);
+    }
+    if (!st)
+        snprintf(out->source, sizeof out->source,
+                 "%s (heal run, %d days rendered as skinsim wound)", dir, k);
+    ss_remove_tree(tmp);
+    return st;
+}
+
+ss_status view_layers_load_dir(const char *dir, int heal_size, int quiet, view_layers *out,
+                               ss_error *err) {
     memset(out, 0, sizeof *out);
     struct stat sb;
     if (stat(dir, &sb) != 0 || !S_ISDIR(sb.st_mode))
         return ss_error_set(err, SS_ERR_INPUT, "%s: not a folder", dir);
-    char json[4096];
+    char json[4096], run[4096];
     snprintf(json, sizeof json, "%s/timeline.json", dir);
-    ss_status st =
-        file_exists(json) ? load_timeline_dir(dir, json, out, err) : load_single_set(dir, out, err);
+    snprintf(run, sizeof run, "%s/run.json", dir);
+    ss_status st = file_exists(json)  ? load_timeline_dir(dir, json, out, err)
+                   : file_exists(run) ? load_heal_run(dir, heal_size, quiet, out, err)
+                                      : load_single_set(dir, out, err);
     if (!st) view_layers_build_mips(out, NULL); /* on failure OpenGL makes the levels */
     return st;
+}
+
+/* ---- a block of skin at its world size --------------------------------------- */
+
+/* Bilinear sample of layer `layer` of a packed map (side n, RGBA8) at
+ * (x, y) in texels (0.5 = first texel centre), clamped at the edges. */
+static void sample_rgba(const unsigned char *map, int n, int layer, double x, double y,
+                        float out[4]) {
+    x -= 0.5, y -= 0.5;
+    double fx = floor(x), fy = floor(y);
+    int x0 = (int)fx, y0 = (int)fy;
+    float tx = (float)(x - fx), ty = (float)(y - fy);
+    const unsigned char *base = map + (size_t)layer * n * n * 4;
+    for (int k = 0; k < 4; k++) out[k] = 0;
+    for (int j = 0; j < 2; j++)
+        for (int i = 0; i < 2; i++) {
+            int xi = x0 + i < 0 ? 0 : x0 + i >= n ? n - 1 : x0 + i;
+            int yi = y0 + j < 0 ? 0 : y0 + j >= n ? n - 1 : y0 + j;
+            float w = (i ? tx : 1 - tx) * (j ? ty : 1 - ty);
+            const unsigned char *p = base + ((size_t)yi * n + xi) * 4;
+            for (int k = 0; k < 4; k++) out[k] += w * p[k];
+        }
+}
+
+/* 1 where a texel centre of a size x size texture lies in a triangle of
+ * island `isl` (UV v down, as the texture rows). */
+static unsigned char *island_mask(const ss_mesh *m, const int *island, int isl, int size) {
+    unsigned char *mask = calloc((size_t)size * size, 1);
+    if (!mask) return NULL;
+    for (int t = 0; t < m->ntriangles; t++) {
+        if (island[t] != isl) continue;
+        const float *a = m->uvs + 2 * m->indices[3 * t], *b = m->uvs + 2 * m->indices[3 * t + 1],
+                    *c = m->uvs + 2 * m->indices[3 * t + 2];
+        double ax = a[0] * size, ay = a[1] * size, bx = b[0] * size, by = b[1] * size,
+               cx = c[0] * size, cy = c[1] * size;
+        double area = (bx - ax) * (cy - ay) - (cx - ax) * (by - ay);
+        if (area == 0) continue;
+        int x0 = (int)floor(fmin(ax, fmin(bx, cx))), x1 = (int)ceil(fmax(ax, fmax(bx, cx)));
+        int y0 = (int)floor(fmin(ay, fmin(by, cy))), y1 = (int)ceil(fmax(ay, fmax(by, cy)));
+        if (x0 < 0) x0 = 0;
+        if (y0 < 0) y0 = 0;
+        if (x1 > size) x1 = size;
+        if (y1 > size) y1 = size;
+        for (int y = y0; y < y1; y++)
+            for (int x = x0; x < x1; x++) {
+                double px = x + 0.5, py = y + 0.5;
+                double w0 = ((bx - px) * (cy - py) - (cx - px) * (by - py)) / area;
+                double w1 = ((cx - px) * (ay - py) - (ax - px) * (cy - py)) / area;
+                double w2 = 1 - w0 - w1;
+                if (w0 >= -1e-9 && w1 >= -1e-9 && w2 >= -1e-9) mask[(size_t)y * size + x] = 1;
+            }
+    }
+    return mask;
+}
+
+ss_status view_layers_place_block(view_layers *l, const ss_mesh *m, const int *island,
+                                  const float centre_uv[2], int size, uint64_t seed,
+                                  ss_error *err) {
+    if (!(l->block_mm > 0)) return SS_OK;
+    if (!m->has_uvs || !island) return SS_OK; /* no UV layout: shown as loaded */
+    /* the centre, else the centroid of the first triangle */
+    float c_uv[2] = {centre_uv ? centre_uv[0] : 0.5f, centre_uv ? centre_uv[1] : 0.5f}, pos[3];
+    int tri = ss_mesh_locate_uv(m, c_uv, pos);
+    if (tri < 0) {
+        tri = 0;
+        for (int k = 0; k < 2; k++)
+            c_uv[k] = (m->uvs[2 * m->indices[0] + k] + m->uvs[2 * m->indices[1] + k] +
+                       m->uvs[2 * m->indices[2] + k]) /
+                      3.0f;
+    }
+    int isl = island[tri];
+    /* mm per UV unit over that island: sqrt(surface area / UV area) */
+    double a3 = 0, a2 = 0;
+    for (int t = 0; t < m->ntriangles; t++) {
+        if (island[t] != isl) continue;
+        const uint32_t *ix = m->indices + 3 * t;
+        const float *p0 = m->positions + 3 * ix[0], *p1 = m->positions + 3 * ix[1],
+                    *p2 = m->positions + 3 * ix[2];
+        double e1[3], e2[3];
+        for (int k = 0; k < 3; k++) e1[k] = p1[k] - p0[k], e2[k] = p2[k] - p0[k];
+        double cr[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                        e1[0] * e2[1] - e1[1] * e2[0]};
+        a3 += 0.5 * sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]);
+        const float *u0 = m->uvs + 2 * ix[0], *u1 = m->uvs + 2 * ix[1], *u2 = m->uvs + 2 * ix[2];
+        a2 += 0.5 * fabs((double)(u1[0] - u0[0]) * (u2[1] - u0[1]) -
+                         (double)(u2[0] - u0[0]) * (u1[1] - u0[1]));
+    }
+    if (!(a3 > 0 && a2 > 0)) return SS_OK;
+    double mm_per_uv = sqrt(a3 / a2) * 1e3; /* metres -> mm */
+    double side = l->block_mm / mm_per_uv;  /* the block's side in UV units */
+    view_layers out = {0};
+    ss_base_skin skin = {0};
+    unsigned char *mask = island_mask(m, island, isl, size);
+    ss_status st = mask ? SS_OK : ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    if (!st) st = ss_base_skin_create(NULL, NULL, size, seed, &skin, err);
+    if (!st) st = alloc_layers(&out, size, l->nlayers, err);
+    if (st) {
+        free(mask);
+        ss_base_skin_free(&skin);
+        return st;
+    }
+    /* the plain skin everywhere, the block's texels where it lies */
+    pack_layer(&out, 0, skin.upper, NULL, NULL, NULL);
+    size_t n = (size_t)size * size;
+    for (int k = 1; k < l->nlayers; k++) {
+        memcpy(out.cr + k * n * 4, out.cr, n * 4);
+        memcpy(out.nh + k * n * 4, out.nh, n * 4);
+    }
+    /* the source level whose texels are about the target's (no aliasing) */
+    double step = (double)l->size * (1.0 / size) / side; /* source texels per target texel */
+    int lv = 0;
+    while (lv + 1 < l->nlevels && step >= 2.0) lv++, step /= 2;
+    int ns = l->size >> lv;
+    const unsigned char *scr = lv ? l->cr_mip[lv] : l->cr, *snh = lv ? l->nh_mip[lv] : l->nh;
+    double u0 = c_uv[0] - 0.5 * side, v0 = c_uv[1] - 0.5 * side;
+    int x0 = (int)floor(u0 * size), x1 = (int)ceil((u0 + side) * size);
+    int y0 = (int)floor(v0 * size), y1 = (int)ceil((v0 + side) * size);
+    if (x0 < 0) x0 = 0;
+    if (y0 < 0) y0 = 0;
+    if (x1 > size) x1 = size;
+    if (y1 > size) y1 = size;
+    float dec[256];
+    for (int i = 0; i < 256; i++) dec[i] = ss_srgb_decode(i / 255.0f);
+    for (int k = 0; k < l->nlayers; k++) {
+        unsigned char *dcr = out.cr + k * n * 4, *dnh = out.nh + k * n * 4;
+#pragma omp parallel for schedule(static)
+        for (int y = y0; y < y1; y++)
+            for (int x = x0; x < x1; x++) {
+                size_t i = (size_t)y * size + x;
+                if (!mask[i]) continue;
+                double bu = ((x + 0.5) / size - u0) / side, bv = ((y + 0.5) / size - v0) / side;
+                if (bu < 0 || bu > 1 || bv < 0 || bv > 1) continue;
+                /* feather: 0 at the block's edge, 1 from 8 % inside */
+                double e = fmin(fmin(bu, 1 - bu), fmin(bv, 1 - bv)) / 0.08;
+                float w = e >= 1 ? 1.0f : (float)(e * e * (3 - 2 * e));
+                float c[4], h[4];
+                sample_rgba(scr, ns, k, bu * ns, bv * ns, c);
+                sample_rgba(snh, ns, k, bu * ns, bv * ns, h);
+                for (int q = 0; q < 3; q++) { /* colour blended in linear light */
+                    float lin = (1 - w) * dec[dcr[4 * i + q]] + w * ss_srgb_decode(c[q] / 255.0f);
+                    dcr[4 * i + q] = to_byte(ss_srgb_encode(lin));
+                }
+                dcr[4 * i + 3] = to_byte(((1 - w) * dcr[4 * i + 3] + w * c[3]) / 255.0f);
+                for (int q = 0; q < 4; q++)
+                    dnh[4 * i + q] = to_byte(((1 - w) * dnh[4 * i + q] + w * h[q]) / 255.0f);
+            }
+    }
+    free(mask);
+    ss_base_skin_free(&skin);
+    /* keep the stops, the timeline and the source; replace the maps */
+    out.nstops = l->nstops;
+    memcpy(out.stop_day, l->stop_day, sizeof out.stop_day);
+    memcpy(out.stop_layer, l->stop_layer, sizeof out.stop_layer);
+    memcpy(out.stop_name, l->stop_name, sizeof out.stop_name);
+    out.end_day = l->end_day;
+    out.height_mm = l->height_mm;
+    out.block_mm = l->block_mm;
+    out.block_uv[0] = c_uv[0], out.block_uv[1] = c_uv[1];
+    out.block_side_uv = side;
+    out.mm_per_uv = mm_per_uv;
+    snprintf(out.source, sizeof out.source, "%.3900s (%.0f mm block at its size on the mesh)",
+             l->source, l->block_mm);
+    view_layers_free(l);
+    *l = out;
+    view_layers_build_mips(l, NULL);
+    return SS_OK;
 }

@@ -18,7 +18,9 @@
  *   result is sRGB-encoded in the shader, so any RGBA8 framebuffer (the
  *   GtkGLArea's or the offscreen one) holds display values.
  * - Stroke samples are drawn as round points in a colour per UV island,
- *   nudged towards the eye so the surface does not hide them. */
+ *   nudged towards the eye so the surface does not hide them; the brush
+ *   ring (the brush's outline on the surface under the cursor) as a line
+ *   loop over everything, white for the brush and red for the eraser. */
 #include "view.h"
 
 #include <epoxy/gl.h>
@@ -35,6 +37,8 @@ struct view_renderer {
     GLsizei nindex;
     GLuint pprog, pvao, pvbo;
     GLsizei npoints;
+    GLuint rvao, rvbo; /* the brush ring: a line loop */
+    GLsizei nring;
     GLuint tex_cr, tex_nh;
     int tex_layers;
     GLuint fbo, fbo_color, fbo_depth;
@@ -137,12 +141,14 @@ static const char *PFS =
     "#version 330 core\n"
     "flat in float v_island;\n"
     "out vec4 o_color;\n"
+    "uniform int u_line;\n"
     "void main() {\n"
     "  vec2 d = gl_PointCoord * 2.0 - 1.0;\n"
-    "  if (dot(d, d) > 1.0) discard;\n"
+    "  if (u_line == 0 && dot(d, d) > 1.0) discard;\n"
     "  int i = int(v_island + 0.5);\n"
     "  vec3 c = i == 0 ? vec3(0.1, 0.9, 1.0) : i == 1 ? vec3(1.0, 0.85, 0.1) : i == 2 ? "
-    "vec3(0.9, 0.2, 1.0) : vec3(0.3, 1.0, 0.3);\n"
+    "vec3(0.9, 0.2, 1.0) : i == 3 ? vec3(0.3, 1.0, 0.3) : i == 4 ? vec3(1.0) : "
+    "vec3(1.0, 0.25, 0.2);\n"
     "  o_color = vec4(c, 1.0);\n"
     "}\n";
 
@@ -373,6 +379,15 @@ view_renderer *view_renderer_create(const ss_mesh *m, ss_error *err) {
     glEnableVertexAttribArray(1);
     glVertexAttribPointer(1, 1, GL_FLOAT, GL_FALSE, sizeof(float) * 4,
                           (const void *)(sizeof(float) * 3));
+    glGenVertexArrays(1, &r->rvao);
+    glBindVertexArray(r->rvao);
+    glGenBuffers(1, &r->rvbo);
+    glBindBuffer(GL_ARRAY_BUFFER, r->rvbo);
+    glEnableVertexAttribArray(0);
+    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(float) * 4, (const void *)0);
+    glEnableVertexAttribArray(1);
+    glVertexAttribPointer(1, 1, GL_FLOAT, GL_FALSE, sizeof(float) * 4,
+                          (const void *)(sizeof(float) * 3));
     glBindVertexArray(0);
     r->radius = 0;
     for (int k = 0; k < 3; k++) {
@@ -392,6 +407,8 @@ void view_renderer_free(view_renderer *r) {
     if (r->pvbo) glDeleteBuffers(1, &r->pvbo);
     if (r->vao) glDeleteVertexArrays(1, &r->vao);
     if (r->pvao) glDeleteVertexArrays(1, &r->pvao);
+    if (r->rvbo) glDeleteBuffers(1, &r->rvbo);
+    if (r->rvao) glDeleteVertexArrays(1, &r->rvao);
     if (r->tex_cr) glDeleteTextures(1, &r->tex_cr);
     if (r->tex_nh) glDeleteTextures(1, &r->tex_nh);
     if (r->fbo) glDeleteFramebuffers(1, &r->fbo);
@@ -469,6 +486,20 @@ void view_renderer_set_strokes(view_renderer *r, const ss_paint_sample *s, int n
     free(buf);
 }
 
+void view_renderer_set_ring(view_renderer *r, const float *pts, int n, int eraser) {
+    float buf[4 * 256];
+    if (n > 256) n = 256;
+    for (int i = 0; i < n; i++) {
+        memcpy(buf + 4 * i, pts + 3 * i, sizeof(float) * 3);
+        buf[4 * i + 3] = eraser ? 5.0f : 4.0f;
+    }
+    r->nring = n;
+    if (n == 0) return;
+    glBindBuffer(GL_ARRAY_BUFFER, r->rvbo);
+    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(sizeof(float) * 4 * (size_t)n), buf,
+                 GL_DYNAMIC_DRAW);
+}
+
 void view_renderer_draw(view_renderer *r, const view_camera *c, const view_layers *l, double day,
                         float displace_scale, int show_strokes) {
     float mvp[16], eye[3];
@@ -520,8 +551,21 @@ void view_renderer_draw(view_renderer *r, const view_camera *c, const view_layer
         glUniform1f(glGetUniformLocation(r->pprog, "u_size"),
                     fmaxf(3.0f, (float)c->height / 240.0f));
         glUniform1f(glGetUniformLocation(r->pprog, "u_nudge"), 0.01f * r->radius);
+        glUniform1i(glGetUniformLocation(r->pprog, "u_line"), 0);
         glBindVertexArray(r->pvao);
         glDrawArrays(GL_POINTS, 0, r->npoints);
+    }
+    if (r->nring > 1) { /* the brush outline, over the surface, never hidden by it */
+        glUseProgram(r->pprog);
+        glUniformMatrix4fv(glGetUniformLocation(r->pprog, "u_mvp"), 1, GL_FALSE, mvp);
+        glUniform3fv(glGetUniformLocation(r->pprog, "u_eye"), 1, eye);
+        glUniform1f(glGetUniformLocation(r->pprog, "u_size"), 1.0f);
+        glUniform1f(glGetUniformLocation(r->pprog, "u_nudge"), 0.01f * r->radius);
+        glUniform1i(glGetUniformLocation(r->pprog, "u_line"), 1);
+        glDisable(GL_DEPTH_TEST);
+        glBindVertexArray(r->rvao);
+        glDrawArrays(GL_LINE_LOOP, 0, r->nring);
+        glEnable(GL_DEPTH_TEST);
     }
     glBindVertexArray(0);
     glUseProgram(0);

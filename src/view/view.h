@@ -38,6 +38,17 @@ typedef struct view_layers {
     double end_day;
     double height_mm;  /* height 1 - height 0 in millimetres */
     char source[4200]; /* what the layers were made from, for the title */
+    /* A single texture set (`skinsim skin`): its colour, linear RGB, kept
+     * so Generate draws the wound on this skin (owned; the app takes it). */
+    ss_image *skin;
+    /* > 0: the textures cover a block of skin this many mm on a side (a
+     * `skinsim wound` or heal run folder), not the mesh's UV layout;
+     * view_layers_place_block maps it onto the mesh at that size. */
+    double block_mm;
+    /* Where view_layers_place_block put it: centre UV, side in UV units,
+     * the mesh's mm per UV unit there. */
+    double block_uv[2], block_side_uv, mm_per_uv;
+    char timing[160]; /* Generate: where its time went */
 } view_layers;
 
 void view_layers_free(view_layers *l);
@@ -53,14 +64,36 @@ ss_status view_layers_plain_skin(int size, uint64_t seed, view_layers *out, ss_e
 /* From a folder: `skinsim abrasion --out DIR` (timeline.json, keys and the
  * maturation frames) or a single texture set (`skinsim skin`: base_color,
  * roughness or specular, normal, height; or *_color.png and siblings). */
-ss_status view_layers_load_dir(const char *dir, view_layers *out, ss_error *err);
+/* A finished `skinsim heal --out DIR` run is rendered first through the
+ * `skinsim wound --heal` path (ss_wound_make, into a temporary folder that
+ * is removed after loading): every snapshot day up to VIEW_HEAL_MAX_DAYS
+ * (evenly thinned beyond), at texture side heal_size. */
+#define VIEW_HEAL_MAX_DAYS 16
+ss_status view_layers_load_dir(const char *dir, int heal_size, int quiet, view_layers *out,
+                               ss_error *err);
+/* A block (block_mm > 0) mapped onto the mesh at its world size: every
+ * layer becomes a size x size texture of the mesh's UV layout with the
+ * procedural healthy skin (seed) and the block pasted, centred on
+ * centre_uv (NULL: UV (0.5, 0.5); the viewer passes the surface point in
+ * the middle of the start view, the back of the shipped hand) and scaled
+ * by the mesh's mm per UV unit in that point's UV island (mesh units are
+ * metres), inside that island only, its outer 8 % blended into the skin.
+ * island: per triangle (ss_paint's). Does nothing when block_mm == 0. */
+ss_status view_layers_place_block(view_layers *l, const ss_mesh *m, const int *island,
+                                  const float centre_uv[2], int size, uint64_t seed, ss_error *err);
 
 /* The Generate job: the abrasion timeline from strokes, at size, with
  * maturation re-rendered at extra positions so the slider can blend it.
- * progress (0..1) is written as it goes (read by the UI thread). Pure
+ * progress (0..1) is written as it goes (read by the UI thread). skin:
+ * the healthy skin colour (linear RGB, any size: a loaded texture set) or
+ * NULL for the procedural one, as `skinsim abrasion --upper`. Pure
  * computation: safe in a worker thread. */
-ss_status view_layers_generate(const ss_stroke_set *strokes, int size, uint64_t seed,
-                               volatile double *progress, view_layers *out, ss_error *err);
+ss_status view_layers_generate(const ss_stroke_set *strokes, const ss_image *skin, int size,
+                               uint64_t seed, volatile double *progress, view_layers *out,
+                               ss_error *err);
+/* The mask of the painted wound in UV space (1 inside a hull, 0 outside),
+ * size x size, as Generate fills it: what `skinsim abrasion --mask` reads. */
+ss_image *view_strokes_mask(const ss_stroke_set *strokes, int size, uint64_t seed, ss_error *err);
 
 /* ---- camera -------------------------------------------------------------- */
 
@@ -99,6 +132,9 @@ void view_renderer_free(view_renderer *r);
 ss_status view_renderer_set_layers(view_renderer *r, const view_layers *l, ss_error *err);
 /* Stroke samples to show (positions with NaN are skipped). */
 void view_renderer_set_strokes(view_renderer *r, const ss_paint_sample *s, int n);
+/* The brush ring: n points (xyz) of a closed outline on the surface (n = 0:
+ * none), white, or red for the eraser. */
+void view_renderer_set_ring(view_renderer *r, const float *pts, int n, int eraser);
 /* Draws the frame at `day` into the currently bound framebuffer of w x h. */
 void view_renderer_draw(view_renderer *r, const view_camera *c, const view_layers *l, double day,
                         float displace_scale, int show_strokes);

@@ -612,9 +612,15 @@ class Job:
         self.out_dir = _out_dir(obj, st)
         self.tmp = tempfile.mkdtemp(prefix="skinsim_job_")
         self.steps = []  # (label, argv)
+        # per step, the label of the command's progress that measures it (a
+        # command may report several in turn; the others are not followed)
+        self.follow = {}
         self.step = 0
         self.proc = None
         self._log = None
+        self._pipe = None  # read end of the command's SKINSIM_PROGRESS_FD
+        self._partial = ""
+        self.sub = 0.0  # the running command's own progress (0..1)
         o = self.out_dir
         if st.source == "HEAL":
             skin = os.path.join(o, "skin")
@@ -628,6 +634,7 @@ class Job:
             cmd, frames = wound_command(cli, st, self.days, os.path.join(o, "wound"), block,
                                         self.tmp)
             self.steps.append(("healing simulation", cmd))
+            self.follow[len(self.steps) - 1] = "wound"
             self._build = lambda: build_heal_material(obj, frames, self.days, skin, st)
         elif st.source == "SKIN":
             skin = os.path.join(o, "skin")
@@ -642,25 +649,69 @@ class Job:
             cmd, frames = abrasion_command(cli, st, self.days, os.path.join(o, "abrasion"),
                                            upper, self.tmp)
             self.steps.append(("abrasion timeline", cmd))
+            self.follow[len(self.steps) - 1] = "frames"
             self._build = lambda: build_material(obj, frames, self.days, st)
 
     @property
     def label(self):
         """What runs now, for the status bar."""
         k = min(self.step, len(self.steps) - 1)
-        return "skinsim: %s (%d of %d) -- Esc to cancel" % (self.steps[k][0], k + 1,
-                                                             len(self.steps))
+        within = " %d%%" % int(100 * self.sub) if self.sub > 0 else ""
+        return "skinsim: %s%s (%d of %d) -- Esc to cancel" % (self.steps[k][0], within, k + 1,
+                                                               len(self.steps))
 
     def start(self):
         """Starts the current step's command (a child process)."""
         label, cmd = self.steps[self.step]
         self._log = open(os.path.join(self.tmp, "step%d.log" % self.step), "w+")
+        # the command reports its progress as lines on a pipe
+        # ("skinsim-progress LABEL FRACTION", SKINSIM_PROGRESS_FD), read in poll()
+        self.sub, self._partial = 0.0, ""
+        r, w = os.pipe()
+        os.set_blocking(r, False)
+        env = dict(os.environ, SKINSIM_PROGRESS_FD=str(w))
         try:
-            self.proc = subprocess.Popen(cmd, stdout=self._log, stderr=subprocess.STDOUT)
+            self.proc = subprocess.Popen(cmd, stdout=self._log, stderr=subprocess.STDOUT,
+                                         env=env, pass_fds=(w,))
         except OSError as e:
+            os.close(r)
+            os.close(w)
             self._close_log()
             raise RuntimeError("cannot run skinsim (%s): %s; set its path in the add-on's "
                                "preferences or $SKINSIM_CLI" % (self.cli, e.strerror))
+        os.close(w)
+        self._pipe = r
+
+    def _read_progress(self):
+        """Takes the running command's latest progress line, if any."""
+        if self._pipe is None:
+            return
+        while True:
+            try:
+                chunk = os.read(self._pipe, 4096)
+            except BlockingIOError:
+                break
+            except OSError:
+                chunk = b""
+            if not chunk:
+                os.close(self._pipe)
+                self._pipe = None
+                break
+            self._partial += chunk.decode("utf-8", "replace")
+        *lines, self._partial = self._partial.split("\n")
+        for line in lines:
+            f = line.split()
+            if len(f) == 3 and f[0] == "skinsim-progress" and \
+                    f[1] == self.follow.get(self.step):
+                try:
+                    self.sub = min(1.0, max(0.0, float(f[-1])))
+                except ValueError:
+                    pass
+
+    def _close_pipe(self):
+        if self._pipe is not None:
+            os.close(self._pipe)
+            self._pipe = None
 
     def _close_log(self):
         text = ""
@@ -677,9 +728,12 @@ class Job:
         if self.proc is None:
             self.start()
         rc = self.proc.poll()
+        self._read_progress()
         if rc is None:
             return False
         self.proc = None
+        self._close_pipe()
+        self.sub = 0.0
         text = self._close_log()
         if rc != 0:
             lines = text.strip().splitlines()
@@ -691,8 +745,10 @@ class Job:
         return False
 
     def fraction(self):
-        """Share of the commands finished (0..1)."""
-        return self.step / len(self.steps)
+        """Share of the work done (0..1): the commands finished, and the
+        running command's own progress within its share (commands that report
+        none count in whole steps)."""
+        return min(1.0, (self.step + self.sub) / len(self.steps))
 
     def cancel(self):
         """Stops the running command and drops the job; the scene is untouched
@@ -705,6 +761,7 @@ class Job:
                 self.proc.kill()
                 self.proc.wait()
             self.proc = None
+        self._close_pipe()
         self._close_log()
         self.cleanup()
 
@@ -716,7 +773,10 @@ class Job:
         """Runs every command to the end (scripts, background mode)."""
         try:
             while not self.poll():
-                self.proc.wait()
+                try:
+                    self.proc.wait(timeout=0.2)
+                except subprocess.TimeoutExpired:
+                    pass
         except BaseException:
             self.cancel()
             raise

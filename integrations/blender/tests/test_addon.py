@@ -16,6 +16,7 @@ the first and last, the skin material, and day 3 over that skin; below, the
 simulated healing at frames 1, 4, 11 and its difference) to look at."""
 import math
 import os
+import time
 import sys
 
 import bpy
@@ -286,7 +287,23 @@ st.heal_days = "0,3,10"
 st.block_mm = 20.0
 st.wound_radius = 0.03
 st.out_dir = os.path.join(OUT, "textures_heal")
-check(bpy.ops.skinsim.build_material() == {"FINISHED"}, "healing source: build_material finished")
+# run as the modal operator runs it (poll() on a timer), recording the
+# progress it would show: it moves within the healing simulation's step
+# (the command's own progress lines), never backwards, and ends at 1
+hjob = skinsim_blender.Job(obj, st, CLI)
+seen = []
+while not hjob.poll():
+    seen.append(hjob.fraction())
+    time.sleep(0.05)
+seen.append(hjob.fraction())
+nsteps = len(hjob.steps)
+inside = [f for f in seen if abs(f * nsteps - round(f * nsteps)) > 1e-3]
+print("healing job: %d polls, %d with a fraction inside a step, e.g. %s"
+      % (len(seen), len(inside), ["%.3f" % f for f in inside[:5]]))
+check(len(inside) >= 2 and seen == sorted(seen) and seen[-1] == 1.0,
+      "the healing job reports progress within its command (%d of %d polls)"
+      % (len(inside), len(seen)))
+check(hjob.finish() is obj.active_material, "healing source: the job builds the material")
 hmat = obj.active_material
 check(hmat.name.startswith("skinsim_heal_"), "the mesh wears the healing material")
 himgs = [n.image for n in hmat.node_tree.nodes if n.bl_idname == "ShaderNodeTexImage"]
