@@ -12,7 +12,8 @@
  * interpolation along the axes (63 8-wide lerps, which vectorise). Colours
  * (base colour, subsurface radius) are stored as logs and interpolated in
  * log space, as ss_mm_table_lookup does (albedo is about exponential in the
- * absorbers). The result equals ss_mm_table_lookup's to float rounding
+ * absorbers), and the blood axis weighs in sqrt(blood), as ss_mm_table_lookup
+ * does (docs/modelmatch.md). The result equals ss_mm_table_lookup's to float rounding
  * (tested); a new table file plugs in unchanged.
  *
  * The surface: specular and roughness come from the table's surface curve
@@ -139,7 +140,10 @@ static inline void lut_lookup_slots(const ss_skin_lut *l, size_t *cbase, float (
         if (xa > v[n - 1]) xa = v[n - 1];
         int i = 0;
         while (i < n - 2 && xa >= v[i + 1]) i++;
-        fr[a] = (xa - v[i]) / (v[i + 1] - v[i]);
+        if (a == SS_MM_AXIS_BLOOD && v[i] >= 0.0f) /* as ss_mm_table_lookup */
+            fr[a] = (sqrtf(xa) - sqrtf(v[i])) / (sqrtf(v[i + 1]) - sqrtf(v[i]));
+        else
+            fr[a] = (xa - v[i]) / (v[i + 1] - v[i]);
         base += (size_t)i * l->stride[a];
     }
     const int slot =
