@@ -828,7 +828,7 @@ int cmd_skin(int argc, char **argv) {
         return 0;
     }
     ss_threads_set(o.threads);
-    /* memory: bio map 44 B, render maps 52 B, cavity scratch 4 B a texel, and a margin */
+    /* memory: bio map 44 B, render maps 52 B a texel, and a margin */
     double need = (double)s.size * s.size * 110.0;
     double phys = ss_memory_physical_bytes();
     if (!st && phys > 0 && need > 0.8 * phys)

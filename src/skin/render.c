@@ -257,17 +257,15 @@ void ss_skin_maps_free(ss_skin_maps *m) {
 /* Cavity: how far a texel lies below the mean height of its neighbourhood
  * (a box of +-0.25 mm, wrapped), over CAVITY_DEPTH_MM: 1 on plateaus and
  * ridges, 0 at the bottom of a furrow 0.05 mm deep. Separable running
- * sums, so O(1) per texel whatever the texel size. */
+ * sums, so O(1) per texel whatever the texel size; tmp holds W x H floats. */
 #define CAVITY_RADIUS_MM 0.25
 #define CAVITY_DEPTH_MM 0.05
-static ss_status cavity_map(const ss_image *h, double texel_mm, ss_image *out, ss_error *err) {
+static void cavity_map(const ss_image *h, double texel_mm, float *tmp, ss_image *out) {
     const int W = h->width, H = h->height;
     int R = (int)lround(CAVITY_RADIUS_MM / texel_mm);
     if (R < 1) R = 1;
     if (2 * R + 1 > W) R = (W - 1) / 2;
     if (2 * R + 1 > H) R = (H - 1) / 2;
-    float *tmp = malloc((size_t)W * H * sizeof(float));
-    if (!tmp) return ss_error_set(err, SS_ERR_NOMEM, "cavity map: out of memory");
         /* the wraps by compare, not %, and the column pass over blocks of
          * columns a row at a time (each column's sum is updated in the same
          * order as one column at a time, so the values are the same) */
@@ -310,8 +308,6 @@ static ss_status cavity_map(const ss_image *h, double texel_mm, ss_image *out, s
             }
         }
     }
-    free(tmp);
-    return SS_OK;
 }
 
 ss_status ss_skin_render_maps(const ss_image *bio, const ss_skin_lut *lut, double world_size_cm,
@@ -364,12 +360,10 @@ ss_status ss_skin_render_maps(const ss_image *bio, const ss_skin_lut *lut, doubl
         free(cache);
     }
     const double texel_mm = world_size_cm * 10.0 / W;
+    /* the cavity map's row sums go in the normal map's memory (3 floats a
+     * texel, not yet written): fresh pages cost faults (16 MB at 2048^2) */
+    cavity_map(out->height_mm, texel_mm, out->normal->data, out->cavity);
     ss_height_to_normal(out->height_mm, (float)(1.0 / texel_mm), out->normal);
-    ss_status st = cavity_map(out->height_mm, texel_mm, out->cavity, err);
-    if (st) {
-        ss_skin_maps_free(out);
-        return st;
-    }
     /* furrows and follicle openings shadow the specular lobe */
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < n; i++)
