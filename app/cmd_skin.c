@@ -469,26 +469,28 @@ static ss_status read_inputs(const opts *o, inputs *in, cJSON *notes, ss_error *
     return st;
 }
 
-/* scratch: 4 floats a texel, the caller's (shared with write_sheet: fresh
- * memory costs page faults) */
-static ss_status write_maps(const char *dir, const ss_skin_maps *m, const ss_image *bio,
-                            int bio_half, const ss_image *mr, const ss_image *normal_gl,
-                            float *scratch, ss_error *err) {
+/* Writes the maps. Translucency and height are turned into what their
+ * files hold in place (the contact sheet, written before, has read them):
+ * translucency to the subsurface radius over 2 mm, clamped; height to
+ * 0..1 over height_min_mm..height_max_mm for the 16-bit PNG. No full-size
+ * copies (fresh memory costs page faults: 67 MB at 2048^2). */
+static ss_status write_maps(const char *dir, ss_skin_maps *m, const ss_image *bio, int bio_half,
+                            const ss_image *mr, const ss_image *normal_gl, ss_error *err) {
     enum { N = 10 };
     static const char *names[N] = {
         "base_color.png", "roughness.png",   "specular.png",     "height.png", "normal.png",
         "bio.exr",        "metal_rough.png", "translucency.png", "cavity.png", "normal_gl.png"};
     const size_t n = (size_t)m->height_mm->width * m->height_mm->height;
-    ss_image h16v = {m->height_mm->width, m->height_mm->height, 1, scratch},
-             trv = {m->height_mm->width, m->height_mm->height, 3, scratch + n}, *h16 = &h16v,
-             *tr = &trv;
     double lo = m->height_min_mm, span = m->height_max_mm - m->height_min_mm;
-    for (size_t i = 0; i < n; i++)
-        h16->data[i] = span > 0 ? (float)((m->height_mm->data[i] - lo) / span) : 0.5f;
-    /* subsurface radius: 1.0 = 2 mm (5 x the table's cm), clamped */
-    for (size_t i = 0; i < n * 3; i++) {
-        float v = m->translucency->data[i] * 5.0f;
-        tr->data[i] = v < 0.0f ? 0.0f : v > 1.0f ? 1.0f : v;
+    float *h = m->height_mm->data, *t = m->translucency->data;
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < n; i++) {
+        h[i] = span > 0 ? (float)((h[i] - lo) / span) : 0.5f;
+        /* subsurface radius: 1.0 = 2 mm (5 x the table's cm), clamped */
+        for (int c = 0; c < 3; c++) {
+            float v = t[i * 3 + c] * 5.0f;
+            t[i * 3 + c] = v < 0.0f ? 0.0f : v > 1.0f ? 1.0f : v;
+        }
     }
     const char *bio_names[SS_BIO_NCHANNELS];
     for (int c = 0; c < SS_BIO_NCHANNELS; c++) bio_names[c] = ss_bio_channel_name(c);
@@ -509,7 +511,7 @@ static ss_status write_maps(const char *dir, const ss_skin_maps *m, const ss_ima
             sts[k] = ss_png_write(path, m->specular, 8, SS_ENC_LINEAR, &errs[k]);
             break;
         case 3:
-            sts[k] = ss_png_write(path, h16, 16, SS_ENC_LINEAR, &errs[k]);
+            sts[k] = ss_png_write(path, m->height_mm, 16, SS_ENC_LINEAR, &errs[k]);
             break;
         case 4:
             sts[k] = ss_png_write(path, m->normal, 8, SS_ENC_LINEAR, &errs[k]);
@@ -521,7 +523,7 @@ static ss_status write_maps(const char *dir, const ss_skin_maps *m, const ss_ima
             if (mr) sts[k] = ss_png_write(path, mr, 8, SS_ENC_LINEAR, &errs[k]);
             break;
         case 7:
-            sts[k] = ss_png_write(path, tr, 8, SS_ENC_LINEAR, &errs[k]);
+            sts[k] = ss_png_write(path, m->translucency, 8, SS_ENC_LINEAR, &errs[k]);
             break;
         case 8:
             sts[k] = ss_png_write(path, m->cavity, 8, SS_ENC_LINEAR, &errs[k]);
@@ -539,6 +541,42 @@ static ss_status write_maps(const char *dir, const ss_skin_maps *m, const ss_ima
     return SS_OK;
 }
 
+/* How a map is shown on the contact sheet, texel by texel (mapped while
+ * shrinking, ss_image_resize_mapped: no full-size display image). */
+typedef struct {
+    int ch;        /* the channel shown (grey maps) */
+    double lo, hi; /* grey maps: the displayed range */
+} sheet_map;
+
+/* Grey: a 1-channel quantity onto 0..1 grey from mean - 4 sd to mean + 4 sd
+ * (clamped to the data's range): a few tall cysts do not turn everything
+ * else into one grey. Decoded, since the sheet encodes sRGB. */
+static void map_grey(const float *texel, float *out, void *ctx) {
+    const sheet_map *g = ctx;
+    double v = g->hi > g->lo ? (texel[g->ch] - g->lo) / (g->hi - g->lo) : 0.5;
+    out[0] = ss_srgb_decode((float)(v < 0 ? 0 : v > 1 ? 1 : v));
+}
+static sheet_map grey_range(const ss_image *src, int ch) {
+    const int C = src->channels;
+    size_t n = (size_t)src->width * src->height;
+    double s1 = 0, s2 = 0, mn = INFINITY, mx = -INFINITY;
+    for (size_t i = 0; i < n; i++) {
+        double v = src->data[i * C + ch];
+        s1 += v, s2 += v * v;
+        mn = fmin(mn, v), mx = fmax(mx, v);
+    }
+    double mean = s1 / n, sd = sqrt(fmax(0.0, s2 / n - mean * mean));
+    return (sheet_map){ch, fmax(mn, mean - 4 * sd), fmin(mx, mean + 4 * sd)};
+}
+/* translucency: radius 0..2 mm, shown as stored in translucency.png */
+static void map_radius(const float *texel, float *out, void *ctx) {
+    (void)ctx;
+    for (int c = 0; c < 3; c++) {
+        float v = texel[c] * 5.0f;
+        out[c] = ss_srgb_decode(v < 0.0f ? 0.0f : v > 1.0f ? 1.0f : v);
+    }
+}
+
 /* A w x w crop of img at its centre (1:1 texels for the contact sheet). */
 static ss_image *crop_centre(const ss_image *img, int w, ss_error *err) {
     if (w > img->width) w = img->width;
@@ -552,44 +590,23 @@ static ss_image *crop_centre(const ss_image *img, int w, ss_error *err) {
     return c;
 }
 
-/* Maps a 1-channel quantity onto 0..1 grey for display, from mean - 4 sd to
- * mean + 4 sd (clamped to the data's range): a few tall cysts do not turn
- * everything else into one grey. Decoded, since the sheet encodes sRGB.
- * Writes into out (width x height floats, the caller's scratch). */
-static void display_grey(const ss_image *src, int C, int ch, float *out) {
-    size_t n = (size_t)src->width * src->height;
-    double s1 = 0, s2 = 0, mn = INFINITY, mx = -INFINITY;
-    for (size_t i = 0; i < n; i++) {
-        double v = src->data[i * C + ch];
-        s1 += v, s2 += v * v;
-        mn = fmin(mn, v), mx = fmax(mx, v);
-    }
-    double mean = s1 / n, sd = sqrt(fmax(0.0, s2 / n - mean * mean));
-    double lo = fmax(mn, mean - 4 * sd), hi = fmin(mx, mean + 4 * sd);
-    for (size_t i = 0; i < n; i++) {
-        double v = hi > lo ? (src->data[i * C + ch] - lo) / (hi - lo) : 0.5;
-        out[i] = ss_srgb_decode((float)(v < 0 ? 0 : v > 1 ? 1 : v));
-    }
-}
-
 /* All maps side by side: base colour (whole and a 1:1 crop), roughness,
  * specular, height, normal (1:1 crop: at a glance the whole map is flat
- * blue), melanin, blood. The full-size display images are made one at a
- * time in one scratch buffer and shrunk to their tile before the next
- * (fresh memory costs page faults: ~130 MB fewer at 2048). */
+ * blue), melanin, blood, translucency, cavity (1:1 crop). Written before
+ * write_maps turns height and translucency into their file values. */
 static ss_status write_sheet(const char *dir, const ss_skin_maps *m, const ss_image *bio,
-                             float *buf, ss_error *err) {
+                             ss_error *err) {
     enum { N = 10 };
     const int S = m->base_color->width, T = S < 512 ? S : 512, CROP = S < 256 ? S : 256;
     ss_image *tiles[N] = {0};
     static const char *labels[N] = {"base colour",  "base colour 1:1", "roughness", "specular",
                                     "height",       "normal 1:1",      "melanin",   "blood",
                                     "translucency", "cavity 1:1"};
-    const size_t n = (size_t)S * m->base_color->height;
     ss_status st = SS_OK;
     for (int k = 0; k < N && !st; k++) {
-        ss_image view = {S, m->base_color->height, 1, buf}, *own = NULL;
-        const ss_image *src = &view;
+        const ss_image *src = NULL, *grey = NULL;
+        ss_image *own = NULL;
+        int ch = 0;
         switch (k) {
         case 0:
             src = m->base_color;
@@ -598,13 +615,13 @@ static ss_status write_sheet(const char *dir, const ss_skin_maps *m, const ss_im
             src = own = crop_centre(m->base_color, CROP, err);
             break;
         case 2:
-            display_grey(m->roughness, 1, 0, buf);
+            grey = m->roughness;
             break;
         case 3:
-            display_grey(m->specular, 1, 0, buf);
+            grey = m->specular;
             break;
         case 4:
-            display_grey(m->height_mm, 1, 0, buf);
+            grey = m->height_mm;
             break;
         case 5: /* the normal map's stored values, shown as they are */
             if ((src = own = crop_centre(m->normal, CROP, err))) {
@@ -613,17 +630,13 @@ static ss_status write_sheet(const char *dir, const ss_skin_maps *m, const ss_im
             }
             break;
         case 6:
-            display_grey(bio, SS_BIO_NCHANNELS, SS_BIO_MELANIN, buf);
+            grey = bio, ch = SS_BIO_MELANIN;
             break;
         case 7:
-            display_grey(bio, SS_BIO_NCHANNELS, SS_BIO_BLOOD, buf);
+            grey = bio, ch = SS_BIO_BLOOD;
             break;
-        case 8: /* radius 0..2 mm, shown as stored in translucency.png */
-            view.channels = 3;
-            for (size_t i = 0; i < n * 3; i++) {
-                float v = m->translucency->data[i] * 5.0f;
-                buf[i] = ss_srgb_decode(v < 0.0f ? 0.0f : v > 1.0f ? 1.0f : v);
-            }
+        case 8:
+            tiles[k] = ss_image_resize_mapped(m->translucency, T, T, 3, map_radius, NULL, err);
             break;
         case 9:
             if ((src = own = crop_centre(m->cavity, CROP, err))) {
@@ -632,15 +645,14 @@ static ss_status write_sheet(const char *dir, const ss_skin_maps *m, const ss_im
             }
             break;
         }
-        if (!src) {
-            st = err->code;
-            break;
-        }
-        if (src->width > T)
+        if (grey) {
+            sheet_map g = grey_range(grey, ch);
+            tiles[k] = ss_image_resize_mapped(grey, T, T, 1, map_grey, &g, err);
+        } else if (src && src->width > T)
             tiles[k] = ss_image_resize(src, T, T, err);
         else if (own)
             tiles[k] = own, own = NULL;
-        else
+        else if (src)
             tiles[k] = ss_image_clone(src, err);
         ss_image_free(own);
         if (!tiles[k]) st = err->code;
@@ -722,20 +734,15 @@ static ss_status run(const opts *o, const ss_skin_settings *s, inputs *in, const
             maps.normal = dx;
         }
     }
-    /* one scratch for the write copies and the contact sheet's display images */
-    float *scratch = NULL;
-    if (!st && !(scratch = malloc((size_t)s->size * s->size * 4 * sizeof(float))))
-        st = ss_error_set(err, SS_ERR_NOMEM, "skin: out of memory for the write buffers");
-    if (!st)
-        st = write_maps(dir, &maps, o->no_bio ? NULL : bio, !o->bio_float, mr, normal_gl, scratch,
-                        err);
+    /* the sheet first: write_maps turns height and translucency into
+     * their file values in place */
+    if (!st) st = write_sheet(dir, &maps, bio, err);
     char path[4200];
     if (!st) {
         snprintf(path, sizeof path, "%s/features.csv", dir);
         st = ss_skin_features_write_csv(path, &in->features, err);
     }
-    if (!st) st = write_sheet(dir, &maps, bio, scratch, err);
-    free(scratch);
+    if (!st) st = write_maps(dir, &maps, o->no_bio ? NULL : bio, !o->bio_float, mr, normal_gl, err);
     const char *gl_normal = o->directx ? "normal_gl.png" : "normal.png";
     if (!st && o->gltf) {
         snprintf(path, sizeof path, "%s/skin.gltf", dir);
@@ -821,7 +828,7 @@ int cmd_skin(int argc, char **argv) {
         return 0;
     }
     ss_threads_set(o.threads);
-    /* memory: bio map 44 B, render maps 36 B, writing copies ~24 B a texel */
+    /* memory: bio map 44 B, render maps 52 B a texel, and a margin */
     double need = (double)s.size * s.size * 110.0;
     double phys = ss_memory_physical_bytes();
     if (!st && phys > 0 && need > 0.8 * phys)

@@ -305,7 +305,8 @@ static void test_table_lookup(void **state) {
         for (int f = 0; f < SS_MM_NFIELDS; f++)
             assert_true(out[f] == t->entries[e * SS_MM_NFIELDS + f]);
     }
-    /* linear between two neighbouring nodes along each axis */
+    /* linear between two neighbouring nodes along each axis (blood: linear
+     * in sqrt(blood), the lookup's weight there) */
     for (int a = 0; a < SS_MM_NAXES; a++) {
         if (t->nsamples[a] < 2) continue;
         int i0[SS_MM_NAXES] = {1, 0, 2, 0, 1, 1}, i1[SS_MM_NAXES];
@@ -322,6 +323,11 @@ static void test_table_lookup(void **state) {
             for (int b = 0; b < SS_MM_NAXES; b++) x[b] = t->axis[b][i0[b]];
             x[a] = (1 - u) * t->axis[a][i0[a]] + u * t->axis[a][i1[a]];
             ss_mm_table_lookup(t, x, out);
+            if (a == SS_MM_AXIS_BLOOD) {
+                const double s0 = sqrt(t->axis[a][i0[a]]), s1 = sqrt(t->axis[a][i1[a]]);
+                u = (sqrt(x[a]) - s0) / (s1 - s0);
+                assert_true(u > 0.0 && u < 1.0 && fabs(u - s / 4.0) > 0.01);
+            }
             for (int f = 0; f < SS_MM_NFIELDS; f++) {
                 double want = colour_field(f) && e0[f] > 0 && e1[f] > 0
                                   ? exp((1 - u) * log(e0[f]) + u * log(e1[f]))
@@ -339,6 +345,7 @@ static void test_table_lookup(void **state) {
                 x[a] = t->axis[a][k % (size_t)t->nsamples[a]];
                 k /= (size_t)t->nsamples[a];
             }
+            x[SS_MM_AXIS_BLOOD] = sqrt(x[SS_MM_AXIS_BLOOD]); /* affine in sqrt(blood) */
             t->entries[e * SS_MM_NFIELDS + f] = affine(f, x);
         }
     for (int trial = 0; trial < 50; trial++) {
@@ -348,6 +355,7 @@ static void test_table_lookup(void **state) {
             x[a] = t->axis[a][0] + u * (t->axis[a][t->nsamples[a] - 1] - t->axis[a][0]);
         }
         ss_mm_table_lookup(t, x, out);
+        x[SS_MM_AXIS_BLOOD] = sqrt(x[SS_MM_AXIS_BLOOD]);
         for (int f = 0; f < SS_MM_NFIELDS; f++) {
             double want = affine(f, x);
             if (t->nsamples[3] == 1) {
@@ -394,7 +402,8 @@ static void test_table_lookup(void **state) {
 
 /* The shipped table between its nodes: at random off-grid points the
  * interpolated albedo agrees with the transport (the table's sigma, its
- * wavelengths) within dE00 3.5 (measured max 2.6 over 16 points, docs); its
+ * wavelengths) within dE00 2 (1.5 at the old worst point; measured max 1.6,
+ * mean 0.6 over 16 points at 20000 packets, docs/modelmatch.md); its
  * surface curve gives a roughness that grows with sigma; every subsurface
  * radius is positive; the file round-trips with the curve (version 2). */
 static void test_shipped_table_offgrid(void **state) {
@@ -412,13 +421,16 @@ static void test_shipped_table_offgrid(void **state) {
     so.wl_min_nm = t->wl_min_nm, so.wl_max_nm = t->wl_max_nm, so.wl_step_nm = t->wl_step_nm;
     so.mc.photons = 8000;
     so.mc.roughness_sigma = t->surface_sigma;
-    const int npts = tu_quick() ? 1 : 3;
+    /* point 0: light skin at low blood, between the blood nodes 0.002 and
+     * 0.01, where weights linear in blood gave dE00 2.0 (sqrt(blood): 0.9);
+     * then random points, melanin log-uniform (light skin as often as dark) */
+    const int npts = tu_quick() ? 2 : 4;
     for (int k = 0; k < npts; k++) {
-        double x[SS_MM_NAXES], v[SS_MM_NFIELDS];
-        for (int a = 0; a < SS_MM_NAXES; a++) {
-            double lo, hi;
+        double x[SS_MM_NAXES] = {0.0036, 0.164, 0.0046, 0.873, 0.0030, 0.0070}, v[SS_MM_NFIELDS];
+        for (int a = 0; a < SS_MM_NAXES && k > 0; a++) {
+            double lo, hi, u = 0.05 + 0.9 * ss_rng_uniform(21, (uint64_t)a, (uint64_t)k);
             ss_mm_axis_default_range(a, &lo, &hi);
-            x[a] = lo + (hi - lo) * (0.15 + 0.7 * ss_rng_uniform(21, (uint64_t)a, (uint64_t)k));
+            x[a] = a == 0 ? exp(log(lo) + (log(hi) - log(lo)) * u) : lo + (hi - lo) * u;
         }
         ss_bio_params b;
         ss_bio_params_default(&b);
@@ -432,7 +444,7 @@ static void test_shipped_table_offgrid(void **state) {
         double de = ss_ciede2000(L0, L1);
         print_message("off-grid %d: melanin %.3f pheo %.2f blood %.4f: dE00 %.2f\n", k, x[0], x[1],
                       x[2], de);
-        assert_true(de < 3.5);
+        assert_true(de < (k == 0 ? 1.5 : 2.0));
     }
     char *dir = tu_tmpdir("shipped");
     char path[512];

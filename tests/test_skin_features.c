@@ -267,6 +267,56 @@ static void test_single_features(void **state) {
     ss_image_free(lips);
 }
 
+/* A follicle smaller than a texel is area-sampled: on 0.2 mm texels an
+ * opening of r_i 0.04 mm darkens by the area it covers, wherever it falls
+ * in its texel. Moved by a fraction of a texel, its summed alpha (its
+ * coverage) stays within 10 % and near the disk integral; its peak texel
+ * stays well under full contrast (point sampling: 1 at the texel centre, 0
+ * a quarter texel away). */
+static void test_follicle_area_sampled(void **state) {
+    (void)state;
+    ss_error err;
+    ss_skin_settings s = small_settings(32);
+    s.phi = 0.0;
+    s.dist.mottle_melanin = s.dist.mottle_blood = s.dist.mottle_height = 0.0;
+    s.dist.relief_depth = s.dist.relief_depth2 = 0.0;
+    s.world_size_cm = 0.64; /* 0.2 mm texels */
+    const double texel = 0.2, ri = 0.04, ro = 0.1;
+    /* the disk integral of the alpha, by dense sampling, in texels */
+    double want = 0.0;
+    const int M = 400;
+    for (int j = 0; j < M; j++)
+        for (int i = 0; i < M; i++) {
+            double x = -ro + 2 * ro * (i + 0.5) / M, y = -ro + 2 * ro * (j + 0.5) / M;
+            want += ss_profile_follicle(hypot(x, y), ri, ro);
+        }
+    want *= (2 * ro / M) * (2 * ro / M) / (texel * texel);
+    const double offs[4][2] = {{0.5, 0.5}, {0.0, 0.0}, {0.25, 0.7}, {0.9, 0.1}};
+    double sums[4];
+    for (int k = 0; k < 4; k++) {
+        ss_skin_feature f;
+        memset(&f, 0, sizeof f);
+        f.type = SS_FEAT_FOLLICLE, f.r = ri, f.r2 = ro;
+        f.x = (16 + offs[k][0]) / 32.0, f.y = (16 + offs[k][1]) / 32.0;
+        ss_skin_feature_list l = {1, &f};
+        ss_image *bio = ss_skin_bio_maps(&s, NULL, &l, &err);
+        assert_non_null(bio);
+        double sum = 0.0, peak = 0.0;
+        for (int i = 0; i < 32 * 32; i++) {
+            double a = bio->data[(size_t)i * SS_BIO_NCHANNELS + SS_BIO_EXTRA_A];
+            sum += a;
+            peak = fmax(peak, a);
+        }
+        print_message("follicle at +%.2f,+%.2f texel: coverage %.4f (disk %.4f), peak %.3f\n",
+                      offs[k][0], offs[k][1], sum, want, peak);
+        assert_true(fabs(sum - want) < 0.15 * want);
+        assert_true(peak < 0.6);
+        sums[k] = sum;
+        ss_image_free(bio);
+    }
+    for (int k = 1; k < 4; k++) assert_true(fabs(sums[k] - sums[0]) < 0.1 * sums[0]);
+}
+
 /* Features crossing the edges wrap: every map's last column continues into
  * its first (and last row into the first) as smoothly as neighbouring
  * columns continue each other. */
@@ -831,6 +881,7 @@ int main(void) {
         cmocka_unit_test(test_counts_and_zero_field),
         cmocka_unit_test(test_samplers_agree),
         cmocka_unit_test(test_single_features),
+        cmocka_unit_test(test_follicle_area_sampled),
         cmocka_unit_test(test_seamless_wrap),
         cmocka_unit_test(test_determinism_and_roundtrip),
         cmocka_unit_test(test_lut_matches_table),

@@ -92,6 +92,12 @@ void ss_image_sample_wrap(const ss_image *img, float u, float v, float *out);
 /* Resample to a new size (bilinear, wrap-around); used for input textures of
  * another size than the output. */
 ss_image *ss_image_resize(const ss_image *img, int width, int height, ss_error *err);
+/* Maps one texel of the source (its channels) to `channels` floats (<= 4). */
+typedef void (*ss_texel_map)(const float *texel, float *out, void *ctx);
+/* ss_image_resize of the image map(img) (channels per texel), equal to it
+ * float for float, reading only the texels the resampling needs. */
+ss_image *ss_image_resize_mapped(const ss_image *img, int width, int height, int channels,
+                                 ss_texel_map map, void *ctx, ss_error *err);
 
 /* A contact sheet: tiles (any size, RGB or grey, linear) scaled into
  * tile_px squares on a dark canvas, `columns` per row, each labelled below

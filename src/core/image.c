@@ -110,6 +110,46 @@ void ss_image_sample_wrap(const ss_image *img, float u, float v, float *out) {
     }
 }
 
+/* ss_image_resize of map(img), without making the mapped full-size image:
+ * each output texel is the same bilinear sample as ss_image_sample_wrap
+ * (the same operations, so the same floats) of the four mapped texels it
+ * reads. A 2048^2 map shrunk to 512^2 maps 1 texel in 4 instead of all. */
+ss_image *ss_image_resize_mapped(const ss_image *img, int width, int height, int channels,
+                                 ss_texel_map map, void *ctx, ss_error *err) {
+    if (channels < 1 || channels > 4 || !map) {
+        ss_error_set(err, SS_ERR_INPUT, "resize: %d mapped channels (1..4)", channels);
+        return NULL;
+    }
+    ss_image *r = ss_image_create(width, height, channels, err);
+    if (!r) return NULL;
+    if (width == img->width && height == img->height) {
+#pragma omp parallel for schedule(static)
+        for (int y = 0; y < height; y++)
+            for (int x = 0; x < width; x++) map(ss_image_px(img, x, y), ss_image_px(r, x, y), ctx);
+        return r;
+    }
+#pragma omp parallel for schedule(static)
+    for (int y = 0; y < height; y++)
+        for (int x = 0; x < width; x++) {
+            const float u = ((float)x + 0.5f) / (float)width, v = ((float)y + 0.5f) / (float)height;
+            float fx = u * (float)img->width - 0.5f, fy = v * (float)img->height - 0.5f;
+            float x0f = floorf(fx), y0f = floorf(fy);
+            float tx = fx - x0f, ty = fy - y0f;
+            int x0 = wrap((int)x0f, img->width), y0 = wrap((int)y0f, img->height);
+            int x1 = wrap(x0 + 1, img->width), y1 = wrap(y0 + 1, img->height);
+            float a[4], b[4], c[4], d[4], *out = ss_image_px(r, x, y);
+            map(ss_image_px(img, x0, y0), a, ctx);
+            map(ss_image_px(img, x1, y0), b, ctx);
+            map(ss_image_px(img, x0, y1), c, ctx);
+            map(ss_image_px(img, x1, y1), d, ctx);
+            for (int k = 0; k < channels; k++) {
+                float top = a[k] + (b[k] - a[k]) * tx, bot = c[k] + (d[k] - c[k]) * tx;
+                out[k] = top + (bot - top) * ty;
+            }
+        }
+    return r;
+}
+
 ss_image *ss_image_resize(const ss_image *img, int width, int height, ss_error *err) {
     ss_image *r = ss_image_create(width, height, img->channels, err);
     if (!r) return NULL;

@@ -12,7 +12,8 @@
  * interpolation along the axes (63 8-wide lerps, which vectorise). Colours
  * (base colour, subsurface radius) are stored as logs and interpolated in
  * log space, as ss_mm_table_lookup does (albedo is about exponential in the
- * absorbers). The result equals ss_mm_table_lookup's to float rounding
+ * absorbers), and the blood axis weighs in sqrt(blood), as ss_mm_table_lookup
+ * does (docs/modelmatch.md). The result equals ss_mm_table_lookup's to float rounding
  * (tested); a new table file plugs in unchanged.
  *
  * The surface: specular and roughness come from the table's surface curve
@@ -139,7 +140,10 @@ static inline void lut_lookup_slots(const ss_skin_lut *l, size_t *cbase, float (
         if (xa > v[n - 1]) xa = v[n - 1];
         int i = 0;
         while (i < n - 2 && xa >= v[i + 1]) i++;
-        fr[a] = (xa - v[i]) / (v[i + 1] - v[i]);
+        if (a == SS_MM_AXIS_BLOOD && v[i] >= 0.0f) /* as ss_mm_table_lookup */
+            fr[a] = (sqrtf(xa) - sqrtf(v[i])) / (sqrtf(v[i + 1]) - sqrtf(v[i]));
+        else
+            fr[a] = (xa - v[i]) / (v[i + 1] - v[i]);
         base += (size_t)i * l->stride[a];
     }
     const int slot =
@@ -253,17 +257,15 @@ void ss_skin_maps_free(ss_skin_maps *m) {
 /* Cavity: how far a texel lies below the mean height of its neighbourhood
  * (a box of +-0.25 mm, wrapped), over CAVITY_DEPTH_MM: 1 on plateaus and
  * ridges, 0 at the bottom of a furrow 0.05 mm deep. Separable running
- * sums, so O(1) per texel whatever the texel size. */
+ * sums, so O(1) per texel whatever the texel size; tmp holds W x H floats. */
 #define CAVITY_RADIUS_MM 0.25
 #define CAVITY_DEPTH_MM 0.05
-static ss_status cavity_map(const ss_image *h, double texel_mm, ss_image *out, ss_error *err) {
+static void cavity_map(const ss_image *h, double texel_mm, float *tmp, ss_image *out) {
     const int W = h->width, H = h->height;
     int R = (int)lround(CAVITY_RADIUS_MM / texel_mm);
     if (R < 1) R = 1;
     if (2 * R + 1 > W) R = (W - 1) / 2;
     if (2 * R + 1 > H) R = (H - 1) / 2;
-    float *tmp = malloc((size_t)W * H * sizeof(float));
-    if (!tmp) return ss_error_set(err, SS_ERR_NOMEM, "cavity map: out of memory");
         /* the wraps by compare, not %, and the column pass over blocks of
          * columns a row at a time (each column's sum is updated in the same
          * order as one column at a time, so the values are the same) */
@@ -306,8 +308,6 @@ static ss_status cavity_map(const ss_image *h, double texel_mm, ss_image *out, s
             }
         }
     }
-    free(tmp);
-    return SS_OK;
 }
 
 ss_status ss_skin_render_maps(const ss_image *bio, const ss_skin_lut *lut, double world_size_cm,
@@ -360,12 +360,10 @@ ss_status ss_skin_render_maps(const ss_image *bio, const ss_skin_lut *lut, doubl
         free(cache);
     }
     const double texel_mm = world_size_cm * 10.0 / W;
+    /* the cavity map's row sums go in the normal map's memory (3 floats a
+     * texel, not yet written): fresh pages cost faults (16 MB at 2048^2) */
+    cavity_map(out->height_mm, texel_mm, out->normal->data, out->cavity);
     ss_height_to_normal(out->height_mm, (float)(1.0 / texel_mm), out->normal);
-    ss_status st = cavity_map(out->height_mm, texel_mm, out->cavity, err);
-    if (st) {
-        ss_skin_maps_free(out);
-        return st;
-    }
     /* furrows and follicle openings shadow the specular lobe */
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < n; i++)

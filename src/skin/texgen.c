@@ -53,9 +53,22 @@ typedef struct tile_index {
     entry *e;
 } tile_index;
 
+/* Follicles smaller than a texel are area-sampled: n x n points per texel
+ * (n = ceil(2 texel / r_i), at most 8), so an opening of 0.08 mm on 0.2 mm
+ * texels darkens its texel by the fraction it covers instead of painting a
+ * full-contrast dot or nothing, depending on where it falls (point sampling:
+ * texel-sized pepper whose look changed with --size). A follicle whose core
+ * is at least a texel wide keeps the single sample at the texel centre. */
+static int follicle_subsamples(const ss_skin_feature *f, double mm_per_unit, int size) {
+    const double texel_mm = mm_per_unit / size;
+    if (f->type != SS_FEAT_FOLLICLE || !(texel_mm > f->r) || !(f->r > 0.0)) return 1;
+    const double n = ceil(2.0 * texel_mm / f->r);
+    return n > 8.0 ? 8 : (int)n;
+}
+
 /* Support box of a feature in texture units. */
-static void support_box(const ss_skin_feature *f, double mm_per_unit, double *x0, double *y0,
-                        double *x1, double *y1) {
+static void support_box(const ss_skin_feature *f, double mm_per_unit, int size, double *x0,
+                        double *y0, double *x1, double *y1) {
     double R = 0.0;
     switch (f->type) {
     case SS_FEAT_CYST:
@@ -67,8 +80,9 @@ static void support_box(const ss_skin_feature *f, double mm_per_unit, double *x0
     case SS_FEAT_FRECKLE:
         R = f->r / 1.2;
         break;
-    case SS_FEAT_FOLLICLE:
+    case SS_FEAT_FOLLICLE: /* area-sampled: the texels a sample can reach */
         R = f->r2 > f->r ? f->r2 : f->r;
+        if (follicle_subsamples(f, mm_per_unit, size) > 1) R += mm_per_unit / size;
         break;
     case SS_FEAT_WRINKLE: {
         double w = f->w / mm_per_unit;
@@ -94,7 +108,7 @@ static void support_box(const ss_skin_feature *f, double mm_per_unit, double *x0
 #define FOR_TILES(...)                                                                             \
     do {                                                                                           \
         double bx0, by0, bx1, by1;                                                                 \
-        support_box(f, mm_per_unit, &bx0, &by0, &bx1, &by1);                                       \
+        support_box(f, mm_per_unit, size, &bx0, &by0, &bx1, &by1);                                 \
         long tx0 = (long)floor(bx0 * size / TILE), tx1 = (long)floor(bx1 * size / TILE);           \
         long ty0 = (long)floor(by0 * size / TILE), ty1 = (long)floor(by1 * size / TILE);           \
         if (tx1 - tx0 >= nt) tx1 = tx0 + nt - 1;                                                   \
@@ -249,7 +263,7 @@ static void apply_feature(const ss_skin_settings *s, const ss_skin_feature *f, u
                           int th, double mm_per_unit, ss_image *bio, const tile_scratch *sc) {
     const int size = s->size;
     double bx0, by0, bx1, by1;
-    support_box(f, mm_per_unit, &bx0, &by0, &bx1, &by1);
+    support_box(f, mm_per_unit, size, &bx0, &by0, &bx1, &by1);
     bx0 += ox, bx1 += ox, by0 += oy, by1 += oy;
     int x0 = (int)floor(bx0 * size - 0.5), x1 = (int)ceil(bx1 * size - 0.5);
     int y0 = (int)floor(by0 * size - 0.5), y1 = (int)ceil(by1 * size - 0.5);
@@ -259,6 +273,7 @@ static void apply_feature(const ss_skin_settings *s, const ss_skin_feature *f, u
     if (y1 > ty0 + th - 1) y1 = ty0 + th - 1;
     const double cx = f->x + ox, cy = f->y + oy;
     const ss_skin_dist *d = &s->dist;
+    const int nss = follicle_subsamples(f, mm_per_unit, size);
     if (f->type == SS_FEAT_WRINKLE) {
         /* per row, the x range where a flattened segment's box grown by the
          * reach (the width, plus a texel for the flattening) meets the row;
@@ -340,7 +355,30 @@ static void apply_feature(const ss_skin_settings *s, const ss_skin_feature *f, u
                 break;
             }
             case SS_FEAT_FOLLICLE: {
-                double al = ss_profile_follicle(dist, f->r, f->r2);
+                /* al: the alpha; pit: its part outside r_i (the opening);
+                 * core: the fraction inside r_i (the stub) */
+                double al = ss_profile_follicle(dist, f->r, f->r2), pit, core;
+                if (nss == 1) {
+                    pit = dist > f->r ? al : 0.0;
+                    core = dist <= f->r ? 1.0 : 0.0;
+                } else {
+                    al = pit = core = 0.0;
+                    for (int j = 0; j < nss; j++)
+                        for (int i = 0; i < nss; i++) {
+                            const double su = u + ((i + 0.5) / nss - 0.5) / size,
+                                         sv = v + ((j + 0.5) / nss - 0.5) / size;
+                            const double ds =
+                                sqrt((su - cx) * (su - cx) + (sv - cy) * (sv - cy)) * mm_per_unit;
+                            const double a = ss_profile_follicle(ds, f->r, f->r2);
+                            al += a;
+                            if (ds > f->r)
+                                pit += a;
+                            else
+                                core += 1.0;
+                        }
+                    const double inv = 1.0 / (nss * nss);
+                    al *= inv, pit *= inv, core *= inv;
+                }
                 if (al > 0.0) {
                     /* premultiplied "over" while evaluating; un-premultiplied at the end */
                     for (int c = 0; c < 3; c++)
@@ -348,10 +386,14 @@ static void apply_feature(const ss_skin_settings *s, const ss_skin_feature *f, u
                     p[10] = (float)(al + p[10] * (1.0 - al));
                     p[SS_BIO_BLOOD] *= (float)(1.0 - d->follicle_blood_drop * al);
                     /* the opening around the hair: a shallow pit, rough */
-                    if (dist > f->r) p[SS_BIO_HEIGHT_MM] -= (float)(0.012 * al);
+                    if (pit > 0.0) p[SS_BIO_HEIGHT_MM] -= (float)(0.012 * pit);
                     p[SS_BIO_SURFACE_SIGMA] += (0.8f - p[SS_BIO_SURFACE_SIGMA]) * (float)(0.6 * al);
-                    if (dist <= f->r && p[SS_BIO_HEIGHT_MM] < d->follicle_height)
-                        p[SS_BIO_HEIGHT_MM] = (float)d->follicle_height;
+                    if (core > 0.0 && p[SS_BIO_HEIGHT_MM] < d->follicle_height)
+                        p[SS_BIO_HEIGHT_MM] =
+                            core >= 1.0
+                                ? (float)d->follicle_height
+                                : p[SS_BIO_HEIGHT_MM] +
+                                      (float)((d->follicle_height - p[SS_BIO_HEIGHT_MM]) * core);
                 }
                 break;
             }
