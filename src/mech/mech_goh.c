@@ -45,6 +45,7 @@ ss_status ss_mech_goh_setup(ss_mech *m, ss_error *err) {
     const ss_mech_params *p = &m->p;
     ss_hyper *H = m->H = ss_hyper_create(m->mesh, p, err);
     if (!H) return err->code ? err->code : SS_ERR_INPUT;
+    ss_hyper_set_active_law(H, 1);
     const int nn = m->mesh->nnodes, nt = m->mesh->ntets;
     memcpy(ss_hyper_anchor(H), m->S->anchor, (size_t)nn * sizeof(double));
     for (int sp = m->ntissue; sp < m->S->nsprings; sp++) {
@@ -95,12 +96,21 @@ ss_status ss_mech_goh_frame(ss_mech *m, const ss_heal_grid *g, double dt_days, s
     const int nt = m->mesh->ntets, nn = m->mesh->nnodes;
     const int32_t *tet = m->mesh->tet;
     double *act = ss_hyper_active(H), *sc = ss_hyper_scale(H);
+    /* the node field written to the .vtu: the amplitude times p_cell at the
+     * grid's volumetric strain (the solve itself uses each tet's own areal
+     * strain) */
+#pragma omp parallel for schedule(static)
+    for (int i = 0; i < nn; i++) {
+        double nw = m->nmyo[i] > 0 ? m->nmyo[i] : 0.0;
+        m->stress[i] = ss_mech_pcell(p, m->nth[i]) * nw * m->nmf[i] * p->K_m_goh;
+    }
 #pragma omp parallel for schedule(static)
     for (int t = 0; t < nt; t++) {
         const int32_t *q = tet + 4 * t;
         double s = 0, e = 0;
         for (int k = 0; k < 4; k++) {
-            s += 0.25 * m->stress[q[k]];
+            double nw = m->nmyo[q[k]] > 0 ? m->nmyo[q[k]] : 0.0;
+            s += 0.25 * nw * m->nmf[q[k]] * p->K_m_goh;
             e += 0.25 * m->necm[q[k]];
         }
         act[t] = s;
