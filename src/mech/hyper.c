@@ -7,9 +7,12 @@
  * deformation gradient. G is the tet's rest state from the biology (the
  * multiplicative split F = F_e G of growth and remodelling, Rodriguez, Hoger
  * and McCulloch 1994): the contraction the myofibroblasts lock in, and the
- * in vivo pre-stretch of intact skin. The myofibroblasts' pull is the seed's
- * isotropic active stress s = p_cell n K_m, a Cauchy stress s I, whose
- * energy is s J per volume of the rest state. Nodes carry an elastic
+ * in vivo pre-stretch of intact skin. The myofibroblasts' pull is either a
+ * constant isotropic Cauchy stress s I (energy s J per volume of the rest
+ * state) or, with ss_hyper_set_active_law (the heal run), the seed's cell
+ * law s p_cell(theta_a) as a tension in the skin's plane at the tet's areal
+ * strain theta_a = J_a - 1 of the total deformation, J_a = |F e_x x F e_y|
+ * (energy s V0 int p_cell, forces and tangent in the solve). Nodes carry an elastic
  * foundation (subcutis, far field), dead loads and springs (sutures).
  *
  * Why this way: the seed's mass-spring network is linear, isotropic and has

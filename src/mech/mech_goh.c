@@ -13,9 +13,13 @@
  * a wound (soft, tension-free) gapes at once; the set-up solves that first
  * equilibrium (day 0). The foundation (subcutis, far field) and the sutures
  * are the springs path's, with stitch stiffness k_suture_goh.
- * Frame: per tet the active stress s = mean of its nodes' p_cell n m K_m
- * (the seed's sigma_cell, an isotropic Cauchy stress) and the stiffness
- * scale rho_ecm/rho_ecm_hat; Newton to equilibrium from the last frame;
+ * Frame: per tet the amplitude of the active tension, the mean of its
+ * nodes' n m K_m_goh, and the stiffness scale rho_ecm/rho_ecm_hat; Newton to
+ * equilibrium from the last frame with the active law in the solve (the
+ * seed's p_cell at the tet's own areal strain, a tension in the skin's
+ * plane: ss_hyper_set_active_law; from the previous frame's strain the
+ * frames alternated at higher loads, and an isotropic stress mostly thinned
+ * the wound);
  * then remodelling, the continuum form of the springs' rest-length lag: in
  * tets under active stress the volume the pull has taken from the elastic
  * state (J_e < 1) is taken into the rest state by the fraction phi = 1 -
