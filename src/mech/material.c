@@ -109,7 +109,7 @@ void ss_mech_params_default(ss_mech_params *p) {
     p->k1_goh = 100.0;
     p->prestretch = 1.15;
     p->k_suture_goh = 1000.0;
-    p->K_m_goh = 250.0;
+    p->K_m_goh = 150.0;
 }
 
 ss_status ss_mech_model_parse(const char *text, int *model, ss_error *err) {
