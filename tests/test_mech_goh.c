@@ -5,7 +5,9 @@
  * stress at every refinement and under a permutation of the axes; mu, k2 and
  * the fibre direction change it; and in a heal set-up the resting tension
  * makes a slit across the fibres gape more than one along them, and stitches
- * hold it; the fast solver ends where the plain one does. */
+ * hold it; the fast solver ends where the plain one does; the heal run's
+ * in-plane active law has its closed-form stress, consistent forces and a
+ * tangent Newton converges with. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -364,11 +366,140 @@ static void test_fast_equals_plain(void **state) {
     omp_set_num_threads(2);
 }
 
+/* the in-plane active law (ss_hyper_set_active_law, the heal run's): a
+ * homogeneous deformation gives the closed-form Cauchy stress s p_cell(J_a
+ * - 1) (J_a / J) (I - n n), n the current normal of the skin's plane (no
+ * stress through the thickness); the forces are the energy's gradient and
+ * objective; Newton with the law's tangent converges in a few iterations
+ * and the fast solver ends where the plain one does */
+static void test_active_law(void **state) {
+    (void)state;
+    ss_mech_params p;
+    ss_mech_params_default(&p);
+    p.mu = 0;
+    p.K_bulk = 1e-9;
+    p.k1_goh = 0;
+    ss_tetmesh *m = box_mesh(3, 0.5, 1.0);
+    ss_error err;
+    ss_hyper *H = ss_hyper_create(m, &p, &err);
+    assert_non_null(H);
+    ss_hyper_set_active_law(H, 1);
+    const int nn = ss_hyper_nodes(H), nt = ss_hyper_tets(H);
+    double *act = ss_hyper_active(H), *x = ss_hyper_x(H);
+    for (int t = 0; t < nt; t++) act[t] = 10.0;
+    const double Fs[3][9] = {{1, 0, 0, 0, 1, 0, 0, 0, 1},
+                             {1.1, 0.05, 0, 0, 1.2, 0, 0.02, 0, 0.9},
+                             {0.8, 0, 0.1, 0.03, 0.85, 0, 0, 0.05, 1.3}};
+    for (int k = 0; k < 3; k++) {
+        const double *F = Fs[k];
+        for (int i = 0; i < nn; i++)
+            for (int d = 0; d < 3; d++)
+                x[3 * i + d] = F[3 * d] * m->x[3 * i] + F[3 * d + 1] * m->x[3 * i + 1] +
+                               F[3 * d + 2] * m->x[3 * i + 2];
+        double a[3] = {F[0], F[3], F[6]}, b[3] = {F[1], F[4], F[7]};
+        double c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                       a[0] * b[1] - a[1] * b[0]};
+        double Ja = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+        double J = F[0] * (F[4] * F[8] - F[5] * F[7]) - F[1] * (F[3] * F[8] - F[5] * F[6]) +
+                   F[2] * (F[3] * F[7] - F[4] * F[6]);
+        double pc = ss_mech_pcell(&p, Ja - 1.0), sg[9];
+        ss_hyper_mean_cauchy(H, sg, NULL);
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++) {
+                double e = 10.0 * pc * Ja / J * ((i == j) - c[i] * c[j] / (Ja * Ja));
+                assert_float_equal(sg[3 * i + j], e, 1e-6 * (1 + fabs(e)));
+            }
+        if (k == 0) assert_float_equal(sg[0], 10.0 * ss_mech_pcell(&p, 0.0), 1e-9);
+    }
+    ss_hyper_free(H);
+    /* forces, objectivity: growth, fibres, a varying amplitude, the law on */
+    ss_mech_params_default(&p);
+    p.fibre[0][0] = 0.8;
+    p.fibre[0][1] = 0.6;
+    H = ss_hyper_create(m, &p, &err);
+    assert_non_null(H);
+    ss_hyper_set_active_law(H, 1);
+    double *G = ss_hyper_growth(H);
+    act = ss_hyper_active(H);
+    x = ss_hyper_x(H);
+    unsigned s = 5;
+    for (int t = 0; t < nt; t++) {
+        for (int i = 0; i < 9; i++) G[9 * t + i] = (i % 4 == 0) + 0.05 * rnd(&s);
+        act[t] = 20.0 * (1 + rnd(&s));
+    }
+    for (int i = 0; i < 3 * nn; i++) x[i] = m->x[i] * (1 - (i % 3 == 1) * 0.15) + 0.03 * rnd(&s);
+    double *f = malloc(3 * (size_t)nn * sizeof(double)),
+           *f1 = malloc(3 * (size_t)nn * sizeof(double));
+    assert_non_null(f);
+    assert_non_null(f1);
+    ss_hyper_tet_forces(H, f);
+    for (int k = 0; k < 3 * nn; k += 5) {
+        double x0 = x[k], h = 1e-6;
+        x[k] = x0 + h;
+        double ep = ss_hyper_energy(H);
+        x[k] = x0 - h;
+        double em = ss_hyper_energy(H);
+        x[k] = x0;
+        assert_float_equal(-(ep - em) / (2 * h), f[k], 1e-5 * (1 + fabs(f[k])));
+    }
+    double E0 = ss_hyper_energy(H), R[9] = {0.6, -0.8, 0, 0.8, 0.6, 0, 0, 0, 1};
+    R[0] = 0.36, R[1] = -0.48, R[2] = 0.8, R[3] = 0.8, R[4] = 0.6, R[5] = 0, R[6] = -0.48,
+    R[7] = 0.64, R[8] = 0.6; /* a rotation (orthonormal rows, det 1) */
+    for (int i = 0; i < nn; i++) {
+        double y[3];
+        for (int d = 0; d < 3; d++)
+            y[d] = R[3 * d] * x[3 * i] + R[3 * d + 1] * x[3 * i + 1] + R[3 * d + 2] * x[3 * i + 2];
+        memcpy(x + 3 * i, y, sizeof y);
+    }
+    assert_float_equal(ss_hyper_energy(H), E0, 1e-10 * fabs(E0));
+    ss_hyper_tet_forces(H, f1);
+    for (int i = 0; i < nn; i++)
+        for (int d = 0; d < 3; d++) {
+            double rf =
+                R[3 * d] * f[3 * i] + R[3 * d + 1] * f[3 * i + 1] + R[3 * d + 2] * f[3 * i + 2];
+            assert_float_equal(f1[3 * i + d], rf, 1e-9 * (1 + fabs(rf)));
+        }
+    free(f);
+    free(f1);
+    ss_hyper_free(H);
+    ss_tetmesh_free(m);
+    /* Newton: a pre-stretched block pulled in-plane in its centre, plain
+     * (fresh tangent every iteration) and fast */
+    ss_tetmesh *mf, *mr;
+    ss_hyper *Hf = pulled_block(1, &mf), *Hr = pulled_block(0, &mr);
+    ss_hyper_set_active_law(Hf, 1);
+    ss_hyper_set_active_law(Hr, 1);
+    const int n3 = 3 * ss_hyper_nodes(Hf);
+    for (int fr = 1; fr <= 3; fr++) {
+        ss_hyper_report rf, rr;
+        pull(Hf, mf, 5 * fr);
+        pull(Hr, mr, 5 * fr);
+        assert_int_equal(ss_hyper_solve(Hf, 1e-8, 60, &rf, &err), SS_OK);
+        assert_int_equal(ss_hyper_solve(Hr, 1e-8, 60, &rr, &err), SS_OK);
+        assert_true(rf.converged && rr.converged);
+        assert_true(rr.newton <= 12);
+        const double *xf = ss_hyper_x(Hf), *xr = ss_hyper_x(Hr), *X = ss_hyper_X(Hf);
+        double du = 0, umax = 0;
+        for (int i = 0; i < n3; i++) {
+            du = fmax(du, fabs(xf[i] - xr[i]));
+            umax = fmax(umax, fabs(xr[i] - X[i]));
+        }
+        print_message("law frame %d: max |u| %.4g mm, fast - plain %.3g mm; Newton %d / %d\n", fr,
+                      umax, du, rf.newton, rr.newton);
+        assert_true(umax > 0.01);
+        assert_true(du < 1e-5 * umax);
+    }
+    ss_hyper_free(Hf);
+    ss_hyper_free(Hr);
+    ss_tetmesh_free(mf);
+    ss_tetmesh_free(mr);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_closed_form_cauchy), cmocka_unit_test(test_forces_objective),
         cmocka_unit_test(test_stretch_analytic),   cmocka_unit_test(test_resting_tension_gape),
-        cmocka_unit_test(test_fast_equals_plain),
+        cmocka_unit_test(test_fast_equals_plain),  cmocka_unit_test(test_active_law),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

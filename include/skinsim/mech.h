@@ -101,6 +101,7 @@ typedef struct ss_mech_params {
     double k1_goh;       /* kPa, GOH fibre stiffness of the hyperelastic solver */
     double prestretch;   /* 1, in vivo resting stretch of intact skin along the fibres */
     double k_suture_goh; /* mN/mm, stitch stiffness on the hyperelastic path */
+    double K_m_goh;      /* 1, K_m of the hyperelastic path's in-plane active tension */
 } ss_mech_params;
 enum { SS_MECH_MODEL_SPRINGS = 0, SS_MECH_MODEL_GOH = 1 };
 /* "springs" / "goh" -> *model; anything else SS_ERR_INPUT naming the text. */
@@ -286,6 +287,13 @@ const double *ss_hyper_X(const ss_hyper *h); /* reference positions */
  * clot without oriented collagen). */
 double *ss_hyper_growth(ss_hyper *h);
 double *ss_hyper_active(ss_hyper *h);
+/* on != 0: act[t] is the amplitude of an in-plane active tension (the
+ * skin's plane, z up) act[t] p_cell(theta) (the seed's cell law,
+ * ss_mech_pcell, with the parameters given at create) at the tet's current
+ * areal strain theta = J_a - 1 of its total deformation against the
+ * reference mesh, evaluated inside the solve (energy, forces, tangent);
+ * off (the default): act[t] is a constant isotropic Cauchy stress. */
+void ss_hyper_set_active_law(ss_hyper *h, int on);
 double *ss_hyper_scale(ss_hyper *h);
 uint8_t *ss_hyper_fibres_on(ss_hyper *h);
 /* Per node: foundation stiffness to the reference position (mN/mm), dead

@@ -7,9 +7,12 @@
  * deformation gradient. G is the tet's rest state from the biology (the
  * multiplicative split F = F_e G of growth and remodelling, Rodriguez, Hoger
  * and McCulloch 1994): the contraction the myofibroblasts lock in, and the
- * in vivo pre-stretch of intact skin. The myofibroblasts' pull is the seed's
- * isotropic active stress s = p_cell n K_m, a Cauchy stress s I, whose
- * energy is s J per volume of the rest state. Nodes carry an elastic
+ * in vivo pre-stretch of intact skin. The myofibroblasts' pull is either a
+ * constant isotropic Cauchy stress s I (energy s J per volume of the rest
+ * state) or, with ss_hyper_set_active_law (the heal run), the seed's cell
+ * law s p_cell(theta_a) as a tension in the skin's plane at the tet's areal
+ * strain theta_a = J_a - 1 of the total deformation, J_a = |F e_x x F e_y|
+ * (energy s V0 int p_cell, forces and tangent in the solve). Nodes carry an elastic
  * foundation (subcutis, far field), dead loads and springs (sutures).
  *
  * Why this way: the seed's mass-spring network is linear, isotropic and has
@@ -49,6 +52,7 @@
 
 typedef struct mat {
     double mu, K, k1, k2, kappa;
+    double K_pas, K_act, p_max, theta1, theta2; /* the cell pressure law */
     double a[2][3];
     int nf;
 } mat;
@@ -79,7 +83,7 @@ struct ss_hyper {
     double mean_edge;
     /* two-level preconditioner: aggregates of nodes (spatial bins), their
      * rigid modes as the coarse space, the coarse matrix's Cholesky factor */
-    int fast, nagg, nc, coarse_ok, tangent_ok;
+    int fast, nagg, nc, coarse_ok, tangent_ok, act_law;
     int32_t *agg, *astart, *alist;
     double *acen, *arho, ascale; /* arho: node offsets from the centroid / bin side */
     double *Ac, *Lc, *wc;
@@ -95,6 +99,125 @@ static void mat_from(mat *M, const ss_mech_params *p) {
     M->kappa = p->kappa;
     M->nf = p->nfibres;
     memcpy(M->a, p->fibre, sizeof M->a);
+    M->K_pas = p->K_pas;
+    M->K_act = p->K_act;
+    M->p_max = p->p_max;
+    M->theta1 = p->theta1;
+    M->theta2 = p->theta2;
+}
+
+/* The seed's cell pressure p_cell(th) (as ss_mech_pcell: K_pas th outside
+ * [theta1, theta2], the active branch falling linearly from p_max at th* =
+ * p_max/K_act to 0 at theta1 and theta2), its slope *dp and its integral
+ * from 0 to th, *pint (continuous and piecewise linear, so the integral is
+ * piecewise quadratic and C1). */
+static double act_int(const mat *M, double u) { /* int_theta1^u of the active branch */
+    const double ts = M->p_max / M->K_act, t1 = M->theta1, t2 = M->theta2;
+    const double c1 = M->K_act * M->p_max / (M->K_act * t1 - M->p_max);
+    const double c2 = M->K_act * M->p_max / (M->K_act * t2 - M->p_max);
+    double v1 = u < t1 ? t1 : u > ts ? ts : u;
+    double r = -0.5 * c1 * (v1 - t1) * (v1 - t1);
+    if (u > ts) {
+        double v2 = u > t2 ? t2 : u;
+        r += 0.5 * c2 * ((t2 - ts) * (t2 - ts) - (t2 - v2) * (t2 - v2));
+    }
+    return r;
+}
+
+static double pcell_law(const mat *M, double th, double *dp, double *pint) {
+    const double ts = M->p_max / M->K_act, t1 = M->theta1, t2 = M->theta2;
+    double p = M->K_pas * th, d = M->K_pas;
+    if (!(th < t1 || th > t2)) {
+        if (th <= ts) {
+            double c1 = M->K_act * M->p_max / (M->K_act * t1 - M->p_max);
+            p += c1 * (t1 - th);
+            d -= c1;
+        } else {
+            double c2 = M->K_act * M->p_max / (M->K_act * t2 - M->p_max);
+            p += c2 * (t2 - th);
+            d -= c2;
+        }
+    }
+    *dp = d;
+    *pint = 0.5 * M->K_pas * th * th + act_int(M, th) - act_int(M, 0.0);
+    return p;
+}
+
+/* The in-plane active law (ss_hyper_set_active_law): energy per reference
+ * volume W = s Pi(J_a - 1), Pi' = p_cell, of the total deformation F
+ * (against the reference mesh, not F_e: the cells' strain since wounding,
+ * the seed's theta), J_a = |F e_x x F e_y| the area stretch of the skin's
+ * plane (Nanson: |cof(F) e_z|). Its Cauchy stress is s p_cell (J_a/J)
+ * (I - n n), n the current normal of that plane: a tension in the plane of
+ * the skin only. P (9) and H (81, or NULL) are d W/dF, d2W/dF2; F's third
+ * column does not enter. */
+static void skew(const double *v, double S[9]) {
+    S[0] = 0, S[1] = -v[2], S[2] = v[1];
+    S[3] = v[2], S[4] = 0, S[5] = -v[0];
+    S[6] = -v[1], S[7] = v[0], S[8] = 0;
+}
+
+static double planar_active(const mat *M, double s, const double *F, double *P, double *H) {
+    const double a[3] = {F[0], F[3], F[6]}, b[3] = {F[1], F[4], F[7]};
+    double c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+    const double Ja = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    if (!(Ja > 0)) return INFINITY;
+    const double u[3] = {c[0] / Ja, c[1] / Ja, c[2] / Ja};
+    double dp, pint, pc = pcell_law(M, Ja - 1.0, &dp, &pint);
+    /* dJa/da = b x u, dJa/db = u x a */
+    double ga[3] = {b[1] * u[2] - b[2] * u[1], b[2] * u[0] - b[0] * u[2],
+                    b[0] * u[1] - b[1] * u[0]};
+    double gb[3] = {u[1] * a[2] - u[2] * a[1], u[2] * a[0] - u[0] * a[2],
+                    u[0] * a[1] - u[1] * a[0]};
+    for (int i = 0; i < 9; i++) P[i] = 0;
+    for (int i = 0; i < 3; i++) {
+        P[3 * i] = s * pc * ga[i];
+        P[3 * i + 1] = s * pc * gb[i];
+    }
+    if (H) {
+        /* d2Ja: [aa] = [b](I-uu)(-[b])/Ja, [ab] = -[u] + [b](I-uu)[a]/Ja,
+         * [bb] = -[a](I-uu)[a]/Ja (with [v] the cross-product matrix) */
+        double A[9], B[9], U[9], Q[9];
+        skew(a, A);
+        skew(b, B);
+        skew(u, U);
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++) Q[3 * i + j] = ((i == j) - u[i] * u[j]) / Ja;
+        double haa[9], hab[9], hbb[9];
+        double QB[9], QA[9];
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++) {
+                QB[3 * i + j] = QA[3 * i + j] = 0;
+                for (int k = 0; k < 3; k++) {
+                    QB[3 * i + j] += Q[3 * i + k] * B[3 * k + j];
+                    QA[3 * i + j] += Q[3 * i + k] * A[3 * k + j];
+                }
+            }
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++) {
+                double x1 = 0, x2 = 0, x3 = 0;
+                for (int k = 0; k < 3; k++) {
+                    x1 -= B[3 * i + k] * QB[3 * k + j];
+                    x2 += B[3 * i + k] * QA[3 * k + j];
+                    x3 -= A[3 * i + k] * QA[3 * k + j];
+                }
+                haa[3 * i + j] = x1;
+                hab[3 * i + j] = x2 - U[3 * i + j];
+                hbb[3 * i + j] = x3;
+            }
+        for (int k = 0; k < 81; k++) H[k] = 0;
+        const double w2 = s * dp, w1 = s * pc;
+        for (int i = 0; i < 3; i++)
+            for (int k = 0; k < 3; k++) {
+                /* F index (i, 0) = a_i, (i, 1) = b_i */
+                int ia = 3 * i, ib = 3 * i + 1, ka = 3 * k, kb = 3 * k + 1;
+                H[ia * 9 + ka] = w2 * ga[i] * ga[k] + w1 * haa[3 * i + k];
+                H[ia * 9 + kb] = w2 * ga[i] * gb[k] + w1 * hab[3 * i + k];
+                H[ib * 9 + ka] = w2 * gb[i] * ga[k] + w1 * hab[3 * k + i];
+                H[ib * 9 + kb] = w2 * gb[i] * gb[k] + w1 * hbb[3 * i + k];
+            }
+    }
+    return s * pint;
 }
 
 static double det3(const double *F) {
@@ -322,6 +445,10 @@ fail:
 }
 
 void ss_hyper_set_fast(ss_hyper *h, int on) { h->fast = on != 0; }
+void ss_hyper_set_active_law(ss_hyper *h, int on) {
+    h->act_law = on != 0;
+    h->tangent_ok = 0;
+}
 
 int ss_hyper_nodes(const ss_hyper *h) { return h->nn; }
 int ss_hyper_tets(const ss_hyper *h) { return h->nt; }
@@ -750,6 +877,30 @@ static void tet_F(const ss_hyper *h, int t, const double *x, double *F) {
                            x[3 * q[2] + i] * b[6 + j] + x[3 * q[3] + i] * b[9 + j];
 }
 
+/* adds w P and w H mapped with the shape gradients b (12) to the tet's
+ * gradient g (12) and tangent K (144, or NULL) */
+static void map_tet(const double *b, double w, const double *P, const double *H, double *g,
+                    double *K) {
+    for (int a = 0; a < 4; a++)
+        for (int i = 0; i < 3; i++)
+            g[3 * a + i] += w * (P[3 * i] * b[3 * a] + P[3 * i + 1] * b[3 * a + 1] +
+                                 P[3 * i + 2] * b[3 * a + 2]);
+    if (!K) return;
+    double Mx[12][9]; /* Mx[(a,i)][(k,l)] = sum_j b_aj H(ij,kl) */
+    for (int a = 0; a < 4; a++)
+        for (int i = 0; i < 3; i++)
+            for (int kl = 0; kl < 9; kl++)
+                Mx[3 * a + i][kl] = b[3 * a] * H[(3 * i) * 9 + kl] +
+                                    b[3 * a + 1] * H[(3 * i + 1) * 9 + kl] +
+                                    b[3 * a + 2] * H[(3 * i + 2) * 9 + kl];
+    for (int r = 0; r < 12; r++)
+        for (int bb = 0; bb < 4; bb++)
+            for (int k = 0; k < 3; k++)
+                K[r * 12 + 3 * bb + k] +=
+                    w * (Mx[r][3 * k] * b[3 * bb] + Mx[r][3 * k + 1] * b[3 * bb + 1] +
+                         Mx[r][3 * k + 2] * b[3 * bb + 2]);
+}
+
 /* mode 0: energies; 1: + gradients; 2: + tangents */
 static void eval_tets(ss_hyper *h, const double *x, int mode) {
     update_growth(h);
@@ -758,37 +909,29 @@ static void eval_tets(ss_hyper *h, const double *x, int mode) {
         double F[9], P[9], H[81];
         tet_F(h, t, x, F);
         const double c = h->scale[t], V = h->Vg[t], s = h->act[t];
+        const int law = h->act_law && s != 0;
         /* c W(F_e) + s J_e: the active energy is not scaled by the stiffness */
-        double W = goh(&h->M, F, h->fib[t], s / c, mode ? P : NULL, mode == 2 ? H : NULL);
-        h->et[t] = V * c * W;
-        if (!mode) continue;
-        const double *b = h->beta + 12 * (size_t)t;
-        double *g = h->gt + 12 * (size_t)t;
-        if (!isfinite(W)) {
-            for (int k = 0; k < 12; k++) g[k] = 0;
-            if (mode == 2) memset(h->Kt + 144 * (size_t)t, 0, 144 * sizeof(double));
-            continue;
+        double W =
+            goh(&h->M, F, h->fib[t], law ? 0.0 : s / c, mode ? P : NULL, mode == 2 ? H : NULL);
+        double Wa = 0, Pa[9], Ha[81], Ft[9];
+        if (law && isfinite(W)) { /* the in-plane law on the total F */
+            const int32_t *q = h->tet + 4 * t;
+            const double *b0 = h->beta0 + 12 * (size_t)t;
+            for (int i = 0; i < 3; i++)
+                for (int j = 0; j < 3; j++)
+                    Ft[3 * i + j] = x[3 * q[0] + i] * b0[j] + x[3 * q[1] + i] * b0[3 + j] +
+                                    x[3 * q[2] + i] * b0[6 + j] + x[3 * q[3] + i] * b0[9 + j];
+            Wa = planar_active(&h->M, s, Ft, Pa, mode == 2 ? Ha : NULL);
         }
-        const double w = V * c;
-        for (int a = 0; a < 4; a++)
-            for (int i = 0; i < 3; i++)
-                g[3 * a + i] = w * (P[3 * i] * b[3 * a] + P[3 * i + 1] * b[3 * a + 1] +
-                                    P[3 * i + 2] * b[3 * a + 2]);
-        if (mode < 2) continue;
-        double Mx[12][9]; /* Mx[(a,i)][(k,l)] = sum_j b_aj H(ij,kl) */
-        for (int a = 0; a < 4; a++)
-            for (int i = 0; i < 3; i++)
-                for (int kl = 0; kl < 9; kl++)
-                    Mx[3 * a + i][kl] = b[3 * a] * H[(3 * i) * 9 + kl] +
-                                        b[3 * a + 1] * H[(3 * i + 1) * 9 + kl] +
-                                        b[3 * a + 2] * H[(3 * i + 2) * 9 + kl];
-        double *K = h->Kt + 144 * (size_t)t;
-        for (int r = 0; r < 12; r++)
-            for (int bb = 0; bb < 4; bb++)
-                for (int k = 0; k < 3; k++)
-                    K[r * 12 + 3 * bb + k] =
-                        w * (Mx[r][3 * k] * b[3 * bb] + Mx[r][3 * k + 1] * b[3 * bb + 1] +
-                             Mx[r][3 * k + 2] * b[3 * bb + 2]);
+        h->et[t] = V * c * W + h->V0[t] * Wa;
+        if (!mode) continue;
+        double *g = h->gt + 12 * (size_t)t;
+        double *K = mode == 2 ? h->Kt + 144 * (size_t)t : NULL;
+        for (int k = 0; k < 12; k++) g[k] = 0;
+        if (K) memset(K, 0, 144 * sizeof(double));
+        if (!isfinite(h->et[t])) continue;
+        map_tet(h->beta + 12 * (size_t)t, V * c, P, H, g, K);
+        if (law) map_tet(h->beta0 + 12 * (size_t)t, h->V0[t], Pa, Ha, g, K);
     }
 }
 
@@ -1122,9 +1265,25 @@ void ss_hyper_mean_cauchy(ss_hyper *h, double sigma[9], double *volume) {
     for (int t = 0; t < h->nt; t++) { /* serial, fixed order */
         double F[9], P[9];
         tet_F(h, t, h->x, F);
-        double c = h->scale[t];
-        if (!isfinite(goh(&h->M, F, h->fib[t], h->act[t] / c, P, NULL))) continue;
+        double c = h->scale[t], s = h->act[t];
+        const int law = h->act_law && s != 0;
+        if (!isfinite(goh(&h->M, F, h->fib[t], law ? 0.0 : s / c, P, NULL))) continue;
         double J = det3(F), v = h->Vg[t] * J;
+        if (law) { /* the in-plane active stress: V0 Pa Ft^T */
+            const int32_t *q = h->tet + 4 * t;
+            const double *b0 = h->beta0 + 12 * (size_t)t;
+            double Ft[9], Pa[9];
+            for (int i = 0; i < 3; i++)
+                for (int j = 0; j < 3; j++)
+                    Ft[3 * i + j] = h->x[3 * q[0] + i] * b0[j] + h->x[3 * q[1] + i] * b0[3 + j] +
+                                    h->x[3 * q[2] + i] * b0[6 + j] + h->x[3 * q[3] + i] * b0[9 + j];
+            if (!isfinite(planar_active(&h->M, s, Ft, Pa, NULL))) continue;
+            for (int i = 0; i < 3; i++)
+                for (int j = 0; j < 3; j++)
+                    S[3 * i + j] +=
+                        h->V0[t] * (Pa[3 * i] * Ft[3 * j] + Pa[3 * i + 1] * Ft[3 * j + 1] +
+                                    Pa[3 * i + 2] * Ft[3 * j + 2]);
+        }
         /* sigma = c P F^T / J (the active part included) */
         for (int i = 0; i < 3; i++)
             for (int j = 0; j < 3; j++)

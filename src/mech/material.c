@@ -70,6 +70,7 @@ static const key keys[] = {
     K(k1_goh, "kPa", 0, 1e7),
     K(prestretch, "1", 1, 1.5),
     K(k_suture_goh, "mN/mm", 0, 1e9),
+    K(K_m_goh, "1", 0, 1e6),
 };
 #undef K
 #define NKEYS (sizeof keys / sizeof keys[0])
@@ -108,6 +109,7 @@ void ss_mech_params_default(ss_mech_params *p) {
     p->k1_goh = 100.0;
     p->prestretch = 1.15;
     p->k_suture_goh = 1000.0;
+    p->K_m_goh = 150.0;
 }
 
 ss_status ss_mech_model_parse(const char *text, int *model, ss_error *err) {

@@ -13,9 +13,13 @@
  * a wound (soft, tension-free) gapes at once; the set-up solves that first
  * equilibrium (day 0). The foundation (subcutis, far field) and the sutures
  * are the springs path's, with stitch stiffness k_suture_goh.
- * Frame: per tet the active stress s = mean of its nodes' p_cell n m K_m
- * (the seed's sigma_cell, an isotropic Cauchy stress) and the stiffness
- * scale rho_ecm/rho_ecm_hat; Newton to equilibrium from the last frame;
+ * Frame: per tet the amplitude of the active tension, the mean of its
+ * nodes' n m K_m_goh, and the stiffness scale rho_ecm/rho_ecm_hat; Newton to
+ * equilibrium from the last frame with the active law in the solve (the
+ * seed's p_cell at the tet's own areal strain, a tension in the skin's
+ * plane: ss_hyper_set_active_law; from the previous frame's strain the
+ * frames alternated at higher loads, and an isotropic stress mostly thinned
+ * the wound);
  * then remodelling, the continuum form of the springs' rest-length lag: in
  * tets under active stress the volume the pull has taken from the elastic
  * state (J_e < 1) is taken into the rest state by the fraction phi = 1 -
@@ -45,6 +49,7 @@ ss_status ss_mech_goh_setup(ss_mech *m, ss_error *err) {
     const ss_mech_params *p = &m->p;
     ss_hyper *H = m->H = ss_hyper_create(m->mesh, p, err);
     if (!H) return err->code ? err->code : SS_ERR_INPUT;
+    ss_hyper_set_active_law(H, 1);
     const int nn = m->mesh->nnodes, nt = m->mesh->ntets;
     memcpy(ss_hyper_anchor(H), m->S->anchor, (size_t)nn * sizeof(double));
     for (int sp = m->ntissue; sp < m->S->nsprings; sp++) {
@@ -95,12 +100,21 @@ ss_status ss_mech_goh_frame(ss_mech *m, const ss_heal_grid *g, double dt_days, s
     const int nt = m->mesh->ntets, nn = m->mesh->nnodes;
     const int32_t *tet = m->mesh->tet;
     double *act = ss_hyper_active(H), *sc = ss_hyper_scale(H);
+    /* the node field written to the .vtu: the amplitude times p_cell at the
+     * grid's volumetric strain (the solve itself uses each tet's own areal
+     * strain) */
+#pragma omp parallel for schedule(static)
+    for (int i = 0; i < nn; i++) {
+        double nw = m->nmyo[i] > 0 ? m->nmyo[i] : 0.0;
+        m->stress[i] = ss_mech_pcell(p, m->nth[i]) * nw * m->nmf[i] * p->K_m_goh;
+    }
 #pragma omp parallel for schedule(static)
     for (int t = 0; t < nt; t++) {
         const int32_t *q = tet + 4 * t;
         double s = 0, e = 0;
         for (int k = 0; k < 4; k++) {
-            s += 0.25 * m->stress[q[k]];
+            double nw = m->nmyo[q[k]] > 0 ? m->nmyo[q[k]] : 0.0;
+            s += 0.25 * nw * m->nmf[q[k]] * p->K_m_goh;
             e += 0.25 * m->necm[q[k]];
         }
         act[t] = s;
