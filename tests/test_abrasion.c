@@ -591,6 +591,57 @@ static void test_thread_determinism(void **state) {
     scene_free(&sc);
 }
 
+/* A progress callback that counts its calls, checks the fraction rises, and
+ * stops the call at call number stop_at (0: never). */
+typedef struct poll_count {
+    int calls, stop_at;
+    double last;
+} poll_count;
+static int count_poll(void *user, double fraction) {
+    poll_count *p = user;
+    assert_true(fraction >= p->last && fraction <= 1.0);
+    p->last = fraction;
+    return ++p->calls == p->stop_at;
+}
+
+/* ss_abrasion_frame_poll in a blend and in maturation: cancelled at the
+ * first poll, SS_ERR_RUNTIME "cancelled"; never stopped, the plain frame. */
+static void test_frame_cancel(void **state) {
+    (void)state;
+    scene sc;
+    int n = 64;
+    scene_make(&sc, n);
+    ss_timeline tl;
+    ss_timeline_default(&tl);
+    ss_abrasion *a;
+    ss_error err;
+    assert_int_equal(ss_abrasion_create(&sc.s, &tl, sc.w, &sc.skin, &a, &err), SS_OK);
+    ss_texture_set f, g;
+    assert_int_equal(ss_texture_set_create(n, &f, &err), SS_OK);
+    assert_int_equal(ss_texture_set_create(n, &g, &err), SS_OK);
+    const double m0 = tl.key[tl.nkeys - 1].day;
+    const double days[2] = {0.5 * (tl.key[3].day + tl.key[4].day), m0 + 0.4 * (tl.end_day - m0)};
+    for (int k = 0; k < 2; k++) {
+        poll_count stop = {0, 1, 0}, go = {0, 0, 0};
+        assert_int_equal(ss_abrasion_frame_poll(a, days[k], &g, count_poll, &stop, &err),
+                         SS_ERR_RUNTIME);
+        assert_non_null(strstr(err.msg, "cancelled"));
+        assert_int_equal(stop.calls, 1);
+        assert_int_equal(ss_abrasion_frame(a, days[k], &f, &err), SS_OK);
+        assert_int_equal(ss_abrasion_frame_poll(a, days[k], &g, count_poll, &go, &err), SS_OK);
+        assert_true(go.calls >= 2 && go.last == 1.0);
+        size_t b3 = sizeof(float) * (size_t)n * n * 3, b1 = b3 / 3;
+        assert_memory_equal(f.color->data, g.color->data, b3);
+        assert_memory_equal(f.reflection->data, g.reflection->data, b1);
+        assert_memory_equal(f.height->data, g.height->data, b1);
+        assert_memory_equal(f.normal->data, g.normal->data, b3);
+    }
+    ss_texture_set_free(&f);
+    ss_texture_set_free(&g);
+    ss_abrasion_free(a);
+    scene_free(&sc);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_timeline_locate),
@@ -603,6 +654,7 @@ int main(void) {
         cmocka_unit_test(test_maturation_no_ridges),
         cmocka_unit_test(test_scar_at_a_year),
         cmocka_unit_test(test_frames_blend),
+        cmocka_unit_test(test_frame_cancel),
         cmocka_unit_test(test_scale_invariance),
         cmocka_unit_test(test_thread_determinism),
         cmocka_unit_test(test_update_equals_create),

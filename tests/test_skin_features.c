@@ -874,6 +874,67 @@ static void test_tone_ends(void **state) {
     ss_mm_table_free(t);
 }
 
+/* A progress callback that counts its calls, checks the fraction rises, and
+ * stops the call at call number stop_at (0: never). */
+typedef struct poll_count {
+    int calls, stop_at;
+    double last;
+} poll_count;
+static int count_poll(void *user, double fraction) {
+    poll_count *p = user;
+    assert_true(fraction >= p->last && fraction <= 1.0);
+    p->last = fraction;
+    return ++p->calls == p->stop_at;
+}
+
+/* The _poll calls: cancelled, SS_ERR_RUNTIME "cancelled" and nothing kept
+ * (ASan: nothing leaks); never stopped, the plain calls' maps bit for bit. */
+static void test_poll_cancel(void **state) {
+    (void)state;
+    ss_error err;
+    ss_skin_settings s = small_settings(128);
+    ss_mm_table *t = load_table();
+    ss_skin_lut *lut = ss_skin_lut_create(t, &err);
+    assert_non_null(lut);
+    ss_skin_feature_list l;
+    assert_int_equal(ss_skin_generate(&s, NULL, &l, NULL, 0, &err), SS_OK);
+    poll_count stop = {0, 2, 0}, go = {0, 0, 0};
+    assert_null(ss_skin_bio_maps_poll(&s, NULL, &l, count_poll, &stop, &err));
+    assert_int_equal(err.code, SS_ERR_RUNTIME);
+    assert_non_null(strstr(err.msg, "cancelled"));
+    assert_int_equal(stop.calls, 2);
+    ss_image *bio = ss_skin_bio_maps(&s, NULL, &l, &err);
+    ss_image *bio2 = ss_skin_bio_maps_poll(&s, NULL, &l, count_poll, &go, &err);
+    assert_non_null(bio);
+    assert_non_null(bio2);
+    assert_true(go.calls >= 2 && go.last == 1.0);
+    size_t n = (size_t)s.size * s.size;
+    assert_memory_equal(bio->data, bio2->data, n * SS_BIO_NCHANNELS * sizeof(float));
+    ss_skin_maps m, m2;
+    stop = (poll_count){0, 2, 0};
+    assert_int_equal(
+        ss_skin_render_maps_poll(bio, lut, s.world_size_cm, 0, &m2, count_poll, &stop, &err),
+        SS_ERR_RUNTIME);
+    assert_non_null(strstr(err.msg, "cancelled"));
+    assert_null(m2.base_color);
+    go = (poll_count){0, 0, 0};
+    assert_int_equal(ss_skin_render_maps(bio, lut, s.world_size_cm, 0, &m, &err), SS_OK);
+    assert_int_equal(
+        ss_skin_render_maps_poll(bio, lut, s.world_size_cm, 0, &m2, count_poll, &go, &err), SS_OK);
+    assert_true(go.calls >= 2 && go.last == 1.0);
+    assert_memory_equal(m.base_color->data, m2.base_color->data, n * 3 * sizeof(float));
+    assert_memory_equal(m.specular->data, m2.specular->data, n * sizeof(float));
+    assert_memory_equal(m.normal->data, m2.normal->data, n * 3 * sizeof(float));
+    assert_true(m.height_min_mm == m2.height_min_mm && m.height_max_mm == m2.height_max_mm);
+    ss_skin_maps_free(&m);
+    ss_skin_maps_free(&m2);
+    ss_image_free(bio);
+    ss_image_free(bio2);
+    ss_skin_feature_list_free(&l);
+    ss_skin_lut_free(lut);
+    ss_mm_table_free(t);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_profiles),
@@ -884,6 +945,7 @@ int main(void) {
         cmocka_unit_test(test_follicle_area_sampled),
         cmocka_unit_test(test_seamless_wrap),
         cmocka_unit_test(test_determinism_and_roundtrip),
+        cmocka_unit_test(test_poll_cancel),
         cmocka_unit_test(test_lut_matches_table),
         cmocka_unit_test(test_lut_other_table),
         cmocka_unit_test(test_mm_defined_variation),

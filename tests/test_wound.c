@@ -477,12 +477,73 @@ static void test_threads(void **state) {
     scene_free(&s);
 }
 
+/* A progress callback that counts its calls, checks the fraction rises, and
+ * stops the call at call number stop_at (0: never). */
+typedef struct poll_count {
+    int calls, stop_at;
+    double last;
+} poll_count;
+static int count_poll(void *user, double fraction) {
+    poll_count *p = user;
+    assert_true(fraction >= p->last && fraction <= 1.0);
+    p->last = fraction;
+    return ++p->calls == p->stop_at;
+}
+
+/* ss_wound_render_poll: cancelled at the first poll it returns
+ * SS_ERR_RUNTIME "cancelled" (ASan: nothing leaks); never stopped it polls
+ * up to 1 and renders what ss_wound_render renders, bit for bit. */
+static void test_render_cancel(void **state) {
+    (void)state;
+    scene s;
+    scene_init(&s);
+    ss_error err;
+    ss_heal_run_config c;
+    ss_heal_run_config_default(&c);
+    c.scenario = "scab";
+    c.grid[0] = c.grid[1] = 24;
+    c.grid[2] = 8;
+    c.days = 1;
+    ss_heal_run *run;
+    assert_int_equal(ss_heal_run_create(&c, &run, &err), SS_OK);
+    assert_int_equal(ss_heal_run_advance_to(run, 1, &err), SS_OK);
+    ss_wound_recipe rec;
+    ss_wound_recipe_default(&rec);
+    ss_wound_tissue *t =
+        ss_wound_tissue_create(ss_heal_run_grid(run), ss_heal_run_params(run), &rec, &err);
+    assert_non_null(t);
+    ss_wound_textures a, b;
+    assert_int_equal(ss_wound_textures_create(TEX, &a, &err), SS_OK);
+    assert_int_equal(ss_wound_textures_create(TEX, &b, &err), SS_OK);
+    poll_count stop = {0, 1, 0};
+    assert_int_equal(ss_wound_render_poll(s.r, t, NULL, &b, count_poll, &stop, &err),
+                     SS_ERR_RUNTIME);
+    assert_non_null(strstr(err.msg, "cancelled"));
+    assert_int_equal(stop.calls, 1);
+    poll_count go = {0, 0, 0};
+    assert_int_equal(ss_wound_render(s.r, t, NULL, &a, &err), SS_OK);
+    assert_int_equal(ss_wound_render_poll(s.r, t, NULL, &b, count_poll, &go, &err), SS_OK);
+    assert_true(go.calls >= 2);
+    assert_true(go.last == 1.0);
+    size_t n = (size_t)TEX * TEX;
+    assert_memory_equal(a.base_color->data, b.base_color->data, n * 3 * sizeof(float));
+    assert_memory_equal(a.roughness->data, b.roughness->data, n * sizeof(float));
+    assert_memory_equal(a.height->data, b.height->data, n * sizeof(float));
+    assert_memory_equal(a.normal->data, b.normal->data, n * 3 * sizeof(float));
+    ss_wound_textures_free(&a);
+    ss_wound_textures_free(&b);
+    ss_wound_tissue_free(t);
+    ss_heal_run_free(run);
+    scene_free(&s);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_delta_e2000),     cmocka_unit_test(test_recipe),
-        cmocka_unit_test(test_layers),          cmocka_unit_test(test_clinical),
-        cmocka_unit_test(test_threads),         cmocka_unit_test(test_base_lookup),
-        cmocka_unit_test(test_height_encoding), cmocka_unit_test(test_pih_rates),
+        cmocka_unit_test(test_delta_e2000), cmocka_unit_test(test_recipe),
+        cmocka_unit_test(test_layers),      cmocka_unit_test(test_clinical),
+        cmocka_unit_test(test_threads),     cmocka_unit_test(test_render_cancel),
+        cmocka_unit_test(test_base_lookup), cmocka_unit_test(test_height_encoding),
+        cmocka_unit_test(test_pih_rates),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -223,6 +223,11 @@ ss_status ss_abrasion_update(ss_abrasion *a, const ss_wound_shape *w, ss_error *
  * caller with ss_texture_set_create at settings.size). Maps the caller set to
  * NULL (all but color) are skipped: a time slider needs only the colour. */
 ss_status ss_abrasion_frame(const ss_abrasion *a, double day, ss_texture_set *out, ss_error *err);
+/* ss_abrasion_frame with a progress and cancel callback (core.h
+ * ss_progress_fn), polled between maps and, in maturation, between bands of
+ * the re-rendered rows; cancelled: out is partly written, SS_ERR_RUNTIME. */
+ss_status ss_abrasion_frame_poll(const ss_abrasion *a, double day, ss_texture_set *out,
+                                 ss_progress_fn fn, void *user, ss_error *err);
 
 #ifdef __cplusplus
 }

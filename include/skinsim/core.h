@@ -371,6 +371,19 @@ void ss_progress_begin(ss_progress *p, const char *label, double total, int quie
 void ss_progress_update(ss_progress *p, double done);
 void ss_progress_end(ss_progress *p);
 
+/* A long call's optional progress and cancel callback (the *_poll calls:
+ * ss_skin_bio_maps_poll, ss_skin_render_maps_poll, ss_abrasion_frame_poll,
+ * ss_wound_render_poll). fn(user, fraction) is called from the calling
+ * thread only, outside any parallel region, between bands of rows (or
+ * between a call's stages), with the fraction done (0..1, rising). A
+ * non-zero return stops the call at that point: it frees what it allocated
+ * and returns SS_ERR_RUNTIME with the message "...: cancelled"; images it
+ * would have allocated are not returned, and images the caller passed in
+ * for the output are partly written (their contents are unspecified). fn
+ * NULL: never polled. Results of calls that are not cancelled do not depend
+ * on fn. */
+typedef int (*ss_progress_fn)(void *user, double fraction);
+
 /* Physical memory of this machine in bytes (0 if unknown): what commands
  * check a job's estimated size against before they start, so a job that
  * cannot fit is an input error rather than an out-of-memory kill. */

@@ -220,6 +220,12 @@ ss_image *ss_skin_bio_maps(const ss_skin_settings *s, const ss_skin_fields *fiel
 /* Everything in one call: preset "forearm" at this size, world size and
  * seed, default fields; returns the bio map (features are not kept). */
 ss_image *ss_skin_bio_default(int size, double world_size_cm, uint64_t seed, ss_error *err);
+/* ss_skin_bio_maps with a progress and cancel callback (core.h
+ * ss_progress_fn), polled between bands of texel rows; cancelled: NULL,
+ * SS_ERR_RUNTIME, nothing allocated is kept. */
+ss_image *ss_skin_bio_maps_poll(const ss_skin_settings *s, const ss_skin_fields *fields,
+                                const ss_skin_feature_list *features, ss_progress_fn fn, void *user,
+                                ss_error *err);
 
 /* ---- render maps (the table lookup, mmd in TexGen line 16) ----------------- */
 
@@ -251,6 +257,12 @@ typedef struct ss_skin_maps {
 ss_status ss_skin_render_maps(const ss_image *bio, const ss_skin_lut *lut, double world_size_cm,
                               int normal_directx, ss_skin_maps *out, ss_error *err);
 void ss_skin_maps_free(ss_skin_maps *m);
+/* ss_skin_render_maps with a progress and cancel callback (core.h
+ * ss_progress_fn), polled between bands of texel rows; cancelled:
+ * SS_ERR_RUNTIME with *out freed and zeroed. */
+ss_status ss_skin_render_maps_poll(const ss_image *bio, const ss_skin_lut *lut,
+                                   double world_size_cm, int normal_directx, ss_skin_maps *out,
+                                   ss_progress_fn fn, void *user, ss_error *err);
 
 /* ---- features.csv --------------------------------------------------------- */
 

@@ -223,6 +223,12 @@ const ss_wound_textures *ss_wound_renderer_base(const ss_wound_renderer *r);
  * (ss_wound_deformation_from_grid makes it from the mechanics' grid arrays). */
 ss_status ss_wound_render(ss_wound_renderer *r, const ss_wound_tissue *t,
                           const ss_image *deformation, ss_wound_textures *out, ss_error *err);
+/* ss_wound_render with a progress and cancel callback (core.h
+ * ss_progress_fn), polled between bands of texture rows; cancelled: out is
+ * partly written, SS_ERR_RUNTIME. */
+ss_status ss_wound_render_poll(ss_wound_renderer *r, const ss_wound_tissue *t,
+                               const ss_image *deformation, ss_wound_textures *out,
+                               ss_progress_fn fn, void *user, ss_error *err);
 
 /* ---- textures in a mesh's UV space (a heal run on a real body) -------------------- */
 struct ss_shell_patch;

@@ -8,6 +8,7 @@
  * (reflection and height of some phases) the choice is documented in
  * docs/abrasion.md. */
 #include "skinsim/abrasion.h"
+#include "abrasion_internal.h"
 #include "skinsim/texture.h"
 
 #include <math.h>
@@ -244,8 +245,7 @@ static ss_status noise_mm(const ctx *c, int octaves, double period_mm, uint64_t 
     *out = ss_image_create_uninit(c->rw > 0 ? c->rw : 1, c->rh > 0 ? c->rh : 1, 1, err);
     if (!*out) return err->code;
     if (c->rw == 0) return SS_OK;
-    ss_status st =
-        ss_value_noise_rect(&p, c->s->seed, stream, c->n, c->n, c->rx, c->ry, *out, err);
+    ss_status st = ss_value_noise_rect(&p, c->s->seed, stream, c->n, c->n, c->rx, c->ry, *out, err);
     if (st) {
         ss_image_free(*out);
         *out = NULL;
@@ -596,15 +596,28 @@ static inline int maturation_px(const ctx *c, const look *l, size_t i, double po
 
 static ss_status maturation_region(const ctx *c, double position, double span_days,
                                    double after_days, ss_image *color, ss_image *reflection,
-                                   ss_error *err) {
+                                   ss_progress_fn fn, void *user, ss_error *err) {
     look l;
     ss_status st = look_create(c, &l, err);
     if (st) return st;
-    FOR_REGION(c) {
-        float rgb[3], r;
-        if (!maturation_px(c, &l, i, position, span_days, after_days, rgb, &r)) continue;
-        for (int k = 0; k < 3; k++) color->data[i * 3 + k] = clampf(rgb[k], 0.0f, 1.0f);
-        if (reflection) reflection->data[i] = r;
+    /* with a progress callback the region's rows go in bands, polled between
+     * them (each pixel is a function of its own position: no value changes) */
+    const int band = fn ? (c->rh / 32 > 16 ? c->rh / 32 : 16) : (c->rh > 0 ? c->rh : 1);
+    for (int yb = c->ry; yb < c->ry + c->rh; yb += band) {
+        const int ye = c->ry + c->rh - yb > band ? yb + band : c->ry + c->rh;
+#pragma omp parallel for schedule(static)
+        for (int y_ = yb; y_ < ye; y_++)
+            for (size_t i = (size_t)y_ * (size_t)c->n + (size_t)c->rx, e_ = i + (size_t)c->rw;
+                 i < e_; i++) {
+                float rgb[3], r;
+                if (!maturation_px(c, &l, i, position, span_days, after_days, rgb, &r)) continue;
+                for (int k = 0; k < 3; k++) color->data[i * 3 + k] = clampf(rgb[k], 0.0f, 1.0f);
+                if (reflection) reflection->data[i] = r;
+            }
+        if (fn && fn(user, (double)(ye - c->ry) / c->rh)) {
+            look_free(&l);
+            return ss_error_set(err, SS_ERR_RUNTIME, "abrasion frame: cancelled");
+        }
     }
     look_free(&l);
     return SS_OK;
@@ -614,7 +627,7 @@ static ss_status render_maturation(const ctx *c, double position, ss_texture_set
                                    ss_error *err) {
     /* The height is flat, a hair below the skin inside (a flat scar). */
     ss_status st = maturation_region(c, position, DEFAULT_MATURATION_DAYS, 0.0, out->color,
-                                     out->reflection, err);
+                                     out->reflection, NULL, NULL, err);
     FOR_REGION(c) {
         float d = c->w->smooth->data[i];
         out->height->data[i] = 0.5f - 0.01f * smooth01(-c->rim_px, c->rim_px, d);
@@ -675,13 +688,22 @@ ss_status ss_abrasion_maturation_at(const ss_wound_shape *w, const ss_base_skin 
                                     const ss_abrasion_settings *s, double position,
                                     double span_days, double after_days, ss_image *color,
                                     ss_image *reflection, ss_error *err) {
+    return abrasion_maturation_at_poll(w, skin, s, position, span_days, after_days, color,
+                                       reflection, NULL, NULL, err);
+}
+
+ss_status abrasion_maturation_at_poll(const ss_wound_shape *w, const ss_base_skin *skin,
+                                      const ss_abrasion_settings *s, double position,
+                                      double span_days, double after_days, ss_image *color,
+                                      ss_image *reflection, ss_progress_fn fn, void *user,
+                                      ss_error *err) {
     if (!(position >= 0.0 && position <= 1.0))
         return ss_error_set(err, SS_ERR_INPUT, "maturation position %g is outside 0..1", position);
     if (!(span_days >= 0) || !(after_days >= 0))
         return ss_error_set(err, SS_ERR_INPUT, "maturation: days must be >= 0");
     ctx c;
     ctx_init(&c, w, skin, s);
-    return maturation_region(&c, position, span_days, after_days, color, reflection, err);
+    return maturation_region(&c, position, span_days, after_days, color, reflection, fn, user, err);
 }
 
 ss_status ss_abrasion_maturation_color(const ss_wound_shape *w, const ss_base_skin *skin,

@@ -4,6 +4,7 @@
  * its key to the end of the timeline (§4.3.5). Default days follow the
  * physiology of seed §2.1 (docs/abrasion.md). */
 #include "skinsim/abrasion.h"
+#include "abrasion_internal.h"
 
 #include <cjson/cJSON.h>
 #include <math.h>
@@ -242,6 +243,20 @@ static void blend_map(const ss_image *a, const ss_image *b, float t, ss_image *o
 }
 
 ss_status ss_abrasion_frame(const ss_abrasion *a, double day, ss_texture_set *out, ss_error *err) {
+    return ss_abrasion_frame_poll(a, day, out, NULL, NULL, err);
+}
+
+/* the poll between maps: stop (SS_ERR_RUNTIME) when fn says so */
+static int frame_stop(ss_progress_fn fn, void *user, double fraction, ss_error *err) {
+    if (fn && fn(user, fraction)) {
+        ss_error_set(err, SS_ERR_RUNTIME, "abrasion frame: cancelled");
+        return 1;
+    }
+    return 0;
+}
+
+ss_status ss_abrasion_frame_poll(const ss_abrasion *a, double day, ss_texture_set *out,
+                                 ss_progress_fn fn, void *user, ss_error *err) {
     if (!isfinite(day) || day < 0)
         return ss_error_set(err, SS_ERR_INPUT, "time %g days must be finite and >= 0", day);
     int n = a->settings.size;
@@ -255,22 +270,29 @@ ss_status ss_abrasion_frame(const ss_abrasion *a, double day, ss_texture_set *ou
     const ss_texture_set *kb = &a->phase[a->timeline.key[p.key_b].phase];
     if (p.in_maturation) {
         copy_set(ka, out, 1);
+        if (frame_stop(fn, user, 0.0, err)) return err->code;
         const ss_timeline *tl = &a->timeline;
         double start = tl->key[tl->nkeys - 1].day, span = tl->end_day - start;
-        return ss_abrasion_maturation_at(
+        ss_status st = abrasion_maturation_at_poll(
             a->shape, a->skin, &a->settings, p.maturation_pos, span > 0 ? span : 0,
-            day > tl->end_day ? day - tl->end_day : 0, out->color, out->reflection, err);
+            day > tl->end_day ? day - tl->end_day : 0, out->color, out->reflection, fn, user, err);
+        return st;
     }
     if (ka == kb || p.weight <= 0.0) {
         copy_set(ka, out, 1);
+        if (fn) fn(user, 1.0); /* done: a stop now changes nothing */
         return SS_OK;
     }
     region r;
     ss_abrasion_changed_region(a->shape, &a->settings, &r.x, &r.y, &r.w, &r.h);
     float w = (float)p.weight;
     blend_map(ka->color, kb->color, w, out->color, r, 0);
+    if (frame_stop(fn, user, 0.25, err)) return err->code;
     if (out->reflection) blend_map(ka->reflection, kb->reflection, w, out->reflection, r, 0);
+    if (frame_stop(fn, user, 0.5, err)) return err->code;
     if (out->height) blend_map(ka->height, kb->height, w, out->height, r, 0);
+    if (frame_stop(fn, user, 0.75, err)) return err->code;
     if (out->normal) blend_map(ka->normal, kb->normal, w, out->normal, r, 1);
+    if (fn) fn(user, 1.0);
     return SS_OK;
 }

@@ -312,6 +312,12 @@ static void cavity_map(const ss_image *h, double texel_mm, float *tmp, ss_image 
 
 ss_status ss_skin_render_maps(const ss_image *bio, const ss_skin_lut *lut, double world_size_cm,
                               int normal_directx, ss_skin_maps *out, ss_error *err) {
+    return ss_skin_render_maps_poll(bio, lut, world_size_cm, normal_directx, out, NULL, NULL, err);
+}
+
+ss_status ss_skin_render_maps_poll(const ss_image *bio, const ss_skin_lut *lut,
+                                   double world_size_cm, int normal_directx, ss_skin_maps *out,
+                                   ss_progress_fn fn, void *user, ss_error *err) {
     memset(out, 0, sizeof *out);
     if (!bio || bio->channels != SS_BIO_NCHANNELS || !lut)
         return ss_error_set(err, SS_ERR_INPUT, "render maps: need a %d-channel bio map",
@@ -331,33 +337,44 @@ ss_status ss_skin_render_maps(const ss_image *bio, const ss_skin_lut *lut, doubl
     }
     const size_t n = (size_t)W * (size_t)H;
     double hmin = INFINITY, hmax = -INFINITY;
+    /* with a progress callback the texels go in bands of rows, polled
+     * between them (a texel's values do not depend on the band, nor the
+     * height's minimum and maximum on the order) */
+    const size_t band = fn ? (size_t)W * (size_t)(H / 32 > 16 ? H / 32 : 16) : n;
+    for (size_t i0 = 0; i0 < n; i0 += band) {
+        const size_t i1 = n - i0 > band ? i0 + band : n;
 #pragma omp parallel reduction(min : hmin) reduction(max : hmax)
-    {
-        lut_cache *cache = malloc(sizeof *cache);
-        if (cache) lut_cache_init(cache);
+        {
+            lut_cache *cache = malloc(sizeof *cache);
+            if (cache) lut_cache_init(cache);
 #pragma omp for schedule(static)
-        for (size_t i = 0; i < n; i++) {
-            const float *p = bio->data + i * SS_BIO_NCHANNELS;
-            float r[LUT_F];
-            if (cache) {
-                lut_lookup(lut, cache, p, r);
-                apply_surface(lut, p[SS_BIO_SURFACE_SIGMA], r);
-            } else
-                ss_skin_lut_lookup_surface(lut, p, p[SS_BIO_SURFACE_SIGMA], r);
-            for (int c = 0; c < 3; c++) out->translucency->data[i * 3 + c] = r[5 + c];
-            const float a = p[SS_BIO_EXTRA_A];
-            for (int c = 0; c < 3; c++) {
-                float b = r[c] < 0.0f ? 0.0f : r[c] > 1.0f ? 1.0f : r[c];
-                out->base_color->data[i * 3 + c] = b * (1.0f - a) + p[SS_BIO_EXTRA_R + c] * a;
+            for (size_t i = i0; i < i1; i++) {
+                const float *p = bio->data + i * SS_BIO_NCHANNELS;
+                float r[LUT_F];
+                if (cache) {
+                    lut_lookup(lut, cache, p, r);
+                    apply_surface(lut, p[SS_BIO_SURFACE_SIGMA], r);
+                } else
+                    ss_skin_lut_lookup_surface(lut, p, p[SS_BIO_SURFACE_SIGMA], r);
+                for (int c = 0; c < 3; c++) out->translucency->data[i * 3 + c] = r[5 + c];
+                const float a = p[SS_BIO_EXTRA_A];
+                for (int c = 0; c < 3; c++) {
+                    float b = r[c] < 0.0f ? 0.0f : r[c] > 1.0f ? 1.0f : r[c];
+                    out->base_color->data[i * 3 + c] = b * (1.0f - a) + p[SS_BIO_EXTRA_R + c] * a;
+                }
+                out->specular->data[i] = r[3] < 0.0f ? 0.0f : r[3] > 1.0f ? 1.0f : r[3];
+                out->roughness->data[i] = r[4] < 0.0f ? 0.0f : r[4] > 1.0f ? 1.0f : r[4];
+                const float h = p[SS_BIO_HEIGHT_MM];
+                out->height_mm->data[i] = h;
+                if (h < hmin) hmin = h;
+                if (h > hmax) hmax = h;
             }
-            out->specular->data[i] = r[3] < 0.0f ? 0.0f : r[3] > 1.0f ? 1.0f : r[3];
-            out->roughness->data[i] = r[4] < 0.0f ? 0.0f : r[4] > 1.0f ? 1.0f : r[4];
-            const float h = p[SS_BIO_HEIGHT_MM];
-            out->height_mm->data[i] = h;
-            if (h < hmin) hmin = h;
-            if (h > hmax) hmax = h;
+            free(cache);
         }
-        free(cache);
+        if (fn && fn(user, 0.8 * (double)i1 / (double)n)) {
+            ss_skin_maps_free(out);
+            return ss_error_set(err, SS_ERR_RUNTIME, "skin render maps: cancelled");
+        }
     }
     const double texel_mm = world_size_cm * 10.0 / W;
     /* the cavity map's row sums go in the normal map's memory (3 floats a
@@ -374,5 +391,6 @@ ss_status ss_skin_render_maps(const ss_image *bio, const ss_skin_lut *lut, doubl
             out->normal->data[i * 3 + 1] = 1.0f - out->normal->data[i * 3 + 1];
     out->height_min_mm = hmin;
     out->height_max_mm = hmax;
+    if (fn) fn(user, 1.0); /* done: a stop now changes nothing */
     return SS_OK;
 }

@@ -404,8 +404,9 @@ static void apply_feature(const ss_skin_settings *s, const ss_skin_feature *f, u
         }
 }
 
-ss_image *ss_skin_bio_maps_timed(const ss_skin_settings *s, const ss_skin_fields *fields,
-                                 const ss_skin_feature_list *l, ss_skin_timing *tm, ss_error *err) {
+static ss_image *bio_maps(const ss_skin_settings *s, const ss_skin_fields *fields,
+                          const ss_skin_feature_list *l, ss_skin_timing *tm, ss_progress_fn fn,
+                          void *user, ss_error *err) {
     ss_status st = ss_skin_settings_validate(s, err);
     if (st) return NULL;
     static const ss_skin_fields none;
@@ -479,44 +480,54 @@ ss_image *ss_skin_bio_maps_timed(const ss_skin_settings *s, const ss_skin_fields
     if (!bio) goto done;
     const int nt = ix.ntiles;
     const texel_ctx ctx = {s, fields, &mot, &rel};
-    int nomem = 0;
+    int nomem = 0, cancelled = 0;
+    /* with a progress callback the tiles go in bands of tile rows, polled
+     * between them (tiles are independent: the bands change no value) */
+    const int band = fn ? (nt / 32 > 1 ? nt / 32 : 1) : nt;
+    for (int tb = 0; tb < nt && !nomem && !cancelled; tb += band) {
+        const int t0 = tb * nt, t1 = (nt - tb > band ? tb + band : nt) * nt;
 #pragma omp parallel
-    {
-        tile_scratch *sc = malloc(sizeof *sc);
-        if (!sc) {
+        {
+            tile_scratch *sc = malloc(sizeof *sc);
+            if (!sc) {
 #pragma omp atomic write
-            nomem = 1;
-        }
-#pragma omp for schedule(dynamic, 4)
-        for (int t = 0; t < nt * nt; t++) {
-            if (!sc) continue;
-            const int tx0 = (t % nt) * TILE, ty0 = (t / nt) * TILE;
-            const int tw = tx0 + TILE <= size ? TILE : size - tx0;
-            const int th = ty0 + TILE <= size ? TILE : size - ty0;
-            tile_baseline(&ctx, tx0, ty0, tw, th, bio, sc);
-            for (size_t q = ix.start[t]; q < ix.start[t + 1]; q++) {
-                const entry *e = &ix.e[q];
-                const ss_skin_feature *f = &l->f[e->feature];
-                apply_feature(s, f, e->feature,
-                              f->type == SS_FEAT_WRINKLE ? &flat[flat_of[e->feature]] : NULL, e->ox,
-                              e->oy, tx0, ty0, tw, th, mm_per_unit, bio, sc);
+                nomem = 1;
             }
-            /* clamp fractions, un-premultiply the extra colour */
-            for (int y = ty0; y < ty0 + th; y++)
-                for (int x = tx0; x < tx0 + tw; x++) {
-                    float *p = ss_image_px(bio, x, y);
-                    for (int a = 0; a < 4; a++)
-                        p[a] = p[a] < 0.0f ? 0.0f : p[a] > 1.0f ? 1.0f : p[a];
-                    if (p[10] > 0.0f)
-                        for (int c = 7; c < 10; c++) p[c] /= p[10];
-                    float sg = p[SS_BIO_SURFACE_SIGMA];
-                    p[SS_BIO_SURFACE_SIGMA] = sg < 0.05f ? 0.05f : sg > 1.5f ? 1.5f : sg;
+#pragma omp for schedule(dynamic, 4)
+            for (int t = t0; t < t1; t++) {
+                if (!sc) continue;
+                const int tx0 = (t % nt) * TILE, ty0 = (t / nt) * TILE;
+                const int tw = tx0 + TILE <= size ? TILE : size - tx0;
+                const int th = ty0 + TILE <= size ? TILE : size - ty0;
+                tile_baseline(&ctx, tx0, ty0, tw, th, bio, sc);
+                for (size_t q = ix.start[t]; q < ix.start[t + 1]; q++) {
+                    const entry *e = &ix.e[q];
+                    const ss_skin_feature *f = &l->f[e->feature];
+                    apply_feature(s, f, e->feature,
+                                  f->type == SS_FEAT_WRINKLE ? &flat[flat_of[e->feature]] : NULL,
+                                  e->ox, e->oy, tx0, ty0, tw, th, mm_per_unit, bio, sc);
                 }
+                /* clamp fractions, un-premultiply the extra colour */
+                for (int y = ty0; y < ty0 + th; y++)
+                    for (int x = tx0; x < tx0 + tw; x++) {
+                        float *p = ss_image_px(bio, x, y);
+                        for (int a = 0; a < 4; a++)
+                            p[a] = p[a] < 0.0f ? 0.0f : p[a] > 1.0f ? 1.0f : p[a];
+                        if (p[10] > 0.0f)
+                            for (int c = 7; c < 10; c++) p[c] /= p[10];
+                        float sg = p[SS_BIO_SURFACE_SIGMA];
+                        p[SS_BIO_SURFACE_SIGMA] = sg < 0.05f ? 0.05f : sg > 1.5f ? 1.5f : sg;
+                    }
+            }
+            free(sc);
         }
-        free(sc);
+        if (fn && !nomem && fn(user, (double)t1 / ((double)nt * nt))) cancelled = 1;
     }
-    if (nomem) {
-        ss_error_set(err, SS_ERR_NOMEM, "texels: out of memory");
+    if (nomem || cancelled) {
+        if (nomem)
+            ss_error_set(err, SS_ERR_NOMEM, "texels: out of memory");
+        else
+            ss_error_set(err, SS_ERR_RUNTIME, "skin bio maps: cancelled");
         ss_image_free(bio);
         bio = NULL;
         goto done;
@@ -533,6 +544,17 @@ done:
     free(flat);
     free(flat_of);
     return bio;
+}
+
+ss_image *ss_skin_bio_maps_timed(const ss_skin_settings *s, const ss_skin_fields *fields,
+                                 const ss_skin_feature_list *l, ss_skin_timing *tm, ss_error *err) {
+    return bio_maps(s, fields, l, tm, NULL, NULL, err);
+}
+
+ss_image *ss_skin_bio_maps_poll(const ss_skin_settings *s, const ss_skin_fields *fields,
+                                const ss_skin_feature_list *features, ss_progress_fn fn, void *user,
+                                ss_error *err) {
+    return bio_maps(s, fields, features, NULL, fn, user, err);
 }
 
 ss_image *ss_skin_bio_maps(const ss_skin_settings *s, const ss_skin_fields *fields,

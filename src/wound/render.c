@@ -537,6 +537,12 @@ static ss_image *crust_depth(const ss_wound_tissue *t, double scale, ss_error *e
 
 ss_status ss_wound_render(ss_wound_renderer *r, const ss_wound_tissue *t,
                           const ss_image *deformation, ss_wound_textures *out, ss_error *err) {
+    return ss_wound_render_poll(r, t, deformation, out, NULL, NULL, err);
+}
+
+ss_status ss_wound_render_poll(ss_wound_renderer *r, const ss_wound_tissue *t,
+                               const ss_image *deformation, ss_wound_textures *out,
+                               ss_progress_fn fn, void *user, ss_error *err) {
     const int n = r->o.size;
     if (!out->base_color || out->base_color->width != n || !out->roughness || !out->height ||
         !out->normal)
@@ -567,87 +573,100 @@ ss_status ss_wound_render(ss_wound_renderer *r, const ss_wound_tissue *t,
     /* on a mesh: the box's half width in columns, and its reach in whole columns */
     const double box_h = 0.5 * EDGE_BOX_MM / t->dx_mm;
     const int box_r = (int)ceil(box_h);
+    /* with a progress callback the rows go in bands, polled between them
+     * (each texel is a function of its own position only, so the bands
+     * change no value) */
+    const int band = fn ? (n / 32 > 64 ? n / 32 : 64) : n;
+    int cancelled = 0;
+    for (int yb = 0; yb < n && !cancelled; yb += band) {
+        const int ye = n - yb > band ? yb + band : n;
 #pragma omp parallel for schedule(dynamic, 8)
-    for (int y = 0; y < n; y++) {
-        for (int x = 0; x < n; x++) {
-            size_t i = (size_t)y * (size_t)n + (size_t)x;
-            double u = (x + 0.5) / n, vv = (y + 0.5) / n, dz = 0;
-            if (deformation) { /* the material point now sits displaced: sample there */
-                const float *d = deformation->data + i * 3;
-                u += d[0] / side_x;
-                vv -= d[1] / side_y;
-                dz = d[2];
-            }
-            double mx = u * t->nx - 0.5, my = vv * t->ny - 0.5;
-            int off = 0; /* on a mesh: the texel shows no skin of the patch */
-            if (r->columns) {
-                const float *cm = r->columns->data + i * 2;
-                off = !(cm[0] == cm[0]);
-                mx = cm[0], my = cm[1];
-            }
-            /* +-WARP_COLUMNS of a column, so a margin follows no voxel staircase */
-            mx += warp_amp * (2.0 * r->warp[0]->data[i] - 1);
-            my += warp_amp * (2.0 * r->warp[1]->data[i] - 1);
-            if (off) mx = my = 0;
-            double cx = mx < 0 ? 0 : mx > t->nx - 1 ? t->nx - 1 : mx;
-            double cy = my < 0 ? 0 : my > t->ny - 1 ? t->ny - 1 : my;
-            int x0 = (int)cx, y0 = (int)cy;
-            int x1 = x0 + 1 < t->nx ? x0 + 1 : x0, y1 = y0 + 1 < t->ny ? y0 + 1 : y0;
-            int base = off;
-            if (!base && r->columns) { /* the B-spline's 4 x 4 columns, over the box */
-                base = 1;
-                for (int jj = y0 - 1 - box_r; jj <= y0 + 2 + box_r && base; jj++)
-                    for (int ii = x0 - 1 - box_r; ii <= x0 + 2 + box_r && base; ii++) {
-                        int a = ii < 0 ? 0 : ii > t->nx - 1 ? t->nx - 1 : ii;
-                        int b = jj < 0 ? 0 : jj > t->ny - 1 ? t->ny - 1 : jj;
-                        base = healthy[(size_t)b * t->nx + a];
-                    }
-            } else if (!base)
-                base = healthy[(size_t)y0 * t->nx + x0] && healthy[(size_t)y0 * t->nx + x1] &&
-                       healthy[(size_t)y1 * t->nx + x0] && healthy[(size_t)y1 * t->nx + x1];
-            if (base) {
-                for (int c = 0; c < 3; c++)
-                    out->base_color->data[i * 3 + c] = r->base.base_color->data[i * 3 + c];
-                out->roughness->data[i] = r->base.roughness->data[i];
-                out->height->data[i] = r->base.height->data[i] + (float)dz;
-                continue;
-            }
-            texel_tissue s;
-            texel_out o;
-            crust_noise nz = {r->crust->data[i], r->mottle->data[i], r->crack->data[i],
-                              r->cap->data[i]};
-            if (r->columns) { /* the mean over a box of EDGE_BOX_MM (module comment) */
-                o = (texel_out){{0, 0, 0}, 0, 0};
-                for (int q = 0; q < BOX_N * BOX_N; q++) {
-                    double ox = box_h * ((2 * (q % BOX_N) + 1.0) / BOX_N - 1),
-                           oy = box_h * ((2 * (q / BOX_N) + 1.0) / BOX_N - 1);
-                    double sx = cx + ox, sy = cy + oy;
-                    sx = sx < 0 ? 0 : sx > t->nx - 1 ? t->nx - 1 : sx;
-                    sy = sy < 0 ? 0 : sy > t->ny - 1 ? t->ny - 1 : sy;
-                    texel_out os;
-                    sample_tissue_smooth(t, crust_in->data, sx, sy, &s);
-                    if (tissue_intact(&s)) { /* the base skin itself: no seam at the rim */
-                        for (int c = 0; c < 3; c++) os.rgb[c] = r->base.base_color->data[i * 3 + c];
-                        os.roughness = r->base.roughness->data[i];
-                        os.height_mm = r->base.height->data[i];
-                    } else
-                        render_texel(r, r->skin->data + i * SS_BIO_NCHANNELS, &nz, &s, t->day, &os);
-                    for (int c = 0; c < 3; c++) o.rgb[c] += os.rgb[c] / (BOX_N * BOX_N);
-                    o.roughness += os.roughness / (BOX_N * BOX_N);
-                    o.height_mm += os.height_mm / (BOX_N * BOX_N);
+        for (int y = yb; y < ye; y++) {
+            for (int x = 0; x < n; x++) {
+                size_t i = (size_t)y * (size_t)n + (size_t)x;
+                double u = (x + 0.5) / n, vv = (y + 0.5) / n, dz = 0;
+                if (deformation) { /* the material point now sits displaced: sample there */
+                    const float *d = deformation->data + i * 3;
+                    u += d[0] / side_x;
+                    vv -= d[1] / side_y;
+                    dz = d[2];
                 }
-            } else {
-                sample_tissue(t, crust_in->data, mx, my, &s);
-                render_texel(r, r->skin->data + i * SS_BIO_NCHANNELS, &nz, &s, t->day, &o);
+                double mx = u * t->nx - 0.5, my = vv * t->ny - 0.5;
+                int off = 0; /* on a mesh: the texel shows no skin of the patch */
+                if (r->columns) {
+                    const float *cm = r->columns->data + i * 2;
+                    off = !(cm[0] == cm[0]);
+                    mx = cm[0], my = cm[1];
+                }
+                /* +-WARP_COLUMNS of a column, so a margin follows no voxel staircase */
+                mx += warp_amp * (2.0 * r->warp[0]->data[i] - 1);
+                my += warp_amp * (2.0 * r->warp[1]->data[i] - 1);
+                if (off) mx = my = 0;
+                double cx = mx < 0 ? 0 : mx > t->nx - 1 ? t->nx - 1 : mx;
+                double cy = my < 0 ? 0 : my > t->ny - 1 ? t->ny - 1 : my;
+                int x0 = (int)cx, y0 = (int)cy;
+                int x1 = x0 + 1 < t->nx ? x0 + 1 : x0, y1 = y0 + 1 < t->ny ? y0 + 1 : y0;
+                int base = off;
+                if (!base && r->columns) { /* the B-spline's 4 x 4 columns, over the box */
+                    base = 1;
+                    for (int jj = y0 - 1 - box_r; jj <= y0 + 2 + box_r && base; jj++)
+                        for (int ii = x0 - 1 - box_r; ii <= x0 + 2 + box_r && base; ii++) {
+                            int a = ii < 0 ? 0 : ii > t->nx - 1 ? t->nx - 1 : ii;
+                            int b = jj < 0 ? 0 : jj > t->ny - 1 ? t->ny - 1 : jj;
+                            base = healthy[(size_t)b * t->nx + a];
+                        }
+                } else if (!base)
+                    base = healthy[(size_t)y0 * t->nx + x0] && healthy[(size_t)y0 * t->nx + x1] &&
+                           healthy[(size_t)y1 * t->nx + x0] && healthy[(size_t)y1 * t->nx + x1];
+                if (base) {
+                    for (int c = 0; c < 3; c++)
+                        out->base_color->data[i * 3 + c] = r->base.base_color->data[i * 3 + c];
+                    out->roughness->data[i] = r->base.roughness->data[i];
+                    out->height->data[i] = r->base.height->data[i] + (float)dz;
+                    continue;
+                }
+                texel_tissue s;
+                texel_out o;
+                crust_noise nz = {r->crust->data[i], r->mottle->data[i], r->crack->data[i],
+                                  r->cap->data[i]};
+                if (r->columns) { /* the mean over a box of EDGE_BOX_MM (module comment) */
+                    o = (texel_out){{0, 0, 0}, 0, 0};
+                    for (int q = 0; q < BOX_N * BOX_N; q++) {
+                        double ox = box_h * ((2 * (q % BOX_N) + 1.0) / BOX_N - 1),
+                               oy = box_h * ((2 * (q / BOX_N) + 1.0) / BOX_N - 1);
+                        double sx = cx + ox, sy = cy + oy;
+                        sx = sx < 0 ? 0 : sx > t->nx - 1 ? t->nx - 1 : sx;
+                        sy = sy < 0 ? 0 : sy > t->ny - 1 ? t->ny - 1 : sy;
+                        texel_out os;
+                        sample_tissue_smooth(t, crust_in->data, sx, sy, &s);
+                        if (tissue_intact(&s)) { /* the base skin itself: no seam at the rim */
+                            for (int c = 0; c < 3; c++)
+                                os.rgb[c] = r->base.base_color->data[i * 3 + c];
+                            os.roughness = r->base.roughness->data[i];
+                            os.height_mm = r->base.height->data[i];
+                        } else
+                            render_texel(r, r->skin->data + i * SS_BIO_NCHANNELS, &nz, &s, t->day,
+                                         &os);
+                        for (int c = 0; c < 3; c++) o.rgb[c] += os.rgb[c] / (BOX_N * BOX_N);
+                        o.roughness += os.roughness / (BOX_N * BOX_N);
+                        o.height_mm += os.height_mm / (BOX_N * BOX_N);
+                    }
+                } else {
+                    sample_tissue(t, crust_in->data, mx, my, &s);
+                    render_texel(r, r->skin->data + i * SS_BIO_NCHANNELS, &nz, &s, t->day, &o);
+                }
+                for (int c = 0; c < 3; c++) out->base_color->data[i * 3 + c] = (float)o.rgb[c];
+                out->roughness->data[i] = (float)o.roughness;
+                out->height->data[i] = (float)(o.height_mm + dz);
             }
-            for (int c = 0; c < 3; c++) out->base_color->data[i * 3 + c] = (float)o.rgb[c];
-            out->roughness->data[i] = (float)o.roughness;
-            out->height->data[i] = (float)(o.height_mm + dz);
         }
+        if (fn && fn(user, 0.95 * ye / n)) cancelled = 1;
     }
     free(healthy);
     ss_image_free(crust_in);
+    if (cancelled) return ss_error_set(err, SS_ERR_RUNTIME, "wound render: cancelled");
     /* height in mm -> normal: slope per texel times texels per mm */
     ss_height_to_normal(out->height, (float)(n / r->o.side_mm), out->normal);
+    if (fn) fn(user, 1.0); /* done: a stop now changes nothing */
     return SS_OK;
 }

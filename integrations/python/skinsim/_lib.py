@@ -214,7 +214,8 @@ def python_terms(message: str, rename: Optional[Dict[str, str]] = None) -> str:
 # library, where Python cannot deliver KeyboardInterrupt. The library polls a
 # callback from the calling thread (ss_mc_options.cancel after each photon
 # block, ss_heal_run_set_progress after each step, the spectrum progress after
-# each wavelength). While such a call runs on the main thread, SIGINT only
+# each wavelength, the ss_progress_fn of the *_poll calls -- skin maps,
+# abrasion frames, wound renders -- between bands of rows). While such a call runs on the main thread, SIGINT only
 # sets a flag (a Python handler that does not raise, so it cannot fire in the
 # middle of a callback); the next poll sees it and tells the library to stop,
 # and the call raises KeyboardInterrupt once the library has cleaned up.
@@ -222,6 +223,7 @@ def python_terms(message: str, rename: Optional[Dict[str, str]] = None) -> str:
 PROGRESS_FN = ctypes.CFUNCTYPE(None, c_void_p, c_double)
 CANCEL_FN = ctypes.CFUNCTYPE(c_int, c_void_p)
 DAY_FN = ctypes.CFUNCTYPE(c_int, c_void_p, c_double)
+PROGRESS_POLL_FN = ctypes.CFUNCTYPE(c_int, c_void_p, c_double)  # core.h ss_progress_fn
 _check_signals = ctypes.pythonapi.PyErr_CheckSignals
 _check_signals.restype = c_int
 _check_signals.argtypes = []
@@ -274,6 +276,7 @@ class Poll:
         self.cancel = CANCEL_FN(self._cancel)
         self.fraction = PROGRESS_FN(self._fraction)
         self.day = DAY_FN(self._day)
+        self._stages: list = []
 
     def __enter__(self) -> "Poll":
         if threading.current_thread() is threading.main_thread():
@@ -328,6 +331,23 @@ class Poll:
         except BaseException:
             return 1
 
+    def stage(self, lo: float = 0.0, hi: float = 1.0) -> Any:
+        """An ss_progress_fn for one stage of the call: the library's
+        fraction 0..1 is reported as lo..hi of the whole, and a pending
+        Ctrl-C (or an exception of the progress callable) stops it. The Poll
+        keeps the callback alive."""
+
+        def fn(user: Any, fraction: float) -> int:
+            try:
+                self._report(lo + (hi - lo) * fraction)
+                return self._stop()
+            except BaseException:
+                return 1
+
+        cb = PROGRESS_POLL_FN(fn)
+        self._stages.append(cb)
+        return cb
+
     def raise_pending(self) -> None:
         """Raises what stopped the call (KeyboardInterrupt on Ctrl-C)."""
         if self.error is not None:
@@ -347,6 +367,18 @@ class Poll:
             raise
         self.raise_pending()
         return st
+
+    def call(self, fn: Any, *args: Any, pointer: bool = False,
+             rename: Optional[Dict[str, str]] = None) -> Any:
+        """check(fn, *args) (check_ptr with pointer=True) that raises as
+        `check` does when the call fails, but on success returns even if a
+        Ctrl-C came in at the call's last poll: the caller first takes
+        ownership of what the call made, then calls raise_pending()."""
+        try:
+            return (check_ptr if pointer else check)(fn, *args, rename=rename)
+        except SkinsimError:
+            self.raise_pending()
+            raise
 
 
 class Handle:
@@ -811,6 +843,8 @@ _fn("ss_abrasion_create", c_int, POINTER(ss_abrasion_settings), POINTER(ss_timel
     POINTER(ss_base_skin), POINTER(P_ABR), P_ERR)
 _fn("ss_abrasion_free", None, P_ABR)
 _fn("ss_abrasion_frame", c_int, P_ABR, c_double, POINTER(ss_texture_set), P_ERR)
+_fn("ss_abrasion_frame_poll", c_int, P_ABR, c_double, POINTER(ss_texture_set),
+    PROGRESS_POLL_FN, c_void_p, P_ERR)
 
 # ---- heal ------------------------------------------------------------------------
 
@@ -1017,6 +1051,10 @@ try:
     _fn("ss_skin_lut_free", None, c_void_p)
     _fn("ss_skin_render_maps", c_int, P_IMAGE, c_void_p, c_double, c_int, POINTER(ss_skin_maps),
         P_ERR)
+    _fn("ss_skin_bio_maps_poll", P_IMAGE, P_SKINSET, POINTER(ss_skin_fields),
+        POINTER(ss_skin_feature_list), PROGRESS_POLL_FN, c_void_p, P_ERR)
+    _fn("ss_skin_render_maps_poll", c_int, P_IMAGE, c_void_p, c_double, c_int,
+        POINTER(ss_skin_maps), PROGRESS_POLL_FN, c_void_p, P_ERR)
     _fn("ss_skin_maps_free", None, POINTER(ss_skin_maps))
     HAVE_SKIN = True
 except AttributeError:
@@ -1066,6 +1104,8 @@ try:
     _fn("ss_wound_tissue_observe", None, c_void_p, P_GRID)
     _fn("ss_wound_tissue_free", None, c_void_p)
     _fn("ss_wound_render", c_int, c_void_p, c_void_p, P_IMAGE, POINTER(ss_wound_textures), P_ERR)
+    _fn("ss_wound_render_poll", c_int, c_void_p, c_void_p, P_IMAGE, POINTER(ss_wound_textures),
+        PROGRESS_POLL_FN, c_void_p, P_ERR)
     HAVE_WOUND = True
 except AttributeError:
     HAVE_WOUND = False

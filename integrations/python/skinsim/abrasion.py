@@ -209,10 +209,13 @@ class Abrasion:
         return {m: np.zeros((n, n, 3) if _CHANNELS[m] == 3 else (n, n), dtype=np.float32)
                 for m in maps}
 
-    def frame(self, day, out=None, maps=MAPS):
+    def frame(self, day, out=None, maps=MAPS, progress=None):
         """The texture set at `day` (days since the injury) as numpy arrays
         the library renders into. out: arrays of an earlier frame to reuse
-        (only the maps present in it are rendered)."""
+        (only the maps present in it are rendered). progress: True for a bar
+        on stderr, or a callable(fraction 0..1) called between maps and bands
+        of rows; Ctrl-C stops the frame there and raises KeyboardInterrupt
+        (arrays passed as out= are then partly written)."""
         self._need_open()
         day = L.as_float("day", day, lo=0.0)
         if out is None:
@@ -228,5 +231,7 @@ class Abrasion:
         if "color" not in out:
             raise L.InputError("frame: the colour map is always rendered; include 'color'",
                                L.SS_ERR_INPUT)
-        L.check(L.lib.ss_abrasion_frame, self._ab, day, ctypes.byref(ts))
+        with L.Poll(progress, "abrasion frame") as poll:
+            poll.check(L.lib.ss_abrasion_frame_poll, self._ab, day, ctypes.byref(ts),
+                       poll.stage(), None)
         return out

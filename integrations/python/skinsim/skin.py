@@ -107,12 +107,15 @@ def textures(size: int = 512, preset: str = "forearm", world_size_cm: Optional[f
              base: Optional[Mapping[str, float]] = None, wrap: bool = True,
              sampler: str = "alias", fields: Optional[Mapping[str, Any]] = None,
              table: Union[None, str, "optics.Table"] = None,
-             normal_directx: bool = False) -> Dict[str, Any]:
+             normal_directx: bool = False, progress: L.ProgressArg = None) -> Dict[str, Any]:
     """Skin textures. fields: optional arrays by name -- a feature type
     ("moles", ...) for its probability field (h, w) 0..1, "lips" (h, w) lip
     weight, "vectors" (h, w, 3) wrinkle vector field. table: an
     optics.Table or a path (default: the shipped table, opened once per
-    process: optics.default_table())."""
+    process: optics.default_table()). progress: True for a bar on stderr, or
+    a callable(fraction 0..1) called between bands of texel rows; Ctrl-C (or
+    an exception from the callable) stops the call at the next band, frees
+    what it made and raises KeyboardInterrupt (or that exception)."""
     s = settings(size, preset, world_size_cm, seed, counts, params, base, wrap, sampler)
     fl = L.ss_skin_fields()
     keep = []
@@ -142,19 +145,23 @@ def textures(size: int = 512, preset: str = "forearm", world_size_cm: Optional[f
     h = L.Handle()
     lst = L.ss_skin_feature_list()
     notes = ctypes.create_string_buffer(512)
-    L.check(L.lib.ss_skin_generate, ctypes.byref(s), ctypes.byref(fl), ctypes.byref(lst), notes,
-            512)
-    try:
-        features = _features_dict(lst)
-        bio = L.check_ptr(L.lib.ss_skin_bio_maps, ctypes.byref(s), ctypes.byref(fl),
-                          ctypes.byref(lst))
-    finally:
-        L.lib.ss_skin_feature_list_free(ctypes.byref(lst))
-    h.own(L.lib.ss_image_free, bio)
-    maps = L.ss_skin_maps()
-    L.check(L.lib.ss_skin_render_maps, bio, table._skin_lut(), s.world_size_cm,
-            1 if normal_directx else 0, ctypes.byref(maps))
-    h.own(L.lib.ss_skin_maps_free, ctypes.pointer(maps))
+    with L.Poll(progress, "skin") as poll:
+        L.check(L.lib.ss_skin_generate, ctypes.byref(s), ctypes.byref(fl), ctypes.byref(lst),
+                notes, 512)
+        try:
+            poll.raise_pending()  # Ctrl-C while the features were drawn
+            features = _features_dict(lst)
+            bio = poll.call(L.lib.ss_skin_bio_maps_poll, ctypes.byref(s), ctypes.byref(fl),
+                            ctypes.byref(lst), poll.stage(0.05, 0.6), None, pointer=True)
+        finally:
+            L.lib.ss_skin_feature_list_free(ctypes.byref(lst))
+        h.own(L.lib.ss_image_free, bio)
+        poll.raise_pending()
+        maps = L.ss_skin_maps()
+        poll.call(L.lib.ss_skin_render_maps_poll, bio, table._skin_lut(), s.world_size_cm,
+                  1 if normal_directx else 0, ctypes.byref(maps), poll.stage(0.6, 1.0), None)
+        h.own(L.lib.ss_skin_maps_free, ctypes.pointer(maps))
+        poll.raise_pending()
     out = {m: L.image_view(getattr(maps, m), h)
            for m in ("base_color", "roughness", "specular", "height_mm", "normal")}
     out["bio"] = L.image_view(bio, h)

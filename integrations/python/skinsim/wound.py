@@ -111,10 +111,13 @@ class Textures:
             self.observe()
         return self
 
-    def render(self, out=None):
+    def render(self, out=None, progress=None):
         """The textures of the current day: base_color (size, size, 3)
         linear RGB, roughness, height_mm (0 = skin surface) and normal
-        (tangent space, OpenGL +Y up)."""
+        (tangent space, OpenGL +Y up). progress: True for a bar on stderr, or
+        a callable(fraction 0..1) called between bands of texture rows;
+        Ctrl-C stops the render at the next band and raises
+        KeyboardInterrupt (arrays passed as out= are then partly written)."""
         n = self.size
         if out is None:
             out = {"base_color": np.zeros((n, n, 3), np.float32),
@@ -126,5 +129,7 @@ class Textures:
         for m, field in zip(MAPS, ("base_color", "roughness", "height", "normal")):
             want = (n, n, 3) if m in ("base_color", "normal") else (n, n)
             L.set_out_image(ts, field, out.get(m), want, "render: out[%r]" % m, hdrs)
-        L.check(L.lib.ss_wound_render, self._renderer, self._tissue, None, ctypes.byref(ts))
+        with L.Poll(progress, "wound render") as poll:
+            poll.check(L.lib.ss_wound_render_poll, self._renderer, self._tissue, None,
+                       ctypes.byref(ts), poll.stage(), None)
         return out

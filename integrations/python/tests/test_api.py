@@ -122,6 +122,104 @@ class Interrupt(unittest.TestCase):
         run.step()  # still a valid run
         self.assertGreater(run.day, day)
 
+    # Ctrl-C in the texture calls: a real SIGINT sent from the first
+    # progress callback (so small, fast sizes still interrupt mid-call) must
+    # stop the call at its next poll -- no further callbacks -- raise
+    # KeyboardInterrupt, restore the handler and free what the call made;
+    # the next call, with a progress callable, equals one without.
+    @staticmethod
+    def _sigint_at_first(seen):
+        def progress(fraction):
+            seen.append(fraction)
+            if len(seen) == 1:
+                os.kill(os.getpid(), signal.SIGINT)
+        return progress
+
+    def _assert_stopped_at_first_poll(self, seen):
+        self.assertEqual(len(seen), 1, "the call went on after Ctrl-C: %r" % seen)
+        self.assertLess(seen[0], 1.0)
+        self.assertIs(signal.getsignal(signal.SIGINT), signal.default_int_handler)
+
+    def _assert_progress_rises_to_one(self, seen):
+        self.assertGreater(len(seen), 2)
+        self.assertEqual(seen, sorted(seen))
+        self.assertAlmostEqual(seen[-1], 1.0)
+
+    @unittest.skipIf(skin is None, "no skin module")
+    def test_ctrl_c_stops_skin_textures(self):
+        handles = []
+        real = L.Handle.__init__
+
+        def tracked(h):
+            real(h)
+            handles.append(weakref.ref(h))
+
+        optics.default_table()
+        for stop_at in (1, 6):  # in the bio maps; in the render maps
+            seen = []
+
+            def progress(f, seen=seen, stop_at=stop_at):
+                seen.append(f)
+                if len(seen) == stop_at:
+                    os.kill(os.getpid(), signal.SIGINT)
+
+            L.Handle.__init__ = tracked
+            try:
+                with self.assertRaises(KeyboardInterrupt) as cm:
+                    skin.textures(size=128, progress=progress)
+            finally:
+                L.Handle.__init__ = real
+            del cm
+            self.assertEqual(len(seen), stop_at, "went on after Ctrl-C: %r" % seen)
+            self.assertLess(seen[-1], 1.0)
+            self.assertIs(signal.getsignal(signal.SIGINT), signal.default_int_handler)
+            self.assertEqual(len(handles), 1)
+            self.assertIsNone(handles.pop()(), "a cancelled call kept its C memory")
+        plain = skin.textures(size=128)
+        seen = []
+        t = skin.textures(size=128, progress=seen.append)
+        self._assert_progress_rises_to_one(seen)
+        for m in ("base_color", "roughness", "specular", "height_mm", "normal", "bio"):
+            np.testing.assert_array_equal(t[m], plain[m])
+
+    def test_ctrl_c_stops_an_abrasion_frame(self):
+        from skinsim import abrasion
+
+        ab = abrasion.Abrasion(size=64)
+        keys, end = ab.timeline
+        blend = 0.5 * (keys[3][1] + keys[4][1])  # vasodilation -> scab forming
+        for day in (blend, keys[-1][1] + 0.5 * (end - keys[-1][1])):  # a blend; maturation
+            seen = []
+            with self.assertRaises(KeyboardInterrupt):
+                ab.frame(day, progress=self._sigint_at_first(seen))
+            self._assert_stopped_at_first_poll(seen)
+            plain = ab.frame(day)
+            seen = []
+            f = ab.frame(day, progress=seen.append)
+            self.assertGreaterEqual(len(seen), 2)
+            self.assertEqual(seen, sorted(seen))
+            self.assertAlmostEqual(seen[-1], 1.0)
+            for m in plain:
+                np.testing.assert_array_equal(f[m], plain[m])
+
+    def test_ctrl_c_stops_a_wound_render(self):
+        try:
+            from skinsim import wound
+        except ImportError:
+            self.skipTest("no wound module")
+        run = heal.Run(days=1, grid=(16, 16, 6), size_mm=(8, 8, 3))
+        tex = wound.Textures(run, size=256)
+        seen = []
+        with self.assertRaises(KeyboardInterrupt):
+            tex.render(progress=self._sigint_at_first(seen))
+        self._assert_stopped_at_first_poll(seen)
+        plain = tex.render()
+        seen = []
+        maps = tex.render(progress=seen.append)
+        self._assert_progress_rises_to_one(seen)
+        for m in plain:
+            np.testing.assert_array_equal(maps[m], plain[m])
+
     def test_progress_callable_and_bar(self):
         seen = []
         optics.spectrum(photons=300, wl_step_nm=100, progress=seen.append)
