@@ -531,8 +531,8 @@ static ss_status render_scab(const ctx *c, ss_texture_set *out, ss_error *err) {
 #define SCAR_WEIGHT 0.6f       /* how far a mature scar goes to the palette's scar */
 #define PIH_RISE_DAYS 14.0f
 #define PIH_FADE_DAYS 240.0f
-#define NEW_MELANIN 0.3f        /* the new epithelium's melanin, of the skin's */
-#define REPIG_DAYS 10.0f        /* its repigmentation from the margins and follicles */
+#define NEW_MELANIN 0.6f        /* the new epithelium's melanin, of the skin's */
+#define REPIG_DAYS 7.0f         /* its repigmentation from the margins and follicles */
 #define SCAR_MELANIN_LOSS 0.25f /* the mature scar's hypopigmentation */
 
 /* The palette's skin ratio at a melanin factor (log-linear between its
