@@ -642,6 +642,71 @@ static void test_frame_cancel(void **state) {
     scene_free(&sc);
 }
 
+/* Dark skin (issue 24): the healing patch follows the skin's own melanin.
+ * The example scrape on the default skin darkened to a brown skin; at days
+ * 20 and 30 the healed ring (inside the outline, away from the still-open
+ * core) is within 8 L* of the skin around it and at most 7 units of chroma
+ * more saturated (the melanin change as a multiplier per channel drew a
+ * light, saturated orange-tan patch). */
+static void test_dark_skin_maturation(void **state) {
+    (void)state;
+    int n = 96;
+    scene sc;
+    scene_make(&sc, n);
+    ss_error err;
+    /* the same skin texture at a brown skin's mean colour (linear sRGB) */
+    const double dark[3] = {0.11, 0.045, 0.025};
+    double mean[3] = {0, 0, 0};
+    for (int i = 0; i < n * n; i++)
+        for (int c = 0; c < 3; c++) mean[c] += sc.skin.upper->data[i * 3 + c] / (n * n);
+    ss_image *up = ss_image_create(n, n, 3, &err);
+    assert_non_null(up);
+    for (int i = 0; i < n * n; i++)
+        for (int c = 0; c < 3; c++)
+            up->data[i * 3 + c] = (float)(sc.skin.upper->data[i * 3 + c] * dark[c] / mean[c]);
+    ss_base_skin_free(&sc.skin);
+    assert_int_equal(ss_base_skin_create(up, NULL, n, 7, &sc.skin, &err), SS_OK);
+    ss_image_free(up);
+    assert_true(sc.skin.palette->pih_prevalence > 0.4f);
+    ss_timeline tl;
+    ss_timeline_default(&tl);
+    ss_abrasion *a;
+    assert_int_equal(ss_abrasion_create(&sc.s, &tl, sc.w, &sc.skin, &a, &err), SS_OK);
+    ss_texture_set f;
+    assert_int_equal(ss_texture_set_create(n, &f, &err), SS_OK);
+    const double days[2] = {20, 30};
+    for (int k = 0; k < 2; k++) {
+        assert_int_equal(ss_abrasion_frame(a, days[k], &f, &err), SS_OK);
+        double cw = 0, cs = 0, lw = 0, ls = 0, nw = 0, ns = 0;
+        double dmax = 0;
+        for (int i = 0; i < n * n; i++)
+            if (sc.w->mask->data[i] > 0.5f) dmax = fmax(dmax, sc.w->dist->data[i]);
+        for (int i = 0; i < n * n; i++) {
+            double rgb[3], lab[3], chroma, hue, ita;
+            for (int c = 0; c < 3; c++) rgb[c] = f.color->data[i * 3 + c];
+            ss_srgb_linear_to_lab(rgb, lab);
+            ss_lab_describe(lab, &chroma, &hue, &ita);
+            int inside = sc.w->mask->data[i] > 0.5f;
+            float d = sc.w->dist->data[i];
+            if (inside && d >= 2 && d < 0.25 * dmax) /* the healed ring, not the open core */
+                cw += chroma, lw += lab[0], nw++;
+            else if (!inside && d > 8)
+                cs += chroma, ls += lab[0], ns++;
+        }
+        assert_true(nw > 0 && ns > 0);
+        cw /= nw, cs /= ns, lw /= nw, ls /= ns;
+        printf("dark skin day %g: healed ring L* %.1f chroma %.1f, skin L* %.1f chroma %.1f\n",
+               days[k], lw, cw, ls, cs);
+        /* lighter pink-tan, then darker: not the light orange-tan (old: L* +21,
+         * chroma +7.4 at day 20) */
+        assert_true(fabs(lw - ls) < 8.0);
+        assert_true(cw - cs < 7.0);
+    }
+    ss_texture_set_free(&f);
+    ss_abrasion_free(a);
+    scene_free(&sc);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_timeline_locate),
@@ -658,6 +723,7 @@ int main(void) {
         cmocka_unit_test(test_scale_invariance),
         cmocka_unit_test(test_thread_determinism),
         cmocka_unit_test(test_update_equals_create),
+        cmocka_unit_test(test_dark_skin_maturation),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

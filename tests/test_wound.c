@@ -537,13 +537,134 @@ static void test_render_cancel(void **state) {
     scene_free(&s);
 }
 
+/* ---- dark skin: pigmentation follows the skin's melanin (issue 24) -------------------- */
+
+/* A tissue map by hand (no heal run, so it is fast): a round healed region
+ * of radius r_open mm that was open and closed `age` days ago, a region
+ * (plasma) that spread to r_region mm over skin that never opened, and in it
+ * the keloid's collagen: keloid_mm in the middle, falling to 0 at
+ * r_region. */
+static ss_wound_tissue *synthetic_tissue(double r_open, double r_region, double keloid_mm,
+                                         double age) {
+    ss_wound_tissue *t = calloc(1, sizeof *t);
+    assert_non_null(t);
+    t->nx = t->ny = 40;
+    t->dx_mm = 0.5;
+    t->day = age + 10;
+    size_t n = 40 * 40;
+    float **maps[] = {&t->epithelium, &t->capillary, &t->oxygen,   &t->plasma,   &t->scab_mm,
+                      &t->scar,       &t->keloid_mm, &t->depth_mm, &t->age_days, &t->elevation_mm};
+    for (size_t k = 0; k < sizeof maps / sizeof *maps; k++)
+        assert_non_null(*maps[k] = calloc(n, sizeof(float)));
+    assert_non_null(t->closed_day = calloc(n, sizeof(double)));
+    for (int y = 0; y < 40; y++)
+        for (int x = 0; x < 40; x++) {
+            size_t i = (size_t)y * 40 + x;
+            double r = hypot((x + 0.5) * 0.5 - 10, (y + 0.5) * 0.5 - 10);
+            t->epithelium[i] = t->capillary[i] = t->oxygen[i] = 1;
+            t->age_days[i] = r < r_open ? (float)age : SS_WOUND_AGE_INTACT;
+            if (r < r_region) {
+                double f = 1 - r / r_region;
+                t->plasma[i] = 1;
+                t->scar[i] = 1;
+                t->keloid_mm[i] = (float)(keloid_mm * f);
+                t->elevation_mm[i] = (float)(0.5 * keloid_mm * f);
+            }
+        }
+    return t;
+}
+
+/* Mean L* and chroma of the base colour by radius (0.5 mm rings) */
+static void ring_profile(const ss_image *img, int tex, double side_mm, double *L, double *C,
+                         int nring) {
+    double cnt[64] = {0};
+    for (int k = 0; k < nring; k++) L[k] = C[k] = 0;
+    for (int y = 0; y < tex; y++)
+        for (int x = 0; x < tex; x++) {
+            double r = hypot((x + 0.5) / tex * side_mm - 0.5 * side_mm,
+                             (y + 0.5) / tex * side_mm - 0.5 * side_mm);
+            int k = (int)(r / 0.5);
+            if (k >= nring) continue;
+            double rgb[3], lab[3];
+            for (int c = 0; c < 3; c++) rgb[c] = img->data[((size_t)y * tex + x) * 3 + c];
+            ss_linear_srgb_to_lab(rgb, lab);
+            L[k] += lab[0], C[k] += hypot(lab[1], lab[2]), cnt[k]++;
+        }
+    for (int k = 0; k < nring; k++) L[k] /= cnt[k], C[k] /= cnt[k];
+}
+
+static void test_dark_skin_pigment(void **state) {
+    (void)state;
+    ss_error err;
+    char path[4096];
+    snprintf(path, sizeof path, "%s/data/modelmatch_default.sstab", SKINSIM_SOURCE_DIR);
+    ss_mm_table *table = ss_mm_table_read(path, &err);
+    assert_non_null(table);
+    const int tex = 64;
+    for (int dark = 0; dark < 2; dark++) {
+        ss_image *skin = ss_skin_bio_default(tex, 2.0, 1, &err);
+        assert_non_null(skin);
+        if (dark) { /* melanin 0.35 (as `skinsim skin --base melanin=0.35`), its mottling kept */
+            size_t n = (size_t)tex * tex;
+            double m = 0;
+            for (size_t i = 0; i < n; i++) m += skin->data[i * SS_BIO_NCHANNELS + SS_BIO_MELANIN];
+            m /= (double)n;
+            for (size_t i = 0; i < n; i++)
+                skin->data[i * SS_BIO_NCHANNELS + SS_BIO_MELANIN] *= (float)(0.35 / m);
+        }
+        ss_wound_render_options o;
+        ss_wound_render_options_default(&o);
+        o.size = tex;
+        o.side_mm = 20.0;
+        o.skin = skin;
+        o.table = table;
+        o.scab_photons = 200;
+        ss_wound_renderer *r;
+        assert_int_equal(ss_wound_renderer_create(&o, &r, &err), SS_OK);
+        ss_wound_textures out;
+        assert_int_equal(ss_wound_textures_create(tex, &out, &err), SS_OK);
+        double L[20], C[20];
+        /* a keloid at day 90: healed 4 mm, the region and its collagen spread
+         * to 7 mm. No ring around the plateau lighter than both it and the
+         * skin (the never-opened rim drew as a century-old whitened scar) */
+        ss_wound_tissue *t = synthetic_tissue(4, 7, 2, 80);
+        assert_int_equal(ss_wound_render(r, t, NULL, &out, &err), SS_OK);
+        ring_profile(out.base_color, tex, 20, L, C, 20);
+        double lk = L[0], ls = L[18], worst = -1e9;
+        for (int k = 1; k < 18; k++) worst = fmax(worst, L[k] - fmax(lk, ls));
+        fprintf(stderr,
+                "%s skin keloid: L* plateau %.1f, skin %.1f, lightest ring %+.1f above both\n",
+                dark ? "dark" : "light", lk, ls, worst);
+        assert_true(worst < 2.0);
+        ss_wound_tissue_free(t);
+        /* a scar at a year (healed and region 5 mm, no keloid): faint on dark
+         * skin, at most a little lighter and no more saturated than the skin */
+        t = synthetic_tissue(5, 5, 0, 365);
+        assert_int_equal(ss_wound_render(r, t, NULL, &out, &err), SS_OK);
+        ring_profile(out.base_color, tex, 20, L, C, 20);
+        double ds = 0.5 * (L[0] + L[1]) - L[18], dc = 0.5 * (C[0] + C[1]) - C[18];
+        fprintf(stderr, "%s skin scar at a year: L* %+.1f, chroma %+.1f against the skin\n",
+                dark ? "dark" : "light", ds, dc);
+        assert_true(ds > 0.5); /* still there, lighter */
+        if (dark) {
+            assert_true(ds < 7.0);
+            assert_true(dc < 3.0);
+        }
+        ss_wound_tissue_free(t);
+        ss_wound_textures_free(&out);
+        ss_wound_renderer_free(r);
+        ss_image_free(skin);
+    }
+    ss_mm_table_free(table);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_delta_e2000), cmocka_unit_test(test_recipe),
         cmocka_unit_test(test_layers),      cmocka_unit_test(test_clinical),
         cmocka_unit_test(test_threads),     cmocka_unit_test(test_render_cancel),
         cmocka_unit_test(test_base_lookup), cmocka_unit_test(test_height_encoding),
-        cmocka_unit_test(test_pih_rates),
+        cmocka_unit_test(test_pih_rates),   cmocka_unit_test(test_dark_skin_pigment),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -75,12 +75,20 @@ void ss_wound_shape_free(ss_wound_shape *w);
  * estimated from the upper texture; ita_deg its typology angle;
  * pih_prevalence the clinical rate of post-inflammatory hyperpigmentation at
  * that skin type (ss_pih_prevalence). */
+#define SS_ABRASION_NMELANIN 9
 typedef struct ss_abrasion_palette {
     float bed_pale[3], bed[3], capillary[3], granulation[3];
     float blood[3], serous[3], fibrin[3], crust_dark[3], crust_light[3];
     float erythema[3], new_epithelium[3], scar[3], hyperpigment[3];
+    /* the skin with its epidermal melanin times ss_abrasion_melanin_factor(k),
+     * as a ratio to the healthy skin: hypo- and hyperpigmentation as the
+     * optics render a melanin change (new_epithelium and scar hold the
+     * skin's own melanin; the healing phases multiply in one of these) */
+    float melanin_ratio[SS_ABRASION_NMELANIN][3];
     float melanin, ita_deg, pih_prevalence;
 } ss_abrasion_palette;
+/* The melanin factor of melanin_ratio[k]: 0.25 to 2.5, evenly in log. */
+double ss_abrasion_melanin_factor(int k);
 /* Computes the palette for a skin whose healthy colour is `upper` (linear
  * RGB); reads the optics model's spectra (data/spectra). */
 ss_status ss_abrasion_palette_compute(const ss_image *upper, ss_abrasion_palette *p, ss_error *err);

@@ -14,9 +14,11 @@
  *                      serum pigment) and dried crust (haemoglobin concentrated
  *                      by drying, deoxygenated, with serum bilirubin);
  *   skin multipliers   erythema (dilated dermal blood), new epithelium (thin,
- *                      melanin-poor, over young vascular tissue), mature scar
- *                      (hypovascular, more scattering collagen) and
- *                      post-inflammatory hyperpigmentation (more melanin), each
+ *                      over young vascular tissue), mature scar (hypovascular,
+ *                      more scattering collagen), post-inflammatory
+ *                      hyperpigmentation (melanin doubled) and the skin at nine
+ *                      melanin factors 0.25..2.5 (the healing phases' hypo- and
+ *                      hyperpigmentation, interpolated in log factor), each
  *                      as the ratio of its albedo to the healthy skin's, so the
  *                      upper skin texture keeps its own detail under them.
  *
@@ -149,6 +151,10 @@ double ss_pih_prevalence(double ita_deg) {
     return p[5];
 }
 
+double ss_abrasion_melanin_factor(int k) {
+    return 0.25 * pow(10.0, (double)k / (SS_ABRASION_NMELANIN - 1));
+}
+
 ss_status ss_abrasion_palette_compute(const ss_image *upper, ss_abrasion_palette *P,
                                       ss_error *err) {
     memset(P, 0, sizeof *P);
@@ -233,20 +239,23 @@ ss_status ss_abrasion_palette_compute(const ss_image *upper, ss_abrasion_palette
     m.bio.blood = 0.06; /* erythema: dermal blood x12 */
     m.bio.oxygenation = 0.85;
     RATIO(erythema);
-    m = skin; /* new epithelium: thin, a third of the melanin, over young vessels */
-    m.bio.melanin *= 0.3;
+    m = skin; /* new epithelium: thin, over young vessels (its melanin: melanin_ratio) */
     m.bio.epidermis_thickness_cm *= 0.6;
     m.bio.blood = 0.02;
     m.bio.oxygenation = 0.85;
     RATIO(new_epithelium);
-    m = skin; /* mature scar: hypovascular, dense collagen, somewhat hypopigmented */
-    m.bio.melanin *= 0.75;
+    m = skin; /* mature scar: hypovascular, dense collagen (its melanin: melanin_ratio) */
     m.bio.blood = 0.003;
     m.dermis_scatter = 1.3;
     RATIO(scar);
     m = skin; /* hyperpigmentation: melanin doubled */
     m.bio.melanin *= 2.0;
     RATIO(hyperpigment);
+    for (int k = 0; k < SS_ABRASION_NMELANIN; k++) {
+        m = skin;
+        m.bio.melanin *= ss_abrasion_melanin_factor(k);
+        RATIO(melanin_ratio[k]);
+    }
 #undef RATIO
     ss_optics_data_close(d);
     return st;

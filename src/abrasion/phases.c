@@ -514,10 +514,12 @@ static ss_status render_scab(const ctx *c, ss_texture_set *out, ss_error *err) {
  *   healed (d <= outer): the skin under new epithelium, pink while young
  *     (fading as exp(-age / 120 d), age the days since that ring healed),
  *     lightening (1 - exp(-age / 60 d)) and turning into a faint pale scar
- *     after the first month (1 - exp(-(age - 30 d) / 150 d)), with
- *     post-inflammatory
- *     hyperpigmentation rising over the first weeks and fading over months,
- *     as strong as the skin type's clinical rate (palette);
+ *     after the first month (1 - exp(-(age - 30 d) / 150 d)); its melanin
+ *     (a factor of the skin's, drawn through the palette's melanin_ratio)
+ *     0.3 at closure, repigmenting over ~10 days, times 1 + the
+ *     post-inflammatory hyperpigmentation (rising over the first weeks and
+ *     fading over months, as strong as the skin type's clinical rate), less
+ *     a quarter as the scar matures;
  *   front (outer < d <= inner): new epithelium at the front, red
  *     granulation tissue behind it;
  *   core: moist granulation tissue with fibrin.
@@ -526,10 +528,25 @@ static ss_status render_scab(const ctx *c, ss_texture_set *out, ss_error *err) {
 #define SCAR_RED_DAYS 120.0f   /* fading of the young scar's pink */
 #define SCAR_PALE_DELAY 30.0f  /* days before the scar starts to pale */
 #define SCAR_PALE_DAYS 150.0f  /* its paling */
-#define SCAR_BRIGHT_DAYS 60.0f /* its lightening (dense collagen, less melanin) */
+#define SCAR_BRIGHT_DAYS 60.0f /* its lightening (dense collagen) */
 #define SCAR_WEIGHT 0.6f       /* how far a mature scar goes to the palette's scar */
 #define PIH_RISE_DAYS 14.0f
 #define PIH_FADE_DAYS 240.0f
+#define NEW_MELANIN 0.6f        /* the new epithelium's melanin, of the skin's */
+#define REPIG_DAYS 7.0f         /* its repigmentation from the margins and follicles */
+#define SCAR_MELANIN_LOSS 0.25f /* the mature scar's hypopigmentation */
+
+/* The palette's skin ratio at a melanin factor (log-linear between its
+ * samples, clamped to 0.25..2.5). */
+static void melanin_ratio(const ss_abrasion_palette *P, float factor, float out[3]) {
+    double x =
+        log10(fmax(factor, 1e-6) / ss_abrasion_melanin_factor(0)) * (SS_ABRASION_NMELANIN - 1);
+    x = x < 0 ? 0 : x > SS_ABRASION_NMELANIN - 1 ? SS_ABRASION_NMELANIN - 1 : x;
+    int k = (int)x < SS_ABRASION_NMELANIN - 1 ? (int)x : SS_ABRASION_NMELANIN - 2;
+    float t = (float)(x - k);
+    for (int c = 0; c < 3; c++)
+        out[c] = P->melanin_ratio[k][c] + (P->melanin_ratio[k + 1][c] - P->melanin_ratio[k][c]) * t;
+}
 static inline int maturation_px(const ctx *c, const look *l, size_t i, double position,
                                 double span_days, double after_days, float *rgb, float *refl) {
     const ss_abrasion_palette *P = c->P;
@@ -563,11 +580,21 @@ static inline int maturation_px(const ctx *c, const look *l, size_t i, double po
     float sb = lum(P->scar) > 1e-6f ? lum(P->scar) : 1.0f;
     float pih = c->P->pih_prevalence * (1.0f - expf(-(float)age / PIH_RISE_DAYS)) *
                 expf(-(float)age / PIH_FADE_DAYS);
+    /* the epidermis's melanin, as a factor of the skin's: the new epithelium
+     * melanin-poor, repigmenting over weeks, darkened by post-inflammatory
+     * hyperpigmentation, and the mature scar somewhat hypopigmented; drawn as
+     * the optics render that melanin (the palette's melanin_ratio), so a dark
+     * skin heals lighter tan, then darker, then faintly lighter, at its own
+     * hue (the melanin change as one more multiplier per channel, weighted
+     * in sRGB, made a saturated orange patch of a dark skin) */
+    float mel = (NEW_MELANIN + (1.0f - NEW_MELANIN) * (1.0f - expf(-(float)age / REPIG_DAYS))) *
+                (1.0f + pih) * (1.0f - SCAR_MELANIN_LOSS * pale);
+    float mr[3];
+    melanin_ratio(P, mel, mr);
     for (int k = 0; k < 3; k++) {
         float f = (1.0f + (P->new_epithelium[k] - 1.0f) * red) *
                   (1.0f + (sb - 1.0f) * SCAR_WEIGHT * bright_t) *
-                  (1.0f + (P->scar[k] / sb - 1.0f) * SCAR_WEIGHT * pale);
-        f *= 1.0f + (P->hyperpigment[k] - 1.0f) * pih;
+                  (1.0f + (P->scar[k] / sb - 1.0f) * SCAR_WEIGHT * pale) * mr[k];
         healed[k] = up[k] * f;
     }
     float r = 0.32f - 0.05f * mat; /* young epithelium is smooth and shiny */

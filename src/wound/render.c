@@ -247,6 +247,7 @@ static double lerp(double a, double b, double t) { return a + (b - a) * t; }
  * century old (a bright rim of mature scar around a 90-day-old one). */
 typedef struct texel_tissue {
     double e, cap, oxy, plasma, scab, scar, keloid, depth, age, elev;
+    double wounded;  /* weight of the columns that were ever open (0..1) */
     double crust_in; /* mm from the crust's edge inwards (0 outside the crust) */
 } texel_tissue;
 
@@ -300,6 +301,7 @@ static void sample_tissue_smooth(const ss_wound_tissue *t, const float *crust_in
             if (t->age_days[idx[q]] < SS_WOUND_AGE_INTACT)
                 acc += wt[q] * (double)t->age_days[idx[q]], ws += wt[q];
         s->age = ws > 1e-12 ? acc / ws : (double)SS_WOUND_AGE_INTACT;
+        s->wounded = ws;
     }
     BS(crust_in, s->crust_in);
 #undef BS
@@ -336,6 +338,7 @@ static void sample_tissue(const ss_wound_tissue *t, const float *crust_in, doubl
             if (t->age_days[ix[q]] < SS_WOUND_AGE_INTACT)
                 acc += wq[q] * (double)t->age_days[ix[q]], ws += wq[q];
         s->age = ws > 1e-12 ? acc / ws : (double)SS_WOUND_AGE_INTACT;
+        s->wounded = ws;
     }
     s->crust_in = BL(crust_in);
 #undef BL
@@ -370,11 +373,17 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
     const double *v = r->o.recipe.v;
     double cover = ramp(s->e, v[SS_WR_EPITHELIUM_LO], v[SS_WR_EPITHELIUM_HI]), open = 1 - cover;
     double reg = ramp(s->plasma, v[SS_WR_REGION_LO], v[SS_WR_REGION_HI]);
+    /* the epidermis that was destroyed and grew back: the region where it was
+     * ever open. Where the region spread over skin that never opened (a
+     * keloid growing beyond the wound) the epidermis is the skin's own, and
+     * its age is no age at all (SS_WOUND_AGE_INTACT): counted as a matured
+     * scar it drew a hypopigmented, whitened rim around the keloid */
+    double regrown = reg * s->wounded;
     double m_scar = 1 - exp(-s->age / v[SS_WR_SCAR_DAYS]);
     double m_epi = 1 - exp(-s->age / v[SS_WR_EPIDERMIS_DAYS]);
     double m_pig = 1 - exp(-s->age / v[SS_WR_PIGMENT_DAYS]);
     double scar = ramp(s->scar, 0, v[SS_WR_SCAR_DENSITY_HI]);
-    float b[SS_BIO_NCHANNELS], k[SS_BIO_NCHANNELS];
+    float b[SS_BIO_NCHANNELS] = {0}, k[SS_BIO_NCHANNELS];
     for (int c = 0; c < SS_BIO_NCHANNELS; c++) k[c] = (float)lerp(skin[c], r->mean[c], reg);
     /* keloid tissue: hypervascular, hypoxic, often hyperpigmented (docs/wound.md) */
     double kel = 1 - exp(-s->keloid / v[SS_WR_KELOID_LOOK_MM]);
@@ -384,12 +393,12 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
         v[SS_WR_PIH_GAIN] * r->pih * (1 - exp(-s->age / 14.0)) * exp(-s->age / v[SS_WR_PIH_DAYS]);
     double mel =
         k[SS_BIO_MELANIN] * cover *
-        lerp(1, lerp(v[SS_WR_NEW_MELANIN], v[SS_WR_SCAR_MELANIN], m_pig) * (1 + pih), reg) *
+        lerp(1, lerp(v[SS_WR_NEW_MELANIN], v[SS_WR_SCAR_MELANIN], m_pig) * (1 + pih), regrown) *
         lerp(1, v[SS_WR_KELOID_MELANIN], kel);
-    double epi =
-        lerp(EPI_FLOOR_CM,
-             k[SS_BIO_EPIDERMIS_CM] * lerp(1, lerp(v[SS_WR_NEW_EPIDERMIS], 1, m_epi), reg), cover);
-    double sc = lerp(SC_FLOOR_CM, k[SS_BIO_SC_CM], cover * lerp(1, m_epi, reg));
+    double epi = lerp(
+        EPI_FLOOR_CM,
+        k[SS_BIO_EPIDERMIS_CM] * lerp(1, lerp(v[SS_WR_NEW_EPIDERMIS], 1, m_epi), regrown), cover);
+    double sc = lerp(SC_FLOOR_CM, k[SS_BIO_SC_CM], cover * lerp(1, m_epi, regrown));
     double cap = s->cap < 0 ? 0 : s->cap;
     double tissue_blood =
         k[SS_BIO_BLOOD] * cap * lerp(1, v[SS_WR_SCAR_BLOOD], reg * scar * m_scar) +
@@ -413,17 +422,28 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
     b[SS_BIO_EPIDERMIS_CM] = (float)epi;
     lookup5 l;
     bio_to_render(r->lut, b, &l);
-    /* dense mature collagen scatters more: lift the albedo towards white */
-    /* dense mature collagen scatters more: a lift of the albedo towards white
-     * on light skin, at the skin's own hue on melanin-rich skin (towards white
-     * it would grey a dark skin: the epidermis above the scattering collagen
-     * still filters the light) */
-    double white = v[SS_WR_SCAR_WHITENING] * reg * scar * m_scar * cover * (1 - kel);
-    double skin_rgb[3], top = fmax(l.rgb[0], fmax(l.rgb[1], l.rgb[2]));
-    double tint = ramp(k[SS_BIO_MELANIN], 0.02, 0.15);
-    for (int c = 0; c < 3; c++) {
-        double hue = lerp(1, top > 1e-6 ? l.rgb[c] / top : 1, tint);
-        skin_rgb[c] = clamp01(l.rgb[c] + white * (hue - l.rgb[c]));
+    /* dense mature collagen scatters more: a lift of the albedo towards a
+     * white dermis seen through this texel's own epidermis. Its filter is the
+     * table's: the bloodless albedo with this melanin over the one without
+     * melanin (the melanin's two passes), so the lift is near white on light
+     * skin and a moderate lightening at the skin's own brown on melanin-rich
+     * skin (a lift to the skin's hue at full brightness, as before, drew a
+     * bright orange scar there). Only where the epidermis regrew: skin the
+     * region spread over was never a scar maturing since closure. */
+    double white = v[SS_WR_SCAR_WHITENING] * regrown * scar * m_scar * cover * (1 - kel);
+    double skin_rgb[3] = {l.rgb[0], l.rgb[1], l.rgb[2]};
+    if (white > 0) {
+        float bw[SS_BIO_NCHANNELS];
+        memcpy(bw, b, sizeof bw);
+        bw[SS_BIO_BLOOD] = 0;
+        lookup5 with, without;
+        bio_to_render(r->lut, bw, &with);
+        bw[SS_BIO_MELANIN] = (float)MELANIN_FLOOR;
+        bio_to_render(r->lut, bw, &without);
+        for (int c = 0; c < 3; c++) {
+            double filt = without.rgb[c] > 1e-6 ? clamp01(with.rgb[c] / without.rgb[c]) : 1;
+            skin_rgb[c] = clamp01(l.rgb[c] + white * (filt - l.rgb[c]));
+        }
     }
     /* the crust: thin at its edge, full from scab_dome inwards; its thickness
      * mottled (+-scab_mottle at ~1.5 mm) */
