@@ -591,19 +591,6 @@ static void test_thread_determinism(void **state) {
     scene_free(&sc);
 }
 
-/* A progress callback that counts its calls, checks the fraction rises, and
- * stops the call at call number stop_at (0: never). */
-typedef struct poll_count {
-    int calls, stop_at;
-    double last;
-} poll_count;
-static int count_poll(void *user, double fraction) {
-    poll_count *p = user;
-    assert_true(fraction >= p->last && fraction <= 1.0);
-    p->last = fraction;
-    return ++p->calls == p->stop_at;
-}
-
 /* ss_abrasion_frame_poll in a blend and in maturation: cancelled at the
  * first poll, SS_ERR_RUNTIME "cancelled"; never stopped, the plain frame. */
 static void test_frame_cancel(void **state) {
@@ -622,13 +609,13 @@ static void test_frame_cancel(void **state) {
     const double m0 = tl.key[tl.nkeys - 1].day;
     const double days[2] = {0.5 * (tl.key[3].day + tl.key[4].day), m0 + 0.4 * (tl.end_day - m0)};
     for (int k = 0; k < 2; k++) {
-        poll_count stop = {0, 1, 0}, go = {0, 0, 0};
-        assert_int_equal(ss_abrasion_frame_poll(a, days[k], &g, count_poll, &stop, &err),
+        tu_poll stop = {0, 1, 0}, go = {0, 0, 0};
+        assert_int_equal(ss_abrasion_frame_poll(a, days[k], &g, tu_poll_count, &stop, &err),
                          SS_ERR_RUNTIME);
         assert_non_null(strstr(err.msg, "cancelled"));
         assert_int_equal(stop.calls, 1);
         assert_int_equal(ss_abrasion_frame(a, days[k], &f, &err), SS_OK);
-        assert_int_equal(ss_abrasion_frame_poll(a, days[k], &g, count_poll, &go, &err), SS_OK);
+        assert_int_equal(ss_abrasion_frame_poll(a, days[k], &g, tu_poll_count, &go, &err), SS_OK);
         assert_true(go.calls >= 2 && go.last == 1.0);
         size_t b3 = sizeof(float) * (size_t)n * n * 3, b1 = b3 / 3;
         assert_memory_equal(f.color->data, g.color->data, b3);

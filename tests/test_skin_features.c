@@ -874,19 +874,6 @@ static void test_tone_ends(void **state) {
     ss_mm_table_free(t);
 }
 
-/* A progress callback that counts its calls, checks the fraction rises, and
- * stops the call at call number stop_at (0: never). */
-typedef struct poll_count {
-    int calls, stop_at;
-    double last;
-} poll_count;
-static int count_poll(void *user, double fraction) {
-    poll_count *p = user;
-    assert_true(fraction >= p->last && fraction <= 1.0);
-    p->last = fraction;
-    return ++p->calls == p->stop_at;
-}
-
 /* The _poll calls: cancelled, SS_ERR_RUNTIME "cancelled" and nothing kept
  * (ASan: nothing leaks); never stopped, the plain calls' maps bit for bit. */
 static void test_poll_cancel(void **state) {
@@ -898,29 +885,30 @@ static void test_poll_cancel(void **state) {
     assert_non_null(lut);
     ss_skin_feature_list l;
     assert_int_equal(ss_skin_generate(&s, NULL, &l, NULL, 0, &err), SS_OK);
-    poll_count stop = {0, 2, 0}, go = {0, 0, 0};
-    assert_null(ss_skin_bio_maps_poll(&s, NULL, &l, count_poll, &stop, &err));
+    tu_poll stop = {0, 2, 0}, go = {0, 0, 0};
+    assert_null(ss_skin_bio_maps_poll(&s, NULL, &l, tu_poll_count, &stop, &err));
     assert_int_equal(err.code, SS_ERR_RUNTIME);
     assert_non_null(strstr(err.msg, "cancelled"));
     assert_int_equal(stop.calls, 2);
     ss_image *bio = ss_skin_bio_maps(&s, NULL, &l, &err);
-    ss_image *bio2 = ss_skin_bio_maps_poll(&s, NULL, &l, count_poll, &go, &err);
+    ss_image *bio2 = ss_skin_bio_maps_poll(&s, NULL, &l, tu_poll_count, &go, &err);
     assert_non_null(bio);
     assert_non_null(bio2);
     assert_true(go.calls >= 2 && go.last == 1.0);
     size_t n = (size_t)s.size * s.size;
     assert_memory_equal(bio->data, bio2->data, n * SS_BIO_NCHANNELS * sizeof(float));
     ss_skin_maps m, m2;
-    stop = (poll_count){0, 2, 0};
+    stop = (tu_poll){0, 2, 0};
     assert_int_equal(
-        ss_skin_render_maps_poll(bio, lut, s.world_size_cm, 0, &m2, count_poll, &stop, &err),
+        ss_skin_render_maps_poll(bio, lut, s.world_size_cm, 0, &m2, tu_poll_count, &stop, &err),
         SS_ERR_RUNTIME);
     assert_non_null(strstr(err.msg, "cancelled"));
     assert_null(m2.base_color);
-    go = (poll_count){0, 0, 0};
+    go = (tu_poll){0, 0, 0};
     assert_int_equal(ss_skin_render_maps(bio, lut, s.world_size_cm, 0, &m, &err), SS_OK);
     assert_int_equal(
-        ss_skin_render_maps_poll(bio, lut, s.world_size_cm, 0, &m2, count_poll, &go, &err), SS_OK);
+        ss_skin_render_maps_poll(bio, lut, s.world_size_cm, 0, &m2, tu_poll_count, &go, &err),
+        SS_OK);
     assert_true(go.calls >= 2 && go.last == 1.0);
     assert_memory_equal(m.base_color->data, m2.base_color->data, n * 3 * sizeof(float));
     assert_memory_equal(m.specular->data, m2.specular->data, n * sizeof(float));

@@ -477,19 +477,6 @@ static void test_threads(void **state) {
     scene_free(&s);
 }
 
-/* A progress callback that counts its calls, checks the fraction rises, and
- * stops the call at call number stop_at (0: never). */
-typedef struct poll_count {
-    int calls, stop_at;
-    double last;
-} poll_count;
-static int count_poll(void *user, double fraction) {
-    poll_count *p = user;
-    assert_true(fraction >= p->last && fraction <= 1.0);
-    p->last = fraction;
-    return ++p->calls == p->stop_at;
-}
-
 /* ss_wound_render_poll: cancelled at the first poll it returns
  * SS_ERR_RUNTIME "cancelled" (ASan: nothing leaks); never stopped it polls
  * up to 1 and renders what ss_wound_render renders, bit for bit. */
@@ -515,14 +502,14 @@ static void test_render_cancel(void **state) {
     ss_wound_textures a, b;
     assert_int_equal(ss_wound_textures_create(TEX, &a, &err), SS_OK);
     assert_int_equal(ss_wound_textures_create(TEX, &b, &err), SS_OK);
-    poll_count stop = {0, 1, 0};
-    assert_int_equal(ss_wound_render_poll(s.r, t, NULL, &b, count_poll, &stop, &err),
+    tu_poll stop = {0, 1, 0};
+    assert_int_equal(ss_wound_render_poll(s.r, t, NULL, &b, tu_poll_count, &stop, &err),
                      SS_ERR_RUNTIME);
     assert_non_null(strstr(err.msg, "cancelled"));
     assert_int_equal(stop.calls, 1);
-    poll_count go = {0, 0, 0};
+    tu_poll go = {0, 0, 0};
     assert_int_equal(ss_wound_render(s.r, t, NULL, &a, &err), SS_OK);
-    assert_int_equal(ss_wound_render_poll(s.r, t, NULL, &b, count_poll, &go, &err), SS_OK);
+    assert_int_equal(ss_wound_render_poll(s.r, t, NULL, &b, tu_poll_count, &go, &err), SS_OK);
     assert_true(go.calls >= 2);
     assert_true(go.last == 1.0);
     size_t n = (size_t)TEX * TEX;

@@ -99,3 +99,10 @@ void tu_assert_heal_grids_equal(const ss_heal_grid *a, const ss_heal_grid *b) {
         if (a->velocity[c]) assert_memory_equal(a->velocity[c], b->velocity[c], n * sizeof(float));
     }
 }
+
+int tu_poll_count(void *user, double fraction) {
+    tu_poll *p = user;
+    assert_true(fraction >= p->last && fraction <= 1.0);
+    p->last = fraction;
+    return ++p->calls == p->stop_at;
+}

@@ -35,4 +35,13 @@ struct ss_heal_grid *tu_heal_grid_noisy(int nx, int ny, int nz, double dx_mm, ui
 /* Asserts that two healing grids hold the same state, bit for bit. */
 void tu_assert_heal_grids_equal(const struct ss_heal_grid *a, const struct ss_heal_grid *b);
 
+/* A progress callback (ss_progress_fn) that counts its calls, asserts the
+ * fraction rises and stays in [0, 1], and asks the call to stop at call
+ * number stop_at (0: never). */
+typedef struct tu_poll {
+    int calls, stop_at;
+    double last;
+} tu_poll;
+int tu_poll_count(void *user, double fraction);
+
 #endif
