@@ -201,13 +201,6 @@ ss_status ss_stroke_hulls(const ss_stroke_set *s, double width, double height, i
 
 ss_image *ss_stroke_footprint(const ss_stroke_set *s, int width, int height, int concave_k,
                               const char *name, ss_error *err) {
-    ss_polygon *polys;
-    if (ss_stroke_hulls(s, width, height, concave_k, name, &polys, err)) return NULL;
-    ss_image *img = ss_image_create(width, height, 1, err);
-    for (int k = 0; k < s->nstrokes; k++) {
-        if (img) ss_polygon_fill(&polys[k], img);
-        ss_polygon_free(&polys[k]);
-    }
-    free(polys);
-    return img;
+    /* the sharp hulls: round.c's footprint with no corner rounding */
+    return ss_stroke_footprint_rounded(s, width, height, concave_k, 0.0, name, err);
 }
