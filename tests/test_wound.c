@@ -418,25 +418,43 @@ static void test_base_lookup(void **state) {
     scene_free(&s);
 }
 
+/* The scab scenario on an n x n x 8 block run to `days`, as wound tissue
+ * (the run in *run, to free after the tissue). */
+static ss_wound_tissue *scab_tissue(int n, double days, ss_heal_run **run) {
+    ss_error err;
+    ss_heal_run_config c;
+    ss_heal_run_config_default(&c);
+    c.scenario = "scab";
+    c.grid[0] = c.grid[1] = n;
+    c.grid[2] = 8;
+    c.days = days;
+    assert_int_equal(ss_heal_run_create(&c, run, &err), SS_OK);
+    assert_int_equal(ss_heal_run_advance_to(*run, days, &err), SS_OK);
+    ss_wound_recipe rec;
+    ss_wound_recipe_default(&rec);
+    ss_wound_tissue *t =
+        ss_wound_tissue_create(ss_heal_run_grid(*run), ss_heal_run_params(*run), &rec, &err);
+    assert_non_null(t);
+    return t;
+}
+
+/* Every map of two TEX x TEX texture sets equal, bit for bit. */
+static void assert_textures_equal(const ss_wound_textures *a, const ss_wound_textures *b) {
+    size_t n = (size_t)TEX * TEX;
+    assert_memory_equal(a->base_color->data, b->base_color->data, n * 3 * sizeof(float));
+    assert_memory_equal(a->roughness->data, b->roughness->data, n * sizeof(float));
+    assert_memory_equal(a->height->data, b->height->data, n * sizeof(float));
+    assert_memory_equal(a->normal->data, b->normal->data, n * 3 * sizeof(float));
+}
+
 /* The same textures for 1 and 2 threads. */
 static void test_threads(void **state) {
     (void)state;
     scene s;
     scene_init(&s);
     ss_error err;
-    ss_heal_run_config c;
-    ss_heal_run_config_default(&c);
-    c.scenario = "scab";
-    c.grid[0] = c.grid[1] = 40;
-    c.grid[2] = 8;
-    c.days = 2;
     ss_heal_run *run;
-    assert_int_equal(ss_heal_run_create(&c, &run, &err), SS_OK);
-    assert_int_equal(ss_heal_run_advance_to(run, 2, &err), SS_OK);
-    ss_wound_recipe rec;
-    ss_wound_recipe_default(&rec);
-    ss_wound_tissue *t =
-        ss_wound_tissue_create(ss_heal_run_grid(run), ss_heal_run_params(run), &rec, &err);
+    ss_wound_tissue *t = scab_tissue(40, 2, &run);
     ss_wound_textures a, b;
     assert_int_equal(ss_wound_textures_create(TEX, &a, &err), SS_OK);
     assert_int_equal(ss_wound_textures_create(TEX, &b, &err), SS_OK);
@@ -447,10 +465,7 @@ static void test_threads(void **state) {
     assert_int_equal(ss_wound_render(s.r, t, NULL, &b, &err), SS_OK);
     ss_threads_set(was);
     size_t n = (size_t)TEX * TEX;
-    assert_memory_equal(a.base_color->data, b.base_color->data, n * 3 * sizeof(float));
-    assert_memory_equal(a.roughness->data, b.roughness->data, n * sizeof(float));
-    assert_memory_equal(a.height->data, b.height->data, n * sizeof(float));
-    assert_memory_equal(a.normal->data, b.normal->data, n * 3 * sizeof(float));
+    assert_textures_equal(&a, &b);
     /* the mechanics' displacement: zero is no displacement; a uniform lift
      * of 0.1 mm raises the height everywhere and changes no colour */
     ss_image *def = ss_image_create(TEX, TEX, 3, &err);
@@ -485,19 +500,8 @@ static void test_render_cancel(void **state) {
     scene s;
     scene_init(&s);
     ss_error err;
-    ss_heal_run_config c;
-    ss_heal_run_config_default(&c);
-    c.scenario = "scab";
-    c.grid[0] = c.grid[1] = 24;
-    c.grid[2] = 8;
-    c.days = 1;
     ss_heal_run *run;
-    assert_int_equal(ss_heal_run_create(&c, &run, &err), SS_OK);
-    assert_int_equal(ss_heal_run_advance_to(run, 1, &err), SS_OK);
-    ss_wound_recipe rec;
-    ss_wound_recipe_default(&rec);
-    ss_wound_tissue *t =
-        ss_wound_tissue_create(ss_heal_run_grid(run), ss_heal_run_params(run), &rec, &err);
+    ss_wound_tissue *t = scab_tissue(24, 1, &run);
     assert_non_null(t);
     ss_wound_textures a, b;
     assert_int_equal(ss_wound_textures_create(TEX, &a, &err), SS_OK);
@@ -512,11 +516,7 @@ static void test_render_cancel(void **state) {
     assert_int_equal(ss_wound_render_poll(s.r, t, NULL, &b, tu_poll_count, &go, &err), SS_OK);
     assert_true(go.calls >= 2);
     assert_true(go.last == 1.0);
-    size_t n = (size_t)TEX * TEX;
-    assert_memory_equal(a.base_color->data, b.base_color->data, n * 3 * sizeof(float));
-    assert_memory_equal(a.roughness->data, b.roughness->data, n * sizeof(float));
-    assert_memory_equal(a.height->data, b.height->data, n * sizeof(float));
-    assert_memory_equal(a.normal->data, b.normal->data, n * 3 * sizeof(float));
+    assert_textures_equal(&a, &b);
     ss_wound_textures_free(&a);
     ss_wound_textures_free(&b);
     ss_wound_tissue_free(t);
