@@ -883,9 +883,25 @@ static void test_poll_cancel(void **state) {
     ss_mm_table *t = load_table();
     ss_skin_lut *lut = ss_skin_lut_create(t, &err);
     assert_non_null(lut);
-    ss_skin_feature_list l;
+    ss_skin_feature_list l, l2;
     assert_int_equal(ss_skin_generate(&s, NULL, &l, NULL, 0, &err), SS_OK);
     tu_poll stop = {0, 2, 0}, go = {0, 0, 0};
+    /* features: stopped at the second type, nothing kept; never stopped,
+     * the same list as the plain call */
+    assert_int_equal(ss_skin_generate_poll(&s, NULL, &l2, NULL, 0, tu_poll_count, &stop, &err),
+                     SS_ERR_RUNTIME);
+    assert_non_null(strstr(err.msg, "cancelled"));
+    assert_int_equal(stop.calls, 2);
+    assert_null(l2.f);
+    assert_int_equal(l2.n, 0);
+    assert_int_equal(ss_skin_generate_poll(&s, NULL, &l2, NULL, 0, tu_poll_count, &go, &err),
+                     SS_OK);
+    assert_true(go.calls >= 2 && go.last == 1.0);
+    assert_int_equal(l2.n, l.n);
+    assert_memory_equal(l2.f, l.f, l.n * sizeof *l.f);
+    ss_skin_feature_list_free(&l2);
+    stop = (tu_poll){0, 2, 0};
+    go = (tu_poll){0, 0, 0};
     assert_null(ss_skin_bio_maps_poll(&s, NULL, &l, tu_poll_count, &stop, &err));
     assert_int_equal(err.code, SS_ERR_RUNTIME);
     assert_non_null(strstr(err.msg, "cancelled"));

@@ -372,10 +372,10 @@ void ss_progress_update(ss_progress *p, double done);
 void ss_progress_end(ss_progress *p);
 
 /* A long call's optional progress and cancel callback (the *_poll calls:
- * ss_skin_bio_maps_poll, ss_skin_render_maps_poll, ss_abrasion_frame_poll,
- * ss_wound_render_poll). fn(user, fraction) is called from the calling
- * thread only, outside any parallel region, between bands of rows (or
- * between a call's stages), with the fraction done (0..1, rising). A
+ * ss_skin_generate_poll, ss_skin_bio_maps_poll, ss_skin_render_maps_poll,
+ * ss_abrasion_frame_poll, ss_wound_render_poll). fn(user, fraction) is
+ * called from the calling thread only, outside any parallel region, between
+ * bands of rows (or between a call's stages or feature types), with the fraction done (0..1, rising). A
  * non-zero return stops the call at that point: it frees what it allocated
  * and returns SS_ERR_RUNTIME with the message "...: cancelled"; images it
  * would have allocated are not returned, and images the caller passed in

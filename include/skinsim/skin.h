@@ -211,6 +211,12 @@ ss_status ss_skin_sample_points(const ss_image *field, double power, int sampler
  * no features". */
 ss_status ss_skin_generate(const ss_skin_settings *s, const ss_skin_fields *fields,
                            ss_skin_feature_list *out, char *notes, size_t notes_len, ss_error *err);
+/* ss_skin_generate with a progress and cancel callback (core.h
+ * ss_progress_fn), polled before each feature type; cancelled:
+ * SS_ERR_RUNTIME "skin features: cancelled" and `out` left empty. */
+ss_status ss_skin_generate_poll(const ss_skin_settings *s, const ss_skin_fields *fields,
+                                ss_skin_feature_list *out, char *notes, size_t notes_len,
+                                ss_progress_fn fn, void *user, ss_error *err);
 
 /* The biological parameter maps of a feature list: a new SS_BIO_NCHANNELS
  * image of s->size^2 (lines 8-15 of TexGen, without the table). This is the

@@ -422,6 +422,14 @@ static void note_add(char *notes, size_t len, const char *msg) {
 ss_status ss_skin_generate(const ss_skin_settings *s, const ss_skin_fields *fields,
                            ss_skin_feature_list *out, char *notes, size_t notes_len,
                            ss_error *err) {
+    return ss_skin_generate_poll(s, fields, out, notes, notes_len, NULL, NULL, err);
+}
+
+/* Polled between feature types and at the end (each type is one sampling
+ * pass and one parameter pass, at most a few tenths of a second). */
+ss_status ss_skin_generate_poll(const ss_skin_settings *s, const ss_skin_fields *fields,
+                                ss_skin_feature_list *out, char *notes, size_t notes_len,
+                                ss_progress_fn fn, void *user, ss_error *err) {
     memset(out, 0, sizeof *out);
     if (notes && notes_len) notes[0] = '\0';
     ss_status st = ss_skin_settings_validate(s, err);
@@ -446,6 +454,10 @@ ss_status ss_skin_generate(const ss_skin_settings *s, const ss_skin_fields *fiel
     }
     size_t at = 0;
     for (int t = 0; t < SS_FEAT_NTYPES && !st; t++) {
+        if (fn && t > 0 && fn(user, (double)t / SS_FEAT_NTYPES)) {
+            st = ss_error_set(err, SS_ERR_RUNTIME, "skin features: cancelled");
+            break;
+        }
         size_t n = (size_t)s->count[t];
         if (n == 0) continue;
         const ss_image *field = fields->density[t] ? fields->density[t] : uniform;
@@ -520,6 +532,8 @@ ss_status ss_skin_generate(const ss_skin_settings *s, const ss_skin_fields *fiel
         free(xy);
     }
     ss_image_free(uniform);
+    if (!st && fn && fn(user, 1.0))
+        st = ss_error_set(err, SS_ERR_RUNTIME, "skin features: cancelled");
     if (st) {
         ss_skin_feature_list_free(out);
         return st;

@@ -1044,6 +1044,8 @@ try:
     _fn("ss_bio_channel_name", c_char_p, c_int)
     _fn("ss_skin_generate", c_int, P_SKINSET, POINTER(ss_skin_fields),
         POINTER(ss_skin_feature_list), c_char_p, c_size_t, P_ERR)
+    _fn("ss_skin_generate_poll", c_int, P_SKINSET, POINTER(ss_skin_fields),
+        POINTER(ss_skin_feature_list), c_char_p, c_size_t, PROGRESS_POLL_FN, c_void_p, P_ERR)
     _fn("ss_skin_feature_list_free", None, POINTER(ss_skin_feature_list))
     _fn("ss_skin_bio_maps", P_IMAGE, P_SKINSET, POINTER(ss_skin_fields),
         POINTER(ss_skin_feature_list), P_ERR)

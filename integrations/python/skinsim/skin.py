@@ -146,10 +146,10 @@ def textures(size: int = 512, preset: str = "forearm", world_size_cm: Optional[f
     lst = L.ss_skin_feature_list()
     notes = ctypes.create_string_buffer(512)
     with L.Poll(progress, "skin") as poll:
-        L.check(L.lib.ss_skin_generate, ctypes.byref(s), ctypes.byref(fl), ctypes.byref(lst),
-                notes, 512)
+        poll.call(L.lib.ss_skin_generate_poll, ctypes.byref(s), ctypes.byref(fl),
+                  ctypes.byref(lst), notes, 512, poll.stage(0.0, 0.05), None)
         try:
-            poll.raise_pending()  # Ctrl-C while the features were drawn
+            poll.raise_pending()  # Ctrl-C at the features' last poll
             features = _features_dict(lst)
             bio = poll.call(L.lib.ss_skin_bio_maps_poll, ctypes.byref(s), ctypes.byref(fl),
                             ctypes.byref(lst), poll.stage(0.05, 0.6), None, pointer=True)

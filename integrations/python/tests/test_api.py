@@ -155,7 +155,7 @@ class Interrupt(unittest.TestCase):
             handles.append(weakref.ref(h))
 
         optics.default_table()
-        for stop_at in (1, 6):  # in the bio maps; in the render maps
+        for stop_at in (1, 6, 11):  # in the features; the bio maps; the render maps
             seen = []
 
             def progress(f, seen=seen, stop_at=stop_at):
