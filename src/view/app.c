@@ -1132,6 +1132,11 @@ static int app_batch(app *a) {
     cJSON_AddStringToObject(sum, "textures", a->layers.source);
     cJSON_AddNumberToObject(sum, "layers", a->layers.nlayers);
     cJSON_AddNumberToObject(sum, "texture_size", a->layers.size);
+    if (a->o.json) { /* a hex string: JSON numbers lose 64-bit integers */
+        char hash[24];
+        snprintf(hash, sizeof hash, "%016llx", (unsigned long long)view_layers_hash(&a->layers));
+        cJSON_AddStringToObject(sum, "layers_hash", hash);
+    }
     cJSON_AddNumberToObject(sum, "end_day", a->layers.end_day);
     cJSON_AddNumberToObject(sum, "day", a->day);
     cJSON_AddBoolToObject(sum, "generate_skin_loaded", a->skin != NULL);
