@@ -26,6 +26,13 @@ int cmd_view(int argc, char **argv) {
     /* skinsim-view would otherwise run itself again to set this (see its
      * main): OpenMP threads that sleep at barriers instead of spinning */
     if (!getenv("OMP_WAIT_POLICY")) setenv("OMP_WAIT_POLICY", "passive", 1);
+    /* and huge pages for malloc's large blocks (see skinsim-view's main) */
+    const char *t = getenv("GLIBC_TUNABLES");
+    if (!t || !strstr(t, "glibc.malloc.hugetlb")) {
+        char buf[1024];
+        snprintf(buf, sizeof buf, "%s%sglibc.malloc.hugetlb=1", t ? t : "", t && *t ? ":" : "");
+        if (strlen(buf) < sizeof buf - 1) setenv("GLIBC_TUNABLES", buf, 1);
+    }
     execv(path, args);
     int e = errno;
     free(args);

@@ -7,7 +7,8 @@
 # on a shared machine wall time measures the queue as much as the program.
 #   bench/view_startup.sh build/skinsim [runs] [texture-size]
 # OMP_WAIT_POLICY is left to the viewer unless set: export
-# OMP_WAIT_POLICY=active to see the spinning default's times.
+# OMP_WAIT_POLICY=active to see the spinning default's times; likewise
+# GLIBC_TUNABLES=glibc.malloc.hugetlb=0 for the times without huge pages.
 set -u
 CLI=${1:-build/skinsim}
 RUNS=${2:-3}

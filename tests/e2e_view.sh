@@ -12,7 +12,8 @@
 # Generate equals `skinsim abrasion` (also on a loaded skin, as --upper); a
 # heal run folder renders as `skinsim wound --heal`; a wound block sits at
 # its world size; the brush ring, eraser, undo/redo, mirror symmetry and
-# the mask export do what they say. Skips (77) only when skinsim-view was not built or no
+# the mask export do what they say; Generate's fast path makes the same
+# bytes as its reference path (layers_hash). Skips (77) only when skinsim-view was not built or no
 # display and no EGL can be made. Checks use tests/view_check.py (python3).
 set -u
 CLI=$1
@@ -199,6 +200,25 @@ check '[ $? -eq 0 ] && grep -q "on the loaded skin" "$T/genskin.json"' "Generate
 V $G --load "$T/abskin" --time 5 --screenshot "$T/abskin5.png" --quiet
 check 'cmp -s "$T/genskin5.png" "$T/abskin5.png"' "Generate on the loaded skin differs from skinsim abrasion --upper"
 check '! cmp -s "$T/genskin5.png" "$T/gen5k.png"' "Generate on the loaded skin looks like the default skin"
+
+# 7b. Generate's fast path (shape and skin at once, maturation in its own
+#    thread, layers packed only in the changed region) gives the same bytes
+#    as the reference path (SKINSIM_VIEW_REFERENCE=1: each step in turn, every
+#    layer packed whole): the same layers_hash for the built-in wound and for
+#    the painted bands (several islands) on the loaded skin; the two differ.
+hash_of() { python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['layers_hash'])" "$1"; }
+for c in ex:"" bands:"--strokes $T/strokes.csv --load $T/skin"; do
+  n=${c%%:*}; args=${c#*:}
+  for ref in 0 1; do
+    SKINSIM_VIEW_REFERENCE=$ref "$CLI" view --egl --size 160x90 --texture-size 512 --generate \
+      $args --json --quiet >"$T/hash_${n}_$ref.json" 2>"$T/hash_${n}_$ref.err"
+    check '[ $? -eq 0 ]' "Generate $n (reference $ref) failed: $(cat "$T/hash_${n}_$ref.err")"
+  done
+  check '[ "$(hash_of "$T/hash_${n}_0.json")" = "$(hash_of "$T/hash_${n}_1.json")" ]' \
+    "Generate $n: fast path $(hash_of "$T/hash_${n}_0.json") != reference $(hash_of "$T/hash_${n}_1.json")"
+done
+check '[ "$(hash_of "$T/hash_ex_0.json")" != "$(hash_of "$T/hash_bands_0.json")" ]' \
+  "layers_hash does not tell two different wounds apart"
 
 # 8. A heal run folder (`skinsim heal --out`) loads through `skinsim wound
 #    --heal`: every snapshot a stop, the same frame as loading the folder

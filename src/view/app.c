@@ -1132,6 +1132,11 @@ static int app_batch(app *a) {
     cJSON_AddStringToObject(sum, "textures", a->layers.source);
     cJSON_AddNumberToObject(sum, "layers", a->layers.nlayers);
     cJSON_AddNumberToObject(sum, "texture_size", a->layers.size);
+    if (a->o.json) { /* a hex string: JSON numbers lose 64-bit integers */
+        char hash[24];
+        snprintf(hash, sizeof hash, "%016llx", (unsigned long long)view_layers_hash(&a->layers));
+        cJSON_AddStringToObject(sum, "layers_hash", hash);
+    }
     cJSON_AddNumberToObject(sum, "end_day", a->layers.end_day);
     cJSON_AddNumberToObject(sum, "day", a->day);
     cJSON_AddBoolToObject(sum, "generate_skin_loaded", a->skin != NULL);
@@ -1747,15 +1752,39 @@ static int run_gtk(app *a, int batch) {
     return g.rc;
 }
 
+/* Sets what the process must have from its start (see main); returns 1
+ * when something was set. */
+static int view_env_defaults(void) {
+    int set = 0;
+    if (!getenv("OMP_WAIT_POLICY") && setenv("OMP_WAIT_POLICY", "passive", 1) == 0) set = 1;
+    /* glibc's malloc asks for transparent huge pages (madvise) on the large
+     * blocks it maps: Generate's layers, the library's images and Mesa's
+     * texture storage. Where THP is "madvise" (Debian's default), every 4 KiB
+     * first touch was a page fault: at 2048^2 Generate + upload took 6.0 +
+     * 2.8 s, 4.3 CPU-s of it in the kernel; with this 3.3 + 0.35 s
+     * (bench/view_startup.sh). GLIBC_TUNABLES=glibc.malloc.hugetlb=0 keeps
+     * the old behaviour. */
+    const char *t = getenv("GLIBC_TUNABLES");
+    if (!t || !strstr(t, "glibc.malloc.hugetlb")) {
+        char buf[1024];
+        if (!t || !*t)
+            snprintf(buf, sizeof buf, "glibc.malloc.hugetlb=1");
+        else
+            snprintf(buf, sizeof buf, "%s:glibc.malloc.hugetlb=1", t);
+        if (strlen(buf) < sizeof buf - 1 && setenv("GLIBC_TUNABLES", buf, 1) == 0) set = 1;
+    }
+    return set;
+}
+
 int main(int argc, char **argv) {
     /* OpenMP threads that spin at barriers (libgomp's default) take the CPU
      * the GTK thread and the other team members need: on 2 busy cores the
      * start-up took 6-24 s instead of 1.4-2.2 s (bench/view.md). libgomp
-     * reads OMP_WAIT_POLICY once, when it is loaded, so the policy is set
-     * here and the program runs itself again (`skinsim view` sets it before
-     * it runs this program, so that costs nothing there). */
-    if (!getenv("OMP_WAIT_POLICY") && setenv("OMP_WAIT_POLICY", "passive", 1) == 0)
-        execv("/proc/self/exe", argv); /* on failure: carry on as we are */
+     * reads OMP_WAIT_POLICY once, when it is loaded (glibc its tunables
+     * likewise), so the policy is set here and the program runs itself again
+     * (`skinsim view` sets both before it runs this program, so that costs
+     * nothing there). */
+    if (view_env_defaults()) execv("/proc/self/exe", argv); /* on failure: carry on as we are */
     double t_start = ss_now();         /* for the first-frame time */
     /* Called as "skinsim view ..." through the skinsim command, or directly. */
     if (argc > 1 && !strcmp(argv[1], "view")) argc--, argv++;

@@ -125,7 +125,7 @@ void view_layers_locate(const view_layers *l, double day, int *a, int *b, float 
     if (stop) *stop = i;
 }
 
-static ss_status alloc_layers(view_layers *l, int size, int n, ss_error *err) {
+ss_status view_layers_alloc(view_layers *l, int size, int n, ss_error *err) {
     memset(l, 0, sizeof *l);
     size_t bytes = (size_t)size * (size_t)size * 4 * (size_t)n;
     l->cr = malloc(bytes);
@@ -149,10 +149,7 @@ static unsigned char to_byte(float v) {
     return (unsigned char)(v * 255.0f + 0.5f);
 }
 
-/* Packs one layer. Any map but colour may be NULL (defaults: reflection
- * 0.3, flat normal, height 0.5). colour is linear RGB (or grey). */
-/* Packs the rectangle x0..x0+w-1, y0..y0+h-1 of one layer. */
-static void pack_rect(view_layers *l, int layer, const ss_image *color, const ss_image *refl,
+void view_layers_pack_rect(view_layers *l, int layer, const ss_image *color, const ss_image *refl,
                       const ss_image *height, const ss_image *normal, int x0, int y0, int w,
                       int h) {
     size_t n = (size_t)l->size * (size_t)l->size;
@@ -178,10 +175,10 @@ static void pack_rect(view_layers *l, int layer, const ss_image *color, const ss
 
 static void pack_layer(view_layers *l, int layer, const ss_image *color, const ss_image *refl,
                        const ss_image *height, const ss_image *normal) {
-    pack_rect(l, layer, color, refl, height, normal, 0, 0, l->size, l->size);
+    view_layers_pack_rect(l, layer, color, refl, height, normal, 0, 0, l->size, l->size);
 }
 
-static void add_stop(view_layers *l, double day, int layer, const char *name) {
+void view_layers_add_stop(view_layers *l, double day, int layer, const char *name) {
     if (l->nstops >= VIEW_MAX_STOPS) return;
     l->stop_day[l->nstops] = day;
     l->stop_layer[l->nstops] = layer;
@@ -192,117 +189,14 @@ static void add_stop(view_layers *l, double day, int layer, const char *name) {
 ss_status view_layers_plain_skin(int size, uint64_t seed, view_layers *out, ss_error *err) {
     ss_base_skin skin = {0};
     ss_status st = ss_base_skin_create(NULL, NULL, size, seed, &skin, err);
-    if (!st) st = alloc_layers(out, size, 1, err);
+    if (!st) st = view_layers_alloc(out, size, 1, err);
     if (!st) {
         pack_layer(out, 0, skin.upper, NULL, NULL, NULL);
-        add_stop(out, 0, 0, "healthy skin");
+        view_layers_add_stop(out, 0, 0, "healthy skin");
         view_layers_build_mips(out, NULL);
         snprintf(out->source, sizeof out->source, "healthy skin (no wound)");
     }
     ss_base_skin_free(&skin);
-    return st;
-}
-
-/* ---- Generate -------------------------------------------------------------- */
-
-static const double MAT_POS[] = {0.0625, 0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 1.0};
-#define NMAT ((int)(sizeof MAT_POS / sizeof MAT_POS[0]))
-
-ss_image *view_strokes_mask(const ss_stroke_set *strokes, int size, uint64_t seed, ss_error *err) {
-    ss_wound_shape *shape = NULL;
-    if (ss_wound_shape_from_strokes(strokes, SS_HULL_CONVEX, 5, size, seed, &shape, err))
-        return NULL;
-    ss_image *m = shape->mask;
-    shape->mask = NULL;
-    ss_wound_shape_free(shape);
-    return m;
-}
-
-ss_status view_layers_generate(const ss_stroke_set *strokes, const ss_image *skin_in, int size,
-                               uint64_t seed, volatile double *progress, view_layers *out,
-                               ss_error *err) {
-    memset(out, 0, sizeof *out);
-    const double steps = 2 + SS_PHASE_COUNT + NMAT;
-    double done = 0;
-    if (progress) *progress = 0;
-    ss_abrasion_settings set;
-    ss_abrasion_settings_default(&set);
-    set.size = size;
-    set.seed = seed;
-    ss_timeline tl;
-    ss_timeline_default(&tl);
-    ss_wound_shape *shape = NULL;
-    ss_base_skin skin = {0};
-    ss_texture_set ts = {0};
-    ss_image *mat_color = NULL;
-    double t[6];
-    t[0] = ss_now();
-    ss_status st = ss_wound_shape_from_strokes(strokes, SS_HULL_CONVEX, 5, size, seed, &shape, err);
-    if (progress) *progress = ++done / steps;
-    t[1] = ss_now();
-    if (!st) st = ss_base_skin_create(skin_in, NULL, size, seed, &skin, err);
-    if (progress) *progress = ++done / steps;
-    t[2] = ss_now();
-    if (!st) st = alloc_layers(out, size, SS_PHASE_COUNT + NMAT, err);
-    if (!st) st = ss_texture_set_create(size, &ts, err);
-    for (int p = 0; p < SS_PHASE_COUNT && !st; p++) {
-        st = ss_abrasion_render_phase((ss_phase)p, 0.0, shape, &skin, &set, &ts, err);
-        if (!st) pack_layer(out, p, ts.color, ts.reflection, ts.height, ts.normal);
-        if (progress) *progress = ++done / steps;
-    }
-    t[3] = ss_now();
-    /* ts now holds maturation at position 0: re-render its colour at the
-     * extra positions (only the wound's box changes). */
-    if (!st) mat_color = ss_image_clone(ts.color, err);
-    if (!st && !mat_color) st = err->code;
-    /* Only the changed region (the wound's box grown by the widest
-     * gradient) changes with the position: it is reset from the key's
-     * colour, re-rendered and packed; the rest of each layer is the
-     * maturation key's layer (the same bytes as packing it all). */
-    int bx = 0, by = 0, bw = 0, bh = 0;
-    if (!st) ss_abrasion_changed_region(shape, &set, &bx, &by, &bw, &bh);
-    size_t plane = (size_t)size * (size_t)size * 4, ch = st ? 3 : (size_t)ts.color->channels;
-    for (int i = 0; i < NMAT && !st; i++) {
-        for (int y = by; y < by + bh; y++)
-            memcpy(mat_color->data + ((size_t)y * size + bx) * ch,
-                   ts.color->data + ((size_t)y * size + bx) * ch, sizeof(float) * bw * ch);
-        st = ss_abrasion_maturation_color(shape, &skin, &set, MAT_POS[i], mat_color, err);
-        if (!st) {
-            int layer = SS_PHASE_COUNT + i;
-            memcpy(out->cr + plane * layer, out->cr + plane * SS_PHASE_MATURATION, plane);
-            memcpy(out->nh + plane * layer, out->nh + plane * SS_PHASE_MATURATION, plane);
-            if (bw > 0 && bh > 0)
-                pack_rect(out, layer, mat_color, ts.reflection, ts.height, ts.normal, bx, by, bw,
-                          bh);
-        }
-        if (progress) *progress = ++done / steps;
-    }
-    t[4] = ss_now();
-    if (!st) {
-        double mat_day = 0;
-        for (int k = 0; k < tl.nkeys; k++) {
-            add_stop(out, tl.key[k].day, (int)tl.key[k].phase, ss_phase_name(tl.key[k].phase));
-            if (tl.key[k].phase == SS_PHASE_MATURATION) mat_day = tl.key[k].day;
-        }
-        for (int i = 0; i < NMAT; i++)
-            add_stop(out, mat_day + MAT_POS[i] * (tl.end_day - mat_day), SS_PHASE_COUNT + i,
-                     "maturation");
-        out->end_day = tl.end_day;
-        out->height_mm = set.scab_height_mm;
-        snprintf(out->source, sizeof out->source, "%d painted stroke(s), %d^2%s", strokes->nstrokes,
-                 size, skin_in ? ", on the loaded skin" : "");
-        view_layers_build_mips(out, NULL); /* on failure OpenGL makes the levels */
-        t[5] = ss_now();
-        snprintf(out->timing, sizeof out->timing,
-                 "%.2f s: shape %.2f, skin %.2f, phases %.2f, maturation %.2f, mipmaps %.2f",
-                 t[5] - t[0], t[1] - t[0], t[2] - t[1], t[3] - t[2], t[4] - t[3], t[5] - t[4]);
-    } else {
-        view_layers_free(out);
-    }
-    ss_image_free(mat_color);
-    ss_texture_set_free(&ts);
-    ss_base_skin_free(&skin);
-    ss_wound_shape_free(shape);
     return st;
 }
 
@@ -344,7 +238,7 @@ static ss_status load_set(const set_paths *p, view_layers *l, int layer, int nla
     ss_image *c = read_map(p->color, SS_ENC_SRGB, &size, err);
     if (!c) return err->code;
     ss_status st = SS_OK;
-    if (!l->cr) st = alloc_layers(l, size, nlayers, err);
+    if (!l->cr) st = view_layers_alloc(l, size, nlayers, err);
     ss_image *r = NULL, *h = NULL, *n = NULL;
     if (!st && p->refl[0] && !(r = read_map(p->refl, SS_ENC_LINEAR, &size, err))) st = err->code;
     if (!st && !r && p->rough[0]) {
@@ -488,7 +382,7 @@ static ss_status load_timeline_dir(const char *dir, const char *json_path, view_
     if (!st) {
         for (int i = 0; i < nc; i++) {
             if (i > 0 && cs[i].day == cs[i - 1].day && layer_of[i] == layer_of[i - 1]) continue;
-            add_stop(out, cs[i].day, layer_of[i], cs[i].name);
+            view_layers_add_stop(out, cs[i].day, layer_of[i], cs[i].name);
         }
         out->end_day = cJSON_IsNumber(end) && end->valuedouble > 0 ? end->valuedouble
                                                                    : out->stop_day[out->nstops - 1];
@@ -570,7 +464,7 @@ static ss_status load_single_set(const char *dir, view_layers *out, ss_error *er
     memset(out, 0, sizeof *out);
     ss_status st = load_set(&p, out, 0, 1, &out->skin, err);
     if (!st) {
-        add_stop(out, 0, 0, "texture set");
+        view_layers_add_stop(out, 0, 0, "texture set");
         snprintf(out->source, sizeof out->source, "%s", p.color);
     }
     return st;
@@ -743,7 +637,7 @@ ss_status view_layers_place_block(view_layers *l, const ss_mesh *m, const int *i
     unsigned char *mask = island_mask(m, island, isl, size);
     ss_status st = mask ? SS_OK : ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     if (!st) st = ss_base_skin_create(NULL, NULL, size, seed, &skin, err);
-    if (!st) st = alloc_layers(&out, size, l->nlayers, err);
+    if (!st) st = view_layers_alloc(&out, size, l->nlayers, err);
     if (st) {
         free(mask);
         ss_base_skin_free(&skin);
@@ -814,4 +708,38 @@ ss_status view_layers_place_block(view_layers *l, const ss_mesh *m, const int *i
     *l = out;
     view_layers_build_mips(l, NULL);
     return SS_OK;
+}
+
+/* ---- hash ----------------------------------------------------------------------- */
+
+static uint64_t fnv_bytes(uint64_t h, const void *p, size_t n) {
+    const unsigned char *b = p;
+    size_t i = 0;
+    /* eight bytes at a time: the full byte-wise FNV takes 1 s on 13 layers of 2048^2 */
+    for (; i + 8 <= n; i += 8) {
+        uint64_t w;
+        memcpy(&w, b + i, 8);
+        h = (h ^ w) * 0x100000001b3ULL;
+    }
+    for (; i < n; i++) h = (h ^ b[i]) * 0x100000001b3ULL;
+    return h;
+}
+
+uint64_t view_layers_hash(const view_layers *l) {
+    uint64_t h = 0xcbf29ce484222325ULL;
+    int hdr[3] = {l->size, l->nlayers, l->nstops};
+    h = fnv_bytes(h, hdr, sizeof hdr);
+    size_t n = (size_t)l->size * (size_t)l->size * 4 * (size_t)l->nlayers;
+    if (l->cr) h = fnv_bytes(h, l->cr, n);
+    if (l->nh) h = fnv_bytes(h, l->nh, n);
+    for (int lv = 1; lv < l->nlevels && lv < 16; lv++) {
+        size_t m = (size_t)(l->size >> lv) * (size_t)(l->size >> lv) * 4 * (size_t)l->nlayers;
+        if (l->cr_mip[lv]) h = fnv_bytes(h, l->cr_mip[lv], m);
+        if (l->nh_mip[lv]) h = fnv_bytes(h, l->nh_mip[lv], m);
+    }
+    for (int i = 0; i < l->nstops; i++) {
+        h = fnv_bytes(h, &l->stop_day[i], sizeof l->stop_day[i]);
+        h = fnv_bytes(h, &l->stop_layer[i], sizeof l->stop_layer[i]);
+    }
+    return h;
 }

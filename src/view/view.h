@@ -52,6 +52,19 @@ typedef struct view_layers {
 } view_layers;
 
 void view_layers_free(view_layers *l);
+/* For layers.c and generate.c: n layers of size^2 (contents undefined). */
+ss_status view_layers_alloc(view_layers *l, int size, int n, ss_error *err);
+/* Packs the rectangle x0..x0+w-1, y0..y0+h-1 of one layer from full-size
+ * maps. Any map but colour may be NULL (defaults: reflection 0.3, flat
+ * normal, height 0.5). colour is linear RGB (or grey). Parallel. */
+void view_layers_pack_rect(view_layers *l, int layer, const ss_image *color, const ss_image *refl,
+                           const ss_image *height, const ss_image *normal, int x0, int y0, int w,
+                           int h);
+void view_layers_add_stop(view_layers *l, double day, int layer, const char *name);
+/* FNV-1a (64-bit words) over every layer's packed bytes, mipmaps and stops:
+ * what --json prints as layers_hash, so two ways of making them can be
+ * shown byte-identical. */
+uint64_t view_layers_hash(const view_layers *l);
 /* Box-filtered mipmap chain down to 1x1 (colour averaged in linear light,
  * the other channels as stored). Parallel; returns SS_ERR_NOMEM on failure
  * (the renderer then lets OpenGL make the levels). */
@@ -84,6 +97,9 @@ ss_status view_layers_place_block(view_layers *l, const ss_mesh *m, const int *i
 
 /* The Generate job: the abrasion timeline from strokes, at size, with
  * maturation re-rendered at extra positions so the slider can blend it.
+ * With SKINSIM_VIEW_REFERENCE=1 in the environment it takes the plain
+ * path instead (one step after another, every layer packed whole), which
+ * gives the same bytes: the e2e test compares the two layers_hash.
  * progress (0..1) is written as it goes (read by the UI thread). skin:
  * the healthy skin colour (linear RGB, any size: a loaded texture set) or
  * NULL for the procedural one, as `skinsim abrasion --upper`. Pure
