@@ -694,6 +694,102 @@ static void test_dark_skin_maturation(void **state) {
     scene_free(&sc);
 }
 
+
+/* The example scrape on the default skin, its texture scaled to the mean
+ * colour dark (linear sRGB); dark = NULL keeps the light skin. */
+static void scene_skin(scene *sc, int n, const double *dark) {
+    scene_make(sc, n);
+    if (!dark) return;
+    ss_error err;
+    double mean[3] = {0, 0, 0};
+    for (int i = 0; i < n * n; i++)
+        for (int c = 0; c < 3; c++) mean[c] += sc->skin.upper->data[i * 3 + c] / (n * n);
+    ss_image *up = ss_image_create(n, n, 3, &err);
+    assert_non_null(up);
+    for (int i = 0; i < n * n; i++)
+        for (int c = 0; c < 3; c++)
+            up->data[i * 3 + c] = (float)(sc->skin.upper->data[i * 3 + c] * dark[c] / mean[c]);
+    ss_base_skin_free(&sc->skin);
+    assert_int_equal(ss_base_skin_create(up, NULL, n, 7, &sc->skin, &err), SS_OK);
+    ss_image_free(up);
+}
+
+static const double DARK_SKIN[3] = {0.11, 0.045, 0.025}; /* a brown skin's mean, linear */
+
+/* Mean CIELAB of a frame's colour where sel(mask, dist / dmax) holds. */
+typedef int (*px_sel)(int inside, double d, double rel);
+static void frame_lab(const ss_abrasion *a, const scene *sc, double day, px_sel sel, double lab[3]) {
+    int n = sc->s.size;
+    ss_error err;
+    ss_texture_set f;
+    assert_int_equal(ss_texture_set_create(n, &f, &err), SS_OK);
+    assert_int_equal(ss_abrasion_frame(a, day, &f, &err), SS_OK);
+    double dmax = 0, cnt = 0;
+    for (int i = 0; i < n * n; i++)
+        if (sc->w->mask->data[i] > 0.5f) dmax = fmax(dmax, sc->w->dist->data[i]);
+    lab[0] = lab[1] = lab[2] = 0;
+    for (int i = 0; i < n * n; i++) {
+        int inside = sc->w->mask->data[i] > 0.5f;
+        double d = sc->w->dist->data[i];
+        if (!sel(inside, d, d / dmax)) continue;
+        double rgb[3], l[3];
+        for (int c = 0; c < 3; c++) rgb[c] = f.color->data[i * 3 + c];
+        ss_srgb_linear_to_lab(rgb, l);
+        for (int c = 0; c < 3; c++) lab[c] += l[c];
+        cnt++;
+    }
+    assert_true(cnt > 0);
+    for (int c = 0; c < 3; c++) lab[c] /= cnt;
+    ss_texture_set_free(&f);
+}
+static int sel_bed(int inside, double d, double rel) { (void)rel; return inside && d >= 4; }
+static int sel_core(int inside, double d, double rel) { (void)d; return inside && rel > 0.8; }
+static int sel_skin(int inside, double d, double rel) { (void)rel; return !inside && d > 8; }
+static double hue_deg(const double lab[3]) { return atan2(lab[2], lab[1]) * 180 / M_PI; }
+
+/* Light and dark skin (CIELAB means over regions): the day-0 bed is exposed,
+ * blood-filled dermis, red and the same on both (no epidermal melanin; it
+ * was a pale pink L* 68.5, a* 19.9); at a year the wound is a faint scar,
+ * still paler than dark skin around it (L* +2..+10), within dE 10 of light
+ * skin. Printed too, for the note: the open core's granulation at days 12
+ * and 20 (on dark skin still orange at day 20, hue 47 against 38). */
+static void test_dark_skin_bed_and_scar(void **state) {
+    (void)state;
+    int n = 128;
+    double bed[2][3];
+    for (int dk = 0; dk < 2; dk++) {
+        scene sc;
+        scene_skin(&sc, n, dk ? DARK_SKIN : NULL);
+        ss_timeline tl;
+        ss_timeline_default(&tl);
+        ss_abrasion *a;
+        ss_error err;
+        assert_int_equal(ss_abrasion_create(&sc.s, &tl, sc.w, &sc.skin, &a, &err), SS_OK);
+        const char *name[5] = {"day 0 bed", "day 12 granulation", "day 20 granulation",
+                               "day 365 wound", "skin"};
+        const double day[5] = {0, 12, 20, 365, 365};
+        px_sel sel[5] = {sel_bed, sel_core, sel_core, sel_bed, sel_skin};
+        double lab[5][3];
+        for (int k = 0; k < 5; k++) {
+            frame_lab(a, &sc, day[k], sel[k], lab[k]);
+            printf("%s skin %-19s L* %5.1f a* %5.1f b* %5.1f hue %5.1f\n", dk ? "dark " : "light",
+                   name[k], lab[k][0], lab[k][1], lab[k][2], hue_deg(lab[k]));
+        }
+        memcpy(bed[dk], lab[0], sizeof bed[dk]);
+        assert_true(lab[0][0] < 62.0);          /* not pale */
+        assert_true(lab[0][1] > 24.0);          /* red */
+        assert_true(hue_deg(lab[0]) < 32.0);    /* not orange or tan */
+        double dl = lab[3][0] - lab[4][0];
+        double de = sqrt(dl * dl + (lab[3][1] - lab[4][1]) * (lab[3][1] - lab[4][1]) +
+                         (lab[3][2] - lab[4][2]) * (lab[3][2] - lab[4][2]));
+        if (dk) assert_true(dl > 2.0 && dl < 10.0); /* a faint, paler scar */
+        assert_true(de < 10.0);
+        ss_abrasion_free(a);
+        scene_free(&sc);
+    }
+    for (int c = 0; c < 3; c++) assert_true(fabs(bed[0][c] - bed[1][c]) < 3.0);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_timeline_locate),
@@ -711,6 +807,7 @@ int main(void) {
         cmocka_unit_test(test_thread_determinism),
         cmocka_unit_test(test_update_equals_create),
         cmocka_unit_test(test_dark_skin_maturation),
+        cmocka_unit_test(test_dark_skin_bed_and_scar),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -198,7 +198,9 @@ ss_status ss_abrasion_palette_compute(const ss_image *upper, ss_abrasion_palette
         if (!st) st = albedo(d, &der, out, err);                                                   \
         to_f(out, P->field);                                                                       \
     } while (0)
-    DERMIS(bed_pale, 0.01, 0.7);     /* vasoconstriction: blanched */
+    /* the fresh bed: vasoconstricted, yet the exposed papillary plexus and the
+     * blood left in it keep it red and wet, not white (0.01 drew pale pink) */
+    DERMIS(bed_pale, 0.035, 0.8);
     DERMIS(bed, 0.05, 0.9);          /* dilated papillary plexus */
     DERMIS(capillary, 0.30, 0.95);   /* a capillary loop / petechia */
     DERMIS(granulation, 0.20, 0.95); /* young vascular tissue, beefy red */
