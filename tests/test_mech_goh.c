@@ -7,7 +7,8 @@
  * makes a slit across the fibres gape more than one along them, and stitches
  * hold it; the fast solver ends where the plain one does; the heal run's
  * in-plane active law has its closed-form stress, consistent forces and a
- * tangent Newton converges with. */
+ * tangent Newton converges with; its checkpoint state carries the
+ * contraction lag and refuses a state written without it. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -257,6 +258,50 @@ static double gape(int along_x, const ss_mech_suture *sut, int nsut) {
     return r;
 }
 
+/* The goh state carries the lagged active tension: it reads back whole, and
+ * a goh state without it (written before tau_contract_goh) is refused with a
+ * message that names the lag, not taken for another mesh. */
+static void test_state_lag(void **state) {
+    (void)state;
+    ss_error err;
+    ss_heal_params *hp = ss_heal_params_preset("clean", &err);
+    assert_non_null(hp);
+    ss_heal_grid *g = ss_heal_grid_create(40, 40, 8, 0.5, &err);
+    assert_non_null(g);
+    uint8_t *w = ss_heal_wound_box(g, 3.0, 2.0, 12.0, 1.0, &err);
+    assert_non_null(w);
+    assert_int_equal(ss_heal_grid_init(g, 3.0, 0.1, w, hp, &err), SS_OK);
+    free(w);
+    ss_mech_params p;
+    ss_mech_params_default(&p);
+    ss_mech *sp = ss_mech_create(g, hp, &p, NULL, NULL, 0, &err);
+    if (!sp) fail_msg("%s", err.msg);
+    p.model = SS_MECH_MODEL_GOH;
+    ss_mech *m = ss_mech_create(g, hp, &p, NULL, NULL, 0, &err);
+    if (!m) fail_msg("%s", err.msg);
+    const ss_tetmesh *mesh = ss_mech_mesh(m);
+    const size_t n = ss_mech_state_size(m), nn = (size_t)mesh->nnodes;
+    /* springs state + G per tet + the lag per node */
+    assert_int_equal(n, ss_mech_state_size(sp) + (9 * (size_t)mesh->ntets + nn) * sizeof(double));
+    char *a = malloc(n), *b = malloc(n);
+    assert_non_null(a);
+    assert_non_null(b);
+    ss_mech_state_get(m, a);
+    assert_int_equal(ss_mech_state_set(m, a, n, &err), SS_OK);
+    ss_mech_state_get(m, b);
+    assert_memory_equal(a, b, n);
+    assert_int_equal(ss_mech_state_set(m, a, n - nn * sizeof(double), &err), SS_ERR_INPUT);
+    assert_non_null(strstr(err.msg, "tau_contract_goh"));
+    assert_int_equal(ss_mech_state_set(m, a, n - 1, &err), SS_ERR_INPUT);
+    assert_null(strstr(err.msg, "tau_contract_goh"));
+    free(a);
+    free(b);
+    ss_mech_free(m);
+    ss_mech_free(sp);
+    ss_heal_grid_free(g);
+    ss_heal_params_free(hp);
+}
+
 static void test_resting_tension_gape(void **state) {
     (void)state;
     double across = gape(0, NULL, 0), along = gape(1, NULL, 0);
@@ -480,6 +525,7 @@ int main(void) {
         cmocka_unit_test(test_closed_form_cauchy), cmocka_unit_test(test_forces_objective),
         cmocka_unit_test(test_stretch_analytic),   cmocka_unit_test(test_resting_tension_gape),
         cmocka_unit_test(test_fast_equals_plain),  cmocka_unit_test(test_active_law),
+        cmocka_unit_test(test_state_lag),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -97,11 +97,12 @@ typedef struct ss_mech_params {
     double tol;         /* 1, convergence: max residual displacement / edge length */
     int max_substeps;   /* sub-steps per frame at most */
     /* the hyperelastic path (ss_hyper, --mech-model goh; docs/mech.md) */
-    int model;           /* SS_MECH_MODEL_SPRINGS (the seed's, default) or SS_MECH_MODEL_GOH */
-    double k1_goh;       /* kPa, GOH fibre stiffness of the hyperelastic solver */
-    double prestretch;   /* 1, in vivo resting stretch of intact skin along the fibres */
-    double k_suture_goh; /* mN/mm, stitch stiffness on the hyperelastic path */
-    double K_m_goh;      /* 1, K_m of the hyperelastic path's in-plane active tension */
+    int model;               /* SS_MECH_MODEL_SPRINGS (the seed's, default) or SS_MECH_MODEL_GOH */
+    double k1_goh;           /* kPa, GOH fibre stiffness of the hyperelastic solver */
+    double prestretch;       /* 1, in vivo resting stretch of intact skin along the fibres */
+    double k_suture_goh;     /* mN/mm, stitch stiffness on the hyperelastic path */
+    double K_m_goh;          /* 1, K_m of the hyperelastic path's in-plane active tension */
+    double tau_contract_goh; /* days, lag of that tension behind n m K_m_goh (0 = none) */
 } ss_mech_params;
 enum { SS_MECH_MODEL_SPRINGS = 0, SS_MECH_MODEL_GOH = 1 };
 /* "springs" / "goh" -> *model; anything else SS_ERR_INPUT naming the text. */
@@ -445,7 +446,10 @@ const double *ss_mech_node_stress(const ss_mech *m); /* n, active stress kPa */
  * when out of memory. */
 float *const *ss_mech_grid_displacement(ss_mech *m);
 /* Flat state for checkpoints: positions, velocities, rest lengths, stress,
- * grid displacement. size in bytes; set returns SS_ERR_INPUT on a size mismatch. */
+ * grid displacement; model goh adds per tet the rest state G and the lagged
+ * active tension. size in bytes; set returns SS_ERR_INPUT on a size mismatch
+ * (a goh state without the lagged tension, written before it existed, is
+ * refused with a message that says so). */
 size_t ss_mech_state_size(const ss_mech *m);
 void ss_mech_state_get(const ss_mech *m, void *buf);
 ss_status ss_mech_state_set(ss_mech *m, const void *buf, size_t size, ss_error *err);

@@ -71,6 +71,7 @@ static const key keys[] = {
     K(prestretch, "1", 1, 1.5),
     K(k_suture_goh, "mN/mm", 0, 1e9),
     K(K_m_goh, "1", 0, 1e6),
+    K(tau_contract_goh, "day", 0, 1e3),
 };
 #undef K
 #define NKEYS (sizeof keys / sizeof keys[0])
@@ -110,6 +111,7 @@ void ss_mech_params_default(ss_mech_params *p) {
     p->prestretch = 1.15;
     p->k_suture_goh = 1000.0;
     p->K_m_goh = 150.0;
+    p->tau_contract_goh = 4.0;
 }
 
 ss_status ss_mech_model_parse(const char *text, int *model, ss_error *err) {

@@ -72,6 +72,7 @@ void ss_mech_free(ss_mech *m) {
     free(m->nmyo);
     free(m->nmf);
     free(m->nproto);
+    free(m->nact);
     free(m->ngf);
     free(m->ncov);
     free(m->nth);
@@ -909,7 +910,7 @@ void ss_mech_stats_compute(const ss_mech *m, ss_mech_stats *st) {
 
 size_t ss_mech_state_size(const ss_mech *m) {
     return ((size_t)m->mesh->nnodes * 9 + (size_t)m->S->nsprings +
-            (m->H ? 9 * (size_t)m->mesh->ntets : 0)) *
+            (m->H ? 9 * (size_t)m->mesh->ntets + (size_t)m->mesh->nnodes : 0)) *
                sizeof(double) +
            sizeof(uint64_t);
 }
@@ -926,12 +927,21 @@ void ss_mech_state_get(const ss_mech *m, void *buf) {
     memcpy(b + 7 * nn * sizeof(double), m->nmf, nn * sizeof(double));
     memcpy(b + 8 * nn * sizeof(double), m->nproto, nn * sizeof(double));
     memcpy(b + 9 * nn * sizeof(double), m->S->rest, (size_t)m->S->nsprings * sizeof(double));
-    if (m->H)
-        memcpy(b + (9 * nn + (size_t)m->S->nsprings) * sizeof(double), ss_hyper_growth(m->H),
-               9 * (size_t)m->mesh->ntets * sizeof(double));
+    if (m->H) {
+        const size_t o = 9 * nn + (size_t)m->S->nsprings, nt = (size_t)m->mesh->ntets;
+        memcpy(b + o * sizeof(double), ss_hyper_growth(m->H), 9 * nt * sizeof(double));
+        memcpy(b + (o + 9 * nt) * sizeof(double), m->nact, nn * sizeof(double));
+    }
 }
 
 ss_status ss_mech_state_set(ss_mech *m, const void *buf, size_t size, ss_error *err) {
+    /* goh states before the contraction lag had no lagged tension: resuming
+     * one with the lag at zero would drop the wound's pull for days */
+    if (m->H && size + (size_t)m->mesh->nnodes * sizeof(double) == ss_mech_state_size(m))
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "mechanics state: a goh checkpoint from before the lagged active "
+                            "tension (tau_contract_goh); it cannot be resumed exactly, run "
+                            "again from day 0");
     if (size != ss_mech_state_size(m))
         return ss_error_set(err, SS_ERR_INPUT,
                             "mechanics state: %zu bytes, expected %zu (another mesh?)", size,
@@ -948,9 +958,14 @@ ss_status ss_mech_state_set(ss_mech *m, const void *buf, size_t size, ss_error *
     memcpy(m->nmf, b + 7 * nn * sizeof(double), nn * sizeof(double));
     memcpy(m->nproto, b + 8 * nn * sizeof(double), nn * sizeof(double));
     memcpy(m->S->rest, b + 9 * nn * sizeof(double), (size_t)m->S->nsprings * sizeof(double));
-    if (m->H)
-        memcpy(ss_hyper_growth(m->H), b + (9 * nn + (size_t)m->S->nsprings) * sizeof(double),
-               9 * (size_t)m->mesh->ntets * sizeof(double));
+    if (m->H) {
+        const size_t o = 9 * nn + (size_t)m->S->nsprings, nt = (size_t)m->mesh->ntets;
+        memcpy(ss_hyper_growth(m->H), b + o * sizeof(double), 9 * nt * sizeof(double));
+        memcpy(m->nact, b + (o + 9 * nt) * sizeof(double), nn * sizeof(double));
+        for (size_t i = 0; i < nn; i++)
+            if (!isfinite(m->nact[i]))
+                return ss_error_set(err, SS_ERR_INPUT, "mechanics state: non-finite value");
+    }
     for (size_t i = 0; i < 3 * nn; i++)
         if (!isfinite(m->S->x[i]) || !isfinite(m->vel[i]))
             return ss_error_set(err, SS_ERR_INPUT, "mechanics state: non-finite value");

@@ -33,6 +33,7 @@ struct ss_mech {
     double *nmyo, *nth, *necm, *stress; /* per node */
     double *nmf, *nproto;               /* per node: myofibroblast, proto fractions */
     double *ngf, *ncov, *nrho;          /* per node: growth factor, cover, wound collagen */
+    double *nact;                       /* per node (goh): n m K_m_goh after its lag */
     double *vel;                        /* 3n, mm/day */
     double *xprev, *grad, *disp;
     int32_t *tri; /* top surface triangles (3 per) */
