@@ -190,7 +190,7 @@ static void test_stretch_analytic(void **state) {
         ss_mech_params q = p;
         q.K_bulk = 1e6;
         double n[3] = {1, 0, 0}, sg, lat[2], l = 1.1;
-        assert_int_equal(ss_mech_uniaxial_analytic(&q, n, l, &sg, lat, NULL), SS_OK);
+        assert_int_equal(ss_mech_uniaxial_analytic(&q, n, l, &sg, lat, NULL, NULL), SS_OK);
         double E = l * l - 1,
                ex = q.mu * (l * l - 1 / l) + 2 * l * l * q.k1_goh * E * exp(q.k2 * E * E);
         assert_float_equal(sg, ex, 1e-3 * ex);
