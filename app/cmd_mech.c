@@ -21,7 +21,7 @@ static void mech_help(FILE *f) {
                "the low face slides on its plane, the high face is moved to L. Prints the Cauchy\n"
                "stress along the axis (reaction over the current cross-section), the shear\n"
                "(F_a1, F_a2: the axial displacement's gradient across) and the closed-form GOH\n"
-               "values of the homogeneous uniaxial state for the same parameters (docs/mech.md).\n\n"
+               "values of the homogeneous uniaxial state, same parameters (docs/mech.md).\n\n"
                "  --stretch L          stretch along the axis (0.3..3)\n"
                "  --axis x|y|z         the stretched axis (x)\n"
                "  --fibres x|y|z|DEG   one fibre family along an axis, or DEG degrees from x in\n"

@@ -511,10 +511,10 @@ static void test_active_law(void **state) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_closed_form_cauchy), cmocka_unit_test(test_forces_objective),
-        cmocka_unit_test(test_stretch_analytic),   cmocka_unit_test(test_stretch_oblique),
-        cmocka_unit_test(test_resting_tension_gape),
-        cmocka_unit_test(test_fast_equals_plain),  cmocka_unit_test(test_active_law),
+        cmocka_unit_test(test_closed_form_cauchy),   cmocka_unit_test(test_forces_objective),
+        cmocka_unit_test(test_stretch_analytic),     cmocka_unit_test(test_stretch_oblique),
+        cmocka_unit_test(test_resting_tension_gape), cmocka_unit_test(test_fast_equals_plain),
+        cmocka_unit_test(test_active_law),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

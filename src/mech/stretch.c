@@ -116,18 +116,27 @@ static int solve5(double A[5][5], double b[5]) {
     return 1;
 }
 
+/* the cofactor matrix of A (row-major; A^-T = c / det A); returns det A */
+static double cofactors(const double A[9], double c[9]) {
+    c[0] = A[4] * A[8] - A[5] * A[7];
+    c[1] = A[5] * A[6] - A[3] * A[8];
+    c[2] = A[3] * A[7] - A[4] * A[6];
+    c[3] = A[2] * A[7] - A[1] * A[8];
+    c[4] = A[0] * A[8] - A[2] * A[6];
+    c[5] = A[1] * A[6] - A[0] * A[7];
+    c[6] = A[1] * A[5] - A[2] * A[4];
+    c[7] = A[2] * A[3] - A[0] * A[5];
+    c[8] = A[0] * A[4] - A[1] * A[3];
+    return A[0] * c[0] + A[1] * c[1] + A[2] * c[2];
+}
+
 /* From F in the frame (axis, t1, t2): the lateral stretches, i.e. the
  * distance of the opposite lateral faces over the reference one (1 / |F^-T
  * t_k|, which a rotation leaves alone), and the shears F_a1, F_a2 (how the
  * axial displacement grows across the block; with F e_a along e_a a
  * rotation about the axis leaves them alone too) */
 static void lateral_shear(const double F[9], double lat[2], double shear[2]) {
-    double c[9] = {F[4] * F[8] - F[5] * F[7], F[5] * F[6] - F[3] * F[8],
-                   F[3] * F[7] - F[4] * F[6], F[2] * F[7] - F[1] * F[8],
-                   F[0] * F[8] - F[2] * F[6], F[1] * F[6] - F[0] * F[7],
-                   F[1] * F[5] - F[2] * F[4], F[2] * F[3] - F[0] * F[5],
-                   F[0] * F[4] - F[1] * F[3]}; /* cofactors: F^-T = c / J */
-    double J = F[0] * c[0] + F[1] * c[1] + F[2] * c[2];
+    double c[9], J = cofactors(F, c);
     for (int k = 0; k < 2; k++) {
         const double *r = c + 3 * (k + 1);
         lat[k] = fabs(J) / sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
@@ -219,17 +228,12 @@ static void mean_F(const ss_tetmesh *m, const double *x, int ax, double Fm[9]) {
                 D[3 * i + k] = m->x[3 * v[k + 1] + pm[i]] - m->x[3 * v[0] + pm[i]];
                 d[3 * i + k] = x[3 * v[k + 1] + pm[i]] - x[3 * v[0] + pm[i]];
             }
-        double c[9] = {D[4] * D[8] - D[5] * D[7], D[5] * D[6] - D[3] * D[8],
-                       D[3] * D[7] - D[4] * D[6], D[2] * D[7] - D[1] * D[8],
-                       D[0] * D[8] - D[2] * D[6], D[1] * D[6] - D[0] * D[7],
-                       D[1] * D[5] - D[2] * D[4], D[2] * D[3] - D[0] * D[5],
-                       D[0] * D[4] - D[1] * D[3]};
-        double det = D[0] * c[0] + D[1] * c[1] + D[2] * c[2];
+        double c[9], det = cofactors(D, c);
         /* F = d D^-1, D^-1 = c^T / det; weighted by the volume det/6: sum d c^T / 6 */
         for (int i = 0; i < 3; i++)
             for (int j = 0; j < 3; j++)
-                S[3 * i + j] += d[3 * i] * c[3 * j] + d[3 * i + 1] * c[3 * j + 1] +
-                                d[3 * i + 2] * c[3 * j + 2];
+                S[3 * i + j] +=
+                    d[3 * i] * c[3 * j] + d[3 * i + 1] * c[3 * j + 1] + d[3 * i + 2] * c[3 * j + 2];
         V += det;
     }
     for (int i = 0; i < 9; i++) Fm[i] = S[i] / V;
@@ -390,8 +394,10 @@ static ss_status pull_dead_load(ss_hyper *H, const ss_tetmesh *m, const ss_mech_
                 found = 1;
                 break;
             }
-            if (s < lam) Tlo = fmax(Tlo, T);
-            else Thi = fmin(Thi, T);
+            if (s < lam)
+                Tlo = fmax(Tlo, T);
+            else
+                Thi = fmin(Thi, T);
             double Tn = s != sa ? T + (lam - s) * (T - Ta) / (s - sa) : NAN;
             if (!(Tn > Tlo && Tn < Thi)) Tn = isfinite(Thi) ? 0.5 * (Tlo + Thi) : 2 * T - Tlo;
             if (fabs(Tn - T) <= 1e-15 * fabs(T)) break; /* the secant can do no better */
