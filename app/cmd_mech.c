@@ -158,9 +158,8 @@ static int cmd_mech_stretch(int argc, char **argv) {
                ss_mech_model_name(c.model), c.stretch, ax, c.fibre[0], c.fibre[1], c.fibre[2],
                r.stress_kpa, r.analytic_stress_kpa, rel, r.mean_sigma_kpa, r.lateral_stretch[0],
                r.lateral_stretch[1], r.analytic_lateral[0], r.analytic_lateral[1], r.shear[0],
-               r.shear[1], r.analytic_shear[0], r.analytic_shear[1], p.mu, p.K_bulk,
-               p.k1_goh, p.k2, p.kappa, r.nodes, r.tets, r.newton, r.cg,
-               r.converged ? "true" : "false");
+               r.shear[1], r.analytic_shear[0], r.analytic_shear[1], p.mu, p.K_bulk, p.k1_goh, p.k2,
+               p.kappa, r.nodes, r.tets, r.newton, r.cg, r.converged ? "true" : "false");
     } else {
         printf("%s, stretch %g along %c, fibres (%.3g, %.3g, %.3g), %d tets:\n"
                "  stress %.6g kPa, analytic GOH %.6g kPa (%+.2e), lateral stretch %.5g %.5g "
