@@ -15,11 +15,13 @@
 
 static void mech_help(FILE *f) {
     fprintf(f, "usage: skinsim mech stretch --stretch L [options]\n\n"
-               "Uniaxial test of a cube of the mechanics' own lattice mesh: the face at the low\n"
-               "end of the axis slides on its plane, the face at the high end is moved to L times\n"
-               "the length, the lateral faces are free. Prints the Cauchy stress along the axis\n"
-               "(reaction over the current cross-section) and the closed-form GOH stress of the\n"
-               "homogeneous uniaxial state for the same parameters (docs/mech.md).\n\n"
+               "Uniaxial test of a cube of the mechanics' own lattice mesh, lateral faces free.\n"
+               "Tension: a dead load on the end faces, found so that they end L times the length\n"
+               "apart, and six pins against rigid motion only (the block may shear); compression:\n"
+               "the low face slides on its plane, the high face is moved to L. Prints the Cauchy\n"
+               "stress along the axis (reaction over the current cross-section), the shear\n"
+               "(F_a1, F_a2: the axial displacement's gradient across) and the closed-form GOH\n"
+               "values of the homogeneous uniaxial state, same parameters (docs/mech.md).\n\n"
                "  --stretch L          stretch along the axis (0.3..3)\n"
                "  --axis x|y|z         the stretched axis (x)\n"
                "  --fibres x|y|z|DEG   one fibre family along an axis, or DEG degrees from x in\n"
@@ -148,22 +150,24 @@ static int cmd_mech_stretch(int argc, char **argv) {
                "  \"analytic_stress_kpa\": %.17g,\n  \"relative_difference\": %.17g,\n"
                "  \"mean_cauchy_kpa\": %.17g,\n  \"lateral_stretch\": [%.17g, %.17g],\n"
                "  \"analytic_lateral_stretch\": [%.17g, %.17g],\n"
+               "  \"shear\": [%.17g, %.17g],\n  \"analytic_shear\": [%.17g, %.17g],\n"
                "  \"params\": {\"mu\": %.17g, \"K_bulk\": %.17g, \"k1_goh\": %.17g, \"k2\": %.17g, "
                "\"kappa\": %.17g},\n"
                "  \"nodes\": %d,\n  \"tets\": %d,\n  \"newton\": %d,\n  \"iterations\": %d,\n"
                "  \"converged\": %s\n}\n",
                ss_mech_model_name(c.model), c.stretch, ax, c.fibre[0], c.fibre[1], c.fibre[2],
                r.stress_kpa, r.analytic_stress_kpa, rel, r.mean_sigma_kpa, r.lateral_stretch[0],
-               r.lateral_stretch[1], r.analytic_lateral[0], r.analytic_lateral[1], p.mu, p.K_bulk,
-               p.k1_goh, p.k2, p.kappa, r.nodes, r.tets, r.newton, r.cg,
-               r.converged ? "true" : "false");
+               r.lateral_stretch[1], r.analytic_lateral[0], r.analytic_lateral[1], r.shear[0],
+               r.shear[1], r.analytic_shear[0], r.analytic_shear[1], p.mu, p.K_bulk, p.k1_goh, p.k2,
+               p.kappa, r.nodes, r.tets, r.newton, r.cg, r.converged ? "true" : "false");
     } else {
         printf("%s, stretch %g along %c, fibres (%.3g, %.3g, %.3g), %d tets:\n"
                "  stress %.6g kPa, analytic GOH %.6g kPa (%+.2e), lateral stretch %.5g %.5g "
-               "(analytic %.5g %.5g)%s\n",
+               "(analytic %.5g %.5g), shear %.5g %.5g (analytic %.5g %.5g)%s\n",
                ss_mech_model_name(c.model), c.stretch, ax, c.fibre[0], c.fibre[1], c.fibre[2],
                r.tets, r.stress_kpa, r.analytic_stress_kpa, rel, r.lateral_stretch[0],
-               r.lateral_stretch[1], r.analytic_lateral[0], r.analytic_lateral[1],
+               r.lateral_stretch[1], r.analytic_lateral[0], r.analytic_lateral[1], r.shear[0],
+               r.shear[1], r.analytic_shear[0], r.analytic_shear[1],
                r.converged ? "" : " (not converged)");
     }
     return 0;

@@ -2,7 +2,8 @@
  * the solver's forces are its energy's gradient and its energy is objective;
  * the closed-form Cauchy stress agrees with the derivative of the energy; the
  * uniaxial stretch of a block of the solver's own mesh gives the analytic GOH
- * stress at every refinement and under a permutation of the axes; mu, k2 and
+ * stress at every refinement and under a permutation of the axes, with
+ * fibres at 30 degrees too (the block shears as the analytic state does); mu, k2 and
  * the fibre direction change it; and in a heal set-up the resting tension
  * makes a slit across the fibres gape more than one along them, and stitches
  * hold it; the fast solver ends where the plain one does; the heal run's
@@ -191,7 +192,7 @@ static void test_stretch_analytic(void **state) {
         ss_mech_params q = p;
         q.K_bulk = 1e6;
         double n[3] = {1, 0, 0}, sg, lat[2], l = 1.1;
-        assert_int_equal(ss_mech_uniaxial_analytic(&q, n, l, &sg, lat, NULL), SS_OK);
+        assert_int_equal(ss_mech_uniaxial_analytic(&q, n, l, &sg, lat, NULL, NULL), SS_OK);
         double E = l * l - 1,
                ex = q.mu * (l * l - 1 / l) + 2 * l * l * q.k1_goh * E * exp(q.k2 * E * E);
         assert_float_equal(sg, ex, 1e-3 * ex);
@@ -228,6 +229,39 @@ static void test_stretch_analytic(void **state) {
     omp_set_num_threads(2);
     ss_mech_stretch_result r2 = stretch(&p, 1.1, 0, fx, 1.0);
     assert_memory_equal(&r1.stress_kpa, &r2.stress_kpa, sizeof(double));
+}
+
+/* fibres at 30 degrees to the axis: the dead-loaded block shears, and its
+ * homogeneous state (F e_x = lambda e_x, lateral faces traction-free) is
+ * what the analytic value solves, so the stress and the shear equal it at
+ * every refinement; turned with the axis (y, fibres in y-z) the same */
+static void test_stretch_oblique(void **state) {
+    (void)state;
+    ss_mech_params p;
+    ss_mech_params_default(&p);
+    const double f30[3] = {cos(M_PI / 6), sin(M_PI / 6), 0};
+    const double hs[3] = {2.0, 1.0, 0.5};
+    ss_mech_stretch_result r1 = {0};
+    for (int k = 0; k < (tu_quick() ? 2 : 3); k++) {
+        ss_mech_stretch_result r = stretch(&p, 1.2, 0, f30, hs[k]);
+        print_message("30 deg, h %.2f mm: %.9f kPa, analytic %.9f; shear %.6f, analytic %.6f\n",
+                      hs[k], r.stress_kpa, r.analytic_stress_kpa, r.shear[0], r.analytic_shear[0]);
+        assert_float_equal(r.stress_kpa, r.analytic_stress_kpa, 1e-7 * r.analytic_stress_kpa);
+        assert_float_equal(r.shear[0], r.analytic_shear[0], 1e-7);
+        assert_float_equal(r.shear[1], 0, 1e-7);
+        for (int d = 0; d < 2; d++)
+            assert_float_equal(r.lateral_stretch[d], r.analytic_lateral[d], 1e-7);
+        if (k == 1) r1 = r;
+    }
+    assert_true(r1.shear[0] < -0.2); /* the fibres turn towards the axis */
+    /* softer than with the fibres along the axis, stiffer than across */
+    const double fx[3] = {1, 0, 0}, fy[3] = {0, 1, 0};
+    assert_true(r1.stress_kpa < stretch(&p, 1.2, 0, fx, 2.0).stress_kpa);
+    assert_true(r1.stress_kpa > stretch(&p, 1.2, 0, fy, 2.0).stress_kpa);
+    const double f30y[3] = {0, cos(M_PI / 6), sin(M_PI / 6)};
+    ss_mech_stretch_result ry = stretch(&p, 1.2, 1, f30y, 1.0);
+    assert_float_equal(ry.stress_kpa, r1.stress_kpa, 1e-8 * r1.stress_kpa);
+    assert_float_equal(ry.shear[0], r1.shear[0], 1e-7);
 }
 
 /* a 20 x 20 x 4 mm block (0.5 mm voxels, skin top at 3 mm), a slit 2 mm x
@@ -522,10 +556,10 @@ static void test_active_law(void **state) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_closed_form_cauchy), cmocka_unit_test(test_forces_objective),
-        cmocka_unit_test(test_stretch_analytic),   cmocka_unit_test(test_resting_tension_gape),
-        cmocka_unit_test(test_fast_equals_plain),  cmocka_unit_test(test_active_law),
-        cmocka_unit_test(test_state_lag),
+        cmocka_unit_test(test_closed_form_cauchy),   cmocka_unit_test(test_forces_objective),
+        cmocka_unit_test(test_stretch_analytic),     cmocka_unit_test(test_stretch_oblique),
+        cmocka_unit_test(test_resting_tension_gape), cmocka_unit_test(test_fast_equals_plain),
+        cmocka_unit_test(test_active_law),           cmocka_unit_test(test_state_lag),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -338,25 +338,36 @@ typedef struct ss_mech_stretch_config {
     int increments;     /* load steps (default 10) */
 } ss_mech_stretch_config;
 typedef struct ss_mech_stretch_result {
-    double stress_kpa;          /* reaction force on the moving face / current cross-section */
-    double analytic_stress_kpa; /* homogeneous uniaxial GOH (lateral stresses zero) */
-    double lateral_stretch[2];  /* the block's mean lateral stretches (the other two axes) */
+    double stress_kpa;          /* axial force on the high end face / current cross-section */
+    double analytic_stress_kpa; /* homogeneous uniaxial GOH (lateral tractions zero) */
+    double lateral_stretch[2];  /* the block's lateral stretches (the next two axes, cyclic):
+                                   distance of opposite lateral faces / reference, mean F */
     double analytic_lateral[2];
+    double shear[2]; /* the mean F's F_a1, F_a2: the axial displacement's gradient across */
+    double analytic_shear[2];
     double mean_sigma_kpa; /* the volume-weighted Cauchy stress along the axis */
     int nodes, tets, newton, cg, converged;
 } ss_mech_stretch_result;
 void ss_mech_stretch_config_default(ss_mech_stretch_config *c);
-/* Stretches a lattice block of the solver's own mesh: the face at the low
- * end of the axis held in the axis direction (one corner held, one node
- * against rotation), the face at the high end moved to lambda, the lateral
- * faces free. The analytic value solves the same GOH law for the
- * homogeneous state with only the axial Cauchy stress non-zero. */
+/* Stretches a lattice block of the solver's own mesh, lateral faces free.
+ * Tension: a dead load on the end faces (uniform traction along the axis,
+ * found by a secant iteration so the faces end lambda apart) and six pins
+ * against rigid motion, so the block may shear. Compression: the low face
+ * slides on its plane, the high face is moved to lambda. The analytic value
+ * solves the same GOH law for the homogeneous state with only the axial
+ * Cauchy stress non-zero and F e_axis = lambda e_axis (the state a dead
+ * load admits). */
 ss_status ss_mech_stretch(const ss_mech_params *p, const ss_mech_stretch_config *c,
                           ss_mech_stretch_result *r, ss_error *err);
 /* The analytic part alone: homogeneous uniaxial stretch lambda along the unit
- * vector n; *lateral (2, may be NULL) the stretches across it. */
+ * vector n, F upper triangular in the frame (n, t1, t2): t1 the coordinate
+ * axis after n's largest component (cyclic), made orthogonal to n, t2 = n x
+ * t1 (for n = e_x: e_y, e_z). *lateral (2, may be NULL): the stretches
+ * across n (distance of the faces normal to t1, t2 over the reference);
+ * *shear (2, may be NULL): F_n1, F_n2. */
 ss_status ss_mech_uniaxial_analytic(const ss_mech_params *p, const double n[3], double lambda,
-                                    double *sigma_kpa, double lateral[2], ss_error *err);
+                                    double *sigma_kpa, double lateral[2], double shear[2],
+                                    ss_error *err);
 
 /* ---- cubic B-spline kernel and grid <-> particle transfer (§5.3) ------------ */
 
