@@ -150,17 +150,45 @@ static void test_grid_init(void **state) {
     assert_true(fabs(st.initial_area_mm2 - 16.0) < 1e-9);
     assert_true(fabs(st.open_area_mm2 - 16.0) < 1e-9);
     assert_true(fabs(st.wound_region_area_mm2 - 16.0) < 1e-9);
-    /* footprint: left half of the image, 0.6 mm deep -> voxels with centre in [3.4, 4) */
+    /* footprint: left half of the image, 0.6 mm deep -> z = 7 whole ([3.5, 4)) and
+     * z = 6 cut: its top 0.1 mm, 0.2 of the voxel, 51/256 ([D15]) */
     ss_image *fp = ss_image_create(40, 40, 1, &err);
     for (int y = 0; y < 40; y++)
         for (int x = 0; x < 20; x++) ss_image_px(fp, x, y)[0] = 1.0f;
     uint8_t *m = ss_heal_wound_from_footprint(g, 4.0, fp, 0.6, NULL, &err);
     assert_non_null(m);
-    int cnt = 0;
-    for (size_t c = 0; c < (size_t)nx * ny * g->nz; c++) cnt += m[c];
+    int cnt = 0, part = 0;
+    for (size_t c = 0; c < (size_t)nx * ny * g->nz; c++) cnt += m[c] == 1, part += m[c] > 1;
     assert_int_equal(cnt, 10 * 20 * 1); /* x 0..9, all y, z = 7 (centre 3.75) */
+    assert_int_equal(part, 10 * 20 * 1);
     assert_int_equal(m[ss_heal_idx(g, 9, 4, 7)], 1);
+    assert_int_equal(m[ss_heal_idx(g, 9, 4, 6)], 51);
+    assert_int_equal(m[ss_heal_idx(g, 9, 4, 5)], 0);
     assert_int_equal(m[ss_heal_idx(g, 10, 4, 7)], 0);
+    assert_true(fabs(ss_heal_wound_fraction(51) - 51.0 / 256) < 1e-12);
+    assert_true(ss_heal_wound_fraction(1) == 1.0 && ss_heal_wound_fraction(0) == 0.0);
+    /* the partial cell: a WOUND cell holding 0.8 of the intact tissue and 0.2 of the clot */
+    assert_int_equal(ss_heal_grid_init(g, 4.0, 0.1, m, p, &err), SS_OK);
+    const size_t pc = ss_heal_idx(g, 9, 4, 6);
+    const float f = 51.0f / 256.0f;
+    assert_int_equal(g->cell[pc], SS_CELL_WOUND);
+    assert_true(g->field[SS_HEAL_PLASMA][pc] == f);
+    assert_true(fabsf(g->field[SS_HEAL_CAPILLARY][pc] - (1 - f) * hv[SS_HEAL_CAPILLARY]) < 1e-6f);
+    assert_true(fabsf(g->field[SS_HEAL_FIBROBLAST][pc] - (1 - f) * hv[SS_HEAL_FIBROBLAST]) <
+                1e-6f);
+    assert_true(fabsf(g->field[SS_HEAL_OXYGEN][pc] -
+                      ((1 - f) * hv[SS_HEAL_OXYGEN] + f * (float)p->u1_wound)) < 1e-6f);
+    assert_true(g->field[SS_HEAL_EPITHELIUM][pc] == 0.0f && g->field[SS_HEAL_SCAR][pc] == 0.0f);
+    /* rounded to whole levels: z = 6 is less than half wound, so only z = 7 is left */
+    int32_t *cols = ss_heal_wound_columns_footprint(nx, ny, g->nz, 0.5, 4.0, fp, 0.6, NULL, &err);
+    assert_non_null(cols);
+    assert_int_equal(cols[2 * (4 * nx + 9)], 1741);
+    assert_int_equal(cols[2 * (4 * nx + 9) + 1], 8 * 256);
+    ss_heal_wound_columns_whole(cols, (size_t)nx * ny);
+    assert_int_equal(cols[2 * (4 * nx + 9)], 7 * 256);
+    assert_int_equal(cols[2 * (4 * nx + 9) + 1], 8 * 256);
+    assert_int_equal(cols[2 * (4 * nx + 10)], cols[2 * (4 * nx + 10) + 1]);
+    free(cols);
     free(m);
     assert_null(ss_heal_wound_from_footprint(g, 4.0, fp, -1.0, NULL, &err));
     assert_int_equal(err.code, SS_ERR_INPUT);
