@@ -172,7 +172,8 @@ static void test_grid_init(void **state) {
     const size_t pc = ss_heal_idx(g, 9, 4, 6);
     const float f = 51.0f / 256.0f;
     assert_int_equal(g->cell[pc], SS_CELL_WOUND);
-    assert_true(g->field[SS_HEAL_PLASMA][pc] == f);
+    assert_true(g->field[SS_HEAL_PLASMA][pc] == 0.5f * (1 + f)); /* in omega, keeps f */
+    assert_true(ss_heal_in_region(g, p, pc));
     assert_true(fabsf(g->field[SS_HEAL_CAPILLARY][pc] - (1 - f) * hv[SS_HEAL_CAPILLARY]) < 1e-6f);
     assert_true(fabsf(g->field[SS_HEAL_FIBROBLAST][pc] - (1 - f) * hv[SS_HEAL_FIBROBLAST]) <
                 1e-6f);

@@ -183,7 +183,8 @@ static inline size_t ss_heal_idx(const ss_heal_grid *g, int x, int y, int z) {
  * v / SS_HEAL_WOUND_SUB (the last voxel of a depth that is not a multiple of
  * the voxel, docs/heal-model.md [D15]); it is a WOUND cell whose intact share
  * (1 - f) starts with the healthy oxygen, capillaries and fibroblasts and its
- * wounded share f with the clot's oxygen and plasma (epithelium 0).
+ * wounded share f with the clot's oxygen (epithelium 0, plasma (1 + f) / 2:
+ * in omega, and the record of f in a static region).
  * Sets cell states (BOUND on the outermost voxel shell, AIR above skin_top_mm,
  * EPIDERMIS in the voxels reaching into the top epidermis_mm of the skin (at
  * least the surface voxel, which then holds a thinner epidermis as a sheet),
@@ -223,6 +224,10 @@ int32_t *ss_heal_wound_columns_box(int nx, int ny, int nz, double dx_mm, double 
  * (whose centre lies in the range), the wound before [D15]; the keloid and
  * the mechanics use it (docs/heal-model.md [D15]). */
 void ss_heal_wound_columns_whole(int32_t *cols, size_t ncol);
+/* 1 when the wound under params p may have partial cells: a static region
+ * (its frozen plasma keeps each cell's wounded fraction, which the adnexa's
+ * depth reads) and no keloid; 0 = round with ss_heal_wound_columns_whole. */
+int ss_heal_wound_subvoxel(const ss_heal_params *p);
 /* The n[0] x n[1] x n[2] mask of the box at whole-grid index lo (may reach
  * past the grid by a halo: 0 there) from column ranges of a gdim grid; a
  * level the range cuts gets its wounded fraction (2..255, see wound3d). */

@@ -272,10 +272,13 @@ static ss_status mesh_outside(const ss_heal_run_config *c, const geometry *gm, s
                         c->wound_mesh, gm->X, gm->Y, gm->Z);
 }
 
-/* The keloid and the mechanics keep whole-voxel depths (docs/heal-model.md
- * [D15]): the mechanics' wound springs read the WOUND state, not a partial
- * cell's intact share, and neither was re-measured with partial cells. */
-static int whole_voxels(const ss_heal_run *r) { return r->c.mechanics || r->p->lamkrho > 0; }
+/* The keloid, an evolving region and the mechanics keep whole-voxel depths
+ * (docs/heal-model.md [D15]): the mechanics' wound springs read the WOUND
+ * state, not a partial cell's intact share, and its velocity carries the
+ * plasma that records the fraction. */
+static int whole_voxels(const ss_heal_run *r) {
+    return r->c.mechanics || !ss_heal_wound_subvoxel(r->p);
+}
 
 /* The wound of a footprint or the built-in square as column ranges
  * (rounded to whole levels where whole_voxels); NULL with err set. */

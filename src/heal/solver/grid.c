@@ -157,14 +157,17 @@ ss_status ss_heal_grid_init_box(ss_heal_grid *g, const int goff[3], const int gd
                 } else if (s == SS_CELL_WOUND) {
                     /* a partial cell: its intact share (1 - f) keeps the healthy
                      * tissue's oxygen, capillaries and fibroblasts, its wounded
-                     * share f the clot's oxygen and plasma. No epithelium: the
-                     * wound opened the surface sheet (an e of 1 - f would count
-                     * that share of the wound as covered at t = 0). */
+                     * share f the clot's oxygen. No epithelium: the wound opened
+                     * the surface sheet (an e of 1 - f would count that share of
+                     * the wound as covered at t = 0). Plasma (1 + f) / 2: in
+                     * omega like every cell the wound cuts (p enters the model
+                     * only through omega), and the record of f that the adnexa's
+                     * depth reads ([D15]) */
                     const float f = (float)ss_heal_wound_fraction(wound3d[c]);
                     for (int k = 0; k < SS_HEAL_NFIELDS; k++) v[k] = (1.0f - f) * hv[k];
                     v[SS_HEAL_EPITHELIUM] = 0.0f;
                     v[SS_HEAL_OXYGEN] += f * (float)p->u1_wound;
-                    v[SS_HEAL_PLASMA] += f;
+                    v[SS_HEAL_PLASMA] = 0.5f * (1.0f + f);
                 }
                 for (int f = 0; f < SS_HEAL_NFIELDS; f++) g->field[f][c] = v[f];
             }
@@ -187,6 +190,10 @@ static void sub_range(int nz, double dx_mm, double top_mm, double d, int32_t c[2
     lo = lo < 0 ? 0 : lo;
     hi = hi > full ? full : hi;
     if (hi > lo) c[0] = (int32_t)lo, c[1] = (int32_t)hi;
+}
+
+int ss_heal_wound_subvoxel(const ss_heal_params *p) {
+    return p && p->static_region && !(p->lamkrho > 0);
 }
 
 void ss_heal_wound_columns_whole(int32_t *cols, size_t ncol) {

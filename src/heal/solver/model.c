@@ -51,6 +51,10 @@ typedef struct model_ctx {
     float kel_h;        /* keloid_mm / voxel: the keloid's depth in voxel levels [D12] */
     int scab, static_region;
     const uint8_t *cell;
+    /* the frozen plasma of a static region without a velocity: a partial
+     * wound cell's wounded fraction f, which the adnexa's depth reads [D15]
+     * (NULL: every WOUND cell counts whole) */
+    const float *pfrac;
     int nx, ny, nz;
     /* per column (y * nx + x): surface cell z (-1: none), gathered surface
      * epithelium and wound-bed capillary density */
@@ -247,6 +251,13 @@ static void heal_react(void *vctx, const ss_heal_rd_row *row) {
 static int is_tissue(uint8_t c) { return c != SS_CELL_AIR && c != SS_CELL_BOUND; }
 
 /* Surface cell of every column: the topmost tissue cell inside the bounds. */
+/* The plasma is a record of the wound's fraction only while it is frozen
+ * (static region) and not carried by a velocity (the mechanics). */
+static void surface_inputs(model_ctx *c, const ss_heal_grid *g) {
+    const int vel = g->velocity[0] || g->velocity[1] || g->velocity[2];
+    c->pfrac = c->static_region && !vel ? g->field[SS_HEAL_PLASMA] : NULL;
+}
+
 static void find_surface(model_ctx *c) {
     const int nx = c->nx, ny = c->ny, nz = c->nz;
     for (int y = 0; y < ny; y++)
@@ -283,13 +294,19 @@ static void find_surface(model_ctx *c) {
     const size_t ncol = (size_t)nx * ny;
     /* adnexal remnants [D11]: the column's wound depth from the lowest WOUND
      * level (whole-grid, the maximum of its negative over a z stack); kept in
-     * ds, which prepare recomputes before it is read */
+     * ds, which prepare recomputes before it is read. A partial lowest cell
+     * [D15] is wound only in its top f: the floor lies 1 - f above its bottom
+     * (f = 1 in a whole cell: the same float as before) */
     if (c->kadn > 0.0f) {
         for (size_t i = 0; i < ncol; i++) {
             float lo = -1e30f;
             for (int z = 1; z <= nz - 2; z++)
                 if (c->cell[(size_t)z * ncol + i] == SS_CELL_WOUND) {
-                    lo = -(float)(z + c->zoff);
+                    /* p = (1 + f) / 2 in a partial cell, 1 in a whole one */
+                    const float f =
+                        c->pfrac ? clampf(2.0f * c->pfrac[(size_t)z * ncol + i] - 1.0f, 0.0f, 1.0f)
+                                 : 1.0f;
+                    lo = -(float)(z + c->zoff) - (1.0f - f);
                     break;
                 }
             c->ds[i] = lo;
@@ -592,6 +609,7 @@ static void ctx_init(model_ctx *c, const ss_heal_params *p, const ss_heal_grid *
     c->scab = p->scab;
     c->static_region = p->static_region;
     c->cell = g->cell;
+    surface_inputs(c, g);
     c->nx = g->nx;
     c->ny = g->ny;
     c->nz = g->nz;
@@ -891,6 +909,7 @@ ss_status ss_heal_step_phase(ss_heal_solver *s, ss_heal_grid *g, int phase, ss_e
     if (g->nx != s->nx || g->ny != s->ny || g->nz != s->nz)
         return ss_error_set(err, SS_ERR_INPUT, "heal step phase: grid does not match the solver");
     s->ctx.cell = g->cell;
+    surface_inputs(&s->ctx, g);
     s->sys.cls = g->cell;
     if (s->ctx.ztop_of != g->cell) find_surface(&s->ctx);
     s->ctx.kact = keloid_signal(&s->p, g->t_days, s->dt);
@@ -922,6 +941,7 @@ static ss_status step_begin(ss_heal_solver *s, ss_heal_grid *g, ss_error *err) {
                             "heal step: grid %dx%dx%d does not match the solver's %dx%dx%d", g->nx,
                             g->ny, g->nz, s->nx, s->ny, s->nz);
     s->ctx.cell = g->cell;
+    surface_inputs(&s->ctx, g);
     s->sys.cls = g->cell;
     if (s->ctx.ztop_of != g->cell) find_surface(&s->ctx);
     s->ctx.kact = keloid_signal(&s->p, g->t_days, s->dt);
