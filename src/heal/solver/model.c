@@ -356,9 +356,9 @@ static inline void bed_seg(float d0, float d1, float v0, float v1, float om, flo
     const float v = v0 + (v1 - v0) * (0.5f * (lo + hi) - d0) / (d1 - d0);
     *bed += (hi - lo) * v;
     *ws += hi - lo;
-    if (om > 0.0f) {
-        *bo += (hi - lo) * v;
-        *wo += hi - lo;
+    if (om > 0.0f) { /* om < 1: a partial wound cell's share [D15] (1 x: exact) */
+        *bo += om * (hi - lo) * v;
+        *wo += om * (hi - lo);
     }
 }
 
@@ -372,14 +372,17 @@ static inline void bed_seg(float d0, float d1, float v0, float v1, float om, flo
 static inline void bed_level(const int *zt, const float *ds, const float *Ur, const float *Sr,
                              const float *Pr, const uint8_t *Cr, float *bed, float *ws, float *bo,
                              float *wo, float *cu, float *cs, float *co, float *ch, int nx, int z,
-                             float h, float bedmm) {
+                             float h, float bedmm, int frac) {
     const float pmin = (float)SS_HEAL_P_MIN;
     for (int x = 0; x < nx; x++) {
         const int k = zt[x] - z;
         if (k < 0) continue;
         const float a = ds[x], b = ds[x] + bedmm;
         const int tis = Cr[x] != SS_CELL_AIR && Cr[x] != SS_CELL_BOUND;
-        const float u = Ur[x], sk = Sr[x], om = (float)(Pr[x] > pmin);
+        /* omega's weight: a partial wound cell (frozen p = (1 + f) / 2) is
+         * granulation tissue in its wounded share f only [D15] */
+        const float u = Ur[x], sk = Sr[x],
+                    om = frac ? clampf(2.0f * Pr[x] - 1.0f, 0.0f, 1.0f) : (float)(Pr[x] > pmin);
         const float top = k * h, mid = top + 0.5f * h;
         float fk = u; /* the interpolant at voxel k's top face, seen from k */
         if (ch[x] > 0.0f) {
@@ -489,7 +492,7 @@ static void heal_prepare(void *vctx, float *const *u) {
         for (int z = zhi; z >= zlo; z--) {
             const size_t o = (size_t)z * sz + r0;
             bed_level(zt, ds, U3 + o, S + o, P + o, c->cell + o, bed, ws, bo, wo, cu, cs, co, ch,
-                      nx, z, h, bedmm);
+                      nx, z, h, bedmm, c->pfrac != NULL);
         }
         bed_flush(zt, ds, bed, ws, bo, wo, cu, co, ch, nx, zlo, h, bedmm);
         for (int x = 0; x < nx; x++) {
@@ -565,7 +568,7 @@ static void heal_prepare_z(model_ctx *c, float *const *u) {
         for (int z = zhi < own_hi ? zhi : own_hi; z >= zlo; z--) {
             const size_t o = (size_t)(z - zoff) * sz + r0;
             bed_level(zt, ds, U3 + o, S + o, P + o, c->cell + o, bed, ws, bo, wo, cu, cs, co, ch,
-                      nx, z, h, bedmm);
+                      nx, z, h, bedmm, c->pfrac != NULL);
         }
         if (own_lo > 0) continue; /* the bottom box (global level 1 inside) finishes */
         bed_flush(zt, ds, bed, ws, bo, wo, cu, co, ch, nx, zend, h, bedmm);
