@@ -436,6 +436,38 @@ static void test_adnexa(void **state) {
     ss_heal_params_free(p);
 }
 
+/* Wound depth below one voxel [D15]: a 0.3 mm wound cuts its last voxel
+ * (0.5 mm voxels: 0.6 of one; 0.25 mm: one and 0.2) instead of rounding to
+ * 0.5 or 0.25 mm. Its closure lies between those of the neighbouring
+ * whole-voxel depths (0.25 and 0.5 mm at 0.25 mm voxels; 0 and 0.5 mm at
+ * 0.5 mm), and the two voxel sizes agree within 12 % in t95 (rounded to
+ * whole voxels they were 19 % apart on this wound). Clean, 10 mm wound. */
+static void test_partial_depth(void **state) {
+    (void)state;
+    ss_error err;
+    ss_heal_params *p = ss_heal_params_preset("clean", &err);
+    assert_non_null(p);
+    assert_true(ss_heal_wound_subvoxel(p));
+    const double depth[4] = {0.25, 0.3, 0.5, 0.3}, dx[4] = {0.25, 0.25, 0.25, 0.5};
+    ss_heal_course c[5];
+    for (int k = 0; k < 5; k++) {
+        ss_heal_course_opts o = {16, 10, k < 4 ? depth[k] : 0.5, k < 4 ? dx[k] : 0.5,
+                                 8, 0.05, 0, -1, 0, {0, 0}};
+        assert_int_equal(ss_heal_course_run(p, &o, &c[k], &err), SS_OK);
+        print_message("depth %.2f mm, voxel %.2f mm: t50 %.3f t95 %.3f peak scar %.3f\n",
+                      o.depth_mm, o.dx_mm, c[k].t50, c[k].t95, c[k].scar_max_peak);
+        assert_true(c[k].t95 > 0);
+    }
+    assert_true(c[0].t95 <= c[1].t95 && c[1].t95 <= c[2].t95); /* 0.25 <= 0.3 <= 0.5 */
+    assert_true(c[3].t95 <= c[4].t95);                         /* 0.3 <= 0.5 at 0.5 mm */
+    assert_true(fabs(c[3].t95 - c[1].t95) < 0.12 * c[1].t95);
+    /* the keloid keeps whole voxels: the 0.3 mm wound rounds as before */
+    ss_heal_params *k = ss_heal_params_preset("keloid", &err);
+    assert_false(ss_heal_wound_subvoxel(k));
+    ss_heal_params_free(k);
+    ss_heal_params_free(p);
+}
+
 /* Large wounds do not stall (issue 25): the margin advances at a rate
  * independent of the wound's size (Cukjati et al. 2001, Med Biol Eng Comput
  * 39:263), so the time to 95 % closure grows about linearly with the half
@@ -971,6 +1003,7 @@ int main(void) {
         cmocka_unit_test(test_remodelling),
         cmocka_unit_test(test_mature_scar),
         cmocka_unit_test(test_adnexa),
+        cmocka_unit_test(test_partial_depth),
         cmocka_unit_test(test_large_wound_front),
         cmocka_unit_test(test_packing_limit),
         cmocka_unit_test(test_keloid),
