@@ -175,8 +175,7 @@ static void test_grid_init(void **state) {
     assert_true(g->field[SS_HEAL_PLASMA][pc] == 0.5f * (1 + f)); /* in omega, keeps f */
     assert_true(ss_heal_in_region(g, p, pc));
     assert_true(fabsf(g->field[SS_HEAL_CAPILLARY][pc] - (1 - f) * hv[SS_HEAL_CAPILLARY]) < 1e-6f);
-    assert_true(fabsf(g->field[SS_HEAL_FIBROBLAST][pc] - (1 - f) * hv[SS_HEAL_FIBROBLAST]) <
-                1e-6f);
+    assert_true(fabsf(g->field[SS_HEAL_FIBROBLAST][pc] - (1 - f) * hv[SS_HEAL_FIBROBLAST]) < 1e-6f);
     assert_true(fabsf(g->field[SS_HEAL_OXYGEN][pc] -
                       ((1 - f) * hv[SS_HEAL_OXYGEN] + f * (float)p->u1_wound)) < 1e-6f);
     assert_true(g->field[SS_HEAL_EPITHELIUM][pc] == 0.0f && g->field[SS_HEAL_SCAR][pc] == 0.0f);
@@ -451,8 +450,8 @@ static void test_partial_depth(void **state) {
     const double depth[4] = {0.25, 0.3, 0.5, 0.3}, dx[4] = {0.25, 0.25, 0.25, 0.5};
     ss_heal_course c[5];
     for (int k = 0; k < 5; k++) {
-        ss_heal_course_opts o = {16, 10, k < 4 ? depth[k] : 0.5, k < 4 ? dx[k] : 0.5,
-                                 8, 0.05, 0, -1, 0, {0, 0}};
+        ss_heal_course_opts o = {
+            16, 10, k < 4 ? depth[k] : 0.5, k < 4 ? dx[k] : 0.5, 8, 0.05, 0, -1, 0, {0, 0}};
         assert_int_equal(ss_heal_course_run(p, &o, &c[k], &err), SS_OK);
         print_message("depth %.2f mm, voxel %.2f mm: t50 %.3f t95 %.3f peak scar %.3f\n",
                       o.depth_mm, o.dx_mm, c[k].t50, c[k].t95, c[k].scar_max_peak);

@@ -286,13 +286,13 @@ static int32_t *wound_columns(ss_heal_run *r, const geometry *gm, const wound_in
                               ss_error *err) {
     int32_t *cols;
     if (w->fp) {
-        cols = ss_heal_wound_columns_footprint(gm->n[0], gm->n[1], gm->n[2], gm->dx, gm->top,
-                                               w->fp, gm->depth, w->dimg, err);
+        cols = ss_heal_wound_columns_footprint(gm->n[0], gm->n[1], gm->n[2], gm->dx, gm->top, w->fp,
+                                               gm->depth, w->dimg, err);
     } else {
         double side = SS_HEAL_DEFAULT_WOUND_MM, lim = (gm->X < gm->Y ? gm->X : gm->Y) * 2.0 / 3.0;
         if (side > lim) side = lim;
-        cols = ss_heal_wound_columns_box(gm->n[0], gm->n[1], gm->n[2], gm->dx, gm->top, side,
-                                         side, gm->depth, err);
+        cols = ss_heal_wound_columns_box(gm->n[0], gm->n[1], gm->n[2], gm->dx, gm->top, side, side,
+                                         gm->depth, err);
         cJSON_AddStringToObject(r->wound, "builtin", "centred square");
         cJSON_AddNumberToObject(r->wound, "side_mm", side);
     }

@@ -178,9 +178,7 @@ ss_status ss_heal_grid_init_box(ss_heal_grid *g, const int goff[3], const int gd
 
 /* ---- the wound as per-column depth ranges ------------------------------------------- */
 
-double ss_heal_wound_fraction(uint8_t v) {
-    return v == 1 ? 1.0 : (double)v / SS_HEAL_WOUND_SUB;
-}
+double ss_heal_wound_fraction(uint8_t v) { return v == 1 ? 1.0 : (double)v / SS_HEAL_WOUND_SUB; }
 
 /* [top - d, top) in 1/SS_HEAL_WOUND_SUB of a level, clipped to the grid;
  * c stays 0, 0 (no wound) when nothing is left */
@@ -314,7 +312,9 @@ uint8_t *ss_heal_wound_columns_expand(const int32_t *cols, const int gdim[3], co
                               b = c[1] < (Z + 1) * s ? c[1] : (Z + 1) * s;
                 const int32_t ov = b - a;
                 m[((size_t)z * (size_t)n[1] + (size_t)y) * (size_t)n[0] + (size_t)x] =
-                    (uint8_t)(ov >= s ? 1 : ov < 2 ? 2 : ov);
+                    (uint8_t)(ov >= s  ? 1
+                              : ov < 2 ? 2
+                                       : ov);
             }
         }
     return m;
