@@ -150,17 +150,45 @@ static void test_grid_init(void **state) {
     assert_true(fabs(st.initial_area_mm2 - 16.0) < 1e-9);
     assert_true(fabs(st.open_area_mm2 - 16.0) < 1e-9);
     assert_true(fabs(st.wound_region_area_mm2 - 16.0) < 1e-9);
-    /* footprint: left half of the image, 0.6 mm deep -> voxels with centre in [3.4, 4) */
+    /* footprint: left half of the image, 0.6 mm deep -> z = 7 whole ([3.5, 4)) and
+     * z = 6 cut: its top 0.1 mm, 0.2 of the voxel, 51/256 ([D15]) */
     ss_image *fp = ss_image_create(40, 40, 1, &err);
     for (int y = 0; y < 40; y++)
         for (int x = 0; x < 20; x++) ss_image_px(fp, x, y)[0] = 1.0f;
     uint8_t *m = ss_heal_wound_from_footprint(g, 4.0, fp, 0.6, NULL, &err);
     assert_non_null(m);
-    int cnt = 0;
-    for (size_t c = 0; c < (size_t)nx * ny * g->nz; c++) cnt += m[c];
+    int cnt = 0, part = 0;
+    for (size_t c = 0; c < (size_t)nx * ny * g->nz; c++) cnt += m[c] == 1, part += m[c] > 1;
     assert_int_equal(cnt, 10 * 20 * 1); /* x 0..9, all y, z = 7 (centre 3.75) */
+    assert_int_equal(part, 10 * 20 * 1);
     assert_int_equal(m[ss_heal_idx(g, 9, 4, 7)], 1);
+    assert_int_equal(m[ss_heal_idx(g, 9, 4, 6)], 51);
+    assert_int_equal(m[ss_heal_idx(g, 9, 4, 5)], 0);
     assert_int_equal(m[ss_heal_idx(g, 10, 4, 7)], 0);
+    assert_true(fabs(ss_heal_wound_fraction(51) - 51.0 / 256) < 1e-12);
+    assert_true(ss_heal_wound_fraction(1) == 1.0 && ss_heal_wound_fraction(0) == 0.0);
+    /* the partial cell: a WOUND cell holding 0.8 of the intact tissue and 0.2 of the clot */
+    assert_int_equal(ss_heal_grid_init(g, 4.0, 0.1, m, p, &err), SS_OK);
+    const size_t pc = ss_heal_idx(g, 9, 4, 6);
+    const float f = 51.0f / 256.0f;
+    assert_int_equal(g->cell[pc], SS_CELL_WOUND);
+    assert_true(g->field[SS_HEAL_PLASMA][pc] == 0.5f * (1 + f)); /* in omega, keeps f */
+    assert_true(ss_heal_in_region(g, p, pc));
+    assert_true(fabsf(g->field[SS_HEAL_CAPILLARY][pc] - (1 - f) * hv[SS_HEAL_CAPILLARY]) < 1e-6f);
+    assert_true(fabsf(g->field[SS_HEAL_FIBROBLAST][pc] - (1 - f) * hv[SS_HEAL_FIBROBLAST]) < 1e-6f);
+    assert_true(fabsf(g->field[SS_HEAL_OXYGEN][pc] -
+                      ((1 - f) * hv[SS_HEAL_OXYGEN] + f * (float)p->u1_wound)) < 1e-6f);
+    assert_true(g->field[SS_HEAL_EPITHELIUM][pc] == 0.0f && g->field[SS_HEAL_SCAR][pc] == 0.0f);
+    /* rounded to whole levels: z = 6 is less than half wound, so only z = 7 is left */
+    int32_t *cols = ss_heal_wound_columns_footprint(nx, ny, g->nz, 0.5, 4.0, fp, 0.6, NULL, &err);
+    assert_non_null(cols);
+    assert_int_equal(cols[2 * (4 * nx + 9)], 1741);
+    assert_int_equal(cols[2 * (4 * nx + 9) + 1], 8 * 256);
+    ss_heal_wound_columns_whole(cols, (size_t)nx * ny);
+    assert_int_equal(cols[2 * (4 * nx + 9)], 7 * 256);
+    assert_int_equal(cols[2 * (4 * nx + 9) + 1], 8 * 256);
+    assert_int_equal(cols[2 * (4 * nx + 10)], cols[2 * (4 * nx + 10) + 1]);
+    free(cols);
     free(m);
     assert_null(ss_heal_wound_from_footprint(g, 4.0, fp, -1.0, NULL, &err));
     assert_int_equal(err.code, SS_ERR_INPUT);
@@ -404,6 +432,38 @@ static void test_adnexa(void **state) {
     assert_true(c[0].scar_max_peak < 0.8 * c[1].scar_max_peak);
     assert_true(c[2].t95 > 1.15 * c[0].t95);
     assert_true(c[1].t95 == c[3].t95 && c[1].scar_max_peak == c[3].scar_max_peak);
+    ss_heal_params_free(p);
+}
+
+/* Wound depth below one voxel [D15]: a 0.3 mm wound cuts its last voxel
+ * (0.5 mm voxels: 0.6 of one; 0.25 mm: one and 0.2) instead of rounding to
+ * 0.5 or 0.25 mm. Its closure lies between those of the neighbouring
+ * whole-voxel depths (0.25 and 0.5 mm at 0.25 mm voxels; 0 and 0.5 mm at
+ * 0.5 mm), and the two voxel sizes agree within 12 % in t95 (rounded to
+ * whole voxels they were 19 % apart on this wound). Clean, 10 mm wound. */
+static void test_partial_depth(void **state) {
+    (void)state;
+    ss_error err;
+    ss_heal_params *p = ss_heal_params_preset("clean", &err);
+    assert_non_null(p);
+    assert_true(ss_heal_wound_subvoxel(p));
+    const double depth[4] = {0.25, 0.3, 0.5, 0.3}, dx[4] = {0.25, 0.25, 0.25, 0.5};
+    ss_heal_course c[5];
+    for (int k = 0; k < 5; k++) {
+        ss_heal_course_opts o = {
+            16, 10, k < 4 ? depth[k] : 0.5, k < 4 ? dx[k] : 0.5, 8, 0.05, 0, -1, 0, {0, 0}};
+        assert_int_equal(ss_heal_course_run(p, &o, &c[k], &err), SS_OK);
+        print_message("depth %.2f mm, voxel %.2f mm: t50 %.3f t95 %.3f peak scar %.3f\n",
+                      o.depth_mm, o.dx_mm, c[k].t50, c[k].t95, c[k].scar_max_peak);
+        assert_true(c[k].t95 > 0);
+    }
+    assert_true(c[0].t95 <= c[1].t95 && c[1].t95 <= c[2].t95); /* 0.25 <= 0.3 <= 0.5 */
+    assert_true(c[3].t95 <= c[4].t95);                         /* 0.3 <= 0.5 at 0.5 mm */
+    assert_true(fabs(c[3].t95 - c[1].t95) < 0.12 * c[1].t95);
+    /* the keloid keeps whole voxels: the 0.3 mm wound rounds as before */
+    ss_heal_params *k = ss_heal_params_preset("keloid", &err);
+    assert_false(ss_heal_wound_subvoxel(k));
+    ss_heal_params_free(k);
     ss_heal_params_free(p);
 }
 
@@ -942,6 +1002,7 @@ int main(void) {
         cmocka_unit_test(test_remodelling),
         cmocka_unit_test(test_mature_scar),
         cmocka_unit_test(test_adnexa),
+        cmocka_unit_test(test_partial_depth),
         cmocka_unit_test(test_large_wound_front),
         cmocka_unit_test(test_packing_limit),
         cmocka_unit_test(test_keloid),

@@ -178,7 +178,13 @@ size_t ss_heal_grid_bytes(int nx, int ny, int nz);
 static inline size_t ss_heal_idx(const ss_heal_grid *g, int x, int y, int z) {
     return ((size_t)z * (size_t)g->ny + (size_t)y) * (size_t)g->nx + (size_t)x;
 }
-/* wound3d: nx*ny*nz bytes, 1 = wound voxel (tissue removed, filled by clot).
+/* wound3d: nx*ny*nz bytes, 0 = intact, 1 = wound voxel (tissue removed, filled
+ * by clot), 2..255 = a partial wound voxel whose wounded fraction is
+ * v / SS_HEAL_WOUND_SUB (the last voxel of a depth that is not a multiple of
+ * the voxel, docs/heal-model.md [D15]); it is a WOUND cell whose intact share
+ * (1 - f) starts with the healthy oxygen, capillaries and fibroblasts and its
+ * wounded share f with the clot's oxygen (epithelium 0, plasma (1 + f) / 2:
+ * in omega, and the record of f in a static region).
  * Sets cell states (BOUND on the outermost voxel shell, AIR above skin_top_mm,
  * EPIDERMIS in the voxels reaching into the top epidermis_mm of the skin (at
  * least the surface voxel, which then holds a thinner epidermis as a sheet),
@@ -197,8 +203,14 @@ ss_status ss_heal_grid_init(ss_heal_grid *g, double skin_top_mm, double epidermi
 ss_status ss_heal_grid_init_box(ss_heal_grid *g, const int goff[3], const int gdim[3],
                                 double skin_top_mm, double epidermis_mm, const uint8_t *wound3d,
                                 const ss_heal_params *p, ss_error *err);
-/* The wound of a footprint or the built-in box as per-column level ranges:
- * 2 x nx*ny int32 (column y*nx + x: first wound level, one past the last;
+/* Sub-voxel wound depth: mask bytes 2..255 are fractions v / SS_HEAL_WOUND_SUB
+ * of a voxel; column ranges are in 1/SS_HEAL_WOUND_SUB of a level. */
+#define SS_HEAL_WOUND_SUB 256
+/* The wounded fraction of a wound3d byte: 0, 1 for 1, v / SS_HEAL_WOUND_SUB. */
+double ss_heal_wound_fraction(uint8_t v);
+/* The wound of a footprint or the built-in box as per-column ranges: 2 x
+ * nx*ny int32 (column y*nx + x: the start and end of the wound in depth, the
+ * depth range [skin_top - depth, skin_top) in 1/SS_HEAL_WOUND_SUB of a level;
  * equal = no wound), 1/nz of the 3D mask, so the MPI driver can hand it to
  * every rank. Arguments and errors as ss_heal_wound_from_footprint and
  * ss_heal_wound_box below (which expand these over the whole grid). */
@@ -208,14 +220,23 @@ int32_t *ss_heal_wound_columns_footprint(int nx, int ny, int nz, double dx_mm, d
 int32_t *ss_heal_wound_columns_box(int nx, int ny, int nz, double dx_mm, double skin_top_mm,
                                    double side_x_mm, double side_y_mm, double depth_mm,
                                    ss_error *err);
+/* Rounds ncol column ranges to whole levels: the levels at least half inside
+ * (whose centre lies in the range), the wound before [D15]; the keloid and
+ * the mechanics use it (docs/heal-model.md [D15]). */
+void ss_heal_wound_columns_whole(int32_t *cols, size_t ncol);
+/* 1 when the wound under params p may have partial cells: a static region
+ * (its frozen plasma keeps each cell's wounded fraction, which the adnexa's
+ * depth reads) and no keloid; 0 = round with ss_heal_wound_columns_whole. */
+int ss_heal_wound_subvoxel(const ss_heal_params *p);
 /* The n[0] x n[1] x n[2] mask of the box at whole-grid index lo (may reach
- * past the grid by a halo: 0 there) from column ranges of a gdim grid. */
+ * past the grid by a halo: 0 there) from column ranges of a gdim grid; a
+ * level the range cuts gets its wounded fraction (2..255, see wound3d). */
 uint8_t *ss_heal_wound_columns_expand(const int32_t *cols, const int gdim[3], const int lo[3],
                                       const int n[3], ss_error *err);
 /* A footprint (1-channel image, value > 0.5 = wound, mapped onto x,y over the
  * whole grid, image row 0 at y = ny-1) cut to depth_mm (or the per-pixel depth
  * of depth_mm_img, 1 channel in mm, if non-NULL) below the surface; returns the
- * malloc'd wound3d mask. */
+ * malloc'd wound3d mask (the voxel the wound's floor cuts is partial). */
 uint8_t *ss_heal_wound_from_footprint(const ss_heal_grid *g, double skin_top_mm,
                                       const ss_image *footprint, double depth_mm,
                                       const ss_image *depth_mm_img, ss_error *err);

@@ -272,7 +272,36 @@ static ss_status mesh_outside(const ss_heal_run_config *c, const geometry *gm, s
                         c->wound_mesh, gm->X, gm->Y, gm->Z);
 }
 
-/* The nx*ny*nz wound mask (1 = wound voxel) on r->g; NULL with err set. */
+/* The keloid, an evolving region and the mechanics keep whole-voxel depths
+ * (docs/heal-model.md [D15]): the mechanics' wound springs read the WOUND
+ * state, not a partial cell's intact share, and its velocity carries the
+ * plasma that records the fraction. */
+static int whole_voxels(const ss_heal_run *r) {
+    return r->c.mechanics || !ss_heal_wound_subvoxel(r->p);
+}
+
+/* The wound of a footprint or the built-in square as column ranges
+ * (rounded to whole levels where whole_voxels); NULL with err set. */
+static int32_t *wound_columns(ss_heal_run *r, const geometry *gm, const wound_inputs *w,
+                              ss_error *err) {
+    int32_t *cols;
+    if (w->fp) {
+        cols = ss_heal_wound_columns_footprint(gm->n[0], gm->n[1], gm->n[2], gm->dx, gm->top, w->fp,
+                                               gm->depth, w->dimg, err);
+    } else {
+        double side = SS_HEAL_DEFAULT_WOUND_MM, lim = (gm->X < gm->Y ? gm->X : gm->Y) * 2.0 / 3.0;
+        if (side > lim) side = lim;
+        cols = ss_heal_wound_columns_box(gm->n[0], gm->n[1], gm->n[2], gm->dx, gm->top, side, side,
+                                         gm->depth, err);
+        cJSON_AddStringToObject(r->wound, "builtin", "centred square");
+        cJSON_AddNumberToObject(r->wound, "side_mm", side);
+    }
+    if (cols && whole_voxels(r)) ss_heal_wound_columns_whole(cols, (size_t)gm->n[0] * gm->n[1]);
+    return cols;
+}
+
+/* The nx*ny*nz wound mask (0 intact, 1 wound voxel, 2..255 partial) on r->g;
+ * NULL with err set. */
 static uint8_t *wound_volume(ss_heal_run *r, const geometry *gm, const wound_inputs *w,
                              ss_error *err) {
     const ss_heal_run_config *c = &r->c;
@@ -286,14 +315,11 @@ static uint8_t *wound_volume(ss_heal_run *r, const geometry *gm, const wound_inp
             return NULL;
         }
         if (w3) cJSON_AddNumberToObject(r->wound, "voxels", (double)cnt);
-    } else if (w->fp) {
-        w3 = ss_heal_wound_from_footprint(r->g, gm->top, w->fp, gm->depth, w->dimg, err);
     } else {
-        double side = SS_HEAL_DEFAULT_WOUND_MM, lim = (gm->X < gm->Y ? gm->X : gm->Y) * 2.0 / 3.0;
-        if (side > lim) side = lim;
-        w3 = ss_heal_wound_box(r->g, gm->top, side, side, gm->depth, err);
-        cJSON_AddStringToObject(r->wound, "builtin", "centred square");
-        cJSON_AddNumberToObject(r->wound, "side_mm", side);
+        int32_t *cols = wound_columns(r, gm, w, err);
+        const int lo[3] = {0, 0, 0};
+        if (cols) w3 = ss_heal_wound_columns_expand(cols, gm->n, lo, gm->n, err);
+        free(cols);
     }
     if (!w3) return NULL;
     /* the wound must reach at least one voxel under the skin surface */
@@ -373,17 +399,7 @@ static ss_status setup_distributed(ss_heal_run *r, const geometry *gm, wound_inp
         memset(&w->mesh, 0, sizeof w->mesh);
         return SS_OK;
     }
-    if (w->fp) {
-        r->wcols = ss_heal_wound_columns_footprint(gm->n[0], gm->n[1], gm->n[2], gm->dx, gm->top,
-                                                   w->fp, gm->depth, w->dimg, err);
-    } else {
-        double side = SS_HEAL_DEFAULT_WOUND_MM, lim = (gm->X < gm->Y ? gm->X : gm->Y) * 2.0 / 3.0;
-        if (side > lim) side = lim;
-        r->wcols = ss_heal_wound_columns_box(gm->n[0], gm->n[1], gm->n[2], gm->dx, gm->top, side,
-                                             side, gm->depth, err);
-        cJSON_AddStringToObject(r->wound, "builtin", "centred square");
-        cJSON_AddNumberToObject(r->wound, "side_mm", side);
-    }
+    r->wcols = wound_columns(r, gm, w, err);
     if (!r->wcols) return err->code ? err->code : SS_ERR_RUNTIME;
     /* every level of a range lies under the skin surface */
     for (size_t k = 0; k < (size_t)gm->n[0] * (size_t)gm->n[1]; k++)

@@ -110,7 +110,13 @@ ss_status ss_heal_course_run(const ss_heal_params *p, const ss_heal_course_opts 
     int n = (int)lround(o->block_mm / dx), nz = (int)lround(4.0 / dx);
     ss_heal_grid *g = ss_heal_grid_create(n, n, nz, dx, err);
     if (!g) return err->code;
-    uint8_t *w = ss_heal_wound_box(g, top, o->wound_mm, o->wound_mm, o->depth_mm, err);
+    /* the keloid keeps whole-voxel depths (docs/heal-model.md [D15]) */
+    int32_t *cols =
+        ss_heal_wound_columns_box(n, n, nz, dx, top, o->wound_mm, o->wound_mm, o->depth_mm, err);
+    if (cols && !ss_heal_wound_subvoxel(p)) ss_heal_wound_columns_whole(cols, (size_t)n * n);
+    const int gdim[3] = {n, n, nz}, lo[3] = {0, 0, 0};
+    uint8_t *w = cols ? ss_heal_wound_columns_expand(cols, gdim, lo, gdim, err) : NULL;
+    free(cols);
     ss_status st =
         w ? ss_heal_grid_init(g, top, SS_HEAL_DEFAULT_EPIDERMIS_MM, w, p, err) : err->code;
     free(w);

@@ -3,7 +3,12 @@
  * bound shell) and the eight species fields of §4.1 as float32 arrays. Builds
  * the wound mask from a footprint + depth (or a box), initialises states and
  * fields (healthy values, wound values, the two-voxel epithelial layer on top
- * of the skin), and computes the diagnostics behind area.csv. */
+ * of the skin), and computes the diagnostics behind area.csv.
+ * Sub-voxel depth (docs/heal-model.md [D15]): the column ranges are kept in
+ * 1/SS_HEAL_WOUND_SUB of a level and the mask byte is the wounded fraction
+ * of its voxel (1 = whole, 2..255 = v/256), so a depth that is not a
+ * multiple of the voxel cuts its last voxel instead of rounding to whole
+ * voxels; whole-voxel depths give the masks and fields they gave before. */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdlib.h>
@@ -134,7 +139,7 @@ ss_status ss_heal_grid_init_box(ss_heal_grid *g, const int goff[3], const int gd
                 else if (Z >= top)
                     s = SS_CELL_AIR;
                 else if (wound3d && wound3d[c])
-                    s = SS_CELL_WOUND;
+                    s = SS_CELL_WOUND; /* whole or partial */
                 else if (Z >= top - nepi)
                     s = SS_CELL_EPIDERMIS;
                 else
@@ -146,9 +151,23 @@ ss_status ss_heal_grid_init_box(ss_heal_grid *g, const int goff[3], const int gd
                     for (int f = 0; f < SS_HEAL_NFIELDS; f++) v[f] = hv[f];
                     /* the intact epidermis (§5.1's layer on top of the skin, in mm) */
                     if (Z >= top - nepi) v[SS_HEAL_EPITHELIUM] = 1.0f;
-                } else if (s == SS_CELL_WOUND) {
+                } else if (s == SS_CELL_WOUND && wound3d[c] == 1) {
                     v[SS_HEAL_OXYGEN] = (float)p->u1_wound;
                     v[SS_HEAL_PLASMA] = 1.0f;
+                } else if (s == SS_CELL_WOUND) {
+                    /* a partial cell: its intact share (1 - f) keeps the healthy
+                     * tissue's oxygen, capillaries and fibroblasts, its wounded
+                     * share f the clot's oxygen. No epithelium: the wound opened
+                     * the surface sheet (an e of 1 - f would count that share of
+                     * the wound as covered at t = 0). Plasma (1 + f) / 2: in
+                     * omega like every cell the wound cuts (p enters the model
+                     * only through omega), and the record of f that the adnexa's
+                     * depth reads ([D15]) */
+                    const float f = (float)ss_heal_wound_fraction(wound3d[c]);
+                    for (int k = 0; k < SS_HEAL_NFIELDS; k++) v[k] = (1.0f - f) * hv[k];
+                    v[SS_HEAL_EPITHELIUM] = 0.0f;
+                    v[SS_HEAL_OXYGEN] += f * (float)p->u1_wound;
+                    v[SS_HEAL_PLASMA] = 0.5f * (1.0f + f);
                 }
                 for (int f = 0; f < SS_HEAL_NFIELDS; f++) g->field[f][c] = v[f];
             }
@@ -158,6 +177,34 @@ ss_status ss_heal_grid_init_box(ss_heal_grid *g, const int goff[3], const int gd
 }
 
 /* ---- the wound as per-column depth ranges ------------------------------------------- */
+
+double ss_heal_wound_fraction(uint8_t v) { return v == 1 ? 1.0 : (double)v / SS_HEAL_WOUND_SUB; }
+
+/* [top - d, top) in 1/SS_HEAL_WOUND_SUB of a level, clipped to the grid;
+ * c stays 0, 0 (no wound) when nothing is left */
+static void sub_range(int nz, double dx_mm, double top_mm, double d, int32_t c[2]) {
+    const double s = SS_HEAL_WOUND_SUB, full = (double)nz * s;
+    double lo = floor((top_mm - d) / dx_mm * s + 0.5), hi = floor(top_mm / dx_mm * s + 0.5);
+    lo = lo < 0 ? 0 : lo;
+    hi = hi > full ? full : hi;
+    if (hi > lo) c[0] = (int32_t)lo, c[1] = (int32_t)hi;
+}
+
+int ss_heal_wound_subvoxel(const ss_heal_params *p) {
+    return p && p->static_region && !(p->lamkrho > 0);
+}
+
+void ss_heal_wound_columns_whole(int32_t *cols, size_t ncol) {
+    const int32_t s = SS_HEAL_WOUND_SUB, h = SS_HEAL_WOUND_SUB / 2;
+    for (size_t i = 0; i < ncol; i++) {
+        int32_t *c = cols + 2 * i;
+        if (c[1] <= c[0]) continue;
+        /* the levels that are at least half wound (centre inside the range) */
+        const int32_t lo = (c[0] + h - 1) / s, hi = (c[1] + h) / s;
+        c[0] = hi > lo ? lo * s : 0;
+        c[1] = hi > lo ? hi * s : 0;
+    }
+}
 
 int32_t *ss_heal_wound_columns_footprint(int nx, int ny, int nz, double dx_mm, double skin_top_mm,
                                          const ss_image *footprint, double depth_mm,
@@ -206,17 +253,7 @@ int32_t *ss_heal_wound_columns_footprint(int nx, int ny, int nz, double dx_mm, d
                     return NULL;
                 }
             }
-            /* the levels whose centre lies in [top - d, top): one run per column */
-            double bottom = skin_top_mm - d;
-            int32_t *c = cols + 2 * ((size_t)y * (size_t)nx + (size_t)x), lo = -1, hi = -1;
-            for (int z = 0; z < nz; z++) {
-                double zc = (z + 0.5) * dx_mm;
-                if (zc < skin_top_mm && zc >= bottom) {
-                    if (lo < 0) lo = z;
-                    hi = z + 1;
-                }
-            }
-            if (lo >= 0) c[0] = lo, c[1] = hi;
+            sub_range(nz, dx_mm, skin_top_mm, d, cols + 2 * ((size_t)y * (size_t)nx + (size_t)x));
         }
     }
     return cols;
@@ -235,16 +272,11 @@ int32_t *ss_heal_wound_columns_box(int nx, int ny, int nz, double dx_mm, double 
         ss_error_set(err, SS_ERR_NOMEM, "wound box: out of memory");
         return NULL;
     }
-    int lo = -1, hi = -1;
-    for (int z = 0; z < nz; z++) {
-        double zc = (z + 0.5) * dx_mm;
-        if (zc < skin_top_mm && zc >= skin_top_mm - depth_mm) {
-            if (lo < 0) lo = z;
-            hi = z + 1;
-        }
-    }
+    int32_t r[2] = {0, 0};
+    sub_range(nz, dx_mm, skin_top_mm, depth_mm, r);
+    const int32_t lo = r[0], hi = r[1];
     double cx = 0.5 * nx * dx_mm, cy = 0.5 * ny * dx_mm;
-    for (int y = 0; lo >= 0 && y < ny; y++) {
+    for (int y = 0; hi > lo && y < ny; y++) {
         double yc = (y + 0.5) * dx_mm;
         if (fabs(yc - cy) >= 0.5 * side_y_mm) continue;
         for (int x = 0; x < nx; x++) {
@@ -270,10 +302,19 @@ uint8_t *ss_heal_wound_columns_expand(const int32_t *cols, const int gdim[3], co
             const int X = x + lo[0], Y = y + lo[1];
             if (X < 0 || Y < 0 || X >= gdim[0] || Y >= gdim[1]) continue;
             const int32_t *c = cols + 2 * ((size_t)Y * (size_t)gdim[0] + (size_t)X);
-            for (int Z = c[0]; Z < c[1]; Z++) {
+            const int32_t s = SS_HEAL_WOUND_SUB;
+            if (c[1] <= c[0]) continue;
+            for (int Z = c[0] / s; Z <= (c[1] - 1) / s; Z++) {
                 const int z = Z - lo[2];
-                if (z >= 0 && z < n[2])
-                    m[((size_t)z * (size_t)n[1] + (size_t)y) * (size_t)n[0] + (size_t)x] = 1;
+                if (z < 0 || z >= n[2]) continue;
+                /* the level's wounded share in 1/s: whole = 1, a sliver >= 2 */
+                const int32_t a = c[0] > Z * s ? c[0] : Z * s,
+                              b = c[1] < (Z + 1) * s ? c[1] : (Z + 1) * s;
+                const int32_t ov = b - a;
+                m[((size_t)z * (size_t)n[1] + (size_t)y) * (size_t)n[0] + (size_t)x] =
+                    (uint8_t)(ov >= s  ? 1
+                              : ov < 2 ? 2
+                                       : ov);
             }
         }
     return m;

@@ -51,6 +51,10 @@ typedef struct model_ctx {
     float kel_h;        /* keloid_mm / voxel: the keloid's depth in voxel levels [D12] */
     int scab, static_region;
     const uint8_t *cell;
+    /* the frozen plasma of a static region without a velocity: a partial
+     * wound cell's wounded fraction f, which the adnexa's depth reads [D15]
+     * (NULL: every WOUND cell counts whole) */
+    const float *pfrac;
     int nx, ny, nz;
     /* per column (y * nx + x): surface cell z (-1: none), gathered surface
      * epithelium and wound-bed capillary density */
@@ -247,6 +251,13 @@ static void heal_react(void *vctx, const ss_heal_rd_row *row) {
 static int is_tissue(uint8_t c) { return c != SS_CELL_AIR && c != SS_CELL_BOUND; }
 
 /* Surface cell of every column: the topmost tissue cell inside the bounds. */
+/* The plasma is a record of the wound's fraction only while it is frozen
+ * (static region) and not carried by a velocity (the mechanics). */
+static void surface_inputs(model_ctx *c, const ss_heal_grid *g) {
+    const int vel = g->velocity[0] || g->velocity[1] || g->velocity[2];
+    c->pfrac = c->static_region && !vel ? g->field[SS_HEAL_PLASMA] : NULL;
+}
+
 static void find_surface(model_ctx *c) {
     const int nx = c->nx, ny = c->ny, nz = c->nz;
     for (int y = 0; y < ny; y++)
@@ -283,13 +294,19 @@ static void find_surface(model_ctx *c) {
     const size_t ncol = (size_t)nx * ny;
     /* adnexal remnants [D11]: the column's wound depth from the lowest WOUND
      * level (whole-grid, the maximum of its negative over a z stack); kept in
-     * ds, which prepare recomputes before it is read */
+     * ds, which prepare recomputes before it is read. A partial lowest cell
+     * [D15] is wound only in its top f: the floor lies 1 - f above its bottom
+     * (f = 1 in a whole cell: the same float as before) */
     if (c->kadn > 0.0f) {
         for (size_t i = 0; i < ncol; i++) {
             float lo = -1e30f;
             for (int z = 1; z <= nz - 2; z++)
                 if (c->cell[(size_t)z * ncol + i] == SS_CELL_WOUND) {
-                    lo = -(float)(z + c->zoff);
+                    /* p = (1 + f) / 2 in a partial cell, 1 in a whole one */
+                    const float f =
+                        c->pfrac ? clampf(2.0f * c->pfrac[(size_t)z * ncol + i] - 1.0f, 0.0f, 1.0f)
+                                 : 1.0f;
+                    lo = -(float)(z + c->zoff) - (1.0f - f);
                     break;
                 }
             c->ds[i] = lo;
@@ -339,9 +356,9 @@ static inline void bed_seg(float d0, float d1, float v0, float v1, float om, flo
     const float v = v0 + (v1 - v0) * (0.5f * (lo + hi) - d0) / (d1 - d0);
     *bed += (hi - lo) * v;
     *ws += hi - lo;
-    if (om > 0.0f) {
-        *bo += (hi - lo) * v;
-        *wo += hi - lo;
+    if (om > 0.0f) { /* om < 1: a partial wound cell's share [D15] (1 x: exact) */
+        *bo += om * (hi - lo) * v;
+        *wo += om * (hi - lo);
     }
 }
 
@@ -355,14 +372,17 @@ static inline void bed_seg(float d0, float d1, float v0, float v1, float om, flo
 static inline void bed_level(const int *zt, const float *ds, const float *Ur, const float *Sr,
                              const float *Pr, const uint8_t *Cr, float *bed, float *ws, float *bo,
                              float *wo, float *cu, float *cs, float *co, float *ch, int nx, int z,
-                             float h, float bedmm) {
+                             float h, float bedmm, int frac) {
     const float pmin = (float)SS_HEAL_P_MIN;
     for (int x = 0; x < nx; x++) {
         const int k = zt[x] - z;
         if (k < 0) continue;
         const float a = ds[x], b = ds[x] + bedmm;
         const int tis = Cr[x] != SS_CELL_AIR && Cr[x] != SS_CELL_BOUND;
-        const float u = Ur[x], sk = Sr[x], om = (float)(Pr[x] > pmin);
+        /* omega's weight: a partial wound cell (frozen p = (1 + f) / 2) is
+         * granulation tissue in its wounded share f only [D15] */
+        const float u = Ur[x], sk = Sr[x],
+                    om = frac ? clampf(2.0f * Pr[x] - 1.0f, 0.0f, 1.0f) : (float)(Pr[x] > pmin);
         const float top = k * h, mid = top + 0.5f * h;
         float fk = u; /* the interpolant at voxel k's top face, seen from k */
         if (ch[x] > 0.0f) {
@@ -472,7 +492,7 @@ static void heal_prepare(void *vctx, float *const *u) {
         for (int z = zhi; z >= zlo; z--) {
             const size_t o = (size_t)z * sz + r0;
             bed_level(zt, ds, U3 + o, S + o, P + o, c->cell + o, bed, ws, bo, wo, cu, cs, co, ch,
-                      nx, z, h, bedmm);
+                      nx, z, h, bedmm, c->pfrac != NULL);
         }
         bed_flush(zt, ds, bed, ws, bo, wo, cu, co, ch, nx, zlo, h, bedmm);
         for (int x = 0; x < nx; x++) {
@@ -548,7 +568,7 @@ static void heal_prepare_z(model_ctx *c, float *const *u) {
         for (int z = zhi < own_hi ? zhi : own_hi; z >= zlo; z--) {
             const size_t o = (size_t)(z - zoff) * sz + r0;
             bed_level(zt, ds, U3 + o, S + o, P + o, c->cell + o, bed, ws, bo, wo, cu, cs, co, ch,
-                      nx, z, h, bedmm);
+                      nx, z, h, bedmm, c->pfrac != NULL);
         }
         if (own_lo > 0) continue; /* the bottom box (global level 1 inside) finishes */
         bed_flush(zt, ds, bed, ws, bo, wo, cu, co, ch, nx, zend, h, bedmm);
@@ -592,6 +612,7 @@ static void ctx_init(model_ctx *c, const ss_heal_params *p, const ss_heal_grid *
     c->scab = p->scab;
     c->static_region = p->static_region;
     c->cell = g->cell;
+    surface_inputs(c, g);
     c->nx = g->nx;
     c->ny = g->ny;
     c->nz = g->nz;
@@ -891,6 +912,7 @@ ss_status ss_heal_step_phase(ss_heal_solver *s, ss_heal_grid *g, int phase, ss_e
     if (g->nx != s->nx || g->ny != s->ny || g->nz != s->nz)
         return ss_error_set(err, SS_ERR_INPUT, "heal step phase: grid does not match the solver");
     s->ctx.cell = g->cell;
+    surface_inputs(&s->ctx, g);
     s->sys.cls = g->cell;
     if (s->ctx.ztop_of != g->cell) find_surface(&s->ctx);
     s->ctx.kact = keloid_signal(&s->p, g->t_days, s->dt);
@@ -922,6 +944,7 @@ static ss_status step_begin(ss_heal_solver *s, ss_heal_grid *g, ss_error *err) {
                             "heal step: grid %dx%dx%d does not match the solver's %dx%dx%d", g->nx,
                             g->ny, g->nz, s->nx, s->ny, s->nz);
     s->ctx.cell = g->cell;
+    surface_inputs(&s->ctx, g);
     s->sys.cls = g->cell;
     if (s->ctx.ztop_of != g->cell) find_surface(&s->ctx);
     s->ctx.kact = keloid_signal(&s->p, g->t_days, s->dt);
