@@ -167,6 +167,23 @@ typedef struct wrinkle_flat {
     float x[FLAT + 1], y[FLAT + 1];
 } wrinkle_flat;
 
+/* Whether (px, py) lies within r of one of the listed segments of a
+ * flattened wrinkle (squared distances, so no square root per texel). */
+static int near_segments(const wrinkle_flat *wf, const int *seg, int nseg, float px, float py,
+                         float r) {
+    for (int k = 0; k < nseg; k++) {
+        const int i = seg[k];
+        const float ax = wf->x[i], ay = wf->y[i];
+        const float dx = wf->x[i + 1] - ax, dy = wf->y[i + 1] - ay;
+        const float l2 = dx * dx + dy * dy;
+        float t = l2 > 0.0f ? ((px - ax) * dx + (py - ay) * dy) / l2 : 0.0f;
+        t = t < 0.0f ? 0.0f : t > 1.0f ? 1.0f : t;
+        const float ex = ax + t * dx - px, ey = ay + t * dy - py;
+        if (ex * ex + ey * ey <= r * r) return 1;
+    }
+    return 0;
+}
+
 /* What the texel pass shares: the mottling, the relief network, fields. */
 typedef struct texel_ctx {
     const ss_skin_settings *s;
@@ -285,10 +302,12 @@ static void apply_feature(const ss_skin_settings *s, const ss_skin_feature *f, u
             const double v = (y + 0.5) / size;
             const float fv = (float)(v - oy);
             float xmin = INFINITY, xmax = -INFINITY;
+            int seg[FLAT], nseg = 0;
             for (int i = 0; i < FLAT; i++) {
                 float ya = fminf(wf->y[i], wf->y[i + 1]) - R,
                       yb = fmaxf(wf->y[i], wf->y[i + 1]) + R;
                 if (fv < ya || fv > yb) continue;
+                seg[nseg++] = i;
                 xmin = fminf(xmin, fminf(wf->x[i], wf->x[i + 1]) - R);
                 xmax = fmaxf(xmax, fmaxf(wf->x[i], wf->x[i + 1]) + R);
             }
@@ -298,6 +317,11 @@ static void apply_feature(const ss_skin_settings *s, const ss_skin_feature *f, u
             if (xb > x1) xb = x1;
             for (int x = xa; x <= xb; x++) {
                 const double u = (x + 0.5) / size;
+                /* a texel farther than the reach from every flattened
+                 * segment of this row is farther than the width from the
+                 * curve (the same bound as the boxes; 1 % slack for float
+                 * rounding): skip the golden section */
+                if (!near_segments(wf, seg, nseg, (float)(u - ox), fv, R * 1.01f)) continue;
                 double t;
                 double dist = skin_bezier3_distance_prep(&bq, u - ox, v - oy, 8, 2e-3,
                                                          f->w / mm_per_unit, &t) *
