@@ -138,7 +138,8 @@ bad_cases=(
     "--stroke $T/nan.csv"
     "--stroke $T/two.csv"
     "--wound-depth-mm 9"
-    "--wound-depth-mm 0.1"
+    "--wound-depth-mm 0.1 --scenario keloid"
+    "--wound-depth-mm 0.1 --mechanics"
     "--wound-mesh $T/above.obj"
     "--stroke $T/s.csv --wound-mesh $T/cube.obj"
     "--threads -3"
@@ -155,6 +156,10 @@ for args in "${bad_cases[@]}"; do
     [ -s "$T/err.txt" ] || fail "'$args' printed no error message"
     [ ! -e "$T/bad" ] || fail "'$args' left $T/bad behind"
 done
+# a wound shallower than one voxel is a partial cell ([D15]); the keloid and
+# --mechanics keep whole voxels and refuse it (above)
+"$CLI" heal --size-mm 10,10,4 --wound-depth-mm 0.1 --days 0.2 --snapshot-every 0 --quiet \
+    --out "$T/shallow" || fail "a 0.1 mm wound on 0.5 mm voxels was refused"
 # --- adaptive steps (the default with the split scheme): a long run takes far
 # fewer solver steps than days / dt, and lands on every snapshot day
 "$CLI" heal --grid 24x20x8 --days 60 --snapshot-every 20 --quiet --out "$T/long" ||
