@@ -49,6 +49,7 @@
 #include <string.h>
 
 #include "skinsim/mech.h"
+#include "mat3.h"
 
 typedef struct mat {
     double mu, K, k1, k2, kappa;
@@ -226,17 +227,7 @@ static double det3(const double *F) {
 }
 
 /* cofactor matrix (J F^-T) */
-static void cof3(const double *F, double *C) {
-    C[0] = F[4] * F[8] - F[5] * F[7];
-    C[1] = F[5] * F[6] - F[3] * F[8];
-    C[2] = F[3] * F[7] - F[4] * F[6];
-    C[3] = F[2] * F[7] - F[1] * F[8];
-    C[4] = F[0] * F[8] - F[2] * F[6];
-    C[5] = F[1] * F[6] - F[0] * F[7];
-    C[6] = F[1] * F[5] - F[2] * F[4];
-    C[7] = F[2] * F[3] - F[0] * F[5];
-    C[8] = F[0] * F[4] - F[1] * F[3];
-}
+static void cof3(const double *F, double *C) { (void)mat3_cofactors(F, C); }
 
 /* W(F) of the GOH law (fibres when fib), P = dW/dF and H = d2W/dF2 (81,
  * H[(3i+j)*9 + 3k+l]); P, H may be NULL. s adds the active energy s J. */

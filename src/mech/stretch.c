@@ -32,6 +32,7 @@
 #include <string.h>
 
 #include "skinsim/mech.h"
+#include "mat3.h"
 
 void ss_mech_stretch_config_default(ss_mech_stretch_config *c) {
     memset(c, 0, sizeof *c);
@@ -116,19 +117,6 @@ static int solve5(double A[5][5], double b[5]) {
     return 1;
 }
 
-/* the cofactor matrix of A (row-major; A^-T = c / det A); returns det A */
-static double cofactors(const double A[9], double c[9]) {
-    c[0] = A[4] * A[8] - A[5] * A[7];
-    c[1] = A[5] * A[6] - A[3] * A[8];
-    c[2] = A[3] * A[7] - A[4] * A[6];
-    c[3] = A[2] * A[7] - A[1] * A[8];
-    c[4] = A[0] * A[8] - A[2] * A[6];
-    c[5] = A[1] * A[6] - A[0] * A[7];
-    c[6] = A[1] * A[5] - A[2] * A[4];
-    c[7] = A[2] * A[3] - A[0] * A[5];
-    c[8] = A[0] * A[4] - A[1] * A[3];
-    return A[0] * c[0] + A[1] * c[1] + A[2] * c[2];
-}
 
 /* From F in the frame (axis, t1, t2): the lateral stretches, i.e. the
  * distance of the opposite lateral faces over the reference one (1 / |F^-T
@@ -136,7 +124,7 @@ static double cofactors(const double A[9], double c[9]) {
  * axial displacement grows across the block; with F e_a along e_a a
  * rotation about the axis leaves them alone too) */
 static void lateral_shear(const double F[9], double lat[2], double shear[2]) {
-    double c[9], J = cofactors(F, c);
+    double c[9], J = mat3_cofactors(F, c);
     for (int k = 0; k < 2; k++) {
         const double *r = c + 3 * (k + 1);
         lat[k] = fabs(J) / sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
@@ -228,7 +216,7 @@ static void mean_F(const ss_tetmesh *m, const double *x, int ax, double Fm[9]) {
                 D[3 * i + k] = m->x[3 * v[k + 1] + pm[i]] - m->x[3 * v[0] + pm[i]];
                 d[3 * i + k] = x[3 * v[k + 1] + pm[i]] - x[3 * v[0] + pm[i]];
             }
-        double c[9], det = cofactors(D, c);
+        double c[9], det = mat3_cofactors(D, c);
         /* F = d D^-1, D^-1 = c^T / det; weighted by the volume det/6: sum d c^T / 6 */
         for (int i = 0; i < 3; i++)
             for (int j = 0; j < 3; j++)
