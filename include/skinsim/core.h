@@ -375,13 +375,12 @@ void ss_progress_end(ss_progress *p);
  * ss_skin_generate_poll, ss_skin_bio_maps_poll, ss_skin_render_maps_poll,
  * ss_abrasion_frame_poll, ss_wound_render_poll). fn(user, fraction) is
  * called from the calling thread only, outside any parallel region, between
- * bands of rows (or between a call's stages or feature types), with the fraction done (0..1, rising). A
- * non-zero return stops the call at that point: it frees what it allocated
- * and returns SS_ERR_RUNTIME with the message "...: cancelled"; images it
- * would have allocated are not returned, and images the caller passed in
- * for the output are partly written (their contents are unspecified). fn
- * NULL: never polled. Results of calls that are not cancelled do not depend
- * on fn. */
+ * bands of rows (or between a call's stages or feature types), with the fraction done (0..1,
+ * rising). A non-zero return stops the call at that point: it frees what it allocated and returns
+ * SS_ERR_RUNTIME with the message "...: cancelled"; images it would have allocated are not
+ * returned, and images the caller passed in for the output are partly written (their contents are
+ * unspecified). fn NULL: never polled. Results of calls that are not cancelled do not depend on fn.
+ */
 typedef int (*ss_progress_fn)(void *user, double fraction);
 
 /* Physical memory of this machine in bytes (0 if unknown): what commands

@@ -117,7 +117,6 @@ static int solve5(double A[5][5], double b[5]) {
     return 1;
 }
 
-
 /* From F in the frame (axis, t1, t2): the lateral stretches, i.e. the
  * distance of the opposite lateral faces over the reference one (1 / |F^-T
  * t_k|, which a rotation leaves alone), and the shears F_a1, F_a2 (how the

@@ -1785,7 +1785,7 @@ int main(int argc, char **argv) {
      * (`skinsim view` sets both before it runs this program, so that costs
      * nothing there). */
     if (view_env_defaults()) execv("/proc/self/exe", argv); /* on failure: carry on as we are */
-    double t_start = ss_now();         /* for the first-frame time */
+    double t_start = ss_now();                              /* for the first-frame time */
     /* Called as "skinsim view ..." through the skinsim command, or directly. */
     if (argc > 1 && !strcmp(argv[1], "view")) argc--, argv++;
     opts o;

@@ -48,9 +48,8 @@ typedef struct rect {
 } rect;
 
 /* Copies the packed layer src into layer dst, then packs r from the maps. */
-static void pack_from(view_layers *l, int dst, int src, const ss_image *color,
-                      const ss_image *refl, const ss_image *height, const ss_image *normal,
-                      rect r) {
+static void pack_from(view_layers *l, int dst, int src, const ss_image *color, const ss_image *refl,
+                      const ss_image *height, const ss_image *normal, rect r) {
     size_t plane = (size_t)l->size * (size_t)l->size * 4;
     memcpy(l->cr + plane * dst, l->cr + plane * src, plane);
     memcpy(l->nh + plane * dst, l->nh + plane * src, plane);
@@ -144,8 +143,8 @@ static ss_status generate_reference(const ss_stroke_set *strokes, const ss_image
     for (int p = 0; p < SS_PHASE_COUNT && !st; p++) {
         st = ss_abrasion_render_phase((ss_phase)p, 0.0, *shape, skin, set, &ts, err);
         if (!st)
-            view_layers_pack_rect(out, p, ts.color, ts.reflection, ts.height, ts.normal, 0, 0,
-                                  size, size);
+            view_layers_pack_rect(out, p, ts.color, ts.reflection, ts.height, ts.normal, 0, 0, size,
+                                  size);
         if (progress) *progress = ++done / steps;
     }
     t[2] = ss_now();

@@ -150,8 +150,8 @@ static unsigned char to_byte(float v) {
 }
 
 void view_layers_pack_rect(view_layers *l, int layer, const ss_image *color, const ss_image *refl,
-                      const ss_image *height, const ss_image *normal, int x0, int y0, int w,
-                      int h) {
+                           const ss_image *height, const ss_image *normal, int x0, int y0, int w,
+                           int h) {
     size_t n = (size_t)l->size * (size_t)l->size;
     unsigned char *cr = l->cr + (size_t)layer * n * 4, *nh = l->nh + (size_t)layer * n * 4;
 #pragma omp parallel for schedule(static)
