@@ -250,7 +250,6 @@ static void heal_react(void *vctx, const ss_heal_rd_row *row) {
 
 static int is_tissue(uint8_t c) { return c != SS_CELL_AIR && c != SS_CELL_BOUND; }
 
-/* Surface cell of every column: the topmost tissue cell inside the bounds. */
 /* The plasma is a record of the wound's fraction only while it is frozen
  * (static region) and not carried by a velocity (the mechanics). */
 static void surface_inputs(model_ctx *c, const ss_heal_grid *g) {
@@ -258,6 +257,7 @@ static void surface_inputs(model_ctx *c, const ss_heal_grid *g) {
     c->pfrac = c->static_region && !vel ? g->field[SS_HEAL_PLASMA] : NULL;
 }
 
+/* Surface cell of every column: the topmost tissue cell inside the bounds. */
 static void find_surface(model_ctx *c) {
     const int nx = c->nx, ny = c->ny, nz = c->nz;
     for (int y = 0; y < ny; y++)
@@ -902,6 +902,18 @@ static float keloid_signal(const ss_heal_params *p, double t, double dt) {
     return (float)(f + (1.0 - f) * exp(-(t + 0.5 * dt) / p->keloid_tau));
 }
 
+/* Points the solver at a grid's cells, fields and velocity before a step
+ * (the surface found again only when the cell array changed). */
+static void bind_grid(ss_heal_solver *s, ss_heal_grid *g) {
+    s->ctx.cell = g->cell;
+    surface_inputs(&s->ctx, g);
+    s->sys.cls = g->cell;
+    if (s->ctx.ztop_of != g->cell) find_surface(&s->ctx);
+    s->ctx.kact = keloid_signal(&s->p, g->t_days, s->dt);
+    for (int f = 0; f < SS_HEAL_NFIELDS; f++) s->sys.u[f] = g->field[f];
+    for (int d = 0; d < 3; d++) s->sys.velocity[d] = g->velocity[d];
+}
+
 ss_status ss_heal_step_phase(ss_heal_solver *s, ss_heal_grid *g, int phase, ss_error *err) {
     const int has_vel = g && (g->velocity[0] || g->velocity[1] || g->velocity[2]);
     if (!s || !g || s->scheme != SS_HEAL_SPLIT || phase < 0 || phase > 2 ||
@@ -911,13 +923,7 @@ ss_status ss_heal_step_phase(ss_heal_solver *s, ss_heal_grid *g, int phase, ss_e
                             "a solver created with it");
     if (g->nx != s->nx || g->ny != s->ny || g->nz != s->nz)
         return ss_error_set(err, SS_ERR_INPUT, "heal step phase: grid does not match the solver");
-    s->ctx.cell = g->cell;
-    surface_inputs(&s->ctx, g);
-    s->sys.cls = g->cell;
-    if (s->ctx.ztop_of != g->cell) find_surface(&s->ctx);
-    s->ctx.kact = keloid_signal(&s->p, g->t_days, s->dt);
-    for (int f = 0; f < SS_HEAL_NFIELDS; f++) s->sys.u[f] = g->field[f];
-    for (int d = 0; d < 3; d++) s->sys.velocity[d] = g->velocity[d];
+    bind_grid(s, g);
     ss_heal_rd__step_split_phase(&s->sys, s->w, s->dt, s->nsub, phase);
     /* the convection swaps the fields with the work buffers */
     for (int f = 0; f < SS_HEAL_NFIELDS; f++) g->field[f] = s->sys.u[f];
@@ -943,17 +949,8 @@ static ss_status step_begin(ss_heal_solver *s, ss_heal_grid *g, ss_error *err) {
         return ss_error_set(err, SS_ERR_INPUT,
                             "heal step: grid %dx%dx%d does not match the solver's %dx%dx%d", g->nx,
                             g->ny, g->nz, s->nx, s->ny, s->nz);
-    s->ctx.cell = g->cell;
-    surface_inputs(&s->ctx, g);
-    s->sys.cls = g->cell;
-    if (s->ctx.ztop_of != g->cell) find_surface(&s->ctx);
-    s->ctx.kact = keloid_signal(&s->p, g->t_days, s->dt);
-    for (int f = 0; f < SS_HEAL_NFIELDS; f++) s->sys.u[f] = g->field[f];
-    int has_vel = 0;
-    for (int d = 0; d < 3; d++) {
-        s->sys.velocity[d] = g->velocity[d];
-        has_vel |= g->velocity[d] != NULL;
-    }
+    bind_grid(s, g);
+    const int has_vel = g->velocity[0] || g->velocity[1] || g->velocity[2];
     if (has_vel) {
         double speed = ss_heal_rd_max_speed(&s->sys);
         if (s->scheme == SS_HEAL_EXPLICIT) {
