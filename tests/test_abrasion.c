@@ -694,7 +694,6 @@ static void test_dark_skin_maturation(void **state) {
     scene_free(&sc);
 }
 
-
 /* The example scrape on the default skin, its texture scaled to the mean
  * colour dark (linear sRGB); dark = NULL keeps the light skin. */
 static void scene_skin(scene *sc, int n, const double *dark) {
@@ -718,7 +717,8 @@ static const double DARK_SKIN[3] = {0.11, 0.045, 0.025}; /* a brown skin's mean,
 
 /* Mean CIELAB of a frame's colour where sel(mask, dist / dmax) holds. */
 typedef int (*px_sel)(int inside, double d, double rel);
-static void frame_lab(const ss_abrasion *a, const scene *sc, double day, px_sel sel, double lab[3]) {
+static void frame_lab(const ss_abrasion *a, const scene *sc, double day, px_sel sel,
+                      double lab[3]) {
     int n = sc->s.size;
     ss_error err;
     ss_texture_set f;
@@ -742,9 +742,18 @@ static void frame_lab(const ss_abrasion *a, const scene *sc, double day, px_sel 
     for (int c = 0; c < 3; c++) lab[c] /= cnt;
     ss_texture_set_free(&f);
 }
-static int sel_bed(int inside, double d, double rel) { (void)rel; return inside && d >= 4; }
-static int sel_core(int inside, double d, double rel) { (void)d; return inside && rel > 0.8; }
-static int sel_skin(int inside, double d, double rel) { (void)rel; return !inside && d > 8; }
+static int sel_bed(int inside, double d, double rel) {
+    (void)rel;
+    return inside && d >= 4;
+}
+static int sel_core(int inside, double d, double rel) {
+    (void)d;
+    return inside && rel > 0.8;
+}
+static int sel_skin(int inside, double d, double rel) {
+    (void)rel;
+    return !inside && d > 8;
+}
 static double hue_deg(const double lab[3]) { return atan2(lab[2], lab[1]) * 180 / M_PI; }
 
 /* Light and dark skin (CIELAB means over regions): the day-0 bed is exposed,
@@ -776,9 +785,9 @@ static void test_dark_skin_bed_and_scar(void **state) {
                    name[k], lab[k][0], lab[k][1], lab[k][2], hue_deg(lab[k]));
         }
         memcpy(bed[dk], lab[0], sizeof bed[dk]);
-        assert_true(lab[0][0] < 62.0);          /* not pale */
-        assert_true(lab[0][1] > 24.0);          /* red */
-        assert_true(hue_deg(lab[0]) < 32.0);    /* not orange or tan */
+        assert_true(lab[0][0] < 62.0);       /* not pale */
+        assert_true(lab[0][1] > 24.0);       /* red */
+        assert_true(hue_deg(lab[0]) < 32.0); /* not orange or tan */
         double dl = lab[3][0] - lab[4][0];
         double de = sqrt(dl * dl + (lab[3][1] - lab[4][1]) * (lab[3][1] - lab[4][1]) +
                          (lab[3][2] - lab[4][2]) * (lab[3][2] - lab[4][2]));
