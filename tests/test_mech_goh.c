@@ -264,19 +264,28 @@ static void test_stretch_oblique(void **state) {
     assert_float_equal(ry.shear[0], r1.shear[0], 1e-7);
 }
 
+/* The clean preset on a 20 x 20 x 4 mm block (0.5 mm voxels, skin top at
+ * 3 mm) with a sx x sy mm wound 1 mm deep; *hp gets the parameters. */
+static ss_heal_grid *slit_grid(double sx, double sy, ss_heal_params **hp) {
+    ss_error err;
+    *hp = ss_heal_params_preset("clean", &err);
+    assert_non_null(*hp);
+    ss_heal_grid *g = ss_heal_grid_create(40, 40, 8, 0.5, &err);
+    assert_non_null(g);
+    uint8_t *w = ss_heal_wound_box(g, 3.0, sx, sy, 1.0, &err);
+    assert_non_null(w);
+    assert_int_equal(ss_heal_grid_init(g, 3.0, 0.1, w, *hp, &err), SS_OK);
+    free(w);
+    return g;
+}
+
 /* a 20 x 20 x 4 mm block (0.5 mm voxels, skin top at 3 mm), a slit 2 mm x
  * 12 mm, 1 mm deep, along y (across the x fibres) or along x; returns the
  * outline area after the day-0 gape over the cut area */
 static double gape(int along_x, const ss_mech_suture *sut, int nsut) {
     ss_error err;
-    ss_heal_params *hp = ss_heal_params_preset("clean", &err);
-    assert_non_null(hp);
-    ss_heal_grid *g = ss_heal_grid_create(40, 40, 8, 0.5, &err);
-    assert_non_null(g);
-    uint8_t *w = ss_heal_wound_box(g, 3.0, along_x ? 12.0 : 2.0, along_x ? 2.0 : 12.0, 1.0, &err);
-    assert_non_null(w);
-    assert_int_equal(ss_heal_grid_init(g, 3.0, 0.1, w, hp, &err), SS_OK);
-    free(w);
+    ss_heal_params *hp;
+    ss_heal_grid *g = slit_grid(along_x ? 12.0 : 2.0, along_x ? 2.0 : 12.0, &hp);
     ss_mech_params p;
     ss_mech_params_default(&p);
     p.model = SS_MECH_MODEL_GOH;
@@ -298,14 +307,8 @@ static double gape(int along_x, const ss_mech_suture *sut, int nsut) {
 static void test_state_lag(void **state) {
     (void)state;
     ss_error err;
-    ss_heal_params *hp = ss_heal_params_preset("clean", &err);
-    assert_non_null(hp);
-    ss_heal_grid *g = ss_heal_grid_create(40, 40, 8, 0.5, &err);
-    assert_non_null(g);
-    uint8_t *w = ss_heal_wound_box(g, 3.0, 2.0, 12.0, 1.0, &err);
-    assert_non_null(w);
-    assert_int_equal(ss_heal_grid_init(g, 3.0, 0.1, w, hp, &err), SS_OK);
-    free(w);
+    ss_heal_params *hp;
+    ss_heal_grid *g = slit_grid(2.0, 12.0, &hp);
     ss_mech_params p;
     ss_mech_params_default(&p);
     ss_mech *sp = ss_mech_create(g, hp, &p, NULL, NULL, 0, &err);
