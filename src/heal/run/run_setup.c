@@ -256,13 +256,22 @@ static const char *wound_source_name(const ss_heal_run_config *c) {
                                 : "--wound-depth-mm";
 }
 
-static ss_status wound_uncovered(const ss_heal_run_config *c, const geometry *gm, ss_error *err) {
+static ss_status wound_uncovered(const ss_heal_run_config *c, const geometry *gm, int whole,
+                                 ss_error *err) {
+    char hint[160];
+    if (c->wound_mesh)
+        snprintf(hint, sizeof hint, "; mesh coordinates are mm from the block corner, z up");
+    else if (whole)
+        snprintf(hint, sizeof hint,
+                 "; make it larger or deeper (the keloid and --mechanics round the depth to "
+                 "whole %g mm voxels)",
+                 gm->dx);
+    else
+        snprintf(hint, sizeof hint, "; make it larger or deeper");
     return ss_error_set(err, SS_ERR_INPUT,
                         "%s: the wound covers no voxel under the skin surface (%g mm) of the "
                         "%gx%gx%g mm block with %g mm voxels%s",
-                        wound_source_name(c), gm->top, gm->X, gm->Y, gm->Z, gm->dx,
-                        c->wound_mesh ? "; mesh coordinates are mm from the block corner, z up"
-                                      : "; make it larger or deeper");
+                        wound_source_name(c), gm->top, gm->X, gm->Y, gm->Z, gm->dx, hint);
 }
 
 static ss_status mesh_outside(const ss_heal_run_config *c, const geometry *gm, ss_error *err) {
@@ -327,7 +336,7 @@ static uint8_t *wound_volume(ss_heal_run *r, const geometry *gm, const wound_inp
     for (size_t i = 0; i < plane * (size_t)gm->n[2]; i++)
         below += w3[i] && ((double)(i / plane) + 0.5) * gm->dx < gm->top;
     if (!below) {
-        wound_uncovered(c, gm, err);
+        wound_uncovered(c, gm, whole_voxels(r), err);
         free(w3);
         return NULL;
     }
@@ -404,7 +413,7 @@ static ss_status setup_distributed(ss_heal_run *r, const geometry *gm, wound_inp
     /* every level of a range lies under the skin surface */
     for (size_t k = 0; k < (size_t)gm->n[0] * (size_t)gm->n[1]; k++)
         if (r->wcols[2 * k + 1] > r->wcols[2 * k]) return SS_OK;
-    return wound_uncovered(c, gm, err);
+    return wound_uncovered(c, gm, whole_voxels(r), err);
 }
 
 ss_status ss_heal_run_wound_counted(ss_heal_run *r, size_t inside, size_t below, ss_error *err) {
@@ -412,7 +421,7 @@ ss_status ss_heal_run_wound_counted(ss_heal_run *r, size_t inside, size_t below,
     const geometry gm = geometry_of(r->g);
     if (inside == 0) return mesh_outside(&r->c, &gm, err);
     cJSON_AddNumberToObject(r->wound, "voxels", (double)inside);
-    return below ? SS_OK : wound_uncovered(&r->c, &gm, err);
+    return below ? SS_OK : wound_uncovered(&r->c, &gm, 0, err);
 }
 
 ss_status ss_heal_run__setup_fresh(ss_heal_run *r, ss_error *err) {
