@@ -53,6 +53,10 @@
 #define WARP_FULL_PX 6.0
 /* The crust's edge: its coverage rises over this many mm from its edge. */
 #define EDGE_MM 0.4
+/* A crust is granular (clotted cells, fibrin strands, dried serum at a few
+ * tenths of a mm): its thickness varies by +-CRUST_GRAIN at ~0.6 mm, and the
+ * edges of its serous patches are as ragged, not soft blobs. */
+#define CRUST_GRAIN 0.25
 
 struct ss_wound_renderer {
     ss_wound_render_options o;
@@ -66,6 +70,7 @@ struct ss_wound_renderer {
     ss_image *warp[2]; /* value noise at ~1.2 mm: jitter of where the tissue maps are
                           sampled, so margins are ragged, not stepped with the voxels */
     ss_image *cap;     /* value noise at ~0.35 mm: the bed's capillary loops */
+    ss_image *grain;   /* value noise at ~0.6 mm: the crust's granular surface */
     double pih;        /* the skin type's rate of post-inflammatory hyperpigmentation */
     ss_wound_textures base;
     ss_image *columns; /* NULL: the flat block; else tissue-map coordinates per texel */
@@ -175,6 +180,8 @@ ss_status ss_wound_renderer_create(const ss_wound_render_options *o, ss_wound_re
     if (!st) st = ss_wound__noise(o->size, o->side_mm, 2.5, 3, o->seed, 203, r->crack, err);
     if (!st && !(r->cap = ss_image_create(o->size, o->size, 1, err))) st = err->code;
     if (!st) st = ss_wound__noise(o->size, o->side_mm, 0.35, 1, o->seed, 206, r->cap, err);
+    if (!st && !(r->grain = ss_image_create(o->size, o->size, 1, err))) st = err->code;
+    if (!st) st = ss_wound__noise(o->size, o->side_mm, 0.6, 2, o->seed, 207, r->grain, err);
     for (int k = 0; k < 2 && !st; k++) {
         if (!(r->warp[k] = ss_image_create(o->size, o->size, 1, err))) st = err->code;
         if (!st)
@@ -210,6 +217,7 @@ void ss_wound_renderer_free(ss_wound_renderer *r) {
     ss_image_free(r->warp[0]);
     ss_image_free(r->warp[1]);
     ss_image_free(r->cap);
+    ss_image_free(r->grain);
     ss_skin_lut_free(r->lut);
     ss_wound_textures_free(&r->base);
     free(r);
@@ -363,9 +371,9 @@ typedef struct texel_out {
     double rgb[3], roughness, height_mm;
 } texel_out;
 
-/* The three crust noises at a texel (0..1). */
+/* The crust's and the bed's noises at a texel (0..1). */
 typedef struct crust_noise {
-    float thick, mottle, crack, cap;
+    float thick, mottle, crack, cap, grain;
 } crust_noise;
 
 static void render_texel(const ss_wound_renderer *r, const float *skin, const crust_noise *nz,
@@ -449,7 +457,8 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
      * mottled (+-scab_mottle at ~1.5 mm) */
     double dome = lerp(v[SS_WR_SCAB_EDGE], 1, 1 - exp(-s->crust_in / v[SS_WR_SCAB_DOME_MM]));
     double thick =
-        s->scab * v[SS_WR_SCAB_SCALE] * dome * (1 + v[SS_WR_SCAB_MOTTLE] * (2.0 * nz->thick - 1));
+        s->scab * v[SS_WR_SCAB_SCALE] * dome *
+        (1 + v[SS_WR_SCAB_MOTTLE] * (2.0 * nz->thick - 1) + CRUST_GRAIN * (2.0 * nz->grain - 1));
     if (thick < 0) thick = 0;
     /* drying: a fresh crust is wet, red blood; it darkens to the aged crust
      * (deoxygenated, concentrated) and turns matte over crust_dry_days */
@@ -470,7 +479,10 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
     double scab_cover = (1 - exp(-thick / 0.05)) * edge_c; /* a 0.05 mm crust hides the bed */
     crack *= scab_cover;
     /* patches of serous (haemoglobin-poor, amber) crust among the bloody one */
-    double serous = v[SS_WR_SCAB_SEROUS] * ramp(nz->mottle, 0.5, 0.8);
+    double serous =
+        v[SS_WR_SCAB_SEROUS] * ramp(nz->mottle + CRUST_GRAIN * (nz->grain - 0.5), 0.5, 0.8);
+    /* and granules of serum through the bloody crust */
+    serous = 1 - (1 - serous) * (1 - v[SS_WR_SCAB_SEROUS] * 0.15 * ramp(nz->grain, 0.5, 0.9));
     double R[3], T[3], R2[3], T2[3], R3[3], T3[3], mid[3];
     /* the clot: fresh blood in the open, avascular bed, pooled in patches and
      * at the capillary loops, at most 0.25 mm (a scrape oozes, it does not
@@ -648,7 +660,7 @@ ss_status ss_wound_render_poll(ss_wound_renderer *r, const ss_wound_tissue *t,
                 texel_tissue s;
                 texel_out o;
                 crust_noise nz = {r->crust->data[i], r->mottle->data[i], r->crack->data[i],
-                                  r->cap->data[i]};
+                                  r->cap->data[i], r->grain->data[i]};
                 if (r->columns) { /* the mean over a box of EDGE_BOX_MM (module comment) */
                     o = (texel_out){{0, 0, 0}, 0, 0};
                     for (int q = 0; q < BOX_N * BOX_N; q++) {
