@@ -536,8 +536,8 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
     /* the keloid's raise: the healing model's surface elevation (collagen
      * beyond the dermis it replaced, heal's surface_elevation_mm) where it is
      * raised - where it falls short, the open wound's depth above already
-     * draws the defect - saturating at a few mm (Vancouver Scar Scale
-     * heights: < 2, 2-5, > 5 mm) */
+     * draws the defect - saturating at a few mm (Vancouver Scar Scale,
+     * Sullivan et al. 1990: heights < 2, 2-5, > 5 mm) */
     double kmax = v[SS_WR_KELOID_MAX_MM];
     double keloid = kmax * (1 - exp(-v[SS_WR_KELOID_SCALE] * fmax(s->elev, 0.0) / kmax));
     /* the surface: the skin, down by the wound's depth, filled by the clot and
