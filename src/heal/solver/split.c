@@ -20,7 +20,7 @@
  * FP exception flags as observable (-fno-trapping-math: values are unchanged,
  * unlike -ffast-math there is no reassociation or finite-math assumption). */
 #if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC optimize("tree-loop-if-convert", "tree-loop-vectorize", "no-trapping-math",          \
+#pragma GCC optimize("tree-loop-if-convert", "tree-loop-vectorize", "no-trapping-math",            \
                      "fp-contract=off")
 #endif
 /* The reaction update and the line solves are built twice, for AVX2 and for
@@ -98,8 +98,8 @@ static void reaction_pass(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt,
                             for (int k = 0; k < sys->nslots; k++)
                                 memcpy(w->mslot[k] + base, row.m[k], (size_t)n * 4);
                         for (int f = 0; f < nf; f++)
-                            react_update(loc[f], row.prod[f], row.loss[f], w->upd[f] + base, n,
-                                         h, sys->lo[f], sys->hi[f]);
+                            react_update(loc[f], row.prod[f], row.loss[f], w->upd[f] + base, n, h,
+                                         sys->lo[f], sys->hi[f]);
                     }
                 } else {
                     for (int k = 0; k < sys->nslots; k++)
