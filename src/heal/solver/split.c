@@ -110,6 +110,45 @@ static void reaction_pass(ss_heal_rd_system *sys, ss_heal_rd_work *w, double dt,
     }
 }
 
+/* Skipping lines that are exactly zero (issue 25: in much of the block a
+ * field such as the epithelium or the eschar is 0 bit for bit). If every
+ * unknown u of a line is +0 (bits zero) and every coefficient is finite, the
+ * Thomas sweep writes +0 back: forward, dp = (u - a dpp) r with u = +0,
+ * dpp = +0 and a <= 0 gives +0 - (-0 or +0) = +0, times r > 0 (the pivot
+ * b - a cpp >= 1 of this M-matrix, finite) is +0; backward u = dp - cp un
+ * = +0 - (+-0) = +0; the clamp then returns clampf(+0, lo, hi), which is +0
+ * when zero_kept says so. Finite coefficients: the multiplier m is in
+ * [0, RD_MLIM / kD] (a NaN or huge m fails the test and the line is solved as
+ * before). So the skip changes no bit. */
+#define RD_MLIM 1e18f
+
+static int zero_kept(float lo, float hi) {
+    const float z = clampf(0.0f, lo, hi);
+    uint32_t b;
+    memcpy(&b, &z, sizeof b);
+    return b == 0u;
+}
+
+/* 1 when the n floats at p are all +0 */
+static int bits_zero(const float *p, size_t n) {
+    uint32_t acc = 0;
+    for (size_t i = 0; i < n; i++) {
+        uint32_t b;
+        memcpy(&b, p + i, sizeof b);
+        acc |= b;
+    }
+    return acc == 0u;
+}
+
+/* 1 when the n multipliers at p are in [0, lim] */
+static int m_tame(const float *p, size_t n, float lim) {
+    int ok = 1;
+    for (size_t i = 0; i < n; i++) ok &= p[i] >= 0.0f && p[i] <= lim;
+    return ok;
+}
+
+static float m_limit(float kD) { return RD_MLIM / (kD > 1.0f ? kD : 1.0f); }
+
 /* Lines are swept in bundles of at most BUNDLE lines side by side, so the
  * Thomas coefficients of a bundle (2 x line length x BUNDLE floats) stay in
  * the L2 cache; the lines are independent, so the chunking does not change
@@ -134,6 +173,13 @@ RD_HOT static void bundle_yz(const ss_heal_rd_system *sys, const ss_heal_rd_work
     float *restrict dpall = scr + (size_t)nline * ldc;
     const float *restrict ones = scr + w->ones_off + x0;
     float *restrict u0 = sys->u[f] + ob;
+    if (!clampit || zero_kept(sys->lo[f], sys->hi[f])) {
+        int zero = 1;
+        for (int j = 1; zero && j < nline - 1; j++) zero = bits_zero(u0 + (size_t)j * step, ldc);
+        for (int j = 0; zero && mk && j < nline; j++)
+            zero = m_tame(mk + ob + (size_t)j * step, ldc, m_limit(kD));
+        if (zero) return; /* exactly zero in, exactly zero out (above) */
+    }
     for (int x = 0; x < cw; x++) cpall[x] = dpall[x] = 0.0f; /* "line -1": no coupling */
     for (int j = 1; j < nline - 1; j++) {
         const size_t lb = (size_t)j * step;
@@ -214,6 +260,14 @@ RD_HOT static void bundle_x(const ss_heal_rd_system *sys, const ss_heal_rd_work 
     const uint8_t *restrict nb = w->nb + bz;
     const uint8_t *restrict upd = w->upd[f] + bz;
     const float *restrict m = mk ? mk + bz : NULL;
+    {
+        int zero = 1;
+        for (int y = 0; zero && y < ch; y++)
+            zero = bits_zero(u + (size_t)y * sy + 1, (size_t)nx - 2);
+        for (int y = 0; zero && m && y < ch; y++)
+            zero = m_tame(m + (size_t)y * sy, (size_t)nx, m_limit(kD));
+        if (zero) return; /* exactly zero in, exactly zero out (bits_zero above) */
+    }
     for (int y = 0; y < ch; y++) cpall[y] = dpall[y] = 0.0f; /* x = 0: no coupling */
     for (int x = 1; x < nx - 1; x++) {
         float *restrict cp = cpall + (size_t)x * ldc;
