@@ -110,12 +110,12 @@ typedef struct ss_heal_params {
     double rho_mature; /* 1, collagen of a mature scar (x normal dermis): remodelling resorbs
                           only the excess above it, so the scar stays */
     /* adnexal re-epithelialisation (docs/heal-model.md §2 [D11]) */
-    double kadn;      /* 1/day, outgrowth of epithelium from surviving follicle and gland
-                         remnants below a partial-thickness wound; 0 = edge only */
-    double adnexa_mm; /* mm, wound depth at which no adnexal remnant survives; the share that
-                         survives falls linearly from 1 at the surface to 0 at this depth */
-    double keloid_mm; /* mm, depth below the skin surface to which the keloid deposition
-                         (lamkrho) reaches (the reticular dermis); deeper dermis stays */
+    double kadn;        /* 1/day, outgrowth of epithelium from surviving follicle and gland
+                           remnants below a partial-thickness wound; 0 = edge only */
+    double adnexa_mm;   /* mm, wound depth at which no adnexal remnant survives; the share that
+                           survives falls linearly from 1 at the surface to 0 at this depth */
+    double keloid_mm;   /* mm, depth below the skin surface to which the keloid deposition
+                           (lamkrho) reaches (the reticular dermis); deeper dermis stays */
     double keloid_gain; /* 1, share of the keloid deposition that the packing limit refuses
                            (the complement of its (1 - rho/rho_sat) factor) that stays as added
                            tissue volume, raising the column's surface (docs/heal-model.md

@@ -43,7 +43,8 @@ void ss_heal_elevation_scan(const ss_heal_grid *g, int z0, int z1, float *elev) 
         const float *r = rho + (size_t)z * ncol;
         const size_t zo = (size_t)z * ncol;
         for (size_t i = 0; i < ncol; i++)
-            if (is_tissue(c[i])) elev[i] += ss_heal_elevation_term(r[i] + (ad ? ad[zo + i] : 0.0f), c[i], k);
+            if (is_tissue(c[i]))
+                elev[i] += ss_heal_elevation_term(r[i] + (ad ? ad[zo + i] : 0.0f), c[i], k);
     }
 }
 
