@@ -825,17 +825,20 @@ static int cmp_double(const void *a, const void *b) {
 }
 
 /* Both ends of the tone range from the baseline melanin, through the shipped
- * table: very light (ITA > 55, C* >= 14) and dark (ITA < -30, C* <= 24),
- * the medians of the base colour map's L*, a*, b*. */
+ * table, for the forearm and the seed (face) presets: very light (ITA > 55,
+ * C* >= 14) and dark (ITA < -30, C* <= 24), the medians of the base colour
+ * map's L*, a*, b*. */
 static void test_tone_ends(void **state) {
     (void)state;
     ss_error err;
     ss_mm_table *t = load_table();
     ss_skin_lut *lut = ss_skin_lut_create(t, &err);
     const double mel[2] = {0.003, 0.43};
-    for (int k = 0; k < 2; k++) {
+    const char *presets[2] = {"forearm", "seed"};
+    for (int run = 0; run < 4; run++) {
+        const int k = run % 2;
         ss_skin_settings s;
-        assert_int_equal(ss_skin_settings_preset(&s, "forearm", 128, &err), SS_OK);
+        assert_int_equal(ss_skin_settings_preset(&s, presets[run / 2], 128, &err), SS_OK);
         s.world_size_cm = 1.28;
         ss_skin_forearm_counts(s.world_size_cm, s.count);
         s.base_lo[SS_BIO_MELANIN] = mel[k];
@@ -860,8 +863,8 @@ static void test_tone_ends(void **state) {
             free(L[c]);
         }
         ss_lab_describe(med, &C, NULL, &ita);
-        print_message("melanin %.3f: L* %.1f a* %.1f b* %.1f, C* %.1f, ITA %.1f\n", mel[k], med[0],
-                      med[1], med[2], C, ita);
+        print_message("%s melanin %.3f: L* %.1f a* %.1f b* %.1f, C* %.1f, ITA %.1f\n",
+                      presets[run / 2], mel[k], med[0], med[1], med[2], C, ita);
         if (k == 0)
             assert_true(ita > 55.0 && C >= 14.0);
         else

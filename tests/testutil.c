@@ -98,6 +98,8 @@ void tu_assert_heal_grids_equal(const ss_heal_grid *a, const ss_heal_grid *b) {
         assert_true(!a->velocity[c] == !b->velocity[c]);
         if (a->velocity[c]) assert_memory_equal(a->velocity[c], b->velocity[c], n * sizeof(float));
     }
+    assert_true(!a->added == !b->added);
+    if (a->added) assert_memory_equal(a->added, b->added, n * sizeof(float));
 }
 
 int tu_poll_count(void *user, double fraction) {

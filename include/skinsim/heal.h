@@ -110,12 +110,16 @@ typedef struct ss_heal_params {
     double rho_mature; /* 1, collagen of a mature scar (x normal dermis): remodelling resorbs
                           only the excess above it, so the scar stays */
     /* adnexal re-epithelialisation (docs/heal-model.md §2 [D11]) */
-    double kadn;      /* 1/day, outgrowth of epithelium from surviving follicle and gland
-                         remnants below a partial-thickness wound; 0 = edge only */
-    double adnexa_mm; /* mm, wound depth at which no adnexal remnant survives; the share that
-                         survives falls linearly from 1 at the surface to 0 at this depth */
-    double keloid_mm; /* mm, depth below the skin surface to which the keloid deposition
-                         (lamkrho) reaches (the reticular dermis); deeper dermis stays */
+    double kadn;        /* 1/day, outgrowth of epithelium from surviving follicle and gland
+                           remnants below a partial-thickness wound; 0 = edge only */
+    double adnexa_mm;   /* mm, wound depth at which no adnexal remnant survives; the share that
+                           survives falls linearly from 1 at the surface to 0 at this depth */
+    double keloid_mm;   /* mm, depth below the skin surface to which the keloid deposition
+                           (lamkrho) reaches (the reticular dermis); deeper dermis stays */
+    double keloid_gain; /* 1, share of the keloid deposition that the packing limit refuses
+                           (the complement of its (1 - rho/rho_sat) factor) that stays as added
+                           tissue volume, raising the column's surface (docs/heal-model.md
+                           [D16]); 0 = none (the elevation stops when the dermis saturates) */
 } ss_heal_params;
 
 /* omega = [p > SS_HEAL_P_MIN] (plasma is normalised to 1 in the fresh clot). */
@@ -167,6 +171,10 @@ typedef struct ss_heal_grid {
     float *velocity[3]; /* NULL = zero (mm/day); the mechanics fills these later */
     double t_days;
     uint64_t step;
+    /* keloid only (docs/heal-model.md [D16]): per cell, the collagen (rho units) the packing
+     * limit refused that stayed as added tissue volume; the surface elevation adds
+     * SS_HEAL_COLLAGEN_VOLUME x dx x it. NULL = none (every other scenario). The grid owns it. */
+    float *added;
 } ss_heal_grid;
 
 /* Largest grid accepted (cells); larger, or more than the machine's physical

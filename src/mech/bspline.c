@@ -31,6 +31,8 @@ struct ss_mech_transfer {
     uint8_t *valid;   /* node reached by a particle / sampled */
     float *tmp[3];    /* sub-lattice values for divergence */
     float *stA, *stB; /* separable upsampling stages (weight + 3 components) */
+    int *xa;          /* per grid x: the sub-lattice node a0 = x / s at or below it */
+    float *xw[2];     /* per grid x: the weights of a0 and a0 + 1 (0: not used) */
 };
 
 double ss_mech_bspline(double x) {
@@ -78,6 +80,17 @@ ss_mech_transfer *ss_mech_transfer_create(int nx, int ny, int nz, double dx_mm, 
     t->stA = malloc((size_t)t->mx * t->my * nz * 4 * sizeof(float));
     t->stB = malloc((size_t)t->mx * ny * nz * 4 * sizeof(float));
     if (!t->stA || !t->stB) goto nomem;
+    t->xa = malloc((size_t)nx * sizeof(int));
+    t->xw[0] = malloc((size_t)nx * sizeof(float));
+    t->xw[1] = malloc((size_t)nx * sizeof(float));
+    if (!t->xa || !t->xw[0] || !t->xw[1]) goto nomem;
+    for (int x = 0; x < nx; x++) { /* the x pass's weights, tabulated once */
+        int a0 = x / stride;
+        float fx = (float)(x - a0 * stride) / (float)stride;
+        t->xa[x] = a0;
+        t->xw[0][x] = 1 - fx;
+        t->xw[1][x] = a0 + 1 < t->mx ? fx : 0;
+    }
     return t;
 nomem:
     ss_mech_transfer_free(t);
@@ -91,6 +104,9 @@ void ss_mech_transfer_free(ss_mech_transfer *t) {
     free(t->valid);
     free(t->stA);
     free(t->stB);
+    free(t->xa);
+    free(t->xw[0]);
+    free(t->xw[1]);
     for (int c = 0; c < 3; c++) {
         free(t->val[c]);
         free(t->tmp[c]);
@@ -232,14 +248,14 @@ static void upsample_from(const ss_mech_transfer *t, double *const *vals, const 
                     for (int q = 0; q < ncomp; q++) out[q][id] = 0;
                     continue;
                 }
-                int a0 = x / s;
-                float fx = (float)(x - a0 * s) / (float)s;
+                /* the weights tabulated at creation (the same floats as
+                 * (x - s a0) / s and its complement, so the same sums) */
+                const int a0 = t->xa[x];
                 float acc[4] = {0, 0, 0, 0};
                 for (int k = 0; k < 2; k++) {
-                    int a = a0 + k;
-                    float w = k ? fx : 1 - fx;
-                    if (w == 0 || a >= mx) continue;
-                    for (int q = 0; q < K; q++) acc[q] += w * row[(size_t)a * K + q];
+                    const float w = t->xw[k][x];
+                    if (w == 0) continue;
+                    for (int q = 0; q < K; q++) acc[q] += w * row[(size_t)(a0 + k) * K + q];
                 }
                 for (int q = 0; q < ncomp; q++)
                     out[q][id] = acc[0] > 1e-6f ? acc[1 + q] / acc[0] : 0;

@@ -81,6 +81,7 @@ struct ss_hyper {
     double *Kt, *gt, *et;
     double *Minv;
     double *g, *d, *r, *z, *p, *q;
+    double *gtry; /* the gradient at the line search's full step */
     double mean_edge;
     /* two-level preconditioner: aggregates of nodes (spatial bins), their
      * rigid modes as the coarse space, the coarse matrix's Cholesky factor */
@@ -342,7 +343,7 @@ void ss_hyper_free(ss_hyper *h) {
                     h->diag, h->val,   h->cstart, h->clist,  h->nstart, h->nlist,  h->Kt,
                     h->gt,   h->et,    h->Minv,   h->g,      h->d,      h->r,      h->z,
                     h->p,    h->q,     h->agg,    h->astart, h->alist,  h->acen,   h->arho,
-                    h->Ac,   h->Lc,    h->wc};
+                    h->Ac,   h->Lc,    h->wc,     h->gtry};
     for (size_t i = 0; i < sizeof ptrs / sizeof ptrs[0]; i++) free(ptrs[i]);
     free(h);
 }
@@ -387,6 +388,7 @@ ss_hyper *ss_hyper_create(const ss_tetmesh *m, const ss_mech_params *p, ss_error
     h->et = malloc((size_t)nt * sizeof(double));
     h->Minv = malloc(9 * (size_t)nn * sizeof(double));
     h->g = malloc(n3 * sizeof(double));
+    h->gtry = malloc(n3 * sizeof(double));
     h->d = malloc(n3 * sizeof(double));
     h->r = malloc(n3 * sizeof(double));
     h->z = malloc(n3 * sizeof(double));
@@ -394,7 +396,8 @@ ss_hyper *ss_hyper_create(const ss_tetmesh *m, const ss_mech_params *p, ss_error
     h->q = malloc(n3 * sizeof(double));
     if (!h->X || !h->x || !h->xt || !h->tet || !h->beta0 || !h->beta || !h->V0 || !h->Vg || !h->G ||
         !h->act || !h->scale || !h->fib || !h->gdirty || !h->anchor || !h->load || !h->fixed ||
-        !h->gt || !h->et || !h->Minv || !h->g || !h->d || !h->r || !h->z || !h->p || !h->q)
+        !h->gt || !h->et || !h->Minv || !h->g || !h->gtry || !h->d || !h->r || !h->z || !h->p ||
+        !h->q)
         goto nomem;
     memcpy(h->X, m->x, n3 * sizeof(double));
     memcpy(h->x, m->x, n3 * sizeof(double));
@@ -1209,11 +1212,15 @@ ss_status ss_hyper_solve(ss_hyper *h, double tol, int max_newton, ss_hyper_repor
             slope = fsum(h->g, h->d, n);
             if (!(slope < 0)) break;
         }
+        /* the full step (alpha 1, nearly always taken) is evaluated with its
+         * gradient, which then serves the next iteration as is: total() at
+         * the accepted point gives the same bytes (its energy does not
+         * depend on whether the gradient is asked for) */
         double alpha = 1, En = INFINITY;
         for (int ls = 0; ls < 40; ls++) {
 #pragma omp parallel for schedule(static)
             for (size_t i = 0; i < n; i++) h->xt[i] = h->x[i] + alpha * h->d[i];
-            En = total(h, h->xt, NULL);
+            En = total(h, h->xt, ls == 0 ? h->gtry : NULL);
             if (isfinite(En) && En <= E + 1e-4 * alpha * slope) break;
             alpha *= 0.5;
         }
@@ -1235,7 +1242,13 @@ ss_status ss_hyper_solve(ss_hyper *h, double tol, int max_newton, ss_hyper_repor
         }
         rr.max_step_mm = sqrt(mx);
         memcpy(h->x, h->xt, n * sizeof(double));
-        E = total(h, h->x, h->g);
+        if (alpha == 1) { /* the gradient of the accepted point is h->gtry */
+            double *gs = h->g;
+            h->g = h->gtry;
+            h->gtry = gs;
+            E = En;
+        } else
+            E = total(h, h->x, h->g);
         fresh = 0;
         if (rr.max_step_mm < tol * h->mean_edge) {
             rr.converged = 1;

@@ -967,7 +967,10 @@ static ss_status do_checkpoint(ss_dist_heal *d, const ss_heal_grid *hdr, const c
             h.params_json = (char *)params_json;
             h.aux = (char *)(aux ? aux : "");
             memcpy(h.dims, d->dims, sizeof h.dims);
-            h.velocity = d->su.mech; /* every box has the mechanics' velocity */
+            h.velocity =
+                d->su.mech |
+                (d->g->added ? 2
+                             : 0); /* the mechanics' velocity; the keloid's added volume [D16] */
             h.npieces = d->size;
             h.piece = all;
             st = ss_heal_ckpt_header_save(dir, &h, keep, err);

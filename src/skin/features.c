@@ -208,6 +208,13 @@ ss_status ss_skin_settings_preset(ss_skin_settings *s, const char *preset, int s
     s->base_lo[SS_BIO_BLOOD] = 0.007;
     if (!strcmp(preset, "seed")) {
         s->world_size_cm = 20.0;
+        /* a face: stratum corneum ~12 um and a 60 um viable epidermis, thinner
+         * than the forearm's (values ours, between the ranges' thin end and the
+         * forearm). At the ranges' thinnest ends (10 and 40 um) melanin 0.43
+         * came out a saturated rust (C* 29.5, issue 23's limit 24); at these
+         * C* 22 (docs/skin.md, tone range) */
+        s->base_lo[SS_BIO_SC_CM] = 0.0012;
+        s->base_lo[SS_BIO_EPIDERMIS_CM] = 0.006;
         const long c[SS_FEAT_NTYPES] = {5000, 700, 3000, 1000, 170000};
         memcpy(s->count, c, sizeof c);
         return SS_OK;

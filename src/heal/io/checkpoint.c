@@ -28,6 +28,8 @@ ss_status ss_heal_checkpoint_write(const char *path, const ss_heal_grid *g, cons
             return ss_error_set(err, SS_ERR_INPUT, "%s: grid field %d missing", path, f);
     int vel = g->velocity[0] && g->velocity[1] && g->velocity[2];
     size_t n = (size_t)g->nx * (size_t)g->ny * (size_t)g->nz;
+    /* bit 1 of the velocity word: the keloid's added volume follows [D16] */
+    const uint32_t flags = (uint32_t)vel | (g->added ? 2u : 0u);
     ss_atomic_file af;
     ss_status st = ss_atomic_open(&af, path, err);
     if (st) return st;
@@ -45,7 +47,7 @@ ss_status ss_heal_checkpoint_write(const char *path, const ss_heal_grid *g, cons
     wu64(&w, g->step);
     wu32(&w, (uint32_t)scheme);
     wf64(&w, dt_days);
-    wu32(&w, (uint32_t)vel);
+    wu32(&w, flags);
     wstr(&w, scenario);
     wstr(&w, params_json);
     wstr(&w, aux);
@@ -53,6 +55,7 @@ ss_status ss_heal_checkpoint_write(const char *path, const ss_heal_grid *g, cons
     for (int f = 0; f < SS_HEAL_NFIELDS; f++) wf32s(&w, g->field[f], n);
     if (vel)
         for (int c = 0; c < 3; c++) wf32s(&w, g->velocity[c], n);
+    if (g->added) wf32s(&w, g->added, n);
     return ck_finish(&w, &af, path, NULL, err);
 }
 
@@ -120,18 +123,18 @@ ss_status ss_heal_checkpoint_read(const char *path, ss_heal_checkpoint *out, ss_
     uint64_t step = ru64(&r);
     int scheme = (int)ru32(&r);
     double dt = rf64(&r);
-    uint32_t vel = ru32(&r);
+    uint32_t flags = ru32(&r), vel = flags & 1u, added = (flags >> 1) & 1u;
     if (nf != SS_HEAL_NFIELDS)
         BAD("%s: checkpoint has %u fields, this build has %d", path, nf, SS_HEAL_NFIELDS);
     if (nx <= 0 || ny <= 0 || nz <= 0 || !(dx > 0) || !isfinite(dx) || !isfinite(t) ||
-        !isfinite(top) || !(dt > 0) || !isfinite(dt) || vel > 1)
+        !isfinite(top) || !(dt > 0) || !isfinite(dt) || flags > 3)
         BAD("%s: checkpoint header values are invalid", path);
     out->scenario = rstr(&r);
     out->params_json = out->scenario ? rstr(&r) : NULL;
     out->aux = out->params_json ? rstr(&r) : NULL;
     if (!out->aux) BAD("%s: truncated checkpoint (strings)", path);
     size_t n = (size_t)nx * (size_t)ny * (size_t)nz;
-    size_t need = n * (1 + 4 * (size_t)(SS_HEAL_NFIELDS + (vel ? 3 : 0)));
+    size_t need = n * (1 + 4 * (size_t)(SS_HEAL_NFIELDS + (vel ? 3 : 0) + added));
     if (n / (size_t)nx / (size_t)ny != (size_t)nz || n > SIZE_MAX / 64 || r.len - r.pos != need)
         BAD("%s: checkpoint data size %zu does not match a %dx%dx%d grid (%zu bytes)", path,
             r.len - r.pos, nx, ny, nz, need);
@@ -146,6 +149,10 @@ ss_status ss_heal_checkpoint_read(const char *path, ss_heal_checkpoint *out, ss_
             st = ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory for velocities", path);
             goto done;
         }
+    if (added && !(g->added = malloc(n * sizeof(float)))) {
+        st = ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory for the added volume", path);
+        goto done;
+    }
     g->skin_top_mm = top;
     g->t_days = t;
     g->step = step;
@@ -157,6 +164,7 @@ ss_status ss_heal_checkpoint_read(const char *path, ss_heal_checkpoint *out, ss_
     else
         for (int c = 0; c < 3; c++)
             if (g->velocity[c]) memset(g->velocity[c], 0, n * sizeof(float));
+    if (added) rf32s(&r, g->added, n);
     out->scheme = scheme;
     out->dt_days = dt;
 #undef BAD

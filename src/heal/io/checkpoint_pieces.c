@@ -65,9 +65,16 @@ void ss_heal_ckpt_split(const int whole[3], const int dims[3], const int coords[
 
 static size_t box_cells(const int n[3]) { return (size_t)n[0] * (size_t)n[1] * (size_t)n[2]; }
 
+/* The flags word after t_days: bit 0 the three velocity arrays, bit 1 the
+ * keloid's added volume (docs/heal-model.md [D16]) follow the fields. */
+static int array_count(int vel) { return SS_HEAL_NFIELDS + 3 * (vel & 1) + ((vel >> 1) & 1); }
+
+static int grid_flags(const ss_heal_grid *g) {
+    return (g->velocity[0] && g->velocity[1] && g->velocity[2]) | (g->added ? 2 : 0);
+}
+
 static uint64_t piece_bytes(const int n[3], int vel) {
-    return PC_HEAD_BYTES +
-           (uint64_t)box_cells(n) * (1 + 4 * (uint64_t)(SS_HEAL_NFIELDS + 3 * vel)) + 4;
+    return PC_HEAD_BYTES + (uint64_t)box_cells(n) * (1 + 4 * (uint64_t)array_count(vel)) + 4;
 }
 
 /* The arrays of a grid in file order: cells, fields, velocities. */
@@ -75,7 +82,8 @@ static int grid_arrays(const ss_heal_grid *g, int vel, void **a) {
     int k = 0;
     a[k++] = g->cell;
     for (int f = 0; f < SS_HEAL_NFIELDS; f++) a[k++] = g->field[f];
-    for (int c = 0; vel && c < 3; c++) a[k++] = g->velocity[c];
+    for (int c = 0; (vel & 1) && c < 3; c++) a[k++] = g->velocity[c];
+    if (vel & 2) a[k++] = g->added;
     return k;
 }
 
@@ -132,7 +140,7 @@ ss_status ss_heal_ckpt_piece_write(const char *run_dir, int index, const ss_heal
     for (int f = 0; f < SS_HEAL_NFIELDS; f++)
         if (!g->field[f])
             return ss_error_set(err, SS_ERR_INPUT, "%s: grid field %d missing", path, f);
-    int vel = g->velocity[0] && g->velocity[1] && g->velocity[2];
+    int vel = grid_flags(g);
     snprintf(dir, sizeof dir, "%s/checkpoints", run_dir);
     ss_status st = ss_mkdir_p(dir, err);
     if (st) return st;
@@ -148,7 +156,7 @@ ss_status ss_heal_ckpt_piece_write(const char *run_dir, int index, const ss_heal
     wu64(&w, g->step);
     wf64(&w, g->t_days);
     wu32(&w, (uint32_t)vel);
-    void *arr[SS_HEAL_NFIELDS + 4];
+    void *arr[SS_HEAL_NFIELDS + 5];
     int na = grid_arrays(g, vel, arr);
     /* a z plane of the box at a time (its x rows gathered), so the CRC and
      * stdio see large blocks */
@@ -191,7 +199,7 @@ static const char *header_values_error(const ss_heal_ckpt_header *h) {
         return "grid larger than any heal grid";
     if (!(h->dx_mm > 0) || !isfinite(h->dx_mm) || !isfinite(h->t_days) ||
         !isfinite(h->skin_top_mm) || !(h->dt_days > 0) || !isfinite(h->dt_days) ||
-        (h->velocity != 0 && h->velocity != 1))
+        (h->velocity < 0 || h->velocity > 3))
         return "header values are invalid";
     if (h->npieces < 1 || h->npieces > SS_HEAL_CKPT_MAX_PIECES || !h->piece ||
         (long long)h->dims[0] * h->dims[1] * h->dims[2] != h->npieces)
@@ -292,7 +300,7 @@ ss_status ss_heal_checkpoint_save_pieces(const char *run_dir, const ss_heal_grid
         memcpy(h.dims, dims, sizeof h.dims);
         h.dx_mm = g->dx_mm, h.skin_top_mm = g->skin_top_mm, h.t_days = g->t_days;
         h.step = g->step, h.scheme = scheme, h.dt_days = dt_days;
-        h.velocity = g->velocity[0] && g->velocity[1] && g->velocity[2];
+        h.velocity = grid_flags(g);
         h.scenario = (char *)scenario, h.params_json = (char *)params_json;
         h.aux = (char *)(aux ? aux : "");
         h.npieces = (int)np;
@@ -438,8 +446,8 @@ static ss_status piece_stream(const char *run_dir, const ss_heal_ckpt_header *h,
         ohi[a] = lo[a] + n[a] < chi[a] ? lo[a] + n[a] : chi[a];
         inside = olo[a] < ohi[a];
     }
-    void *arr[SS_HEAL_NFIELDS + 4];
-    int na = g ? grid_arrays(g, (int)vel, arr) : 1 + SS_HEAL_NFIELDS + 3 * (int)vel;
+    void *arr[SS_HEAL_NFIELDS + 5];
+    int na = g ? grid_arrays(g, (int)vel, arr) : 1 + array_count((int)vel);
     if (!(row = malloc((size_t)n[0] * 4))) BAD("%s: out of memory", path);
     for (int k = 0; k < na; k++) {
         size_t es = k == 0 ? 1 : 4, rb = (size_t)n[0] * es;
@@ -495,10 +503,12 @@ ss_status ss_heal_ckpt_read_box(const char *run_dir, const ss_heal_ckpt_header *
                                 path, lo[a], lo[a] + n[a], a, h->whole[a], gn[a], org[a]);
     }
     size_t ng = (size_t)gn[0] * gn[1] * gn[2];
-    for (int c = 0; h->velocity && c < 3; c++)
+    if ((h->velocity & 2) && !g->added && !(g->added = calloc(ng, sizeof(float))))
+        return ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory for the added volume", path);
+    for (int c = 0; (h->velocity & 1) && c < 3; c++)
         if (!g->velocity[c] && !(g->velocity[c] = calloc(ng, sizeof(float))))
             return ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory for velocities", path);
-    for (int c = 0; !h->velocity && c < 3; c++)
+    for (int c = 0; !(h->velocity & 1) && c < 3; c++)
         for (int z = clo[2]; g->velocity[c] && z < chi[2]; z++)
             for (int y = clo[1]; y < chi[1]; y++)
                 memset(g->velocity[c] + ss_heal_idx(g, clo[0] - org[0], y - org[1], z - org[2]), 0,

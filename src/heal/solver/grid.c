@@ -87,6 +87,7 @@ void ss_heal_grid_free(ss_heal_grid *g) {
     free(g->cell);
     for (int f = 0; f < SS_HEAL_NFIELDS; f++) free(g->field[f]);
     for (int d = 0; d < 3; d++) free(g->velocity[d]);
+    free(g->added);
     free(g);
 }
 

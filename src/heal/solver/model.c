@@ -49,6 +49,7 @@ typedef struct model_ctx {
     float rmat;         /* rho_mature: remodelling resorbs only the excess above it [D10] */
     float kadn, adn_mm; /* adnexal outgrowth rate and the depth that destroys it [D11] */
     float kel_h;        /* keloid_mm / voxel: the keloid's depth in voxel levels [D12] */
+    float kgain;        /* keloid_gain: refused deposition kept as added volume [D16] */
     int scab, static_region;
     const uint8_t *cell;
     /* the frozen plasma of a static region without a velocity: a partial
@@ -625,6 +626,7 @@ static void ctx_init(model_ctx *c, const ss_heal_params *p, const ss_heal_grid *
     c->kadn = (float)p->kadn;
     c->adn_mm = p->adnexa_mm > 0 ? (float)p->adnexa_mm : 1.0f;
     c->kel_h = (float)(p->keloid_mm / g->dx_mm);
+    c->kgain = (float)p->keloid_gain;
     c->rho_closed = (float)(1.0 - p->rho_open);
     c->bed_mm = (float)p->bed_mm;
     c->h = (float)g->dx_mm;
@@ -914,6 +916,45 @@ static void bind_grid(ss_heal_solver *s, ss_heal_grid *g) {
     for (int d = 0; d < 3; d++) s->sys.velocity[d] = g->velocity[d];
 }
 
+/* The keloid's added tissue volume [D16]: the packing limit keeps rho at
+ * rho_sat, so the part of the keloid deposition that its (1 - rho/rho_sat)
+ * factor refuses, lamkrho G min(1, rho/rho_sat) in the cells it reaches (the
+ * same omega, (1 - s), n, G and depth share kin as react_row's kdep), is not
+ * lost: keloid_gain of it stays as tissue added to the cell's column
+ * (g->added, rho units; the elevation adds it). Explicit over the step from
+ * the fields at its end, cell by cell, so any box or rank count and a resumed
+ * run (the checkpoint holds g->added) give the same values. */
+static void keloid_volume(ss_heal_solver *s, ss_heal_grid *g) {
+    const model_ctx *m = &s->ctx;
+    if (!g->added || !(m->lamkrho > 0.0f) || !(m->kgain > 0.0f)) return;
+    const int nx = g->nx, ny = g->ny, nz = g->nz;
+    const float *N = g->field[SS_HEAL_FIBROBLAST], *S = g->field[SS_HEAL_ESCHAR];
+    const float *RHO = g->field[SS_HEAL_SCAR], *P = g->field[SS_HEAL_PLASMA];
+    const float pmin = (float)SS_HEAL_P_MIN, dtg = (float)s->dt * m->kgain;
+    const float lka = m->lamkrho * m->kact, lkb = m->lamkrho * (1.0f - m->kact);
+#pragma omp parallel for schedule(static)
+    for (int z = 0; z < nz; z++)
+        for (int y = 0; y < ny; y++)
+            for (int x = 0; x < nx; x++) {
+                const size_t i = ss_heal_idx(g, x, y, z);
+                const int zt = m->ztop[(size_t)y * (size_t)nx + (size_t)x];
+                const int Z = z + m->zoff;
+                if (!is_tissue(g->cell[i]) || zt < Z || !(P[i] > pmin)) continue;
+                const float kin = clampf(m->kel_h - (float)(zt - Z), 0.0f, 1.0f);
+                const float rho = RHO[i];
+                const float G = lka + lkb * clampf(rho * m->inv_rhomax - 1.0f, 0.0f, 1.0f);
+                const float refused = clampf(rho * m->inv_rhosat, 0.0f, 1.0f);
+                g->added[i] += dtg * pos(1.0f - S[i]) * N[i] * G * refused * kin;
+            }
+}
+
+/* Allocates the keloid's added volume on a keloid grid that has none yet. */
+static ss_status keloid_alloc(const ss_heal_solver *s, ss_heal_grid *g, ss_error *err) {
+    if (g->added || !(s->ctx.lamkrho > 0.0f) || !(s->ctx.kgain > 0.0f)) return SS_OK;
+    g->added = calloc((size_t)g->nx * (size_t)g->ny * (size_t)g->nz, sizeof *g->added);
+    return g->added ? SS_OK : ss_error_set(err, SS_ERR_NOMEM, "heal step: out of memory");
+}
+
 ss_status ss_heal_step_phase(ss_heal_solver *s, ss_heal_grid *g, int phase, ss_error *err) {
     const int has_vel = g && (g->velocity[0] || g->velocity[1] || g->velocity[2]);
     if (!s || !g || s->scheme != SS_HEAL_SPLIT || phase < 0 || phase > 2 ||
@@ -923,11 +964,13 @@ ss_status ss_heal_step_phase(ss_heal_solver *s, ss_heal_grid *g, int phase, ss_e
                             "a solver created with it");
     if (g->nx != s->nx || g->ny != s->ny || g->nz != s->nz)
         return ss_error_set(err, SS_ERR_INPUT, "heal step phase: grid does not match the solver");
+    if (phase == 2 && keloid_alloc(s, g, err)) return err ? err->code : SS_ERR_NOMEM;
     bind_grid(s, g);
     ss_heal_rd__step_split_phase(&s->sys, s->w, s->dt, s->nsub, phase);
     /* the convection swaps the fields with the work buffers */
     for (int f = 0; f < SS_HEAL_NFIELDS; f++) g->field[f] = s->sys.u[f];
     if (phase == 2) {
+        keloid_volume(s, g);
         g->t_days += s->dt;
         g->step++;
     }
@@ -949,6 +992,8 @@ static ss_status step_begin(ss_heal_solver *s, ss_heal_grid *g, ss_error *err) {
         return ss_error_set(err, SS_ERR_INPUT,
                             "heal step: grid %dx%dx%d does not match the solver's %dx%dx%d", g->nx,
                             g->ny, g->nz, s->nx, s->ny, s->nz);
+    ss_status sa = keloid_alloc(s, g, err);
+    if (sa) return sa;
     bind_grid(s, g);
     const int has_vel = g->velocity[0] || g->velocity[1] || g->velocity[2];
     if (has_vel) {
@@ -971,6 +1016,7 @@ static ss_status step_begin(ss_heal_solver *s, ss_heal_grid *g, ss_error *err) {
 
 static void step_end(ss_heal_solver *s, ss_heal_grid *g) {
     for (int f = 0; f < SS_HEAL_NFIELDS; f++) g->field[f] = s->sys.u[f];
+    keloid_volume(s, g);
     g->t_days += s->dt;
     g->step++;
 }

@@ -200,6 +200,15 @@ static const pdef PDEFS[] = {
      "of the dermis on the trunk and limbs (estimate); the deeper tissue of the block stays "
      "intact",
      2.0, 2.0, 2.0},
+    {"keloid_gain", OFF(keloid_gain), "1",
+     "keloid only (docs/heal-model.md [D16]): share of the keloid deposition that the packing "
+     "limit refuses (the part its (1 - rho/rho_sat) factor removes) that stays as added tissue "
+     "volume in its column, so the keloid keeps rising after its dermis saturates (keloids "
+     "grow slowly over months to years and stand proud of the skin, Bayat et al. 2003, BMJ "
+     "326:88; untreated keloids keep enlarging over 1-6 years of follow-up). Calibrated (no "
+     "measured height growth rate found): the default keloid's elevation rises ~1 mm per 100 "
+     "days after its dermis saturates; 0 = none",
+     0.0, 0.0, 0.03},
 };
 #define NPDEFS ((int)(sizeof PDEFS / sizeof PDEFS[0]))
 /* keys whose value may be negative */

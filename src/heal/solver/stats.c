@@ -34,15 +34,17 @@ void ss_heal_stats_acc_init(ss_heal_stats_acc *a) {
 static float elev_k(const ss_heal_grid *g) { return (float)(SS_HEAL_COLLAGEN_VOLUME * g->dx_mm); }
 
 void ss_heal_elevation_scan(const ss_heal_grid *g, int z0, int z1, float *elev) {
-    const float k = elev_k(g), *rho = g->field[SS_HEAL_SCAR];
+    const float k = elev_k(g), *rho = g->field[SS_HEAL_SCAR], *ad = g->added;
     const size_t ncol = (size_t)g->nx * (size_t)g->ny;
     if (z0 < 0) z0 = 0;
     if (z1 > g->nz) z1 = g->nz;
     for (int z = z1 - 1; z >= z0; z--) {
         const uint8_t *c = g->cell + (size_t)z * ncol;
         const float *r = rho + (size_t)z * ncol;
+        const size_t zo = (size_t)z * ncol;
         for (size_t i = 0; i < ncol; i++)
-            if (is_tissue(c[i])) elev[i] += ss_heal_elevation_term(r[i], c[i], k);
+            if (is_tissue(c[i]))
+                elev[i] += ss_heal_elevation_term(r[i] + (ad ? ad[zo + i] : 0.0f), c[i], k);
     }
 }
 
@@ -191,7 +193,7 @@ static inline void bucket_add(bucket_sums *bs, int f, float v) {
  * float into elev (row-major over the range) as ss_heal_elevation_scan. */
 static void add_planes(ss_heal_stats_acc *a, const ss_heal_grid *g, int x0, int x1, int y0, int y1,
                        float *elev, bucket_sums *bs) {
-    const float k = elev_k(g), *rho = g->field[SS_HEAL_SCAR];
+    const float k = elev_k(g), *rho = g->field[SS_HEAL_SCAR], *ad = g->added;
     const int w = x1 - x0;
     memset(bs, 0, sizeof *bs);
     for (int z = g->nz - 1; z >= 0; z--)
@@ -206,7 +208,7 @@ static void add_planes(ss_heal_stats_acc *a, const ss_heal_grid *g, int x0, int 
                 bs->adds++;
                 for (int f = 0; f < SS_HEAL_NFIELDS; f++) bucket_add(bs, f, g->field[f][c]);
                 if (rho[c] > a->scar_max) a->scar_max = rho[c];
-                ev[x - x0] += ss_heal_elevation_term(rho[c], g->cell[c], k);
+                ev[x - x0] += ss_heal_elevation_term(rho[c] + (ad ? ad[c] : 0.0f), g->cell[c], k);
             }
         }
     buckets_fold(a, bs);
@@ -288,12 +290,12 @@ void ss_heal_stats_acc_add_stack(ss_heal_stats_acc *a, const ss_heal_grid *g, in
                 if (s[c] > cs->smax) cs->smax = s[c];
             }
             /* the elevation: every tissue cell of the owned levels, top down */
-            const float k = elev_k(g), *rho = g->field[SS_HEAL_SCAR];
+            const float k = elev_k(g), *rho = g->field[SS_HEAL_SCAR], *ad = g->added;
             for (int z = g->nz - 2; z >= 1; z--) {
                 const int Z = z + zoff;
                 const size_t c = ss_heal_idx(g, x, y, z);
                 if (Z >= 1 && Z <= gz - 2 && is_tissue(g->cell[c]))
-                    cs->elev += ss_heal_elevation_term(rho[c], g->cell[c], k);
+                    cs->elev += ss_heal_elevation_term(rho[c] + (ad ? ad[c] : 0.0f), g->cell[c], k);
             }
             if (bottom && cs->phase)
                 add_column(a, cs->initial, cs->region, cs->smax, cs->esurf, cs->elev);
