@@ -823,7 +823,7 @@ int cmd_skin(int argc, char **argv) {
     ss_status st = make_settings(&o, &s, &err);
     if (!st && o.list_params) {
         for (const char *const *nm = ss_skin_dist_names(); *nm; nm++)
-            printf("%-24s %g\n", *nm, ss_skin_dist_get(&s.dist, *nm));
+            printf("%-26s %g\n", *nm, ss_skin_dist_get(&s.dist, *nm));
         opts_free(&o);
         return 0;
     }

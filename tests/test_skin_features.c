@@ -251,7 +251,12 @@ static void test_single_features(void **state) {
             double sc = dc < 0.8 ? ss_profile_sigmoid(dc, 0.4) : 0.0;
             double al = ss_profile_follicle(df, 0.15, 0.4);
             const double lo = s.base_lo[SS_BIO_MELANIN];
-            double mel = lo + sm * 0.2 * (1.0 + 3.0 * lo); /* contrast follows the tone */
+            double mel = lo + sm * 0.2 * (1.0 + s.dist.mole_tone_gain * lo); /* follows the tone */
+            /* the hair: the texel goes to the hair's pigment by the alpha */
+            const double mh = s.dist.hair_melanin + s.dist.hair_gain * lo;
+            mel += (mh - lo) * al;
+            const double pheo = s.dist.lip_pheomelanin +
+                                (s.dist.hair_pheomelanin / mh - s.dist.lip_pheomelanin) * al;
             double h = sc * 0.3 + 0.6 * sm * 0.2;
             if (df > 0.15) h -= 0.012 * al; /* the follicle opening's pit */
             if (df <= 0.15 && h < s.dist.follicle_height) h = s.dist.follicle_height;
@@ -259,9 +264,8 @@ static void test_single_features(void **state) {
             assert_float_equal(p[SS_BIO_MELANIN], mel, 2e-6);
             assert_float_equal(p[SS_BIO_HEIGHT_MM], h, 2e-6);
             assert_float_equal(p[SS_BIO_BLOOD], blood, 2e-6);
-            assert_float_equal(p[SS_BIO_PHEOMELANIN], s.dist.lip_pheomelanin, 2e-6);
-            assert_float_equal(p[SS_BIO_EXTRA_A], al, 2e-6);
-            if (al > 0) assert_float_equal(p[SS_BIO_EXTRA_R], s.dist.hair_rgb[0], 2e-6);
+            assert_float_equal(p[SS_BIO_PHEOMELANIN], pheo, 2e-6);
+            assert_float_equal(p[SS_BIO_EXTRA_A], 0.0, 0); /* hair is pigment, no extra colour */
         }
     ss_image_free(bio);
     ss_image_free(lips);
@@ -270,9 +274,9 @@ static void test_single_features(void **state) {
 /* A follicle smaller than a texel is area-sampled: on 0.2 mm texels an
  * opening of r_i 0.04 mm darkens by the area it covers, wherever it falls
  * in its texel. Moved by a fraction of a texel, its summed alpha (its
- * coverage) stays within 10 % and near the disk integral; its peak texel
- * stays well under full contrast (point sampling: 1 at the texel centre, 0
- * a quarter texel away). */
+ * coverage, read as the share of the hair's melanin its texels took) stays within 10 % and near the
+ * disk integral; its peak texel stays well under full contrast (point sampling: 1 at the texel
+ * centre, 0 a quarter texel away). */
 static void test_follicle_area_sampled(void **state) {
     (void)state;
     ss_error err;
@@ -302,8 +306,11 @@ static void test_follicle_area_sampled(void **state) {
         ss_image *bio = ss_skin_bio_maps(&s, NULL, &l, &err);
         assert_non_null(bio);
         double sum = 0.0, peak = 0.0;
+        /* the alpha is the share of the hair's pigment a texel took */
+        const double lo = s.base_lo[SS_BIO_MELANIN];
+        const double mh = s.dist.hair_melanin + s.dist.hair_gain * lo;
         for (int i = 0; i < 32 * 32; i++) {
-            double a = bio->data[(size_t)i * SS_BIO_NCHANNELS + SS_BIO_EXTRA_A];
+            double a = (bio->data[(size_t)i * SS_BIO_NCHANNELS + SS_BIO_MELANIN] - lo) / (mh - lo);
             sum += a;
             peak = fmax(peak, a);
         }
@@ -334,6 +341,11 @@ static void test_seamless_wrap(void **state) {
     const int N = 128;
     for (int c = 0; c < SS_BIO_NCHANNELS; c++) {
         if (c == SS_BIO_OXYGENATION || c == SS_BIO_SC_CM || c == SS_BIO_EPIDERMIS_CM) continue;
+        if (c >= SS_BIO_EXTRA_R && c <= SS_BIO_EXTRA_A) { /* none: the hair is pigment */
+            for (int i = 0; i < N * N; i++)
+                assert_true(bio->data[(size_t)i * SS_BIO_NCHANNELS + c] == 0.0f);
+            continue;
+        }
         double maxc = 0.0, maxr = 0.0, wc = 0.0, wr = 0.0;
         for (int x = 0; x < N; x++) {
             double dc = 0.0, dr = 0.0;
@@ -748,7 +760,22 @@ static void test_mole_border(void **state) {
                     s1 += v, s2 += v * v, n++;
                 }
             if (!dark) sdev[k] = sqrt(fmax(0.0, s2 / n - (s1 / n) * (s1 / n)));
-            if (k == 0) inside_mel[dark] = s1 / n - s.base_lo[SS_BIO_MELANIN];
+            if (k == 0) {
+                /* the melanin the light crosses: melanin x epidermis over the
+                 * skin's epidermis (above the table's top a mole thickens the
+                 * pigmented layer) */
+                double col = 0.0;
+                for (int y = 54; y < 74; y++)
+                    for (int x = 22; x < 42; x++) {
+                        const float *p = ss_image_px(bio, x, y);
+                        assert_true(p[SS_BIO_MELANIN] <= s.base_hi[SS_BIO_MELANIN] + 1e-6);
+                        assert_true(p[SS_BIO_EPIDERMIS_CM] <=
+                                    s.base_hi[SS_BIO_EPIDERMIS_CM] + 1e-7);
+                        col += p[SS_BIO_MELANIN] * p[SS_BIO_EPIDERMIS_CM];
+                    }
+                inside_mel[dark] =
+                    col / n / s.base_lo[SS_BIO_EPIDERMIS_CM] - s.base_lo[SS_BIO_MELANIN];
+            }
         }
         /* 0.3 mm outside the outline: untouched skin */
         double out = ss_image_px(bio, 32 + 23, 64)[SS_BIO_MELANIN];
@@ -877,6 +904,82 @@ static void test_tone_ends(void **state) {
     ss_mm_table_free(t);
 }
 
+/* Mean L* of the base colour over texels (x0..x1, y0..y1), or over those
+ * whose centre lies between r0 and r1 texels of (cx, cy) when r1 > 0. */
+static double mean_lstar(const ss_image *bc, int x0, int y0, int x1, int y1, double cx, double cy,
+                         double r0, double r1) {
+    double sum = 0.0;
+    int n = 0;
+    for (int y = y0; y <= y1; y++)
+        for (int x = x0; x <= x1; x++) {
+            const double d = hypot(x + 0.5 - cx, y + 0.5 - cy);
+            if (r1 > 0.0 && (d < r0 || d >= r1)) continue;
+            double rgb[3], lab[3];
+            for (int c = 0; c < 3; c++) rgb[c] = ss_image_px(bc, x, y)[c];
+            ss_srgb_linear_to_lab(rgb, lab);
+            sum += lab[0], n++;
+        }
+    assert_true(n > 0);
+    return sum / n;
+}
+
+/* Feature contrast follows the tone, through the shipped table: one mole
+ * (r 1 mm, M 0.1, uniform pigment) and one follicle on uniform forearm skin
+ * at 0.025 mm texels, at melanin 0.01, 0.05, 0.15 and 0.3. The mole is darker
+ * than the skin around it at every tone, by at least 8 L* and a third of the
+ * skin's L* (with a stop at the table's top melanin it kept 6 L*, a quarter,
+ * at 0.3). The hair stub is darker than the skin at every tone, and on light
+ * skin (0.01) a light brown, L* > 40 (a fixed dark hair colour: L* 16). */
+static void test_feature_contrast_follows_tone(void **state) {
+    (void)state;
+    ss_error err;
+    ss_mm_table *t = load_table();
+    ss_skin_lut *lut = ss_skin_lut_create(t, &err);
+    assert_non_null(lut);
+    const int N = 256;
+    ss_skin_settings s;
+    assert_int_equal(ss_skin_settings_preset(&s, "forearm", N, &err), SS_OK);
+    s.world_size_cm = 0.64; /* 0.025 mm texels: the stub covers its centre texel */
+    s.phi = 0.0;
+    s.dist.mottle_melanin = s.dist.mottle_blood = s.dist.mottle_height = 0.0;
+    s.dist.relief_depth = s.dist.relief_depth2 = 0.0;
+    ss_skin_feature fs[2];
+    memset(fs, 0, sizeof fs);
+    fs[0].type = SS_FEAT_MOLE, fs[0].x = 0.3, fs[0].y = 0.5, fs[0].r = 1.0, fs[0].m = 0.1;
+    fs[1].type = SS_FEAT_FOLLICLE, fs[1].x = (192 + 0.5) / N, fs[1].y = (128 + 0.5) / N;
+    fs[1].r = s.dist.follicle_r_inner, fs[1].r2 = s.dist.follicle_r_outer;
+    ss_skin_feature_list l = {2, fs};
+    const double mel[4] = {0.01, 0.05, 0.15, 0.3};
+    const double tex_mm = 6.4 / N, mcx = 0.3 * N, mcy = 0.5 * N;
+    for (int k = 0; k < 4; k++) {
+        s.base_lo[SS_BIO_MELANIN] = mel[k];
+        ss_image *bio = ss_skin_bio_maps(&s, NULL, &l, &err);
+        assert_non_null(bio);
+        ss_skin_maps m;
+        assert_int_equal(ss_skin_render_maps(bio, lut, s.world_size_cm, 0, &m, &err), SS_OK);
+        /* the mole: its inner half against a ring 0.5-1 mm outside it */
+        const double r = 1.0 / tex_mm;
+        const double Lm = mean_lstar(m.base_color, 0, 0, N / 2, N - 1, mcx, mcy, 0.0, 0.5 * r);
+        const double Ls = mean_lstar(m.base_color, 0, 0, N / 2, N - 1, mcx, mcy, r + 0.5 / tex_mm,
+                                     r + 1.0 / tex_mm);
+        /* the follicle: its centre texel, and skin 0.2-0.4 mm away */
+        const double Lf = mean_lstar(m.base_color, 192, 128, 192, 128, 0, 0, 0, 0);
+        const double Lfs =
+            mean_lstar(m.base_color, 160, 96, 224, 160, 192.5, 128.5, 0.2 / tex_mm, 0.4 / tex_mm);
+        print_message("melanin %.2f: skin L* %.1f, mole %.1f (dL* %.1f), hair stub %.1f (skin "
+                      "%.1f)\n",
+                      mel[k], Ls, Lm, Lm - Ls, Lf, Lfs);
+        assert_true(Lm - Ls <= -8.0);
+        assert_true(Lm - Ls <= -Ls / 3.0);
+        assert_true(Lf < Lfs - 5.0);
+        if (k == 0) assert_true(Lf > 40.0 && Lf < Lfs - 8.0);
+        ss_skin_maps_free(&m);
+        ss_image_free(bio);
+    }
+    ss_skin_lut_free(lut);
+    ss_mm_table_free(t);
+}
+
 /* The _poll calls: cancelled, SS_ERR_RUNTIME "cancelled" and nothing kept
  * (ASan: nothing leaks); never stopped, the plain calls' maps bit for bit. */
 static void test_poll_cancel(void **state) {
@@ -961,6 +1064,7 @@ int main(void) {
         cmocka_unit_test(test_mole_border),
         cmocka_unit_test(test_render_surface_maps),
         cmocka_unit_test(test_tone_ends),
+        cmocka_unit_test(test_feature_contrast_follows_tone),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

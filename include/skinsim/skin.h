@@ -101,7 +101,10 @@ typedef struct ss_skin_dist {
     double mole_m_min, mole_m_range;                            /* M = min + range U */
     double follicle_r_inner, follicle_r_outer, follicle_height; /* stub height mm */
     double follicle_blood_drop;                                 /* blood *= 1 - drop*alpha */
-    double hair_rgb[3];                                         /* linear extra colour */
+    /* hair pigment (docs/skin.md): melanin m_h = hair_melanin + hair_gain x
+     * the skin's melanin, of which hair_pheomelanin is pheomelanin (constant,
+     * as measured in hair: Ito & Wakamatsu 2011); rendered by the table */
+    double hair_melanin, hair_gain, hair_pheomelanin;
     double freckle_r_mean, freckle_r_sigma, freckle_m_max, freckle_h_scale, freckle_power;
     double lip_blood, lip_pheomelanin;
     double wrinkle_max_length, wrinkle_width, wrinkle_depth, wrinkle_cross_deg;
@@ -109,6 +112,9 @@ typedef struct ss_skin_dist {
     /* ours (docs/skin.md): moles r = r_min + |s N|, a border of this width,
      * reticular pigment in this share of moles */
     double mole_r_min, mole_border, mole_reticular;
+    /* the pigment a mole or freckle adds: x (1 + tone_gain x the skin's
+     * melanin), so its contrast follows the tone (docs/skin.md) */
+    double mole_tone_gain, freckle_tone_gain;
     /* baseline mottling in mm (Tsumura et al. 2003 chromophore maps):
      * relative amplitude of melanin and blood, finest and coarsest
      * wavelength of the fBm octaves */

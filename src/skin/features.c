@@ -66,9 +66,9 @@ static const dist_field DIST_FIELDS[] = {
     DF("follicles.r_outer", follicle_r_outer, 0, 100),
     DF("follicles.height", follicle_height, 0, 100),
     DF("follicles.blood_drop", follicle_blood_drop, 0, 1),
-    DF("follicles.hair_r", hair_rgb[0], 0, 1),
-    DF("follicles.hair_g", hair_rgb[1], 0, 1),
-    DF("follicles.hair_b", hair_rgb[2], 0, 1),
+    DF("follicles.hair_melanin", hair_melanin, 0, 2),
+    DF("follicles.hair_gain", hair_gain, 0, 100),
+    DF("follicles.hair_pheomelanin", hair_pheomelanin, 0, 2),
     DF("freckles.r_mean", freckle_r_mean, 0, 100),
     DF("freckles.r_sigma", freckle_r_sigma, 0, 100),
     DF("freckles.m_max", freckle_m_max, 0, 1),
@@ -84,6 +84,8 @@ static const dist_field DIST_FIELDS[] = {
     DF("moles.r_min", mole_r_min, 0, 100),
     DF("moles.border", mole_border, 0, 1),
     DF("moles.reticular", mole_reticular, 0, 1),
+    DF("moles.tone_gain", mole_tone_gain, 0, 100),
+    DF("freckles.tone_gain", freckle_tone_gain, 0, 100),
     DF("mottle.melanin", mottle_melanin, 0, 2),
     DF("mottle.blood", mottle_blood, 0, 2),
     DF("mottle.min_mm", mottle_min_mm, 0.01, 1000),
@@ -121,9 +123,13 @@ void ss_skin_dist_default(ss_skin_dist *d) {
     d->follicle_r_outer = 0.1;
     d->follicle_height = 0.02;    /* "its maximum": ours */
     d->follicle_blood_drop = 0.5; /* §4.8.5 example: ours */
-    d->hair_rgb[0] = 0.030;       /* dark brown hair, linear */
-    d->hair_rgb[1] = 0.018;
-    d->hair_rgb[2] = 0.010;
+    /* hair: melanin 0.04 + 4 x the skin's (ours: blond to light brown on
+     * light skin, black from melanin ~0.1), pheomelanin a constant 0.02 of
+     * it (Ito & Wakamatsu 2011: eumelanin falls from black to blond hair,
+     * pheomelanin stays at a trace) */
+    d->hair_melanin = 0.04;
+    d->hair_gain = 4.0;
+    d->hair_pheomelanin = 0.02;
     d->freckle_r_mean = 0.8; /* §5.3.5 r ~ N(0.8, 0.4), M = 0.12 U, H = 0.015 (M + U) */
     d->freckle_r_sigma = 0.4;
     d->freckle_m_max = 0.12;
@@ -139,6 +145,8 @@ void ss_skin_dist_default(ss_skin_dist *d) {
     d->mole_r_min = 0.0;
     d->mole_border = 0.08; /* naevi are mostly sharp-edged: a 0.08 mm border */
     d->mole_reticular = 0.4;
+    d->mole_tone_gain = 10.0; /* pigment x (1 + 10 melanin): ours, docs/skin.md */
+    d->freckle_tone_gain = 10.0;
     d->mottle_melanin = 0.12; /* relative sd of melanin and blood (ours, docs/skin.md) */
     d->mottle_blood = 0.25;
     d->mottle_min_mm = 0.1;
@@ -236,7 +244,7 @@ ss_status ss_skin_settings_preset(ss_skin_settings *s, const char *preset, int s
         s->dist.wrinkle_depth = 0.025;
         s->dist.wrinkle_cross_deg = 60.0;
         s->base_lo[SS_BIO_MELANIN] = 0.02;
-        s->dist.mole_m_min = 0.05; /* with the tone factor 1 + 3 melanin */
+        s->dist.mole_m_min = 0.05; /* with the tone factor 1 + 10 melanin */
         s->dist.mole_m_range = 0.12;
         s->base_lo[SS_BIO_BLOOD] = 0.007;
         /* a forearm's stratum corneum (~13-15 um) and viable epidermis (~85-90

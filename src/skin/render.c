@@ -1,8 +1,9 @@
 /* From biological parameter maps to render maps (seed 003 §4.8.8 line 16,
  * mmd(FEATURE(...))): every texel's optical parameters go through the
  * ModelMatch table (optics_fit.h, the same table `skinsim optics table
- * --lookup` reads) to the GGX render parameters; the extra colour (hair)
- * is laid over the base colour; height becomes a normal map.
+ * --lookup` reads) to the GGX render parameters; the extra colour (an over
+ * layer; `skin` writes none, its hair is pigment) is laid over the base
+ * colour; height becomes a normal map.
  *
  * The lookup: ss_mm_table_lookup interpolates all 18 fields of an entry in
  * double over 64 corners with a weight product per corner. A texture needs

@@ -238,6 +238,7 @@ static void tile_baseline(const texel_ctx *c, int tx0, int ty0, int tw, int th, 
                 p[a] = q < lo ? lo : q > lo + wid[a] ? lo + wid[a] : q;
             }
             p[SS_BIO_HEIGHT_MM] = (float)d->mottle_height * m[MOT_HEIGHT]; /* gentle undulation */
+            /* no extra colour: the hair is pigment (follicles) */
             p[7] = p[8] = p[9] = p[10] = 0.0f;
             /* the relief network, oriented by the wrinkle field (read every
              * 8 texels: it turns over millimetres) */
@@ -271,6 +272,32 @@ static void tile_baseline(const texel_ctx *c, int tx0, int ty0, int tw, int th, 
             }
             p[SS_BIO_SURFACE_SIGMA] = sig;
         }
+    }
+}
+
+/* Adds melanin dm to a texel (a feature's pigment). Above the top of the
+ * melanin range (base_hi: the table's axis, 0.43), which the lookup would
+ * clamp, the excess goes into the thickness of the pigmented layer: melanin
+ * x epidermis thickness, the melanin the light crosses, grows as asked, up
+ * to the epidermis range's top. So a mole on dark skin still darkens (as
+ * naevi do at every tone) instead of stopping at the table's darkest
+ * melanin. Continuous in dm; a texel already above the top (the baseline's
+ * mottle) keeps its melanin and scales its thickness. */
+static inline void add_melanin(const ss_skin_settings *s, float *p, float dm) {
+    const float top = (float)s->base_hi[SS_BIO_MELANIN];
+    const float e_top = (float)s->base_hi[SS_BIO_EPIDERMIS_CM];
+    const float m0 = p[SS_BIO_MELANIN], mt = m0 + dm;
+    float scale = 1.0f;
+    if (m0 >= top && m0 > 0.0f)
+        scale = mt / m0;
+    else if (mt > top && top > 0.0f)
+        p[SS_BIO_MELANIN] = top, scale = mt / top;
+    else
+        p[SS_BIO_MELANIN] = mt > 0.0f ? mt : 0.0f;
+    if (scale != 1.0f) {
+        const float e0 = p[SS_BIO_EPIDERMIS_CM], lim = e0 > e_top ? e0 : e_top;
+        const float e = e0 * (scale > 0.0f ? scale : 0.0f);
+        p[SS_BIO_EPIDERMIS_CM] = e < lim ? e : lim;
     }
 }
 
@@ -332,7 +359,7 @@ static void apply_feature(const ss_skin_settings *s, const ss_skin_feature *f, u
                     p[SS_BIO_HEIGHT_MM] -= (float)(prof * f->h);
                     /* a furrow: slightly darker (as melanin, so it follows
                      * the tone) and rough-walled */
-                    p[SS_BIO_MELANIN] *= (float)(1.0 + 0.15 * prof);
+                    add_melanin(s, p, (float)(0.15 * prof) * p[SS_BIO_MELANIN]);
                     p[SS_BIO_SURFACE_SIGMA] +=
                         (0.75f - p[SS_BIO_SURFACE_SIGMA]) * (float)(0.5 * prof);
                 }
@@ -353,14 +380,18 @@ static void apply_feature(const ss_skin_settings *s, const ss_skin_feature *f, u
             case SS_FEAT_MOLE: {
                 /* a naevus: a sharp border (moles.border wide), a slightly
                  * irregular outline, uniform or reticular pigment; melanin
-                 * added in proportion to M and to the skin's own melanin,
-                 * so the contrast follows the tone */
+                 * added in proportion to M and grows with the skin's own
+                 * melanin (1 + moles.tone_gain melanin), beyond the table's
+                 * top as a thicker pigmented layer: the contrast follows
+                 * the tone */
                 const double a = ss_profile_mole(dist, ss_mole_outline(f->r, atan2(v - cy, u - cx)),
                                                  d->mole_border);
                 if (a > 0.0) {
                     const int k = (y - ty0) * TILE + (x - tx0);
                     const double pat = f->p > 0.5 ? 0.45 + 0.55 * sqrt(sc->groove[k]) : 1.0;
-                    p[SS_BIO_MELANIN] += (float)(a * pat * f->m * (1.0 + 3.0 * p[SS_BIO_MELANIN]));
+                    add_melanin(
+                        s, p,
+                        (float)(a * pat * f->m * (1.0 + d->mole_tone_gain * p[SS_BIO_MELANIN])));
                     p[SS_BIO_HEIGHT_MM] += (float)(f->h * a * f->m);
                 }
                 break;
@@ -373,7 +404,9 @@ static void apply_feature(const ss_skin_settings *s, const ss_skin_feature *f, u
                     const float mt = sc->mottle[(y - ty0) * TILE + (x - tx0)];
                     double U = 0.6 + 0.25 * mt;
                     U = U < 0.1 ? 0.1 : U > 1.0 ? 1.0 : U;
-                    p[SS_BIO_MELANIN] += (float)(a * f->m * U * (1.0 + 3.0 * p[SS_BIO_MELANIN]));
+                    add_melanin(
+                        s, p,
+                        (float)(a * f->m * U * (1.0 + d->freckle_tone_gain * p[SS_BIO_MELANIN])));
                     p[SS_BIO_PHEOMELANIN] += (float)(a * f->p * U);
                 }
                 break;
@@ -404,10 +437,17 @@ static void apply_feature(const ss_skin_settings *s, const ss_skin_feature *f, u
                     al *= inv, pit *= inv, core *= inv;
                 }
                 if (al > 0.0) {
-                    /* premultiplied "over" while evaluating; un-premultiplied at the end */
-                    for (int c = 0; c < 3; c++)
-                        p[7 + c] = (float)(d->hair_rgb[c] * al + p[7 + c] * (1.0 - al));
-                    p[10] = (float)(al + p[10] * (1.0 - al));
+                    /* the hair: pigment that the table renders, melanin
+                     * m_h = hair_melanin + hair_gain x the texel's melanin
+                     * (lighter hair on light skin, black on dark), its
+                     * pheomelanin a constant amount of it; the texel goes
+                     * to the hair's pigment by the alpha (its coverage) */
+                    const double m = p[SS_BIO_MELANIN];
+                    const double mh = d->hair_melanin + d->hair_gain * m;
+                    double ph = mh > 0.0 ? d->hair_pheomelanin / mh : 0.0;
+                    if (ph > 1.0) ph = 1.0;
+                    add_melanin(s, p, (float)((mh - m) * al));
+                    p[SS_BIO_PHEOMELANIN] += (float)((ph - p[SS_BIO_PHEOMELANIN]) * al);
                     p[SS_BIO_BLOOD] *= (float)(1.0 - d->follicle_blood_drop * al);
                     /* the opening around the hair: a shallow pit, rough */
                     if (pit > 0.0) p[SS_BIO_HEIGHT_MM] -= (float)(0.012 * pit);
@@ -531,14 +571,12 @@ static ss_image *bio_maps(const ss_skin_settings *s, const ss_skin_fields *field
                                   f->type == SS_FEAT_WRINKLE ? &flat[flat_of[e->feature]] : NULL,
                                   e->ox, e->oy, tx0, ty0, tw, th, mm_per_unit, bio, sc);
                 }
-                /* clamp fractions, un-premultiply the extra colour */
+                /* clamp fractions and the surface roughness */
                 for (int y = ty0; y < ty0 + th; y++)
                     for (int x = tx0; x < tx0 + tw; x++) {
                         float *p = ss_image_px(bio, x, y);
                         for (int a = 0; a < 4; a++)
                             p[a] = p[a] < 0.0f ? 0.0f : p[a] > 1.0f ? 1.0f : p[a];
-                        if (p[10] > 0.0f)
-                            for (int c = 7; c < 10; c++) p[c] /= p[10];
                         float sg = p[SS_BIO_SURFACE_SIGMA];
                         p[SS_BIO_SURFACE_SIGMA] = sg < 0.05f ? 0.05f : sg > 1.5f ? 1.5f : sg;
                     }
