@@ -443,9 +443,17 @@ static void apply_feature(const ss_skin_settings *s, const ss_skin_feature *f, u
                      * pheomelanin a constant amount of it; the texel goes
                      * to the hair's pigment by the alpha (its coverage) */
                     const double m = p[SS_BIO_MELANIN];
-                    const double mh = d->hair_melanin + d->hair_gain * m;
+                    double mh = d->hair_melanin + d->hair_gain * m;
                     double ph = mh > 0.0 ? d->hair_pheomelanin / mh : 0.0;
                     if (ph > 1.0) ph = 1.0;
+                    /* no more than the darkest the table renders (the top
+                     * melanin through the thickest epidermis): beyond it the
+                     * stub is no darker, only the fade around it would be */
+                    const double e = p[SS_BIO_EPIDERMIS_CM];
+                    const double mmax =
+                        e > 0.0 ? s->base_hi[SS_BIO_MELANIN] * s->base_hi[SS_BIO_EPIDERMIS_CM] / e
+                                : mh;
+                    if (mh > mmax && mmax > m) mh = mmax;
                     add_melanin(s, p, (float)((mh - m) * al));
                     p[SS_BIO_PHEOMELANIN] += (float)((ph - p[SS_BIO_PHEOMELANIN]) * al);
                     p[SS_BIO_BLOOD] *= (float)(1.0 - d->follicle_blood_drop * al);
