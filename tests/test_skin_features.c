@@ -4,7 +4,8 @@
  * distribution (chi-square), feature effects and blend order on single
  * features, seamless wrap, determinism across thread counts, the
  * features.csv round trip, the render lookup against ss_mm_table_lookup,
- * and bad inputs. */
+ * feature contrast through the table at four tones (moles, hair), and bad
+ * inputs. */
 #include "testutil.h"
 #include "skinsim/optics.h"
 #include "skinsim/skin.h"

@@ -143,7 +143,8 @@ enum {
     SS_BIO_SC_CM = 4,        /* stratum corneum thickness, cm */
     SS_BIO_EPIDERMIS_CM = 5, /* epidermis thickness, cm */
     SS_BIO_HEIGHT_MM = 6,    /* displacement from the mean skin surface, mm */
-    SS_BIO_EXTRA_R = 7,      /* extra colour RGBA (linear), over the skin colour */
+    SS_BIO_EXTRA_R = 7,      /* extra colour RGBA (linear), over the skin colour
+                              * (ss_skin_bio_maps writes 0: hair is pigment) */
     SS_BIO_EXTRA_G = 8,
     SS_BIO_EXTRA_B = 9,
     SS_BIO_EXTRA_A = 10,

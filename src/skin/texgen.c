@@ -14,9 +14,12 @@
  * baseline skin is written first, then the lips, then each listed feature
  * over the texels of its box in list order, so each texel sees the
  * features in priority order (§4.8.5: everything that adds blood before the
- * follicles take it away). The baseline noise is a per-texel uniform per
- * parameter (§5.3.1, phi x range width), drawn from the counter-based RNG by
- * texel index, so the result does not depend on tiles or threads.
+ * follicles take it away). Features colour the skin only through its
+ * pigment (add_melanin: above the table's top melanin, a thicker pigmented
+ * layer), hair too, so the table renders them at every tone. The
+ * baseline noise is a per-texel uniform per parameter (§5.3.1, phi x range
+ * width), drawn from the counter-based RNG by texel index, so the result
+ * does not depend on tiles or threads.
  *
  * Supports (where a feature is evaluated): cyst and mole 2 r (the sigmoid
  * profile is below 7e-4 there), freckle r / 1.2 (its profile is 0 beyond),
