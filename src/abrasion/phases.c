@@ -382,9 +382,11 @@ static inline float capillary_dots(const look *l, size_t r) {
 }
 
 static ss_status render_vasoconstriction(const ctx *c, ss_texture_set *out, ss_error *err) {
-    /* §4.3.1: the fresh, blanched bed (vessels constricted): pale pink-white
-     * exposed dermis with the first punctate bleeding from torn capillary
-     * loops; wet; no erythema yet. */
+    /* §4.3.1: the fresh bed (arterioles constricted, the seed's blanched
+     * phase): exposed dermis, deep red from the torn papillary plexus as
+     * fresh abrasions look, with punctate bleeding from torn capillary loops
+     * (pale pink-white, then salmon pink, did not look like one); wet; no
+     * erythema yet. */
     look l;
     ss_status st = look_create(c, &l, err);
     if (st) return st;
