@@ -70,8 +70,8 @@ void ss_wound_shape_free(ss_wound_shape *w);
  * albedos; src/abrasion/palette.c, docs/abrasion.md): the exposed dermis
  * (blanched, dilated, a capillary loop, granulation tissue), films over the
  * dilated bed (fresh blood, serous exudate, fibrin, dark and light dried
- * crust), and multipliers of the healthy skin (erythema, new epithelium,
- * mature scar, hyperpigmentation). melanin: the skin's melanin fraction
+ * crust), multipliers of the healthy skin (erythema, mature scar) and new
+ * epithelium at melanin factors. melanin: the skin's melanin fraction
  * estimated from the upper texture; ita_deg its typology angle;
  * pih_prevalence the clinical rate of post-inflammatory hyperpigmentation at
  * that skin type (ss_pih_prevalence). */
@@ -79,12 +79,16 @@ void ss_wound_shape_free(ss_wound_shape *w);
 typedef struct ss_abrasion_palette {
     float bed_pale[3], bed[3], capillary[3], granulation[3];
     float blood[3], serous[3], fibrin[3], crust_dark[3], crust_light[3];
-    float erythema[3], new_epithelium[3], scar[3], hyperpigment[3];
+    float erythema[3], scar[3];
     /* the skin with its epidermal melanin times ss_abrasion_melanin_factor(k),
      * as a ratio to the healthy skin: hypo- and hyperpigmentation as the
-     * optics render a melanin change (new_epithelium and scar hold the
-     * skin's own melanin; the healing phases multiply in one of these) */
+     * optics render a melanin change (scar holds the skin's own melanin; the
+     * healing phases multiply in one of these) */
     float melanin_ratio[SS_ABRASION_NMELANIN][3];
+    /* new epithelium, a colour of its own (not a multiplier): a thin
+     * epidermis with the skin's melanin times ss_abrasion_melanin_factor(k)
+     * over young, hyperaemic dermis */
+    float epithelium[SS_ABRASION_NMELANIN][3];
     float melanin, ita_deg, pih_prevalence;
 } ss_abrasion_palette;
 /* The melanin factor of melanin_ratio[k]: 0.25 to 2.5, evenly in log. */

@@ -13,14 +13,18 @@
  *                      bilirubin), fibrin (a scattering protein gel holding
  *                      serum pigment) and dried crust (haemoglobin concentrated
  *                      by drying, deoxygenated, with serum bilirubin);
- *   skin multipliers   erythema (dilated dermal blood), new epithelium (thin,
- *                      over young vascular tissue), mature scar (hypovascular,
- *                      more scattering collagen), post-inflammatory
- *                      hyperpigmentation (melanin doubled) and the skin at nine
- *                      melanin factors 0.25..2.5 (the healing phases' hypo- and
- *                      hyperpigmentation, interpolated in log factor), each
- *                      as the ratio of its albedo to the healthy skin's, so the
- *                      upper skin texture keeps its own detail under them.
+ *   skin multipliers   erythema (dilated dermal blood), mature scar
+ *                      (hypovascular, more scattering collagen) and the skin
+ *                      at nine melanin factors 0.25..2.5 (the healing phases'
+ *                      hypo- and hyperpigmentation, interpolated in log
+ *                      factor), each as the ratio of its albedo to the healthy
+ *                      skin's, so the upper skin texture keeps its own detail
+ *                      under them;
+ *   new epithelium     a colour of its own at the same nine melanin factors:
+ *                      a thin epidermis over young, hyperaemic dermis. Not a
+ *                      multiplier: on a dark skin the ratio of a melanin-poor
+ *                      epidermis to the skin (red and green gain most) times
+ *                      the texture's own saturated brown drew orange.
  *
  * The skin's melanin is estimated from the upper texture's mean luminance
  * (bisection on the model's melanin fraction), so a dark skin given with
@@ -198,10 +202,12 @@ ss_status ss_abrasion_palette_compute(const ss_image *upper, ss_abrasion_palette
         if (!st) st = albedo(d, &der, out, err);                                                   \
         to_f(out, P->field);                                                                       \
     } while (0)
-    /* the fresh bed: vasoconstricted, yet the exposed papillary plexus and the
-     * blood left in it keep it red and wet, not white (0.01 drew pale pink) */
-    DERMIS(bed_pale, 0.035, 0.8);
-    DERMIS(bed, 0.05, 0.9);          /* dilated papillary plexus */
+    /* the fresh bed: the arterioles constrict, yet the torn papillary plexus
+     * and the blood spilled into the exposed dermis make a fresh abrasion deep
+     * red with punctate bleeding, as clinical photographs show it (0.01 drew
+     * pale pink, 0.035 salmon pink: L* 57, C* 30) */
+    DERMIS(bed_pale, 0.10, 0.85);
+    DERMIS(bed, 0.10, 0.9);          /* dilated papillary plexus (0.05 was paler than day 0) */
     DERMIS(capillary, 0.30, 0.95);   /* a capillary loop / petechia */
     DERMIS(granulation, 0.20, 0.95); /* young vascular tissue, beefy red */
 #undef DERMIS
@@ -241,24 +247,32 @@ ss_status ss_abrasion_palette_compute(const ss_image *upper, ss_abrasion_palette
     m.bio.blood = 0.06; /* erythema: dermal blood x12 */
     m.bio.oxygenation = 0.85;
     RATIO(erythema);
-    m = skin; /* new epithelium: thin, over young vessels (its melanin: melanin_ratio) */
-    m.bio.epidermis_thickness_cm *= 0.6;
-    m.bio.blood = 0.02;
-    m.bio.oxygenation = 0.85;
-    RATIO(new_epithelium);
     m = skin; /* mature scar: hypovascular, dense collagen (its melanin: melanin_ratio) */
     m.bio.blood = 0.003;
     m.dermis_scatter = 1.3;
     RATIO(scar);
-    m = skin; /* hyperpigmentation: melanin doubled */
-    m.bio.melanin *= 2.0;
-    RATIO(hyperpigment);
     for (int k = 0; k < SS_ABRASION_NMELANIN; k++) {
         m = skin;
         m.bio.melanin *= ss_abrasion_melanin_factor(k);
         RATIO(melanin_ratio[k]);
     }
 #undef RATIO
+    /* new epithelium as a colour of its own, at each melanin factor: a thin
+     * epidermis (0.6 of the skin's) at the skin's melanin times the factor,
+     * over young, hyperaemic dermis (blood 4 %, 8x the healthy skin's, short
+     * of the erythema's 6 %). As a multiplier of a dark skin texture (its
+     * ratio to the model's skin) a melanin-poor epidermis drew saturated
+     * orange (L* 44, C* 45, hue 51 on a brown skin) where the optics give
+     * pink-brown (L* 39, C* 28, hue 44) */
+    for (int k = 0; k < SS_ABRASION_NMELANIN; k++) {
+        m = skin;
+        m.bio.melanin *= ss_abrasion_melanin_factor(k);
+        m.bio.epidermis_thickness_cm *= 0.6;
+        m.bio.blood = 0.04;
+        m.bio.oxygenation = 0.9;
+        if (!st) st = albedo(d, &m, out, err);
+        to_f(out, P->epithelium[k]);
+    }
     ss_optics_data_close(d);
     return st;
 }

@@ -97,7 +97,7 @@ typedef struct ctx {
     const ss_abrasion_palette *P; /* the tissue colours (optics) */
     float px_per_mm;              /* texture pixels per mm on the body */
     float rim_px;                 /* width of the torn-epidermis rim: 0.35 mm */
-    float lower_mean;             /* mean luminance of the lower skin in the box */
+    float lower_mean, upper_mean; /* mean luminance of the lower and upper skin in the box */
 } ctx;
 
 void ss_abrasion_changed_region(const ss_wound_shape *w, const ss_abrasion_settings *s, int *x,
@@ -127,11 +127,16 @@ static void ctx_init(ctx *c, const ss_wound_shape *w, const ss_base_skin *skin,
     c->bw = w->box_w;
     c->bh = w->box_h;
     ss_abrasion_changed_region(w, s, &c->rx, &c->ry, &c->rw, &c->rh);
-    double acc = 0;
+    double acc = 0, acc_up = 0;
     for (int y = c->by; y < c->by + c->bh; y++)
-        for (int x = c->bx; x < c->bx + c->bw; x++)
-            acc += lum(skin->lower->data + ((size_t)y * (size_t)c->n + (size_t)x) * 3);
-    c->lower_mean = c->bw > 0 && acc > 0 ? (float)(acc / ((double)c->bw * c->bh)) : 1.0f;
+        for (int x = c->bx; x < c->bx + c->bw; x++) {
+            size_t i = ((size_t)y * (size_t)c->n + (size_t)x) * 3;
+            acc += lum(skin->lower->data + i);
+            acc_up += lum(skin->upper->data + i);
+        }
+    double area = (double)c->bw * c->bh;
+    c->lower_mean = c->bw > 0 && acc > 0 ? (float)(acc / area) : 1.0f;
+    c->upper_mean = c->bw > 0 && acc_up > 0 ? (float)(acc_up / area) : 1.0f;
 }
 
 /* A value-noise texture over the wound's box only (noise is only read inside
@@ -339,6 +344,11 @@ static inline void glow_color(const ctx *c, size_t i, float glow, float strength
 static inline float lower_mod(const ctx *c, size_t i) {
     return clampf(lum(c->skin->lower->data + i * 3) / c->lower_mean, 0.8f, 1.2f);
 }
+/* The upper skin texture's relative brightness: new epithelium, a colour of
+ * its own, keeps the skin's grain. */
+static inline float upper_mod(const ctx *c, size_t i) {
+    return clampf(lum(c->skin->upper->data + i * 3) / c->upper_mean, 0.8f, 1.2f);
+}
 
 /* Writes the pixel: outside the jittered outline the glow, inside the bed,
  * the two joined across the rim (rim_mm of torn epidermis) by one lerp, so
@@ -372,9 +382,11 @@ static inline float capillary_dots(const look *l, size_t r) {
 }
 
 static ss_status render_vasoconstriction(const ctx *c, ss_texture_set *out, ss_error *err) {
-    /* §4.3.1: the fresh, blanched bed (vessels constricted): pale pink-white
-     * exposed dermis with the first punctate bleeding from torn capillary
-     * loops; wet; no erythema yet. */
+    /* §4.3.1: the fresh bed (arterioles constricted, the seed's blanched
+     * phase): exposed dermis, deep red from the torn papillary plexus as
+     * fresh abrasions look, with punctate bleeding from torn capillary loops
+     * (pale pink-white, then salmon pink, did not look like one); wet; no
+     * erythema yet. */
     look l;
     ss_status st = look_create(c, &l, err);
     if (st) return st;
@@ -382,8 +394,8 @@ static ss_status render_vasoconstriction(const ctx *c, ss_texture_set *out, ss_e
     FOR_REGION(c) {
         where w = locate_px(c, &l, i);
         if (w.s <= 0.0f) continue; /* healthy skin (fill_healthy) */
-        float m = lower_mod(c, i), dots = 0.45f * capillary_dots(&l, w.r), bed[3];
-        float bl = 0.25f * smooth01(0.6f, 0.9f, l.bleed->data[w.r]);
+        float m = lower_mod(c, i), dots = 0.6f * capillary_dots(&l, w.r), bed[3];
+        float bl = 0.4f * smooth01(0.6f, 0.9f, l.bleed->data[w.r]);
         for (int k = 0; k < 3; k++) {
             float v = P->bed_pale[k] * m;
             v += (P->capillary[k] - v) * dots;
@@ -511,8 +523,11 @@ static ss_status render_scab(const ctx *c, ss_texture_set *out, ss_error *err) {
 /* Maturation at a position (Alg. 4.4's healed border sweeping inward by up to
  * half the closing distance, its inner border rand(0.4, 0.8) of that further
  * in), on the smoothed distance, so its fronts are rounded and nested:
- *   healed (d <= outer): the skin under new epithelium, pink while young
- *     (fading as exp(-age / 120 d), age the days since that ring healed),
+ *   healed (d <= outer): new epithelium, the optics' own colour of a thin
+ *     epidermis over hyperaemic dermis at the ring's melanin (the palette's
+ *     epithelium; pink on light skin, pink-brown on dark), giving way to
+ *     the skin texture as exp(-age / 120 d) (age the days since that ring
+ *     healed),
  *     lightening (1 - exp(-age / 60 d)) and turning into a faint pale scar
  *     after the first month (1 - exp(-(age - 30 d) / 150 d)); its melanin
  *     (a factor of the skin's, drawn through the palette's melanin_ratio)
@@ -551,16 +566,16 @@ static ss_status render_scab(const ctx *c, ss_texture_set *out, ss_error *err) {
 #define REPIG_DAYS 7.0f
 #define SCAR_MELANIN_LOSS 0.25f /* the mature scar's hypopigmentation */
 
-/* The palette's skin ratio at a melanin factor (log-linear between its
- * samples, clamped to 0.25..2.5). */
-static void melanin_ratio(const ss_abrasion_palette *P, float factor, float out[3]) {
+/* One of the palette's tables over melanin factors (melanin_ratio,
+ * epithelium) at a factor: log-linear between its samples, clamped to
+ * 0.25..2.5. */
+static void at_melanin(const float table[SS_ABRASION_NMELANIN][3], float factor, float out[3]) {
     double x =
         log10(fmax(factor, 1e-6) / ss_abrasion_melanin_factor(0)) * (SS_ABRASION_NMELANIN - 1);
     x = x < 0 ? 0 : x > SS_ABRASION_NMELANIN - 1 ? SS_ABRASION_NMELANIN - 1 : x;
     int k = (int)x < SS_ABRASION_NMELANIN - 1 ? (int)x : SS_ABRASION_NMELANIN - 2;
     float t = (float)(x - k);
-    for (int c = 0; c < 3; c++)
-        out[c] = P->melanin_ratio[k][c] + (P->melanin_ratio[k + 1][c] - P->melanin_ratio[k][c]) * t;
+    for (int c = 0; c < 3; c++) out[c] = table[k][c] + (table[k + 1][c] - table[k][c]) * t;
 }
 static inline int maturation_px(const ctx *c, const look *l, size_t i, double position,
                                 double span_days, double after_days, float *rgb, float *refl) {
@@ -602,19 +617,22 @@ static inline int maturation_px(const ctx *c, const look *l, size_t i, double po
     /* the epidermis's melanin, as a factor of the skin's: the new epithelium
      * melanin-poor, repigmenting over weeks, darkened by post-inflammatory
      * hyperpigmentation, and the mature scar somewhat hypopigmented; drawn as
-     * the optics render that melanin (the palette's melanin_ratio), so a dark
-     * skin heals lighter tan, then darker, then faintly lighter, at its own
-     * hue (the melanin change as one more multiplier per channel, weighted
-     * in sRGB, made a saturated orange patch of a dark skin) */
+     * the optics render that melanin (the palette's epithelium while young,
+     * its melanin_ratio on the skin texture as it matures), so a dark skin
+     * heals pink-brown, then darker, then faintly lighter (the melanin change
+     * as one more multiplier per channel, weighted in sRGB, made a saturated
+     * orange patch of a dark skin; the young epithelium as a multiplier of
+     * the texture, an orange ring round the red core at day 12) */
     float mel = (NEW_MELANIN + (1.0f - NEW_MELANIN) * (1.0f - expf(-(float)age / REPIG_DAYS))) *
                 (1.0f + pih) * (1.0f - SCAR_MELANIN_LOSS * pale);
-    float mr[3];
-    melanin_ratio(P, mel, mr);
+    float mr[3], epi[3], detail = upper_mod(c, i);
+    at_melanin(P->melanin_ratio, mel, mr);
+    at_melanin(P->epithelium, mel, epi);
     for (int k = 0; k < 3; k++) {
-        float f = (1.0f + (P->new_epithelium[k] - 1.0f) * red) *
-                  (1.0f + (sb - 1.0f) * SCAR_WEIGHT * bright_t) *
-                  (1.0f + (P->scar[k] / sb - 1.0f) * SCAR_WEIGHT * pale) * mr[k];
-        healed[k] = up[k] * f;
+        float young = epi[k] * detail, mature = up[k] * mr[k];
+        healed[k] = (mature + (young - mature) * red) *
+                    (1.0f + (sb - 1.0f) * SCAR_WEIGHT * bright_t) *
+                    (1.0f + (P->scar[k] / sb - 1.0f) * SCAR_WEIGHT * pale);
     }
     float r = 0.32f - 0.05f * mat; /* young epithelium is smooth and shiny */
     if (s > outer) {               /* the front and the open core */
