@@ -882,6 +882,7 @@ class ss_heal_grid(ctypes.Structure):
         ("velocity", POINTER(c_float) * 3),
         ("t_days", c_double),
         ("step", c_uint64),
+        ("added", POINTER(c_float)),
     ]
 
 
@@ -963,7 +964,7 @@ SS_FEAT_NTYPES = 5
 SS_BIO_NCHANNELS = 12
 
 
-NDIST = 43  # doubles in ss_skin_dist
+NDIST = 45  # doubles in ss_skin_dist
 
 
 class ss_skin_dist(ctypes.Structure):
