@@ -173,6 +173,12 @@ ss_status ss_heal_pvti_write(const char *path, const int whole[3], double dx_mm,
 ss_status ss_heal_pvti_write_vectors(const char *path, const int whole[3], double dx_mm,
                                      int npieces, const int (*ext)[6], const char *const *files,
                                      int nvec, const char *const *names, ss_error *err) {
+    return ss_heal_pvti_write_arrays(path, whole, dx_mm, npieces, ext, files, nvec, names, 0, err);
+}
+
+ss_status ss_heal_pvti_write_arrays(const char *path, const int whole[3], double dx_mm,
+                                    int npieces, const int (*ext)[6], const char *const *files,
+                                    int nvec, const char *const *names, int added, ss_error *err) {
     ss_atomic_file af;
     ss_status st = ss_atomic_open(&af, path, err);
     if (st) return st;
@@ -191,8 +197,9 @@ ss_status ss_heal_pvti_write_vectors(const char *path, const int whole[3], doubl
     for (int v = 0; v < nvec; v++)
         fprintf(f, "      <PDataArray type=\"Float32\" Name=\"%s\" NumberOfComponents=\"3\"/>\n",
                 names[v]);
-    fprintf(f, "      <PDataArray type=\"Float32\" Name=\"surface_elevation_mm\"/>\n"
-               "    </PCellData>\n");
+    fprintf(f, "      <PDataArray type=\"Float32\" Name=\"surface_elevation_mm\"/>\n");
+    if (added) fprintf(f, "      <PDataArray type=\"Float32\" Name=\"keloid_added\"/>\n");
+    fprintf(f, "    </PCellData>\n");
     for (int i = 0; i < npieces; i++) {
         fprintf(f, "    <Piece Extent=\"%d %d %d %d %d %d\" Source=\"", ext[i][0], ext[i][1],
                 ext[i][2], ext[i][3], ext[i][4], ext[i][5]);
