@@ -215,8 +215,7 @@ ss_heal_grid *ss_heal_pvti_read(const char *path, float **displacement, double *
                 memcpy(g->cell + d, p->cell + s, (size_t)b->n[0]);
                 for (int f = 0; f < SS_HEAL_NFIELDS; f++)
                     memcpy(g->field[f] + d, p->field[f] + s, (size_t)b->n[0] * sizeof(float));
-                if (p->added)
-                    memcpy(g->added + d, p->added + s, (size_t)b->n[0] * sizeof(float));
+                if (p->added) memcpy(g->added + d, p->added + s, (size_t)b->n[0] * sizeof(float));
                 for (int c = 0; pd && c < 3; c++)
                     memcpy(disp + (size_t)c * ncell + d, pd + (size_t)c * pn + s,
                            (size_t)b->n[0] * sizeof(float));

@@ -176,9 +176,9 @@ ss_status ss_heal_pvti_write_vectors(const char *path, const int whole[3], doubl
     return ss_heal_pvti_write_arrays(path, whole, dx_mm, npieces, ext, files, nvec, names, 0, err);
 }
 
-ss_status ss_heal_pvti_write_arrays(const char *path, const int whole[3], double dx_mm,
-                                    int npieces, const int (*ext)[6], const char *const *files,
-                                    int nvec, const char *const *names, int added, ss_error *err) {
+ss_status ss_heal_pvti_write_arrays(const char *path, const int whole[3], double dx_mm, int npieces,
+                                    const int (*ext)[6], const char *const *files, int nvec,
+                                    const char *const *names, int added, ss_error *err) {
     ss_atomic_file af;
     ss_status st = ss_atomic_open(&af, path, err);
     if (st) return st;
@@ -332,8 +332,7 @@ static ss_status write_vti(const char *path, const ss_heal_grid *g, const int bo
         if (!box) put_f32le(f, g->added, n);
         for (int z = 0; box && z < bx[5]; z++)
             for (int y = 0; y < bx[4]; y++)
-                put_f32le(f, g->added + ss_heal_idx(g, bx[0], bx[1] + y, bx[2] + z),
-                          (size_t)bx[3]);
+                put_f32le(f, g->added + ss_heal_idx(g, bx[0], bx[1] + y, bx[2] + z), (size_t)bx[3]);
     }
     if (closed_day) {
         put_u64le(f, (uint64_t)(8 * ncol));
