@@ -819,8 +819,36 @@ static void test_surface_elevation(void **state) {
     ss_heal_grid *b = ss_heal_vti_read(path, NULL, NULL, &err);
     assert_non_null(b);
     assert_memory_equal(b->field[SS_HEAL_SCAR], g->field[SS_HEAL_SCAR], n * sizeof(float));
+    assert_null(b->added); /* no keloid_added array without g->added */
+    assert_null(strstr(data, "keloid_added"));
     ss_heal_grid_free(b);
     free(data);
+    /* a keloid grid's added volume [D16] (0.5 rho units in each tissue cell of
+     * column (1, 1)): the snapshot holds it, the reader restores it, and the
+     * elevation of the grid read back is the run's (wound --heal draws it) */
+    assert_non_null(g->added = calloc(n, sizeof *g->added));
+    for (int z = 0; z < g->nz; z++) {
+        size_t i = ss_heal_idx(g, 1, 1, z);
+        if (g->cell[i] != SS_CELL_AIR && g->cell[i] != SS_CELL_BOUND) g->added[i] = 0.5f;
+    }
+    assert_int_equal(ss_heal_vti_write(path, g, &err), SS_OK);
+    assert_non_null(b = ss_heal_vti_read(path, NULL, NULL, &err));
+    assert_non_null(b->added);
+    assert_memory_equal(b->added, g->added, n * sizeof(float));
+    float *e0 = calloc((size_t)g->nx * g->ny, sizeof *e0),
+          *e1 = calloc((size_t)g->nx * g->ny, sizeof *e1);
+    assert_non_null(e0);
+    assert_non_null(e1);
+    ss_heal_elevation_scan(g, 0, g->nz, e0);
+    ss_heal_elevation_scan(b, 0, b->nz, e1);
+    assert_memory_equal(e0, e1, (size_t)g->nx * g->ny * sizeof *e0);
+    const double raised_added = keloid_cells * k * 3.5;
+    print_message("elevation with the added volume: %.4f (expect %.4f)\n", e1[1 * g->nx + 1],
+                  raised_added);
+    assert_true(fabs(e1[1 * g->nx + 1] - raised_added) < 1e-6);
+    free(e0);
+    free(e1);
+    ss_heal_grid_free(b);
     tu_rmtree(dir);
     free(path);
     free(dir);

@@ -334,6 +334,7 @@ static void write_pvti_n(const char *dir, int index, const ss_heal_grid *g, cons
                 p->nx = n[0], p->ny = n[1], p->nz = n[2];
                 p->t_days = g->t_days;
                 size_t pn = (size_t)n[0] * n[1] * n[2];
+                if (g->added) assert_non_null(p->added = calloc(pn, sizeof *p->added));
                 float *pd = malloc(3 * pn * sizeof *pd);
                 double *pc = malloc((size_t)n[0] * n[1] * sizeof *pc);
                 for (int k = 0; k < n[2]; k++)
@@ -344,6 +345,7 @@ static void write_pvti_n(const char *dir, int index, const ss_heal_grid *g, cons
                             p->cell[t] = g->cell[s];
                             for (int f = 0; f < SS_HEAL_NFIELDS; f++)
                                 p->field[f][t] = g->field[f][s];
+                            if (g->added) p->added[t] = g->added[s];
                             for (int v = 0; disp && v < 3; v++)
                                 pd[(size_t)v * pn + t] =
                                     disp[(size_t)v * g->nx * g->ny * g->nz + s];
@@ -372,8 +374,9 @@ static void write_pvti_n(const char *dir, int index, const ss_heal_grid *g, cons
     char pvname[64];
     snprintf(pvname, sizeof pvname, "fields_%04d.pvti", index);
     char *pv = tu_join(dir, pvname);
-    assert_int_equal(ss_heal_pvti_write(pv, whole, g->dx_mm, np, (const int(*)[6])ext,
-                                        (const char *const *)files, &err),
+    assert_int_equal(ss_heal_pvti_write_arrays(pv, whole, g->dx_mm, np, (const int(*)[6])ext,
+                                               (const char *const *)files, 0, NULL,
+                                               g->added != NULL, &err),
                      SS_OK);
     for (i = 0; i < np; i++) free(files[i]);
     free(files);
@@ -422,6 +425,37 @@ static void test_pvti_roundtrip(void **state) {
         free(pc);
         ss_heal_grid_free(h);
         free(pv);
+        tu_rmtree(sub);
+        free(sub);
+    }
+    /* a keloid grid's added volume [D16]: the pieces hold it, the .pvti lists
+     * it, the joined grid has it as the gathered snapshot does */
+    {
+        ss_heal_grid *k = tu_heal_grid_noisy(11, 9, 6, 0.3, 21, 0);
+        assert_non_null(k->added = malloc(n * sizeof *k->added));
+        for (size_t i = 0; i < n; i++) k->added[i] = (float)ss_rng_uniform(78, 1, i);
+        char *sub = tu_tmpdir("pvti-added");
+        char *kg = tu_join(sub, "whole.vti");
+        assert_int_equal(ss_heal_vti_write_all(kg, k, 0, NULL, NULL, closed, &err), SS_OK);
+        ss_heal_grid *kref = ss_heal_vti_read(kg, NULL, NULL, &err);
+        assert_non_null(kref);
+        assert_non_null(kref->added);
+        assert_memory_equal(kref->added, k->added, n * sizeof *k->added);
+        write_pvti(sub, k, splits[2], NULL, closed, 0);
+        char *kpv = tu_join(sub, "fields_0003.pvti");
+        size_t klen;
+        char *kt = ss_read_file(kpv, &klen, &err);
+        assert_non_null(kt);
+        assert_non_null(strstr(kt, "Name=\"keloid_added\""));
+        free(kt);
+        ss_heal_grid *kh = ss_heal_pvti_read(kpv, NULL, NULL, &err);
+        if (!kh) fail_msg("%s", err.msg);
+        tu_assert_heal_grids_equal(kref, kh);
+        ss_heal_grid_free(kh);
+        ss_heal_grid_free(kref);
+        ss_heal_grid_free(k);
+        free(kpv);
+        free(kg);
         tu_rmtree(sub);
         free(sub);
     }

@@ -82,6 +82,8 @@ static void test_recipe(void **state) {
         "{\"recipes\": {}}",
         "{\"recipe\": ",
         "{\"recipe\": {\"epithelium_lo\": {\"value\": 0.9, \"unit\": \"1\"}}}",
+        /* gone: it saturated the keloid's raise at 4 mm (the height follows heal's elevation) */
+        "{\"recipe\": {\"keloid_max\": {\"value\": 4, \"unit\": \"mm\"}}}",
     };
     for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
         ss_wound_recipe_default(&q);
@@ -249,7 +251,8 @@ static void run_days(const scene *s, const char *scenario, const double *days, i
         measure(s, t, &tex, 2.0, &out[k]);
         /* the raise is the healing model's own surface elevation (heal's
          * surface_elevation_mm): the tissue map's maximum is heal's, and the
-         * height map reaches the recipe's saturating curve of it */
+         * height map reaches it, not saturated (the 4 mm curve of the old
+         * keloid_max gave 2.8 mm for heal's 4.8 at a year) */
         ss_heal_stats hs;
         ss_heal_stats_compute(ss_heal_run_grid(run), &hs);
         float emax = -INFINITY, hmax = -INFINITY;
@@ -258,9 +261,12 @@ static void run_days(const scene *s, const char *scenario, const double *days, i
             hmax = fmaxf(hmax, tex.height->data[i]);
         assert_true(fabs(emax - hs.elevation_max_mm) <= 1e-5 * (1 + fabs(hs.elevation_max_mm)));
         if (!strcmp(scenario, "keloid") && days[k] >= 60) {
-            const double kmax = rec.v[SS_WR_KELOID_MAX_MM];
+            const double want = rec.v[SS_WR_KELOID_SCALE] * emax;
+            fprintf(stderr, "keloid day %g: height max %.3f mm, heal's elevation max %.3f mm\n",
+                    days[k], hmax, emax);
             assert_true(emax > 0.5);
-            assert_true(hmax >= 0.9 * kmax * (1 - exp(-rec.v[SS_WR_KELOID_SCALE] * emax / kmax)));
+            /* within the base skin's relief (a few hundredths of a mm) */
+            assert_true(fabs(hmax - want) <= 0.03 * want + 0.05);
         }
         double ec = 0;
         int nc = 0;

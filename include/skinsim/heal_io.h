@@ -81,6 +81,12 @@ ss_status ss_heal_pvti_write(const char *path, const int whole[3], double dx_mm,
 ss_status ss_heal_pvti_write_vectors(const char *path, const int whole[3], double dx_mm,
                                      int npieces, const int (*ext)[6], const char *const *files,
                                      int nvec, const char *const *names, ss_error *err);
+/* The same, listing also the keloid's added volume (the Float32 cell array
+ * keloid_added that the pieces of a grid with g->added hold, docs/heal-model.md
+ * [D16]) when added is not 0. */
+ss_status ss_heal_pvti_write_arrays(const char *path, const int whole[3], double dx_mm, int npieces,
+                                    const int (*ext)[6], const char *const *files, int nvec,
+                                    const char *const *names, int added, ss_error *err);
 /* The same with nvec 3-component cell arrays (as ss_heal_vti_write_vectors,
  * each of piece->nx*ny*nz floats) and, if closed_day is not NULL, the closure
  * days of the piece's own columns (piece->nx * piece->ny, index y*nx + x of

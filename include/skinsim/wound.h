@@ -58,8 +58,8 @@ enum {
     SS_WR_SCAB_ROUGHNESS,         /* 1: roughness of the dry scab */
     SS_WR_SCAR_ROUGHNESS,         /* 1: roughness of the mature scar (shiny) */
     SS_WR_DEPTH_SCALE,            /* 1: multiplier of the displacement depth */
-    SS_WR_KELOID_SCALE,           /* 1: raise per mm of collagen above the keloid threshold */
-    SS_WR_KELOID_MAX_MM,          /* mm: the raise saturates towards this height */
+    SS_WR_KELOID_SCALE,           /* 1: raise per mm of the healing model's surface elevation
+                                     (not saturated: the model bounds it) */
     SS_WR_HEIGHT_RANGE_MM,        /* mm: height map 0..1 spans -range..+range */
     /* the crust's structure (docs/wound.md: mottled, thicker in the middle, cracked at
      * the edges) */

@@ -1132,9 +1132,10 @@ static ss_status do_pieces(ss_dist_heal *d, int index, ss_error *err) {
                 snprintf(files[q], 32, "fields_%04d_p%04d.vti", index, q);
             }
             snprintf(path, sizeof path, "%s/fields_%04d.pvti", dir, index);
-            vmax = ss_heal_pvti_write_vectors(path, d->su.G, d->su.dx_mm, d->size,
-                                              (const int(*)[6])ext, (const char *const *)files,
-                                              d->su.mech ? 2 : 0, vnames, err);
+            /* the pieces hold the keloid's added volume when the grids have it [D16] */
+            vmax = ss_heal_pvti_write_arrays(path, d->su.G, d->su.dx_mm, d->size,
+                                             (const int(*)[6])ext, (const char *const *)files,
+                                             d->su.mech ? 2 : 0, vnames, d->g->added != NULL, err);
         }
         free(ext);
         free(files);

@@ -47,7 +47,6 @@ static const struct {
     [SS_WR_SCAR_ROUGHNESS] = {"scar_roughness", "1", 0.35, 0, 1},
     [SS_WR_DEPTH_SCALE] = {"depth_scale", "1", 1, 0, 100},
     [SS_WR_KELOID_SCALE] = {"keloid_scale", "1", 1, 0, 100},
-    [SS_WR_KELOID_MAX_MM] = {"keloid_max", "mm", 4, 1e-3, 100},
     [SS_WR_HEIGHT_RANGE_MM] = {"height_range", "mm", 2, 1e-3, 1e3},
     [SS_WR_SCAB_MOTTLE] = {"scab_mottle", "1", 0.6, 0, 1},
     [SS_WR_SCAB_SEROUS] = {"scab_serous", "1", 0.5, 0, 1},

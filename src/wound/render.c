@@ -534,12 +534,12 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
     rough = lerp(rough, lerp(0.4, v[SS_WR_SCAB_ROUGHNESS], dry) + 0.1 * crack, scab_cover);
     o->roughness = clamp01(rough);
     /* the keloid's raise: the healing model's surface elevation (collagen
-     * beyond the dermis it replaced, heal's surface_elevation_mm) where it is
-     * raised - where it falls short, the open wound's depth above already
-     * draws the defect - saturating at a few mm (Vancouver Scar Scale,
-     * Sullivan et al. 1990: heights < 2, 2-5, > 5 mm) */
-    double kmax = v[SS_WR_KELOID_MAX_MM];
-    double keloid = kmax * (1 - exp(-v[SS_WR_KELOID_SCALE] * fmax(s->elev, 0.0) / kmax));
+     * beyond the dermis it replaced and the keloid's added volume, heal's
+     * surface_elevation_mm) where it is raised - where it falls short, the
+     * open wound's depth above already draws the defect. Taken as it is, not
+     * saturated: the model itself bounds it (docs/heal-model.md [D16]), and
+     * the height map's range follows the frame (ss_wound_height_range) */
+    double keloid = v[SS_WR_KELOID_SCALE] * fmax(s->elev, 0.0);
     /* the surface: the skin, down by the wound's depth, filled by the clot and
      * by the crust (which fills the defect and stands above the skin), the
      * bed's relief of capillary loops, the crust's cracks and lifted edge, and

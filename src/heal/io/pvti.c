@@ -172,7 +172,7 @@ ss_heal_grid *ss_heal_pvti_read(const char *path, float **displacement, double *
     float *disp = g && displacement ? malloc(3 * ncell * sizeof *disp) : NULL;
     double *closed = g && closed_day ? malloc(ncol * sizeof *closed) : NULL;
     unsigned char *cover = g ? calloc(ncol, 1) : NULL; /* 1: a piece gave the column's day */
-    int ndisp = 0, nclosed = 0,
+    int ndisp = 0, nclosed = 0, nadded = 0,
         ok = g && cover && (!displacement || disp) && (!closed_day || closed);
     if (g && !ok) ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", path);
     for (int i = 0; ok && i < v.n; i++) {
@@ -202,6 +202,11 @@ ss_heal_grid *ss_heal_pvti_read(const char *path, float **displacement, double *
             mis = "its TimeValue differs from the other pieces'";
         if (mis) ss_error_set(err, SS_ERR_INPUT, "%s: piece of %s: %s", file, path, mis);
         ok = !mis;
+        /* a keloid run's added volume [D16]: in every piece or in none */
+        if (ok && p->added && !g->added && !(g->added = calloc(ncell, sizeof *g->added))) {
+            ss_error_set(err, SS_ERR_NOMEM, "%s: out of memory", path);
+            ok = 0;
+        }
         const size_t pn = (size_t)b->n[0] * b->n[1] * b->n[2];
         for (int z = 0; ok && z < b->n[2]; z++)
             for (int y = 0; y < b->n[1]; y++) {
@@ -210,6 +215,7 @@ ss_heal_grid *ss_heal_pvti_read(const char *path, float **displacement, double *
                 memcpy(g->cell + d, p->cell + s, (size_t)b->n[0]);
                 for (int f = 0; f < SS_HEAL_NFIELDS; f++)
                     memcpy(g->field[f] + d, p->field[f] + s, (size_t)b->n[0] * sizeof(float));
+                if (p->added) memcpy(g->added + d, p->added + s, (size_t)b->n[0] * sizeof(float));
                 for (int c = 0; pd && c < 3; c++)
                     memcpy(disp + (size_t)c * ncell + d, pd + (size_t)c * pn + s,
                            (size_t)b->n[0] * sizeof(float));
@@ -230,6 +236,7 @@ ss_heal_grid *ss_heal_pvti_read(const char *path, float **displacement, double *
                 cover[d] = 1;
             }
         ndisp += pd != NULL;
+        nadded += ok && p->added != NULL;
         nclosed += pc != NULL;
         if (ok) g->t_days = p->t_days;
         free(pd);
@@ -243,6 +250,11 @@ ss_heal_grid *ss_heal_pvti_read(const char *path, float **displacement, double *
                          c % (size_t)v.whole[0], c / (size_t)v.whole[0]);
             ok = 0;
         }
+    if (ok && nadded && nadded != v.n) {
+        ss_error_set(err, SS_ERR_INPUT, "%s: some pieces hold keloid_added and others do not",
+                     path);
+        ok = 0;
+    }
     free(cover);
     const int npieces = v.n;
     pv_free(&v);

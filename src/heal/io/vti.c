@@ -2,7 +2,10 @@
  * fields, here handed to ParaView instead of a shader): one .vti per snapshot
  * with the cell state (UInt8) and every species field (Float32) as cell data,
  * appended raw binary with UInt64 block headers, and a .pvd collection that
- * gives ParaView a time slider in days. Written atomically. */
+ * gives ParaView a time slider in days. Written atomically. A keloid grid's
+ * added volume (g->added, docs/heal-model.md [D16]) is one more Float32 cell
+ * array, keloid_added, so a snapshot read back has the full state and its
+ * surface elevation equals the run's (skinsim wound --heal). */
 #define _POSIX_C_SOURCE 200809L
 #include "skinsim/heal_io.h"
 
@@ -170,6 +173,12 @@ ss_status ss_heal_pvti_write(const char *path, const int whole[3], double dx_mm,
 ss_status ss_heal_pvti_write_vectors(const char *path, const int whole[3], double dx_mm,
                                      int npieces, const int (*ext)[6], const char *const *files,
                                      int nvec, const char *const *names, ss_error *err) {
+    return ss_heal_pvti_write_arrays(path, whole, dx_mm, npieces, ext, files, nvec, names, 0, err);
+}
+
+ss_status ss_heal_pvti_write_arrays(const char *path, const int whole[3], double dx_mm, int npieces,
+                                    const int (*ext)[6], const char *const *files, int nvec,
+                                    const char *const *names, int added, ss_error *err) {
     ss_atomic_file af;
     ss_status st = ss_atomic_open(&af, path, err);
     if (st) return st;
@@ -188,8 +197,9 @@ ss_status ss_heal_pvti_write_vectors(const char *path, const int whole[3], doubl
     for (int v = 0; v < nvec; v++)
         fprintf(f, "      <PDataArray type=\"Float32\" Name=\"%s\" NumberOfComponents=\"3\"/>\n",
                 names[v]);
-    fprintf(f, "      <PDataArray type=\"Float32\" Name=\"surface_elevation_mm\"/>\n"
-               "    </PCellData>\n");
+    fprintf(f, "      <PDataArray type=\"Float32\" Name=\"surface_elevation_mm\"/>\n");
+    if (added) fprintf(f, "      <PDataArray type=\"Float32\" Name=\"keloid_added\"/>\n");
+    fprintf(f, "    </PCellData>\n");
     for (int i = 0; i < npieces; i++) {
         fprintf(f, "    <Piece Extent=\"%d %d %d %d %d %d\" Source=\"", ext[i][0], ext[i][1],
                 ext[i][2], ext[i][3], ext[i][4], ext[i][5]);
@@ -240,8 +250,9 @@ static ss_status write_vti(const char *path, const ss_heal_grid *g, const int bo
             "format=\"ascii\">%.17g</DataArray>\n",
             g->t_days);
     /* the closure days go after every cell array in the appended data */
+    const int add = g->added != NULL;
     size_t ncol = (size_t)bx[3] * (size_t)bx[4];
-    uint64_t coff = 8 + n + SS_HEAL_NFIELDS * (8 + 4 * (uint64_t)n) +
+    uint64_t coff = 8 + n + (SS_HEAL_NFIELDS + add) * (8 + 4 * (uint64_t)n) +
                     (uint64_t)(vel + nvec) * (8 + 12 * (uint64_t)n) + 8 + 4 * (uint64_t)n;
     if (closed_day)
         fprintf(f,
@@ -284,6 +295,11 @@ static ss_status write_vti(const char *path, const ss_heal_grid *g, const int bo
             "format=\"appended\" offset=\"%llu\"/>\n",
             (unsigned long long)off);
     off += 8 + 4 * n;
+    if (add) /* the keloid's added volume, rho units per cell [D16] */
+        fprintf(f,
+                "        <DataArray type=\"Float32\" Name=\"keloid_added\" "
+                "format=\"appended\" offset=\"%llu\"/>\n",
+                (unsigned long long)off);
     fprintf(f, "      </CellData>\n    </Piece>\n  </ImageData>\n"
                "  <AppendedData encoding=\"raw\">\n   _");
     put_u64le(f, (uint64_t)n);
@@ -311,6 +327,13 @@ static ss_status write_vti(const char *path, const ss_heal_grid *g, const int bo
             put_f32le(f, elevation + (size_t)(bx[1] + y) * (size_t)g->nx + (size_t)bx[0],
                       (size_t)bx[3]);
     free(elev);
+    if (add) {
+        put_u64le(f, (uint64_t)(4 * n));
+        if (!box) put_f32le(f, g->added, n);
+        for (int z = 0; box && z < bx[5]; z++)
+            for (int y = 0; y < bx[4]; y++)
+                put_f32le(f, g->added + ss_heal_idx(g, bx[0], bx[1] + y, bx[2] + z), (size_t)bx[3]);
+    }
     if (closed_day) {
         put_u64le(f, (uint64_t)(8 * ncol));
         put_f64le(f, closed_day, ncol);
@@ -482,6 +505,13 @@ static ss_heal_grid *read_vti(const char *path, int piece, int whole[3], int off
                 why = "a field array is malformed";
             else
                 get_f32le(g->field[k], b, ncell), have[k] = 1;
+        } else if (nl == 12 && !strncmp(nm, "keloid_added", 12)) {
+            if (!b || comps != 1)
+                why = "the keloid_added array is malformed";
+            else if (!g->added && !(g->added = malloc(ncell * sizeof *g->added)))
+                why = "out of memory";
+            else
+                get_f32le(g->added, b, ncell);
         } else if (nl == 12 && !strncmp(nm, "displacement", 12) && displacement) {
             if (!b || comps != 3)
                 why = "the displacement array is malformed";
