@@ -76,7 +76,7 @@ struct ss_hyper {
     int32_t *rowptr, *col, *diag;
     int nblk;
     double *val;
-    int32_t *cstart, *clist; /* per block: (tet * 16 + la * 4 + lb) in tet order */
+    int32_t *tblk;           /* per (tet * 16 + la * 4 + lb): its block */
     int32_t *nstart, *nlist; /* per node: (tet * 4 + la) in tet order */
     double *Kt, *gt, *et;
     double *Minv;
@@ -337,13 +337,12 @@ void ss_hyper_goh_cauchy(const ss_mech_params *p, const double F[9], double sg[9
 
 void ss_hyper_free(ss_hyper *h) {
     if (!h) return;
-    void *ptrs[] = {h->X,    h->x,     h->xt,     h->tet,    h->beta0,  h->V0,     h->beta,
-                    h->Vg,   h->G,     h->act,    h->scale,  h->fib,    h->gdirty, h->anchor,
-                    h->load, h->fixed, h->se,     h->srest,  h->sk,     h->rowptr, h->col,
-                    h->diag, h->val,   h->cstart, h->clist,  h->nstart, h->nlist,  h->Kt,
-                    h->gt,   h->et,    h->Minv,   h->g,      h->d,      h->r,      h->z,
-                    h->p,    h->q,     h->agg,    h->astart, h->alist,  h->acen,   h->arho,
-                    h->Ac,   h->Lc,    h->wc,     h->gtry};
+    void *ptrs[] = {
+        h->X,   h->x,      h->xt,    h->tet,    h->beta0,  h->V0,   h->beta,   h->Vg,    h->G,
+        h->act, h->scale,  h->fib,   h->gdirty, h->anchor, h->load, h->fixed,  h->se,    h->srest,
+        h->sk,  h->rowptr, h->col,   h->diag,   h->val,    h->tblk, h->nstart, h->nlist, h->Kt,
+        h->gt,  h->et,     h->Minv,  h->g,      h->d,      h->r,    h->z,      h->p,     h->q,
+        h->agg, h->astart, h->alist, h->acen,   h->arho,   h->Ac,   h->Lc,     h->wc,    h->gtry};
     for (size_t i = 0; i < sizeof ptrs / sizeof ptrs[0]; i++) free(ptrs[i]);
     free(h);
 }
@@ -520,12 +519,11 @@ static ss_status build_pattern(ss_hyper *h) {
     free(h->col);
     free(h->diag);
     free(h->val);
-    free(h->cstart);
-    free(h->clist);
+    free(h->tblk);
     free(h->nstart);
     free(h->nlist);
     free(h->Kt);
-    h->rowptr = h->col = h->diag = h->cstart = h->clist = h->nstart = h->nlist = NULL;
+    h->rowptr = h->col = h->diag = h->tblk = h->nstart = h->nlist = NULL;
     h->val = h->Kt = NULL;
     /* node -> (tet, local) */
     h->nstart = calloc((size_t)nn + 1, sizeof(int32_t));
@@ -589,10 +587,9 @@ static ss_status build_pattern(ss_hyper *h) {
     h->col = malloc((size_t)total * sizeof(int32_t));
     h->diag = malloc((size_t)nn * sizeof(int32_t));
     h->val = malloc(9 * (size_t)total * sizeof(double));
-    h->cstart = calloc((size_t)total + 1, sizeof(int32_t));
-    h->clist = malloc(16 * (size_t)nt * sizeof(int32_t));
+    h->tblk = malloc(16 * (size_t)nt * sizeof(int32_t));
     h->Kt = malloc(144 * (size_t)nt * sizeof(double));
-    if (!h->col || !h->diag || !h->val || !h->cstart || !h->clist || !h->Kt) {
+    if (!h->col || !h->diag || !h->val || !h->tblk || !h->Kt) {
         free(fill);
         free(cnt);
         free(cand);
@@ -606,26 +603,13 @@ static ss_status build_pattern(ss_hyper *h) {
     free(cnt);
     free(fill);
     for (int i = 0; i < nn; i++) h->diag[i] = find_blk(h, i, i);
-    /* per block, its tets' contributions in tet order (counting sort) */
-    int32_t *bk = malloc(16 * (size_t)nt * sizeof(int32_t));
-    if (!bk) return SS_ERR_NOMEM;
+    /* each tet's 16 blocks (the assembly walks a node's tets in tet order,
+     * so each block sums its tets' contributions in tet order) */
     for (int t = 0; t < nt; t++)
         for (int a = 0; a < 4; a++)
-            for (int b = 0; b < 4; b++) {
-                int k = find_blk(h, h->tet[4 * t + a], h->tet[4 * t + b]);
-                bk[16 * (size_t)t + 4 * a + b] = k;
-                h->cstart[k + 1]++;
-            }
-    for (int k = 0; k < total; k++) h->cstart[k + 1] += h->cstart[k];
-    int32_t *pos = malloc((size_t)total * sizeof(int32_t));
-    if (!pos) {
-        free(bk);
-        return SS_ERR_NOMEM;
-    }
-    memcpy(pos, h->cstart, (size_t)total * sizeof(int32_t));
-    for (int c = 0; c < 16 * nt; c++) h->clist[pos[bk[c]]++] = c;
-    free(pos);
-    free(bk);
+            for (int b = 0; b < 4; b++)
+                h->tblk[16 * (size_t)t + 4 * a + b] =
+                    find_blk(h, h->tet[4 * t + a], h->tet[4 * t + b]);
     if (build_aggregates(h) != SS_OK) return SS_ERR_NOMEM;
     h->tangent_ok = 0;
     h->pattern_ok = 1;
@@ -1035,19 +1019,26 @@ void ss_hyper_tet_forces(ss_hyper *h, double *f) {
     }
 }
 
-/* the tangent: tets gathered per block, then foundation and springs */
+/* the tangent: tets gathered per row of blocks, then foundation and springs */
 static void assemble(ss_hyper *h, const double *x) {
     eval_tets(h, x, 2);
+    /* row by row: a node's tets in tet order, each adding its three rows of
+     * K to the row's blocks (the same sums in the same order as a gather per
+     * block, but K is read a row at a time) */
 #pragma omp parallel for schedule(static)
-    for (int k = 0; k < h->nblk; k++) {
-        double s[9] = {0};
-        for (int c = h->cstart[k]; c < h->cstart[k + 1]; c++) {
-            int code = h->clist[c], t = code / 16, la = (code / 4) % 4, lb = code % 4;
-            const double *K = h->Kt + 144 * (size_t)t;
-            for (int i = 0; i < 3; i++)
-                for (int j = 0; j < 3; j++) s[3 * i + j] += K[(3 * la + i) * 12 + 3 * lb + j];
+    for (int i = 0; i < h->nn; i++) {
+        memset(h->val + 9 * (size_t)h->rowptr[i], 0,
+               9 * (size_t)(h->rowptr[i + 1] - h->rowptr[i]) * sizeof(double));
+        for (int c = h->nstart[i]; c < h->nstart[i + 1]; c++) {
+            const int t = h->nlist[c] / 4, la = h->nlist[c] % 4;
+            const double *K = h->Kt + 144 * (size_t)t + 36 * la;
+            const int32_t *bk = h->tblk + 16 * (size_t)t + 4 * la;
+            for (int lb = 0; lb < 4; lb++) {
+                double *v = h->val + 9 * (size_t)bk[lb];
+                for (int r = 0; r < 3; r++)
+                    for (int j = 0; j < 3; j++) v[3 * r + j] += K[12 * r + 3 * lb + j];
+            }
         }
-        memcpy(h->val + 9 * (size_t)k, s, sizeof s);
     }
     for (int i = 0; i < h->nn; i++)
         for (int d = 0; d < 3; d++) h->val[9 * (size_t)h->diag[i] + 4 * d] += h->anchor[i];
