@@ -88,7 +88,8 @@ struct ss_hyper {
     int fast, nagg, nc, coarse_ok, tangent_ok, act_law;
     int32_t *agg, *astart, *alist;
     double *acen, *arho, ascale; /* arho: node offsets from the centroid / bin side */
-    double *Ac, *Lc, *wc;
+    double *Ac, *Lc, *wc;        /* Ac: P^T A P, after the factoring L's transpose */
+    int32_t *lband;              /* per coarse row: L's first and L^T's last nonzero */
 };
 
 /* ---- material ---------------------------------------------------------------- */
@@ -337,12 +338,13 @@ void ss_hyper_goh_cauchy(const ss_mech_params *p, const double F[9], double sg[9
 
 void ss_hyper_free(ss_hyper *h) {
     if (!h) return;
-    void *ptrs[] = {
-        h->X,   h->x,      h->xt,    h->tet,    h->beta0,  h->V0,   h->beta,   h->Vg,    h->G,
-        h->act, h->scale,  h->fib,   h->gdirty, h->anchor, h->load, h->fixed,  h->se,    h->srest,
-        h->sk,  h->rowptr, h->col,   h->diag,   h->val,    h->tblk, h->nstart, h->nlist, h->Kt,
-        h->gt,  h->et,     h->Minv,  h->g,      h->d,      h->r,    h->z,      h->p,     h->q,
-        h->agg, h->astart, h->alist, h->acen,   h->arho,   h->Ac,   h->Lc,     h->wc,    h->gtry};
+    void *ptrs[] = {h->X,    h->x,     h->xt,     h->tet,    h->beta0, h->V0,     h->beta,
+                    h->Vg,   h->G,     h->act,    h->scale,  h->fib,   h->gdirty, h->anchor,
+                    h->load, h->fixed, h->se,     h->srest,  h->sk,    h->rowptr, h->col,
+                    h->diag, h->val,   h->tblk,   h->nstart, h->nlist, h->Kt,     h->gt,
+                    h->et,   h->Minv,  h->g,      h->d,      h->r,     h->z,      h->p,
+                    h->q,    h->agg,   h->astart, h->alist,  h->acen,  h->arho,   h->Ac,
+                    h->Lc,   h->wc,    h->gtry,   h->lband};
     for (size_t i = 0; i < sizeof ptrs / sizeof ptrs[0]; i++) free(ptrs[i]);
     free(h);
 }
@@ -631,10 +633,12 @@ static ss_status build_aggregates(ss_hyper *h) {
     free(h->acen);
     free(h->arho);
     free(h->Ac);
+    free(h->lband);
     free(h->Lc);
     free(h->wc);
     h->agg = h->astart = h->alist = NULL;
     h->acen = h->arho = h->Ac = h->Lc = h->wc = NULL;
+    h->lband = NULL;
     h->nagg = h->nc = h->coarse_ok = 0;
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (int i = 0; i < nn; i++)
@@ -679,9 +683,10 @@ static ss_status build_aggregates(ss_hyper *h) {
     h->acen = calloc(3 * (size_t)na, sizeof(double));
     h->arho = malloc(3 * (size_t)nn * sizeof(double));
     h->Ac = malloc((size_t)h->nc * h->nc * sizeof(double));
+    h->lband = malloc(2 * (size_t)h->nc * sizeof(int32_t));
     h->Lc = malloc((size_t)h->nc * h->nc * sizeof(double));
     h->wc = malloc(2 * (size_t)h->nc * sizeof(double));
-    if (!h->astart || !h->acen || !h->arho || !h->Ac || !h->Lc || !h->wc) {
+    if (!h->astart || !h->acen || !h->arho || !h->Ac || !h->Lc || !h->wc || !h->lband) {
         free(bin);
         free(idx);
         return SS_ERR_NOMEM;
@@ -770,6 +775,23 @@ static void coarse_build(ss_hyper *h) {
             Li[j] = s / ljj;
         }
     }
+    /* for the solves: L^T (over A, no longer needed) so the backward pass
+     * reads rows too, and each row's band (the entries outside it are exact
+     * zeros: the factor fills only within the matrix's envelope) */
+    int32_t *first = h->lband, *last = h->lband + nc;
+    for (int i = 0; i < nc; i++) {
+        const double *Li = L + (size_t)i * nc;
+        int f = 0;
+        while (f < i && Li[f] == 0) f++;
+        first[i] = f;
+        for (int k = 0; k < nc; k++) A[(size_t)k * nc + i] = Li[k];
+    }
+    for (int i = 0; i < nc; i++) {
+        const double *Ti = A + (size_t)i * nc;
+        int l = nc - 1;
+        while (l > i && Ti[l] == 0) l--;
+        last[i] = l;
+    }
     h->coarse_ok = 1;
 }
 
@@ -795,7 +817,8 @@ static void coarse_apply(const ss_hyper *h, const double *r, double *z) {
         }
         memcpy(w + 6 * I, s, sizeof s);
     }
-    const double *L = h->Lc;
+    const double *L = h->Lc, *Lt = h->Ac;
+    const int32_t *first = h->lband, *last = h->lband + nc;
     for (int i = 0; i < nc; i++) { /* L y = w */
         const double *Li = L + (size_t)i * nc;
         if (!(Li[i] > 0)) {
@@ -803,17 +826,18 @@ static void coarse_apply(const ss_hyper *h, const double *r, double *z) {
             continue;
         }
         double s = w[i];
-        for (int k = 0; k < i; k++) s -= Li[k] * y[k];
+        for (int k = first[i]; k < i; k++) s -= Li[k] * y[k];
         y[i] = s / Li[i];
     }
     for (int i = nc - 1; i >= 0; i--) { /* L^T w = y */
-        const double lii = L[(size_t)i * nc + i];
+        const double *Ti = Lt + (size_t)i * nc;
+        const double lii = Ti[i];
         if (!(lii > 0)) {
             w[i] = 0;
             continue;
         }
         double s = y[i];
-        for (int k = i + 1; k < nc; k++) s -= L[(size_t)k * nc + i] * w[k];
+        for (int k = i + 1; k <= last[i]; k++) s -= Ti[k] * w[k];
         w[i] = s / lii;
     }
 #pragma omp parallel for schedule(static)
