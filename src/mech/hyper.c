@@ -51,6 +51,8 @@
 #include "skinsim/mech.h"
 #include "mat3.h"
 
+enum { SUMBLK = 4096 }; /* the fixed blocks of the dot products (fsum, cg) */
+
 typedef struct mat {
     double mu, K, k1, k2, kappa;
     double K_pas, K_act, p_max, theta1, theta2; /* the cell pressure law */
@@ -81,7 +83,8 @@ struct ss_hyper {
     double *Kt, *gt, *et;
     double *Minv;
     double *g, *d, *r, *z, *p, *q;
-    double *gtry; /* the gradient at the line search's full step */
+    double *gtry;   /* the gradient at the line search's full step */
+    double *cgpart; /* the CG's dot-product partials, 3 x ceil(3 nn / SUMBLK) */
     double mean_edge;
     /* two-level preconditioner: aggregates of nodes (spatial bins), their
      * rigid modes as the coarse space, the coarse matrix's Cholesky factor */
@@ -344,7 +347,7 @@ void ss_hyper_free(ss_hyper *h) {
                     h->diag, h->val,   h->tblk,   h->nstart, h->nlist, h->Kt,     h->gt,
                     h->et,   h->Minv,  h->g,      h->d,      h->r,     h->z,      h->p,
                     h->q,    h->agg,   h->astart, h->alist,  h->acen,  h->arho,   h->Ac,
-                    h->Lc,   h->wc,    h->gtry,   h->lband};
+                    h->Lc,   h->wc,    h->gtry,   h->lband,  h->cgpart};
     for (size_t i = 0; i < sizeof ptrs / sizeof ptrs[0]; i++) free(ptrs[i]);
     free(h);
 }
@@ -395,10 +398,11 @@ ss_hyper *ss_hyper_create(const ss_tetmesh *m, const ss_mech_params *p, ss_error
     h->z = malloc(n3 * sizeof(double));
     h->p = malloc(n3 * sizeof(double));
     h->q = malloc(n3 * sizeof(double));
+    h->cgpart = malloc(3 * ((n3 + SUMBLK - 1) / SUMBLK) * sizeof(double));
     if (!h->X || !h->x || !h->xt || !h->tet || !h->beta0 || !h->beta || !h->V0 || !h->Vg || !h->G ||
         !h->act || !h->scale || !h->fib || !h->gdirty || !h->anchor || !h->load || !h->fixed ||
         !h->gt || !h->et || !h->Minv || !h->g || !h->gtry || !h->d || !h->r || !h->z || !h->p ||
-        !h->q)
+        !h->q || !h->cgpart)
         goto nomem;
     memcpy(h->X, m->x, n3 * sizeof(double));
     memcpy(h->x, m->x, n3 * sizeof(double));
@@ -796,11 +800,13 @@ static void coarse_build(ss_hyper *h) {
 }
 
 /* z += P A_c^-1 P^T r; P^T r per node is (r, rho x r), P (t, th) is t +
- * th x rho (fixed dofs masked) */
-static void coarse_apply(const ss_hyper *h, const double *r, double *z) {
-    const int nc = h->nc;
-    double *w = h->wc, *y = h->wc + nc;
-#pragma omp parallel for schedule(static)
+ * th x rho (fixed dofs masked). In three parts so that the CG's single
+ * parallel region can call them (their loops are orphaned omp for: called
+ * outside a parallel region they run on one thread): the restriction to
+ * h->wc, the coarse solves on it (one thread), the prolongation of one dof. */
+static void coarse_restrict(const ss_hyper *h, const double *r) {
+    double *w = h->wc;
+#pragma omp for schedule(static)
     for (int I = 0; I < h->nagg; I++) {
         double s[6] = {0, 0, 0, 0, 0, 0};
         for (int t = h->astart[I]; t < h->astart[I + 1]; t++) {
@@ -817,6 +823,11 @@ static void coarse_apply(const ss_hyper *h, const double *r, double *z) {
         }
         memcpy(w + 6 * I, s, sizeof s);
     }
+}
+
+static void coarse_solve(const ss_hyper *h) {
+    const int nc = h->nc;
+    double *w = h->wc, *y = h->wc + nc;
     const double *L = h->Lc, *Lt = h->Ac;
     const int32_t *first = h->lband, *last = h->lband + nc;
     for (int i = 0; i < nc; i++) { /* L y = w */
@@ -840,13 +851,31 @@ static void coarse_apply(const ss_hyper *h, const double *r, double *z) {
         for (int k = i + 1; k <= last[i]; k++) s -= Ti[k] * w[k];
         w[i] = s / lii;
     }
-#pragma omp parallel for schedule(static)
-    for (int i = 0; i < h->nn; i++) {
-        const double *c = w + 6 * h->agg[i], *p = h->arho + 3 * (size_t)i;
-        const double u[3] = {c[0] + c[4] * p[2] - c[5] * p[1], c[1] + c[5] * p[0] - c[3] * p[2],
-                             c[2] + c[3] * p[1] - c[4] * p[0]};
-        for (int d = 0; d < 3; d++)
-            if (!h->fixed[3 * i + d]) z[3 * i + d] += u[d];
+}
+
+/* the coarse correction of dof d of node i (not fixed) */
+static double coarse_dof(const ss_hyper *h, int i, int d) {
+    const double *c = h->wc + 6 * h->agg[i], *p = h->arho + 3 * (size_t)i;
+    switch (d) {
+    case 0:
+        return c[0] + c[4] * p[2] - c[5] * p[1];
+    case 1:
+        return c[1] + c[5] * p[0] - c[3] * p[2];
+    default:
+        return c[2] + c[3] * p[1] - c[4] * p[0];
+    }
+}
+
+static void coarse_apply(const ss_hyper *h, const double *r, double *z) {
+#pragma omp parallel
+    {
+        coarse_restrict(h, r);
+#pragma omp single
+        coarse_solve(h);
+#pragma omp for schedule(static)
+        for (int i = 0; i < h->nn; i++)
+            for (int d = 0; d < 3; d++)
+                if (!h->fixed[3 * i + d]) z[3 * i + d] += coarse_dof(h, i, d);
     }
 }
 
@@ -937,9 +966,8 @@ static void eval_tets(ss_hyper *h, const double *x, int mode) {
     }
 }
 
-/* fixed-order sums: partial sums per block of 4096 in parallel, then a
+/* fixed-order sums: partial sums per block of SUMBLK in parallel, then a
  * serial sum of the partials (the same for any thread count) */
-enum { SUMBLK = 4096 };
 static double fsum(const double *a, const double *b, size_t n) {
     size_t nb = (n + SUMBLK - 1) / SUMBLK;
     double stack[256], *part = nb <= 256 ? stack : malloc(nb * sizeof(double));
@@ -1115,8 +1143,9 @@ static void assemble(ss_hyper *h, const double *x) {
     if (h->fast && h->nagg > 1) coarse_build(h);
 }
 
+/* out = A v (fixed dofs 0); an orphaned omp for (the CG's region) */
 static void matvec(const ss_hyper *h, const double *v, double *out) {
-#pragma omp parallel for schedule(static)
+#pragma omp for schedule(static)
     for (int i = 0; i < h->nn; i++) {
         double s[3] = {0, 0, 0};
         for (int k = h->rowptr[i]; k < h->rowptr[i + 1]; k++) {
@@ -1141,7 +1170,19 @@ static void precond(const ss_hyper *h, const double *r, double *z) {
     if (h->coarse_ok) coarse_apply(h, r, z);
 }
 
-/* truncated preconditioned CG on K d = -g; returns iterations */
+/* The block-Jacobi part of z = M r at dof k (fixed: 0) */
+static double jacobi_dof(const ss_hyper *h, const double *r, size_t k) {
+    const size_t i = k / 3, d = k % 3;
+    const double *M = h->Minv + 9 * i, *v = r + 3 * i;
+    return h->fixed[k] ? 0 : M[3 * d] * v[0] + M[3 * d + 1] * v[1] + M[3 * d + 2] * v[2];
+}
+
+/* truncated preconditioned CG on K d = -g; returns iterations. The
+ * iterations run in one parallel region (a region costs several barriers'
+ * time): the vector updates fused with the dot products' fixed blocks of
+ * SUMBLK (each block summed in index order, the blocks' partials summed in
+ * block order by every thread alike, as fsum does: the same bytes for any
+ * thread count), every thread taking the same decisions from the same sums. */
 static int cg(ss_hyper *h, double eta, int maxit) {
     const size_t n = 3 * (size_t)h->nn;
     double *d = h->d, *r = h->r, *z = h->z, *p = h->p, *q = h->q;
@@ -1151,33 +1192,80 @@ static int cg(ss_hyper *h, double eta, int maxit) {
     }
     precond(h, r, z);
     memcpy(p, z, n * sizeof(double));
-    double rz = fsum(r, z, n), r0 = sqrt(fsum(r, r, n));
+    const double rz0 = fsum(r, z, n), r0 = sqrt(fsum(r, r, n));
     if (!(r0 > 0)) return 0;
-    int it;
-    for (it = 0; it < maxit; it++) {
-        matvec(h, p, q);
-        double pq = fsum(p, q, n);
-        if (!(pq > 0)) {
-            if (it == 0) memcpy(d, z, n * sizeof(double)); /* a preconditioned gradient step */
-            break;
+    const size_t nb = (n + SUMBLK - 1) / SUMBLK;
+    double *ppq = h->cgpart, *prr = ppq + nb, *prz = prr + nb;
+    const int coarse = h->coarse_ok;
+    int iters = 0;
+#pragma omp parallel
+    {
+        double rz = rz0;
+        int it;
+        for (it = 0; it < maxit; it++) {
+            matvec(h, p, q);
+#pragma omp for schedule(static)
+            for (size_t k = 0; k < nb; k++) {
+                const size_t hi = (k + 1) * SUMBLK < n ? (k + 1) * SUMBLK : n;
+                double s = 0;
+                for (size_t i = k * SUMBLK; i < hi; i++) s += p[i] * q[i];
+                ppq[k] = s;
+            }
+            double pq = 0;
+            for (size_t k = 0; k < nb; k++) pq += ppq[k];
+            if (!(pq > 0)) {
+                if (it == 0) { /* a preconditioned gradient step */
+#pragma omp for schedule(static)
+                    for (size_t i = 0; i < n; i++) d[i] = z[i];
+                }
+                break;
+            }
+            const double a = rz / pq;
+#pragma omp for schedule(static)
+            for (size_t k = 0; k < nb; k++) {
+                const size_t hi = (k + 1) * SUMBLK < n ? (k + 1) * SUMBLK : n;
+                double s = 0;
+                for (size_t i = k * SUMBLK; i < hi; i++) {
+                    d[i] += a * p[i];
+                    r[i] -= a * q[i];
+                    s += r[i] * r[i];
+                }
+                prr[k] = s;
+            }
+            double rr = 0;
+            for (size_t k = 0; k < nb; k++) rr += prr[k];
+            if (sqrt(rr) <= eta * r0) {
+                it++;
+                break;
+            }
+            /* z = M r (block-Jacobi plus the coarse correction), with r.z */
+            if (coarse) {
+                coarse_restrict(h, r);
+#pragma omp single
+                coarse_solve(h);
+            }
+#pragma omp for schedule(static)
+            for (size_t k = 0; k < nb; k++) {
+                const size_t hi = (k + 1) * SUMBLK < n ? (k + 1) * SUMBLK : n;
+                double s = 0;
+                for (size_t i = k * SUMBLK; i < hi; i++) {
+                    z[i] = jacobi_dof(h, r, i);
+                    if (coarse && !h->fixed[i]) z[i] += coarse_dof(h, (int)(i / 3), (int)(i % 3));
+                    s += r[i] * z[i];
+                }
+                prz[k] = s;
+            }
+            double rz1 = 0;
+            for (size_t k = 0; k < nb; k++) rz1 += prz[k];
+            const double b = rz1 / rz;
+            rz = rz1;
+#pragma omp for schedule(static)
+            for (size_t i = 0; i < n; i++) p[i] = z[i] + b * p[i];
         }
-        double a = rz / pq;
-#pragma omp parallel for schedule(static)
-        for (size_t i = 0; i < n; i++) {
-            d[i] += a * p[i];
-            r[i] -= a * q[i];
-        }
-        if (sqrt(fsum(r, r, n)) <= eta * r0) {
-            it++;
-            break;
-        }
-        precond(h, r, z);
-        double rz1 = fsum(r, z, n), b = rz1 / rz;
-        rz = rz1;
-#pragma omp parallel for schedule(static)
-        for (size_t i = 0; i < n; i++) p[i] = z[i] + b * p[i];
+#pragma omp master
+        iters = it;
     }
-    return it;
+    return iters;
 }
 
 ss_status ss_hyper_solve(ss_hyper *h, double tol, int max_newton, ss_hyper_report *rep,
