@@ -9,6 +9,7 @@
 
 #include "skinsim/core.h"
 #include "skinsim/geom.h"
+#include "skinsim/optics.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -74,7 +75,7 @@ void ss_wound_shape_free(ss_wound_shape *w);
  * epithelium at melanin factors. melanin: the skin's melanin fraction
  * estimated from the upper texture; ita_deg its typology angle;
  * pih_prevalence the clinical rate of post-inflammatory hyperpigmentation at
- * that skin type (ss_pih_prevalence). */
+ * that skin type (ss_pih_prevalence, skinsim/optics.h). */
 #define SS_ABRASION_NMELANIN 9
 typedef struct ss_abrasion_palette {
     float bed_pale[3], bed[3], capillary[3], granulation[3];
@@ -96,12 +97,6 @@ double ss_abrasion_melanin_factor(int k);
 /* Computes the palette for a skin whose healthy colour is `upper` (linear
  * RGB); reads the optics model's spectra (data/spectra). */
 ss_status ss_abrasion_palette_compute(const ss_image *upper, ss_abrasion_palette *p, ss_error *err);
-/* Fraction of patients with post-inflammatory hyperpigmentation after an
- * inflammatory skin injury, by the skin's individual typology angle (ITA,
- * degrees; Chardon et al. 1991 classes), from the rates of Taylor et al. 2002
- * and Davis & Callender 2010 (palette.c): 0.03 for very light skin, 0.65 for
- * dark skin. */
-double ss_pih_prevalence(double ita_deg);
 
 typedef struct ss_base_skin {
     ss_image *upper, *lower; /* linear RGB */

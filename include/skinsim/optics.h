@@ -238,6 +238,21 @@ ss_status ss_optics_albedo_grid(const ss_bio_params *bio, const ss_spectrum_opti
                                 const double *melanin, int nmel, const double *blood, int nbl,
                                 double *rgb, ss_error *err);
 
+/* ---- healing skin as tissue (src/optics/healing.c) -------------------------------- */
+/* New epithelium, shared by `abrasion` and `wound`: a thin epidermis over
+ * young, hyperaemic dermis. */
+#define SS_NEW_EPIDERMIS_FRACTION 0.6 /* its thickness, of the skin's epidermis */
+#define SS_YOUNG_DERMIS_BLOOD 0.04    /* blood volume fraction of the dermis below it */
+#define SS_YOUNG_DERMIS_OXYGENATION 0.9
+/* out = skin with its melanin times melanin_factor, the epidermis thinned and
+ * the dermal blood of the young tissue (out may be skin). */
+void ss_bio_new_epithelium(const ss_bio_params *skin, double melanin_factor, ss_bio_params *out);
+/* Fraction of patients with post-inflammatory hyperpigmentation after an
+ * inflammatory skin injury, by the skin's individual typology angle (ITA,
+ * degrees; Chardon et al. 1991 classes), from the rates of Taylor et al. 2002
+ * and Davis & Callender 2010: 0.03 for very light skin, 0.65 for dark skin. */
+double ss_pih_prevalence(double ita_deg);
+
 /* ---- CIELAB and CIEDE2000 (src/optics/colour.c) ---------------------------------- */
 /* Linear sRGB (white-normalised albedo, as above) <-> CIELAB, D65 white. */
 void ss_srgb_linear_to_lab(const double rgb[3], double lab[3]);

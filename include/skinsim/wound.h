@@ -38,7 +38,7 @@ enum {
     SS_WR_REGION_HI,              /* 1: plasma level of the full wound region */
     SS_WR_BED_BLOOD,              /* 1: blood volume fraction of the open wound bed */
     SS_WR_TISSUE_MIN_OXYGENATION, /* 1: blood oxygenation in tissue without oxygen */
-    SS_WR_YOUNG_BLOOD,            /* 1: extra blood fraction of freshly closed tissue */
+    SS_WR_YOUNG_BLOOD,            /* 1: dermal blood fraction of freshly closed tissue */
     SS_WR_SCAR_DAYS,              /* day: time constant of scar maturation after closure */
     SS_WR_EPIDERMIS_DAYS,         /* day: time constant of epidermal maturation */
     SS_WR_PIGMENT_DAYS,           /* day: time constant of repigmentation */

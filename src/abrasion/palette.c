@@ -133,28 +133,6 @@ static void to_f(const double *a, float *out) {
     for (int c = 0; c < 3; c++) out[c] = (float)(a[c] < 0 ? 0 : a[c] > 1 ? 1 : a[c]);
 }
 
-/* Post-inflammatory hyperpigmentation by skin type: the fraction of patients
- * with it after an inflammatory skin injury, from the individual typology
- * angle of the skin (Chardon, Cretois & Hourseau 1991, Int. J. Cosmet. Sci. 13:
- * 191: very light > 55 deg, light 41-55, intermediate 28-41, tan 10-28, brown
- * -30-10, dark < -30). Rates: acne patients of colour, Taylor, Cook-Bolden,
- * Rahman & Strachan 2002, J. Am. Acad. Dermatol. 46: S98 (PIH in 65 % of
- * African-American, 53 % of Hispanic and 47 % of Asian patients); light skin
- * types I-III rarely (a few per cent; Davis & Callender 2010, J. Clin. Aesthet.
- * Dermatol. 3(7): 20). Interpolated linearly in ITA between the class
- * centres. */
-double ss_pih_prevalence(double ita_deg) {
-    static const double ita[6] = {-45, -10, 19, 34.5, 48, 62};
-    static const double p[6] = {0.65, 0.53, 0.47, 0.25, 0.08, 0.03};
-    if (ita_deg <= ita[0]) return p[0];
-    for (int k = 0; k < 5; k++)
-        if (ita_deg <= ita[k + 1]) {
-            double t = (ita_deg - ita[k]) / (ita[k + 1] - ita[k]);
-            return p[k] + (p[k + 1] - p[k]) * t;
-        }
-    return p[5];
-}
-
 double ss_abrasion_melanin_factor(int k) {
     return 0.25 * pow(10.0, (double)k / (SS_ABRASION_NMELANIN - 1));
 }
@@ -257,19 +235,17 @@ ss_status ss_abrasion_palette_compute(const ss_image *upper, ss_abrasion_palette
         RATIO(melanin_ratio[k]);
     }
 #undef RATIO
-    /* new epithelium as a colour of its own, at each melanin factor: a thin
-     * epidermis (0.6 of the skin's) at the skin's melanin times the factor,
-     * over young, hyperaemic dermis (blood 4 %, 8x the healthy skin's, short
-     * of the erythema's 6 %). As a multiplier of a dark skin texture (its
+    /* new epithelium as a colour of its own, at each melanin factor: the
+     * tissue of ss_bio_new_epithelium (src/optics/healing.c, shared with
+     * `wound`): a thin epidermis (0.6 of the skin's) at the skin's melanin
+     * times the factor, over young, hyperaemic dermis (blood 4 %, 8x the
+     * healthy skin's, short of the erythema's 6 %). As a multiplier of a dark skin texture (its
      * ratio to the model's skin) a melanin-poor epidermis drew saturated
      * orange (L* 44, C* 45, hue 51 on a brown skin) where the optics give
      * pink-brown (L* 39, C* 28, hue 44) */
     for (int k = 0; k < SS_ABRASION_NMELANIN; k++) {
         m = skin;
-        m.bio.melanin *= ss_abrasion_melanin_factor(k);
-        m.bio.epidermis_thickness_cm *= 0.6;
-        m.bio.blood = 0.04;
-        m.bio.oxygenation = 0.9;
+        ss_bio_new_epithelium(&skin.bio, ss_abrasion_melanin_factor(k), &m.bio);
         if (!st) st = albedo(d, &m, out, err);
         to_f(out, P->epithelium[k]);
     }

@@ -28,7 +28,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "skinsim/abrasion.h"
 #include "skinsim/geom.h"
 #include "skinsim/optics.h"
 #include "skinsim/texture.h"
@@ -408,9 +407,14 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
         k[SS_BIO_EPIDERMIS_CM] * lerp(1, lerp(v[SS_WR_NEW_EPIDERMIS], 1, m_epi), regrown), cover);
     double sc = lerp(SC_FLOOR_CM, k[SS_BIO_SC_CM], cover * lerp(1, m_epi, regrown));
     double cap = s->cap < 0 ? 0 : s->cap;
+    /* freshly closed tissue: the new epithelium of ss_bio_new_epithelium
+     * (src/optics/healing.c, as `abrasion` draws it), its dermis hyperaemic
+     * (young_blood, SS_YOUNG_DERMIS_BLOOD by default, at
+     * SS_YOUNG_DERMIS_OXYGENATION), fading as the scar matures */
+    double young = reg * cover * (1 - m_scar);
     double tissue_blood =
-        k[SS_BIO_BLOOD] * cap * lerp(1, v[SS_WR_SCAR_BLOOD], reg * scar * m_scar) +
-        v[SS_WR_YOUNG_BLOOD] * reg * cover * (1 - m_scar);
+        lerp(k[SS_BIO_BLOOD] * cap * lerp(1, v[SS_WR_SCAR_BLOOD], reg * scar * m_scar),
+             v[SS_WR_YOUNG_BLOOD], young);
     tissue_blood = lerp(tissue_blood, v[SS_WR_KELOID_BLOOD], kel * cover);
     /* the open bed: its capillary loops (dots at ~0.35 mm) hold more blood */
     double bedtex = v[SS_WR_BED_TEXTURE] * open * reg;
@@ -419,8 +423,10 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
         lerp(tissue_blood, v[SS_WR_BED_BLOOD] * (1 + bedtex * (3 * dots - 0.5)), open * reg);
     /* blood under cover follows the tissue's oxygen; blood in the open bed is
      * oxygenated by the air (atmospheric O2 reaches ~0.3 mm deep) */
-    double oxy = lerp(lerp(v[SS_WR_TISSUE_MIN_OXYGENATION], k[SS_BIO_OXYGENATION], clamp01(s->oxy)),
-                      v[SS_WR_BED_OXYGENATION], open * reg);
+    double oxy =
+        lerp(lerp(v[SS_WR_TISSUE_MIN_OXYGENATION],
+                  lerp(k[SS_BIO_OXYGENATION], SS_YOUNG_DERMIS_OXYGENATION, young), clamp01(s->oxy)),
+             v[SS_WR_BED_OXYGENATION], open * reg);
     oxy = lerp(oxy, v[SS_WR_KELOID_OXYGENATION], kel * cover);
     b[SS_BIO_MELANIN] = (float)(mel > MELANIN_FLOOR ? mel : MELANIN_FLOOR);
     b[SS_BIO_PHEOMELANIN] = k[SS_BIO_PHEOMELANIN];
