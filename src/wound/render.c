@@ -20,9 +20,16 @@
  * from the base skin's textures (`skinsim skin`'s render maps of the bio map),
  * so the skin away from the wound is the base skin exactly and only the
  * wound's texels cost a table lookup (skin.h's render lookup of the GGX fit).
- * The skin's extra colour (hair) is laid over everything, except where the
- * tissue was destroyed. Gave up: sub-texel detail of the fields (the grid is
- * 0.5 mm; bilinear keeps edges soft, as healing edges are). */
+ * Hair is pigment of the bio map (src/skin/texgen.c: hair melanin through
+ * the table, as the skin's), so the same lookup draws it, and where the
+ * tissue was destroyed it goes with the skin's other features. The bio
+ * map's extra colour (an RGBA over-layer, 0 in every map `skinsim skin`
+ * writes now) is still laid over everything except the destroyed tissue: a
+ * --skin bio.exr may carry one (an older `skinsim skin` run, a user's
+ * paint), and `skinsim skin`'s render maps, copied outside the wound, lay
+ * it too, so without it here a painted hair would stop at a seam where the
+ * rendered texels begin; at alpha 0 it changes no value. Gave up: sub-texel detail of the fields
+ * (the grid is 0.5 mm; bilinear keeps edges soft, as healing edges are). */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdlib.h>
@@ -56,6 +63,10 @@
  * tenths of a mm): its thickness varies by +-CRUST_GRAIN at ~0.6 mm, and the
  * edges of its serous patches are as ragged, not soft blobs. */
 #define CRUST_GRAIN 0.25
+/* Healed skin is patchy: its post-inflammatory hyperpigmentation and its
+ * young tissue's redness vary by +-PATCHY (a flat colour over the healed
+ * region, days 14-90, read as paint). */
+#define PATCHY 0.35
 
 struct ss_wound_renderer {
     ss_wound_render_options o;
@@ -398,6 +409,9 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
      * closure, fades over months, as strong as the skin type's clinical rate */
     double pih =
         v[SS_WR_PIH_GAIN] * r->pih * (1 - exp(-s->age / 14.0)) * exp(-s->age / v[SS_WR_PIH_DAYS]);
+    /* both patchy, not one flat colour: PIH in macules (+-PATCHY at ~1.5 mm),
+     * the young tissue's redness in blotches (at ~2 mm) */
+    pih *= 1 + PATCHY * (2.0 * nz->thick - 1);
     double mel =
         k[SS_BIO_MELANIN] * cover *
         lerp(1, lerp(v[SS_WR_NEW_MELANIN], v[SS_WR_SCAR_MELANIN], m_pig) * (1 + pih), regrown) *
@@ -414,7 +428,7 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
     double young = reg * cover * (1 - m_scar);
     double tissue_blood =
         lerp(k[SS_BIO_BLOOD] * cap * lerp(1, v[SS_WR_SCAR_BLOOD], reg * scar * m_scar),
-             v[SS_WR_YOUNG_BLOOD], young);
+             v[SS_WR_YOUNG_BLOOD] * (1 + PATCHY * (2.0 * nz->mottle - 1)), young);
     tissue_blood = lerp(tissue_blood, v[SS_WR_KELOID_BLOOD], kel * cover);
     /* the open bed: its capillary loops (dots at ~0.35 mm) hold more blood */
     double bedtex = v[SS_WR_BED_TEXTURE] * open * reg;
@@ -526,7 +540,8 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
     double lift = v[SS_WR_CRUST_LIFT_MM] > 0 ? cover * scab_cover * exp(-s->crust_in / 0.8) : 0;
     for (int c = 0; c < 3; c++)
         o->rgb[c] = lerp(mid[c], o->rgb[c] * (1 - 0.65 * crack) * (1 + 0.5 * lift), edge_c);
-    /* the extra colour (hair) over everything, gone where the tissue was destroyed */
+    /* the bio map's extra colour over everything, gone where the tissue was
+     * destroyed (module comment: 0 in new maps, kept for given ones) */
     double ea = k[SS_BIO_EXTRA_A] * (1 - reg);
     for (int c = 0; c < 3; c++)
         o->rgb[c] = clamp01(clamp01(o->rgb[c]) * (1 - ea) + k[SS_BIO_EXTRA_R + c] * ea);
