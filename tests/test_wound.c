@@ -587,34 +587,54 @@ static void ring_profile(const ss_image *img, int tex, double side_mm, double *L
     for (int k = 0; k < nring; k++) L[k] /= cnt[k], C[k] /= cnt[k];
 }
 
-static void test_dark_skin_pigment(void **state) {
-    (void)state;
+/* The repository's ModelMatch table. */
+static ss_mm_table *default_table(void) {
     ss_error err;
     char path[4096];
     snprintf(path, sizeof path, "%s/data/modelmatch_default.sstab", SKINSIM_SOURCE_DIR);
     ss_mm_table *table = ss_mm_table_read(path, &err);
     assert_non_null(table);
+    return table;
+}
+
+/* A renderer of a 20 mm block of tex^2 texels on the built-in skin, its
+ * mean melanin set to `melanin` (its mottling kept; 0: as it is); *skin is
+ * the caller's to free after the renderer. */
+static ss_wound_renderer *block_renderer(const ss_mm_table *table, int tex, double melanin,
+                                         ss_image **skin) {
+    ss_error err;
+    *skin = ss_skin_bio_default(tex, 2.0, 1, &err);
+    assert_non_null(*skin);
+    if (melanin > 0) {
+        size_t n = (size_t)tex * tex;
+        float *d = (*skin)->data;
+        double m = 0;
+        for (size_t i = 0; i < n; i++) m += d[i * SS_BIO_NCHANNELS + SS_BIO_MELANIN];
+        m /= (double)n;
+        for (size_t i = 0; i < n; i++)
+            d[i * SS_BIO_NCHANNELS + SS_BIO_MELANIN] *= (float)(melanin / m);
+    }
+    ss_wound_render_options o;
+    ss_wound_render_options_default(&o);
+    o.size = tex;
+    o.side_mm = 20.0;
+    o.skin = *skin;
+    o.table = table;
+    o.scab_photons = 200;
+    ss_wound_renderer *r;
+    assert_int_equal(ss_wound_renderer_create(&o, &r, &err), SS_OK);
+    return r;
+}
+
+static void test_dark_skin_pigment(void **state) {
+    (void)state;
+    ss_error err;
+    ss_mm_table *table = default_table();
     const int tex = 64;
     for (int dark = 0; dark < 2; dark++) {
-        ss_image *skin = ss_skin_bio_default(tex, 2.0, 1, &err);
-        assert_non_null(skin);
-        if (dark) { /* melanin 0.35 (as `skinsim skin --base melanin=0.35`), its mottling kept */
-            size_t n = (size_t)tex * tex;
-            double m = 0;
-            for (size_t i = 0; i < n; i++) m += skin->data[i * SS_BIO_NCHANNELS + SS_BIO_MELANIN];
-            m /= (double)n;
-            for (size_t i = 0; i < n; i++)
-                skin->data[i * SS_BIO_NCHANNELS + SS_BIO_MELANIN] *= (float)(0.35 / m);
-        }
-        ss_wound_render_options o;
-        ss_wound_render_options_default(&o);
-        o.size = tex;
-        o.side_mm = 20.0;
-        o.skin = skin;
-        o.table = table;
-        o.scab_photons = 200;
-        ss_wound_renderer *r;
-        assert_int_equal(ss_wound_renderer_create(&o, &r, &err), SS_OK);
+        /* dark: melanin 0.35 (as `skinsim skin --base melanin=0.35`) */
+        ss_image *skin;
+        ss_wound_renderer *r = block_renderer(table, tex, dark ? 0.35 : 0, &skin);
         ss_wound_textures out;
         assert_int_equal(ss_wound_textures_create(tex, &out, &err), SS_OK);
         double L[20], C[20];
@@ -686,32 +706,12 @@ static double hue_deg(const double lab[3]) { return atan2(lab[2], lab[1]) * 57.2
 static void test_epithelium_colour(void **state) {
     (void)state;
     ss_error err;
-    char path[4096];
-    snprintf(path, sizeof path, "%s/data/modelmatch_default.sstab", SKINSIM_SOURCE_DIR);
-    ss_mm_table *table = ss_mm_table_read(path, &err);
-    assert_non_null(table);
+    ss_mm_table *table = default_table();
     const int tex = 64;
     const double ages[] = {3, 14, 90, 365};
     for (int dark = 0; dark < 2; dark++) {
-        ss_image *skin = ss_skin_bio_default(tex, 2.0, 1, &err);
-        assert_non_null(skin);
-        if (dark) {
-            size_t n = (size_t)tex * tex;
-            double m = 0;
-            for (size_t i = 0; i < n; i++) m += skin->data[i * SS_BIO_NCHANNELS + SS_BIO_MELANIN];
-            m /= (double)n;
-            for (size_t i = 0; i < n; i++)
-                skin->data[i * SS_BIO_NCHANNELS + SS_BIO_MELANIN] *= (float)(0.25 / m);
-        }
-        ss_wound_render_options o;
-        ss_wound_render_options_default(&o);
-        o.size = tex;
-        o.side_mm = 20.0;
-        o.skin = skin;
-        o.table = table;
-        o.scab_photons = 200;
-        ss_wound_renderer *r;
-        assert_int_equal(ss_wound_renderer_create(&o, &r, &err), SS_OK);
+        ss_image *skin;
+        ss_wound_renderer *r = block_renderer(table, tex, dark ? 0.25 : 0, &skin);
         ss_wound_textures out;
         assert_int_equal(ss_wound_textures_create(tex, &out, &err), SS_OK);
         for (size_t a = 0; a < sizeof ages / sizeof *ages; a++) {
