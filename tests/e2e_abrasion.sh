@@ -3,15 +3,9 @@
 # End-to-end: `skinsim abrasion` as a user runs it: default shape, strokes,
 # masks, several wounds, timeline JSON; and every bad input exits 2 with a
 # message naming the input and leaves no output directory behind.
-set -u
-CLI=$1
+. "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+e2e_begin "$1"
 SRC=$2
-T=$(mktemp -d /tmp/skinsim-e2e-abr-XXXXXX)
-trap 'rm -rf "$T"' EXIT
-fail=0; pass=0
-ok()   { pass=$((pass+1)); }
-bad()  { echo "FAIL: $*"; fail=$((fail+1)); }
-check() { if eval "$1"; then ok; else bad "$2"; fi; }
 
 # 1. Defaults (built-in stroke) at a small size.
 "$CLI" abrasion --size 128 --out "$T/def" --quiet --times 0,0.02,1,5,12,30 >"$T/out.txt" 2>"$T/err.txt"

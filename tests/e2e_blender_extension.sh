@@ -10,7 +10,7 @@ set -u
 SRC="$(cd "$2" && pwd)"
 T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
-fail() { echo "FAIL: $*"; exit 1; }
+. "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 PY=/usr/bin/python3
 [ -x "$PY" ] || PY=$(command -v python3)
 "$PY" -c "import tomllib" 2>/dev/null || { echo "SKIP: $PY has no tomllib (Python < 3.11)"; exit 77; }

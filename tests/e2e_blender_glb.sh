@@ -5,15 +5,13 @@
 # the extras, and on Blender >= 3.5 the _ field attributes. Runs with `make
 # test-blender` (SKINSIM_TEST_BLENDER=1); skipped (77) in the ordinary suite,
 # where Blender may be missing, or without the hand mesh.
-set -u
-CLI="$(cd "$(dirname "$1")" && pwd)/$(basename "$1")"
+. "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+e2e_begin "$1"
 SRC="$(cd "$2" && pwd)"
 [ "${SKINSIM_TEST_BLENDER:-0}" = 1 ] || { echo "SKIP: run with make test-blender"; exit 77; }
 command -v blender >/dev/null || { echo "SKIP: blender is not installed"; exit 77; }
 HAND="$SRC/data/meshes/generic-hand-left.glb"
 [ -f "$HAND" ] || { echo "SKIP: no hand mesh"; exit 77; }
-T=$(mktemp -d /tmp/skinsim-e2e-blglb-XXXXXX)
-trap 'rm -rf "$T"' EXIT
 python3 "$SRC/tests/strokes_ellipse.py" 0.2 0.62 0.02 0.014 >"$T/cut.csv"
 # myofibroblasts pull at once (no differentiation delay), so day 0.2 is deformed
 printf '{"mechanics": {"tau_myo": {"value": 0, "unit": "day", "source": "e2e"}, "tau_remodel": {"value": 0, "unit": "day", "source": "e2e"}}}\n' >"$T/pull.json"

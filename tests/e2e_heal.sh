@@ -5,13 +5,9 @@
 # bit-identical final state; stroke and mesh wounds run; bad inputs exit 2 and
 # leave no output directory.
 # usage: e2e_heal.sh <skinsim> <source dir>
-set -u
-CLI=$1
-T=$(mktemp -d /tmp/skinsim-e2e-heal-XXXXXX)
-trap 'rm -rf "$T"' EXIT
-fail() { echo "FAIL: $*" >&2; exit 1; }
+. "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+e2e_begin "$1"
 count() { ls "$@" 2>/dev/null | wc -l; }
-png_ok() { [ "$(head -c 8 "$1" | od -An -tx1 | tr -d ' \n')" = 89504e470d0a1a0a ] || fail "$1 is not a PNG"; }
 
 # one thread keeps these tiny runs fast on a loaded machine; run a uses 2 threads,
 # so every comparison with it also checks thread-count independence

@@ -6,13 +6,9 @@
 # end is byte-identical to an uninterrupted run on two; sutures run; bad
 # mechanics inputs exit 2 and leave no output directory.
 # usage: e2e_heal_mech.sh <skinsim> <source dir>
-set -u
-CLI=$1
-T=$(mktemp -d /tmp/skinsim-e2e-mech-XXXXXX)
-trap 'rm -rf "$T"' EXIT
-fail() { echo "FAIL: $*" >&2; exit 1; }
+. "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+e2e_begin "$1"
 count() { ls "$@" 2>/dev/null | wc -l; }
-png_ok() { [ "$(head -c 8 "$1" | od -An -tx1 | tr -d ' \n')" = 89504e470d0a1a0a ] || fail "$1 is not a PNG"; }
 
 # a 20 x 20 x 4 mm block, 13 mm wound, 1 mm tets
 SMALL="--grid 40x40x8 --mechanics --snapshot-every 0.5 --quiet"

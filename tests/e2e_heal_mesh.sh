@@ -11,12 +11,9 @@
 # writes nothing; an OBJ in metres is read as metres with a note, one whose
 # size leaves mm or cm open is refused naming --mesh-units-mm.
 # usage: e2e_heal_mesh.sh <skinsim> <source dir>
-set -u
-CLI=$1
+. "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+e2e_begin "$1"
 SRC=$2
-T=$(mktemp -d /tmp/skinsim-e2e-mesh-XXXXXX)
-trap 'rm -rf "$T"' EXIT
-fail() { echo "FAIL: $*" >&2; exit 1; }
 HAND="$SRC/data/meshes/generic-hand-left.glb" # shipped with the repository
 [ -f "$HAND" ] || fail "$HAND is missing"
 

@@ -9,11 +9,8 @@
 # reads a run folder with only .pvti + pieces: equal frames to the gathered
 # .vti when the pieces carry closure days, else exit 2 naming the snapshot.
 # usage: e2e_heal_pieces.sh <skinsim> <source dir>
-set -u
-CLI=$1
-T=$(mktemp -d /tmp/skinsim-e2e-heal-pieces-XXXXXX)
-trap 'rm -rf "$T"' EXIT
-fail() { echo "FAIL: $*" >&2; exit 1; }
+. "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+e2e_begin "$1"
 count() { ls "$@" 2>/dev/null | wc -l; }
 tree_sum() { (cd "$1" && find . -type f | sort | xargs md5sum) | md5sum; }
 SMALL="--grid 24x20x8 --scenario scab --snapshot-every 1 --quiet --threads 1"

@@ -2,12 +2,10 @@
 # The heal fields open in VTK's own XML reader (what ParaView uses): extents,
 # spacing, every field as cell data with the right length. Skipped (exit 77)
 # where VTK's Python module is not installed (Debian: python3-vtk9).
-set -u
-CLI=$1
+. "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+e2e_begin "$1"
 PY=/usr/bin/python3
 "$PY" -c "import vtk" 2>/dev/null || { echo "python3-vtk9 not installed: skipped"; exit 77; }
-T=$(mktemp -d /tmp/skinsim-e2e-vtk-XXXXXX)
-trap 'rm -rf "$T"' EXIT
 "$CLI" heal --grid 24x20x8 --days 2 --snapshot-every 1 --out "$T/h" --quiet || exit 1
 "$PY" - "$T/h/fields" <<'PY'
 import glob, sys, vtk, xml.etree.ElementTree as ET

@@ -8,13 +8,9 @@
 # `heal --help` listing --wound-mesh once.
 # SKINSIM_TEST_QUICK (the sanitizer build) runs the fast examples only.
 # usage: e2e_help.sh <skinsim> <source dir>
-set -u
-CLI=$(cd "$(dirname "$1")" && pwd)/$(basename "$1")
+. "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+e2e_begin "$1"
 SRC=$2
-T=$(mktemp -d /tmp/skinsim-e2e-help-XXXXXX)
-trap 'rm -rf "$T"' EXIT
-fail=0
-bad() { echo "FAIL: $*"; fail=$((fail + 1)); }
 ln -s "$SRC/data" "$T/data"
 for c in abrasion heal wound skin view "optics" "optics spectrum" "optics brdf" "optics mci" \
          "optics swatch" "optics fit" "optics table" "optics match"; do

@@ -9,13 +9,8 @@
 # usage: e2e_inputs.sh <skinsim> [source dir]
 set -u
 export SKINSIM_THREADS=1
-CLI="$(cd "$(dirname "$1")" && pwd)/$(basename "$1")"
-T=$(mktemp -d /tmp/skinsim-e2e-inputs-XXXXXX)
-trap 'rm -rf "$T"' EXIT
-fail=0; pass=0
-ok()   { pass=$((pass+1)); }
-bad()  { echo "FAIL: $*"; fail=$((fail+1)); }
-check() { if eval "$1"; then ok; else bad "$2"; fi; }
+. "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+e2e_begin "$1"
 # exit 2, a message containing $1 (grep -E), nothing at output $2; the rest is the command
 expect2() {
   local words="$1" out="$2"; shift 2

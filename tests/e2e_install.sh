@@ -8,13 +8,10 @@
 # overrides it, that bad input gets the library's message and exit 2, that
 # every installed header's functions link from both libraries, and that
 # pkg-config --cflags emits only the include folder.
-set -u
-CLI="$(cd "$(dirname "$1")" && pwd)/$(basename "$1")"
+. "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+e2e_begin "$1"
 SRC="$(cd "$2" && pwd)"
 BUILD="$(dirname "$CLI")"
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-fail() { echo "FAIL: $*"; exit 1; }
 for tool in cc pkg-config cmake readelf; do
   command -v $tool >/dev/null || { echo "SKIP: $tool not installed"; exit 77; }
 done

@@ -6,12 +6,8 @@
 # across the fibres gapes from area.csv's first row, one along them less,
 # stitches across the slit hold it, and the springs model shows no gape.
 # usage: e2e_mech_goh.sh <skinsim> <source dir>
-set -u
-CLI=$1
-T=$(mktemp -d /tmp/skinsim-e2e-goh-XXXXXX)
-trap 'rm -rf "$T"' EXIT
-fail() { echo "FAIL: $*" >&2; exit 1; }
-jget() { python3 -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]])" "$1" "$2"; }
+. "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+e2e_begin "$1"
 
 st() { # out-file, options...
     local o=$1; shift

@@ -12,11 +12,8 @@
 # (clinically maximal at 5-15 days). A run checkpointed at day 5 and resumed
 # (the lagged tension in the mechanics state) follows the same course.
 # usage: e2e_mech_goh_course.sh <skinsim> <source dir>
-set -u
-CLI=$1
-T=$(mktemp -d /tmp/skinsim-e2e-gohc-XXXXXX)
-trap 'rm -rf "$T"' EXIT
-fail() { echo "FAIL: $*" >&2; exit 1; }
+. "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+e2e_begin "$1"
 H="--grid 40x40x8 --mechanics --mech-model goh --quiet --threads 2"
 "$CLI" heal $H --days 14 --out "$T/run" >"$T/log" 2>&1 || { cat "$T/log" >&2; fail "heal --mech-model goh"; }
 python3 - "$T/run/area.csv" <<'PY' || fail "contraction course"

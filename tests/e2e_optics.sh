@@ -1,11 +1,8 @@
 #!/usr/bin/env bash
 # End-to-end: `skinsim optics` subcommands, help texts, JSON shape, output
 # files, bad input (exit 2, nothing written), thread-count determinism.
-set -u
-CLI="$(cd "$(dirname "$1")" && pwd)/$(basename "$1")"
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-fail() { echo "FAIL: $*"; exit 1; }
+. "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+e2e_begin "$1"
 
 "$CLI" optics --help >/dev/null || fail "optics --help"
 for s in spectrum brdf mci swatch; do

@@ -3,18 +3,9 @@
 # help texts, JSON shape, thread-count determinism of the table file, bad input
 # (exit 2, nothing written), corrupt / truncated / other-version tables, and
 # the shipped default table.
-set -u
-CLI="$(cd "$(dirname "$1")" && pwd)/$(basename "$1")"
+. "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+e2e_begin "$1"
 SRC="$2"
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-fail() { echo "FAIL: $*"; exit 1; }
-expect2() { # expect exit code 2
-  "$@" >"$T/o.txt" 2>"$T/e.txt"
-  rc=$?
-  [ $rc -eq 2 ] || fail "expected exit 2, got $rc: $*"
-  grep -q "error" "$T/e.txt" || fail "no error message: $*"
-}
 
 for s in fit table; do
   "$CLI" optics $s --help >"$T/h.txt" || fail "$s --help"
@@ -62,44 +53,44 @@ head -c 7 "$T/t1.sstab" | grep -q "SSMMTAB" || fail "table magic"
 grep -q '"ggx"' "$T/l.json" || fail "lookup json"
 
 # bad input: exit 2, nothing written
-expect2 "$CLI" optics fit --melanin 2
-expect2 "$CLI" optics fit --photons abc
-expect2 "$CLI" optics fit --weighting foo
-expect2 "$CLI" optics fit --base none
-expect2 "$CLI" optics fit --base
-expect2 "$CLI" optics fit --bogus
-expect2 "$CLI" optics fit --max-theta-deg 5
-expect2 "$CLI" optics fit --max-theta-deg 91
-expect2 "$CLI" optics table --samples 0 --out "$T/bad.sstab"
-expect2 "$CLI" optics table --samples 2 --photons 10 --out "$T/bad.sstab"
-expect2 "$CLI" optics table $SMALL --samples 2 --out "$T/nodir/x/bad.sstab" --wl-min 700 \
+exits2 "$CLI" optics fit --melanin 2
+exits2 "$CLI" optics fit --photons abc
+exits2 "$CLI" optics fit --weighting foo
+exits2 "$CLI" optics fit --base none
+exits2 "$CLI" optics fit --base
+exits2 "$CLI" optics fit --bogus
+exits2 "$CLI" optics fit --max-theta-deg 5
+exits2 "$CLI" optics fit --max-theta-deg 91
+exits2 "$CLI" optics table --samples 0 --out "$T/bad.sstab"
+exits2 "$CLI" optics table --samples 2 --photons 10 --out "$T/bad.sstab"
+exits2 "$CLI" optics table $SMALL --samples 2 --out "$T/nodir/x/bad.sstab" --wl-min 700 \
   --wl-max 400
-expect2 "$CLI" optics table --samples 2
-expect2 "$CLI" optics table --lookup "$T/t1.sstab" --out "$T/bad.sstab"
-expect2 "$CLI" optics table --samples 1 $SMALL --out /proc/none/bad.sstab
+exits2 "$CLI" optics table --samples 2
+exits2 "$CLI" optics table --lookup "$T/t1.sstab" --out "$T/bad.sstab"
+exits2 "$CLI" optics table --samples 1 $SMALL --out /proc/none/bad.sstab
 [ ! -e "$T/bad.sstab" ] || fail "a failed run wrote its output"
 [ -z "$(ls "$T" | grep -v -e '^t1.sstab$' -e '^t2.sstab$' -e '\.json$' -e '\.txt$')" ] \
   || fail "stray files: $(ls "$T")"
 
 # corrupt, truncated, other-version and missing tables: exit 2
 head -c 100 "$T/t1.sstab" >"$T/trunc.sstab"
-expect2 "$CLI" optics table --lookup "$T/trunc.sstab"
+exits2 "$CLI" optics table --lookup "$T/trunc.sstab"
 cp "$T/t1.sstab" "$T/corrupt.sstab"
 printf '\x55' | dd of="$T/corrupt.sstab" bs=1 seek=200 conv=notrunc 2>/dev/null
-expect2 "$CLI" optics table --lookup "$T/corrupt.sstab"
+exits2 "$CLI" optics table --lookup "$T/corrupt.sstab"
 cp "$T/t1.sstab" "$T/v2.sstab"  # version 7: not readable
 printf '\x07' | dd of="$T/v2.sstab" bs=1 seek=8 conv=notrunc 2>/dev/null
-expect2 "$CLI" optics table --lookup "$T/v2.sstab"
+exits2 "$CLI" optics table --lookup "$T/v2.sstab"
 grep -q "version" "$T/e.txt" || fail "version error names the version"
-expect2 "$CLI" optics table --lookup "$T/missing.sstab"
+exits2 "$CLI" optics table --lookup "$T/missing.sstab"
 
 # explicit axis values: two melanin samples, the rest single
 "$CLI" optics table --axis melanin=0.01,0.2 --samples 1 $SMALL --out "$T/ax.sstab" --quiet \
   || fail "table --axis"
 "$CLI" optics table --lookup "$T/ax.sstab" --melanin 0.1 --json >"$T/ax.json" || fail "lookup --axis table"
 grep -q '"entries": 2' "$T/ax.json" || fail "--axis table has 2 entries"
-expect2 "$CLI" optics table --axis melanin=0.2,0.1 --out "$T/bad.sstab"
-expect2 "$CLI" optics table --axis skin=0.1 --out "$T/bad.sstab"
+exits2 "$CLI" optics table --axis melanin=0.2,0.1 --out "$T/bad.sstab"
+exits2 "$CLI" optics table --axis skin=0.1 --out "$T/bad.sstab"
 [ ! -e "$T/bad.sstab" ] || fail "bad --axis wrote a table"
 
 # the shipped default table reads and interpolates

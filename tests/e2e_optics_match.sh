@@ -5,18 +5,9 @@
 # with the surface reflectance included, --geometry sce without), JSON
 # shape, the same answer for 1 and 2 threads, --lab input, and bad input
 # (exit 2 with an error naming it).
-set -u
-CLI="$(cd "$(dirname "$1")" && pwd)/$(basename "$1")"
+. "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+e2e_begin "$1"
 SRC="$2"
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-fail() { echo "FAIL: $*"; exit 1; }
-expect2() { # expect exit code 2
-  "$@" >"$T/o.txt" 2>"$T/e.txt"
-  rc=$?
-  [ $rc -eq 2 ] || fail "expected exit 2, got $rc: $*"
-  grep -q "error" "$T/e.txt" || fail "no error message: $*"
-}
 [ -f "$SRC/data/modelmatch_default.sstab" ] || fail "data/modelmatch_default.sstab is missing"
 
 "$CLI" optics match --help >"$T/h.txt" || fail "match --help"
@@ -84,16 +75,16 @@ cmp -s "$T/d1.json" "$T/dark-skin.json" || fail "match differs between 1 and 2 t
 "$CLI" optics match --lab 60,12,18 --table-only >"$T/l.txt" || fail "match --lab"
 grep -q "Delta-E00" "$T/l.txt" || fail "match text output"
 
-expect2 "$CLI" optics match
-expect2 "$CLI" optics match --srgb 1,2
-expect2 "$CLI" optics match --srgb 300,2,3
-expect2 "$CLI" optics match --srgb 1,2,nan
-expect2 "$CLI" optics match --lab 120,0,0
-expect2 "$CLI" optics match --srgb 1,2,3 --lab 50,0,0
-expect2 "$CLI" optics match --srgb 1,2,3 --table "$T/none.sstab"
+exits2 "$CLI" optics match
+exits2 "$CLI" optics match --srgb 1,2
+exits2 "$CLI" optics match --srgb 300,2,3
+exits2 "$CLI" optics match --srgb 1,2,nan
+exits2 "$CLI" optics match --lab 120,0,0
+exits2 "$CLI" optics match --srgb 1,2,3 --lab 50,0,0
+exits2 "$CLI" optics match --srgb 1,2,3 --table "$T/none.sstab"
 echo "garbage" >"$T/bad.sstab"
-expect2 "$CLI" optics match --srgb 1,2,3 --table "$T/bad.sstab"
-expect2 "$CLI" optics match --srgb 1,2,3 --photons 5
-expect2 "$CLI" optics match --srgb 1,2,3 --geometry 45/0
-expect2 "$CLI" optics match --srgb 1,2,3 --geometry
+exits2 "$CLI" optics match --srgb 1,2,3 --table "$T/bad.sstab"
+exits2 "$CLI" optics match --srgb 1,2,3 --photons 5
+exits2 "$CLI" optics match --srgb 1,2,3 --geometry 45/0
+exits2 "$CLI" optics match --srgb 1,2,3 --geometry
 echo "e2e_optics_match: ok"

@@ -7,13 +7,10 @@
 # lookup). The source files pip reads are copied to a scratch folder first, so
 # the test writes nothing into the source tree. Needs python3-venv,
 # python3-setuptools, python3-wheel and python3-numpy (Makefile DEPS).
-set -u
-CLI="$(cd "$(dirname "$1")" && pwd)/$(basename "$1")"
+. "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+e2e_begin "$1"
 SRC="$(cd "$2" && pwd)"
 BUILD="$(dirname "$CLI")"
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-fail() { echo "FAIL: $*"; exit 1; }
 PY=/usr/bin/python3
 [ -x "$PY" ] || PY=$(command -v python3)
 for m in ensurepip:python3-venv setuptools:python3-setuptools wheel:python3-wheel numpy:python3-numpy; do

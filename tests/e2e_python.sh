@@ -3,12 +3,10 @@
 # shared library of this build, with Debian's python3 and python3-numpy:
 # the unit tests in integrations/python/tests, including the check that the
 # ctypes struct mirrors have the C compiler's sizes and offsets.
-set -u
-CLI="$(cd "$(dirname "$1")" && pwd)/$(basename "$1")"
+. "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+e2e_begin "$1"
 SRC="$(cd "$2" && pwd)"
 BUILD="$(dirname "$CLI")"
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
 PY=/usr/bin/python3
 [ -x "$PY" ] || PY=$(command -v python3)
 "$PY" -c "import numpy" 2>/dev/null || { echo "SKIP: $PY has no numpy (apt-get install python3-numpy)"; exit 77; }

@@ -10,11 +10,9 @@
 # window (e2e_view); `mpirun` blocks run when the build has MPI.
 # SKINSIM_TEST_QUICK (the sanitizer build) runs the cheap blocks only.
 # usage: e2e_readme.sh <skinsim> <source dir>
-set -u
-CLI=$1
+. "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+e2e_begin "$1"
 SRC=$2
-T=$(mktemp -d /tmp/skinsim-e2e-readme-XXXXXX)
-trap 'rm -rf "$T"' EXIT
 fail=0
 W="$T/clone"
 mkdir -p "$W"

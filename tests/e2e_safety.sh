@@ -16,14 +16,9 @@ cleanup() {
   rm -rf "$T" "$W"
 }
 trap cleanup EXIT
-fail=0; pass=0
-ok()   { pass=$((pass+1)); }
-bad()  { echo "FAIL: $*"; fail=$((fail+1)); }
-check() { if eval "$1"; then ok; else bad "$2"; fi; }
+. "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 sk() { timeout 120 "$CLI" "$@"; }
 # background runs call the command directly, so $! is its pid (kill -9, lock)
-# checksum of every file of a folder (names and contents)
-sums() { (cd "$1" && find . -type f | LC_ALL=C sort | xargs md5sum) 2>/dev/null; }
 # exit 2 with a message containing $1; the rest is the command
 expect2() {
   local words="$1"; shift

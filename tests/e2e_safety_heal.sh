@@ -16,11 +16,7 @@ cleanup() {
 }
 trap cleanup EXIT
 export SKINSIM_THREADS=1
-fail=0; pass=0
-ok()   { pass=$((pass+1)); }
-bad()  { echo "FAIL: $*"; fail=$((fail+1)); }
-check() { if eval "$1"; then ok; else bad "$2"; fi; }
-sums() { (cd "$1" && find . -type f | LC_ALL=C sort | xargs md5sum) 2>/dev/null; }
+. "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 expect2() {
   local words="$1"; shift
   timeout 60 "$CLI" "$@" >/dev/null 2>"$W/err.txt"

@@ -3,15 +3,9 @@
 # fields, features.csv round trip, determinism across thread counts, --gltf,
 # --normal-convention; every bad input exits 2 naming the input and leaves no
 # output folder behind. (python3 for the JSON checks: in the Makefile DEPS.)
-set -u
-CLI=$1
+. "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+e2e_begin "$1"
 SRC=$2
-T=$(mktemp -d /tmp/skinsim-e2e-skin-XXXXXX)
-trap 'rm -rf "$T"' EXIT
-fail=0; pass=0
-ok()   { pass=$((pass+1)); }
-bad()  { echo "FAIL: $*"; fail=$((fail+1)); }
-check() { if eval "$1"; then ok; else bad "$2"; fi; }
 
 # 1. Defaults at a small size.
 "$CLI" skin --size 256 --out "$T/def" --quiet >"$T/o" 2>"$T/e"

@@ -23,10 +23,7 @@ HAND="$SRC/data/meshes/generic-hand-left.glb"
 T=$(mktemp -d /tmp/skinsim-e2e-view-XXXXXX)
 XPID=""
 trap 'rm -rf "$T"; [ -n "$XPID" ] && kill "$XPID" 2>/dev/null' EXIT
-fail=0; pass=0
-ok()   { pass=$((pass+1)); }
-bad()  { echo "FAIL: $*"; fail=$((fail+1)); }
-check() { if eval "$1"; then ok; else bad "$2"; fi; }
+. "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 if [ ! -x "$(dirname "$CLI")/skinsim-view" ]; then
   echo "skip: skinsim-view not built (GTK 4 or libepoxy missing at build time)"; exit 77

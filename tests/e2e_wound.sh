@@ -6,12 +6,8 @@
 # runs; bad inputs
 # (days, recipe, skin, table, heal options) exit 2 and write nothing.
 # usage: e2e_wound.sh <skinsim> <source dir>
-set -u
-CLI=$1
-T=$(mktemp -d /tmp/skinsim-e2e-wound-XXXXXX)
-trap 'rm -rf "$T"' EXIT
-fail() { echo "FAIL: $*" >&2; exit 1; }
-png_ok() { [ "$(head -c 8 "$1" | od -An -tx1 | tr -d ' \n')" = 89504e470d0a1a0a ] || fail "$1 is not a PNG"; }
+. "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+e2e_begin "$1"
 
 SMALL="--grid 24x24x8 --size 64 --quiet"
 

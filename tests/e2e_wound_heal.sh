@@ -8,11 +8,8 @@
 # between its snapshots, heal options next to --heal, --mechanics on a run
 # without it, a damaged snapshot: exit 2 naming the input, nothing written.
 # usage: e2e_wound_heal.sh <skinsim> <source dir>
-set -u
-CLI=$1
-T=$(mktemp -d /tmp/skinsim-e2e-wound-heal-XXXXXX)
-trap 'rm -rf "$T"' EXIT
-fail() { echo "FAIL: $*" >&2; exit 1; }
+. "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+e2e_begin "$1"
 
 printf 'u,v\n0.25,0.3\n0.7,0.22\n0.78,0.6\n0.45,0.8\n0.2,0.62\n' >"$T/stroke.csv"
 PROB="--scenario scab --grid 24x24x8 --stroke $T/stroke.csv"

@@ -14,11 +14,8 @@
 # - the height PNG decodes (the frame's height_min_mm..height_max_mm) to that
 #   maximum, with the wound's texels not piled at one value.
 # usage: e2e_wound_keloid.sh <skinsim> <source dir>
-set -u
-CLI=$1
-T=$(mktemp -d /tmp/skinsim-e2e-wound-keloid-XXXXXX)
-trap 'rm -rf "$T"' EXIT
-fail() { echo "FAIL: $*" >&2; exit 1; }
+. "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+e2e_begin "$1"
 
 printf 'u,v\n0.3,0.35\n0.65,0.3\n0.7,0.62\n0.4,0.7\n' >"$T/stroke.csv"
 PROB="--scenario keloid --size-mm 16,16,4 --grid 32x32x8 --skin-top-mm 3 --stroke $T/stroke.csv

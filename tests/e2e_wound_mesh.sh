@@ -7,14 +7,11 @@
 # states the UV scale; --mechanics on a mesh exits 2 and writes nothing.
 # Skipped (77) without the hand mesh.
 # usage: e2e_wound_mesh.sh <skinsim> <source dir>
-set -u
-CLI=$1
+. "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+e2e_begin "$1"
 SRC=$2
 MESH="$SRC/data/meshes/generic-hand-left.glb"
 [ -f "$MESH" ] || { echo "SKIP: no $MESH"; exit 77; }
-T=$(mktemp -d /tmp/skinsim-e2e-wound-mesh-XXXXXX)
-trap 'rm -rf "$T"' EXIT
-fail() { echo "FAIL: $*" >&2; exit 1; }
 
 # a wound on the back of the hand (its UV island, lower left)
 printf 'u,v\n0.22,0.70\n0.30,0.68\n0.31,0.76\n0.23,0.78\n' >"$T/cut.csv"

@@ -14,16 +14,13 @@
 # the corners are rounded: the wound (w > 0.5) covers less than 97 % of the
 # strokes' quadrilateral but more than 75 %. Skipped (77) without the hand mesh.
 # usage: e2e_wound_mesh_edge.sh <skinsim> <source dir>
-set -u
-CLI=$1
+. "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+e2e_begin "$1"
 SRC=$2
 MESH="$SRC/data/meshes/generic-hand-left.glb"
 [ -f "$MESH" ] || { echo "SKIP: no $MESH"; exit 77; }
 PY=/usr/bin/python3
 [ -x "$PY" ] || PY=$(command -v python3)
-T=$(mktemp -d /tmp/skinsim-e2e-wound-edge-XXXXXX)
-trap 'rm -rf "$T"' EXIT
-fail() { echo "FAIL: $*" >&2; exit 1; }
 
 printf 'u,v\n0.22,0.70\n0.30,0.68\n0.31,0.76\n0.23,0.78\n' >"$T/quad.csv"
 for n in 512 1024; do
