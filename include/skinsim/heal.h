@@ -566,6 +566,15 @@ typedef struct ss_heal_rd_system {
      * closed: a voxel that is mostly crust, [D9]); the reaction must write
      * the same into the slot. 0: m = clamp(1 - u_f, 0, 1) everywhere. */
     float mface_closed;
+    /* The tissue volume fraction of each cell for the fields of a face slot
+     * (a voxel that holds a sub-voxel crust over tissue, [D14]); NULL = 1
+     * everywhere (the same arithmetic as before, bit for bit). Such a cell's
+     * values are per tissue volume and its tissue lies in the bottom v of the
+     * voxel, over a whole cell: its lateral faces conduct min(v_i, v_j) (the
+     * tissue's share of the face), the face below it 2 / (1 + v) (the
+     * distance from its tissue's centre, v dx/2 + dx/2, instead of dx), and
+     * its update is divided by v (conserved: the sum of v u). */
+    const float *vfrac;
     /* a sub-box's convection sync (split scheme); NULL = this grid is the whole problem */
     ss_heal_conv_fn conv;
     void *conv_ctx;

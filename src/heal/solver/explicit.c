@@ -379,6 +379,23 @@ void ss_heal_rd__step_explicit_part(ss_heal_rd_system *sys, ss_heal_rd_work *w, 
                         czm[x] = wzm[x] * (mc < md ? mc : md);
                         czp[x] = wzp[x] * (mc < mu ? mc : mu);
                     }
+                    if (sys->vfrac) {
+                        /* sub-voxel tissue [D14]: lateral faces x min(v), the
+                         * face below a cell x 2 / (1 + v) of the upper cell,
+                         * all divided by the cell's own v */
+                        const float *restrict v = sys->vfrac + base;
+                        for (int x = xa; x < xa + n; x++) {
+                            const float vc = v[x], iv = 1.0f / vc;
+                            const float vl = v[x - 1], vr = v[x + 1];
+                            const float vs = v[x - (long)sy], vn = v[x + sy];
+                            cxm[x] *= (vc < vl ? vc : vl) * iv;
+                            cxp[x] *= (vc < vr ? vc : vr) * iv;
+                            cym[x] *= (vc < vs ? vc : vs) * iv;
+                            cyp[x] *= (vc < vn ? vc : vn) * iv;
+                            czm[x] *= 2.0f / (1.0f + vc) * iv;
+                            czp[x] *= 2.0f / (1.0f + v[x + sz]) * iv;
+                        }
+                    }
                 }
                 for (int f = 0; f < nf; f++) {
                     const float *restrict u = sys->u[f] + base;

@@ -70,6 +70,11 @@ typedef struct model_ctx {
     float crust;            /* s above which a voxel is crust, closed to u1..n [D9] (inf: none) */
     int *zt_min, *zt_max;   /* per y: range of ztop over the row's columns */
     int kdeep;              /* levels below the surface where no surface/scab term acts */
+    /* per cell: the tissue volume fraction 1 - wsc of a WOUND cell the crust
+     * layer's floor cuts (0 < wsc < 1), 1 elsewhere [D14]; NULL when no level
+     * can be cut (scab_mm a whole number of voxels, or no crust) */
+    float *vfrac;
+    float vmin; /* its smallest value */
     /* a box of a stack in z (src/mpi): ztop, zt_min, zt_max are whole-grid
      * levels, zoff the whole-grid level of this box's z = 0, col the exchange
      * with the boxes above and below (NULL: the columns are whole here) */
@@ -258,6 +263,37 @@ static void surface_inputs(model_ctx *c, const ss_heal_grid *g) {
     c->pfrac = c->static_region && !vel ? g->field[SS_HEAL_PLASMA] : NULL;
 }
 
+/* The tissue volume fraction of every cell, halo included (the explicit
+ * scheme reads it at the neighbours): 1 - wsc in a WOUND cell the crust
+ * layer's floor cuts, wsc computed as in react_row from the column's
+ * topmost tissue level (over a z stack: the maximum, exact as floats). The
+ * column scan reuses the prepare scratch wsum, which prepare rewrites. */
+static void tissue_fraction(model_ctx *c) {
+    const int nx = c->nx, ny = c->ny, nz = c->nz;
+    const size_t ncol = (size_t)nx * ny;
+    float *zt = c->wsum;
+    for (size_t i = 0; i < ncol; i++) {
+        zt[i] = -1.0f;
+        for (int z = nz - 2; z >= 1; z--)
+            if (is_tissue(c->cell[(size_t)z * ncol + i])) {
+                zt[i] = (float)(z + c->zoff);
+                break;
+            }
+    }
+    if (c->col) c->col(c->col_ctx, SS_HEAL_COL_MAX, zt, ncol);
+    for (int z = 0; z < nz; z++)
+        for (size_t i = 0; i < ncol; i++) {
+            const size_t k = (size_t)z * ncol + i;
+            float v = 1.0f;
+            if (c->cell[k] == SS_CELL_WOUND && zt[i] >= 0.0f) {
+                const float kf = zt[i] - (float)(z + c->zoff);
+                const float wsc = kf >= 0.0f ? clampf(c->scab_h - kf, 0.0f, 1.0f) : 0.0f;
+                if (wsc > 0.0f && wsc < 1.0f) v = 1.0f - wsc;
+            }
+            c->vfrac[k] = v;
+        }
+}
+
 /* Surface cell of every column: the topmost tissue cell inside the bounds. */
 static void find_surface(model_ctx *c) {
     const int nx = c->nx, ny = c->ny, nz = c->nz;
@@ -289,6 +325,7 @@ static void find_surface(model_ctx *c) {
         c->zt_min[y] = lo;
         c->zt_max[y] = hi;
     }
+    if (c->vfrac) tissue_fraction(c);
     /* the margin [D8]: lateral faces of a surface cell with intact epidermis
      * (the Dirichlet e = 1 of the sheet) at the same level */
     const float kf = c->De / (c->h * c->h);
@@ -710,6 +747,10 @@ static void sys_init(ss_heal_rd_system *s, model_ctx *c, const ss_heal_grid *g,
     s->prepare = c->ztop ? heal_prepare : NULL;
     s->ctx = c;
     s->mmax = 1.0;
+    /* sub-voxel tissue [D14]: a cell's face sum grows to at most 4 lateral
+     * faces of 1 and two z faces of 2 / (vmin (1 + vmin)) each */
+    s->vfrac = c->vfrac;
+    if (c->vfrac) s->mmax = (4.0 + 4.0 / ((double)c->vmin * (1.0 + c->vmin))) / 6.0;
     s->rate_max = rate_bound(p);
 }
 
@@ -826,6 +867,18 @@ static ss_heal_solver *solver_create(const ss_heal_grid *g, const int *goff, con
         return NULL;
     }
     if (goff) s->ctx.zoff = goff[2];
+    /* a level the crust layer's floor cuts exists when scab_mm is not a whole
+     * number of voxels (and a crust forms) [D14] */
+    const double frac = s->ctx.scab_h - floor((double)s->ctx.scab_h);
+    if (p->scab && p->Rs != 0.0 && frac > 0.0) {
+        s->ctx.vmin = (float)(1.0 - frac);
+        s->ctx.vfrac = malloc((size_t)g->nx * g->ny * g->nz * sizeof(float));
+        if (!s->ctx.vfrac) {
+            ss_heal_solver_free(s);
+            ss_error_set(err, SS_ERR_NOMEM, "heal solver: out of memory");
+            return NULL;
+        }
+    }
     find_surface(&s->ctx);
     sys_init(&s->sys, &s->ctx, g, &s->p);
     for (int d = 0; goff && d < 3; d++) {
@@ -891,6 +944,7 @@ void ss_heal_solver_free(ss_heal_solver *s) {
     free(s->ctx.kfix);
     free(s->ctx.zt_min);
     free(s->ctx.zt_max);
+    free(s->ctx.vfrac);
     free(s);
 }
 

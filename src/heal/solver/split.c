@@ -191,6 +191,28 @@ RD_HOT static void bundle_yz(const ss_heal_rd_system *sys, const ss_heal_rd_work
         float *restrict dp = dpall + (size_t)j * ldc;
         const float *restrict cpp = cp - ldc;
         const float *restrict dpp = dp - ldc;
+        if (face && sys->vfrac) {
+            /* with sub-voxel tissue [D14]: lateral faces x min(v), the face
+             * below a cell x 2 / (1 + v) of the upper cell, the row / v */
+            const float *restrict mlo = mrow - step, *restrict mhi = mrow + step;
+            const float *restrict v = sys->vfrac + ob + lb;
+            const float *restrict vlo = v - step, *restrict vhi = v + step;
+#pragma omp simd
+            for (int x = 0; x < cw; x++) {
+                const float k = kD / v[x] * (float)(upd[x] != 0);
+                const float ml = mrow[x] < mlo[x] ? mrow[x] : mlo[x];
+                const float mr = mrow[x] < mhi[x] ? mrow[x] : mhi[x];
+                const float gl = d == 1 ? (v[x] < vlo[x] ? v[x] : vlo[x]) : 2.0f / (1.0f + v[x]);
+                const float gr = d == 1 ? (v[x] < vhi[x] ? v[x] : vhi[x]) : 2.0f / (1.0f + vhi[x]);
+                const float wl = (float)((nb[x] & bm) != 0) * ml * gl;
+                const float wr = (float)((nb[x] & bp) != 0) * mr * gr;
+                const float a = -k * wl, c = -k * wr, b = 1.0f + k * (wl + wr);
+                const float r = 1.0f / (b - a * cpp[x]);
+                cp[x] = c * r;
+                dp[x] = (u[x] - a * dpp[x]) * r;
+            }
+            continue;
+        }
         if (face) {
             /* conservative: face conductance min(m) of the two cells */
             const float *restrict mlo = mrow - step, *restrict mhi = mrow + step;
@@ -260,6 +282,7 @@ RD_HOT static void bundle_x(const ss_heal_rd_system *sys, const ss_heal_rd_work 
     const uint8_t *restrict nb = w->nb + bz;
     const uint8_t *restrict upd = w->upd[f] + bz;
     const float *restrict m = mk ? mk + bz : NULL;
+    const float *restrict vf = sys->vfrac ? sys->vfrac + bz : NULL;
     {
         int zero = 1;
         for (int y = 0; zero && y < ch; y++)
@@ -285,7 +308,24 @@ RD_HOT static void bundle_x(const ss_heal_rd_system *sys, const ss_heal_rd_work 
         cp[y] = cc * r;                                                                            \
         dp[y] = (u[c] - a * dpp[y]) * r;                                                           \
     }
-        if (m && face) {
+        if (m && face && vf) {
+            /* with sub-voxel tissue [D14]: faces x min(v), the row / v */
+#pragma omp simd
+            for (int y = 0; y < ch; y++) {
+                const size_t c = (size_t)y * sy + (size_t)x;
+                const float k = kD / vf[c] * (float)(upd[c] != 0);
+                const float ml = m[c] < m[c - 1] ? m[c] : m[c - 1];
+                const float mr = m[c] < m[c + 1] ? m[c] : m[c + 1];
+                const float gl = vf[c] < vf[c - 1] ? vf[c] : vf[c - 1];
+                const float gr = vf[c] < vf[c + 1] ? vf[c] : vf[c + 1];
+                const float wl = (float)((nb[c] & NB_XM) != 0) * ml * gl;
+                const float wr = (float)((nb[c] & NB_XP) != 0) * mr * gr;
+                const float a = -k * wl, cc = -k * wr, b = 1.0f + k * (wl + wr);
+                const float r = 1.0f / (b - a * cpp[y]);
+                cp[y] = cc * r;
+                dp[y] = (u[c] - a * dpp[y]) * r;
+            }
+        } else if (m && face) {
             /* conservative: face conductance min(m) of the two cells */
 #pragma omp simd
             for (int y = 0; y < ch; y++) {
