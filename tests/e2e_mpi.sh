@@ -17,7 +17,7 @@
 # exits 2 on every rank with nothing written; `optics table` on 2 and 4
 # ranks writes the bytes of the single-process table. The mechanics and skin
 # meshes on MPI: tests/e2e_mpi_mech.sh. Skips (77) without mpirun or without
-# an MPI build.
+# an MPI build. 1 mm voxels (a sub-voxel crust, [D14]) on 3 ranks and 2x1x2.
 # usage: e2e_mpi.sh <skinsim> <source dir>
 set -u
 CLI=$1
@@ -70,6 +70,17 @@ echo "ok: boxes built per rank from strokes and a mesh, bit-identical (2x1x2, 1x
 # --- the split scheme (the default): y sweeps on x slabs, reached by transposes
 equal_on_ranks split-23x17x9 "1 2 3 4" --grid 23x17x9 --scenario scab --days 1 --snapshot-every 0.5 \
     --area-every 0.05 --quiet --threads 1
+
+# --- 1 mm voxels: the crust layer's floor cuts the surface voxel, whose
+# tissue share has its own faces and volume (docs/heal-model.md [D14]);
+# both schemes, and boxes stacked in z (the neighbours' shares in the halo)
+SUB="--size-mm 23,17,9 --grid 23x17x9 --scenario scab --days 1 --snapshot-every 0.5 --area-every 0.05 --quiet --threads 1"
+equal_on_ranks subvoxel-split "3" $SUB
+equal_on_ranks subvoxel-explicit "3" $SUB --scheme explicit
+SKINSIM_MPI_DIMS=2x1x2 run_np 4 heal $SUB --scheme explicit --out "$T/subvoxel-explicit-z" ||
+    fail "1 mm voxel run on 2x1x2"
+same_run "$T/subvoxel-explicit" "$T/subvoxel-explicit-z"
+echo "ok: heal with sub-voxel crusts (1 mm voxels) bit-identical, 2x1x2 too"
 
 # --- adaptive steps (the split scheme's default) with rejected, undone steps
 OPTS="--grid 23x17x9 --scenario keloid --days $adapt_days --snapshot-every 10 --adapt-tol 0.05 --quiet --threads 1"

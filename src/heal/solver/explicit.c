@@ -380,20 +380,26 @@ void ss_heal_rd__step_explicit_part(ss_heal_rd_system *sys, ss_heal_rd_work *w, 
                         czp[x] = wzp[x] * (mc < mu ? mc : mu);
                     }
                     if (sys->vfrac) {
-                        /* sub-voxel tissue [D14]: lateral faces x min(v), the
-                         * face below a cell x 2 / (1 + v) of the upper cell,
-                         * all divided by the cell's own v */
+                        /* sub-voxel tissue [D14]: a cell with v < 1 holds its
+                         * crust apart (its own m is 1, as the split scheme's
+                         * reaction writes); lateral faces x min(v), the face
+                         * below a cell x 2 / (1 + v) of the upper cell, all
+                         * divided by the cell's own v */
                         const float *restrict v = sys->vfrac + base;
                         for (int x = xa; x < xa + n; x++) {
+                            const long o[6] = {-1, 1, -(long)sy, (long)sy, -(long)sz, (long)sz};
+                            float *const cf[6] = {cxm, cxp, cym, cyp, czm, czp};
+                            const float *const wf[6] = {wxm, wxp, wym, wyp, wzm, wzp};
                             const float vc = v[x], iv = 1.0f / vc;
-                            const float vl = v[x - 1], vr = v[x + 1];
-                            const float vs = v[x - (long)sy], vn = v[x + sy];
-                            cxm[x] *= (vc < vl ? vc : vl) * iv;
-                            cxp[x] *= (vc < vr ? vc : vr) * iv;
-                            cym[x] *= (vc < vs ? vc : vs) * iv;
-                            cyp[x] *= (vc < vn ? vc : vn) * iv;
-                            czm[x] *= 2.0f / (1.0f + vc) * iv;
-                            czp[x] *= 2.0f / (1.0f + v[x + sz]) * iv;
+                            const float mc = vc < 1.0f ? 1.0f : face_m(q[x], qc);
+                            for (int k = 0; k < 6; k++) {
+                                const float vn = v[x + o[k]];
+                                const float mn = vn < 1.0f ? 1.0f : face_m(q[x + o[k]], qc);
+                                const float g = k < 4   ? (vc < vn ? vc : vn)
+                                                : k == 4 ? 2.0f / (1.0f + vc)
+                                                         : 2.0f / (1.0f + vn);
+                                cf[k][x] = wf[k][x] * (mc < mn ? mc : mn) * g * iv;
+                            }
                         }
                     }
                 }

@@ -74,7 +74,7 @@ typedef struct model_ctx {
      * layer's floor cuts (0 < wsc < 1), 1 elsewhere [D14]; NULL when no level
      * can be cut (scab_mm a whole number of voxels, or no crust) */
     float *vfrac;
-    float vmin; /* its smallest value */
+    float vmin; /* its smallest value (0: none is cut, vfrac stays NULL) */
     /* a box of a stack in z (src/mpi): ztop, zt_min, zt_max are whole-grid
      * levels, zoff the whole-grid level of this box's z = 0, col the exchange
      * with the boxes above and below (NULL: the columns are whole here) */
@@ -670,6 +670,10 @@ static void ctx_init(model_ctx *c, const ss_heal_params *p, const ss_heal_grid *
     c->De = (float)p->De;
     c->scab_h = (float)(p->scab_mm / g->dx_mm);
     c->crust = p->scab ? (float)SS_HEAL_CRUST_CLOSED : INFINITY;
+    /* a level the crust layer's floor cuts exists when scab_mm is not a whole
+     * number of voxels (and a crust forms) [D14]: its tissue fraction */
+    const double frac = (double)c->scab_h - floor((double)c->scab_h);
+    c->vmin = p->scab && p->Rs != 0.0 && frac > 0.0 ? (float)(1.0 - frac) : 0.0f;
     /* wsc = 0 once kf >= scab_h; without the scab switch R = 0 everywhere */
     c->kdeep = 1;
     if (p->scab && p->Rs != 0.0) {
@@ -750,7 +754,7 @@ static void sys_init(ss_heal_rd_system *s, model_ctx *c, const ss_heal_grid *g,
     /* sub-voxel tissue [D14]: a cell's face sum grows to at most 4 lateral
      * faces of 1 and two z faces of 2 / (vmin (1 + vmin)) each */
     s->vfrac = c->vfrac;
-    if (c->vfrac) s->mmax = (4.0 + 4.0 / ((double)c->vmin * (1.0 + c->vmin))) / 6.0;
+    if (c->vmin > 0.0f) s->mmax = (4.0 + 4.0 / ((double)c->vmin * (1.0 + c->vmin))) / 6.0;
     s->rate_max = rate_bound(p);
 }
 
@@ -867,11 +871,7 @@ static ss_heal_solver *solver_create(const ss_heal_grid *g, const int *goff, con
         return NULL;
     }
     if (goff) s->ctx.zoff = goff[2];
-    /* a level the crust layer's floor cuts exists when scab_mm is not a whole
-     * number of voxels (and a crust forms) [D14] */
-    const double frac = s->ctx.scab_h - floor((double)s->ctx.scab_h);
-    if (p->scab && p->Rs != 0.0 && frac > 0.0) {
-        s->ctx.vmin = (float)(1.0 - frac);
+    if (s->ctx.vmin > 0.0f) {
         s->ctx.vfrac = malloc((size_t)g->nx * g->ny * g->nz * sizeof(float));
         if (!s->ctx.vfrac) {
             ss_heal_solver_free(s);
