@@ -395,7 +395,7 @@ void ss_heal_rd__step_explicit_part(ss_heal_rd_system *sys, ss_heal_rd_work *w, 
                             for (int k = 0; k < 6; k++) {
                                 const float vn = v[x + o[k]];
                                 const float mn = vn < 1.0f ? 1.0f : face_m(q[x + o[k]], qc);
-                                const float g = k < 4   ? (vc < vn ? vc : vn)
+                                const float g = k < 4    ? (vc < vn ? vc : vn)
                                                 : k == 4 ? 2.0f / (1.0f + vc)
                                                          : 2.0f / (1.0f + vn);
                                 cf[k][x] = wf[k][x] * (mc < mn ? mc : mn) * g * iv;
