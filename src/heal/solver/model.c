@@ -19,7 +19,9 @@
  * thickness slows capillary and fibroblast growth in the wound below. The
  * bed the sheet reads is the granulation tissue (omega) under the crust. A
  * voxel the crust layer's floor cuts (voxels coarser than scab_mm) holds a
- * sub-voxel crust over tissue that grows at the full rate. These
+ * sub-voxel crust over tissue that grows at the full rate; that tissue has
+ * its own volume and a face to the dermis below from its own centre (the
+ * core's vfrac). These
  * column inputs are gathered before each reaction pass (prepare hook), so
  * rows stay independent and results bit-identical for any thread count.
  * The keloid's invasion signal a(t) (keloid_tau, keloid_floor) depends on the grid's day

@@ -11,7 +11,9 @@
  *     solve (I - dt m D d_xx) then d_yy then d_zz by the Thomas algorithm.
  *     Every line matrix is an M-matrix with unit column sums where m = 1, so
  *     the step is unconditionally stable, keeps u >= 0 and conserves mass of
- *     pure diffusion with no-flux faces. Lines are solved in bundles (all x
+ *     pure diffusion with no-flux faces (with a tissue volume fraction
+ *     vfrac, [D14], the rows are divided by v: the sum of v u is conserved,
+ *     still an M-matrix). Lines are solved in bundles (all x
  *     lines of a z slab, all y lines of a z slab, all z lines of a y slab) so
  *     independent lines fill the SIMD lanes and memory access stays local.
  * OpenMP over rows/slabs; no reductions, so bit-identical for any thread count. */
