@@ -278,6 +278,13 @@ void ss_hyper_free(ss_hyper *h);
  * Newton converges fast; off: block-Jacobi and a fresh tangent every Newton
  * iteration (the reference the tests compare with). */
 void ss_hyper_set_fast(ss_hyper *h, int on);
+/* on (the default): changes that keep the result within the Newton
+ * tolerance but not its bytes: the matrix of the CG's products in single
+ * precision (the gradient, the line search and the preconditioner stay in
+ * double), and a predictor, the last solve's change of positions tried as a
+ * first step when the positions are where the last solve left them; off:
+ * the solver as it was before them (docs/mech.md, stop 38). */
+void ss_hyper_set_tolerant(ss_hyper *h, int on);
 int ss_hyper_nodes(const ss_hyper *h);
 int ss_hyper_tets(const ss_hyper *h);
 /* Current positions (3n, mm): read, or set before a solve (a warm start). */
@@ -316,6 +323,7 @@ typedef struct ss_hyper_report {
     int converged;      /* 1: the last Newton step moved no node more than tol * h */
     double max_step_mm; /* largest node move of the last Newton step */
     double residual;    /* largest free-dof force (mN) at the end */
+    int predicted;      /* 1: the last solve's change was taken as a first step */
 } ss_hyper_report;
 /* Newton to the energy minimum from the current positions: stops when a
  * step moves no node more than tol times the mean edge, or after max_newton

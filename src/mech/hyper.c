@@ -93,6 +93,12 @@ struct ss_hyper {
     double *acen, *arho, ascale; /* arho: node offsets from the centroid / bin side */
     double *Ac, *Lc, *wc;        /* Ac: P^T A P, after the factoring L's transpose */
     int32_t *lband;              /* per coarse row: L's first and L^T's last nonzero */
+    /* within the solver's tolerance (ss_hyper_set_tolerant): the matrix in
+     * single precision for the CG's products, and the previous solve's
+     * displacement as a predictor step */
+    int tolerant, pred_ok;
+    float *val32;         /* val rounded to float, for matvec */
+    double *xend, *dprev; /* the last solve's end (then this one's start), its change */
 };
 
 /* ---- material ---------------------------------------------------------------- */
@@ -341,13 +347,13 @@ void ss_hyper_goh_cauchy(const ss_mech_params *p, const double F[9], double sg[9
 
 void ss_hyper_free(ss_hyper *h) {
     if (!h) return;
-    void *ptrs[] = {h->X,    h->x,     h->xt,     h->tet,    h->beta0, h->V0,     h->beta,
-                    h->Vg,   h->G,     h->act,    h->scale,  h->fib,   h->gdirty, h->anchor,
-                    h->load, h->fixed, h->se,     h->srest,  h->sk,    h->rowptr, h->col,
-                    h->diag, h->val,   h->tblk,   h->nstart, h->nlist, h->Kt,     h->gt,
-                    h->et,   h->Minv,  h->g,      h->d,      h->r,     h->z,      h->p,
-                    h->q,    h->agg,   h->astart, h->alist,  h->acen,  h->arho,   h->Ac,
-                    h->Lc,   h->wc,    h->gtry,   h->lband,  h->cgpart};
+    void *ptrs[] = {
+        h->X,     h->x,      h->xt,    h->tet,    h->beta0,  h->V0,   h->beta,   h->Vg,    h->G,
+        h->act,   h->scale,  h->fib,   h->gdirty, h->anchor, h->load, h->fixed,  h->se,    h->srest,
+        h->sk,    h->rowptr, h->col,   h->diag,   h->val,    h->tblk, h->nstart, h->nlist, h->Kt,
+        h->gt,    h->et,     h->Minv,  h->g,      h->d,      h->r,    h->z,      h->p,     h->q,
+        h->agg,   h->astart, h->alist, h->acen,   h->arho,   h->Ac,   h->Lc,     h->wc,    h->gtry,
+        h->lband, h->cgpart, h->val32, h->xend,   h->dprev};
     for (size_t i = 0; i < sizeof ptrs / sizeof ptrs[0]; i++) free(ptrs[i]);
     free(h);
 }
@@ -399,10 +405,12 @@ ss_hyper *ss_hyper_create(const ss_tetmesh *m, const ss_mech_params *p, ss_error
     h->p = malloc(n3 * sizeof(double));
     h->q = malloc(n3 * sizeof(double));
     h->cgpart = malloc(3 * ((n3 + SUMBLK - 1) / SUMBLK) * sizeof(double));
+    h->xend = malloc(n3 * sizeof(double));
+    h->dprev = malloc(n3 * sizeof(double));
     if (!h->X || !h->x || !h->xt || !h->tet || !h->beta0 || !h->beta || !h->V0 || !h->Vg || !h->G ||
         !h->act || !h->scale || !h->fib || !h->gdirty || !h->anchor || !h->load || !h->fixed ||
         !h->gt || !h->et || !h->Minv || !h->g || !h->gtry || !h->d || !h->r || !h->z || !h->p ||
-        !h->q || !h->cgpart)
+        !h->q || !h->cgpart || !h->xend || !h->dprev)
         goto nomem;
     memcpy(h->X, m->x, n3 * sizeof(double));
     memcpy(h->x, m->x, n3 * sizeof(double));
@@ -435,6 +443,7 @@ ss_hyper *ss_hyper_create(const ss_tetmesh *m, const ss_mech_params *p, ss_error
     }
     h->mean_edge = esum / (3.0 * nt);
     h->fast = 1;
+    h->tolerant = 1;
     return h;
 nomem:
     ss_error_set(err, SS_ERR_NOMEM, "hyperelastic solver: out of memory");
@@ -444,6 +453,11 @@ fail:
 }
 
 void ss_hyper_set_fast(ss_hyper *h, int on) { h->fast = on != 0; }
+void ss_hyper_set_tolerant(ss_hyper *h, int on) {
+    h->tolerant = on != 0;
+    h->tangent_ok = 0; /* val32 is filled by the assembly */
+    h->pred_ok = 0;
+}
 void ss_hyper_set_active_law(ss_hyper *h, int on) {
     h->act_law = on != 0;
     h->tangent_ok = 0;
@@ -529,8 +543,10 @@ static ss_status build_pattern(ss_hyper *h) {
     free(h->nstart);
     free(h->nlist);
     free(h->Kt);
+    free(h->val32);
     h->rowptr = h->col = h->diag = h->tblk = h->nstart = h->nlist = NULL;
     h->val = h->Kt = NULL;
+    h->val32 = NULL;
     /* node -> (tet, local) */
     h->nstart = calloc((size_t)nn + 1, sizeof(int32_t));
     h->nlist = malloc(4 * (size_t)nt * sizeof(int32_t));
@@ -595,7 +611,8 @@ static ss_status build_pattern(ss_hyper *h) {
     h->val = malloc(9 * (size_t)total * sizeof(double));
     h->tblk = malloc(16 * (size_t)nt * sizeof(int32_t));
     h->Kt = malloc(144 * (size_t)nt * sizeof(double));
-    if (!h->col || !h->diag || !h->val || !h->tblk || !h->Kt) {
+    h->val32 = malloc(9 * (size_t)total * sizeof(float));
+    if (!h->col || !h->diag || !h->val || !h->tblk || !h->Kt || !h->val32) {
         free(fill);
         free(cnt);
         free(cand);
@@ -1117,9 +1134,13 @@ static void assemble(ss_hyper *h, const double *x) {
             h->val[9 * (size_t)ba + k] -= B[k];
         }
     }
-    /* block-Jacobi preconditioner; fixed dofs -> identity rows */
+    /* block-Jacobi preconditioner; fixed dofs -> identity rows; the float
+     * copy of the matrix for the products */
 #pragma omp parallel for schedule(static)
     for (int i = 0; i < h->nn; i++) {
+        if (h->tolerant)
+            for (size_t k = 9 * (size_t)h->rowptr[i]; k < 9 * (size_t)h->rowptr[i + 1]; k++)
+                h->val32[k] = (float)h->val[k];
         double A[9];
         memcpy(A, h->val + 9 * (size_t)h->diag[i], sizeof A);
         for (int d = 0; d < 3; d++)
@@ -1145,6 +1166,21 @@ static void assemble(ss_hyper *h, const double *x) {
 
 /* out = A v (fixed dofs 0); an orphaned omp for (the CG's region) */
 static void matvec(const ss_hyper *h, const double *v, double *out) {
+    if (h->tolerant) { /* the float matrix: half the bytes, sums in double */
+#pragma omp for schedule(static)
+        for (int i = 0; i < h->nn; i++) {
+            double s[3] = {0, 0, 0};
+            for (int k = h->rowptr[i]; k < h->rowptr[i + 1]; k++) {
+                const float *B = h->val32 + 9 * (size_t)k;
+                const double *w = v + 3 * (size_t)h->col[k];
+                s[0] += (double)B[0] * w[0] + (double)B[1] * w[1] + (double)B[2] * w[2];
+                s[1] += (double)B[3] * w[0] + (double)B[4] * w[1] + (double)B[5] * w[2];
+                s[2] += (double)B[6] * w[0] + (double)B[7] * w[1] + (double)B[8] * w[2];
+            }
+            for (int d = 0; d < 3; d++) out[3 * i + d] = h->fixed[3 * i + d] ? 0 : s[d];
+        }
+        return;
+    }
 #pragma omp for schedule(static)
     for (int i = 0; i < h->nn; i++) {
         double s[3] = {0, 0, 0};
@@ -1270,13 +1306,37 @@ static int cg(ss_hyper *h, double eta, int maxit) {
 
 ss_status ss_hyper_solve(ss_hyper *h, double tol, int max_newton, ss_hyper_report *rep,
                          ss_error *err) {
-    ss_hyper_report rr = {0, 0, 0, 0, 0};
+    ss_hyper_report rr = {0, 0, 0, 0, 0, 0};
     if (!h->pattern_ok && build_pattern(h) != SS_OK)
         return ss_error_set(err, SS_ERR_NOMEM, "hyperelastic solver: out of memory");
     const size_t n = 3 * (size_t)h->nn;
     double E = total(h, h->x, h->g);
     if (!isfinite(E)) /* a folded start: nothing to minimise from */
         return ss_error_set(err, SS_ERR_INPUT, "hyperelastic solver: the start has a folded tet");
+    /* tolerant: if the positions are where the last solve left them (a new
+     * frame of a smooth load), its change of positions is tried as a first
+     * step, taken if it passes the Armijo test at once (one evaluation, whose
+     * gradient then serves Newton; the tangent is kept). Newton then starts
+     * closer and needs fewer iterations; it still converges to the same
+     * tolerance. */
+    int pred_ok = h->tolerant && h->pred_ok && !memcmp(h->x, h->xend, n * sizeof(double));
+    if (h->tolerant) memcpy(h->xend, h->x, n * sizeof(double)); /* this solve's start */
+    if (pred_ok) {
+        const double slope = fsum(h->g, h->dprev, n);
+        if (slope < 0) {
+#pragma omp parallel for schedule(static)
+            for (size_t i = 0; i < n; i++) h->xt[i] = h->x[i] + h->dprev[i];
+            const double En = total(h, h->xt, h->gtry);
+            if (isfinite(En) && En <= E + 1e-4 * slope) {
+                double *gs = h->g;
+                h->g = h->gtry;
+                h->gtry = gs;
+                E = En;
+                memcpy(h->x, h->xt, n * sizeof(double));
+                rr.predicted = 1;
+            }
+        }
+    }
     double g0 = sqrt(fsum(h->g, h->g, n));
     /* fast: the tangent (and its preconditioner) of an earlier iteration,
      * even of the previous solve, is kept while the steps it gives cut the
@@ -1358,6 +1418,13 @@ ss_status ss_hyper_solve(ss_hyper *h, double tol, int max_newton, ss_hyper_repor
             break;
         }
         if (alpha < 1 || !(sqrt(fsum(h->g, h->g, n)) <= REUSE_RATIO * gn)) h->tangent_ok = 0;
+    }
+    if (h->tolerant) { /* the predictor of the next solve */
+        for (size_t i = 0; i < n; i++) {
+            h->dprev[i] = h->fixed[i] ? 0 : h->x[i] - h->xend[i];
+            h->xend[i] = h->x[i];
+        }
+        h->pred_ok = 1;
     }
     double gm = 0;
     for (size_t i = 0; i < n; i++) gm = fmax(gm, fabs(h->g[i]));

@@ -479,7 +479,7 @@ ss_status ss_mech_stretch(const ss_mech_params *p_in, const ss_mech_stretch_conf
     }
     const int ax = c->axis, nn = m->nnodes;
     const double eps = 1e-9 * L;
-    ss_hyper_report rep = {0, 0, 0, 0, 0};
+    ss_hyper_report rep = {0, 0, 0, 0, 0, 0};
     int conv = 1;
     st = c->stretch >= 1 ? pull_dead_load(H, m, &p, c, L, &rep, &conv, err)
                          : push_flat_ends(H, m, c, L, &rep, &conv, err);
