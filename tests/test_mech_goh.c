@@ -557,12 +557,90 @@ static void test_active_law(void **state) {
     ss_tetmesh_free(mr);
 }
 
+/* ss_hyper_set_tolerant (the default; docs/mech.md, stop 38): the float
+ * matrix of the CG's products and the predictor step from the last solve
+ * change the bytes but not the result beyond the Newton tolerance. The
+ * pulled block with the heal run's in-plane active law over six frames whose
+ * pull grows and whose rest state takes in part of the contraction between
+ * frames (as the heal frame's remodelling does), at the heal run's tolerance
+ * (1e-4 of the mean edge) and a tight one: the displacement of the tolerant
+ * solver differs from the solver without those changes by less than the
+ * tolerance times the displacement (2-norms), the predictor is taken from
+ * the second frame on, and the tolerant path is bit-identical on 1 and 2
+ * threads. */
+static void grow_in(ss_hyper *H, const ss_tetmesh *m) {
+    double *G = ss_hyper_growth(H);
+    const double *act = ss_hyper_active(H);
+    for (int t = 0; t < m->ntets; t++)
+        if (act[t] > 0)
+            for (int k = 0; k < 9; k++) G[9 * t + k] *= 0.995;
+}
+
+static double *tolerant_run(int tolerant, double tol, int *npred, double *unorm, int *n3o) {
+    ss_tetmesh *m;
+    ss_hyper *H = pulled_block(1, &m);
+    ss_hyper_set_active_law(H, 1);
+    ss_hyper_set_tolerant(H, tolerant);
+    const int n3 = 3 * ss_hyper_nodes(H);
+    ss_error err;
+    *npred = 0;
+    for (int fr = 1; fr <= 6; fr++) {
+        ss_hyper_report r;
+        pull(H, m, 3 * fr);
+        assert_int_equal(ss_hyper_solve(H, tol, 60, &r, &err), SS_OK);
+        assert_true(r.converged);
+        *npred += r.predicted;
+        grow_in(H, m);
+    }
+    double *x = malloc((size_t)n3 * sizeof(double)), u2 = 0;
+    assert_non_null(x);
+    memcpy(x, ss_hyper_x(H), (size_t)n3 * sizeof(double));
+    for (int i = 0; i < n3; i++) u2 += (x[i] - ss_hyper_X(H)[i]) * (x[i] - ss_hyper_X(H)[i]);
+    *unorm = sqrt(u2);
+    *n3o = n3;
+    ss_hyper_free(H);
+    ss_tetmesh_free(m);
+    return x;
+}
+
+static void test_tolerant_within_tolerance(void **state) {
+    (void)state;
+    const double tols[2] = {1e-4, 1e-8};
+    for (int k = 0; k < 2; k++) {
+        omp_set_num_threads(2);
+        int pt, pe, p1, n3;
+        double ut, ue, u1, d2 = 0;
+        double *xt = tolerant_run(1, tols[k], &pt, &ut, &n3);
+        double *xe = tolerant_run(0, tols[k], &pe, &ue, &n3);
+        for (int i = 0; i < n3; i++) d2 += (xt[i] - xe[i]) * (xt[i] - xe[i]);
+        print_message("tol %g: |u| %.4g mm, tolerant - exact %.3g mm (%.3g of |u|); predictor "
+                      "taken %d times (exact path %d)\n",
+                      tols[k], ue, sqrt(d2), sqrt(d2) / ue, pt, pe);
+        assert_true(ue > 0.01);
+        assert_true(sqrt(d2) < tols[k] * ue);
+        assert_true(pt >= 3); /* of the five frames after the first */
+        assert_int_equal(pe, 0);
+        omp_set_num_threads(1);
+        double *x1 = tolerant_run(1, tols[k], &p1, &u1, &n3);
+        assert_memory_equal(x1, xt, (size_t)n3 * sizeof(double));
+        free(x1);
+        free(xt);
+        free(xe);
+    }
+    omp_set_num_threads(2);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_closed_form_cauchy),   cmocka_unit_test(test_forces_objective),
-        cmocka_unit_test(test_stretch_analytic),     cmocka_unit_test(test_stretch_oblique),
-        cmocka_unit_test(test_resting_tension_gape), cmocka_unit_test(test_fast_equals_plain),
-        cmocka_unit_test(test_active_law),           cmocka_unit_test(test_state_lag),
+        cmocka_unit_test(test_closed_form_cauchy),
+        cmocka_unit_test(test_forces_objective),
+        cmocka_unit_test(test_stretch_analytic),
+        cmocka_unit_test(test_stretch_oblique),
+        cmocka_unit_test(test_resting_tension_gape),
+        cmocka_unit_test(test_fast_equals_plain),
+        cmocka_unit_test(test_active_law),
+        cmocka_unit_test(test_state_lag),
+        cmocka_unit_test(test_tolerant_within_tolerance),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
