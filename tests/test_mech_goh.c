@@ -558,16 +558,15 @@ static void test_active_law(void **state) {
 }
 
 /* ss_hyper_set_tolerant (the default; docs/mech.md, stop 38): the float
- * matrix of the CG's products and the predictor step from the last solve
- * change the bytes but not the result beyond the Newton tolerance. The
- * pulled block with the heal run's in-plane active law over six frames whose
- * pull grows and whose rest state takes in part of the contraction between
- * frames (as the heal frame's remodelling does), at the heal run's tolerance
- * (1e-4 of the mean edge) and a tight one: the displacement of the tolerant
- * solver differs from the solver without those changes by less than the
- * tolerance times the displacement (2-norms), the predictor is taken from
- * the second frame on, and the tolerant path is bit-identical on 1 and 2
- * threads. */
+ * matrix of the CG's products, the predictor step from the last solve and
+ * the end without an evaluation at a step under the tolerance change the bytes but not the result
+ * beyond the Newton tolerance. The pulled block with the heal run's in-plane active law over six
+ * frames whose pull grows and whose rest state takes in part of the contraction between frames (as
+ * the heal frame's remodelling does), at the heal run's tolerance (1e-4 of the mean edge) and a
+ * tight one (1e-6; below 1e-7 the exact path's line search reaches the rounding of the energy): the
+ * displacement of the tolerant solver differs from the solver without those changes by less than
+ * the tolerance times the displacement (2-norms), the predictor is taken from the second frame on,
+ * and the tolerant path is bit-identical on 1 and 2 threads. */
 static void grow_in(ss_hyper *H, const ss_tetmesh *m) {
     double *G = ss_hyper_growth(H);
     const double *act = ss_hyper_active(H);
@@ -605,7 +604,7 @@ static double *tolerant_run(int tolerant, double tol, int *npred, double *unorm,
 
 static void test_tolerant_within_tolerance(void **state) {
     (void)state;
-    const double tols[2] = {1e-4, 1e-8};
+    const double tols[2] = {1e-4, 1e-6};
     for (int k = 0; k < 2; k++) {
         omp_set_num_threads(2);
         int pt, pe, p1, n3;

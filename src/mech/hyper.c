@@ -1304,6 +1304,48 @@ static int cg(ss_hyper *h, double eta, int maxit) {
     return iters;
 }
 
+/* the largest node move of the step d */
+static double max_move(const ss_hyper *h, const double *d) {
+    double mx = 0;
+    for (int i = 0; i < h->nn; i++) {
+        const double *v = d + 3 * (size_t)i, s2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+        if (s2 > mx) mx = s2;
+    }
+    return sqrt(mx);
+}
+
+/* 1 if x + d folds a tet (J_e <= 0, or a zero area in the skin's plane for
+ * the in-plane active law): where the energy is infinite */
+static int folds(ss_hyper *h, const double *d) {
+    const size_t n = 3 * (size_t)h->nn;
+    int bad = 0;
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < n; i++) h->xt[i] = h->x[i] + d[i];
+    update_growth(h);
+#pragma omp parallel for schedule(static) reduction(| : bad)
+    for (int t = 0; t < h->nt; t++) {
+        double F[9];
+        tet_F(h, t, h->xt, F);
+        if (!(det3(F) > 0)) bad |= 1;
+        if (h->act_law && h->act[t] != 0) {
+            const int32_t *q = h->tet + 4 * t;
+            const double *b0 = h->beta0 + 12 * (size_t)t;
+            double a[3], b[3];
+            for (int i = 0; i < 3; i++) {
+                a[i] = b[i] = 0;
+                for (int k = 0; k < 4; k++) {
+                    a[i] += h->xt[3 * q[k] + i] * b0[3 * k];
+                    b[i] += h->xt[3 * q[k] + i] * b0[3 * k + 1];
+                }
+            }
+            const double c0 = a[1] * b[2] - a[2] * b[1], c1 = a[2] * b[0] - a[0] * b[2],
+                         c2 = a[0] * b[1] - a[1] * b[0];
+            if (!(c0 * c0 + c1 * c1 + c2 * c2 > 0)) bad |= 1;
+        }
+    }
+    return bad;
+}
+
 ss_status ss_hyper_solve(ss_hyper *h, double tol, int max_newton, ss_hyper_report *rep,
                          ss_error *err) {
     ss_hyper_report rr = {0, 0, 0, 0, 0, 0};
@@ -1374,6 +1416,17 @@ ss_status ss_hyper_solve(ss_hyper *h, double tol, int max_newton, ss_hyper_repor
             for (size_t i = 0; i < n; i++) h->d[i] = -h->d[i];
             slope = fsum(h->g, h->d, n);
             if (!(slope < 0)) break;
+        }
+        /* tolerant: a full step already under the tolerance ends the solve
+         * without the line search's evaluation if it folds no tet (the
+         * Armijo test would at most shorten a step that is below the
+         * tolerance anyway); the gradient kept is the one before it */
+        if (h->tolerant && max_move(h, h->d) < tol * h->mean_edge && !folds(h, h->d)) {
+#pragma omp parallel for schedule(static)
+            for (size_t i = 0; i < n; i++) h->x[i] += h->d[i];
+            rr.max_step_mm = max_move(h, h->d);
+            rr.converged = 1;
+            break;
         }
         /* the full step (alpha 1, nearly always taken) is evaluated with its
          * gradient, which then serves the next iteration as is: total() at
