@@ -37,7 +37,14 @@
  * cut the gradient five-fold (a frame's load changes the tangent little);
  * the assembly was over half of a frame. ss_hyper_set_fast(h, 0) gives the
  * plain solver (block-Jacobi, fresh tangent each iteration), which the tests
- * compare with.
+ * compare with. Within the Newton tolerance but not the same bytes
+ * (ss_hyper_set_tolerant, on by default; off is the solver before them): the
+ * CG's matrix products read a float copy of the tangent (half the bytes of
+ * the bandwidth-bound product; the residual and gradient stay in double),
+ * a solve that starts where the last one ended first tries the last one's
+ * change of positions as a step (Armijo-tested: a smooth load's frames move
+ * alike, so Newton starts closer), and a Newton step under the tolerance
+ * ends the solve without the line search's evaluation when it folds no tet.
  *
  * What it gave up: linear tets lock somewhat in near-incompressible bending
  * (the default K_bulk/mu = 2.1 is far from it); no sparse direct solver (no
