@@ -41,6 +41,7 @@
  * (ss_hyper_set_tolerant, on by default; off is the solver before them): the
  * CG's matrix products read a float copy of the tangent (half the bytes of
  * the bandwidth-bound product; the residual and gradient stay in double),
+ * the per-tet tangents are stored as floats (half the assembly's traffic),
  * a solve that starts where the last one ended first tries the last one's
  * change of positions as a step (Armijo-tested: a smooth load's frames move
  * alike, so Newton starts closer), and a Newton step under the tolerance
@@ -87,7 +88,7 @@ struct ss_hyper {
     double *val;
     int32_t *tblk;           /* per (tet * 16 + la * 4 + lb): its block */
     int32_t *nstart, *nlist; /* per node: (tet * 4 + la) in tet order */
-    double *Kt, *gt, *et;
+    double *Kt, *gt, *et;    /* Kt: 144 per tet; tolerant: as floats (its first half) */
     double *Minv;
     double *g, *d, *r, *z, *p, *q;
     double *gtry;   /* the gradient at the line search's full step */
@@ -981,12 +982,17 @@ static void eval_tets(ss_hyper *h, const double *x, int mode) {
         h->et[t] = V * c * W + h->V0[t] * Wa;
         if (!mode) continue;
         double *g = h->gt + 12 * (size_t)t;
-        double *K = mode == 2 ? h->Kt + 144 * (size_t)t : NULL;
+        double Kl[144], *K = mode != 2 ? NULL : h->tolerant ? Kl : h->Kt + 144 * (size_t)t;
         for (int k = 0; k < 12; k++) g[k] = 0;
         if (K) memset(K, 0, 144 * sizeof(double));
-        if (!isfinite(h->et[t])) continue;
-        map_tet(h->beta + 12 * (size_t)t, V * c, P, H, g, K);
-        if (law) map_tet(h->beta0 + 12 * (size_t)t, h->V0[t], Pa, Ha, g, K);
+        if (isfinite(h->et[t])) {
+            map_tet(h->beta + 12 * (size_t)t, V * c, P, H, g, K);
+            if (law) map_tet(h->beta0 + 12 * (size_t)t, h->V0[t], Pa, Ha, g, K);
+        }
+        if (K == Kl) { /* the tolerant tangent is kept in single precision */
+            float *Kf = (float *)h->Kt + 144 * (size_t)t;
+            for (int k = 0; k < 144; k++) Kf[k] = (float)Kl[k];
+        }
     }
 }
 
@@ -1105,6 +1111,19 @@ static void assemble(ss_hyper *h, const double *x) {
     for (int i = 0; i < h->nn; i++) {
         memset(h->val + 9 * (size_t)h->rowptr[i], 0,
                9 * (size_t)(h->rowptr[i + 1] - h->rowptr[i]) * sizeof(double));
+        if (h->tolerant) { /* the float tangents, the same order */
+            for (int c = h->nstart[i]; c < h->nstart[i + 1]; c++) {
+                const int t = h->nlist[c] / 4, la = h->nlist[c] % 4;
+                const float *K = (const float *)h->Kt + 144 * (size_t)t + 36 * la;
+                const int32_t *bk = h->tblk + 16 * (size_t)t + 4 * la;
+                for (int lb = 0; lb < 4; lb++) {
+                    double *v = h->val + 9 * (size_t)bk[lb];
+                    for (int r = 0; r < 3; r++)
+                        for (int j = 0; j < 3; j++) v[3 * r + j] += K[12 * r + 3 * lb + j];
+                }
+            }
+            continue;
+        }
         for (int c = h->nstart[i]; c < h->nstart[i + 1]; c++) {
             const int t = h->nlist[c] / 4, la = h->nlist[c] % 4;
             const double *K = h->Kt + 144 * (size_t)t + 36 * la;
