@@ -282,7 +282,8 @@ void ss_hyper_set_fast(ss_hyper *h, int on);
  * tolerance but not its bytes: the per-tet tangents and the matrix of the
  * CG's products in single precision (the gradient, the line search, the
  * sums and the preconditioner stay in double); a predictor, the last solve's change of positions
- * tried as a first step when the positions are where the last solve left them; and a Newton step
+ * tried as a start when the positions are where the last solve left them (if it
+ * folds no tet); and a Newton step
  * already under the tolerance taken without the line search's evaluation if it folds no tet (the
  * report's residual is then the one before that step). Off: the solver as it was before them
  * (docs/mech.md, stop 38). */

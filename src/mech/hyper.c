@@ -42,9 +42,9 @@
  * CG's matrix products read a float copy of the tangent (half the bytes of
  * the bandwidth-bound product; the residual and gradient stay in double),
  * the per-tet tangents are stored as floats (half the assembly's traffic),
- * a solve that starts where the last one ended first tries the last one's
- * change of positions as a step (Armijo-tested: a smooth load's frames move
- * alike, so Newton starts closer), and a Newton step under the tolerance
+ * a solve that starts where the last one ended starts from there moved by
+ * the last one's change of positions if that folds no tet (a smooth load's
+ * frames move alike, so Newton starts closer), and a Newton step under the tolerance
  * ends the solve without the line search's evaluation when it folds no tet.
  *
  * What it gave up: linear tets lock somewhat in near-incompressible bending
@@ -515,7 +515,8 @@ int ss_hyper_add_spring(ss_hyper *h, int a, int b, double rest, double k, ss_err
 
 void ss_hyper_set_spring(ss_hyper *h, int i, double rest, double k) {
     if (i < 0 || i >= h->ns) return;
-    if (h->sk[i] != k || h->srest[i] != rest) h->tangent_ok = 0; /* a stitch cut: fresh tangent */
+    if (h->sk[i] != k || h->srest[i] != rest) /* a stitch cut: fresh tangent, no predictor */
+        h->tangent_ok = h->pred_ok = 0;
     h->srest[i] = rest;
     h->sk[i] = k;
 }
@@ -1378,33 +1379,28 @@ ss_status ss_hyper_solve(ss_hyper *h, double tol, int max_newton, ss_hyper_repor
     if (!h->pattern_ok && build_pattern(h) != SS_OK)
         return ss_error_set(err, SS_ERR_NOMEM, "hyperelastic solver: out of memory");
     const size_t n = 3 * (size_t)h->nn;
-    double E = total(h, h->x, h->g);
-    if (!isfinite(E)) /* a folded start: nothing to minimise from */
-        return ss_error_set(err, SS_ERR_INPUT, "hyperelastic solver: the start has a folded tet");
     /* tolerant: if the positions are where the last solve left them (a new
-     * frame of a smooth load), its change of positions is tried as a first
-     * step, taken if it passes the Armijo test at once (one evaluation, whose
-     * gradient then serves Newton; the tangent is kept). Newton then starts
-     * closer and needs fewer iterations; it still converges to the same
-     * tolerance. */
-    int pred_ok = h->tolerant && h->pred_ok && !memcmp(h->x, h->xend, n * sizeof(double));
+     * frame of a smooth load), the solve starts from them moved by the last
+     * solve's change of positions, if that folds no tet (a smooth load's
+     * frames move alike; the evaluation there replaces the one at the old
+     * positions, its gradient serves Newton and the tangent is kept). Newton
+     * then starts closer, needs fewer iterations and converges to the same
+     * tolerance (its line search decreases the energy from there). */
+    const int pred_ok = h->tolerant && h->pred_ok && !memcmp(h->x, h->xend, n * sizeof(double));
     if (h->tolerant) memcpy(h->xend, h->x, n * sizeof(double)); /* this solve's start */
+    double E = INFINITY;
     if (pred_ok) {
-        const double slope = fsum(h->g, h->dprev, n);
-        if (slope < 0) {
 #pragma omp parallel for schedule(static)
-            for (size_t i = 0; i < n; i++) h->xt[i] = h->x[i] + h->dprev[i];
-            const double En = total(h, h->xt, h->gtry);
-            if (isfinite(En) && En <= E + 1e-4 * slope) {
-                double *gs = h->g;
-                h->g = h->gtry;
-                h->gtry = gs;
-                E = En;
-                memcpy(h->x, h->xt, n * sizeof(double));
-                rr.predicted = 1;
-            }
+        for (size_t i = 0; i < n; i++) h->xt[i] = h->x[i] + h->dprev[i];
+        E = total(h, h->xt, h->g);
+        if (isfinite(E)) {
+            memcpy(h->x, h->xt, n * sizeof(double));
+            rr.predicted = 1;
         }
     }
+    if (!rr.predicted) E = total(h, h->x, h->g);
+    if (!isfinite(E)) /* a folded start: nothing to minimise from */
+        return ss_error_set(err, SS_ERR_INPUT, "hyperelastic solver: the start has a folded tet");
     double g0 = sqrt(fsum(h->g, h->g, n));
     /* fast: the tangent (and its preconditioner) of an earlier iteration,
      * even of the previous solve, is kept while the steps it gives cut the
