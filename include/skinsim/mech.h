@@ -281,12 +281,12 @@ void ss_hyper_set_fast(ss_hyper *h, int on);
 /* on (the default): changes that keep the result within the Newton
  * tolerance but not its bytes: the per-tet tangents and the matrix of the
  * CG's products in single precision (the gradient, the line search, the
- * sums and the preconditioner stay in double); a predictor, the last solve's change of positions
- * tried as a start when the positions are where the last solve left them (if it
- * folds no tet); and a Newton step
- * already under the tolerance taken without the line search's evaluation if it folds no tet (the
- * report's residual is then the one before that step). Off: the solver as it was before them
- * (docs/mech.md, stop 38). */
+ * sums and the preconditioner stay in double); a predictor, the last
+ * solve's change of positions added to the start when the positions are
+ * where the last solve left them (if that folds no tet); and a Newton step
+ * already under the tolerance taken without the line search's evaluation
+ * if it folds no tet (the report's residual is then the one before that
+ * step). Off: the solver as it was before them (docs/mech.md, stop 38). */
 void ss_hyper_set_tolerant(ss_hyper *h, int on);
 int ss_hyper_nodes(const ss_hyper *h);
 int ss_hyper_tets(const ss_hyper *h);
