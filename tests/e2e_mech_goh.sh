@@ -1,10 +1,11 @@
 #!/bin/bash
 # End-to-end test of the hyperelastic tissue (docs/mech.md, "The GOH solver"):
-# `skinsim mech stretch` against the closed-form GOH stress (fibres along and
-# across the axis, mu and k2 change it, the springs model is far from it, bad
-# input exits 2), and `skinsim heal --mechanics --mech-model goh`: a slit
-# across the fibres gapes from area.csv's first row, one along them less,
-# stitches across the slit hold it, and the springs model shows no gape.
+# `skinsim mech stretch` against the closed-form GOH stress (fibres along,
+# across and at 30 and 60 degrees to the axis, mu and k2 change it, the
+# springs model is far from it, bad input exits 2), and `skinsim heal
+# --mechanics --mech-model goh`: a slit across the fibres gapes from
+# area.csv's first row, one along them less, stitches across the slit hold
+# it, and the springs model shows no gape.
 # usage: e2e_mech_goh.sh <skinsim> <source dir>
 . "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 e2e_begin "$1"
@@ -15,24 +16,34 @@ st() { # out-file, options...
 }
 st along --stretch 1.1 --axis x --fibres x
 st across --stretch 1.1 --axis x --fibres y
+st deg30 --stretch 1.1 --axis x --fibres 30
+st deg60 --stretch 1.1 --axis x --fibres 60
 st mu --stretch 1.1 --axis x --fibres y --param mu=30
 st k2 --stretch 1.1 --axis x --fibres x --param k2=10
 st zz --stretch 1.1 --axis z --fibres z --tet-size-mm 2
 st springs --stretch 1.1 --axis x --fibres x --mech-model springs
 python3 - "$T" <<'PY' || fail "stretch figures"
 import json, sys
-d = {k: json.load(open(f"{sys.argv[1]}/{k}.json")) for k in ["along", "across", "mu", "k2", "zz", "springs"]}
-for k in ["along", "across", "mu", "k2", "zz"]:
+names = ["along", "across", "deg30", "deg60", "mu", "k2", "zz", "springs"]
+d = {k: json.load(open(f"{sys.argv[1]}/{k}.json")) for k in names}
+for k in ["along", "across", "deg30", "deg60", "mu", "k2", "zz"]:
     s, a = d[k]["stress_kpa"], d[k]["analytic_stress_kpa"]
     assert abs(s - a) <= 1e-6 * abs(a), (k, s, a)
     assert d[k]["converged"] is True, k
 assert d["along"]["stress_kpa"] > 5 * d["across"]["stress_kpa"]
+# oblique fibres: softer as they turn away from the axis, and the block shears (free ends)
+s0, s30, s60, s90 = (d[k]["stress_kpa"] for k in ["along", "deg30", "deg60", "across"])
+assert s0 > s30 > s60 > s90, (s0, s30, s60, s90)
+for k in ["deg30", "deg60"]:
+    g, ga = d[k]["shear"][0], d[k]["analytic_shear"][0]
+    assert g < -1e-3 and abs(g - ga) < 1e-6, (k, g, ga)
 assert d["mu"]["stress_kpa"] > 1.5 * d["across"]["stress_kpa"]
 assert d["k2"]["stress_kpa"] > 1.2 * d["along"]["stress_kpa"]
 assert abs(d["zz"]["stress_kpa"] - d["along"]["stress_kpa"]) < 1e-6 * d["along"]["stress_kpa"]
 assert d["springs"]["stress_kpa"] < 0.5 * d["springs"]["analytic_stress_kpa"]
-print("stretch 1.1: along %.3f kPa, across %.3f, mu 30 %.3f, k2 10 %.3f, springs %.3f (GOH %.3f)" % (
-    d["along"]["stress_kpa"], d["across"]["stress_kpa"], d["mu"]["stress_kpa"], d["k2"]["stress_kpa"],
+print("stretch 1.1: along %.3f kPa, 30 deg %.3f, 60 deg %.3f, across %.3f, mu 30 %.3f, "
+      "k2 10 %.3f, springs %.3f (GOH %.3f)" % (
+    s0, s30, s60, s90, d["mu"]["stress_kpa"], d["k2"]["stress_kpa"],
     d["springs"]["stress_kpa"], d["springs"]["analytic_stress_kpa"]))
 PY
 bad() {
