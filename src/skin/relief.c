@@ -24,6 +24,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* the sub-sampling of a texel (skin_relief_eval) */
+enum { RELIEF_SUB_MAX = 4 };
+#define RELIEF_SUB_MM 0.0125
+
 void skin_relief_free(skin_relief *r) {
     if (!r) return;
     free(r->p1);
@@ -85,8 +89,13 @@ ss_status skin_relief_init(skin_relief *r, const ss_skin_settings *s, const ss_i
         skin_relief_free(r);
         return ss_error_set(err, SS_ERR_NOMEM, "microrelief: out of memory");
     }
-    /* half-widths: primary lines about 80 um wide, secondary 40 um */
-    const double wmin = 0.75 * r->texel_mm;
+    /* sub-samples per texel side: spaced at most RELIEF_SUB_MM (about
+     * half the secondary line's half-width), up to RELIEF_SUB_MAX */
+    long ns = lround(ceil(r->texel_mm / RELIEF_SUB_MM - 1e-9));
+    r->ns = (int)(ns < 1 ? 1 : ns > RELIEF_SUB_MAX ? RELIEF_SUB_MAX : ns);
+    /* half-widths: primary lines about 80 um wide, secondary 40 um; a line
+     * narrower than 0.75 sub-sample spacing is widened */
+    const double wmin = 0.75 * r->texel_mm / r->ns;
     r->w1 = 0.04;
     r->w2 = 0.02;
     r->d1 = d->relief_depth;
@@ -105,18 +114,28 @@ ss_status skin_relief_init(skin_relief *r, const ss_skin_settings *s, const ss_i
     return SS_OK;
 }
 
-/* Distance (mm, in the stretched metric) from (u, v) to the nearest Voronoi
- * edge of the m x m periodic point set, and that edge's depth factor; only
- * edges nearer than `reach_mm` are looked for (+INFINITY: none). A rival k
- * can only be the edge's other side when |p_k| - |p_best| < 2 reach (the
- * bisector distance is at least half that difference), which skips most. */
-static inline __attribute__((always_inline)) double
-edge_distance(const float *p, int m, double world_mm, double u, double v, double tx, double ty,
-              double inv_stretch, int iso, double reach_mm, float *depth) {
-    enum { REACH = 2, SIDE = 2 * REACH + 1 };
+/* The points of the m x m periodic set that can matter within a texel:
+ * offsets (mm, in the stretched metric) from the texel centre (u, v) to the
+ * points of the 5 x 5 lattice cells around it, kept when
+ * |p_k| < |p_nearest| + slack. A point can only be nearest to a sub-sample
+ * within distance t of the centre when |p_k| < |p_nearest| + 2 t, and only
+ * be the other side of an edge nearer than `reach` when
+ * |p_k| < |p_nearest| + 2 t + 2 reach (the bisector distance is at least
+ * half the difference of the two distances), so slack = 2 (t + reach)
+ * keeps every point the texel's sub-samples need and skips most. */
+enum { REACH = 2, SIDE = 2 * REACH + 1, NPTS = SIDE * SIDE };
+typedef struct cand_set {
+    int n;
+    double x[NPTS], y[NPTS], d2[NPTS];
+    float z[NPTS];
+} cand_set;
+
+static inline __attribute__((always_inline)) void
+gather_points(const float *p, int m, double world_mm, double u, double v, double tx, double ty,
+              double inv_stretch, int iso, double slack, cand_set *cs) {
     const int ci = (int)floor(u * m), cj = (int)floor(v * m);
-    double bx[SIDE * SIDE], by[SIDE * SIDE], bd2[SIDE * SIDE];
-    float bz[SIDE * SIDE];
+    double bx[NPTS], by[NPTS], bd2[NPTS];
+    float bz[NPTS];
     int col[SIDE];
     double cox[SIDE];
     for (int d = 0; d < SIDE; d++) { /* the periodic wrap, once per column */
@@ -127,8 +146,7 @@ edge_distance(const float *p, int m, double world_mm, double u, double v, double
         col[d] = i;
         cox[d] = ox;
     }
-    int nb = 0, best = 0;
-    double bd = INFINITY;
+    int nb = 0;
     for (int dj = 0; dj < SIDE; dj++) {
         int j = cj + dj - REACH;
         double oy = 0;
@@ -149,9 +167,8 @@ edge_distance(const float *p, int m, double world_mm, double u, double v, double
             nb++;
         }
     }
-    /* the nearest point: the minimum by a tree (no serial dependence), then
-     * its first index, as a running strict minimum would find it */
-    double mn[SIDE];
+    /* the nearest distance: the minimum by a tree (no serial dependence) */
+    double mn[SIDE], bd = INFINITY;
     for (int d = 0; d < SIDE; d++) {
         const double *r5 = bd2 + d * SIDE;
         double x = r5[0] < r5[1] ? r5[0] : r5[1], y = r5[2] < r5[3] ? r5[2] : r5[3];
@@ -160,20 +177,48 @@ edge_distance(const float *p, int m, double world_mm, double u, double v, double
     }
     for (int d = 0; d < SIDE; d++)
         if (mn[d] < bd) bd = mn[d];
-    while (bd2[best] != bd) best++;
-    const double lim = sqrt(bd) + 2.0 * reach_mm, lim2 = lim * lim;
+    const double lim = sqrt(bd) + slack, lim2 = lim * lim;
+    int n = 0;
+    for (int k = 0; k < nb; k++) /* in lattice order: ties resolve as before */
+        if (bd2[k] <= lim2) {
+            cs->x[n] = bx[k];
+            cs->y[n] = by[k];
+            cs->d2[n] = bd2[k];
+            cs->z[n] = bz[k];
+            n++;
+        }
+    cs->n = n;
+}
+
+/* Distance (mm, in the metric) from the point at offset (ox, oy) from the
+ * texel centre to the nearest Voronoi edge of the gathered points, and
+ * that edge's depth factor; only edges nearer than `reach` are looked for
+ * (+INFINITY: none). The distance to the bisector between the nearest point
+ * and a rival, exact for a Voronoi diagram; at offset 0 the centre's own
+ * distances are used as they are. */
+static inline __attribute__((always_inline)) double
+edge_at(const cand_set *cs, double ox, double oy, double reach, float *depth) {
+    double d2[NPTS], bd = INFINITY;
+    int best = 0;
+    for (int k = 0; k < cs->n; k++) {
+        double a = cs->x[k] - ox, b = cs->y[k] - oy;
+        d2[k] = a * a + b * b;
+    }
+    for (int k = 0; k < cs->n; k++) /* the first nearest, a strict running minimum */
+        if (d2[k] < bd) bd = d2[k], best = k;
+    const double lim = sqrt(bd) + 2.0 * reach, lim2 = lim * lim;
     double e = INFINITY;
     float dep = 0.0f;
-    for (int k = 0; k < nb; k++) {
-        if (k == best || bd2[k] > lim2) continue;
-        double gx = bx[k] - bx[best], gy = by[k] - by[best];
+    for (int k = 0; k < cs->n; k++) {
+        if (k == best || d2[k] > lim2) continue;
+        double gx = cs->x[k] - cs->x[best], gy = cs->y[k] - cs->y[best];
         double gl = sqrt(gx * gx + gy * gy);
         if (!(gl > 0)) continue;
-        /* the bisector: points x with (x - mid) . g = 0; the texel is at 0 */
-        double dist = (bd2[k] - bd) / (2.0 * gl);
+        /* the bisector: points x with (x - mid) . g = 0; the sample is at 0 */
+        double dist = (d2[k] - bd) / (2.0 * gl);
         if (dist < e) {
             e = dist;
-            dep = 0.5f + 0.5f * (bz[k] + bz[best]); /* symmetric in the two cells */
+            dep = 0.5f + 0.5f * (cs->z[k] + cs->z[best]); /* symmetric in the two cells */
         }
     }
     *depth = dep;
@@ -202,19 +247,42 @@ float skin_relief_eval(const skin_relief *r, double u, double v, float *groove) 
     const double len = sqrt(c2 * c2 + s2 * s2), c = len > 0 ? c2 / len : 1.0;
     const double tx = sqrt(fmax(0.0, 0.5 * (1.0 + c))),
                  ty = (s2 < 0 ? -1.0 : 1.0) * sqrt(fmax(0.0, 0.5 * (1.0 - c)));
+    /* the texel's footprint: n x n sub-samples on a regular grid, their
+     * offsets along the texel's axes in each metric; t bounds their distance
+     * from the centre (the metric only shrinks) */
+    const int n = r->ns;
+    const double h = r->texel_mm / n, t = 0.5 * (n - 1) * h * sqrt(2.0);
+    const double is = 1.0 / r->stretch;
+    cand_set cp, cs;
+    gather_points(r->p1, r->m1, r->world_mm, u, v, tx, ty, is, 0, 2.0 * (t + r->w1), &cp);
+    gather_points(r->p2, r->m2, r->world_mm, u, v, 1.0, 0.0, 1.0, 1, 2.0 * (t + r->w2), &cs);
     float dep1, dep2;
-    const double e1 =
-        edge_distance(r->p1, r->m1, r->world_mm, u, v, tx, ty, 1.0 / r->stretch, 0, r->w1, &dep1);
-    const double e2 =
-        edge_distance(r->p2, r->m2, r->world_mm, u, v, 1.0, 0.0, 1.0, 1, r->w2, &dep2);
-    double g1 = e1 < r->w1 ? (1.0 - e1 / r->w1) : 0.0, g2 = e2 < r->w2 ? (1.0 - e2 / r->w2) : 0.0;
-    g1 *= g1;
-    g2 *= g2;
-    /* the groove weight keeps its area when the line is widened, like the depth */
-    g1 *= r->k1;
-    g2 *= 0.5 * r->k2;
-    *groove = (float)(g1 > g2 ? g1 : g2);
-    g1 /= r->k1;
-    g2 /= 0.5 * r->k2;
-    return (float)-(r->d1 * dep1 * g1 + r->d2 * dep2 * g2);
+    /* a line reaches the footprint only when the centre is within w + t of
+     * it (the distance to the edges is 1-Lipschitz): else a plateau, 0 */
+    const int near1 = edge_at(&cp, 0.0, 0.0, r->w1 + t, &dep1) < r->w1 + t;
+    const int near2 = edge_at(&cs, 0.0, 0.0, r->w2 + t, &dep2) < r->w2 + t;
+    if (!near1 && !near2) return 0.0f;
+    double hs = 0.0, gs = 0.0;
+    for (int j = 0; j < n; j++)
+        for (int i = 0; i < n; i++) {
+            const double ox = (i + 0.5 - 0.5 * n) * h, oy = (j + 0.5 - 0.5 * n) * h;
+            double g1 = 0.0, g2 = 0.0;
+            if (near1) {
+                const double e1 = edge_at(&cp, (ox * tx + oy * ty) * is, -ox * ty + oy * tx,
+                                          r->w1, &dep1);
+                if (e1 < r->w1) g1 = (1.0 - e1 / r->w1) * (1.0 - e1 / r->w1);
+            }
+            if (near2) {
+                const double e2 = edge_at(&cs, ox, oy, r->w2, &dep2);
+                if (e2 < r->w2) g2 = (1.0 - e2 / r->w2) * (1.0 - e2 / r->w2);
+            }
+            hs += r->d1 * dep1 * g1 + r->d2 * dep2 * g2;
+            /* the groove weight keeps its area when the line is widened,
+             * like the depth */
+            const double q1 = g1 * r->k1, q2 = 0.5 * g2 * r->k2;
+            gs += q1 > q2 ? q1 : q2;
+        }
+    const double inv = 1.0 / (n * n);
+    *groove = (float)(gs * inv);
+    return (float)(-hs * inv);
 }

@@ -40,10 +40,11 @@ typedef struct skin_relief {
     int m1, m2;     /* cells per side, primary and secondary */
     float *p1, *p2; /* jittered points: x, y (texture units), depth factor */
     double world_mm, texel_mm;
-    double w1, w2; /* line half-widths, mm (antialiased: >= 0.75 texel) */
+    double w1, w2; /* line half-widths, mm (>= 0.75 sub-sample spacing) */
     double d1, d2; /* line depths, mm (scaled by w / w_eff when widened) */
     double k1, k2; /* that scale (1 when not widened), also applied to the groove */
     double stretch;
+    int ns; /* sub-samples per texel side (the footprint is averaged) */
     int nd; /* direction grid per side (doubled angle: cos 2a, sin 2a) */
     float *dir;
 } skin_relief;
