@@ -836,7 +836,8 @@ static void test_render_surface_maps(void **state) {
         if (m.cavity->data[i] == 1.0f) rp += r, np++;
     }
     const double rsd = sqrt(r2 / n - (r1 / n) * (r1 / n)), ssd = sqrt(s2 / n - (s1 / n) * (s1 / n));
-    print_message("roughness %.3f sd %.3f (lines %.3f, plateaus %.3f; %d / %d texels), specular %.3f sd %.3f\n",
+    print_message("roughness %.3f sd %.3f (lines %.3f, plateaus %.3f; %d / %d texels), specular "
+                  "%.3f sd %.3f\n",
                   r1 / n, rsd, nl ? rl / nl : 0, np ? rp / np : 0, nl, np, s1 / n, ssd);
     assert_true(rsd > 0.02 && ssd > 0.02);
     assert_true(nl > 100 && np > 100 && rl / nl > rp / np + 0.03);
