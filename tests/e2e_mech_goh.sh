@@ -22,6 +22,7 @@ st mu --stretch 1.1 --axis x --fibres y --param mu=30
 st k2 --stretch 1.1 --axis x --fibres x --param k2=10
 st zz --stretch 1.1 --axis z --fibres z --tet-size-mm 2
 st springs --stretch 1.1 --axis x --fibres x --mech-model springs
+st rest --stretch 1 --axis x --fibres 30
 python3 - "$T" <<'PY' || fail "stretch figures"
 import json, sys
 names = ["along", "across", "deg30", "deg60", "mu", "k2", "zz", "springs"]
@@ -31,6 +32,9 @@ for k in ["along", "across", "deg30", "deg60", "mu", "k2", "zz"]:
     assert abs(s - a) <= 1e-6 * abs(a), (k, s, a)
     assert d[k]["converged"] is True, k
 assert d["along"]["stress_kpa"] > 5 * d["across"]["stress_kpa"]
+# at rest: converged, no stress
+r = json.load(open(f"{sys.argv[1]}/rest.json"))
+assert r["converged"] is True and abs(r["stress_kpa"]) < 1e-9, r
 # oblique fibres: softer as they turn away from the axis, and the block shears (free ends)
 s0, s30, s60, s90 = (d[k]["stress_kpa"] for k in ["along", "deg30", "deg60", "across"])
 assert s0 > s30 > s60 > s90, (s0, s30, s60, s90)

@@ -361,9 +361,12 @@ static ss_status pull_dead_load(ss_hyper *H, const ss_tetmesh *m, const ss_mech_
         const double lam = 1 + (c->stretch - 1) * k / c->increments;
         double Ta = T0, sa = s0, T = T0 + slope * (lam - s0), s = s0;
         double Tlo = T0, Thi = INFINITY; /* the bracket: stretch below, above lam */
-        /* the increments before the last only lead the way there */
+        /* the increments before the last only lead the way there (never
+         * tighter than the last: at stretch 1 their share would be 0, which
+         * the rounding of the end stretch never meets) */
         const int last = k == c->increments;
-        const double tol_k = last ? tol_s : 1e-3 * fabs(c->stretch - 1) / c->increments;
+        const double tol_k =
+            last ? tol_s : fmax(tol_s, 1e-3 * fabs(c->stretch - 1) / c->increments);
         int found = 0, newton_ok = 0;
         for (int it = 0; it < 60 && !found && !st; it++) {
             for (int i = 0; i < nn; i++) load[3 * i + ax] = T * area[i];
