@@ -342,9 +342,32 @@ void ss_heal_stats_acc_finish(const ss_heal_stats_acc *a, double dx_mm, ss_heal_
     }
 }
 
+/* Rows of y per slab of the threaded sum, and the cells below which it stays
+ * on one thread. */
+#define STATS_SLAB_ROWS 8
+#define STATS_PAR_MIN_CELLS ((size_t)1 << 15)
+
+/* The whole grid as y slabs on the OpenMP threads, merged in slab order:
+ * every part is an exact integer sum, a count or a max (the MPI driver's
+ * merge), so the figures are bit-identical to one slab on one thread. */
 void ss_heal_stats_compute(const ss_heal_grid *g, ss_heal_stats *st) {
+    const int nslab = (g->ny + STATS_SLAB_ROWS - 1) / STATS_SLAB_ROWS;
+    const size_t ncell = (size_t)g->nx * (size_t)g->ny * (size_t)g->nz;
     ss_heal_stats_acc a;
     ss_heal_stats_acc_init(&a);
-    ss_heal_stats_acc_add(&a, g, 0, g->nx, 0, g->ny);
+    ss_heal_stats_acc *part = nslab > 1 ? malloc((size_t)nslab * sizeof *part) : NULL;
+    if (!part) { /* one slab, or no memory for the parts: the serial sum */
+        ss_heal_stats_acc_add(&a, g, 0, g->nx, 0, g->ny);
+        ss_heal_stats_acc_finish(&a, g->dx_mm, st);
+        return;
+    }
+#pragma omp parallel for schedule(dynamic, 1) if (ncell >= STATS_PAR_MIN_CELLS)
+    for (int i = 0; i < nslab; i++) {
+        ss_heal_stats_acc_init(&part[i]);
+        ss_heal_stats_acc_add(&part[i], g, 0, g->nx, i * STATS_SLAB_ROWS,
+                              (i + 1) * STATS_SLAB_ROWS);
+    }
+    for (int i = 0; i < nslab; i++) ss_heal_stats_acc_merge(&a, &part[i]);
+    free(part);
     ss_heal_stats_acc_finish(&a, g->dx_mm, st);
 }
