@@ -177,10 +177,19 @@ static void skew(const double *v, double S[9]) {
     S[6] = -v[1], S[7] = v[0], S[8] = 0;
 }
 
+/* c = F e_x x F e_y, the skin's plane after F; returns J_a = |c| */
+static double plane_normal(const double *F, double c[3]) {
+    const double a[3] = {F[0], F[3], F[6]}, b[3] = {F[1], F[4], F[7]};
+    c[0] = a[1] * b[2] - a[2] * b[1];
+    c[1] = a[2] * b[0] - a[0] * b[2];
+    c[2] = a[0] * b[1] - a[1] * b[0];
+    return sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+}
+
 static double planar_active(const mat *M, double s, const double *F, double *P, double *H) {
     const double a[3] = {F[0], F[3], F[6]}, b[3] = {F[1], F[4], F[7]};
-    double c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-    const double Ja = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    double c[3];
+    const double Ja = plane_normal(F, c);
     if (!(Ja > 0)) return INFINITY;
     const double u[3] = {c[0] / Ja, c[1] / Ja, c[2] / Ja};
     double dp, pint, pc = pcell_law(M, Ja - 1.0, &dp, &pint);
@@ -958,6 +967,17 @@ static void map_tet(const double *b, double w, const double *P, const double *H,
                          Mx[r][3 * k + 2] * b[3 * bb + 2]);
 }
 
+/* the total deformation gradient of tet t at x, against the reference mesh
+ * (the in-plane active law's F, not F_e) */
+static void tet_F_total(const ss_hyper *h, int t, const double *x, double F[9]) {
+    const int32_t *q = h->tet + 4 * t;
+    const double *b0 = h->beta0 + 12 * (size_t)t;
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            F[3 * i + j] = x[3 * q[0] + i] * b0[j] + x[3 * q[1] + i] * b0[3 + j] +
+                           x[3 * q[2] + i] * b0[6 + j] + x[3 * q[3] + i] * b0[9 + j];
+}
+
 /* mode 0: energies; 1: + gradients; 2: + tangents */
 static void eval_tets(ss_hyper *h, const double *x, int mode) {
     update_growth(h);
@@ -972,12 +992,7 @@ static void eval_tets(ss_hyper *h, const double *x, int mode) {
             goh(&h->M, F, h->fib[t], law ? 0.0 : s / c, mode ? P : NULL, mode == 2 ? H : NULL);
         double Wa = 0, Pa[9], Ha[81], Ft[9];
         if (law && isfinite(W)) { /* the in-plane law on the total F */
-            const int32_t *q = h->tet + 4 * t;
-            const double *b0 = h->beta0 + 12 * (size_t)t;
-            for (int i = 0; i < 3; i++)
-                for (int j = 0; j < 3; j++)
-                    Ft[3 * i + j] = x[3 * q[0] + i] * b0[j] + x[3 * q[1] + i] * b0[3 + j] +
-                                    x[3 * q[2] + i] * b0[6 + j] + x[3 * q[3] + i] * b0[9 + j];
+            tet_F_total(h, t, x, Ft);
             Wa = planar_active(&h->M, s, Ft, Pa, mode == 2 ? Ha : NULL);
         }
         h->et[t] = V * c * W + h->V0[t] * Wa;
@@ -1355,19 +1370,9 @@ static int folds(ss_hyper *h, const double *d) {
         tet_F(h, t, h->xt, F);
         if (!(det3(F) > 0)) bad |= 1;
         if (h->act_law && h->act[t] != 0) {
-            const int32_t *q = h->tet + 4 * t;
-            const double *b0 = h->beta0 + 12 * (size_t)t;
-            double a[3], b[3];
-            for (int i = 0; i < 3; i++) {
-                a[i] = b[i] = 0;
-                for (int k = 0; k < 4; k++) {
-                    a[i] += h->xt[3 * q[k] + i] * b0[3 * k];
-                    b[i] += h->xt[3 * q[k] + i] * b0[3 * k + 1];
-                }
-            }
-            const double c0 = a[1] * b[2] - a[2] * b[1], c1 = a[2] * b[0] - a[0] * b[2],
-                         c2 = a[0] * b[1] - a[1] * b[0];
-            if (!(c0 * c0 + c1 * c1 + c2 * c2 > 0)) bad |= 1;
+            double Ft[9], c[3];
+            tet_F_total(h, t, h->xt, Ft);
+            if (!(plane_normal(Ft, c) > 0)) bad |= 1;
         }
     }
     return bad;
@@ -1443,10 +1448,11 @@ ss_status ss_hyper_solve(ss_hyper *h, double tol, int max_newton, ss_hyper_repor
          * without the line search's evaluation if it folds no tet (the
          * Armijo test would at most shorten a step that is below the
          * tolerance anyway); the gradient kept is the one before it */
-        if (h->tolerant && max_move(h, h->d) < tol * h->mean_edge && !folds(h, h->d)) {
+        const double move = h->tolerant ? max_move(h, h->d) : INFINITY;
+        if (move < tol * h->mean_edge && !folds(h, h->d)) {
 #pragma omp parallel for schedule(static)
             for (size_t i = 0; i < n; i++) h->x[i] += h->d[i];
-            rr.max_step_mm = max_move(h, h->d);
+            rr.max_step_mm = move;
             rr.converged = 1;
             break;
         }
