@@ -113,6 +113,14 @@ static inline float pos(float v) { return v > 0.0f ? v : 0.0f; }
  * granulation tissue: 0.63 and 0.61 day/mm now (docs/heal-model.md [D3]). */
 static inline float qwin(float u3, float g1, float ig1) { return u3 < g1 ? pos(u3 * ig1) : 1.0f; }
 
+/* The share of a level kf below the column's surface (0 = the surface
+ * level) that lies inside the top scab_h levels, the crust layer: 1 within
+ * it, 0 below it and above the surface, between on the level its floor
+ * cuts. Arithmetic only, so react_row's loop stays vectorised. */
+static inline float crust_share(float scab_h, float kf) {
+    return (float)(kf >= 0.0f) * clampf(scab_h - kf, 0.0f, 1.0f);
+}
+
 /* One row of the reaction. `deep` (a constant at each call, so the compiler
  * emits two loops): no cell of the row is a surface cell or inside the scab
  * layer, so the sheet and eschar-source terms are zero there and are not
@@ -168,7 +176,7 @@ react_row(const model_ctx *m, const ss_heal_rd_row *row, const int deep, const i
          * table lookup, so the loop stays vectorised) */
         const float kf = deep ? 1.0f : (float)(ZT[i] - z);
         const float surf = deep ? 0.0f : (float)(kf == 0.0f);
-        const float wsc = deep ? 0.0f : (float)(kf >= 0.0f) * clampf(scab_h - kf, 0.0f, 1.0f);
+        const float wsc = deep ? 0.0f : crust_share(scab_h, kf);
         /* a voxel the crust layer's floor cuts (0 < wsc < 1, voxels coarser
          * than scab_mm or not a divisor of it) holds a sub-voxel crust on top
          * of tissue [D14]: its tissue species are those of the tissue part,
@@ -267,7 +275,7 @@ static void surface_inputs(model_ctx *c, const ss_heal_grid *g) {
 
 /* The tissue volume fraction of every cell, halo included (the explicit
  * scheme reads it at the neighbours): 1 - wsc in a WOUND cell the crust
- * layer's floor cuts, wsc computed as in react_row from the column's
+ * layer's floor cuts, wsc = crust_share as in react_row, from the column's
  * topmost tissue level (over a z stack: the maximum, exact as floats). The
  * column scan reuses the prepare scratch wsum, which prepare rewrites. */
 static void tissue_fraction(model_ctx *c) {
@@ -289,7 +297,7 @@ static void tissue_fraction(model_ctx *c) {
             float v = 1.0f;
             if (c->cell[k] == SS_CELL_WOUND && zt[i] >= 0.0f) {
                 const float kf = zt[i] - (float)(z + c->zoff);
-                const float wsc = kf >= 0.0f ? clampf(c->scab_h - kf, 0.0f, 1.0f) : 0.0f;
+                const float wsc = crust_share(c->scab_h, kf);
                 if (wsc > 0.0f && wsc < 1.0f) v = 1.0f - wsc;
             }
             c->vfrac[k] = v;
