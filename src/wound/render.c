@@ -421,10 +421,12 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
         k[SS_BIO_EPIDERMIS_CM] * lerp(1, lerp(v[SS_WR_NEW_EPIDERMIS], 1, m_epi), regrown), cover);
     double sc = lerp(SC_FLOOR_CM, k[SS_BIO_SC_CM], cover * lerp(1, m_epi, regrown));
     double cap = s->cap < 0 ? 0 : s->cap;
-    /* freshly closed tissue: the new epithelium of ss_bio_new_epithelium
-     * (src/optics/healing.c, as `abrasion` draws it), its dermis hyperaemic
-     * (young_blood, SS_YOUNG_DERMIS_BLOOD by default, at
-     * SS_YOUNG_DERMIS_OXYGENATION), fading as the scar matures */
+    /* freshly closed tissue: the tissue ss_bio_new_epithelium describes
+     * (src/optics/healing.c, as `abrasion` draws it) through the recipe's
+     * knobs, whose defaults are its constants: new_epidermis
+     * (SS_NEW_EPIDERMIS_FRACTION), its dermis hyperaemic (young_blood,
+     * SS_YOUNG_DERMIS_BLOOD, at SS_YOUNG_DERMIS_OXYGENATION), fading as the
+     * scar matures */
     double young = reg * cover * (1 - m_scar);
     double tissue_blood =
         lerp(k[SS_BIO_BLOOD] * cap * lerp(1, v[SS_WR_SCAR_BLOOD], reg * scar * m_scar),
