@@ -36,7 +36,8 @@ enum {
     SS_WR_EPITHELIUM_HI,          /* 1: epithelium level of full cover */
     SS_WR_REGION_LO,              /* 1: plasma level where the wound region starts (ramp) */
     SS_WR_REGION_HI,              /* 1: plasma level of the full wound region */
-    SS_WR_BED_BLOOD,              /* 1: blood volume fraction of the open wound bed */
+    SS_WR_BED_BLOOD,              /* 1: blood volume fraction of the open wound bed's
+                                     granulation tissue at the healthy capillary density */
     SS_WR_TISSUE_MIN_OXYGENATION, /* 1: blood oxygenation in tissue without oxygen */
     SS_WR_YOUNG_BLOOD,            /* 1: dermal blood fraction of freshly closed tissue */
     SS_WR_SCAR_DAYS,              /* day: time constant of scar maturation after closure */
@@ -85,6 +86,9 @@ enum {
     SS_WR_CRUST_DRY_DAYS, /* day: time constant of the crust's drying and darkening */
     SS_WR_CRUST_LIFT_MM,  /* mm: how far the crust's edge lifts over new epithelium */
     SS_WR_BED_TEXTURE,    /* 1: strength of the bed's capillary-loop and exudate texture */
+    SS_WR_LOOP_DEPTH_MM,  /* mm: depth of the capillary loops that hold blood above the
+                             table's largest blood fraction (a thin whole-blood layer) */
+    SS_WR_CLOT_OXYGENATION, /* 1: oxygenation of the fresh clot (oozed capillary blood) */
     SS_WR_NKEYS
 };
 

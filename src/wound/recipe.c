@@ -25,7 +25,7 @@ static const struct {
     [SS_WR_EPITHELIUM_HI] = {"epithelium_hi", "1", 0.8, 0, 1},
     [SS_WR_REGION_LO] = {"region_lo", "1", 0.25, 0, 1},
     [SS_WR_REGION_HI] = {"region_hi", "1", 0.75, 0, 1},
-    [SS_WR_BED_BLOOD] = {"bed_blood", "1", 0.05, 0, 1},
+    [SS_WR_BED_BLOOD] = {"bed_blood", "1", 0.4, 0, 1},
     [SS_WR_TISSUE_MIN_OXYGENATION] = {"tissue_min_oxygenation", "1", 0.65, 0, 1},
     [SS_WR_YOUNG_BLOOD] = {"young_blood", "1", SS_YOUNG_DERMIS_BLOOD, 0, 1},
     [SS_WR_SCAR_DAYS] = {"scar_maturation", "day", 120, 0.01, 1e5},
@@ -66,6 +66,8 @@ static const struct {
     [SS_WR_CRUST_DRY_DAYS] = {"crust_dry_days", "day", 2, 0.01, 1e5},
     [SS_WR_CRUST_LIFT_MM] = {"crust_lift", "mm", 0.15, 0, 10},
     [SS_WR_BED_TEXTURE] = {"bed_texture", "1", 1, 0, 10},
+    [SS_WR_LOOP_DEPTH_MM] = {"loop_depth", "mm", 0.2, 0, 10},
+    [SS_WR_CLOT_OXYGENATION] = {"clot_oxygenation", "1", 0.7, 0, 1},
 };
 
 void ss_wound_recipe_default(ss_wound_recipe *r) {

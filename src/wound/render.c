@@ -67,13 +67,17 @@
  * young tissue's redness vary by +-PATCHY (a flat colour over the healed
  * region, days 14-90, read as paint). */
 #define PATCHY 0.35
+/* The fresh clot of the open bed: at most CLOT_MAX_MM of pooled blood, and
+ * POOL_FILM of that between the pools (a film of ooze over the bed). */
+#define CLOT_MAX_MM 0.4
+#define POOL_FILM 0.25
 
 struct ss_wound_renderer {
     ss_wound_render_options o;
     ss_image *skin; /* size x size x SS_BIO_NCHANNELS */
     ss_skin_lut *lut;
     float mean[SS_BIO_NCHANNELS];
-    ss_layer_table scab, serous, clot;
+    ss_layer_table scab, serous, clot, loops;
     ss_image *crust;   /* value noise 0..1 at ~1.5 mm: the crust's thickness is uneven */
     ss_image *mottle;  /* value noise at ~3 mm: where the crust is serous, not bloody */
     ss_image *crack;   /* value noise at ~2.5 mm: its mid-level lines are the cracks */
@@ -82,6 +86,7 @@ struct ss_wound_renderer {
     ss_image *cap;     /* value noise at ~0.35 mm: the bed's capillary loops */
     ss_image *grain;   /* value noise at ~0.6 mm: the crust's granular surface */
     double pih;        /* the skin type's rate of post-inflammatory hyperpigmentation */
+    double blood_cap;  /* the table's largest blood fraction: blood above it is a layer */
     ss_wound_textures base;
     ss_image *columns; /* NULL: the flat block; else tissue-map coordinates per texel */
 };
@@ -173,15 +178,19 @@ ss_status ss_wound_renderer_create(const ss_wound_render_options *o, ss_wound_re
             r->mean[c] = (float)(acc / (double)n);
         }
     }
-    ss_blood_layer scab, serous, clot;
+    ss_blood_layer scab, serous, clot, loops;
     ss_blood_layer_scab(o->recipe.v[SS_WR_SCAB_HB_FACTOR], &scab);
     ss_blood_layer_scab(o->recipe.v[SS_WR_SCAB_SEROUS_HB], &serous);
     scab.bilirubin_g_per_l = serous.bilirubin_g_per_l = o->recipe.v[SS_WR_SCAB_BILIRUBIN];
-    ss_blood_layer_clot(o->recipe.v[SS_WR_BED_OXYGENATION], &clot);
+    ss_blood_layer_clot(o->recipe.v[SS_WR_CLOT_OXYGENATION], &clot);
+    ss_blood_layer_clot(o->recipe.v[SS_WR_BED_OXYGENATION], &loops);
     if (!st) st = ss_layer_table_build(&scab, o->scab_photons, o->seed, &r->scab, err);
     if (!st) st = ss_layer_table_build(&clot, o->scab_photons, o->seed + 1000, &r->clot, err);
     if (!st) st = ss_layer_table_build(&serous, o->scab_photons, o->seed + 2000, &r->serous, err);
+    if (!st) st = ss_layer_table_build(&loops, o->scab_photons, o->seed + 3000, &r->loops, err);
     if (!st && !(r->lut = ss_skin_lut_create(o->table, err))) st = err->code;
+    if (!st) /* as a float, the lookup's own axis value */
+        r->blood_cap = (float)o->table->axis[SS_MM_AXIS_BLOOD][o->table->nsamples[SS_MM_AXIS_BLOOD] - 1];
     if (!st && !(r->crust = ss_image_create(o->size, o->size, 1, err))) st = err->code;
     if (!st) st = ss_wound__noise(o->size, o->side_mm, 1.5, 2, o->seed, 201, r->crust, err);
     if (!st && !(r->mottle = ss_image_create(o->size, o->size, 1, err))) st = err->code;
@@ -432,11 +441,22 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
         lerp(k[SS_BIO_BLOOD] * cap * lerp(1, v[SS_WR_SCAR_BLOOD], reg * scar * m_scar),
              v[SS_WR_YOUNG_BLOOD] * (1 + PATCHY * (2.0 * nz->mottle - 1)), young);
     tissue_blood = lerp(tissue_blood, v[SS_WR_KELOID_BLOOD], kel * cover);
-    /* the open bed: its capillary loops (dots at ~0.35 mm) hold more blood */
+    /* the open bed: granulation tissue, as vascular as the healing model's new
+     * capillaries (none in the freshly exposed, torn dermis of day 0: the
+     * punctate bleeding there is the clot's), its capillary loops (dots at
+     * ~0.35 mm) holding more blood */
     double bedtex = v[SS_WR_BED_TEXTURE] * open * reg;
     double dots = ramp(nz->cap, 0.55, 0.85);
-    double blood =
-        lerp(tissue_blood, v[SS_WR_BED_BLOOD] * (1 + bedtex * (3 * dots - 0.5)), open * reg);
+    double blood = lerp(tissue_blood,
+                        lerp(k[SS_BIO_BLOOD], v[SS_WR_BED_BLOOD], clamp01(cap)) *
+                            (1 + bedtex * (3 * dots - 0.5)),
+                        open * reg);
+    /* blood beyond the table's largest fraction is not clamped away: it sits in
+     * the capillary loops of the top loop_depth (granulation tissue's loops
+     * reach to ~0.1-0.3 mm under its surface), drawn as a layer of whole blood
+     * of the same haemoglobin per area, (blood - cap) x loop_depth thick, over
+     * the table's colour at the cap */
+    double loops = blood > r->blood_cap ? (blood - r->blood_cap) * v[SS_WR_LOOP_DEPTH_MM] : 0;
     /* blood under cover follows the tissue's oxygen; blood in the open bed is
      * oxygenated by the air (atmospheric O2 reaches ~0.3 mm deep) */
     double oxy =
@@ -462,6 +482,12 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
      * region spread over was never a scar maturing since closure. */
     double white = v[SS_WR_SCAR_WHITENING] * regrown * scar * m_scar * cover * (1 - kel);
     double skin_rgb[3] = {l.rgb[0], l.rgb[1], l.rgb[2]};
+    double R[3], T[3], R2[3], T2[3], R3[3], T3[3], mid[3];
+    if (loops > 0) {
+        ss_layer_table_eval(&r->loops, loops, R, T);
+        ss_layer_over(R, T, l.rgb, l.rgb);
+        for (int c = 0; c < 3; c++) skin_rgb[c] = l.rgb[c];
+    }
     if (white > 0) {
         float bw[SS_BIO_NCHANNELS];
         memcpy(bw, b, sizeof bw);
@@ -505,18 +531,17 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
         v[SS_WR_SCAB_SEROUS] * ramp(nz->mottle + CRUST_GRAIN * (nz->grain - 0.5), 0.5, 0.8);
     /* and granules of serum through the bloody crust */
     serous = 1 - (1 - serous) * (1 - v[SS_WR_SCAB_SEROUS] * 0.15 * ramp(nz->grain, 0.5, 0.9));
-    double R[3], T[3], R2[3], T2[3], R3[3], T3[3], mid[3];
     /* the clot: fresh blood in the open, avascular bed, pooled in patches and
      * at the capillary loops, at most 0.25 mm (a scrape oozes, it does not
      * fill with blood); exudate: serum and fibrin glazing the bed from the
      * first day (yellow patches) */
     double room = s->depth - s->scab > 0 ? s->depth - s->scab : 0;
-    double pool = lerp(1, 0.25 + 0.75 * ramp(nz->mottle, 0.3, 0.75) + 0.3 * dots,
+    double pool = lerp(1, POOL_FILM + (1 - POOL_FILM) * ramp(nz->mottle, 0.3, 0.75) + 0.3 * dots,
                        fmin(1, v[SS_WR_BED_TEXTURE]));
     /* the clot's full thickness, laid over the open part (open x reg) as
      * coverage: a thickness fading with open x reg saturated to blood red
      * within a texel of the wound's edge (a hard, stepped edge) */
-    double clot_full = fmin(room, 0.25) * v[SS_WR_CLOT_SCALE] * pool, a_clot = open * reg;
+    double clot_full = fmin(room, CLOT_MAX_MM) * v[SS_WR_CLOT_SCALE] * pool, a_clot = open * reg;
     double clot = a_clot * clot_full;
     double exudate = bedtex * 0.04 * ramp(nz->thick, 0.45, 0.8) * (1 - exp(-day / 1.0));
     ss_layer_table_eval(&r->clot, clot_full, R, T);
