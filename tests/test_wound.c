@@ -751,6 +751,95 @@ static void test_epithelium_colour(void **state) {
     ss_mm_table_free(table);
 }
 
+/* The open bed's colour on the built-in square wound (clean scenario, 40 x 40
+ * columns on 20 mm): mean CIELAB over the texels whose column is open
+ * (epithelium < 0.2) in the full wound region. Day 0, the fresh clot: red
+ * (hue 25-42 degrees) and darker and less saturated than paint red (main
+ * drew L* 37, C* 76 here, sRGB (176, 13, 7) on the CLI); day 5, granulation
+ * tissue under the new capillaries (the model's capillary density ~0.6 of
+ * healthy): beefy red, not pale pink (main: L* ~62, a* ~27, its blood clamped
+ * at the table's 5 %). The bands are docs/wound.md's: photographs of fresh
+ * abrasions and of red granulation (the red class of the wound-bed colour
+ * models) are a deep, darkish red. */
+static void bed_lab(const ss_wound_tissue *t, const ss_image *img, int tex, double lab[3]) {
+    double acc[3] = {0, 0, 0};
+    int n = 0;
+    for (int y = 0; y < tex; y++)
+        for (int x = 0; x < tex; x++) {
+            int cx = x * t->nx / tex, cy = y * t->ny / tex;
+            int open = 1; /* the column and its 8 neighbours: away from the rim */
+            for (int dy = -1; dy <= 1; dy++)
+                for (int dx = -1; dx <= 1; dx++) {
+                    int xx = cx + dx, yy = cy + dy;
+                    if (xx < 0 || yy < 0 || xx >= t->nx || yy >= t->ny) {
+                        open = 0;
+                        continue;
+                    }
+                    size_t q = (size_t)yy * t->nx + xx;
+                    if (!(t->epithelium[q] < 0.2f && t->plasma[q] > 0.75f)) open = 0;
+                }
+            if (!open) continue;
+            double rgb[3], l[3];
+            for (int k = 0; k < 3; k++) rgb[k] = img->data[((size_t)y * tex + x) * 3 + k];
+            ss_linear_srgb_to_lab(rgb, l);
+            for (int k = 0; k < 3; k++) acc[k] += l[k];
+            n++;
+        }
+    assert_true(n > 20);
+    for (int k = 0; k < 3; k++) lab[k] = acc[k] / n;
+}
+
+static void test_bed_colour(void **state) {
+    (void)state;
+    scene s;
+    scene_init(&s);
+    ss_error err;
+    ss_heal_run_config c;
+    ss_heal_run_config_default(&c);
+    c.scenario = "clean";
+    c.grid[0] = c.grid[1] = 40;
+    c.grid[2] = 8;
+    c.days = 5;
+    c.dt_days = SS_HEAL_SPLIT_MAX_DT_DAYS;
+    ss_heal_run *run;
+    assert_int_equal(ss_heal_run_create(&c, &run, &err), SS_OK);
+    ss_wound_recipe rec;
+    ss_wound_recipe_default(&rec);
+    ss_wound_tissue *t =
+        ss_wound_tissue_create(ss_heal_run_grid(run), ss_heal_run_params(run), &rec, &err);
+    assert_non_null(t);
+    ss_wound_textures tex;
+    assert_int_equal(ss_wound_textures_create(TEX, &tex, &err), SS_OK);
+    const double days[] = {0, 5};
+    for (int k = 0; k < 2; k++) {
+        long long target = llround(days[k] / ss_heal_run_dt(run));
+        while (ss_heal_run_step_index(run) < target) {
+            assert_int_equal(ss_heal_run_step(run, &err), SS_OK);
+            ss_wound_tissue_observe(t, ss_heal_run_grid(run));
+        }
+        assert_int_equal(ss_wound_render(s.r, t, NULL, &tex, &err), SS_OK);
+        double lab[3];
+        bed_lab(t, tex.base_color, TEX, lab);
+        double C = hypot(lab[1], lab[2]), h = hue_deg(lab);
+        fprintf(stderr, "clean day %g: open bed L* %.1f a* %.1f b* %.1f C* %.1f h %.1f\n", days[k],
+                lab[0], lab[1], lab[2], C, h);
+        if (days[k] == 0) { /* the fresh clot: dark red, not paint red */
+            assert_true(h > 25 && h < 42);
+            assert_true(lab[1] > 30);
+            assert_true(C < 62);
+            assert_true(lab[0] > 15 && lab[0] < 32);
+        } else { /* granulation: beefy red */
+            assert_true(lab[1] > 33);
+            assert_true(lab[0] > 33 && lab[0] < 52);
+            assert_true(h > 25 && h < 47);
+        }
+    }
+    ss_wound_textures_free(&tex);
+    ss_wound_tissue_free(t);
+    ss_heal_run_free(run);
+    scene_free(&s);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_delta_e2000),
@@ -764,6 +853,7 @@ int main(void) {
         cmocka_unit_test(test_pih_rates),
         cmocka_unit_test(test_dark_skin_pigment),
         cmocka_unit_test(test_epithelium_colour),
+        cmocka_unit_test(test_bed_colour),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -70,6 +70,10 @@
 /* The fresh clot of the open bed: at most CLOT_MAX_MM of pooled blood, and
  * POOL_FILM of that between the pools (a film of ooze over the bed). */
 #define CLOT_MAX_MM 0.4
+/* The bed's capillary loops (dots at ~0.35 mm) hold up to 1 + 5/6 LOOP_CONTRAST
+ * times its blood, the tissue between them 1 - LOOP_CONTRAST / 6 (an even bed
+ * of loops: at 3, red dots on an orange film of thin blood) */
+#define LOOP_CONTRAST 1.5
 #define POOL_FILM 0.25
 
 struct ss_wound_renderer {
@@ -449,7 +453,7 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
     double dots = ramp(nz->cap, 0.55, 0.85);
     double blood = lerp(tissue_blood,
                         lerp(k[SS_BIO_BLOOD], v[SS_WR_BED_BLOOD], clamp01(cap)) *
-                            (1 + bedtex * (3 * dots - 0.5)),
+                            (1 + bedtex * LOOP_CONTRAST * (dots - 1.0 / 6)),
                         open * reg);
     /* blood beyond the table's largest fraction is not clamped away: it sits in
      * the capillary loops of the top loop_depth (granulation tissue's loops
