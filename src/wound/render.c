@@ -451,16 +451,18 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
      * ~0.35 mm) holding more blood */
     double bedtex = v[SS_WR_BED_TEXTURE] * open * reg;
     double dots = ramp(nz->cap, 0.55, 0.85);
-    double blood = lerp(tissue_blood,
-                        lerp(k[SS_BIO_BLOOD], v[SS_WR_BED_BLOOD], clamp01(cap)) *
-                            (1 + bedtex * LOOP_CONTRAST * (dots - 1.0 / 6)),
-                        open * reg);
-    /* blood beyond the table's largest fraction is not clamped away: it sits in
-     * the capillary loops of the top loop_depth (granulation tissue's loops
-     * reach to ~0.1-0.3 mm under its surface), drawn as a layer of whole blood
-     * of the same haemoglobin per area, (blood - cap) x loop_depth thick, over
-     * the table's colour at the cap */
-    double loops = blood > r->blood_cap ? (blood - r->blood_cap) * v[SS_WR_LOOP_DEPTH_MM] : 0;
+    double bed_blood = lerp(k[SS_BIO_BLOOD], v[SS_WR_BED_BLOOD], clamp01(cap)) *
+                       (1 + bedtex * LOOP_CONTRAST * (dots - 1.0 / 6));
+    /* the bed's blood beyond the table's largest fraction is not clamped
+     * away: it sits in the capillary loops of the top loop_depth (granulation
+     * tissue's loops reach to ~0.1-0.3 mm under its surface), drawn as a layer
+     * of whole blood of the same haemoglobin per area, (blood - cap) x
+     * loop_depth thick, over the table's colour at the cap. Laid at the bed's
+     * full thickness over the open part (open x reg) as coverage, as the
+     * clot: a thickness fading with open x reg reddened the rim within a
+     * texel (a stepped edge) */
+    double loops = bed_blood > r->blood_cap ? (bed_blood - r->blood_cap) * v[SS_WR_LOOP_DEPTH_MM] : 0;
+    double blood = lerp(tissue_blood, fmin(bed_blood, r->blood_cap), open * reg);
     /* blood under cover follows the tissue's oxygen; blood in the open bed is
      * oxygenated by the air (atmospheric O2 reaches ~0.3 mm deep) */
     double oxy =
@@ -489,8 +491,8 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
     double R[3], T[3], R2[3], T2[3], R3[3], T3[3], mid[3];
     if (loops > 0) {
         ss_layer_table_eval(&r->loops, loops, R, T);
-        ss_layer_over(R, T, l.rgb, l.rgb);
-        for (int c = 0; c < 3; c++) skin_rgb[c] = l.rgb[c];
+        ss_layer_over(R, T, l.rgb, mid);
+        for (int c = 0; c < 3; c++) skin_rgb[c] = l.rgb[c] = lerp(l.rgb[c], mid[c], open * reg);
     }
     if (white > 0) {
         float bw[SS_BIO_NCHANNELS];
