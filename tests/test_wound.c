@@ -755,12 +755,11 @@ static void test_epithelium_colour(void **state) {
  * columns on 20 mm): mean CIELAB over the texels whose column is open
  * (epithelium < 0.2) in the full wound region. Day 0, the fresh clot: red
  * (hue 25-42 degrees) and darker and less saturated than paint red (main
- * drew L* 37, C* 76 here, sRGB (176, 13, 7) on the CLI); day 5, granulation
+ * drew L* 32.2, a* 53.1, b* 44.3, C* 69.2 here: fails); day 5, granulation
  * tissue under the new capillaries (the model's capillary density ~0.6 of
- * healthy): beefy red, not pale pink (main: L* ~62, a* ~27, its blood clamped
- * at the table's 5 %). The bands are docs/wound.md's: photographs of fresh
- * abrasions and of red granulation (the red class of the wound-bed colour
- * models) are a deep, darkish red. */
+ * healthy): beefy red, not pale pink (main clamped its blood at the table's
+ * 5 %). The bands are docs/wound.md's (stated there as a calibration from
+ * clinical descriptions, not a measured CIELAB value). */
 static void bed_lab(const ss_wound_tissue *t, const ss_image *img, int tex, double lab[3]) {
     double acc[3] = {0, 0, 0};
     int n = 0;
