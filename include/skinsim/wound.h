@@ -80,14 +80,14 @@ enum {
     SS_WR_KELOID_ROUGHNESS,   /* 1: roughness of the keloid's stretched surface (shiny) */
     SS_WR_SCAB_BILIRUBIN,     /* g/L: serum pigment (bilirubin, carotenoids) of the dried crust */
     /* after healing: post-inflammatory pigmentation by skin type, the crust's ageing */
-    SS_WR_PIH_GAIN,       /* 1: extra melanin of post-inflammatory hyperpigmentation at full
-                             strength, times the skin type's clinical rate */
-    SS_WR_PIH_DAYS,       /* day: time constant of its fading */
-    SS_WR_CRUST_DRY_DAYS, /* day: time constant of the crust's drying and darkening */
-    SS_WR_CRUST_LIFT_MM,  /* mm: how far the crust's edge lifts over new epithelium */
-    SS_WR_BED_TEXTURE,    /* 1: strength of the bed's capillary-loop and exudate texture */
-    SS_WR_LOOP_DEPTH_MM,  /* mm: depth of the capillary loops that hold blood above the
-                             table's largest blood fraction (a thin whole-blood layer) */
+    SS_WR_PIH_GAIN,         /* 1: extra melanin of post-inflammatory hyperpigmentation at full
+                               strength, times the skin type's clinical rate */
+    SS_WR_PIH_DAYS,         /* day: time constant of its fading */
+    SS_WR_CRUST_DRY_DAYS,   /* day: time constant of the crust's drying and darkening */
+    SS_WR_CRUST_LIFT_MM,    /* mm: how far the crust's edge lifts over new epithelium */
+    SS_WR_BED_TEXTURE,      /* 1: strength of the bed's capillary-loop and exudate texture */
+    SS_WR_LOOP_DEPTH_MM,    /* mm: depth of the capillary loops that hold blood above the
+                               table's largest blood fraction (a thin whole-blood layer) */
     SS_WR_CLOT_OXYGENATION, /* 1: oxygenation of the fresh clot (oozed capillary blood) */
     SS_WR_NKEYS
 };

@@ -21,7 +21,8 @@
  * the red and < 1 % in the green, the dark red-brown of aged blood stains
  * (reflectance spectra in Bremmer et al. 2011); refractive index 1.45 (dried
  * protein).
- * Clot: whole blood (hb_factor 1) at the open bed's oxygenation with the
+ * Clot: whole blood (hb_factor 1) at a given oxygenation (the fresh clot's,
+ * and the open bed's for the blood of its capillary loops) with the
  * reduced scattering of whole blood, mus' = 30 /cm (mus 2000-2800 /cm with g
  * 0.98-0.99 in the red, Roggan et al. 1999, J. Biomed. Opt. 4: 36-46), here
  * as mus = 300 /cm with g = 0.9 (the similarity relation: the same mus',

@@ -8,7 +8,9 @@
  *   melanin   = skin x cover x (reg: lerp(new_melanin, scar_melanin, m_pigment))
  *   epidermis = lerp(floor, skin x (reg: lerp(new_epidermis, 1, m_epidermis)), cover)
  *   blood     = lerp(skin x capillary x (reg: lerp(1, scar_blood, scar x m_scar))
- *                    + young_blood x reg x cover x (1 - m_scar),  bed_blood,  open x reg)
+ *                    + young_blood x reg x cover x (1 - m_scar),  min(bed, cap),  open x reg),
+ *               bed = lerp(skin, bed_blood, capillary) x loops; the bed's blood above the
+ *               table's cap is a whole-blood layer (bed - cap) x loop_depth thick
  *   oxygenation = lerp(clot_oxygenation, skin, oxygen)
  *   -> ModelMatch (GGX base colour, roughness), then the scar's whitening, the
  *      scab (dried-blood layer, adding formula), roughness of the wet bed, the
@@ -194,7 +196,8 @@ ss_status ss_wound_renderer_create(const ss_wound_render_options *o, ss_wound_re
     if (!st) st = ss_layer_table_build(&loops, o->scab_photons, o->seed + 3000, &r->loops, err);
     if (!st && !(r->lut = ss_skin_lut_create(o->table, err))) st = err->code;
     if (!st) /* as a float, the lookup's own axis value */
-        r->blood_cap = (float)o->table->axis[SS_MM_AXIS_BLOOD][o->table->nsamples[SS_MM_AXIS_BLOOD] - 1];
+        r->blood_cap =
+            (float)o->table->axis[SS_MM_AXIS_BLOOD][o->table->nsamples[SS_MM_AXIS_BLOOD] - 1];
     if (!st && !(r->crust = ss_image_create(o->size, o->size, 1, err))) st = err->code;
     if (!st) st = ss_wound__noise(o->size, o->side_mm, 1.5, 2, o->seed, 201, r->crust, err);
     if (!st && !(r->mottle = ss_image_create(o->size, o->size, 1, err))) st = err->code;
@@ -461,7 +464,8 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
      * full thickness over the open part (open x reg) as coverage, as the
      * clot: a thickness fading with open x reg reddened the rim within a
      * texel (a stepped edge) */
-    double loops = bed_blood > r->blood_cap ? (bed_blood - r->blood_cap) * v[SS_WR_LOOP_DEPTH_MM] : 0;
+    double loops =
+        bed_blood > r->blood_cap ? (bed_blood - r->blood_cap) * v[SS_WR_LOOP_DEPTH_MM] : 0;
     double blood = lerp(tissue_blood, fmin(bed_blood, r->blood_cap), open * reg);
     /* blood under cover follows the tissue's oxygen; blood in the open bed is
      * oxygenated by the air (atmospheric O2 reaches ~0.3 mm deep) */
