@@ -222,24 +222,34 @@ static void measure(const scene *s, const ss_wound_tissue *t, const ss_wound_tex
     out->wound_de = ss_delta_e2000(out->wound, out->skin);
 }
 
-/* Runs `scenario` on a 20 x 20 mm block (the built-in square wound, 13.3 mm)
- * and measures the textures at each of `days`. */
-static void run_days(const scene *s, const char *scenario, const double *days, int n, stats *out) {
+/* The heal run of `scenario` on the 20 x 20 mm block (40 x 40 x 8 columns,
+ * the built-in square wound) to `days`, and its wound tissue maps. */
+static ss_heal_run *square_run(const char *scenario, double days, ss_wound_tissue **t) {
     ss_error err;
     ss_heal_run_config c;
     ss_heal_run_config_default(&c);
     c.scenario = scenario;
     c.grid[0] = c.grid[1] = 40;
     c.grid[2] = 8;
-    c.days = days[n - 1];
+    c.days = days;
     c.dt_days = SS_HEAL_SPLIT_MAX_DT_DAYS; /* 0.1: fewer steps for the year-long runs */
     ss_heal_run *run;
     assert_int_equal(ss_heal_run_create(&c, &run, &err), SS_OK);
     ss_wound_recipe rec;
     ss_wound_recipe_default(&rec);
-    ss_wound_tissue *t =
-        ss_wound_tissue_create(ss_heal_run_grid(run), ss_heal_run_params(run), &rec, &err);
-    assert_non_null(t);
+    *t = ss_wound_tissue_create(ss_heal_run_grid(run), ss_heal_run_params(run), &rec, &err);
+    assert_non_null(*t);
+    return run;
+}
+
+/* Runs `scenario` on a 20 x 20 mm block (the built-in square wound, 13.3 mm)
+ * and measures the textures at each of `days`. */
+static void run_days(const scene *s, const char *scenario, const double *days, int n, stats *out) {
+    ss_error err;
+    ss_wound_tissue *t;
+    ss_heal_run *run = square_run(scenario, days[n - 1], &t);
+    ss_wound_recipe rec;
+    ss_wound_recipe_default(&rec);
     ss_wound_textures tex;
     assert_int_equal(ss_wound_textures_create(TEX, &tex, &err), SS_OK);
     for (int k = 0; k < n; k++) {
@@ -793,20 +803,8 @@ static void test_bed_colour(void **state) {
     scene s;
     scene_init(&s);
     ss_error err;
-    ss_heal_run_config c;
-    ss_heal_run_config_default(&c);
-    c.scenario = "clean";
-    c.grid[0] = c.grid[1] = 40;
-    c.grid[2] = 8;
-    c.days = 5;
-    c.dt_days = SS_HEAL_SPLIT_MAX_DT_DAYS;
-    ss_heal_run *run;
-    assert_int_equal(ss_heal_run_create(&c, &run, &err), SS_OK);
-    ss_wound_recipe rec;
-    ss_wound_recipe_default(&rec);
-    ss_wound_tissue *t =
-        ss_wound_tissue_create(ss_heal_run_grid(run), ss_heal_run_params(run), &rec, &err);
-    assert_non_null(t);
+    ss_wound_tissue *t;
+    ss_heal_run *run = square_run("clean", 5, &t);
     ss_wound_textures tex;
     assert_int_equal(ss_wound_textures_create(TEX, &tex, &err), SS_OK);
     const double days[] = {0, 5};
