@@ -751,6 +751,51 @@ static void test_epithelium_colour(void **state) {
     ss_mm_table_free(table);
 }
 
+/* ---- one PIH course for both wound paths (issue 24) --------------------------------- */
+
+/* The shared course passes through Danielsen et al. 2013's measurements
+ * (+24 % at 1 month, +15 % at 3, back at 12), and `abrasion`'s and
+ * `wound`'s PIH melanin factors agree on the same skin (abrasion's palette
+ * computed from the wound renderer's base colour) at 30, 90 and 365 days;
+ * dark skin darker than light. Before the shared course they were 1.49x and
+ * 2.54x at 90 days on dark skin (PIH_GAIN 1.5 / fade 130 d against pih_gain 5 /
+ * pih_days 120 d). */
+static void test_pih_course(void **state) {
+    (void)state;
+    ss_error err;
+    assert_float_equal(ss_pih_course(0), 0, 1e-12);
+    assert_float_equal(ss_pih_course(-3), 0, 1e-12);
+    assert_float_equal(ss_pih_course(30), 0.24, 1e-9);
+    assert_float_equal(ss_pih_course(90), 0.15, 1e-9);
+    assert_true(ss_pih_course(365) < 0.02);
+    assert_true(ss_pih_course(14) > 0.1 && ss_pih_course(14) < ss_pih_course(30));
+    ss_mm_table *table = default_table();
+    const int tex = 32;
+    const double days[] = {30, 90, 365};
+    double f30[2] = {0, 0};
+    for (int dark = 0; dark < 2; dark++) {
+        ss_image *skin;
+        ss_wound_renderer *r = block_renderer(table, tex, dark ? 0.25 : 0, &skin);
+        ss_abrasion_palette P;
+        assert_int_equal(
+            ss_abrasion_palette_compute(ss_wound_renderer_base(r)->base_color, &P, &err), SS_OK);
+        for (int k = 0; k < 3; k++) {
+            double fw = ss_wound_renderer_pih_factor(r, days[k]);
+            double fa = ss_abrasion_pih_factor(&P, days[k]);
+            fprintf(stderr, "%s skin (rate %.3f), day %3.0f: PIH melanin x%.4f wound, x%.4f abrasion\n",
+                    dark ? "dark" : "light", P.pih_prevalence, days[k], fw, fa);
+            assert_float_equal(fw, fa, 1e-5);
+            assert_float_equal(fw - 1, (fa - 1), 1e-5);
+            if (k == 0) f30[dark] = fw;
+        }
+        ss_wound_renderer_free(r);
+        ss_image_free(skin);
+    }
+    assert_true(f30[1] > 1.5 && f30[1] > f30[0] + 0.3); /* dark skin: visibly darker */
+    assert_true(f30[0] < 1.45); /* light skin: about Danielsen's +24 % */
+    ss_mm_table_free(table);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_delta_e2000),
@@ -762,6 +807,7 @@ int main(void) {
         cmocka_unit_test(test_base_lookup),
         cmocka_unit_test(test_height_encoding),
         cmocka_unit_test(test_pih_rates),
+        cmocka_unit_test(test_pih_course),
         cmocka_unit_test(test_dark_skin_pigment),
         cmocka_unit_test(test_epithelium_colour),
     };

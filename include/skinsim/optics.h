@@ -252,6 +252,17 @@ void ss_bio_new_epithelium(const ss_bio_params *skin, double melanin_factor, ss_
  * degrees; Chardon et al. 1991 classes), from the rates of Taylor et al. 2002
  * and Davis & Callender 2010: 0.03 for very light skin, 0.65 for dark skin. */
 double ss_pih_prevalence(double ita_deg);
+/* Its time course: the healed skin's pigmentation above the adjacent skin's
+ * (a fraction) `days` after closure, through Danielsen et al. 2013's donor
+ * sites (+0.24 at 30 d, +0.15 at 90 d, ~0 at 365 d; 0 at and before 0 d). */
+double ss_pih_course(double days);
+/* The healed skin's melanin factor from PIH, for both wound paths:
+ * 1 + gain x prevalence x ss_pih_course(days). SS_PIH_GAIN is the default
+ * gain: 1 / the light skin class's rate (0.08), so a light skin (ITA 41-55,
+ * Danielsen's Danish patients) gets their +24 % at a month and a dark one
+ * (0.65) 2.95x, 2.22x at 3 months, 1.08x at a year. */
+#define SS_PIH_GAIN 12.5
+double ss_pih_melanin_factor(double prevalence, double days, double gain);
 
 /* ---- CIELAB and CIEDE2000 (src/optics/colour.c) ---------------------------------- */
 /* Linear sRGB (white-normalised albedo, as above) <-> CIELAB, D65 white. */

@@ -79,9 +79,9 @@ enum {
     SS_WR_KELOID_ROUGHNESS,   /* 1: roughness of the keloid's stretched surface (shiny) */
     SS_WR_SCAB_BILIRUBIN,     /* g/L: serum pigment (bilirubin, carotenoids) of the dried crust */
     /* after healing: post-inflammatory pigmentation by skin type, the crust's ageing */
-    SS_WR_PIH_GAIN,       /* 1: extra melanin of post-inflammatory hyperpigmentation at full
-                             strength, times the skin type's clinical rate */
-    SS_WR_PIH_DAYS,       /* day: time constant of its fading */
+    SS_WR_PIH_GAIN,       /* 1: gain of post-inflammatory hyperpigmentation: melanin x
+                             ss_pih_melanin_factor(rate, age, gain), the course shared
+                             with abrasion (default SS_PIH_GAIN, as abrasion's) */
     SS_WR_CRUST_DRY_DAYS, /* day: time constant of the crust's drying and darkening */
     SS_WR_CRUST_LIFT_MM,  /* mm: how far the crust's edge lifts over new epithelium */
     SS_WR_BED_TEXTURE,    /* 1: strength of the bed's capillary-loop and exudate texture */
@@ -216,6 +216,11 @@ ss_status ss_wound_renderer_create(const ss_wound_render_options *o, ss_wound_re
 void ss_wound_renderer_free(ss_wound_renderer *r);
 /* The base skin's own textures (what the skin looks like without a wound). */
 const ss_wound_textures *ss_wound_renderer_base(const ss_wound_renderer *r);
+/* The healed skin's melanin factor from post-inflammatory hyperpigmentation
+ * `days` after closure (before its patchiness): ss_pih_melanin_factor at the
+ * base skin's PIH rate and the recipe's pih_gain; abrasion's
+ * ss_abrasion_pih_factor gives the same on the same skin. */
+double ss_wound_renderer_pih_factor(const ss_wound_renderer *r, double days);
 /* Textures of the tissue t over the base skin (the texture covers the heal
  * block). deformation: NULL, or the mechanics' per-texel displacement of the
  * material point (3 channels, mm: x, y along the texture (x right, y up), z

@@ -233,6 +233,10 @@ void ss_wound_renderer_free(ss_wound_renderer *r) {
     free(r);
 }
 
+double ss_wound_renderer_pih_factor(const ss_wound_renderer *r, double days) {
+    return ss_pih_melanin_factor(r->pih, days, r->o.recipe.v[SS_WR_PIH_GAIN]);
+}
+
 const ss_wound_textures *ss_wound_renderer_base(const ss_wound_renderer *r) { return &r->base; }
 
 ss_status ss_wound_renderer_set_columns(ss_wound_renderer *r, const ss_image *columns,
@@ -405,10 +409,10 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
     for (int c = 0; c < SS_BIO_NCHANNELS; c++) k[c] = (float)lerp(skin[c], r->mean[c], reg);
     /* keloid tissue: hypervascular, hypoxic, often hyperpigmented (docs/wound.md) */
     double kel = 1 - exp(-s->keloid / v[SS_WR_KELOID_LOOK_MM]);
-    /* post-inflammatory hyperpigmentation: rises over the first two weeks after
-     * closure, fades over months, as strong as the skin type's clinical rate */
-    double pih =
-        v[SS_WR_PIH_GAIN] * r->pih * (1 - exp(-s->age / 14.0)) * exp(-s->age / v[SS_WR_PIH_DAYS]);
+    /* post-inflammatory hyperpigmentation: the course shared with abrasion
+     * (ss_pih_melanin_factor: rises over two weeks after closure, fades over
+     * months), as strong as the skin type's clinical rate */
+    double pih = ss_wound_renderer_pih_factor(r, s->age) - 1;
     /* both patchy, not one flat colour: PIH in macules (+-PATCHY at ~1.5 mm),
      * the young tissue's redness in blotches (at ~2 mm) */
     pih *= 1 + PATCHY * (2.0 * nz->thick - 1);
