@@ -782,7 +782,8 @@ static void test_pih_course(void **state) {
         for (int k = 0; k < 3; k++) {
             double fw = ss_wound_renderer_pih_factor(r, days[k]);
             double fa = ss_abrasion_pih_factor(&P, days[k]);
-            fprintf(stderr, "%s skin (rate %.3f), day %3.0f: PIH melanin x%.4f wound, x%.4f abrasion\n",
+            fprintf(stderr,
+                    "%s skin (rate %.3f), day %3.0f: PIH melanin x%.4f wound, x%.4f abrasion\n",
                     dark ? "dark" : "light", P.pih_prevalence, days[k], fw, fa);
             assert_float_equal(fw, fa, 1e-5);
             assert_float_equal(fw - 1, (fa - 1), 1e-5);
@@ -792,7 +793,7 @@ static void test_pih_course(void **state) {
         ss_image_free(skin);
     }
     assert_true(f30[1] > 1.5 && f30[1] > f30[0] + 0.3); /* dark skin: visibly darker */
-    assert_true(f30[0] < 1.45); /* light skin: about Danielsen's +24 % */
+    assert_true(f30[0] < 1.45);                         /* light skin: about Danielsen's +24 % */
     ss_mm_table_free(table);
 }
 

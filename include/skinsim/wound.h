@@ -85,6 +85,13 @@ enum {
     SS_WR_CRUST_DRY_DAYS, /* day: time constant of the crust's drying and darkening */
     SS_WR_CRUST_LIFT_MM,  /* mm: how far the crust's edge lifts over new epithelium */
     SS_WR_BED_TEXTURE,    /* 1: strength of the bed's capillary-loop and exudate texture */
+    /* the keloid's structure: active margin, fibrous centre, vessels, nodules */
+    SS_WR_KELOID_MARGIN_MM,    /* mm: width of its active, erythematous margin */
+    SS_WR_KELOID_CENTRE_BLOOD, /* 1: blood of its matured centre, of keloid_blood */
+    SS_WR_KELOID_MATURE_DAYS,  /* day: time constant of its centre's maturation */
+    SS_WR_KELOID_VESSELS,      /* 1: strength of its telangiectatic vessels */
+    SS_WR_KELOID_VESSEL_MM,    /* mm: width of a vessel trunk (branches half) */
+    SS_WR_KELOID_NODULES,      /* 1: unevenness of its raise (fraction, at ~4 mm) */
     SS_WR_NKEYS
 };
 

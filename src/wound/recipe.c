@@ -65,6 +65,12 @@ static const struct {
     [SS_WR_CRUST_DRY_DAYS] = {"crust_dry_days", "day", 2, 0.01, 1e5},
     [SS_WR_CRUST_LIFT_MM] = {"crust_lift", "mm", 0.15, 0, 10},
     [SS_WR_BED_TEXTURE] = {"bed_texture", "1", 1, 0, 10},
+    [SS_WR_KELOID_MARGIN_MM] = {"keloid_margin", "mm", 1.5, 0.01, 100},
+    [SS_WR_KELOID_CENTRE_BLOOD] = {"keloid_centre_blood", "1", 0.3, 0, 1},
+    [SS_WR_KELOID_MATURE_DAYS] = {"keloid_maturation", "day", 60, 0.01, 1e5},
+    [SS_WR_KELOID_VESSELS] = {"keloid_vessels", "1", 1, 0, 1},
+    [SS_WR_KELOID_VESSEL_MM] = {"keloid_vessel_width", "mm", 0.18, 0.005, 2},
+    [SS_WR_KELOID_NODULES] = {"keloid_nodules", "1", 0.12, 0, 1},
 };
 
 void ss_wound_recipe_default(ss_wound_recipe *r) {
