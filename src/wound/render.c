@@ -484,7 +484,8 @@ static void keloid_structure(const double *v, const texel_tissue *s, const crust
     k->blood = lerp(v[SS_WR_KELOID_BLOOD] * lerp(1, v[SS_WR_KELOID_CENTRE_BLOOD], k->mature),
                     VESSEL_BLOOD, k->vessels);
     k->oxygenation = lerp(v[SS_WR_KELOID_OXYGENATION], VESSEL_OXYGENATION, k->vessels);
-    k->raise = 1 + v[SS_WR_KELOID_NODULES] * (1 - 0.5 * k->mature) * (2.0 * nz->nodule - 1);
+    /* the nodules only lower it: its highest point stays heal's elevation */
+    k->raise = 1 - v[SS_WR_KELOID_NODULES] * (1 - 0.5 * k->mature) * nz->nodule;
 }
 
 static void render_texel(const ss_wound_renderer *r, const float *skin, const crust_noise *nz,
