@@ -258,10 +258,11 @@ double ss_pih_prevalence(double ita_deg);
 double ss_pih_course(double days);
 /* The healed skin's melanin factor from PIH, for both wound paths:
  * 1 + gain x prevalence x ss_pih_course(days). SS_PIH_GAIN is the default
- * gain: 1 / the light skin class's rate (0.08), so a light skin (ITA 41-55,
- * Danielsen's Danish patients) gets their +24 % at a month and a dark one
- * (0.65) 2.95x, 2.22x at 3 months, 1.08x at a year. */
-#define SS_PIH_GAIN 12.5
+ * gain (ours): a light skin (rate 0.08-0.13) gets +12-18 % at a month, near
+ * Danielsen's +24 % in Danish patients, a dark one (0.65) 1.94x at a month,
+ * 1.59x at 3 months, 1.04x at a year (12.5, Danielsen's exactly at rate
+ * 0.08, gave a dark skin 2.95x: a healed ring 9.6 L* below the skin). */
+#define SS_PIH_GAIN 6.0
 double ss_pih_melanin_factor(double prevalence, double days, double gain);
 
 /* ---- CIELAB and CIEDE2000 (src/optics/colour.c) ---------------------------------- */
