@@ -527,7 +527,7 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
     double sc = lerp(SC_FLOOR_CM, k[SS_BIO_SC_CM], cover * lerp(1, m_epi, regrown));
     /* over the keloid's vessels the stretched epidermis is thinnest: they
      * lie in the papillary dermis right under it */
-    epi *= 1 - 0.5 * kt.vessels;
+    epi *= 1 - 0.25 * kt.vessels;
     double cap = s->cap < 0 ? 0 : s->cap;
     /* freshly closed tissue: the tissue ss_bio_new_epithelium describes
      * (src/optics/healing.c, as `abrasion` draws it) through the recipe's
