@@ -621,8 +621,10 @@ static ss_wound_renderer *block_renderer(const ss_mm_table *table, int tex, doub
         double m = 0;
         for (size_t i = 0; i < n; i++) m += d[i * SS_BIO_NCHANNELS + SS_BIO_MELANIN];
         m /= (double)n;
-        for (size_t i = 0; i < n; i++)
-            d[i * SS_BIO_NCHANNELS + SS_BIO_MELANIN] *= (float)(melanin / m);
+        for (size_t i = 0; i < n; i++) { /* a fraction: hair at 256 texels went above 1 */
+            float *x = d + i * SS_BIO_NCHANNELS + SS_BIO_MELANIN;
+            *x = fminf(1.0f, *x * (float)(melanin / m));
+        }
     }
     ss_wound_render_options o;
     ss_wound_render_options_default(&o);
@@ -632,7 +634,9 @@ static ss_wound_renderer *block_renderer(const ss_mm_table *table, int tex, doub
     o.table = table;
     o.scab_photons = 200;
     ss_wound_renderer *r;
-    assert_int_equal(ss_wound_renderer_create(&o, &r, &err), SS_OK);
+    ss_status st = ss_wound_renderer_create(&o, &r, &err);
+    if (st) fprintf(stderr, "renderer: %s\n", err.msg);
+    assert_int_equal(st, SS_OK);
     return r;
 }
 
@@ -837,6 +841,111 @@ static void test_bed_colour(void **state) {
     scene_free(&s);
 }
 
+/* ---- one PIH course for both wound paths (issue 24) --------------------------------- */
+
+/* The shared course passes through Danielsen et al. 2013's measurements
+ * (+24 % at 1 month, +15 % at 3, back at 12), and `abrasion`'s and
+ * `wound`'s PIH melanin factors agree on the same skin (abrasion's palette
+ * computed from the wound renderer's base colour) at 30, 90 and 365 days;
+ * dark skin darker than light. Before the shared course they were 1.49x and
+ * 2.54x at 90 days on dark skin (PIH_GAIN 1.5 / fade 130 d against pih_gain 5 /
+ * pih_days 120 d). */
+static void test_pih_course(void **state) {
+    (void)state;
+    ss_error err;
+    assert_float_equal(ss_pih_course(0), 0, 1e-12);
+    assert_float_equal(ss_pih_course(-3), 0, 1e-12);
+    assert_float_equal(ss_pih_course(30), 0.24, 1e-9);
+    assert_float_equal(ss_pih_course(90), 0.15, 1e-9);
+    assert_true(ss_pih_course(365) < 0.02);
+    assert_true(ss_pih_course(14) > 0.1 && ss_pih_course(14) < ss_pih_course(30));
+    ss_mm_table *table = default_table();
+    const int tex = 32;
+    const double days[] = {30, 90, 365};
+    double f30[2] = {0, 0};
+    for (int dark = 0; dark < 2; dark++) {
+        ss_image *skin;
+        ss_wound_renderer *r = block_renderer(table, tex, dark ? 0.25 : 0, &skin);
+        ss_abrasion_palette P;
+        assert_int_equal(
+            ss_abrasion_palette_compute(ss_wound_renderer_base(r)->base_color, &P, &err), SS_OK);
+        for (int k = 0; k < 3; k++) {
+            double fw = ss_wound_renderer_pih_factor(r, days[k]);
+            double fa = ss_abrasion_pih_factor(&P, days[k]);
+            fprintf(stderr,
+                    "%s skin (rate %.3f), day %3.0f: PIH melanin x%.4f wound, x%.4f abrasion\n",
+                    dark ? "dark" : "light", P.pih_prevalence, days[k], fw, fa);
+            assert_float_equal(fw, fa, 1e-5);
+            assert_float_equal(fw - 1, (fa - 1), 1e-5);
+            if (k == 0) f30[dark] = fw;
+        }
+        ss_wound_renderer_free(r);
+        ss_image_free(skin);
+    }
+    assert_true(f30[1] > 1.5 && f30[1] > f30[0] + 0.3); /* dark skin: visibly darker */
+    assert_true(f30[0] < 1.45);                         /* light skin: about Danielsen's +24 % */
+    ss_mm_table_free(table);
+}
+
+/* ---- the keloid's structure (issue 24) ------------------------------------------------ */
+
+/* Mean and standard deviation of a* within r0..r1 mm of the block's centre. */
+static void ring_a(const ss_image *img, int tex, double side_mm, double r0, double r1, double *mean,
+                   double *sd) {
+    double s1 = 0, s2 = 0, cnt = 0;
+    for (int y = 0; y < tex; y++)
+        for (int x = 0; x < tex; x++) {
+            double r = hypot((x + 0.5) / tex * side_mm - 0.5 * side_mm,
+                             (y + 0.5) / tex * side_mm - 0.5 * side_mm);
+            if (r < r0 || r >= r1) continue;
+            double rgb[3], lab[3];
+            for (int c = 0; c < 3; c++) rgb[c] = img->data[((size_t)y * tex + x) * 3 + c];
+            ss_linear_srgb_to_lab(rgb, lab);
+            s1 += lab[1], s2 += lab[1] * lab[1], cnt++;
+        }
+    *mean = s1 / cnt;
+    *sd = sqrt(fmax(0, s2 / cnt - *mean * *mean));
+}
+
+/* A keloid is not one flat colour: a keloid at 80 days (healed 4 mm, grown
+ * to 7 mm) has an active margin redder (a*) than its matured centre, its a*
+ * varies inside it (margin, centre, vessels) and the look is the same at 128
+ * and 256 texels for the same 20 mm (widths in mm, not texels). Before (one
+ * plateau colour) the margin's a* was below the centre's and the spread
+ * came only from the keloid's fading edge. */
+static void test_keloid_structure(void **state) {
+    (void)state;
+    ss_error err;
+    ss_mm_table *table = default_table();
+    double sd_at[2] = {0, 0};
+    for (int dark = 0; dark < 2; dark++)
+        for (int k = 0; k < 2; k++) {
+            const int tex = k ? 256 : 128;
+            ss_image *skin;
+            ss_wound_renderer *r = block_renderer(table, tex, dark ? 0.25 : 0, &skin);
+            ss_wound_textures out;
+            assert_int_equal(ss_wound_textures_create(tex, &out, &err), SS_OK);
+            ss_wound_tissue *t = synthetic_tissue(4, 7, 2, 80);
+            assert_int_equal(ss_wound_render(r, t, NULL, &out, &err), SS_OK);
+            double ac, sc, am, sm, ak, sk;
+            ring_a(out.base_color, tex, 20, 0, 2.5, &ac, &sc);   /* centre */
+            ring_a(out.base_color, tex, 20, 4.5, 5.5, &am, &sm); /* active margin */
+            ring_a(out.base_color, tex, 20, 0, 5.5, &ak, &sk);   /* the keloid */
+            fprintf(stderr,
+                    "%s skin keloid at %d: a* centre %.1f, margin %.1f; inside %.1f +- %.2f\n",
+                    dark ? "dark" : "light", tex, ac, am, ak, sk);
+            assert_true(am > ac + (dark ? 1.0 : 3.0));
+            assert_true(sk > (dark ? 0.8 : 1.0));
+            if (!dark) sd_at[k] = sk;
+            ss_wound_tissue_free(t);
+            ss_wound_textures_free(&out);
+            ss_wound_renderer_free(r);
+            ss_image_free(skin);
+        }
+    assert_true(fabs(sd_at[0] - sd_at[1]) < 0.15 * sd_at[1]);
+    ss_mm_table_free(table);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_delta_e2000),
@@ -848,6 +957,8 @@ int main(void) {
         cmocka_unit_test(test_base_lookup),
         cmocka_unit_test(test_height_encoding),
         cmocka_unit_test(test_pih_rates),
+        cmocka_unit_test(test_keloid_structure),
+        cmocka_unit_test(test_pih_course),
         cmocka_unit_test(test_dark_skin_pigment),
         cmocka_unit_test(test_epithelium_colour),
         cmocka_unit_test(test_bed_colour),

@@ -97,6 +97,10 @@ double ss_abrasion_melanin_factor(int k);
 /* Computes the palette for a skin whose healthy colour is `upper` (linear
  * RGB); reads the optics model's spectra (data/spectra). */
 ss_status ss_abrasion_palette_compute(const ss_image *upper, ss_abrasion_palette *p, ss_error *err);
+/* The healed skin's melanin factor from post-inflammatory hyperpigmentation
+ * `days` after closure: ss_pih_melanin_factor at the palette's PIH rate and
+ * SS_PIH_GAIN (the course `wound` uses too, skinsim/optics.h). */
+double ss_abrasion_pih_factor(const ss_abrasion_palette *p, double days);
 
 typedef struct ss_base_skin {
     ss_image *upper, *lower; /* linear RGB */

@@ -252,6 +252,18 @@ void ss_bio_new_epithelium(const ss_bio_params *skin, double melanin_factor, ss_
  * degrees; Chardon et al. 1991 classes), from the rates of Taylor et al. 2002
  * and Davis & Callender 2010: 0.03 for very light skin, 0.65 for dark skin. */
 double ss_pih_prevalence(double ita_deg);
+/* Its time course: the healed skin's pigmentation above the adjacent skin's
+ * (a fraction) `days` after closure, through Danielsen et al. 2013's donor
+ * sites (+0.24 at 30 d, +0.15 at 90 d, ~0 at 365 d; 0 at and before 0 d). */
+double ss_pih_course(double days);
+/* The healed skin's melanin factor from PIH, for both wound paths:
+ * 1 + gain x prevalence x ss_pih_course(days). SS_PIH_GAIN is the default
+ * gain (ours): a light skin (rate 0.08-0.13) gets +12-18 % at a month, near
+ * Danielsen's +24 % in Danish patients, a dark one (0.65) 1.94x at a month,
+ * 1.59x at 3 months, 1.04x at a year (12.5, Danielsen's exactly at rate
+ * 0.08, gave a dark skin 2.95x: a healed ring 9.6 L* below the skin). */
+#define SS_PIH_GAIN 6.0
+double ss_pih_melanin_factor(double prevalence, double days, double gain);
 
 /* ---- CIELAB and CIEDE2000 (src/optics/colour.c) ---------------------------------- */
 /* Linear sRGB (white-normalised albedo, as above) <-> CIELAB, D65 white. */

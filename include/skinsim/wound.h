@@ -80,15 +80,22 @@ enum {
     SS_WR_KELOID_ROUGHNESS,   /* 1: roughness of the keloid's stretched surface (shiny) */
     SS_WR_SCAB_BILIRUBIN,     /* g/L: serum pigment (bilirubin, carotenoids) of the dried crust */
     /* after healing: post-inflammatory pigmentation by skin type, the crust's ageing */
-    SS_WR_PIH_GAIN,         /* 1: extra melanin of post-inflammatory hyperpigmentation at full
-                               strength, times the skin type's clinical rate */
-    SS_WR_PIH_DAYS,         /* day: time constant of its fading */
+    SS_WR_PIH_GAIN,         /* 1: gain of post-inflammatory hyperpigmentation: melanin x
+                               ss_pih_melanin_factor(rate, age, gain), the course shared
+                               with abrasion (default SS_PIH_GAIN, as abrasion's) */
     SS_WR_CRUST_DRY_DAYS,   /* day: time constant of the crust's drying and darkening */
     SS_WR_CRUST_LIFT_MM,    /* mm: how far the crust's edge lifts over new epithelium */
     SS_WR_BED_TEXTURE,      /* 1: strength of the bed's capillary-loop and exudate texture */
     SS_WR_LOOP_DEPTH_MM,    /* mm: depth of the capillary loops that hold blood above the
                                table's largest blood fraction (a thin whole-blood layer) */
     SS_WR_CLOT_OXYGENATION, /* 1: oxygenation of the fresh clot (oozed capillary blood) */
+    /* the keloid's structure: active margin, fibrous centre, vessels, nodules */
+    SS_WR_KELOID_MARGIN_MM,    /* mm: width of its active, erythematous margin */
+    SS_WR_KELOID_CENTRE_BLOOD, /* 1: blood of its matured centre, of keloid_blood */
+    SS_WR_KELOID_MATURE_DAYS,  /* day: time constant of its centre's maturation */
+    SS_WR_KELOID_VESSELS,      /* 1: strength of its telangiectatic vessels */
+    SS_WR_KELOID_VESSEL_MM,    /* mm: width of a vessel trunk (branches half) */
+    SS_WR_KELOID_NODULES,      /* 1: unevenness of its raise (fraction, at ~4 mm) */
     SS_WR_NKEYS
 };
 
@@ -220,6 +227,11 @@ ss_status ss_wound_renderer_create(const ss_wound_render_options *o, ss_wound_re
 void ss_wound_renderer_free(ss_wound_renderer *r);
 /* The base skin's own textures (what the skin looks like without a wound). */
 const ss_wound_textures *ss_wound_renderer_base(const ss_wound_renderer *r);
+/* The healed skin's melanin factor from post-inflammatory hyperpigmentation
+ * `days` after closure (before its patchiness): ss_pih_melanin_factor at the
+ * base skin's PIH rate and the recipe's pih_gain; abrasion's
+ * ss_abrasion_pih_factor gives the same on the same skin. */
+double ss_wound_renderer_pih_factor(const ss_wound_renderer *r, double days);
 /* Textures of the tissue t over the base skin (the texture covers the heal
  * block). deformation: NULL, or the mechanics' per-texel displacement of the
  * material point (3 channels, mm: x, y along the texture (x right, y up), z

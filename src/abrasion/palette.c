@@ -252,3 +252,7 @@ ss_status ss_abrasion_palette_compute(const ss_image *upper, ss_abrasion_palette
     ss_optics_data_close(d);
     return st;
 }
+
+double ss_abrasion_pih_factor(const ss_abrasion_palette *p, double days) {
+    return ss_pih_melanin_factor(p->pih_prevalence, days, SS_PIH_GAIN);
+}

@@ -545,17 +545,10 @@ static ss_status render_scab(const ctx *c, ss_texture_set *out, ss_error *err) {
 #define SCAR_PALE_DAYS 150.0f  /* its paling */
 #define SCAR_BRIGHT_DAYS 60.0f /* its lightening (dense collagen) */
 #define SCAR_WEIGHT 0.6f       /* how far a mature scar goes to the palette's scar */
-/* Post-inflammatory hyperpigmentation after a partial-thickness wound: in
- * split-thickness donor sites (Danielsen, Jorgensen, Jorgensen, Karlsmark &
- * Agren 2013, "Erythema persists longer than one year in split-thickness skin
- * graft donor sites", Acta Derm. Venereol. 93: 281) pigmentation was 24 %
- * above the adjacent skin at 1 month, 15 % at 3 months and back to it at 12:
- * a fade of ~130 days (24 -> 15 % over 60 days). Its strength is the skin
- * type's PIH rate times PIH_GAIN (ours: calibrated so that a dark skin's
- * healed ring is visibly darker at day 30 and not black). */
-#define PIH_RISE_DAYS 14.0f
-#define PIH_FADE_DAYS 130.0f
-#define PIH_GAIN 1.5f
+/* Post-inflammatory hyperpigmentation after healing: ss_abrasion_pih_factor
+ * (palette.c), the course `wound` uses too (ss_pih_melanin_factor,
+ * src/optics/healing.c: Danielsen et al. 2013's +24 % at 1 month, +15 % at 3,
+ * back at 12, as strong as the skin type's PIH rate). */
 /* The new epithelium's melanin, of the skin's, at closure, and its
  * repigmentation from the margin and the follicles: ours, not cited (no
  * clinical time constant found); consistent with the pigmentation being
@@ -612,8 +605,7 @@ static inline int maturation_px(const ctx *c, const look *l, size_t i, double po
      * the oldest ring's age for every ring (per-ring ages made the oldest,
      * outermost ring darkest: a dark line at the healed margin) */
     float wage = (float)(position * span_days + after_days);
-    float pih = PIH_GAIN * c->P->pih_prevalence * (1.0f - expf(-wage / PIH_RISE_DAYS)) *
-                expf(-wage / PIH_FADE_DAYS);
+    float pih = (float)ss_abrasion_pih_factor(c->P, wage) - 1.0f;
     /* the epidermis's melanin, as a factor of the skin's: the new epithelium
      * melanin-poor, repigmenting over weeks, darkened by post-inflammatory
      * hyperpigmentation, and the mature scar somewhat hypopigmented; drawn as

@@ -77,6 +77,19 @@
  * of loops: at 3, red dots on an orange film of thin blood) */
 #define LOOP_CONTRAST 1.5
 #define POOL_FILM 0.25
+/* A keloid's telangiectasia (module comment of render_texel's keloid part):
+ * trunks along the mid-level lines of a value noise of KELOID_TRUNK_MM,
+ * branches along those of one of KELOID_BRANCH_MM near the trunks, both
+ * with widths in mm; its nodular surface a noise of KELOID_NODULE_MM. */
+#define KELOID_TRUNK_MM 3.0
+#define KELOID_BRANCH_MM 1.2
+#define KELOID_NODULE_MM 4.0
+/* where the keloid's swelling starts: its edge for the margin's distance */
+#define KELOID_EDGE_FRACTION 0.1
+/* blood and oxygenation in the dilated vessels: the table's most blood
+ * (ss_mm_axis_default_range: 5 %), oxygenated as in the open bed */
+#define VESSEL_BLOOD 0.05
+#define VESSEL_OXYGENATION 0.9
 
 struct ss_wound_renderer {
     ss_wound_render_options o;
@@ -84,15 +97,18 @@ struct ss_wound_renderer {
     ss_skin_lut *lut;
     float mean[SS_BIO_NCHANNELS];
     ss_layer_table scab, serous, clot, loops;
-    ss_image *crust;   /* value noise 0..1 at ~1.5 mm: the crust's thickness is uneven */
-    ss_image *mottle;  /* value noise at ~3 mm: where the crust is serous, not bloody */
-    ss_image *crack;   /* value noise at ~2.5 mm: its mid-level lines are the cracks */
-    ss_image *warp[2]; /* value noise at ~1.2 mm: jitter of where the tissue maps are
-                          sampled, so margins are ragged, not stepped with the voxels */
-    ss_image *cap;     /* value noise at ~0.35 mm: the bed's capillary loops */
-    ss_image *grain;   /* value noise at ~0.6 mm: the crust's granular surface */
-    double pih;        /* the skin type's rate of post-inflammatory hyperpigmentation */
-    double blood_cap;  /* the table's largest blood fraction: blood above it is a layer */
+    ss_image *crust;     /* value noise 0..1 at ~1.5 mm: the crust's thickness is uneven */
+    ss_image *mottle;    /* value noise at ~3 mm: where the crust is serous, not bloody */
+    ss_image *crack;     /* value noise at ~2.5 mm: its mid-level lines are the cracks */
+    ss_image *warp[2];   /* value noise at ~1.2 mm: jitter of where the tissue maps are
+                            sampled, so margins are ragged, not stepped with the voxels */
+    ss_image *cap;       /* value noise at ~0.35 mm: the bed's capillary loops */
+    ss_image *grain;     /* value noise at ~0.6 mm: the crust's granular surface */
+    ss_image *vessel[2]; /* value noise at KELOID_TRUNK_MM, KELOID_BRANCH_MM: the keloid's
+                            vessels along their mid-level lines */
+    ss_image *nodule;    /* value noise at KELOID_NODULE_MM: the keloid's uneven raise */
+    double pih;          /* the skin type's rate of post-inflammatory hyperpigmentation */
+    double blood_cap;    /* the table's largest blood fraction: blood above it is a layer */
     ss_wound_textures base;
     ss_image *columns; /* NULL: the flat block; else tissue-map coordinates per texel */
 };
@@ -208,6 +224,17 @@ ss_status ss_wound_renderer_create(const ss_wound_render_options *o, ss_wound_re
     if (!st) st = ss_wound__noise(o->size, o->side_mm, 0.35, 1, o->seed, 206, r->cap, err);
     if (!st && !(r->grain = ss_image_create(o->size, o->size, 1, err))) st = err->code;
     if (!st) st = ss_wound__noise(o->size, o->side_mm, 0.6, 2, o->seed, 207, r->grain, err);
+    const double vessel_mm[2] = {KELOID_TRUNK_MM, KELOID_BRANCH_MM};
+    for (int k = 0; k < 2 && !st; k++) {
+        if (!(r->vessel[k] = ss_image_create(o->size, o->size, 1, err))) st = err->code;
+        if (!st)
+            st = ss_wound__noise(o->size, o->side_mm, vessel_mm[k], 2 - k, o->seed,
+                                 208 + (uint64_t)k, r->vessel[k], err);
+    }
+    if (!st && !(r->nodule = ss_image_create(o->size, o->size, 1, err))) st = err->code;
+    if (!st)
+        st =
+            ss_wound__noise(o->size, o->side_mm, KELOID_NODULE_MM, 2, o->seed, 210, r->nodule, err);
     for (int k = 0; k < 2 && !st; k++) {
         if (!(r->warp[k] = ss_image_create(o->size, o->size, 1, err))) st = err->code;
         if (!st)
@@ -244,9 +271,16 @@ void ss_wound_renderer_free(ss_wound_renderer *r) {
     ss_image_free(r->warp[1]);
     ss_image_free(r->cap);
     ss_image_free(r->grain);
+    ss_image_free(r->vessel[0]);
+    ss_image_free(r->vessel[1]);
+    ss_image_free(r->nodule);
     ss_skin_lut_free(r->lut);
     ss_wound_textures_free(&r->base);
     free(r);
+}
+
+double ss_wound_renderer_pih_factor(const ss_wound_renderer *r, double days) {
+    return ss_pih_melanin_factor(r->pih, days, r->o.recipe.v[SS_WR_PIH_GAIN]);
 }
 
 const ss_wound_textures *ss_wound_renderer_base(const ss_wound_renderer *r) { return &r->base; }
@@ -281,9 +315,16 @@ static double lerp(double a, double b, double t) { return a + (b - a) * t; }
  * century old (a bright rim of mature scar around a 90-day-old one). */
 typedef struct texel_tissue {
     double e, cap, oxy, plasma, scab, scar, keloid, depth, age, elev;
-    double wounded;  /* weight of the columns that were ever open (0..1) */
-    double crust_in; /* mm from the crust's edge inwards (0 outside the crust) */
+    double wounded;   /* weight of the columns that were ever open (0..1) */
+    double crust_in;  /* mm from the crust's edge inwards (0 outside the crust) */
+    double keloid_in; /* mm from the keloid's edge inwards (0 outside it) */
+    double wound_in;  /* mm from the edge of the columns that were ever open inwards */
 } texel_tissue;
+
+/* Per column: mm from the crust's and from the keloid's edge inwards. */
+typedef struct edge_maps {
+    const float *crust_in, *keloid_in, *wound_in;
+} edge_maps;
 
 /* On a mesh's UV layout: the same fields through a cubic B-spline (4 x 4
  * columns, weights summing to 1, clamped at the edges). A texel there is
@@ -291,7 +332,7 @@ typedef struct texel_tissue {
  * columns gave a transition narrower than a texel (stepped, aliased edges at
  * 1024). The B-spline is C2, so a wound's edge is a smooth ramp about two
  * columns wide, the same width in mm at every texture size. */
-static void sample_tissue_smooth(const ss_wound_tissue *t, const float *crust_in, double mx,
+static void sample_tissue_smooth(const ss_wound_tissue *t, const edge_maps *em, double mx,
                                  double my, texel_tissue *s) {
     double fx0 = floor(mx), fy0 = floor(my), fx = mx - fx0, fy = my - fy0;
     double wx[4], wy[4];
@@ -337,11 +378,13 @@ static void sample_tissue_smooth(const ss_wound_tissue *t, const float *crust_in
         s->age = ws > 1e-12 ? acc / ws : (double)SS_WOUND_AGE_INTACT;
         s->wounded = ws;
     }
-    BS(crust_in, s->crust_in);
+    BS(em->crust_in, s->crust_in);
+    BS(em->keloid_in, s->keloid_in);
+    BS(em->wound_in, s->wound_in);
 #undef BS
 }
 
-static void sample_tissue(const ss_wound_tissue *t, const float *crust_in, double mx, double my,
+static void sample_tissue(const ss_wound_tissue *t, const edge_maps *em, double mx, double my,
                           texel_tissue *s) {
     if (mx < 0) mx = 0;
     if (my < 0) my = 0;
@@ -374,7 +417,9 @@ static void sample_tissue(const ss_wound_tissue *t, const float *crust_in, doubl
         s->age = ws > 1e-12 ? acc / ws : (double)SS_WOUND_AGE_INTACT;
         s->wounded = ws;
     }
-    s->crust_in = BL(crust_in);
+    s->crust_in = BL(em->crust_in);
+    s->keloid_in = BL(em->keloid_in);
+    s->wound_in = BL(em->wound_in);
 #undef BL
 }
 
@@ -397,10 +442,67 @@ typedef struct texel_out {
     double rgb[3], roughness, height_mm;
 } texel_out;
 
-/* The crust's and the bed's noises at a texel (0..1). */
+/* The crust's, the bed's and the keloid's noises at a texel (0..1); trunk
+ * and branch are the keloid's vessels' coverage of the texel (vessel_line). */
 typedef struct crust_noise {
     float thick, mottle, crack, cap, grain;
+    float trunk, branch, nodule;
 } crust_noise;
+
+/* The coverage of a texel by a line of width_mm along the mid-level line of
+ * a noise (0..1): the distance to the line is |n - 0.5| / |grad n| in mm
+ * (central differences), so the width is in mm, not in noise values nor
+ * texels; where a texel is wider than the line, the line is drawn one texel
+ * wide at width / texel of the strength (its area kept: the same look at
+ * 256, 512 and 1024 texels for the same world size). */
+static double vessel_line(const ss_image *noise, int x, int y, double texel_mm, double width_mm) {
+    const int w = noise->width, h = noise->height;
+    const float *d = noise->data;
+    int x0 = x > 0 ? x - 1 : x, x1 = x < w - 1 ? x + 1 : x;
+    int y0 = y > 0 ? y - 1 : y, y1 = y < h - 1 ? y + 1 : y;
+    double gx = (d[(size_t)y * w + x1] - d[(size_t)y * w + x0]) / ((x1 - x0) * texel_mm);
+    double gy = (d[(size_t)y1 * w + x] - d[(size_t)y0 * w + x]) / ((y1 - y0) * texel_mm);
+    double g = hypot(gx, gy);
+    if (!(g > 1e-9)) return 0;
+    double dist = fabs(d[(size_t)y * w + x] - 0.5) / g;
+    double half = 0.5 * width_mm, eff = fmax(half, 0.5 * texel_mm);
+    double f = 1 - dist / eff;
+    return f > 0 ? f * f * (3 - 2 * f) * (half / eff) : 0;
+}
+
+/* The keloid at a texel, as tissue (docs/wound.md, row keloid): its look
+ * kel from its swelling, and under it a structure from the healing model's
+ * own fields. A keloid grows at its edge and matures from within (Bayat,
+ * McGrouther & Ferguson 2003, BMJ 326: 88; Ogawa 2017, Int. J. Mol. Sci. 18:
+ * 606): its margin active, erythematous (keloid_blood), its centre, where
+ * the wound closed longest ago, more fibrous and paler (the blood down to
+ * keloid_centre_blood of it, the scar's whitening back) as it matures over
+ * keloid_maturation; the tissue it spread over beyond the wound (never open:
+ * no age) counts as margin. Over all of it dilated, arborizing telangiectatic
+ * vessels (the dermoscopy of keloids: linear and branching vessels on a pink
+ * to red background) as blood in lines of physical width; its raise uneven
+ * (nodules at ~4 mm), smoother where it matured. */
+typedef struct keloid_tissue {
+    double kel;     /* how much keloid the texel shows (0..1) */
+    double mature;  /* its centre's maturity: fibrous, paler (0..1) */
+    double vessels; /* the vessels' coverage (0..1) */
+    double blood, oxygenation;
+    double raise; /* factor of the raise: the nodules */
+} keloid_tissue;
+
+static void keloid_structure(const double *v, const texel_tissue *s, const crust_noise *nz,
+                             keloid_tissue *k) {
+    k->kel = 1 - exp(-s->keloid / v[SS_WR_KELOID_LOOK_MM]);
+    double centre = 1 - exp(-fmin(s->keloid_in, s->wound_in) / v[SS_WR_KELOID_MARGIN_MM]);
+    double age = s->age < SS_WOUND_AGE_INTACT ? s->age : 0;
+    k->mature = centre * (1 - exp(-age / v[SS_WR_KELOID_MATURE_DAYS]));
+    k->vessels = v[SS_WR_KELOID_VESSELS] * k->kel * fmax(nz->trunk, nz->branch);
+    k->blood = lerp(v[SS_WR_KELOID_BLOOD] * lerp(1, v[SS_WR_KELOID_CENTRE_BLOOD], k->mature),
+                    VESSEL_BLOOD, k->vessels);
+    k->oxygenation = lerp(v[SS_WR_KELOID_OXYGENATION], VESSEL_OXYGENATION, k->vessels);
+    /* the nodules only lower it: its highest point stays heal's elevation */
+    k->raise = 1 - v[SS_WR_KELOID_NODULES] * (1 - 0.5 * k->mature) * nz->nodule;
+}
 
 static void render_texel(const ss_wound_renderer *r, const float *skin, const crust_noise *nz,
                          const texel_tissue *s, double day, texel_out *o) {
@@ -419,12 +521,15 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
     double scar = ramp(s->scar, 0, v[SS_WR_SCAR_DENSITY_HI]);
     float b[SS_BIO_NCHANNELS] = {0}, k[SS_BIO_NCHANNELS];
     for (int c = 0; c < SS_BIO_NCHANNELS; c++) k[c] = (float)lerp(skin[c], r->mean[c], reg);
-    /* keloid tissue: hypervascular, hypoxic, often hyperpigmented (docs/wound.md) */
-    double kel = 1 - exp(-s->keloid / v[SS_WR_KELOID_LOOK_MM]);
-    /* post-inflammatory hyperpigmentation: rises over the first two weeks after
-     * closure, fades over months, as strong as the skin type's clinical rate */
-    double pih =
-        v[SS_WR_PIH_GAIN] * r->pih * (1 - exp(-s->age / 14.0)) * exp(-s->age / v[SS_WR_PIH_DAYS]);
+    /* keloid tissue: hypervascular, hypoxic, often hyperpigmented, with an
+     * active margin, a maturing centre and vessels (keloid_structure) */
+    keloid_tissue kt;
+    keloid_structure(v, s, nz, &kt);
+    const double kel = kt.kel;
+    /* post-inflammatory hyperpigmentation: the course shared with abrasion
+     * (ss_pih_melanin_factor: rises over two weeks after closure, fades over
+     * months), as strong as the skin type's clinical rate */
+    double pih = ss_wound_renderer_pih_factor(r, s->age) - 1;
     /* both patchy, not one flat colour: PIH in macules (+-PATCHY at ~1.5 mm),
      * the young tissue's redness in blotches (at ~2 mm) */
     pih *= 1 + PATCHY * (2.0 * nz->thick - 1);
@@ -436,6 +541,9 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
         EPI_FLOOR_CM,
         k[SS_BIO_EPIDERMIS_CM] * lerp(1, lerp(v[SS_WR_NEW_EPIDERMIS], 1, m_epi), regrown), cover);
     double sc = lerp(SC_FLOOR_CM, k[SS_BIO_SC_CM], cover * lerp(1, m_epi, regrown));
+    /* over the keloid's vessels the stretched epidermis is thinnest: they
+     * lie in the papillary dermis right under it */
+    epi *= 1 - 0.25 * kt.vessels;
     double cap = s->cap < 0 ? 0 : s->cap;
     /* freshly closed tissue: the tissue ss_bio_new_epithelium describes
      * (src/optics/healing.c, as `abrasion` draws it) through the recipe's
@@ -447,7 +555,7 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
     double tissue_blood =
         lerp(k[SS_BIO_BLOOD] * cap * lerp(1, v[SS_WR_SCAR_BLOOD], reg * scar * m_scar),
              v[SS_WR_YOUNG_BLOOD] * (1 + PATCHY * (2.0 * nz->mottle - 1)), young);
-    tissue_blood = lerp(tissue_blood, v[SS_WR_KELOID_BLOOD], kel * cover);
+    tissue_blood = lerp(tissue_blood, kt.blood, kel * cover);
     /* the open bed: granulation tissue, as vascular as the healing model's new
      * capillaries (none in the freshly exposed, torn dermis of day 0: the
      * punctate bleeding there is the clot's), its capillary loops (dots at
@@ -473,7 +581,7 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
         lerp(lerp(v[SS_WR_TISSUE_MIN_OXYGENATION],
                   lerp(k[SS_BIO_OXYGENATION], SS_YOUNG_DERMIS_OXYGENATION, young), clamp01(s->oxy)),
              v[SS_WR_BED_OXYGENATION], open * reg);
-    oxy = lerp(oxy, v[SS_WR_KELOID_OXYGENATION], kel * cover);
+    oxy = lerp(oxy, kt.oxygenation, kel * cover);
     b[SS_BIO_MELANIN] = (float)(mel > MELANIN_FLOOR ? mel : MELANIN_FLOOR);
     b[SS_BIO_PHEOMELANIN] = k[SS_BIO_PHEOMELANIN];
     b[SS_BIO_BLOOD] = (float)clamp01(blood);
@@ -490,7 +598,8 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
      * skin (a lift to the skin's hue at full brightness, as before, drew a
      * bright orange scar there). Only where the epidermis regrew: skin the
      * region spread over was never a scar maturing since closure. */
-    double white = v[SS_WR_SCAR_WHITENING] * regrown * scar * m_scar * cover * (1 - kel);
+    double white =
+        v[SS_WR_SCAR_WHITENING] * regrown * scar * m_scar * cover * (1 - kel * (1 - kt.mature));
     double skin_rgb[3] = {l.rgb[0], l.rgb[1], l.rgb[2]};
     double R[3], T[3], R2[3], T2[3], R3[3], T3[3], mid[3];
     if (loops > 0) {
@@ -597,7 +706,7 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
      * open wound's depth above already draws the defect. Taken as it is, not
      * saturated: the model itself bounds it (docs/heal-model.md [D16]), and
      * the height map's range follows the frame (ss_wound_height_range) */
-    double keloid = v[SS_WR_KELOID_SCALE] * fmax(s->elev, 0.0);
+    double keloid = v[SS_WR_KELOID_SCALE] * fmax(s->elev, 0.0) * kt.raise;
     /* the surface: the skin, down by the wound's depth, filled by the clot and
      * by the crust (which fills the defect and stands above the skin), the
      * bed's relief of capillary loops, the crust's cracks and lifted edge, and
@@ -608,14 +717,16 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
                    v[SS_WR_CRUST_LIFT_MM] * lift + keloid;
 }
 
-/* Per column: mm from the crust's edge inwards (0 where there is no crust):
- * the distance to the nearest column without crust, less half a column so
- * that it is about 0 at the edge. */
-static ss_image *crust_depth(const ss_wound_tissue *t, double scale, ss_error *err) {
+/* Per column: mm from the edge of a map's region inwards (0 outside it; the
+ * region: map x scale >= threshold): the distance to the nearest column
+ * outside, less half a column so that it is about 0 at the edge. For the
+ * crust (scab_mm) and the keloid (keloid_mm). */
+static ss_image *edge_depth(const ss_wound_tissue *t, const float *map, double scale,
+                            double threshold, ss_error *err) {
     ss_image *no = ss_image_create(t->nx, t->ny, 1, err);
     ss_image *d = no ? ss_image_create(t->nx, t->ny, 1, err) : NULL;
     size_t n = (size_t)t->nx * (size_t)t->ny;
-    for (size_t i = 0; d && i < n; i++) no->data[i] = t->scab_mm[i] * scale < 0.01 ? 1.f : 0.f;
+    for (size_t i = 0; d && i < n; i++) no->data[i] = map[i] * scale < threshold ? 1.f : 0.f;
     if (d && ss_distance_transform(no, d, err)) ss_image_free(d), d = NULL;
     for (size_t i = 0; d && i < n; i++) {
         double mm = isfinite(d->data[i]) ? (d->data[i] - 0.5) * t->dx_mm : 1e3;
@@ -648,11 +759,30 @@ ss_status ss_wound_render_poll(ss_wound_renderer *r, const ss_wound_tissue *t,
     uint8_t *healthy = malloc(ncol);
     if (!healthy) return ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     for (size_t i = 0; i < ncol; i++) healthy[i] = (uint8_t)column_healthy(t, i);
-    ss_image *crust_in = crust_depth(t, r->o.recipe.v[SS_WR_SCAB_SCALE], err);
-    if (!crust_in) {
+    ss_image *crust_in = edge_depth(t, t->scab_mm, r->o.recipe.v[SS_WR_SCAB_SCALE], 0.01, err);
+    ss_image *keloid_in =
+        crust_in ? edge_depth(t, t->keloid_mm, 1.0,
+                              KELOID_EDGE_FRACTION * r->o.recipe.v[SS_WR_KELOID_LOOK_MM], err)
+                 : NULL;
+    if (!keloid_in) {
         free(healthy);
+        ss_image_free(crust_in);
         return err->code ? err->code : SS_ERR_NOMEM;
     }
+    /* the columns that were ever open: their age is not the intact sentinel */
+    float *opened = malloc(ncol * sizeof *opened);
+    for (size_t i = 0; opened && i < ncol; i++)
+        opened[i] = t->age_days[i] < SS_WOUND_AGE_INTACT ? 1.f : 0.f;
+    ss_image *wound_in = opened ? edge_depth(t, opened, 1.0, 0.5, err) : NULL;
+    free(opened);
+    if (!wound_in) {
+        free(healthy);
+        ss_image_free(crust_in);
+        ss_image_free(keloid_in);
+        return err->code ? err->code : ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    }
+    const edge_maps em = {crust_in->data, keloid_in->data, wound_in->data};
+    const double texel_mm = r->o.side_mm / n, vessel_mm = r->o.recipe.v[SS_WR_KELOID_VESSEL_MM];
     const double side_x = t->nx * t->dx_mm, side_y = t->ny * t->dx_mm;
     /* the jitter's noise (0.6 mm) needs a few texels per period; where the
      * texels are coarser (a mesh's UV layout at 1024: 0.33 mm) it would
@@ -717,8 +847,19 @@ ss_status ss_wound_render_poll(ss_wound_renderer *r, const ss_wound_tissue *t,
                 }
                 texel_tissue s;
                 texel_out o;
-                crust_noise nz = {r->crust->data[i], r->mottle->data[i], r->crack->data[i],
-                                  r->cap->data[i], r->grain->data[i]};
+                crust_noise nz = {r->crust->data[i],
+                                  r->mottle->data[i],
+                                  r->crack->data[i],
+                                  r->cap->data[i],
+                                  r->grain->data[i],
+                                  0,
+                                  0,
+                                  r->nodule->data[i]};
+                /* the keloid's vessels: trunks, and branches near them */
+                nz.trunk = (float)(vessel_line(r->vessel[0], x, y, texel_mm, vessel_mm) *
+                                   ramp(r->mottle->data[i], 0.3, 0.6));
+                nz.branch = (float)(vessel_line(r->vessel[1], x, y, texel_mm, 0.5 * vessel_mm) *
+                                    (1 - ramp(fabs(r->vessel[0]->data[i] - 0.5), 0.03, 0.1)));
                 if (r->columns) { /* the mean over a box of EDGE_BOX_MM (module comment) */
                     o = (texel_out){{0, 0, 0}, 0, 0};
                     for (int q = 0; q < BOX_N * BOX_N; q++) {
@@ -728,7 +869,7 @@ ss_status ss_wound_render_poll(ss_wound_renderer *r, const ss_wound_tissue *t,
                         sx = sx < 0 ? 0 : sx > t->nx - 1 ? t->nx - 1 : sx;
                         sy = sy < 0 ? 0 : sy > t->ny - 1 ? t->ny - 1 : sy;
                         texel_out os;
-                        sample_tissue_smooth(t, crust_in->data, sx, sy, &s);
+                        sample_tissue_smooth(t, &em, sx, sy, &s);
                         if (tissue_intact(&s)) { /* the base skin itself: no seam at the rim */
                             for (int c = 0; c < 3; c++)
                                 os.rgb[c] = r->base.base_color->data[i * 3 + c];
@@ -742,7 +883,7 @@ ss_status ss_wound_render_poll(ss_wound_renderer *r, const ss_wound_tissue *t,
                         o.height_mm += os.height_mm / (BOX_N * BOX_N);
                     }
                 } else {
-                    sample_tissue(t, crust_in->data, mx, my, &s);
+                    sample_tissue(t, &em, mx, my, &s);
                     render_texel(r, r->skin->data + i * SS_BIO_NCHANNELS, &nz, &s, t->day, &o);
                 }
                 for (int c = 0; c < 3; c++) out->base_color->data[i * 3 + c] = (float)o.rgb[c];
@@ -754,6 +895,8 @@ ss_status ss_wound_render_poll(ss_wound_renderer *r, const ss_wound_tissue *t,
     }
     free(healthy);
     ss_image_free(crust_in);
+    ss_image_free(keloid_in);
+    ss_image_free(wound_in);
     if (cancelled) return ss_error_set(err, SS_ERR_RUNTIME, "wound render: cancelled");
     /* height in mm -> normal: slope per texel times texels per mm */
     ss_height_to_normal(out->height, (float)(n / r->o.side_mm), out->normal);

@@ -1065,7 +1065,7 @@ except AttributeError:
 
 # ---- wound ------------------------------------------------------------------------
 
-SS_WR_NKEYS = 46
+SS_WR_NKEYS = 53
 
 
 class ss_wound_recipe(ctypes.Structure):
