@@ -933,14 +933,18 @@ static void update_growth(ss_hyper *h) {
     }
 }
 
-/* F_e of tet t at positions x */
-static void tet_F(const ss_hyper *h, int t, const double *x, double *F) {
-    const int32_t *q = h->tet + 4 * t;
-    const double *b = h->beta + 12 * (size_t)t;
+/* sum_a x_a (x) b_a over the tet's four nodes q: a deformation gradient
+ * from the shape gradients b (12) */
+static void nodes_F(const int32_t *q, const double *b, const double *x, double F[9]) {
     for (int i = 0; i < 3; i++)
         for (int j = 0; j < 3; j++)
             F[3 * i + j] = x[3 * q[0] + i] * b[j] + x[3 * q[1] + i] * b[3 + j] +
                            x[3 * q[2] + i] * b[6 + j] + x[3 * q[3] + i] * b[9 + j];
+}
+
+/* F_e of tet t at positions x (the grown tet's shape gradients) */
+static void tet_F(const ss_hyper *h, int t, const double *x, double *F) {
+    nodes_F(h->tet + 4 * t, h->beta + 12 * (size_t)t, x, F);
 }
 
 /* adds w P and w H mapped with the shape gradients b (12) to the tet's
@@ -970,12 +974,7 @@ static void map_tet(const double *b, double w, const double *P, const double *H,
 /* the total deformation gradient of tet t at x, against the reference mesh
  * (the in-plane active law's F, not F_e) */
 static void tet_F_total(const ss_hyper *h, int t, const double *x, double F[9]) {
-    const int32_t *q = h->tet + 4 * t;
-    const double *b0 = h->beta0 + 12 * (size_t)t;
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++)
-            F[3 * i + j] = x[3 * q[0] + i] * b0[j] + x[3 * q[1] + i] * b0[3 + j] +
-                           x[3 * q[2] + i] * b0[6 + j] + x[3 * q[3] + i] * b0[9 + j];
+    nodes_F(h->tet + 4 * t, h->beta0 + 12 * (size_t)t, x, F);
 }
 
 /* mode 0: energies; 1: + gradients; 2: + tangents */
