@@ -688,10 +688,11 @@ static void test_dark_skin_pigment(void **state) {
 
 /* ---- new epithelium and scar colours on light and dark skin (issue 24) ----------------- */
 
-/* Mean CIELAB of the base colour within r0..r1 mm of the block's centre. */
-static void disc_lab(const ss_image *img, int tex, double side_mm, double r0, double r1,
-                     double lab[3]) {
-    double acc[3] = {0, 0, 0}, cnt = 0;
+/* Mean CIELAB of the base colour within r0..r1 mm of the block's centre,
+ * and (a_sd not NULL) the standard deviation of its a*. */
+static void ring_lab(const ss_image *img, int tex, double side_mm, double r0, double r1,
+                     double lab[3], double *a_sd) {
+    double acc[3] = {0, 0, 0}, a2 = 0, cnt = 0;
     for (int y = 0; y < tex; y++)
         for (int x = 0; x < tex; x++) {
             double r = hypot((x + 0.5) / tex * side_mm - 0.5 * side_mm,
@@ -701,9 +702,16 @@ static void disc_lab(const ss_image *img, int tex, double side_mm, double r0, do
             for (int c = 0; c < 3; c++) rgb[c] = img->data[((size_t)y * tex + x) * 3 + c];
             ss_linear_srgb_to_lab(rgb, l);
             for (int c = 0; c < 3; c++) acc[c] += l[c];
+            a2 += l[1] * l[1];
             cnt++;
         }
     for (int c = 0; c < 3; c++) lab[c] = acc[c] / cnt;
+    if (a_sd) *a_sd = sqrt(fmax(0, a2 / cnt - lab[1] * lab[1]));
+}
+
+static void disc_lab(const ss_image *img, int tex, double side_mm, double r0, double r1,
+                     double lab[3]) {
+    ring_lab(img, tex, side_mm, r0, r1, lab, NULL);
 }
 
 static double hue_deg(const double lab[3]) { return atan2(lab[2], lab[1]) * 57.29577951308232; }
@@ -892,19 +900,9 @@ static void test_pih_course(void **state) {
 /* Mean and standard deviation of a* within r0..r1 mm of the block's centre. */
 static void ring_a(const ss_image *img, int tex, double side_mm, double r0, double r1, double *mean,
                    double *sd) {
-    double s1 = 0, s2 = 0, cnt = 0;
-    for (int y = 0; y < tex; y++)
-        for (int x = 0; x < tex; x++) {
-            double r = hypot((x + 0.5) / tex * side_mm - 0.5 * side_mm,
-                             (y + 0.5) / tex * side_mm - 0.5 * side_mm);
-            if (r < r0 || r >= r1) continue;
-            double rgb[3], lab[3];
-            for (int c = 0; c < 3; c++) rgb[c] = img->data[((size_t)y * tex + x) * 3 + c];
-            ss_linear_srgb_to_lab(rgb, lab);
-            s1 += lab[1], s2 += lab[1] * lab[1], cnt++;
-        }
-    *mean = s1 / cnt;
-    *sd = sqrt(fmax(0, s2 / cnt - *mean * *mean));
+    double lab[3];
+    ring_lab(img, tex, side_mm, r0, r1, lab, sd);
+    *mean = lab[1];
 }
 
 /* A keloid is not one flat colour: a keloid at 80 days (healed 4 mm, grown
