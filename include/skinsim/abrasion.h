@@ -101,6 +101,11 @@ ss_status ss_abrasion_palette_compute(const ss_image *upper, ss_abrasion_palette
  * `days` after closure: ss_pih_melanin_factor at the palette's PIH rate and
  * SS_PIH_GAIN (the course `wound` uses too, skinsim/optics.h). */
 double ss_abrasion_pih_factor(const ss_abrasion_palette *p, double days);
+/* The healed skin's whole melanin factor `days` after closure (a ring that
+ * healed as long ago as the wound): ss_healed_melanin_factor with the
+ * default repigmentation, the palette's PIH rate and SS_PIH_GAIN, the curve
+ * `wound` takes too (ss_wound_renderer_melanin_factor). */
+double ss_abrasion_melanin_factor_at(const ss_abrasion_palette *p, double days);
 
 typedef struct ss_base_skin {
     ss_image *upper, *lower; /* linear RGB */

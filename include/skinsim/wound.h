@@ -42,10 +42,11 @@ enum {
     SS_WR_YOUNG_BLOOD,            /* 1: dermal blood fraction of freshly closed tissue */
     SS_WR_SCAR_DAYS,              /* day: time constant of scar maturation after closure */
     SS_WR_EPIDERMIS_DAYS,         /* day: time constant of epidermal maturation */
-    SS_WR_PIGMENT_DAYS,           /* day: time constant of repigmentation */
-    SS_WR_NEW_MELANIN,            /* 1: melanin of new epithelium, fraction of the skin's */
-    SS_WR_SCAR_MELANIN,           /* 1: melanin of the mature scar, fraction (< 1 hypo-, > 1
-                                     hyperpigmented) */
+    SS_WR_PIGMENT_DAYS,           /* day: time constant of repigmentation
+                                     (ss_repigmentation_factor, shared with abrasion) */
+    SS_WR_NEW_MELANIN,            /* 1: melanin of new epithelium at closure, of the skin's */
+    SS_WR_SCAR_MELANIN,           /* 1: melanin of the mature scar, reached after the first
+                                     month over SS_SCAR_PALE_DAYS (< 1 hypo-, > 1 hyper-) */
     SS_WR_NEW_EPIDERMIS,          /* 1: thickness of new epidermis, fraction of the skin's */
     SS_WR_SCAR_DENSITY_HI,        /* 1: scar (collagen) density of the full scar look */
     SS_WR_SCAR_BLOOD,             /* 1: blood of the mature dense scar, fraction of the skin's */
@@ -232,6 +233,12 @@ const ss_wound_textures *ss_wound_renderer_base(const ss_wound_renderer *r);
  * base skin's PIH rate and the recipe's pih_gain; abrasion's
  * ss_abrasion_pih_factor gives the same on the same skin. */
 double ss_wound_renderer_pih_factor(const ss_wound_renderer *r, double days);
+/* The healed skin's whole melanin factor `days` after closure (before its
+ * patchiness): ss_healed_melanin_factor with the recipe's new_melanin,
+ * repigmentation, scar_melanin and pih_gain at the base skin's PIH rate;
+ * abrasion's ss_abrasion_melanin_factor_at gives the same on the same skin
+ * with the default recipe. */
+double ss_wound_renderer_melanin_factor(const ss_wound_renderer *r, double days);
 /* Textures of the tissue t over the base skin (the texture covers the heal
  * block). deformation: NULL, or the mechanics' per-texel displacement of the
  * material point (3 channels, mm: x, y along the texture (x right, y up), z

@@ -256,3 +256,9 @@ ss_status ss_abrasion_palette_compute(const ss_image *upper, ss_abrasion_palette
 double ss_abrasion_pih_factor(const ss_abrasion_palette *p, double days) {
     return ss_pih_melanin_factor(p->pih_prevalence, days, SS_PIH_GAIN);
 }
+
+double ss_abrasion_melanin_factor_at(const ss_abrasion_palette *p, double days) {
+    ss_repigmentation repig;
+    ss_repigmentation_default(&repig);
+    return ss_healed_melanin_factor(&repig, p->pih_prevalence, SS_PIH_GAIN, days);
+}

@@ -531,7 +531,7 @@ static ss_status render_scab(const ctx *c, ss_texture_set *out, ss_error *err) {
  *     lightening (1 - exp(-age / 60 d)) and turning into a faint pale scar
  *     after the first month (1 - exp(-(age - 30 d) / 150 d)); its melanin
  *     (a factor of the skin's, drawn through the palette's melanin_ratio)
- *     0.6 at closure, repigmenting over ~a week, times 1 + the
+ *     0.5 at closure, repigmenting over ~10 days, times 1 + the
  *     post-inflammatory hyperpigmentation (rising over the first weeks and
  *     fading over months, as strong as the skin type's clinical rate), less
  *     a quarter as the scar matures;
@@ -549,15 +549,11 @@ static ss_status render_scab(const ctx *c, ss_texture_set *out, ss_error *err) {
  * (palette.c), the course `wound` uses too (ss_pih_melanin_factor,
  * src/optics/healing.c: Danielsen et al. 2013's +24 % at 1 month, +15 % at 3,
  * back at 12, as strong as the skin type's PIH rate). */
-/* The new epithelium's melanin, of the skin's, at closure, and its
- * repigmentation from the margin and the follicles: ours, not cited (no
- * clinical time constant found); consistent with the pigmentation being
- * back (and above, with PIH) by 1 month as Danielsen et al. measured. 0.4
- * and 28 days drew an orange-tan ring on dark skin (melanin loss as a
+/* The new epithelium's melanin and the scar's: ss_repigmentation_factor
+ * (src/optics/healing.c), the model `wound` uses too (0.5 of the skin's at
+ * closure, repigmenting over ~10 days, a quarter less in the mature scar).
+ * 0.4 and 28 days drew an orange-tan ring on dark skin (melanin loss as a
  * multiplier of the skin; day 20: L* +10.7, chroma +12). */
-#define NEW_MELANIN 0.6f
-#define REPIG_DAYS 7.0f
-#define SCAR_MELANIN_LOSS 0.25f /* the mature scar's hypopigmentation */
 
 /* One of the palette's tables over melanin factors (melanin_ratio,
  * epithelium) at a factor: log-linear between its samples, clamped to
@@ -615,8 +611,9 @@ static inline int maturation_px(const ctx *c, const look *l, size_t i, double po
      * as one more multiplier per channel, weighted in sRGB, made a saturated
      * orange patch of a dark skin; the young epithelium as a multiplier of
      * the texture, an orange ring round the red core at day 12) */
-    float mel = (NEW_MELANIN + (1.0f - NEW_MELANIN) * (1.0f - expf(-(float)age / REPIG_DAYS))) *
-                (1.0f + pih) * (1.0f - SCAR_MELANIN_LOSS * pale);
+    ss_repigmentation repig;
+    ss_repigmentation_default(&repig);
+    float mel = (float)ss_repigmentation_factor(&repig, age) * (1.0f + pih);
     float mr[3], epi[3], detail = upper_mod(c, i);
     at_melanin(P->melanin_ratio, mel, mr);
     at_melanin(P->epithelium, mel, epi);

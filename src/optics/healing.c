@@ -20,7 +20,12 @@
  *   PIH course         its time course after closure (ss_pih_course, fitted
  *                      to Danielsen et al. 2013) and the melanin factor it
  *                      gives (ss_pih_melanin_factor): one curve, so the two
- *                      paths darken a healed dark skin alike on every day.
+ *                      paths darken a healed dark skin alike on every day;
+ *   repigmentation     the rest of the healed epidermis's melanin
+ *                      (ss_repigmentation_factor): melanin-poor new
+ *                      epithelium repigmenting over a week, then the mature
+ *                      scar a little lighter; with PIH, the one melanin
+ *                      factor of both paths (ss_healed_melanin_factor).
  *
  * Gave up: one colour for both paths (abrasion's Kubelka-Munk palette in
  * `wound` too): `wound` draws the skin around the wound through the table,
@@ -85,4 +90,39 @@ double ss_pih_course(double days) {
 
 double ss_pih_melanin_factor(double prevalence, double days, double gain) {
     return 1 + gain * prevalence * ss_pih_course(days);
+}
+
+/* Repigmentation and the scar's melanin. New epithelium is melanin-poor:
+ * melanocytes migrate in from the wound margin and the surviving follicles
+ * over the first weeks (Chadwick, Heath & Shah 2012, "Abnormal pigmentation
+ * within cutaneous scars: a complication of wound healing", Indian J. Plast.
+ * Surg. 45: 403; its pattern varies from patient to patient); by a month the
+ * donor sites' pigmentation was back and above the adjacent skin's
+ * (Danielsen et al. 2013, above), so the repigmentation is near complete
+ * within that month (0.5 at closure, 10 days: ours, no clinical time constant
+ * found). The mature scar is paler than the skin, but mostly for optical and
+ * vascular reasons: pale surgical scars hold as many melanocytes, with melanin
+ * transferred as in the adjacent skin (Velangi & Rees 2001, "Why are scars
+ * pale?", Acta Derm. Venereol. 81: 326), and hypo- and hyperpigmented parts of
+ * burn scars the same melanocyte numbers at different activity (Carney et al.
+ * 2021, PLoS One 16: e0248985). So the scar's melanin loss is modest (a
+ * quarter, after the first month, over five months; the whitening of its
+ * dense collagen is each path's own optics), and at a year a dark skin's scar
+ * is slightly lighter than the skin or similar, as in the clinical picture. */
+void ss_repigmentation_default(ss_repigmentation *p) {
+    p->new_melanin = SS_REPIG_NEW_MELANIN;
+    p->repig_days = SS_REPIG_DAYS;
+    p->scar_melanin = SS_REPIG_SCAR_MELANIN;
+}
+
+double ss_repigmentation_factor(const ss_repigmentation *p, double days) {
+    double t = days > 0 ? days : 0;
+    double repig = p->new_melanin + (1 - p->new_melanin) * (1 - exp(-t / p->repig_days));
+    double pale = 1 - exp(-fmax(0.0, t - SS_SCAR_PALE_DELAY_DAYS) / SS_SCAR_PALE_DAYS);
+    return repig * (1 - (1 - p->scar_melanin) * pale);
+}
+
+double ss_healed_melanin_factor(const ss_repigmentation *p, double prevalence, double gain,
+                                double days) {
+    return ss_repigmentation_factor(p, days) * ss_pih_melanin_factor(prevalence, days, gain);
 }

@@ -5,7 +5,7 @@
  *   reg   = ramp(plasma)                the wound region (§4.1.8): tissue that was destroyed
  *   maturity m(a) = 1 - exp(-a / tau)   a = days since the column closed (observed)
  *   skin  = lerp(base texel, base mean, reg)     destroyed tissue loses its features
- *   melanin   = skin x cover x (reg: lerp(new_melanin, scar_melanin, m_pigment))
+ *   melanin   = skin x cover x (reg: repigmentation(age) x PIH(age), shared with abrasion)
  *   epidermis = lerp(floor, skin x (reg: lerp(new_epidermis, 1, m_epidermis)), cover)
  *   blood     = lerp(skin x capillary x (reg: lerp(1, scar_blood, scar x m_scar))
  *                    + young_blood x reg x cover x (1 - m_scar),  min(bed, cap),  open x reg),
@@ -283,6 +283,16 @@ double ss_wound_renderer_pih_factor(const ss_wound_renderer *r, double days) {
     return ss_pih_melanin_factor(r->pih, days, r->o.recipe.v[SS_WR_PIH_GAIN]);
 }
 
+/* The recipe's repigmentation (ss_repigmentation_factor's parameters). */
+static ss_repigmentation recipe_repigmentation(const double *v) {
+    return (ss_repigmentation){v[SS_WR_NEW_MELANIN], v[SS_WR_PIGMENT_DAYS], v[SS_WR_SCAR_MELANIN]};
+}
+
+double ss_wound_renderer_melanin_factor(const ss_wound_renderer *r, double days) {
+    ss_repigmentation p = recipe_repigmentation(r->o.recipe.v);
+    return ss_healed_melanin_factor(&p, r->pih, r->o.recipe.v[SS_WR_PIH_GAIN], days);
+}
+
 const ss_wound_textures *ss_wound_renderer_base(const ss_wound_renderer *r) { return &r->base; }
 
 ss_status ss_wound_renderer_set_columns(ss_wound_renderer *r, const ss_image *columns,
@@ -517,7 +527,6 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
     double regrown = reg * s->wounded;
     double m_scar = 1 - exp(-s->age / v[SS_WR_SCAR_DAYS]);
     double m_epi = 1 - exp(-s->age / v[SS_WR_EPIDERMIS_DAYS]);
-    double m_pig = 1 - exp(-s->age / v[SS_WR_PIGMENT_DAYS]);
     double scar = ramp(s->scar, 0, v[SS_WR_SCAR_DENSITY_HI]);
     float b[SS_BIO_NCHANNELS] = {0}, k[SS_BIO_NCHANNELS];
     for (int c = 0; c < SS_BIO_NCHANNELS; c++) k[c] = (float)lerp(skin[c], r->mean[c], reg);
@@ -533,10 +542,13 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
     /* both patchy, not one flat colour: PIH in macules (+-PATCHY at ~1.5 mm),
      * the young tissue's redness in blotches (at ~2 mm) */
     pih *= 1 + PATCHY * (2.0 * nz->thick - 1);
-    double mel =
-        k[SS_BIO_MELANIN] * cover *
-        lerp(1, lerp(v[SS_WR_NEW_MELANIN], v[SS_WR_SCAR_MELANIN], m_pig) * (1 + pih), regrown) *
-        lerp(1, v[SS_WR_KELOID_MELANIN], kel);
+    /* the regrown epidermis's melanin: the repigmentation shared with
+     * abrasion (ss_repigmentation_factor: melanin-poor at closure, back within
+     * weeks, a little lighter in the mature scar) times the PIH */
+    const ss_repigmentation repig = recipe_repigmentation(v);
+    double mel = k[SS_BIO_MELANIN] * cover *
+                 lerp(1, ss_repigmentation_factor(&repig, s->age) * (1 + pih), regrown) *
+                 lerp(1, v[SS_WR_KELOID_MELANIN], kel);
     double epi = lerp(
         EPI_FLOOR_CM,
         k[SS_BIO_EPIDERMIS_CM] * lerp(1, lerp(v[SS_WR_NEW_EPIDERMIS], 1, m_epi), regrown), cover);
