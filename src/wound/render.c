@@ -61,6 +61,10 @@
 #define WARP_FULL_PX 6.0
 /* The crust's edge: its coverage rises over this many mm from its edge. */
 #define EDGE_MM 0.4
+/* The open bed's edge: its coverage (the exposed dermis, the clot over it,
+ * the bed's blood and wetness, all one mask) rises over this many mm across
+ * the contour of the open columns (open_in, a signed distance). */
+#define BED_EDGE_MM 0.3
 /* A crust is granular (clotted cells, fibrin strands, dried serum at a few
  * tenths of a mm): its thickness varies by +-CRUST_GRAIN at ~0.6 mm, and the
  * edges of its serous patches are as ragged, not soft blobs. */
@@ -329,11 +333,12 @@ typedef struct texel_tissue {
     double crust_in;  /* mm from the crust's edge inwards (0 outside the crust) */
     double keloid_in; /* mm from the keloid's edge inwards (0 outside it) */
     double wound_in;  /* mm from the edge of the columns that were ever open inwards */
+    double open_in;   /* mm from the edge of the open bed inwards, negative outside it */
 } texel_tissue;
 
 /* Per column: mm from the crust's and from the keloid's edge inwards. */
 typedef struct edge_maps {
-    const float *crust_in, *keloid_in, *wound_in;
+    const float *crust_in, *keloid_in, *wound_in, *open_in;
 } edge_maps;
 
 /* On a mesh's UV layout: the same fields through a cubic B-spline (4 x 4
@@ -391,6 +396,7 @@ static void sample_tissue_smooth(const ss_wound_tissue *t, const edge_maps *em, 
     BS(em->crust_in, s->crust_in);
     BS(em->keloid_in, s->keloid_in);
     BS(em->wound_in, s->wound_in);
+    BS(em->open_in, s->open_in);
 #undef BS
 }
 
@@ -430,6 +436,7 @@ static void sample_tissue(const ss_wound_tissue *t, const edge_maps *em, double 
     s->crust_in = BL(em->crust_in);
     s->keloid_in = BL(em->keloid_in);
     s->wound_in = BL(em->wound_in);
+    s->open_in = BL(em->open_in);
 #undef BL
 }
 
@@ -517,8 +524,25 @@ static void keloid_structure(const double *v, const texel_tissue *s, const crust
 static void render_texel(const ss_wound_renderer *r, const float *skin, const crust_noise *nz,
                          const texel_tissue *s, double day, texel_out *o) {
     const double *v = r->o.recipe.v;
-    double cover = ramp(s->e, v[SS_WR_EPITHELIUM_LO], v[SS_WR_EPITHELIUM_HI]), open = 1 - cover;
     double reg = ramp(s->plasma, v[SS_WR_REGION_LO], v[SS_WR_REGION_HI]);
+    /* the open bed, one mask from one distance field: its coverage bed rises
+     * over BED_EDGE_MM across the contour of the open columns (open x region
+     * >= 0.5 there), the same width in mm at every texture size; the exposed
+     * dermis (no epidermis, no melanin: 1 - cover) and everything laid
+     * on the bed (the clot, its blood, wetness: open x reg = bed, the open
+     * bed being wound region) follow it. Before, cover came from the
+     * epithelium and the clot's coverage from epithelium x region, two ramps
+     * of two bilinear fields: where the one had fallen and the other not yet
+     * risen, a 1-2 texel rim of pale-pink dermis showed round the clot on
+     * dark skin */
+    double bed = ramp(s->open_in, -0.5 * BED_EDGE_MM, 0.5 * BED_EDGE_MM);
+    /* the dermis is bared under the clot's inner half of the edge only: the
+     * table's colour of a half-bared dermis (half the melanin) is lighter
+     * than both the skin and the clot, so bared where the clot covered less
+     * than half it drew a faint light line (L* +4 on dark skin) */
+    double cover = 1 - ramp(s->open_in, 0, 0.5 * BED_EDGE_MM);
+    reg = fmax(reg, bed);
+    double open = reg > 0 ? bed / reg : 0;
     /* the epidermis that was destroyed and grew back: the region where it was
      * ever open. Where the region spread over skin that never opened (a
      * keloid growing beyond the wound) the epidermis is the skin's own, and
@@ -748,6 +772,25 @@ static ss_image *edge_depth(const ss_wound_tissue *t, const float *map, double s
     return d;
 }
 
+/* Per column: the signed mm from the edge of a map's region (map >=
+ * threshold), positive inside, negative outside, about 0 halfway between
+ * the last column in and the first out; +-1e3 where there is no edge. */
+static ss_image *signed_edge_depth(const ss_wound_tissue *t, const float *map, double threshold,
+                                   ss_error *err) {
+    ss_image *in = edge_depth(t, map, 1.0, threshold, err);
+    size_t n = (size_t)t->nx * (size_t)t->ny;
+    float *flip = in ? calloc(n ? n : 1, sizeof *flip) : NULL;
+    for (size_t i = 0; flip && i < n; i++) flip[i] = map[i] >= threshold ? 0.f : 1.f;
+    ss_image *out = flip ? edge_depth(t, flip, 1.0, 0.5, err) : NULL;
+    if (in && !flip) ss_error_set(err, SS_ERR_NOMEM, "out of memory");
+    free(flip);
+    for (size_t i = 0; out && i < n; i++)
+        in->data[i] = map[i] >= threshold ? in->data[i] : -out->data[i];
+    ss_image_free(out);
+    if (!out) ss_image_free(in), in = NULL;
+    return in;
+}
+
 ss_status ss_wound_render(ss_wound_renderer *r, const ss_wound_tissue *t,
                           const ss_image *deformation, ss_wound_textures *out, ss_error *err) {
     return ss_wound_render_poll(r, t, deformation, out, NULL, NULL, err);
@@ -782,18 +825,27 @@ ss_status ss_wound_render_poll(ss_wound_renderer *r, const ss_wound_tissue *t,
         return err->code ? err->code : SS_ERR_NOMEM;
     }
     /* the columns that were ever open: their age is not the intact sentinel */
-    float *opened = malloc(ncol * sizeof *opened);
+    float *opened = calloc(ncol ? ncol : 1, sizeof *opened);
     for (size_t i = 0; opened && i < ncol; i++)
         opened[i] = t->age_days[i] < SS_WOUND_AGE_INTACT ? 1.f : 0.f;
     ss_image *wound_in = opened ? edge_depth(t, opened, 1.0, 0.5, err) : NULL;
+    /* the open bed's columns: open x region (the ramps of the epithelium and
+     * the plasma), its edge as one signed distance */
+    const double *rv = r->o.recipe.v;
+    for (size_t i = 0; wound_in && i < ncol; i++)
+        opened[i] =
+            (float)((1 - ramp(t->epithelium[i], rv[SS_WR_EPITHELIUM_LO], rv[SS_WR_EPITHELIUM_HI])) *
+                    ramp(t->plasma[i], rv[SS_WR_REGION_LO], rv[SS_WR_REGION_HI]));
+    ss_image *open_in = wound_in ? signed_edge_depth(t, opened, 0.5, err) : NULL;
     free(opened);
-    if (!wound_in) {
+    if (!open_in) {
         free(healthy);
         ss_image_free(crust_in);
         ss_image_free(keloid_in);
+        ss_image_free(wound_in);
         return err->code ? err->code : ss_error_set(err, SS_ERR_NOMEM, "out of memory");
     }
-    const edge_maps em = {crust_in->data, keloid_in->data, wound_in->data};
+    const edge_maps em = {crust_in->data, keloid_in->data, wound_in->data, open_in->data};
     const double texel_mm = r->o.side_mm / n, vessel_mm = r->o.recipe.v[SS_WR_KELOID_VESSEL_MM];
     const double side_x = t->nx * t->dx_mm, side_y = t->ny * t->dx_mm;
     /* the jitter's noise (0.6 mm) needs a few texels per period; where the
@@ -909,6 +961,7 @@ ss_status ss_wound_render_poll(ss_wound_renderer *r, const ss_wound_tissue *t,
     ss_image_free(crust_in);
     ss_image_free(keloid_in);
     ss_image_free(wound_in);
+    ss_image_free(open_in);
     if (cancelled) return ss_error_set(err, SS_ERR_RUNTIME, "wound render: cancelled");
     /* height in mm -> normal: slope per texel times texels per mm */
     ss_height_to_normal(out->height, (float)(n / r->o.side_mm), out->normal);
