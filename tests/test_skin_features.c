@@ -510,6 +510,37 @@ static void test_lut_matches_table(void **state) {
     ss_mm_table_free(t);
 }
 
+/* The cached lookup (ss_skin_lut_lookup_cached, the wound renderer's per
+ * thread) gives exactly the uncached values, bit for bit: points in a few
+ * neighbouring cells (cache hits) and scattered ones (misses and slot
+ * collisions), and a NULL cache. */
+static void test_lut_cache_exact(void **state) {
+    (void)state;
+    ss_error err;
+    ss_mm_table *t = load_table();
+    ss_skin_lut *lut = ss_skin_lut_create(t, &err);
+    ss_skin_lut_cache *c = ss_skin_lut_cache_create();
+    assert_non_null(c);
+    for (int k = 0; k < 4000; k++) {
+        float xf[6], a[5], b[5], d[5];
+        for (int ax = 0; ax < SS_MM_NAXES; ax++) {
+            double lo, hi;
+            ss_mm_axis_default_range(ax, &lo, &hi);
+            double u = ss_rng_uniform(5, 1, (uint64_t)k * 8 + ax);
+            if (k % 2) u = 0.4 + 0.05 * u; /* near one point: repeated cells */
+            xf[ax] = (float)(lo + u * (hi - lo));
+        }
+        ss_skin_lut_lookup(lut, xf, a);
+        ss_skin_lut_lookup_cached(lut, c, xf, b);
+        ss_skin_lut_lookup_cached(lut, NULL, xf, d);
+        assert_memory_equal(a, b, sizeof a);
+        assert_memory_equal(a, d, sizeof a);
+    }
+    ss_skin_lut_cache_free(c);
+    ss_skin_lut_free(lut);
+    ss_mm_table_free(t);
+}
+
 /* Another table shape plugs in: single-sample axes and other sample counts,
  * entries a known function of the node; the lookup equals the table's. */
 static void test_lut_other_table(void **state) {
@@ -1062,6 +1093,7 @@ int main(void) {
         cmocka_unit_test(test_determinism_and_roundtrip),
         cmocka_unit_test(test_poll_cancel),
         cmocka_unit_test(test_lut_matches_table),
+        cmocka_unit_test(test_lut_cache_exact),
         cmocka_unit_test(test_lut_other_table),
         cmocka_unit_test(test_mm_defined_variation),
         cmocka_unit_test(test_surface_state),

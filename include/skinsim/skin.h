@@ -256,6 +256,16 @@ void ss_skin_lut_lookup(const ss_skin_lut *l, const float x[6], float out[5]);
  * roughness from the table's surface curve, the base colour scaled to keep
  * the albedo (ss_mm_surface_lobe); out[5..7] the subsurface radius (cm). */
 void ss_skin_lut_lookup_surface(const ss_skin_lut *l, const float x[6], float sigma, float out[8]);
+/* A lookup cache for one thread: the corners of the last few table cells
+ * (gathering them is most of a lookup). Lookups through it give exactly
+ * ss_skin_lut_lookup's values, faster where neighbouring texels fall in the
+ * same cells. NULL from create when out of memory; a NULL cache in the
+ * lookup is ss_skin_lut_lookup. */
+typedef struct ss_skin_lut_cache ss_skin_lut_cache;
+ss_skin_lut_cache *ss_skin_lut_cache_create(void);
+void ss_skin_lut_cache_free(ss_skin_lut_cache *c);
+void ss_skin_lut_lookup_cached(const ss_skin_lut *l, ss_skin_lut_cache *c, const float x[6],
+                               float out[5]);
 
 typedef struct ss_skin_maps {
     ss_image *base_color;           /* linear RGB (extra colour composited) */

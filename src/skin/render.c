@@ -222,6 +222,29 @@ void ss_skin_lut_lookup(const ss_skin_lut *l, const float x[6], float out[5]) {
     memcpy(out, r, 5 * sizeof(float));
 }
 
+struct ss_skin_lut_cache {
+    lut_cache c;
+};
+
+ss_skin_lut_cache *ss_skin_lut_cache_create(void) {
+    ss_skin_lut_cache *c = malloc(sizeof *c);
+    if (c) lut_cache_init(&c->c);
+    return c;
+}
+
+void ss_skin_lut_cache_free(ss_skin_lut_cache *c) { free(c); }
+
+void ss_skin_lut_lookup_cached(const ss_skin_lut *l, ss_skin_lut_cache *c, const float x[6],
+                               float out[5]) {
+    if (!c) {
+        ss_skin_lut_lookup(l, x, out);
+        return;
+    }
+    float r[LUT_F];
+    lut_lookup(l, &c->c, x, r);
+    memcpy(out, r, 5 * sizeof(float));
+}
+
 void ss_skin_lut_lookup_surface(const ss_skin_lut *l, const float x[6], float sigma, float out[8]) {
     struct {
         size_t base[1];

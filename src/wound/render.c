@@ -34,6 +34,7 @@
  * (the grid is 0.5 mm; bilinear keeps edges soft, as healing edges are). */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
+#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -153,11 +154,12 @@ typedef struct lookup5 {
 } lookup5;
 
 /* One texel's bio parameters -> base colour and roughness. */
-static void bio_to_render(const ss_skin_lut *lut, const float *b, lookup5 *out) {
+static void bio_to_render(const ss_skin_lut *lut, ss_skin_lut_cache *lc, const float *b,
+                          lookup5 *out) {
     float x[6] = {b[SS_BIO_MELANIN],     b[SS_BIO_PHEOMELANIN], b[SS_BIO_BLOOD],
                   b[SS_BIO_OXYGENATION], b[SS_BIO_SC_CM],       b[SS_BIO_EPIDERMIS_CM]};
     float r[5];
-    ss_skin_lut_lookup(lut, x, r);
+    ss_skin_lut_lookup_cached(lut, lc, x, r);
     for (int c = 0; c < 3; c++) out->rgb[c] = r[c] < 0 ? 0 : r[c] > 1 ? 1 : r[c];
     out->roughness = r[4] < 0 ? 0 : r[4] > 1 ? 1 : r[4];
 }
@@ -521,8 +523,8 @@ static void keloid_structure(const double *v, const texel_tissue *s, const crust
     k->raise = 1 - v[SS_WR_KELOID_NODULES] * (1 - 0.5 * k->mature) * nz->nodule;
 }
 
-static void render_texel(const ss_wound_renderer *r, const float *skin, const crust_noise *nz,
-                         const texel_tissue *s, double day, texel_out *o) {
+static void render_texel(const ss_wound_renderer *r, ss_skin_lut_cache *lc, const float *skin,
+                         const crust_noise *nz, const texel_tissue *s, double day, texel_out *o) {
     const double *v = r->o.recipe.v;
     double reg = ramp(s->plasma, v[SS_WR_REGION_LO], v[SS_WR_REGION_HI]);
     /* the open bed, one mask from one distance field: its coverage bed rises
@@ -625,7 +627,7 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
     b[SS_BIO_SC_CM] = (float)sc;
     b[SS_BIO_EPIDERMIS_CM] = (float)epi;
     lookup5 l;
-    bio_to_render(r->lut, b, &l);
+    bio_to_render(r->lut, lc, b, &l);
     /* dense mature collagen scatters more: a lift of the albedo towards a
      * white dermis seen through this texel's own epidermis. Its filter is the
      * table's: the bloodless albedo with this melanin over the one without
@@ -648,9 +650,9 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
         memcpy(bw, b, sizeof bw);
         bw[SS_BIO_BLOOD] = 0;
         lookup5 with, without;
-        bio_to_render(r->lut, bw, &with);
+        bio_to_render(r->lut, lc, bw, &with);
         bw[SS_BIO_MELANIN] = (float)MELANIN_FLOOR;
-        bio_to_render(r->lut, bw, &without);
+        bio_to_render(r->lut, lc, bw, &without);
         for (int c = 0; c < 3; c++) {
             double filt = without.rgb[c] > 1e-6 ? clamp01(with.rgb[c] / without.rgb[c]) : 1;
             skin_rgb[c] = clamp01(l.rgb[c] + white * (filt - l.rgb[c]));
@@ -751,6 +753,20 @@ static void render_texel(const ss_wound_renderer *r, const float *skin, const cr
     o->height_mm = k[SS_BIO_HEIGHT_MM] - v[SS_WR_DEPTH_SCALE] * s->depth * (1 - fill) + clot +
                    bedtex * 0.02 * (dots - 0.5) + thick * edge_c * (1 - 0.7 * crack) +
                    v[SS_WR_CRUST_LIFT_MM] * lift + keloid;
+}
+
+/* The keloid's vessels at texel (x, y): trunks, and branches near them, as
+ * the coverage of lines of physical width (vessel_line). Only needed where
+ * the keloid's field is non-zero: elsewhere keloid_structure's kel is 0 and
+ * the vessels' coverage with it (the same values, two noise gradients
+ * fewer per texel). */
+static void keloid_vessels(const ss_wound_renderer *r, int x, int y, double texel_mm,
+                           double vessel_mm, crust_noise *nz) {
+    size_t i = (size_t)y * (size_t)r->o.size + (size_t)x;
+    nz->trunk = (float)(vessel_line(r->vessel[0], x, y, texel_mm, vessel_mm) *
+                        ramp(r->mottle->data[i], 0.3, 0.6));
+    nz->branch = (float)(vessel_line(r->vessel[1], x, y, texel_mm, 0.5 * vessel_mm) *
+                         (1 - ramp(fabs(r->vessel[0]->data[i] - 0.5), 0.03, 0.1)));
 }
 
 /* Per column: mm from the edge of a map's region inwards (0 outside it; the
@@ -862,10 +878,17 @@ ss_status ss_wound_render_poll(ss_wound_renderer *r, const ss_wound_tissue *t,
      * change no value) */
     const int band = fn ? (n / 32 > 64 ? n / 32 : 64) : n;
     int cancelled = 0;
+    /* a table-lookup cache per thread (neighbouring texels share cells; the
+     * values are the uncached lookup's: a thread without one looks up
+     * uncached) */
+    const int nthreads = omp_get_max_threads();
+    ss_skin_lut_cache **caches = calloc((size_t)nthreads, sizeof *caches);
+    for (int k = 0; caches && k < nthreads; k++) caches[k] = ss_skin_lut_cache_create();
     for (int yb = 0; yb < n && !cancelled; yb += band) {
         const int ye = n - yb > band ? yb + band : n;
 #pragma omp parallel for schedule(dynamic, 8)
         for (int y = yb; y < ye; y++) {
+            ss_skin_lut_cache *lc = caches ? caches[omp_get_thread_num()] : NULL;
             for (int x = 0; x < n; x++) {
                 size_t i = (size_t)y * (size_t)n + (size_t)x;
                 double u = (x + 0.5) / n, vv = (y + 0.5) / n, dz = 0;
@@ -919,11 +942,9 @@ ss_status ss_wound_render_poll(ss_wound_renderer *r, const ss_wound_tissue *t,
                                   0,
                                   0,
                                   r->nodule->data[i]};
-                /* the keloid's vessels: trunks, and branches near them */
-                nz.trunk = (float)(vessel_line(r->vessel[0], x, y, texel_mm, vessel_mm) *
-                                   ramp(r->mottle->data[i], 0.3, 0.6));
-                nz.branch = (float)(vessel_line(r->vessel[1], x, y, texel_mm, 0.5 * vessel_mm) *
-                                    (1 - ramp(fabs(r->vessel[0]->data[i] - 0.5), 0.03, 0.1)));
+                /* the keloid's vessels only where a sample has keloid (elsewhere
+                 * kel is 0 and so is their coverage: the same values) */
+                int vessels_done = 0;
                 if (r->columns) { /* the mean over a box of EDGE_BOX_MM (module comment) */
                     o = (texel_out){{0, 0, 0}, 0, 0};
                     for (int q = 0; q < BOX_N * BOX_N; q++) {
@@ -934,21 +955,24 @@ ss_status ss_wound_render_poll(ss_wound_renderer *r, const ss_wound_tissue *t,
                         sy = sy < 0 ? 0 : sy > t->ny - 1 ? t->ny - 1 : sy;
                         texel_out os;
                         sample_tissue_smooth(t, &em, sx, sy, &s);
+                        if (s.keloid > 0 && !vessels_done)
+                            keloid_vessels(r, x, y, texel_mm, vessel_mm, &nz), vessels_done = 1;
                         if (tissue_intact(&s)) { /* the base skin itself: no seam at the rim */
                             for (int c = 0; c < 3; c++)
                                 os.rgb[c] = r->base.base_color->data[i * 3 + c];
                             os.roughness = r->base.roughness->data[i];
                             os.height_mm = r->base.height->data[i];
                         } else
-                            render_texel(r, r->skin->data + i * SS_BIO_NCHANNELS, &nz, &s, t->day,
-                                         &os);
+                            render_texel(r, lc, r->skin->data + i * SS_BIO_NCHANNELS, &nz, &s,
+                                         t->day, &os);
                         for (int c = 0; c < 3; c++) o.rgb[c] += os.rgb[c] / (BOX_N * BOX_N);
                         o.roughness += os.roughness / (BOX_N * BOX_N);
                         o.height_mm += os.height_mm / (BOX_N * BOX_N);
                     }
                 } else {
                     sample_tissue(t, &em, mx, my, &s);
-                    render_texel(r, r->skin->data + i * SS_BIO_NCHANNELS, &nz, &s, t->day, &o);
+                    if (s.keloid > 0) keloid_vessels(r, x, y, texel_mm, vessel_mm, &nz);
+                    render_texel(r, lc, r->skin->data + i * SS_BIO_NCHANNELS, &nz, &s, t->day, &o);
                 }
                 for (int c = 0; c < 3; c++) out->base_color->data[i * 3 + c] = (float)o.rgb[c];
                 out->roughness->data[i] = (float)o.roughness;
@@ -957,6 +981,8 @@ ss_status ss_wound_render_poll(ss_wound_renderer *r, const ss_wound_tissue *t,
         }
         if (fn && fn(user, 0.95 * ye / n)) cancelled = 1;
     }
+    for (int k = 0; caches && k < nthreads; k++) ss_skin_lut_cache_free(caches[k]);
+    free(caches);
     free(healthy);
     ss_image_free(crust_in);
     ss_image_free(keloid_in);
