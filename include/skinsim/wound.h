@@ -185,18 +185,65 @@ void ss_blood_layer_clot(double oxygenation, ss_blood_layer *l);
  * per linear-sRGB channel, tabulated over thickness by Monte Carlo transport
  * of the optics model at 400..700 nm. */
 #define SS_LAYER_NTHICK 10
+/* the transport's wavelengths: SS_LAYER_NWL bins, 400..700 nm every 20 nm */
+#define SS_LAYER_NWL 16
 typedef struct ss_layer_table {
     double thickness_mm[SS_LAYER_NTHICK];
     double reflect[SS_LAYER_NTHICK][3], transmit[SS_LAYER_NTHICK][3];
+    /* the same per wavelength, before the conversion to RGB */
+    double reflect_wl[SS_LAYER_NTHICK][SS_LAYER_NWL], transmit_wl[SS_LAYER_NTHICK][SS_LAYER_NWL];
 } ss_layer_table;
 ss_status ss_layer_table_build(const ss_blood_layer *l, uint64_t photons, uint64_t seed,
                                ss_layer_table *out, ss_error *err);
 /* R and T at a thickness (linear between samples, constant beyond the last). */
 void ss_layer_table_eval(const ss_layer_table *t, double thickness_mm, double reflect[3],
                          double transmit[3]);
+/* The same per wavelength (SS_LAYER_NWL bins). */
+void ss_layer_table_eval_wl(const ss_layer_table *t, double thickness_mm,
+                            double reflect[SS_LAYER_NWL], double transmit[SS_LAYER_NWL]);
 /* Albedo of the layer over a skin of albedo `skin` (adding: R + T^2 A / (1 - R A)). */
 void ss_layer_over(const double reflect[3], const double transmit[3], const double skin[3],
                    double out[3]);
+
+/* ---- a blood layer over a table colour, per wavelength (src/wound/bed_spectrum.c) ---- */
+/* The reflectance spectra of the open bed (no epidermis, no melanin: the
+ * bio parameters `bed`) at the ModelMatch table's blood samples, by the
+ * optics model's transport, with what turns a spectrum into linear sRGB. A
+ * table colour at a blood fraction stands for the spectrum there times a
+ * smooth factor (quadratic in wavelength) that gives it exactly that colour. */
+#define SS_BED_MAX_BLOOD 16
+typedef struct ss_bed_spectra {
+    int nblood;
+    double blood[SS_BED_MAX_BLOOD];                  /* strictly increasing */
+    double reflect[SS_BED_MAX_BLOOD][SS_LAYER_NWL];  /* the transport's diffuse reflectance */
+    double moment[SS_BED_MAX_BLOOD][3][3];           /* sum_w weight[w][i] reflect x^j */
+    double wavelength_nm[SS_LAYER_NWL], x[SS_LAYER_NWL]; /* x = (wl - 550) / 150 */
+    double weight[SS_LAYER_NWL][3]; /* linear sRGB of each bin: rgb = sum_w weight[w] S[w] */
+} ss_bed_spectra;
+/* Runs the transport of `bed` at each of the nblood blood fractions
+ * (1..SS_BED_MAX_BLOOD, strictly increasing), `photons` packets per
+ * wavelength. */
+ss_status ss_bed_spectra_build(const ss_bio_params *bed, const double *blood, int nblood,
+                               uint64_t photons, uint64_t seed, ss_bed_spectra *out,
+                               ss_error *err);
+/* The smooth spectrum standing for the colour rgb (linear sRGB) at a blood
+ * fraction (clamped to the samples; between them the spectra are linear):
+ * its linear sRGB is rgb (to rounding). Returns 1, or 0 (out untouched) when
+ * no such factor exists (a singular system: a black colour, say). */
+int ss_bed_spectrum(const ss_bed_spectra *s, double blood, const double rgb[3],
+                    double out[SS_LAYER_NWL]);
+/* The layer of the table t, thickness_mm thick, over the spectrum `in`, by
+ * the adding formula per wavelength (out may be in). */
+void ss_layer_add_wl(const ss_layer_table *t, double thickness_mm, const double in[SS_LAYER_NWL],
+                     double out[SS_LAYER_NWL]);
+/* A spectrum's linear sRGB (CIE 1931 observer, D65; white -> (1, 1, 1)). */
+void ss_bed_spectra_to_rgb(const ss_bed_spectra *s, const double spectrum[SS_LAYER_NWL],
+                           double rgb[3]);
+/* The layer of the table t, thickness_mm thick, over that spectrum, by the
+ * adding formula per wavelength, in linear sRGB; at thickness 0 it is rgb.
+ * Falls back to ss_layer_over in RGB where ss_bed_spectrum has no spectrum. */
+void ss_layer_over_spectral(const ss_layer_table *t, double thickness_mm, const ss_bed_spectra *s,
+                            double blood, const double rgb[3], double out[3]);
 
 /* ---- the renderer --------------------------------------------------------------------- */
 

@@ -34,8 +34,10 @@
  * tabulated over SS_LAYER_NTHICK thicknesses by Monte Carlo at 400..700 nm and
  * converted to linear sRGB; a texel then adds the layer to its skin albedo A
  * with the adding formula R + T^2 A / (1 - R A) (Kubelka 1954; it treats the
- * layer as symmetric and combines in RGB instead of per wavelength, which
- * the docs state as an approximation). */
+ * layer as symmetric). In RGB that is an approximation (the docs state it),
+ * kept for the crust; the table keeps R and T per wavelength too, and the
+ * open bed's blood (its capillary loops, the fresh clot) is added per
+ * wavelength (bed_spectrum.c), where a thin layer of blood is not orange. */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdlib.h>
@@ -48,7 +50,7 @@ static const double THICK_MM[SS_LAYER_NTHICK] = {0,   0.005, 0.01, 0.02, 0.05,
 #define SKIN_N 1.4
 #define WL_MIN 400.0
 #define WL_STEP 20.0
-#define NWL 16
+#define NWL SS_LAYER_NWL
 
 void ss_blood_layer_scab(double hb_factor, ss_blood_layer *l) {
     *l = (ss_blood_layer){hb_factor, 0.0, 1500.0, 0.9, 1.45, 0.0};
@@ -101,6 +103,7 @@ ss_status ss_layer_table_build(const ss_blood_layer *l, uint64_t photons, uint64
     }
     /* the bare skin: R = 0, T = 1 */
     for (int c = 0; c < 3; c++) out->transmit[0][c] = 1;
+    for (int w = 0; w < NWL; w++) out->transmit_wl[0][w] = 1;
     /* one Monte Carlo run per (thickness, wavelength), in parallel: each run
      * is smaller than one block of the transport, so it runs on one thread */
     double R[SS_LAYER_NTHICK][NWL], T[SS_LAYER_NTHICK][NWL];
@@ -137,6 +140,8 @@ ss_status ss_layer_table_build(const ss_blood_layer *l, uint64_t photons, uint64
             st = sts[jb];
         }
     for (int k = 1; k < SS_LAYER_NTHICK && !st; k++) {
+        memcpy(out->reflect_wl[k], R[k], sizeof R[k]);
+        memcpy(out->transmit_wl[k], T[k], sizeof T[k]);
         st = ss_spectrum_to_srgb_linear_with(d, wl, R[k], NWL, out->reflect[k], err);
         if (!st) st = ss_spectrum_to_srgb_linear_with(d, wl, T[k], NWL, out->transmit[k], err);
         for (int c = 0; c < 3 && !st; c++) { /* colour matrices can dip below 0 */
@@ -148,14 +153,32 @@ ss_status ss_layer_table_build(const ss_blood_layer *l, uint64_t photons, uint64
     return st;
 }
 
-void ss_layer_table_eval(const ss_layer_table *t, double thickness_mm, double reflect[3],
-                         double transmit[3]) {
+/* The sample at or below the thickness and the fraction towards the next. */
+static int thickness_sample(const ss_layer_table *t, double thickness_mm, double *f) {
     int k = 0;
     if (!(thickness_mm > 0)) thickness_mm = 0;
     while (k < SS_LAYER_NTHICK - 2 && thickness_mm > t->thickness_mm[k + 1]) k++;
     double a = t->thickness_mm[k], b = t->thickness_mm[k + 1];
-    double f = (thickness_mm - a) / (b - a);
-    if (f > 1) f = 1;
+    *f = (thickness_mm - a) / (b - a);
+    if (*f > 1) *f = 1;
+    return k;
+}
+
+void ss_layer_table_eval_wl(const ss_layer_table *t, double thickness_mm,
+                            double reflect[SS_LAYER_NWL], double transmit[SS_LAYER_NWL]) {
+    double f;
+    int k = thickness_sample(t, thickness_mm, &f);
+    for (int w = 0; w < SS_LAYER_NWL; w++) {
+        reflect[w] = t->reflect_wl[k][w] + f * (t->reflect_wl[k + 1][w] - t->reflect_wl[k][w]);
+        transmit[w] =
+            t->transmit_wl[k][w] + f * (t->transmit_wl[k + 1][w] - t->transmit_wl[k][w]);
+    }
+}
+
+void ss_layer_table_eval(const ss_layer_table *t, double thickness_mm, double reflect[3],
+                         double transmit[3]) {
+    double f;
+    int k = thickness_sample(t, thickness_mm, &f);
     for (int c = 0; c < 3; c++) {
         reflect[c] = t->reflect[k][c] + f * (t->reflect[k + 1][c] - t->reflect[k][c]);
         transmit[c] = t->transmit[k][c] + f * (t->transmit[k + 1][c] - t->transmit[k][c]);

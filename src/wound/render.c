@@ -114,6 +114,7 @@ struct ss_wound_renderer {
     ss_image *nodule;    /* value noise at KELOID_NODULE_MM: the keloid's uneven raise */
     double pih;          /* the skin type's rate of post-inflammatory hyperpigmentation */
     double blood_cap;    /* the table's largest blood fraction: blood above it is a layer */
+    ss_bed_spectra bed;  /* the open bed's spectra: its blood layers added per wavelength */
     ss_wound_textures base;
     ss_image *columns; /* NULL: the flat block; else tissue-map coordinates per texel */
 };
@@ -165,6 +166,27 @@ static void bio_to_render(const ss_skin_lut *lut, ss_skin_lut_cache *lc, const f
 }
 
 /* ---- create ----------------------------------------------------------------------------- */
+
+/* The open bed's reflectance spectra (bed_spectrum.c) at the table's blood
+ * samples (at most SS_BED_MAX_BLOOD of them, evenly picked, both ends kept):
+ * the bed's bio parameters (no melanin: the table's least, the floors of
+ * the epidermis and stratum corneum, the bed's oxygenation, the skin's mean
+ * pheomelanin ratio), the table's base pigments. */
+static ss_status build_bed_spectra(ss_wound_renderer *r, ss_error *err) {
+    const ss_mm_table *t = r->o.table;
+    int n = t->nsamples[SS_MM_AXIS_BLOOD], m = n < SS_BED_MAX_BLOOD ? n : SS_BED_MAX_BLOOD;
+    double blood[SS_BED_MAX_BLOOD];
+    for (int k = 0; k < m; k++)
+        blood[k] = t->axis[SS_MM_AXIS_BLOOD][m > 1 ? (int)lround((double)k * (n - 1) / (m - 1)) : 0];
+    ss_bio_params bed;
+    ss_bio_params_default(&bed);
+    bed.melanin = t->axis[SS_MM_AXIS_MELANIN][0];
+    bed.pheomelanin_ratio = fmin(1, fmax(0, r->mean[SS_BIO_PHEOMELANIN]));
+    bed.oxygenation = fmin(1, fmax(0, r->o.recipe.v[SS_WR_BED_OXYGENATION]));
+    bed.sc_thickness_cm = SC_FLOOR_CM;
+    bed.epidermis_thickness_cm = EPI_FLOOR_CM;
+    return ss_bed_spectra_build(&bed, blood, m, r->o.scab_photons, r->o.seed + 4000, &r->bed, err);
+}
 
 /* The base skin's textures are `skinsim skin`'s render maps of the bio map. */
 static ss_status render_base(ss_wound_renderer *r, ss_error *err) {
@@ -220,6 +242,7 @@ ss_status ss_wound_renderer_create(const ss_wound_render_options *o, ss_wound_re
     if (!st) /* as a float, the lookup's own axis value */
         r->blood_cap =
             (float)o->table->axis[SS_MM_AXIS_BLOOD][o->table->nsamples[SS_MM_AXIS_BLOOD] - 1];
+    if (!st) st = build_bed_spectra(r, err);
     if (!st && !(r->crust = ss_image_create(o->size, o->size, 1, err))) st = err->code;
     if (!st) st = ss_wound__noise(o->size, o->side_mm, 1.5, 2, o->seed, 201, r->crust, err);
     if (!st && !(r->mottle = ss_image_create(o->size, o->size, 1, err))) st = err->code;
@@ -640,12 +663,23 @@ static void render_texel(const ss_wound_renderer *r, ss_skin_lut_cache *lc, cons
         v[SS_WR_SCAR_WHITENING] * regrown * scar * m_scar * cover * (1 - kel * (1 - kt.mature));
     double skin_rgb[3] = {l.rgb[0], l.rgb[1], l.rgb[2]};
     double R[3], T[3], R2[3], T2[3], R3[3], T3[3], mid[3];
-    if (loops > 0) {
+    /* the bed's blood layers are added per wavelength (bed_spectrum.c) to
+     * the spectrum standing for the table's colour, which carries through
+     * loops, clot and exudate (spec: A holds skin_rgb's spectrum) */
+    double A[SS_LAYER_NWL], A1[SS_LAYER_NWL];
+    int spec = 0;
+    if (loops > 0 && (spec = ss_bed_spectrum(&r->bed, b[SS_BIO_BLOOD], l.rgb, A))) {
+        ss_layer_add_wl(&r->loops, loops, A, A1);
+        for (int w = 0; w < SS_LAYER_NWL; w++) A[w] = lerp(A[w], A1[w], open * reg);
+        ss_bed_spectra_to_rgb(&r->bed, A, mid);
+        for (int c = 0; c < 3; c++) skin_rgb[c] = l.rgb[c] = mid[c];
+    } else if (loops > 0) { /* no spectrum for this colour: the layer in RGB */
         ss_layer_table_eval(&r->loops, loops, R, T);
         ss_layer_over(R, T, l.rgb, mid);
         for (int c = 0; c < 3; c++) skin_rgb[c] = l.rgb[c] = lerp(l.rgb[c], mid[c], open * reg);
     }
     if (white > 0) {
+        spec = 0; /* skin_rgb changes below */
         float bw[SS_BIO_NCHANNELS];
         memcpy(bw, b, sizeof bw);
         bw[SS_BIO_BLOOD] = 0;
@@ -701,11 +735,22 @@ static void render_texel(const ss_wound_renderer *r, ss_skin_lut_cache *lc, cons
     double clot_full = fmin(room, CLOT_MAX_MM) * v[SS_WR_CLOT_SCALE] * pool, a_clot = open * reg;
     double clot = a_clot * clot_full;
     double exudate = bedtex * 0.04 * ramp(nz->thick, 0.45, 0.8) * (1 - exp(-day / 1.0));
-    ss_layer_table_eval(&r->clot, clot_full, R, T);
-    ss_layer_over(R, T, skin_rgb, mid);
-    for (int c = 0; c < 3; c++) mid[c] = lerp(skin_rgb[c], mid[c], a_clot);
-    ss_layer_table_eval(&r->serous, exudate, R, T);
-    ss_layer_over(R, T, mid, mid);
+    int clotted = clot_full > 0 && a_clot > 0;
+    if ((clotted || exudate > 0) &&
+        (spec || (spec = ss_bed_spectrum(&r->bed, b[SS_BIO_BLOOD], skin_rgb, A)))) {
+        if (clotted) {
+            ss_layer_add_wl(&r->clot, clot_full, A, A1);
+            for (int w = 0; w < SS_LAYER_NWL; w++) A[w] = lerp(A[w], A1[w], a_clot);
+        }
+        if (exudate > 0) ss_layer_add_wl(&r->serous, exudate, A, A);
+        ss_bed_spectra_to_rgb(&r->bed, A, mid);
+    } else { /* none, or no spectrum for this colour: in RGB (bare: mid = skin_rgb) */
+        ss_layer_table_eval(&r->clot, clot_full, R, T);
+        ss_layer_over(R, T, skin_rgb, mid);
+        for (int c = 0; c < 3; c++) mid[c] = lerp(skin_rgb[c], mid[c], a_clot);
+        ss_layer_table_eval(&r->serous, exudate, R, T);
+        ss_layer_over(R, T, mid, mid);
+    }
     /* the crust: the fresh one as whole blood of the same haemoglobin per
      * area (hb_factor x the thickness), the aged one the dried-blood layer */
     ss_layer_table_eval(&r->clot, thick * v[SS_WR_SCAB_HB_FACTOR], R3, T3);
