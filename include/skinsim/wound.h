@@ -205,33 +205,37 @@ void ss_layer_table_eval_wl(const ss_layer_table *t, double thickness_mm,
 void ss_layer_over(const double reflect[3], const double transmit[3], const double skin[3],
                    double out[3]);
 
-/* ---- a blood layer over a table colour, per wavelength (src/wound/bed_spectrum.c) ---- */
-/* The reflectance spectra of the open bed (no epidermis, no melanin: the
- * bio parameters `bed`) at the ModelMatch table's blood samples, by the
- * optics model's transport, with what turns a spectrum into linear sRGB. A
- * table colour at a blood fraction stands for the spectrum there times a
- * smooth factor (quadratic in wavelength) that gives it exactly that colour. */
+/* ---- the open bed's spectra: its blood and layers per wavelength (bed_spectrum.c) ---- */
+/* Reflectance spectra of the open bed (no epidermis, no melanin: the bio
+ * parameters `bed`, its blood set per sample) by the optics model's
+ * transport, along one blood axis: a sample at or below `cap` (the
+ * ModelMatch table's largest blood fraction) is the bed with that blood in
+ * its whole dermis; one above it is the bed at `cap` whose top loop_depth_mm
+ * of dermis (its capillary loops) holds that blood fraction. A table colour
+ * at a blood fraction stands for the spectrum there times a smooth factor q
+ * (quadratic in wavelength) that gives it exactly that colour. */
 #define SS_BED_MAX_BLOOD 16
 typedef struct ss_bed_spectra {
     int nblood;
-    double blood[SS_BED_MAX_BLOOD];                  /* strictly increasing */
-    double reflect[SS_BED_MAX_BLOOD][SS_LAYER_NWL];  /* the transport's diffuse reflectance */
-    double moment[SS_BED_MAX_BLOOD][3][3];           /* sum_w weight[w][i] reflect x^j */
+    double blood[SS_BED_MAX_BLOOD];                 /* strictly increasing */
+    double cap, loop_depth_mm;
+    double reflect[SS_BED_MAX_BLOOD][SS_LAYER_NWL]; /* the transport's diffuse reflectance */
+    double moment[SS_BED_MAX_BLOOD][3][3];          /* sum_w weight[w][i] reflect x^j */
     double wavelength_nm[SS_LAYER_NWL], x[SS_LAYER_NWL]; /* x = (wl - 550) / 150 */
     double weight[SS_LAYER_NWL][3]; /* linear sRGB of each bin: rgb = sum_w weight[w] S[w] */
 } ss_bed_spectra;
-/* Runs the transport of `bed` at each of the nblood blood fractions
- * (1..SS_BED_MAX_BLOOD, strictly increasing), `photons` packets per
- * wavelength. */
+/* Runs the transport at each of the nblood blood fractions (1..SS_BED_MAX_BLOOD,
+ * strictly increasing, in 0..1), `photons` packets per wavelength. */
 ss_status ss_bed_spectra_build(const ss_bio_params *bed, const double *blood, int nblood,
-                               uint64_t photons, uint64_t seed, ss_bed_spectra *out,
-                               ss_error *err);
-/* The smooth spectrum standing for the colour rgb (linear sRGB) at a blood
- * fraction (clamped to the samples; between them the spectra are linear):
- * its linear sRGB is rgb (to rounding). Returns 1, or 0 (out untouched) when
- * no such factor exists (a singular system: a black colour, say). */
-int ss_bed_spectrum(const ss_bed_spectra *s, double blood, const double rgb[3],
-                    double out[SS_LAYER_NWL]);
+                               double cap, double loop_depth_mm, uint64_t photons, uint64_t seed,
+                               ss_bed_spectra *out, ss_error *err);
+/* The factor q of the colour rgb (linear sRGB) at a blood fraction (clamped
+ * to the samples; between them the spectra are linear). Returns 1, or 0 when
+ * there is none (a singular system: a black colour, say). */
+int ss_bed_fit(const ss_bed_spectra *s, double blood, const double rgb[3], double q[3]);
+/* The spectrum at a blood fraction times the factor q. */
+void ss_bed_eval(const ss_bed_spectra *s, double blood, const double q[3],
+                 double out[SS_LAYER_NWL]);
 /* The layer of the table t, thickness_mm thick, over the spectrum `in`, by
  * the adding formula per wavelength (out may be in). */
 void ss_layer_add_wl(const ss_layer_table *t, double thickness_mm, const double in[SS_LAYER_NWL],
@@ -239,9 +243,10 @@ void ss_layer_add_wl(const ss_layer_table *t, double thickness_mm, const double 
 /* A spectrum's linear sRGB (CIE 1931 observer, D65; white -> (1, 1, 1)). */
 void ss_bed_spectra_to_rgb(const ss_bed_spectra *s, const double spectrum[SS_LAYER_NWL],
                            double rgb[3]);
-/* The layer of the table t, thickness_mm thick, over that spectrum, by the
- * adding formula per wavelength, in linear sRGB; at thickness 0 it is rgb.
- * Falls back to ss_layer_over in RGB where ss_bed_spectrum has no spectrum. */
+/* The layer of the table t, thickness_mm thick, over the spectrum standing
+ * for rgb at a blood fraction (ss_bed_fit), by the adding formula per
+ * wavelength, in linear sRGB; at thickness 0 it is rgb. Falls back to
+ * ss_layer_over in RGB where ss_bed_fit has no factor. */
 void ss_layer_over_spectral(const ss_layer_table *t, double thickness_mm, const ss_bed_spectra *s,
                             double blood, const double rgb[3], double out[3]);
 

@@ -101,7 +101,7 @@ struct ss_wound_renderer {
     ss_image *skin; /* size x size x SS_BIO_NCHANNELS */
     ss_skin_lut *lut;
     float mean[SS_BIO_NCHANNELS];
-    ss_layer_table scab, serous, clot, loops;
+    ss_layer_table scab, serous, clot;
     ss_image *crust;     /* value noise 0..1 at ~1.5 mm: the crust's thickness is uneven */
     ss_image *mottle;    /* value noise at ~3 mm: where the crust is serous, not bloody */
     ss_image *crack;     /* value noise at ~2.5 mm: its mid-level lines are the cracks */
@@ -167,17 +167,31 @@ static void bio_to_render(const ss_skin_lut *lut, ss_skin_lut_cache *lc, const f
 
 /* ---- create ----------------------------------------------------------------------------- */
 
-/* The open bed's reflectance spectra (bed_spectrum.c) at the table's blood
- * samples (at most SS_BED_MAX_BLOOD of them, evenly picked, both ends kept):
- * the bed's bio parameters (no melanin: the table's least, the floors of
- * the epidermis and stratum corneum, the bed's oxygenation, the skin's mean
- * pheomelanin ratio), the table's base pigments. */
+/* The open bed's blood above the table's cap, as fractions of its capillary
+ * loops' layer (bed_spectrum.c): up to whole blood, denser where the colour
+ * changes fastest. */
+static const double LOOP_BLOOD[] = {0.075, 0.1, 0.15, 0.2, 0.3, 0.45, 0.65, 1.0};
+#define NLOOP_BLOOD ((int)(sizeof LOOP_BLOOD / sizeof *LOOP_BLOOD))
+
+/* The open bed's reflectance spectra (bed_spectrum.c): at the table's blood
+ * samples (at most SS_BED_MAX_BLOOD - NLOOP_BLOOD of them, evenly picked,
+ * both ends kept) and with its loops' blood above the cap; the bed's bio
+ * parameters (no melanin: the table's least, the floors of the epidermis
+ * and stratum corneum, the bed's oxygenation, the skin's mean pheomelanin
+ * ratio), the table's base pigments. */
 static ss_status build_bed_spectra(ss_wound_renderer *r, ss_error *err) {
     const ss_mm_table *t = r->o.table;
-    int n = t->nsamples[SS_MM_AXIS_BLOOD], m = n < SS_BED_MAX_BLOOD ? n : SS_BED_MAX_BLOOD;
+    int n = t->nsamples[SS_MM_AXIS_BLOOD], most = SS_BED_MAX_BLOOD - NLOOP_BLOOD;
+    int m = n < most ? n : most;
     double blood[SS_BED_MAX_BLOOD];
     for (int k = 0; k < m; k++)
         blood[k] = t->axis[SS_MM_AXIS_BLOOD][m > 1 ? (int)lround((double)k * (n - 1) / (m - 1)) : 0];
+    double cap = blood[m - 1];
+    if (!(cap > 0 && cap < 1))
+        return ss_error_set(err, SS_ERR_INPUT, "wound renderer: the table's largest blood "
+                            "fraction (%g) is not in (0, 1)", cap);
+    for (int k = 0; k < NLOOP_BLOOD; k++)
+        if (LOOP_BLOOD[k] > blood[m - 1]) blood[m++] = LOOP_BLOOD[k];
     ss_bio_params bed;
     ss_bio_params_default(&bed);
     bed.melanin = t->axis[SS_MM_AXIS_MELANIN][0];
@@ -185,7 +199,8 @@ static ss_status build_bed_spectra(ss_wound_renderer *r, ss_error *err) {
     bed.oxygenation = fmin(1, fmax(0, r->o.recipe.v[SS_WR_BED_OXYGENATION]));
     bed.sc_thickness_cm = SC_FLOOR_CM;
     bed.epidermis_thickness_cm = EPI_FLOOR_CM;
-    return ss_bed_spectra_build(&bed, blood, m, r->o.scab_photons, r->o.seed + 4000, &r->bed, err);
+    return ss_bed_spectra_build(&bed, blood, m, cap, r->o.recipe.v[SS_WR_LOOP_DEPTH_MM],
+                                r->o.scab_photons, r->o.seed + 4000, &r->bed, err);
 }
 
 /* The base skin's textures are `skinsim skin`'s render maps of the bio map. */
@@ -228,16 +243,14 @@ ss_status ss_wound_renderer_create(const ss_wound_render_options *o, ss_wound_re
             r->mean[c] = (float)(acc / (double)n);
         }
     }
-    ss_blood_layer scab, serous, clot, loops;
+    ss_blood_layer scab, serous, clot;
     ss_blood_layer_scab(o->recipe.v[SS_WR_SCAB_HB_FACTOR], &scab);
     ss_blood_layer_scab(o->recipe.v[SS_WR_SCAB_SEROUS_HB], &serous);
     scab.bilirubin_g_per_l = serous.bilirubin_g_per_l = o->recipe.v[SS_WR_SCAB_BILIRUBIN];
     ss_blood_layer_clot(o->recipe.v[SS_WR_CLOT_OXYGENATION], &clot);
-    ss_blood_layer_clot(o->recipe.v[SS_WR_BED_OXYGENATION], &loops);
     if (!st) st = ss_layer_table_build(&scab, o->scab_photons, o->seed, &r->scab, err);
     if (!st) st = ss_layer_table_build(&clot, o->scab_photons, o->seed + 1000, &r->clot, err);
     if (!st) st = ss_layer_table_build(&serous, o->scab_photons, o->seed + 2000, &r->serous, err);
-    if (!st) st = ss_layer_table_build(&loops, o->scab_photons, o->seed + 3000, &r->loops, err);
     if (!st && !(r->lut = ss_skin_lut_create(o->table, err))) st = err->code;
     if (!st) /* as a float, the lookup's own axis value */
         r->blood_cap =
@@ -627,14 +640,13 @@ static void render_texel(const ss_wound_renderer *r, ss_skin_lut_cache *lc, cons
                        (1 + bedtex * LOOP_CONTRAST * (dots - 1.0 / 6));
     /* the bed's blood beyond the table's largest fraction is not clamped
      * away: it sits in the capillary loops of the top loop_depth (granulation
-     * tissue's loops reach to ~0.1-0.3 mm under its surface), drawn as a layer
-     * of whole blood of the same haemoglobin per area, (blood - cap) x
-     * loop_depth thick, over the table's colour at the cap. Laid at the bed's
-     * full thickness over the open part (open x reg) as coverage, as the
-     * clot: a thickness fading with open x reg reddened the rim within a
+     * tissue's loops reach to ~0.1-0.3 mm under its surface), drawn by the
+     * bed's spectra (bed_spectrum.c: the transport of a bed whose top
+     * loop_depth holds that blood, under the factor that gives the table's
+     * colour at the cap). Laid over the open part (open x reg) as coverage,
+     * as the clot: a blood fading with open x reg reddened the rim within a
      * texel (a stepped edge) */
-    double loops =
-        bed_blood > r->blood_cap ? (bed_blood - r->blood_cap) * v[SS_WR_LOOP_DEPTH_MM] : 0;
+    double loops = bed_blood > r->blood_cap ? fmin(bed_blood, 1) : 0;
     double blood = lerp(tissue_blood, fmin(bed_blood, r->blood_cap), open * reg);
     /* blood under cover follows the tissue's oxygen; blood in the open bed is
      * oxygenated by the air (atmospheric O2 reaches ~0.3 mm deep) */
@@ -663,21 +675,18 @@ static void render_texel(const ss_wound_renderer *r, ss_skin_lut_cache *lc, cons
         v[SS_WR_SCAR_WHITENING] * regrown * scar * m_scar * cover * (1 - kel * (1 - kt.mature));
     double skin_rgb[3] = {l.rgb[0], l.rgb[1], l.rgb[2]};
     double R[3], T[3], R2[3], T2[3], R3[3], T3[3], mid[3];
-    /* the bed's blood layers are added per wavelength (bed_spectrum.c) to
-     * the spectrum standing for the table's colour, which carries through
-     * loops, clot and exudate (spec: A holds skin_rgb's spectrum) */
-    double A[SS_LAYER_NWL], A1[SS_LAYER_NWL];
+    /* the bed per wavelength (bed_spectrum.c): the spectrum standing for the
+     * table's colour, its loops' blood, then the clot and the exudate on it
+     * (spec: A holds skin_rgb's spectrum) */
+    double A[SS_LAYER_NWL], A1[SS_LAYER_NWL], q[3];
     int spec = 0;
-    if (loops > 0 && (spec = ss_bed_spectrum(&r->bed, b[SS_BIO_BLOOD], l.rgb, A))) {
-        ss_layer_add_wl(&r->loops, loops, A, A1);
+    if (loops > 0 && (spec = ss_bed_fit(&r->bed, b[SS_BIO_BLOOD], l.rgb, q))) {
+        ss_bed_eval(&r->bed, b[SS_BIO_BLOOD], q, A);
+        ss_bed_eval(&r->bed, loops, q, A1);
         for (int w = 0; w < SS_LAYER_NWL; w++) A[w] = lerp(A[w], A1[w], open * reg);
         ss_bed_spectra_to_rgb(&r->bed, A, mid);
         for (int c = 0; c < 3; c++) skin_rgb[c] = l.rgb[c] = mid[c];
-    } else if (loops > 0) { /* no spectrum for this colour: the layer in RGB */
-        ss_layer_table_eval(&r->loops, loops, R, T);
-        ss_layer_over(R, T, l.rgb, mid);
-        for (int c = 0; c < 3; c++) skin_rgb[c] = l.rgb[c] = lerp(l.rgb[c], mid[c], open * reg);
-    }
+    } /* (no factor: a black colour, which no blood changes) */
     if (white > 0) {
         spec = 0; /* skin_rgb changes below */
         float bw[SS_BIO_NCHANNELS];
@@ -735,9 +744,10 @@ static void render_texel(const ss_wound_renderer *r, ss_skin_lut_cache *lc, cons
     double clot_full = fmin(room, CLOT_MAX_MM) * v[SS_WR_CLOT_SCALE] * pool, a_clot = open * reg;
     double clot = a_clot * clot_full;
     double exudate = bedtex * 0.04 * ramp(nz->thick, 0.45, 0.8) * (1 - exp(-day / 1.0));
-    int clotted = clot_full > 0 && a_clot > 0;
-    if ((clotted || exudate > 0) &&
-        (spec || (spec = ss_bed_spectrum(&r->bed, b[SS_BIO_BLOOD], skin_rgb, A)))) {
+    int clotted = clot_full > 0 && a_clot > 0, wet = clotted || exudate > 0;
+    if (wet && !spec && (spec = ss_bed_fit(&r->bed, b[SS_BIO_BLOOD], skin_rgb, q)))
+        ss_bed_eval(&r->bed, b[SS_BIO_BLOOD], q, A);
+    if (wet && spec) {
         if (clotted) {
             ss_layer_add_wl(&r->clot, clot_full, A, A1);
             for (int w = 0; w < SS_LAYER_NWL; w++) A[w] = lerp(A[w], A1[w], a_clot);
