@@ -217,10 +217,10 @@ void ss_layer_over(const double reflect[3], const double transmit[3], const doub
 #define SS_BED_MAX_BLOOD 16
 typedef struct ss_bed_spectra {
     int nblood;
-    double blood[SS_BED_MAX_BLOOD];                 /* strictly increasing */
+    double blood[SS_BED_MAX_BLOOD]; /* strictly increasing */
     double cap, loop_depth_mm;
-    double reflect[SS_BED_MAX_BLOOD][SS_LAYER_NWL]; /* the transport's diffuse reflectance */
-    double moment[SS_BED_MAX_BLOOD][3][3];          /* sum_w weight[w][i] reflect x^j */
+    double reflect[SS_BED_MAX_BLOOD][SS_LAYER_NWL];      /* the transport's diffuse reflectance */
+    double moment[SS_BED_MAX_BLOOD][3][3];               /* sum_w weight[w][i] reflect x^j */
     double wavelength_nm[SS_LAYER_NWL], x[SS_LAYER_NWL]; /* x = (wl - 550) / 150 */
     double weight[SS_LAYER_NWL][3]; /* linear sRGB of each bin: rgb = sum_w weight[w] S[w] */
 } ss_bed_spectra;
@@ -231,7 +231,7 @@ ss_status ss_bed_spectra_build(const ss_bio_params *bed, const double *blood, in
                                ss_bed_spectra *out, ss_error *err);
 /* The factor q of the colour rgb (linear sRGB) at a blood fraction (clamped
  * to the samples; between them the spectra are linear). Returns 1, or 0 when
- * there is none (a singular system: a black colour, say). */
+ * there is none (the spectra's moments are singular: a bed reflecting nothing). */
 int ss_bed_fit(const ss_bed_spectra *s, double blood, const double rgb[3], double q[3]);
 /* The spectrum at a blood fraction times the factor q. */
 void ss_bed_eval(const ss_bed_spectra *s, double blood, const double q[3],

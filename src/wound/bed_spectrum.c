@@ -132,8 +132,8 @@ ss_status ss_bed_spectra_build(const ss_bio_params *bed, const double *blood, in
     for (int jb = 0; jb < njob; jb++) {
         int k = jb / SS_LAYER_NWL, w = jb % SS_LAYER_NWL;
         ss_optics_slab slab;
-        sts[jb] = bed_slab(d, bed, blood[k], cap, loop_depth_mm, out->wavelength_nm[w], &slab,
-                           &errs[jb]);
+        sts[jb] =
+            bed_slab(d, bed, blood[k], cap, loop_depth_mm, out->wavelength_nm[w], &slab, &errs[jb]);
         if (sts[jb]) continue;
         ss_mc_options o;
         ss_mc_options_default(&o);

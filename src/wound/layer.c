@@ -170,8 +170,7 @@ void ss_layer_table_eval_wl(const ss_layer_table *t, double thickness_mm,
     int k = thickness_sample(t, thickness_mm, &f);
     for (int w = 0; w < SS_LAYER_NWL; w++) {
         reflect[w] = t->reflect_wl[k][w] + f * (t->reflect_wl[k + 1][w] - t->reflect_wl[k][w]);
-        transmit[w] =
-            t->transmit_wl[k][w] + f * (t->transmit_wl[k + 1][w] - t->transmit_wl[k][w]);
+        transmit[w] = t->transmit_wl[k][w] + f * (t->transmit_wl[k + 1][w] - t->transmit_wl[k][w]);
     }
 }
 

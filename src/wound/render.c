@@ -185,11 +185,14 @@ static ss_status build_bed_spectra(ss_wound_renderer *r, ss_error *err) {
     int m = n < most ? n : most;
     double blood[SS_BED_MAX_BLOOD];
     for (int k = 0; k < m; k++)
-        blood[k] = t->axis[SS_MM_AXIS_BLOOD][m > 1 ? (int)lround((double)k * (n - 1) / (m - 1)) : 0];
+        blood[k] =
+            t->axis[SS_MM_AXIS_BLOOD][m > 1 ? (int)lround((double)k * (n - 1) / (m - 1)) : 0];
     double cap = blood[m - 1];
     if (!(cap > 0 && cap < 1))
-        return ss_error_set(err, SS_ERR_INPUT, "wound renderer: the table's largest blood "
-                            "fraction (%g) is not in (0, 1)", cap);
+        return ss_error_set(err, SS_ERR_INPUT,
+                            "wound renderer: the table's largest blood "
+                            "fraction (%g) is not in (0, 1)",
+                            cap);
     for (int k = 0; k < NLOOP_BLOOD; k++)
         if (LOOP_BLOOD[k] > blood[m - 1]) blood[m++] = LOOP_BLOOD[k];
     ss_bio_params bed;
@@ -686,7 +689,7 @@ static void render_texel(const ss_wound_renderer *r, ss_skin_lut_cache *lc, cons
         for (int w = 0; w < SS_LAYER_NWL; w++) A[w] = lerp(A[w], A1[w], open * reg);
         ss_bed_spectra_to_rgb(&r->bed, A, mid);
         for (int c = 0; c < 3; c++) skin_rgb[c] = l.rgb[c] = mid[c];
-    } /* (no factor: a black colour, which no blood changes) */
+    } /* (no factor: the bed's spectra reflect nothing; no blood shows) */
     if (white > 0) {
         spec = 0; /* skin_rgb changes below */
         float bw[SS_BIO_NCHANNELS];
