@@ -683,7 +683,7 @@ static void render_texel(const ss_wound_renderer *r, ss_skin_lut_cache *lc, cons
      * (spec: A holds skin_rgb's spectrum) */
     double A[SS_LAYER_NWL], A1[SS_LAYER_NWL], q[3];
     int spec = 0;
-    if (loops > 0 && (spec = ss_bed_fit(&r->bed, b[SS_BIO_BLOOD], l.rgb, q))) {
+    if (loops > 0 && open * reg > 0 && (spec = ss_bed_fit(&r->bed, b[SS_BIO_BLOOD], l.rgb, q))) {
         ss_bed_eval(&r->bed, b[SS_BIO_BLOOD], q, A);
         ss_bed_eval(&r->bed, loops, q, A1);
         for (int w = 0; w < SS_LAYER_NWL; w++) A[w] = lerp(A[w], A1[w], open * reg);
