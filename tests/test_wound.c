@@ -222,8 +222,9 @@ static void test_bed_spectrum(void **state) {
         ss_srgb_linear_to_lab(o, l1);
         ss_srgb_linear_to_lab(bf, l2);
         fprintf(stderr,
-                "colour %d, 0.03 mm clot: table %.1f %.1f %.1f, brute force %.1f %.1f %.1f\n", k,
-                l1[0], l1[1], l1[2], l2[0], l2[1], l2[2]);
+                "colour %d, 0.03 mm clot: table %.1f %.1f %.1f, brute force %.1f %.1f %.1f, "
+                "dE00 %.2f\n",
+                k, l1[0], l1[1], l1[2], l2[0], l2[1], l2[2], ss_ciede2000(l1, l2));
         assert_true(ss_ciede2000(l1, l2) < 1.5);
     }
     /* the loops: crimson, not orange; with no loops, the colour as it is */
