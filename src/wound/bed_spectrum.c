@@ -50,6 +50,7 @@
 #include <string.h>
 
 #include "skinsim/wound.h"
+#include "wound_internal.h"
 
 #define WL_MIN 400.0
 #define WL_STEP 20.0
@@ -135,15 +136,8 @@ ss_status ss_bed_spectra_build(const ss_bio_params *bed, const double *blood, in
         sts[jb] =
             bed_slab(d, bed, blood[k], cap, loop_depth_mm, out->wavelength_nm[w], &slab, &errs[jb]);
         if (sts[jb]) continue;
-        ss_mc_options o;
-        ss_mc_options_default(&o);
-        o.photons = photons;
-        o.seed = seed + (uint64_t)jb;
-        ss_mc_result res;
-        memset(&res, 0, sizeof res);
-        sts[jb] = ss_mc_run(&slab, &o, &res, &errs[jb]);
-        out->reflect[k][w] = res.diffuse;
-        ss_mc_result_free(&res);
+        sts[jb] = ss_wound__mc_one(&slab, photons, seed + (uint64_t)jb, &out->reflect[k][w], NULL,
+                                   &errs[jb]);
     }
     for (int jb = 0; jb < njob && !st; jb++)
         if (sts[jb]) {

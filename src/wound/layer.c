@@ -44,6 +44,7 @@
 #include <string.h>
 
 #include "skinsim/wound.h"
+#include "wound_internal.h"
 
 static const double THICK_MM[SS_LAYER_NTHICK] = {0,   0.005, 0.01, 0.02, 0.05,
                                                  0.1, 0.2,   0.4,  0.8,  1.6};
@@ -72,6 +73,21 @@ static ss_status blood_mua(const ss_optics_data *d, double oxygenation, double b
     ss_optics_slab slab;
     ss_status st = ss_optics_skin_slab_with(d, &bio, wl, &slab, err);
     if (!st) *mua = slab.layer[2].mua_per_cm; /* papillary dermis = whole blood here */
+    return st;
+}
+
+ss_status ss_wound__mc_one(const ss_optics_slab *slab, uint64_t photons, uint64_t seed,
+                           double *diffuse, double *transmit, ss_error *err) {
+    ss_mc_options o;
+    ss_mc_options_default(&o);
+    o.photons = photons;
+    o.seed = seed;
+    ss_mc_result res;
+    memset(&res, 0, sizeof res);
+    ss_status st = ss_mc_run(slab, &o, &res, err);
+    *diffuse = res.diffuse;
+    if (transmit) *transmit = res.transmit;
+    ss_mc_result_free(&res);
     return st;
 }
 
@@ -123,16 +139,8 @@ ss_status ss_layer_table_build(const ss_blood_layer *l, uint64_t photons, uint64
         slab.n_above = 1.0;
         slab.n_below = SKIN_N;
         slab.bottom_albedo = -1;
-        ss_mc_options o;
-        ss_mc_options_default(&o);
-        o.photons = photons;
-        o.seed = seed + (uint64_t)jb;
-        ss_mc_result res;
-        memset(&res, 0, sizeof res);
-        sts[jb] = ss_mc_run(&slab, &o, &res, &errs[jb]);
-        R[k][w] = res.diffuse;
-        T[k][w] = res.transmit;
-        ss_mc_result_free(&res);
+        sts[jb] =
+            ss_wound__mc_one(&slab, photons, seed + (uint64_t)jb, &R[k][w], &T[k][w], &errs[jb]);
     }
     for (int jb = 0; jb < njob && !st; jb++)
         if (sts[jb]) {

@@ -10,4 +10,9 @@
 ss_status ss_wound__noise(int size, double side_mm, double period_mm, int octaves, uint64_t seed,
                           uint64_t stream, ss_image *out, ss_error *err);
 
+/* One Monte Carlo run of a slab (the blood layers' and the bed's spectra,
+ * layer.c): its diffuse reflectance and (transmit non-NULL) transmittance. */
+ss_status ss_wound__mc_one(const ss_optics_slab *slab, uint64_t photons, uint64_t seed,
+                           double *diffuse, double *transmit, ss_error *err);
+
 #endif
