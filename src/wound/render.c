@@ -10,7 +10,8 @@
  *   blood     = lerp(skin x capillary x (reg: lerp(1, scar_blood, scar x m_scar))
  *                    + young_blood x reg x cover x (1 - m_scar),  min(bed, cap),  open x reg),
  *               bed = lerp(skin, bed_blood, capillary) x loops; the bed's blood above the
- *               table's cap is a whole-blood layer (bed - cap) x loop_depth thick
+ *               table's cap is in its top loop_depth, drawn per wavelength with the clot
+ *               and exudate on it (bed_spectrum.c)
  *   oxygenation = lerp(clot_oxygenation, skin, oxygen)
  *   -> ModelMatch (GGX base colour, roughness), then the scar's whitening, the
  *      scab (dried-blood layer, adding formula), roughness of the wet bed, the
